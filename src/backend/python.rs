@@ -1,0 +1,57 @@
+//! The pinned Python environment that the Mitsuba and Blender backends run in.
+//!
+//! Lookup order for the interpreter: `$POSER_PYTHON`; the repository's `.venv` (created by
+//! `backends/setup.sh` from `backends/requirements.txt`); `python3` on `PATH`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Root of the poser source tree (where `backends/` lives).
+pub fn repo_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Directory of the Python back-end sources (`backends/`).
+pub fn backends_dir() -> PathBuf {
+    repo_root().join("backends")
+}
+
+/// The Python interpreter to use.
+pub fn interpreter() -> PathBuf {
+    if let Some(p) = std::env::var_os("POSER_PYTHON") {
+        return PathBuf::from(p);
+    }
+    let venv = repo_root().join(".venv/bin/python");
+    if venv.exists() {
+        return venv;
+    }
+    PathBuf::from("python3")
+}
+
+/// A `Command` running `script` with the pinned interpreter, with `backends/` on `PYTHONPATH`.
+pub fn command(script: &Path) -> Command {
+    let mut c = Command::new(interpreter());
+    c.arg(script);
+    c.env("PYTHONPATH", backends_dir());
+    c.env("PYTHONDONTWRITEBYTECODE", "1");
+    c
+}
+
+/// Check that a module can be imported; the error tells the user how to set the environment up.
+pub fn require_module(module: &str) -> Result<(), String> {
+    let py = interpreter();
+    let ok = Command::new(&py)
+        .args(["-c", &format!("import {module}")])
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false);
+    if ok {
+        Ok(())
+    } else {
+        Err(format!(
+            "Python module `{module}` is not available to {}\n  help: run `backends/setup.sh` \
+             (creates .venv with the pinned packages) or set POSER_PYTHON",
+            py.display()
+        ))
+    }
+}

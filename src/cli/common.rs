@@ -1,0 +1,54 @@
+//! What every subcommand shares: the error type that maps to exit codes, and loading a scene
+//! with its diagnostics printed.
+
+use super::SceneArgs;
+use crate::model::Model;
+use std::process::ExitCode;
+
+#[derive(Debug)]
+pub enum CliError {
+    /// The scene is invalid; its diagnostics were already printed. Exit 1.
+    Invalid,
+    /// The command line is wrong. Exit 2.
+    Usage(String),
+    /// The run failed (I/O, renderer, …). Exit 1.
+    Failed(String),
+}
+
+impl CliError {
+    pub fn report(self) -> ExitCode {
+        match self {
+            CliError::Invalid => ExitCode::from(1),
+            CliError::Usage(m) => {
+                eprintln!("error: {m}");
+                ExitCode::from(2)
+            }
+            CliError::Failed(m) => {
+                eprintln!("error: {m}");
+                ExitCode::from(1)
+            }
+        }
+    }
+}
+
+impl From<String> for CliError {
+    fn from(s: String) -> Self {
+        CliError::Failed(s)
+    }
+}
+
+/// Load, validate and resolve a scene; print its diagnostics (warnings too) to stderr.
+pub fn load_model(args: &SceneArgs) -> Result<Model, CliError> {
+    match crate::scene::load(&args.scene, &args.sets) {
+        Ok(loaded) => {
+            if !loaded.warnings.is_empty() {
+                eprint!("{}", loaded.render_warnings());
+            }
+            Ok(loaded.model)
+        }
+        Err(failure) => {
+            eprint!("{}", failure.render());
+            Err(CliError::Invalid)
+        }
+    }
+}

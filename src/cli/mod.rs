@@ -1,0 +1,224 @@
+//! The `poser` command line: argument definitions (clap) and dispatch to one handler per
+//! subcommand. Each handler lives in its own file under `cli/` and calls into the library.
+//!
+//! Exit codes: 0 success, 1 invalid scene or failed run, 2 usage error.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+mod common;
+mod compile;
+mod dive;
+mod explain;
+mod plan;
+mod project;
+mod render;
+mod schema;
+mod truth;
+mod validate;
+
+pub use common::{CliError, load_model};
+
+const EXAMPLES: &str = "\
+Examples:
+  poser render scenarios/reef_strip.toml -o out/reef          # native renderer, no Python
+  poser validate scenarios/*.toml
+  poser explain scenarios/calibration_flat.toml --set water.temperature=12
+  poser project scenarios/calibration_flat.toml --points pts.csv --frame world
+  poser truth scenarios/reef_strip.toml -o out/truth
+  poser compile scenarios/dome_orbit.toml --backend mitsuba -o out/mi
+  poser render scenarios/dome_orbit.toml --backend blender -o out/cycles
+  poser plan scenarios/paper_survey.toml
+  poser dive scenarios/paper_survey.toml -o dive.ssrf
+  poser schema";
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "poser",
+    version,
+    about = "Simulate underwater photogrammetry surveys: validate, plan, render, ground truth.",
+    after_help = EXAMPLES
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// A scene file plus command-line overrides.
+#[derive(Args, Debug, Clone)]
+pub struct SceneArgs {
+    /// The scene file (TOML).
+    pub scene: PathBuf,
+    /// Override any value of the scene, e.g. `--set water.temperature=12` or
+    /// `--set 'render.samples=64'`. Repeatable; applied after includes.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    Native,
+    Mitsuba,
+    Blender,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FrameArg {
+    Camera,
+    World,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Check scenes and report every error and warning with file:line:column.
+    Validate {
+        /// Scene files.
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+        /// Override values in every scene (`KEY=VALUE`).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// Treat warnings as errors.
+        #[arg(long)]
+        deny_warnings: bool,
+    },
+    /// Print the resolved model's key numbers and what will be modelled, and why.
+    Explain {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Print the whole resolved model as JSON instead.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Write the JSON Schema of the scene format (and the format reference in docs/).
+    Schema {
+        /// Directory of the schema.
+        #[arg(short, long, default_value = "schema")]
+        out: PathBuf,
+        /// Directory of the generated format reference.
+        #[arg(long, default_value = "docs")]
+        docs: PathBuf,
+        /// Do not write; fail if the files on disk are stale.
+        #[arg(long)]
+        check: bool,
+    },
+    /// Project 3D points (CSV `id,x,y,z`) to pixels through the port; writes `id,u,v,status`.
+    Project {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// CSV file with header `id,x,y,z` (metres).
+        #[arg(long)]
+        points: PathBuf,
+        /// Camera of the rig (default: the first).
+        #[arg(long)]
+        camera: Option<String>,
+        /// Frame of the input points.
+        #[arg(long, value_enum, default_value = "camera")]
+        frame: FrameArg,
+        /// Rig pose index for `--frame world` (default 0).
+        #[arg(long, default_value_t = 0)]
+        pose: usize,
+        /// Colour channel: r, g or b (default g).
+        #[arg(long, default_value = "g")]
+        channel: String,
+        /// Output CSV (default: standard output).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+    },
+    /// Write exact ground truth for every image: target pixels, intrinsics, poses, COLMAP model.
+    Truth {
+        #[command(flatten)]
+        scene: SceneArgs,
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// Compile a scene for another renderer (Mitsuba 3 XML or a Blender/bpy script).
+    Compile {
+        #[command(flatten)]
+        scene: SceneArgs,
+        #[arg(long, value_enum)]
+        backend: BackendArg,
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// Render every pose (linear EXR + PNG) and write the ground truth beside the images.
+    Render {
+        #[command(flatten)]
+        scene: SceneArgs,
+        #[arg(long, value_enum, default_value = "native")]
+        backend: BackendArg,
+        #[arg(short, long)]
+        out: PathBuf,
+        /// Override samples per pixel.
+        #[arg(long)]
+        samples: Option<u32>,
+        /// Render only these pose indices (e.g. `0,3,5`).
+        #[arg(long, value_delimiter = ',')]
+        poses: Option<Vec<usize>>,
+        /// Hide the progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Survey plan: image count, path, time, GSD, footprint, overlaps achieved.
+    Plan {
+        #[command(flatten)]
+        scene: SceneArgs,
+        #[arg(long)]
+        json: bool,
+        /// Also write the coverage map/mesh into this directory.
+        #[arg(long)]
+        coverage: Option<PathBuf>,
+    },
+    /// Dive profile, decompression and gas verdict; export to Subsurface.
+    Dive {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Subsurface log to write (`.ssrf`).
+        #[arg(short, long)]
+        out: Option<PathBuf>,
+        /// Plot of depth, ceiling and NDL over time (`.svg` or `.png`).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = e.print();
+            return match e.kind() {
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion => {
+                    ExitCode::SUCCESS
+                }
+                _ => ExitCode::from(2),
+            };
+        }
+    };
+    let result = match cli.command {
+        Command::Validate { scenes, sets, deny_warnings } => {
+            validate::run(&scenes, &sets, deny_warnings)
+        }
+        Command::Explain { scene, json } => explain::run(&scene, json),
+        Command::Schema { out, docs, check } => schema::run(&out, &docs, check),
+        Command::Project { scene, points, camera, frame, pose, channel, output } => {
+            project::run(&scene, &points, camera.as_deref(), frame, pose, &channel, output.as_deref())
+        }
+        Command::Truth { scene, out } => truth::run(&scene, &out),
+        Command::Compile { scene, backend, out } => compile::run(&scene, backend, &out),
+        Command::Render { scene, backend, out, samples, poses, quiet } => {
+            render::run(&scene, backend, &out, samples, poses, quiet)
+        }
+        Command::Plan { scene, json, coverage } => plan::run(&scene, json, coverage.as_deref()),
+        Command::Dive { scene, out, plot, json } => {
+            dive::run(&scene, out.as_deref(), plot.as_deref(), json)
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => e.report(),
+    }
+}

@@ -1,0 +1,35 @@
+//! `poser render`: render every pose with the chosen backend (native by default).
+use super::{BackendArg, CliError, SceneArgs, load_model};
+use crate::backend::RenderOptions;
+use std::path::Path;
+
+pub fn run(
+    scene: &SceneArgs,
+    backend: BackendArg,
+    out: &Path,
+    samples: Option<u32>,
+    poses: Option<Vec<usize>>,
+    quiet: bool,
+) -> Result<(), CliError> {
+    let model = load_model(scene)?;
+    if let Some(p) = poses.as_ref().and_then(|p| p.iter().find(|&&i| i >= model.poses.len())) {
+        return Err(CliError::Usage(format!(
+            "--poses: index {p} is out of range (the network has {} poses)",
+            model.poses.len()
+        )));
+    }
+    let opts = RenderOptions { samples, poses, progress: !quiet };
+    let report = match backend {
+        BackendArg::Native => crate::render::render(&model, out, &opts),
+        BackendArg::Mitsuba => crate::backend::mitsuba::render(&model, out, &opts),
+        BackendArg::Blender => crate::backend::blender::render(&model, out, &opts),
+    }
+    .map_err(CliError::Failed)?;
+    eprintln!(
+        "rendered {} image(s) into {} in {:.2} s",
+        report.images.len(),
+        out.display(),
+        report.seconds
+    );
+    Ok(())
+}

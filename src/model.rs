@@ -1,0 +1,565 @@
+//! The resolved model: the one explicit structure every backend consumes.
+//!
+//! A scene file (see [`crate::scene`]) is parsed, validated and *resolved* into a [`Model`]:
+//! SI units everywhere, every preset, include and command-line override applied, camera
+//! networks expanded into poses, and optical constants computed per colour channel. The model
+//! also records what the scene *needs* ([`Needs`]) so that backends emit only that.
+//!
+//! Conventions (shared by every module):
+//! * World frame: right-handed, metres, **z up**, x east, y north. The sea surface (if any) is
+//!   the plane z = 0; the nominal seabed of the site is z = -`site.depth`.
+//! * Camera frame: OpenCV — x right, y down, z forward; origin at the entrance pupil.
+//! * Pixel (i, j) covers [i, i+1]×[j, j+1]; its centre is (i+0.5, j+0.5) (OpenCV/COLMAP).
+//! * Rotations are stored as `DMat3` whose columns are the child axes in the parent frame
+//!   (`parent_from_child`), so `p_parent = R * p_child + t`.
+//! * Colour channels are always `[R, G, B]` at [`CHANNEL_WAVELENGTHS_NM`].
+//! * Angles in radians, lengths in metres, times in seconds, pressures in pascal, volumes in m³,
+//!   temperatures in °C (the one non-SI exception, as everyone writes them), salinity in PSU.
+
+use glam::{DMat3, DVec3};
+use serde::{Deserialize, Serialize};
+
+/// Representative wavelengths of the R, G and B channels, in nanometres.
+pub const CHANNEL_WAVELENGTHS_NM: [f64; 3] = [650.0, 550.0, 450.0];
+
+/// Per-channel quantity, `[R, G, B]`.
+pub type Rgb = [f64; 3];
+
+/// A rigid transform `parent_from_child`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    /// Columns are the child frame's axes expressed in the parent frame.
+    pub rotation: DMat3,
+    /// Origin of the child frame in the parent frame, metres.
+    pub translation: DVec3,
+}
+
+impl Pose {
+    pub const IDENTITY: Pose = Pose { rotation: DMat3::IDENTITY, translation: DVec3::ZERO };
+
+    /// Map a point from the child frame to the parent frame.
+    pub fn transform_point(&self, p: DVec3) -> DVec3 {
+        self.rotation * p + self.translation
+    }
+    /// Map a direction from the child frame to the parent frame.
+    pub fn transform_vector(&self, v: DVec3) -> DVec3 {
+        self.rotation * v
+    }
+    /// The inverse transform (`child_from_parent`).
+    pub fn inverse(&self) -> Pose {
+        let rt = self.rotation.transpose();
+        Pose { rotation: rt, translation: -(rt * self.translation) }
+    }
+    /// Composition `self ∘ other` (apply `other` first).
+    pub fn compose(&self, other: &Pose) -> Pose {
+        Pose {
+            rotation: self.rotation * other.rotation,
+            translation: self.rotation * other.translation + self.translation,
+        }
+    }
+}
+
+/// The whole resolved scene.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Model {
+    /// Scenario name (from the file, or its stem).
+    pub name: String,
+    /// Free-text description for trainers.
+    pub description: String,
+    /// Path of the scene file as given (for messages and for resolving relative assets).
+    pub source: String,
+    /// The water, or `None` for a survey in air (then no medium is emitted anywhere).
+    pub water: Option<Water>,
+    /// Site: depth, sea surface, seabed.
+    pub site: Site,
+    /// The sun, if the scene is lit by daylight.
+    pub sun: Option<Sun>,
+    /// The cameras of the rig, each with its housing port. At least one.
+    pub cameras: Vec<Camera>,
+    /// Lights other than the sun.
+    pub lights: Vec<Light>,
+    /// Scene geometry other than targets.
+    pub objects: Vec<Object>,
+    /// Calibration targets, scale bars, GSD targets; all with known 3D points.
+    pub targets: Vec<Target>,
+    /// The expanded camera network: one entry per rig position (every camera fires at each).
+    pub poses: Vec<RigPose>,
+    /// Summary of the network that produced the poses (for planning and `explain`).
+    pub network: NetworkSummary,
+    /// Diver or vehicle, for planning and dive safety.
+    pub diver: Option<Diver>,
+    /// Render settings.
+    pub render: RenderSettings,
+    /// What the scene needs modelled, with reasons.
+    pub needs: Needs,
+}
+
+// ------------------------------------------------------------------------------------------
+// Water, site, sun
+// ------------------------------------------------------------------------------------------
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Water {
+    /// Phase index of the water per channel.
+    pub ior: Rgb,
+    /// How the index was obtained (for `explain`).
+    pub ior_source: IorSource,
+    /// Absorption coefficient σa per channel, 1/m.
+    pub absorption: Rgb,
+    /// Scattering coefficient σs per channel, 1/m.
+    pub scattering: Rgb,
+    /// Name of the Jerlov type used, if any (`"IB"`, `"3C"`, …).
+    pub jerlov: Option<String>,
+    pub phase: Phase,
+    /// Where the water is.
+    pub extent: WaterExtent,
+}
+
+impl Water {
+    /// Extinction σt = σa + σs per channel, 1/m.
+    pub fn extinction(&self) -> Rgb {
+        [0, 1, 2].map(|c| self.absorption[c] + self.scattering[c])
+    }
+    /// Single-scattering albedo σs/σt per channel (0 where σt = 0).
+    pub fn albedo(&self) -> Rgb {
+        let t = self.extinction();
+        [0, 1, 2].map(|c| if t[c] > 0.0 { self.scattering[c] / t[c] } else { 0.0 })
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum IorSource {
+    /// Given as a constant by the scene.
+    Constant,
+    /// Quan–Fry (temperature, salinity, wavelength), with Millard–Seaver pressure correction
+    /// when `depth` > 0.
+    Seawater { temperature: f64, salinity: f64, depth: f64 },
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Phase {
+    /// Henyey–Greenstein with asymmetry `g` ∈ (-1, 1).
+    HenyeyGreenstein { g: f64 },
+    /// Fournier–Forand (Mobley–Sundman–Boss form): real index of particles relative to water
+    /// `n` (> 1) and Junge slope `mu` (3 < μ ≤ 5). `backscatter` is the resulting fraction B.
+    FournierForand { n: f64, mu: f64, backscatter: f64 },
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum WaterExtent {
+    /// Water fills all space below the sea surface (or all space when there is no surface).
+    Everywhere,
+    /// Only an axis-aligned box of the given half-size around each camera position (the
+    /// original POSER's trick for fast volumes). Outside it: clear water (index kept, no medium).
+    BoxAroundCamera { half_size: DVec3 },
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Site {
+    /// Depth of the nominal seabed below the surface, m (> 0 underwater).
+    pub depth: f64,
+    pub surface: SeaSurface,
+    /// Altitude above sea level of the water surface, m (for dive planning at altitude).
+    pub altitude: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum SeaSurface {
+    /// No interface is modelled (sunlight, if any, is a directional light in the water).
+    None,
+    /// A flat air–water interface at z = 0.
+    Flat,
+    /// A wavy surface: significant wave height (m), dominant wavelength (m), wind speed (m/s).
+    Waves { height: f64, wavelength: f64, wind_speed: f64 },
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Sun {
+    /// Elevation above the horizon, rad.
+    pub elevation: f64,
+    /// Azimuth, clockwise from north, rad.
+    pub azimuth: f64,
+    /// Irradiance on a plane normal to the sun, above the surface, W/m² per channel.
+    pub irradiance: Rgb,
+    /// Unit direction in which sunlight *propagates in air* (world frame; z < 0).
+    pub direction_air: DVec3,
+    /// Unit direction in which sunlight propagates *in the water* after refraction at a flat
+    /// surface (equals `direction_air` when there is no water).
+    pub direction_water: DVec3,
+    /// Irradiance on a plane normal to `direction_water`, just below the surface, W/m² per
+    /// channel: `E_air · T_Fresnel · cos θa / cos θw` (see render-conventions §4).
+    pub irradiance_water: Rgb,
+    /// How the sun's position was obtained.
+    pub from_time: Option<SunTime>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SunTime {
+    pub latitude: f64,
+    pub longitude: f64,
+    /// ISO-8601 date-time with offset, as given.
+    pub datetime: String,
+}
+
+// ------------------------------------------------------------------------------------------
+// Cameras, lenses, ports
+// ------------------------------------------------------------------------------------------
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Camera {
+    /// Unique name within the rig (`"left"`, `"cam0"`, …).
+    pub name: String,
+    /// Image size in pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Pixel pitch, m.
+    pub pixel_pitch: f64,
+    /// Focal length, m (= fx · pixel_pitch).
+    pub focal_length: f64,
+    /// Focal lengths in pixels.
+    pub fx: f64,
+    pub fy: f64,
+    /// Principal point in pixels (OpenCV convention: the image centre is (w/2, h/2)).
+    pub cx: f64,
+    pub cy: f64,
+    pub lens: LensModel,
+    pub distortion: Distortion,
+    /// Focus distance, m (`None`: pinhole, everything sharp).
+    pub focus_distance: Option<f64>,
+    /// Aperture f-number (`None`: pinhole).
+    pub f_number: Option<f64>,
+    /// The housing port in front of this camera.
+    pub port: Port,
+    /// Pose of this camera in the rig frame (`rig_from_camera`).
+    pub rig_from_camera: Pose,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LensModel {
+    /// r = f·tan θ.
+    Rectilinear,
+    /// r = f·θ.
+    FisheyeEquidistant,
+    /// r = 2f·sin(θ/2).
+    FisheyeEquisolid,
+}
+
+/// Brown–Conrady distortion, OpenCV convention, on normalised coordinates.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Distortion {
+    pub k1: f64,
+    pub k2: f64,
+    pub k3: f64,
+    pub p1: f64,
+    pub p2: f64,
+}
+
+impl Distortion {
+    pub fn is_zero(&self) -> bool {
+        self.k1 == 0.0 && self.k2 == 0.0 && self.k3 == 0.0 && self.p1 == 0.0 && self.p2 == 0.0
+    }
+}
+
+/// A port material with its index per channel.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Glass {
+    /// Catalogue name (`"N-BK7"`, `"fused_silica"`, `"PMMA"`, `"sapphire"`) or `"custom"`.
+    pub name: String,
+    /// Index per channel.
+    pub ior: Rgb,
+}
+
+/// A housing port, in the **camera frame** (OpenCV axes, origin at the entrance pupil).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Port {
+    /// No housing: the camera sits directly in the medium (air survey, or an idealised camera).
+    None,
+    /// Flat port. Inner face `{x : normal·x = distance}`, outer face at `distance + thickness`.
+    /// `normal` is a unit vector pointing from the camera into the water (untilted: +z).
+    Flat { normal: DVec3, distance: f64, thickness: f64, glass: Glass },
+    /// Dome port: spheres about `center` with radii `inner_radius` and
+    /// `inner_radius + thickness`. `center` = 0 is a perfectly centred dome.
+    Dome { center: DVec3, inner_radius: f64, thickness: f64, glass: Glass },
+    /// Cylindrical port: coaxial cylinders of radii `inner_radius` and `inner_radius +
+    /// thickness` about the line through `axis_point` with unit direction `axis`.
+    Cylinder { axis_point: DVec3, axis: DVec3, inner_radius: f64, thickness: f64, glass: Glass },
+}
+
+impl Port {
+    pub fn glass(&self) -> Option<&Glass> {
+        match self {
+            Port::None => None,
+            Port::Flat { glass, .. } | Port::Dome { glass, .. } | Port::Cylinder { glass, .. } => {
+                Some(glass)
+            }
+        }
+    }
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Port::None => "none",
+            Port::Flat { .. } => "flat",
+            Port::Dome { .. } => "dome",
+            Port::Cylinder { .. } => "cylinder",
+        }
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Lights
+// ------------------------------------------------------------------------------------------
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Light {
+    pub name: String,
+    /// Whether `position`/`direction` are in the rig frame (moves with the cameras) or world.
+    pub mount: Mount,
+    pub kind: LightKind,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mount {
+    Rig,
+    World,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum LightKind {
+    /// Isotropic point light. `intensity` in W/sr per channel (Blender power P ↔ I = P/4π).
+    Point { position: DVec3, intensity: Rgb },
+    /// Spot (strobe, LED): sharp cone of half-angle `half_angle` (rad) about unit `direction`,
+    /// uniform `intensity` W/sr inside the cone, zero outside.
+    Spot { position: DVec3, direction: DVec3, half_angle: f64, intensity: Rgb },
+    /// One-sided rectangular area light emitting along its local +z (`frame` columns are
+    /// its x, y, z axes), size `width`×`height` m, uniform `radiance` W/(m²·sr).
+    Area { frame: Pose, width: f64, height: f64, radiance: Rgb },
+    /// Uniform radiance arriving from every direction, W/(m²·sr) (a crude stand-in for sky).
+    Ambient { radiance: Rgb },
+}
+
+// ------------------------------------------------------------------------------------------
+// Objects and targets
+// ------------------------------------------------------------------------------------------
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Object {
+    pub name: String,
+    pub shape: Shape,
+    /// `world_from_object`; `scale` is applied in the object frame before it.
+    pub pose: Pose,
+    pub scale: DVec3,
+    pub material: Material,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum Shape {
+    /// Triangle mesh from a glTF file (path resolved, relative to the scene file, and checked
+    /// to stay inside the scene's directory tree).
+    Mesh { path: String },
+    /// Rectangle in the object's xy plane, centred, normal +z.
+    Plane { width: f64, height: f64 },
+    /// Axis-aligned box, centred.
+    Box { size: DVec3 },
+    Sphere { radius: f64 },
+    /// Cylinder along the object's z axis, centred.
+    Cylinder { radius: f64, height: f64 },
+    /// Procedural seabed: a `width`×`length` heightfield on the object's xy plane, fractal
+    /// relief of RMS `roughness` m, `resolution` m cell size, from `seed`.
+    Seabed { width: f64, length: f64, roughness: f64, resolution: f64, seed: u64 },
+    /// Procedural rock/coral field scattered on the seabed: `count` boulders of mean radius
+    /// `radius` within `width`×`length`, from `seed`.
+    Boulders { width: f64, length: f64, count: u32, radius: f64, seed: u64 },
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Material {
+    /// Lambertian albedo per channel, in [0, 1].
+    pub albedo: Rgb,
+    /// Optional procedural pattern modulating the albedo.
+    pub pattern: Option<Pattern>,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum Pattern {
+    /// Checker of square `size` m between albedo and `albedo * contrast`.
+    Checker { size: f64, contrast: f64 },
+    /// Value noise of feature `size` m, amplitude `amount` (0..1) — texture for matching.
+    Noise { size: f64, amount: f64, seed: u64 },
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Target {
+    /// Unique name; target point ids are `"{name}/{index}"` unless the kind defines codes.
+    pub name: String,
+    pub kind: TargetKind,
+    /// `world_from_target`; the target's own frame has its printed face on z = 0, normal +z.
+    pub pose: Pose,
+    /// Known 3D points (world frame) with ids. Computed by the resolver from `kind` and `pose`.
+    pub points: Vec<TargetPoint>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct TargetPoint {
+    pub id: String,
+    pub world: DVec3,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum TargetKind {
+    /// `cols`×`rows` squares of side `square` m; points are the inner corners
+    /// ((cols-1)×(rows-1)), row-major from the target's (-x, -y) corner.
+    Checkerboard { cols: u32, rows: u32, square: f64 },
+    /// Grid of black disks of `diameter` m at `spacing` m on white; points are the disk centres.
+    CircleGrid { cols: u32, rows: u32, spacing: f64, diameter: f64 },
+    /// Coded targets (ring-coded disks), `count` of them placed on a grid of `spacing`; ids are
+    /// their code numbers.
+    Coded { count: u32, spacing: f64, diameter: f64, first_code: u32 },
+    /// Scale bar of `length` m between two disk targets of `diameter` m.
+    ScaleBar { length: f64, width: f64, diameter: f64 },
+    /// Siemens star GSD/resolution target of `diameter` m with `spokes` black sectors; its
+    /// point is the centre.
+    SiemensStar { diameter: f64, spokes: u32 },
+    /// 3D test object: a staircase pyramid of `levels` steps of `step` height and `size` base
+    /// width, with a disk target on every corner.
+    TestObject { size: f64, levels: u32, step: f64, diameter: f64 },
+}
+
+// ------------------------------------------------------------------------------------------
+// Network, diver, render settings
+// ------------------------------------------------------------------------------------------
+
+/// One rig position of the network.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RigPose {
+    /// Image stem, e.g. `"img_0001"`; each camera's image is `"{camera}_{name}"` when the rig
+    /// has more than one camera.
+    pub name: String,
+    /// `world_from_rig` (the rig frame uses camera axes: x right, y down, z forward).
+    pub world_from_rig: Pose,
+    /// Time since the start of the survey at which this image is taken, s.
+    pub time: f64,
+    /// Index of the strip/ring/segment this pose belongs to.
+    pub strip: u32,
+}
+
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct NetworkSummary {
+    /// `"explicit"`, `"lawnmower"`, `"spiral"`, `"orbit"`, …
+    pub kind: String,
+    /// The swim path as a polyline (world), including turns between strips.
+    pub path: Vec<DVec3>,
+    /// Path length, m.
+    pub path_length: f64,
+    /// Swim speed used, m/s.
+    pub speed: f64,
+    /// Survey duration (swim + time triggers), s.
+    pub duration: f64,
+    /// Nominal camera altitude above the seabed, m (if the network defines one).
+    pub altitude: Option<f64>,
+    /// Nominal forward overlap and side-lap (fractions), if the network defines them.
+    pub overlap: Option<f64>,
+    pub sidelap: Option<f64>,
+    /// Distance between exposures along a strip, m, and between strips, m.
+    pub spacing: Option<f64>,
+    pub strip_spacing: Option<f64>,
+    pub strips: u32,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Diver {
+    /// Swim speed during the survey, m/s.
+    pub speed: f64,
+    /// Descent and ascent rates, m/s (positive numbers).
+    pub descent_rate: f64,
+    pub ascent_rate: f64,
+    /// Surface air consumption, m³/s of surface-equivalent gas (input as l/min).
+    pub sac: f64,
+    pub cylinders: Vec<Cylinder>,
+    /// Bühlmann gradient factors, fractions (e.g. 0.3, 0.7 → GF 30/70).
+    pub gf_low: f64,
+    pub gf_high: f64,
+    /// Gas that must remain at the surface, Pa (e.g. 50 bar).
+    pub reserve: f64,
+    /// Water is salt (density 1025 kg/m³) or fresh (1000).
+    pub salt_water: bool,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Cylinder {
+    pub name: String,
+    /// Water volume, m³.
+    pub volume: f64,
+    /// Fill pressure, Pa.
+    pub pressure: f64,
+    /// O₂ and He fractions (the rest is N₂).
+    pub o2: f64,
+    pub he: f64,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RenderSettings {
+    /// Samples per pixel.
+    pub samples: u32,
+    /// Seed for every random choice of every backend.
+    pub seed: u64,
+    /// Maximum path length (bounces).
+    pub max_bounces: u32,
+    /// Render one pass per channel with that channel's indices.
+    pub dispersion: bool,
+    /// Outputs requested: `"rgb"`, `"depth"`, `"truth"`.
+    pub outputs: Vec<String>,
+    /// Exposure multiplier applied to the PNG preview only (EXR stays linear).
+    pub exposure: f64,
+}
+
+/// What the scene needs modelled, decided once, with reasons a person can read.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Needs {
+    /// A participating medium (σt > 0 somewhere).
+    pub medium: bool,
+    /// The medium is confined to a box around each camera.
+    pub medium_box: bool,
+    /// Refraction at a housing port.
+    pub refraction: bool,
+    /// One render pass per channel (dispersion asked for *and* its effect ≥ 0.1 px).
+    pub per_channel_passes: bool,
+    /// The sun must be refracted through the sea surface.
+    pub sun_refraction: bool,
+    /// Caustics from a wavy surface.
+    pub caustics: bool,
+    /// Lateral colour at the image corner (max over cameras), px, between R and B.
+    pub lateral_color_px: f64,
+    /// One line per decision, for `poser explain`.
+    pub reasons: Vec<String>,
+}
+
+impl Model {
+    /// Index of the medium the cameras' ports open into, per channel (1 in air).
+    pub fn ambient_ior(&self) -> Rgb {
+        self.water.as_ref().map(|w| w.ior).unwrap_or([1.0; 3])
+    }
+
+    /// `world_from_camera` for camera `cam` at rig pose `pose`.
+    pub fn world_from_camera(&self, pose: usize, cam: usize) -> Pose {
+        self.poses[pose].world_from_rig.compose(&self.cameras[cam].rig_from_camera)
+    }
+
+    /// Name of the image taken by camera `cam` at rig pose `pose`.
+    pub fn image_name(&self, pose: usize, cam: usize) -> String {
+        if self.cameras.len() == 1 {
+            self.poses[pose].name.clone()
+        } else {
+            format!("{}_{}", self.cameras[cam].name, self.poses[pose].name)
+        }
+    }
+}

@@ -1,0 +1,2 @@
+//! The optics core: refractive indices (water, glass), water IOPs and phase functions, lens
+//! models, housing ports with exact forward and backward projection, sun position.

@@ -1,0 +1,1 @@
+//! Survey planning: networks, GSD, coverage, dive profile, decompression, gas, Subsurface.

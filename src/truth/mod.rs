@@ -1,0 +1,1 @@
+//! Exact ground truth: where every target lands in every image, intrinsics, poses, COLMAP export.
