@@ -7,6 +7,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod bench;
 mod common;
 mod compile;
 mod dive;
@@ -170,6 +171,17 @@ pub enum Command {
         #[arg(long)]
         coverage: Option<PathBuf>,
     },
+    /// Speed-against-error reports: `projection` (port solvers) or `render` (backends).
+    Bench {
+        /// What to benchmark: `projection` or `render`.
+        what: String,
+        /// Write the report as JSON too.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Smaller, quicker run.
+        #[arg(long)]
+        quick: bool,
+    },
     /// Dive profile, decompression and gas verdict; export to Subsurface.
     Dive {
         #[command(flatten)]
@@ -213,6 +225,7 @@ pub fn main() -> ExitCode {
             render::run(&scene, backend, &out, samples, poses, quiet)
         }
         Command::Plan { scene, json, coverage } => plan::run(&scene, json, coverage.as_deref()),
+        Command::Bench { what, json, quick } => bench::run(&what, json.as_deref(), quick),
         Command::Dive { scene, out, plot, json } => {
             dive::run(&scene, out.as_deref(), plot.as_deref(), json)
         }
