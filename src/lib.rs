@@ -8,6 +8,7 @@
 pub mod backend;
 pub mod cli;
 pub mod io;
+pub mod mesh;
 pub mod model;
 pub mod optics;
 pub mod plan;
