@@ -416,6 +416,11 @@ impl Scene {
         })
     }
 
+    /// Whether anything is hit along `ray` with `t ∈ (RAY_EPSILON, tmax)`.
+    pub fn occluded_ray(&self, ray: &Ray, tmax: f64) -> bool {
+        self.traverse(ray, tmax, true).is_some()
+    }
+
     /// Whether anything blocks the open segment between `a` and `b` (both ends excluded by a
     /// relative margin, so surfaces the points lie on do not count).
     pub fn occluded(&self, a: DVec3, b: DVec3) -> bool {
@@ -436,6 +441,12 @@ impl Scene {
 pub fn target_mesh(target: &crate::model::Target) -> TriMesh {
     let (w, h) = target_extent(target);
     crate::mesh::plane(w, h).transformed(&target.pose, DVec3::ONE)
+}
+
+/// Printed reflectance at (x, y) of the target frame (grey, all channels).
+pub fn target_reflectance(kind: &crate::model::TargetKind, x: f64, y: f64) -> f64 {
+    let _ = (kind, x, y);
+    0.9
 }
 
 /// Width and height (target x, y) of a target's printed face, m.
