@@ -37,14 +37,21 @@ pub fn extent(kind: &TargetKind) -> (f64, f64) {
         TargetKind::Checkerboard { cols, rows, square } => {
             ((cols + 2) as f64 * square, (rows + 2) as f64 * square)
         }
-        TargetKind::CircleGrid { cols, rows, spacing, .. } => {
-            (cols as f64 * spacing, rows as f64 * spacing)
-        }
+        TargetKind::CircleGrid {
+            cols,
+            rows,
+            spacing,
+            ..
+        } => (cols as f64 * spacing, rows as f64 * spacing),
         TargetKind::Coded { count, spacing, .. } => {
             let (c, r) = coded_grid(count);
             (c as f64 * spacing, r as f64 * spacing)
         }
-        TargetKind::ScaleBar { length, width, diameter } => (length + 2.0 * diameter, width),
+        TargetKind::ScaleBar {
+            length,
+            width,
+            diameter,
+        } => (length + 2.0 * diameter, width),
         TargetKind::SiemensStar { diameter, .. } => (diameter, diameter),
         TargetKind::TestObject { size, .. } => (size, size),
     }
@@ -64,20 +71,38 @@ pub fn local_points(kind: &TargetKind) -> Vec<(String, DVec3)> {
             let (w, h) = (cols as f64 * square, rows as f64 * square);
             for j in 1..rows {
                 for i in 1..cols {
-                    let p = DVec3::new(-w / 2.0 + i as f64 * square, -h / 2.0 + j as f64 * square, 0.0);
+                    let p = DVec3::new(
+                        -w / 2.0 + i as f64 * square,
+                        -h / 2.0 + j as f64 * square,
+                        0.0,
+                    );
                     out.push((out.len().to_string(), p));
                 }
             }
         }
-        TargetKind::CircleGrid { cols, rows, spacing, .. } => {
+        TargetKind::CircleGrid {
+            cols,
+            rows,
+            spacing,
+            ..
+        } => {
             for (i, j, p) in grid(cols, rows, spacing) {
                 let _ = (i, j);
                 out.push((out.len().to_string(), p));
             }
         }
-        TargetKind::Coded { count, spacing, first_code, .. } => {
+        TargetKind::Coded {
+            count,
+            spacing,
+            first_code,
+            ..
+        } => {
             let (c, r) = coded_grid(count);
-            for (k, (_, _, p)) in grid(c, r, spacing).into_iter().take(count as usize).enumerate() {
+            for (k, (_, _, p)) in grid(c, r, spacing)
+                .into_iter()
+                .take(count as usize)
+                .enumerate()
+            {
                 out.push(((first_code as u64 + k as u64).to_string(), p));
             }
         }
@@ -86,7 +111,12 @@ pub fn local_points(kind: &TargetKind) -> Vec<(String, DVec3)> {
             out.push(("1".into(), DVec3::new(length / 2.0, 0.0, 0.0)));
         }
         TargetKind::SiemensStar { .. } => out.push(("0".into(), DVec3::ZERO)),
-        TargetKind::TestObject { size, levels, step, diameter } => {
+        TargetKind::TestObject {
+            size,
+            levels,
+            step,
+            diameter,
+        } => {
             for k in 0..levels {
                 let (side, z) = test_object_step(size, levels, step, k);
                 let a = (side / 2.0 - diameter).max(0.0);
@@ -136,13 +166,27 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
                 (i + j) % 2 == 0
             }
         }
-        TargetKind::CircleGrid { cols, rows, spacing, diameter } => grid(cols, rows, spacing)
+        TargetKind::CircleGrid {
+            cols,
+            rows,
+            spacing,
+            diameter,
+        } => grid(cols, rows, spacing)
             .iter()
             .any(|(_, _, p)| (x - p.x).hypot(y - p.y) <= diameter / 2.0),
-        TargetKind::Coded { count, spacing, diameter, first_code } => {
+        TargetKind::Coded {
+            count,
+            spacing,
+            diameter,
+            first_code,
+        } => {
             let (c, r) = coded_grid(count);
             let mut dark = false;
-            for (k, (_, _, p)) in grid(c, r, spacing).into_iter().take(count as usize).enumerate() {
+            for (k, (_, _, p)) in grid(c, r, spacing)
+                .into_iter()
+                .take(count as usize)
+                .enumerate()
+            {
                 let (dx, dy) = (x - p.x, y - p.y);
                 let rr = dx.hypot(dy);
                 if rr <= diameter / 2.0 {
@@ -157,7 +201,9 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
             }
             dark
         }
-        TargetKind::ScaleBar { length, diameter, .. } => {
+        TargetKind::ScaleBar {
+            length, diameter, ..
+        } => {
             (x + length / 2.0).hypot(y) <= diameter / 2.0
                 || (x - length / 2.0).hypot(y) <= diameter / 2.0
         }
@@ -192,7 +238,11 @@ pub const MAX_TEXTURE_PX: u32 = 8192;
 /// anti-aliasing); sides are clamped to [`MAX_TEXTURE_PX`] (the resolution drops accordingly).
 pub fn texture(kind: &TargetKind, px_per_m: f64) -> image::RgbImage {
     let (w, h) = extent(kind);
-    let ppm = if px_per_m.is_finite() && px_per_m > 0.0 { px_per_m } else { 1000.0 };
+    let ppm = if px_per_m.is_finite() && px_per_m > 0.0 {
+        px_per_m
+    } else {
+        1000.0
+    };
     let mut wpx = (w * ppm).round().max(1.0);
     let mut hpx = (h * ppm).round().max(1.0);
     let m = MAX_TEXTURE_PX as f64;
@@ -216,7 +266,11 @@ mod tests {
 
     #[test]
     fn checkerboard_corners_sit_on_square_boundaries() {
-        let k = TargetKind::Checkerboard { cols: 9, rows: 6, square: 0.04 };
+        let k = TargetKind::Checkerboard {
+            cols: 9,
+            rows: 6,
+            square: 0.04,
+        };
         let pts = local_points(&k);
         assert_eq!(pts.len(), 8 * 5);
         // First corner is one square in from the (-x,-y) corner of the 0.36 × 0.24 pattern.
@@ -233,7 +287,12 @@ mod tests {
 
     #[test]
     fn circle_grid_centres_are_black_between_is_white() {
-        let k = TargetKind::CircleGrid { cols: 4, rows: 3, spacing: 0.05, diameter: 0.02 };
+        let k = TargetKind::CircleGrid {
+            cols: 4,
+            rows: 3,
+            spacing: 0.05,
+            diameter: 0.02,
+        };
         let pts = local_points(&k);
         assert_eq!(pts.len(), 12);
         for (_, p) in &pts {
@@ -245,8 +304,16 @@ mod tests {
 
     #[test]
     fn coded_ids_and_world_points() {
-        let k = TargetKind::Coded { count: 5, spacing: 0.1, diameter: 0.01, first_code: 7 };
-        let pose = Pose { rotation: glam::DMat3::IDENTITY, translation: DVec3::new(1.0, 2.0, -3.0) };
+        let k = TargetKind::Coded {
+            count: 5,
+            spacing: 0.1,
+            diameter: 0.01,
+            first_code: 7,
+        };
+        let pose = Pose {
+            rotation: glam::DMat3::IDENTITY,
+            translation: DVec3::new(1.0, 2.0, -3.0),
+        };
         let pts = points("field", &k, &pose);
         assert_eq!(pts.len(), 5);
         assert_eq!(pts[0].id, "field/7");
@@ -257,7 +324,10 @@ mod tests {
 
     #[test]
     fn star_scale_bar_test_object() {
-        let s = TargetKind::SiemensStar { diameter: 0.2, spokes: 16 };
+        let s = TargetKind::SiemensStar {
+            diameter: 0.2,
+            spokes: 16,
+        };
         assert_eq!(local_points(&s).len(), 1);
         let dark = (0..64)
             .filter(|k| {
@@ -266,10 +336,19 @@ mod tests {
             })
             .count();
         assert_eq!(dark, 32, "half of the star is black");
-        let b = TargetKind::ScaleBar { length: 1.0, width: 0.04, diameter: 0.02 };
+        let b = TargetKind::ScaleBar {
+            length: 1.0,
+            width: 0.04,
+            diameter: 0.02,
+        };
         let p = local_points(&b);
         assert!((p[1].1 - p[0].1).length() - 1.0 < 1e-12);
-        let t = TargetKind::TestObject { size: 0.5, levels: 3, step: 0.1, diameter: 0.02 };
+        let t = TargetKind::TestObject {
+            size: 0.5,
+            levels: 3,
+            step: 0.1,
+            diameter: 0.02,
+        };
         let p = local_points(&t);
         assert_eq!(p.len(), 12);
         assert!((p[11].1.z - 0.3).abs() < 1e-12);
@@ -277,7 +356,11 @@ mod tests {
 
     #[test]
     fn texture_matches_reflectance() {
-        let k = TargetKind::Checkerboard { cols: 4, rows: 3, square: 0.01 };
+        let k = TargetKind::Checkerboard {
+            cols: 4,
+            rows: 3,
+            square: 0.01,
+        };
         let img = texture(&k, 1000.0);
         assert_eq!(img.dimensions(), (60, 50));
         // Pixel (15, 34) centre: x = -0.0145, y = -0.0095 → bottom-left square (black).

@@ -136,7 +136,12 @@ impl Dim {
                 ("ml", 1e-6, 0.0),
                 ("cuft", 0.028316846592, 0.0),
             ],
-            Dim::Time => &[("s", 1.0, 0.0), ("ms", 1e-3, 0.0), ("min", 60.0, 0.0), ("h", 3600.0, 0.0)],
+            Dim::Time => &[
+                ("s", 1.0, 0.0),
+                ("ms", 1e-3, 0.0),
+                ("min", 60.0, 0.0),
+                ("h", 3600.0, 0.0),
+            ],
             Dim::Power => &[("W", 1.0, 0.0), ("mW", 1e-3, 0.0), ("kW", 1e3, 0.0)],
             Dim::Intensity => &[("W/sr", 1.0, 0.0), ("mW/sr", 1e-3, 0.0)],
             Dim::Radiance => &[
@@ -155,13 +160,21 @@ impl Dim {
                 ("°F", 5.0 / 9.0, -32.0 * 5.0 / 9.0),
             ],
             Dim::Fraction => &[("%", 0.01, 0.0)],
-            Dim::Gsd => &[("m/px", 1.0, 0.0), ("cm/px", 1e-2, 0.0), ("mm/px", 1e-3, 0.0)],
+            Dim::Gsd => &[
+                ("m/px", 1.0, 0.0),
+                ("cm/px", 1e-2, 0.0),
+                ("mm/px", 1e-3, 0.0),
+            ],
             Dim::Number => &[],
         }
     }
     /// Spellings accepted for this dimension, for messages.
     pub fn unit_list(self) -> String {
-        self.units().iter().map(|u| u.0).collect::<Vec<_>>().join(", ")
+        self.units()
+            .iter()
+            .map(|u| u.0)
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }
 
@@ -171,7 +184,12 @@ pub enum UnitError {
     /// The number part is missing or malformed.
     BadNumber(String),
     /// No unit, or a unit of another dimension / unknown unit. `suggestion`: closest known unit.
-    BadUnit { unit: String, dim: Dim, suggestion: Option<String>, other_dim: Option<Dim> },
+    BadUnit {
+        unit: String,
+        dim: Dim,
+        suggestion: Option<String>,
+        other_dim: Option<Dim>,
+    },
     /// The result is NaN or infinite.
     NotFinite,
 }
@@ -180,9 +198,19 @@ impl std::fmt::Display for UnitError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             UnitError::BadNumber(s) => write!(f, "`{s}` is not a number"),
-            UnitError::BadUnit { unit, dim, other_dim, .. } => {
+            UnitError::BadUnit {
+                unit,
+                dim,
+                other_dim,
+                ..
+            } => {
                 if let Some(o) = other_dim {
-                    write!(f, "`{unit}` is a unit of {}, but a {} is expected", o.name(), dim.name())
+                    write!(
+                        f,
+                        "`{unit}` is a unit of {}, but a {} is expected",
+                        o.name(),
+                        dim.name()
+                    )
                 } else if unit.is_empty() {
                     write!(f, "a {} needs a unit", dim.name())
                 } else {
@@ -214,7 +242,8 @@ const ALL_DIMS: &[Dim] = &[
 fn parse_number(s: &str) -> Result<f64, UnitError> {
     let t = s.trim().replace('_', "");
     let ok = !t.is_empty()
-        && t.chars().all(|c| c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E'));
+        && t.chars()
+            .all(|c| c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e' | 'E'));
     match t.parse::<f64>() {
         Ok(v) if ok => {
             if v.is_finite() {
@@ -239,7 +268,11 @@ fn split(s: &str) -> (&str, &str) {
             && i + 1 < b.len()
             && (b[i + 1].1.is_ascii_digit() || b[i + 1].1 == '-' || b[i + 1].1 == '+')
             && i > 0;
-        if c.is_ascii_digit() || c == '.' || c == '_' || ((c == '-' || c == '+') && (i == 0 || matches!(b[i - 1].1, 'e' | 'E'))) {
+        if c.is_ascii_digit()
+            || c == '.'
+            || c == '_'
+            || ((c == '-' || c == '+') && (i == 0 || matches!(b[i - 1].1, 'e' | 'E')))
+        {
             i += 1;
             end = b.get(i).map(|x| x.0).unwrap_or(s.len());
         } else if is_exp {
@@ -262,12 +295,18 @@ fn unit_factor(unit: &str, dim: Dim) -> Result<(f64, f64), UnitError> {
         return Ok((f, o));
     }
     // Case-insensitive second chance (e.g. "MM", "Bar"), unless ambiguous.
-    let ci: Vec<_> = dim.units().iter().filter(|x| x.0.eq_ignore_ascii_case(&u)).collect();
+    let ci: Vec<_> = dim
+        .units()
+        .iter()
+        .filter(|x| x.0.eq_ignore_ascii_case(&u))
+        .collect();
     if ci.len() == 1 && !u.is_empty() {
         return Ok((ci[0].1, ci[0].2));
     }
-    let other_dim =
-        ALL_DIMS.iter().copied().find(|d| *d != dim && d.units().iter().any(|x| x.0 == u));
+    let other_dim = ALL_DIMS
+        .iter()
+        .copied()
+        .find(|d| *d != dim && d.units().iter().any(|x| x.0 == u));
     let suggestion = dim
         .units()
         .iter()
@@ -275,7 +314,12 @@ fn unit_factor(unit: &str, dim: Dim) -> Result<(f64, f64), UnitError> {
         .filter(|(s, _)| *s > 0.7)
         .max_by(|a, b| a.0.total_cmp(&b.0))
         .map(|x| x.1.to_string());
-    Err(UnitError::BadUnit { unit: u, dim, suggestion, other_dim })
+    Err(UnitError::BadUnit {
+        unit: u,
+        dim,
+        suggestion,
+        other_dim,
+    })
 }
 
 /// Parse `"<number> <unit>"` as a quantity of dimension `dim`, in SI. A bare number in a
@@ -290,19 +334,30 @@ pub fn parse_quantity(s: &str, dim: Dim) -> Result<f64, UnitError> {
         return Ok(v);
     }
     if dim == Dim::Number {
-        return Err(UnitError::BadUnit { unit: unit.into(), dim, suggestion: None, other_dim: None });
+        return Err(UnitError::BadUnit {
+            unit: unit.into(),
+            dim,
+            suggestion: None,
+            other_dim: None,
+        });
     }
     let (f, o) = unit_factor(unit, dim)?;
     let r = v * f + o;
-    if r.is_finite() { Ok(r) } else { Err(UnitError::NotFinite) }
+    if r.is_finite() {
+        Ok(r)
+    } else {
+        Err(UnitError::NotFinite)
+    }
 }
 
 /// Parse a vector string with one trailing unit: `"0, 0.1, 2 m"` or `"10 20 30 deg"`.
 pub fn parse_vector(s: &str, dim: Dim) -> Result<Vec<f64>, UnitError> {
     let s = s.trim().trim_start_matches('[');
     // The unit is whatever follows the last number.
-    let parts: Vec<&str> =
-        s.split(|c: char| c == ',' || c.is_whitespace()).filter(|p| !p.is_empty()).collect();
+    let parts: Vec<&str> = s
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|p| !p.is_empty())
+        .collect();
     let mut nums = Vec::new();
     let mut unit = String::new();
     for (i, p) in parts.iter().enumerate() {
@@ -317,7 +372,10 @@ pub fn parse_vector(s: &str, dim: Dim) -> Result<Vec<f64>, UnitError> {
         }
         nums.push(parse_number(n)?);
         if !u.is_empty() {
-            unit = std::iter::once(u).chain(parts[i + 1..].iter().copied()).collect::<Vec<_>>().join(" ");
+            unit = std::iter::once(u)
+                .chain(parts[i + 1..].iter().copied())
+                .collect::<Vec<_>>()
+                .join(" ");
             break;
         }
     }
@@ -329,7 +387,11 @@ pub fn parse_vector(s: &str, dim: Dim) -> Result<Vec<f64>, UnitError> {
     }
     let (f, o) = unit_factor(&unit, dim)?;
     let out: Vec<f64> = nums.iter().map(|v| v * f + o).collect();
-    if out.iter().all(|v| v.is_finite()) { Ok(out) } else { Err(UnitError::NotFinite) }
+    if out.iter().all(|v| v.is_finite()) {
+        Ok(out)
+    } else {
+        Err(UnitError::NotFinite)
+    }
 }
 
 #[cfg(test)]
@@ -366,22 +428,40 @@ mod tests {
     fn errors() {
         assert!(matches!(
             parse_quantity("18 bar", Dim::Length),
-            Err(UnitError::BadUnit { other_dim: Some(Dim::Pressure), .. })
+            Err(UnitError::BadUnit {
+                other_dim: Some(Dim::Pressure),
+                ..
+            })
         ));
         match parse_quantity("18 mmm", Dim::Length) {
-            Err(UnitError::BadUnit { suggestion: Some(s), .. }) => assert_eq!(s, "mm"),
+            Err(UnitError::BadUnit {
+                suggestion: Some(s),
+                ..
+            }) => assert_eq!(s, "mm"),
             e => panic!("{e:?}"),
         }
-        assert!(matches!(parse_quantity("abc m", Dim::Length), Err(UnitError::BadNumber(_))));
-        assert!(matches!(parse_quantity("", Dim::Length), Err(UnitError::BadNumber(_))));
+        assert!(matches!(
+            parse_quantity("abc m", Dim::Length),
+            Err(UnitError::BadNumber(_))
+        ));
+        assert!(matches!(
+            parse_quantity("", Dim::Length),
+            Err(UnitError::BadNumber(_))
+        ));
         assert!(parse_quantity("1e400 m", Dim::Length).is_err());
         assert!(parse_quantity("3 m", Dim::Number).is_err());
     }
 
     #[test]
     fn vectors() {
-        assert_eq!(parse_vector("0, 10, 2000 mm", Dim::Length).unwrap(), vec![0.0, 0.01, 2.0]);
-        assert_eq!(parse_vector("1 2 3", Dim::Length).unwrap(), vec![1.0, 2.0, 3.0]);
+        assert_eq!(
+            parse_vector("0, 10, 2000 mm", Dim::Length).unwrap(),
+            vec![0.0, 0.01, 2.0]
+        );
+        assert_eq!(
+            parse_vector("1 2 3", Dim::Length).unwrap(),
+            vec![1.0, 2.0, 3.0]
+        );
         let v = parse_vector("90, 0, 0 deg", Dim::Angle).unwrap();
         assert!((v[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
         assert!(parse_vector("1, 2, 3 bar", Dim::Length).is_err());

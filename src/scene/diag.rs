@@ -7,7 +7,7 @@ use codespan_reporting::files::SimpleFiles;
 use codespan_reporting::term;
 
 /// A byte range in one source file (index into [`Sources::files`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Span {
     pub file: usize,
     pub start: usize,
@@ -50,7 +50,10 @@ impl Diagnostic {
         }
     }
     pub fn warning(code: &'static str, message: impl Into<String>) -> Self {
-        Diagnostic { severity: Severity::Warning, ..Diagnostic::error(code, message) }
+        Diagnostic {
+            severity: Severity::Warning,
+            ..Diagnostic::error(code, message)
+        }
     }
     /// Primary label (the first one is the location reported).
     pub fn label(mut self, span: Span, msg: impl Into<String>) -> Self {
@@ -89,7 +92,9 @@ impl Diagnostic {
         .with_message(&self.message);
         let mut labels = Vec::new();
         for (span, msg, primary) in &self.labels {
-            let Some((_, text)) = sources.files.get(span.file) else { continue };
+            let Some((_, text)) = sources.files.get(span.file) else {
+                continue;
+            };
             let s = span.start.min(text.len());
             let e = span.end.clamp(s, text.len());
             if !text.is_char_boundary(s) || !text.is_char_boundary(e) {
@@ -121,6 +126,11 @@ impl Diagnostic {
 pub fn line_col(text: &str, at: usize) -> (usize, usize) {
     let before = &text[..at.min(text.len())];
     let line = before.matches('\n').count() + 1;
-    let col = before.rsplit('\n').next().map(|l| l.chars().count()).unwrap_or(0) + 1;
+    let col = before
+        .rsplit('\n')
+        .next()
+        .map(|l| l.chars().count())
+        .unwrap_or(0)
+        + 1;
     (line, col)
 }

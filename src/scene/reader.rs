@@ -49,7 +49,12 @@ fn expect_dim(dim: Dim) -> String {
         Dim::Number => "a number".into(),
         Dim::Fraction => "a fraction (a number like 0.6, or a string like \"60 %\")".into(),
         Dim::Temperature => "a temperature (a number in °C, or a string like \"12 °C\")".into(),
-        d => format!("a {} (a number in {}, or a string like \"{}\")", d.name(), d.si_unit(), example(d)),
+        d => format!(
+            "a {} (a number in {}, or a string like \"{}\")",
+            d.name(),
+            d.si_unit(),
+            example(d)
+        ),
     }
 }
 
@@ -74,25 +79,39 @@ fn example(d: Dim) -> &'static str {
 }
 
 fn path_join(path: &str, key: &str) -> String {
-    if path.is_empty() { key.to_string() } else { format!("{path}.{key}") }
+    if path.is_empty() {
+        key.to_string()
+    } else {
+        format!("{path}.{key}")
+    }
 }
 
 impl<'a> Tab<'a> {
     /// Open `node` as a table (None: the table is absent, every getter returns defaults).
     pub fn open(cx: &mut Cx, node: Option<&'a Node>, path: &str, fallback: Span) -> Tab<'a> {
         let (table, span) = match node {
-            Some(Node { val: Val::Table(t), span }) => (Some(t), *span),
+            Some(Node {
+                val: Val::Table(t),
+                span,
+            }) => (Some(t), *span),
             Some(n) => {
                 cx.push(
                     Diagnostic::error("E0101", format!("`{path}` must be a table"))
                         .label(n.span, format!("found {}", n.val.type_name()))
-                        .help(format!("write it as a table: `[{path}]` followed by `key = value` lines")),
+                        .help(format!(
+                            "write it as a table: `[{path}]` followed by `key = value` lines"
+                        )),
                 );
                 (None, n.span)
             }
             None => (None, fallback),
         };
-        Tab { table, span, path: path.to_string(), known: vec![] }
+        Tab {
+            table,
+            span,
+            path: path.to_string(),
+            known: vec![],
+        }
     }
 
     pub fn present(&self) -> bool {
@@ -114,17 +133,29 @@ impl<'a> Tab<'a> {
     }
     /// Span of `key`'s value, or of the table when absent.
     pub fn span_of(&self, key: &str) -> Span {
-        self.table.and_then(|t| t.get(key)).map(|e| e.node.span).unwrap_or(self.span)
+        self.table
+            .and_then(|t| t.get(key))
+            .map(|e| e.node.span)
+            .unwrap_or(self.span)
     }
     /// Span of the key itself, or of the table when absent.
     pub fn key_span(&self, key: &str) -> Span {
-        self.table.and_then(|t| t.get(key)).map(|e| e.key_span).unwrap_or(self.span)
+        self.table
+            .and_then(|t| t.get(key))
+            .map(|e| e.key_span)
+            .unwrap_or(self.span)
     }
     /// Span covering `key = value`.
     pub fn entry_span(&self, key: &str) -> Span {
         match self.table.and_then(|t| t.get(key)) {
-            Some(e) if e.key_span.file == e.node.span.file && e.node.span.end >= e.key_span.start => {
-                Span { file: e.key_span.file, start: e.key_span.start, end: e.node.span.end }
+            Some(e)
+                if e.key_span.file == e.node.span.file && e.node.span.end >= e.key_span.start =>
+            {
+                Span {
+                    file: e.key_span.file,
+                    start: e.key_span.start,
+                    end: e.node.span.end,
+                }
             }
             Some(e) => e.node.span,
             None => self.span,
@@ -185,9 +216,12 @@ impl<'a> Tab<'a> {
             Val::Int(i) if *i >= 0 => Some(*i as u64),
             Val::Int(i) => {
                 cx.push(
-                    Diagnostic::error("E0043", format!("`{}` must not be negative", self.full(key)))
-                        .label(n.span, format!("{i} is negative"))
-                        .help("use a whole number ≥ 0"),
+                    Diagnostic::error(
+                        "E0043",
+                        format!("`{}` must not be negative", self.full(key)),
+                    )
+                    .label(n.span, format!("{i} is negative"))
+                    .help("use a whole number ≥ 0"),
                 );
                 None
             }
@@ -221,7 +255,9 @@ impl<'a> Tab<'a> {
         }
     }
     pub fn bool(&mut self, cx: &mut Cx, key: &'static str, default: bool) -> bool {
-        let Some(n) = self.get(key) else { return default };
+        let Some(n) = self.get(key) else {
+            return default;
+        };
         match &n.val {
             Val::Bool(b) => *b,
             v => {
@@ -241,7 +277,12 @@ impl<'a> Tab<'a> {
         }
     }
     /// One of `options` (case-sensitive, did-you-mean on mismatch).
-    pub fn choice(&mut self, cx: &mut Cx, key: &'static str, options: &[&'static str]) -> Option<&'static str> {
+    pub fn choice(
+        &mut self,
+        cx: &mut Cx,
+        key: &'static str,
+        options: &[&'static str],
+    ) -> Option<&'static str> {
         let span = self.span_of(key);
         let s = self.opt_str(cx, key)?;
         if let Some(o) = options.iter().find(|o| **o == s) {
@@ -304,7 +345,9 @@ impl<'a> Tab<'a> {
     /// An array of tables (`[[key]]`); entries that are not tables are reported.
     pub fn tables(&mut self, cx: &mut Cx, key: &'static str) -> Vec<&'a Node> {
         let full = self.full(key);
-        let Some(n) = self.get(key) else { return vec![] };
+        let Some(n) = self.get(key) else {
+            return vec![];
+        };
         match &n.val {
             Val::Array(a) => a
                 .iter()
@@ -312,9 +355,14 @@ impl<'a> Tab<'a> {
                     let ok = matches!(x.val, Val::Table(_));
                     if !ok {
                         cx.push(
-                            Diagnostic::error("E0101", format!("entries of `{full}` must be tables"))
-                                .label(x.span, format!("found {}", x.val.type_name()))
-                                .help(format!("write each entry as `[[{full}]]` followed by its keys")),
+                            Diagnostic::error(
+                                "E0101",
+                                format!("entries of `{full}` must be tables"),
+                            )
+                            .label(x.span, format!("found {}", x.val.type_name()))
+                            .help(format!(
+                                "write each entry as `[[{full}]]` followed by its keys"
+                            )),
                         );
                     }
                     ok
@@ -331,7 +379,10 @@ impl<'a> Tab<'a> {
 
 pub fn type_error(n: &Node, full: &str, expected: &str, found: &Val) -> Diagnostic {
     Diagnostic::error("E0040", format!("wrong type for `{full}`"))
-        .label(n.span, format!("expected {expected}, found {}", found.type_name()))
+        .label(
+            n.span,
+            format!("expected {expected}, found {}", found.type_name()),
+        )
         .help(format!("`{full}` takes {expected}"))
 }
 
@@ -366,13 +417,22 @@ pub fn number(cx: &mut Cx, n: &Node, dim: Dim, full: &str) -> Option<f64> {
 
 pub fn unit_error(n: &Node, full: &str, dim: Dim, e: &UnitError) -> Diagnostic {
     let help = match e {
-        UnitError::BadUnit { suggestion: Some(s), .. } => format!("did you mean `{s}`?"),
-        UnitError::BadUnit { .. } if dim == Dim::Number => "this value is a plain number; remove the unit".into(),
+        UnitError::BadUnit {
+            suggestion: Some(s),
+            ..
+        } => format!("did you mean `{s}`?"),
+        UnitError::BadUnit { .. } if dim == Dim::Number => {
+            "this value is a plain number; remove the unit".into()
+        }
         UnitError::BadUnit { .. } => format!("units for a {}: {}", dim.name(), dim.unit_list()),
         UnitError::NotFinite => "give a finite value".into(),
         UnitError::BadNumber(_) => format!("`{full}` takes {}", expect_dim(dim)),
     };
-    let code = if matches!(e, UnitError::NotFinite) { "E0041" } else { "E0042" };
+    let code = if matches!(e, UnitError::NotFinite) {
+        "E0041"
+    } else {
+        "E0042"
+    };
     Diagnostic::error(code, format!("invalid value for `{full}`"))
         .label(n.span, e.to_string())
         .help(help)
@@ -404,7 +464,10 @@ pub fn vector(cx: &mut Cx, n: &Node, dim: Dim, full: &str, len: Option<usize>) -
         },
         v => {
             let what = match len {
-                Some(3) => format!("a list of 3 numbers like `[0, 0, 1]` or a string like \"0, 0, 10 {}\"", example_unit(dim)),
+                Some(3) => format!(
+                    "a list of 3 numbers like `[0, 0, 1]` or a string like \"0, 0, 10 {}\"",
+                    example_unit(dim)
+                ),
                 _ => "a list of numbers".to_string(),
             };
             cx.push(type_error(n, full, &what, v));
@@ -416,8 +479,19 @@ pub fn vector(cx: &mut Cx, n: &Node, dim: Dim, full: &str, len: Option<usize>) -
     {
         cx.push(
             Diagnostic::error("E0044", format!("`{full}` needs {l} values"))
-                .label(n.span, format!("{} value{} given", v.len(), if v.len() == 1 { "" } else { "s" }))
-                .help(if l == 3 { "write `[x, y, z]`".to_string() } else { format!("give exactly {l} values") }),
+                .label(
+                    n.span,
+                    format!(
+                        "{} value{} given",
+                        v.len(),
+                        if v.len() == 1 { "" } else { "s" }
+                    ),
+                )
+                .help(if l == 3 {
+                    "write `[x, y, z]`".to_string()
+                } else {
+                    format!("give exactly {l} values")
+                }),
         );
         return None;
     }

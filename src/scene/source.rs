@@ -92,23 +92,30 @@ impl Val {
 
 fn convert(v: &toml::Spanned<DeValue<'_>>, file: usize, diags: &mut Vec<Diagnostic>) -> Node {
     let r = v.span();
-    let span = Span { file, start: r.start, end: r.end };
+    let span = Span {
+        file,
+        start: r.start,
+        end: r.end,
+    };
     let val = match v.get_ref() {
         DeValue::String(s) => Val::Str(s.to_string()),
-        DeValue::Integer(i) => {
-            match i64::from_str_radix(&i.as_str().replace('_', ""), i.radix()) {
-                Ok(x) => Val::Int(x),
-                Err(_) => {
-                    diags.push(
-                        Diagnostic::error("E0002", "integer out of range")
-                            .label(span, "does not fit in a 64-bit integer")
-                            .help("write it as a float (e.g. `1e20`) or use a smaller number"),
-                    );
-                    Val::Int(0)
-                }
+        DeValue::Integer(i) => match i64::from_str_radix(&i.as_str().replace('_', ""), i.radix()) {
+            Ok(x) => Val::Int(x),
+            Err(_) => {
+                diags.push(
+                    Diagnostic::error("E0002", "integer out of range")
+                        .label(span, "does not fit in a 64-bit integer")
+                        .help("write it as a float (e.g. `1e20`) or use a smaller number"),
+                );
+                Val::Int(0)
             }
-        }
-        DeValue::Float(f) => Val::Float(f.as_str().replace('_', "").parse::<f64>().unwrap_or(f64::NAN)),
+        },
+        DeValue::Float(f) => Val::Float(
+            f.as_str()
+                .replace('_', "")
+                .parse::<f64>()
+                .unwrap_or(f64::NAN),
+        ),
         DeValue::Boolean(b) => Val::Bool(*b),
         DeValue::Datetime(d) => Val::Datetime(d.to_string()),
         DeValue::Array(a) => Val::Array(a.iter().map(|x| convert(x, file, diags)).collect()),
@@ -124,7 +131,11 @@ fn convert_table(t: &DeTable<'_>, file: usize, diags: &mut Vec<Diagnostic>) -> T
             let ks = k.span();
             Entry {
                 key: k.get_ref().to_string(),
-                key_span: Span { file, start: ks.start, end: ks.end },
+                key_span: Span {
+                    file,
+                    start: ks.start,
+                    end: ks.end,
+                },
                 node: convert(v, file, diags),
             }
         })
@@ -150,11 +161,18 @@ pub fn parse_text(text: &str, file: usize, diags: &mut Vec<Diagnostic>) -> Optio
         }
         return None;
     }
-    let span = Span { file, start: 0, end: 0 };
+    let span = Span {
+        file,
+        start: 0,
+        end: 0,
+    };
     let mut d = Vec::new();
     let t = convert_table(doc.get_ref(), file, &mut d);
     diags.extend(d);
-    Some(Node { val: Val::Table(t), span })
+    Some(Node {
+        val: Val::Table(t),
+        span,
+    })
 }
 
 fn clamp_span(text: &str, s: usize, e: usize) -> (usize, usize) {
@@ -213,8 +231,11 @@ pub fn load_file(
 ) -> Option<Node> {
     let canon = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     if let Some(pos) = stack.iter().position(|p| *p == canon) {
-        let chain: Vec<String> =
-            stack[pos..].iter().chain(std::iter::once(&canon)).map(|p| display(p)).collect();
+        let chain: Vec<String> = stack[pos..]
+            .iter()
+            .chain(std::iter::once(&canon))
+            .map(|p| display(p))
+            .collect();
         let mut d = Diagnostic::error("E0011", "include cycle")
             .help("remove one of the includes in the cycle; an included file must not include its includer");
         if let Some(s) = included_from {
@@ -224,15 +245,19 @@ pub fn load_file(
         return None;
     }
     if stack.len() > 32 {
-        diags.push(Diagnostic::error("E0011", "includes nested too deeply (more than 32 levels)"));
+        diags.push(Diagnostic::error(
+            "E0011",
+            "includes nested too deeply (more than 32 levels)",
+        ));
         return None;
     }
     let text = match std::fs::read(path) {
         Ok(bytes) => match String::from_utf8(bytes) {
             Ok(t) => t,
             Err(_) => {
-                let mut d = Diagnostic::error("E0010", format!("`{}` is not UTF-8 text", display(path)))
-                    .help("save the scene file as UTF-8");
+                let mut d =
+                    Diagnostic::error("E0010", format!("`{}` is not UTF-8 text", display(path)))
+                        .help("save the scene file as UTF-8");
                 if let Some(s) = included_from {
                     d = d.label(s, "included here");
                 }
@@ -259,8 +284,12 @@ pub fn load_file(
     let text = sources.files[file].1.clone();
     let mut node = parse_text(&text, file, diags)?;
     // Includes.
-    let Val::Table(t) = &mut node.val else { return Some(node) };
-    let Some(inc) = t.remove("include") else { return Some(node) };
+    let Val::Table(t) = &mut node.val else {
+        return Some(node);
+    };
+    let Some(inc) = t.remove("include") else {
+        return Some(node);
+    };
     let list: Vec<Node> = match inc.node.val {
         Val::Str(_) => vec![inc.node.clone()],
         Val::Array(a) => a,
@@ -325,7 +354,12 @@ pub fn display(p: &Path) -> String {
 
 /// Apply `--set key.path=value` overrides onto `root`. Each override lives in the
 /// [`COMMAND_LINE`] pseudo-file so that diagnostics can point at it.
-pub fn apply_sets(root: &mut Node, sets: &[String], sources: &mut Sources, diags: &mut Vec<Diagnostic>) {
+pub fn apply_sets(
+    root: &mut Node,
+    sets: &[String],
+    sources: &mut Sources,
+    diags: &mut Vec<Diagnostic>,
+) {
     if sets.is_empty() {
         return;
     }
@@ -360,19 +394,40 @@ pub fn apply_sets(root: &mut Node, sets: &[String], sources: &mut Sources, diags
                 shift(&mut n, vstart);
                 n
             }
-            Err(_) => Node { val: Val::Str(raw.trim().to_string()), span: Span { file, start: vstart, end } },
+            Err(_) => Node {
+                val: Val::Str(raw.trim().to_string()),
+                span: Span {
+                    file,
+                    start: vstart,
+                    end,
+                },
+            },
         };
         diags.extend(vd);
         let mut segs = Vec::new();
         let mut off = start;
         for seg in key.split('.') {
-            segs.push((seg.trim().to_string(), Span { file, start: off, end: off + seg.len() }));
+            segs.push((
+                seg.trim().to_string(),
+                Span {
+                    file,
+                    start: off,
+                    end: off + seg.len(),
+                },
+            ));
             off += seg.len() + 1;
         }
         if segs.iter().any(|(k, _)| k.is_empty()) {
             diags.push(
                 Diagnostic::error("E0030", "empty key in override")
-                    .label(Span { file, start, end: start + key.len() }, "a dotted path like `water.temperature` is expected")
+                    .label(
+                        Span {
+                            file,
+                            start,
+                            end: start + key.len(),
+                        },
+                        "a dotted path like `water.temperature` is expected",
+                    )
                     .help("write e.g. `--set camera.port.thickness=\"12 mm\"`"),
             );
             continue;
@@ -405,7 +460,11 @@ fn set_path(node: &mut Node, segs: &[(String, Span)], value: Node, diags: &mut V
                         e.key_span = *kspan;
                         merge_or_replace(&mut e.node, value);
                     }
-                    None => t.entries.push(Entry { key: key.clone(), key_span: *kspan, node: value }),
+                    None => t.entries.push(Entry {
+                        key: key.clone(),
+                        key_span: *kspan,
+                        node: value,
+                    }),
                 }
                 return;
             }
@@ -413,7 +472,10 @@ fn set_path(node: &mut Node, segs: &[(String, Span)], value: Node, diags: &mut V
                 t.entries.push(Entry {
                     key: key.clone(),
                     key_span: *kspan,
-                    node: Node { val: Val::Table(Table::default()), span: *kspan },
+                    node: Node {
+                        val: Val::Table(Table::default()),
+                        span: *kspan,
+                    },
                 });
             }
             let e = t.get_mut(key).expect("just inserted");
@@ -440,9 +502,12 @@ fn set_path(node: &mut Node, segs: &[(String, Span)], value: Node, diags: &mut V
             }
         }
         other => diags.push(
-            Diagnostic::error("E0031", format!("cannot set `{key}` inside {}", other.type_name()))
-                .label(*kspan, "this part of the path is not a table")
-                .help("only tables (and list entries by index) contain keys"),
+            Diagnostic::error(
+                "E0031",
+                format!("cannot set `{key}` inside {}", other.type_name()),
+            )
+            .label(*kspan, "this part of the path is not a table")
+            .help("only tables (and list entries by index) contain keys"),
         ),
     }
 }
