@@ -33,8 +33,12 @@ fn spot_on_lambertian_patch_in_absorbing_water_matches_analytic() {
         for i in 30..130u32 {
             // Pixel-centre ray to the plane z = 0.
             let d = cam.transform_vector(
-                DVec3::new((i as f64 + 0.5 - c.cx) / c.fx, (j as f64 + 0.5 - c.cy) / c.fy, 1.0)
-                    .normalize(),
+                DVec3::new(
+                    (i as f64 + 0.5 - c.cx) / c.fx,
+                    (j as f64 + 0.5 - c.cy) / c.fy,
+                    1.0,
+                )
+                .normalize(),
             );
             let t = -cam.translation.z / d.z;
             let p = cam.translation + t * d;
@@ -59,7 +63,10 @@ fn spot_on_lambertian_patch_in_absorbing_water_matches_analytic() {
         // f32 storage.
         let tol = 4.0 * sd / n.sqrt() + 1e-4;
         eprintln!("channel {ch}: mean ratio {mean:.6}, per-pixel sd {sd:.2e}, tol {tol:.2e}");
-        assert!((mean - 1.0).abs() < tol, "channel {ch}: mean ratio {mean}, sd {sd}, tol {tol}");
+        assert!(
+            (mean - 1.0).abs() < tol,
+            "channel {ch}: mean ratio {mean}, sd {sd}, tol {tol}"
+        );
         assert!(sd < 0.02, "channel {ch}: per-pixel spread {sd}");
     }
 }
@@ -70,22 +77,44 @@ fn busy_model() -> Model {
         let w = m.water.as_mut().unwrap();
         w.absorption = [0.3, 0.08, 0.05];
         w.scattering = [0.2, 0.25, 0.3];
-        w.phase = Phase::FournierForand { n: 1.10, mu: 3.5835, backscatter: 0.0183 };
-        w.extent = WaterExtent::BoxAroundCamera { half_size: DVec3::splat(3.0) };
+        w.phase = Phase::FournierForand {
+            n: 1.10,
+            mu: 3.5835,
+            backscatter: 0.0183,
+        };
+        w.extent = WaterExtent::BoxAroundCamera {
+            half_size: DVec3::splat(3.0),
+        };
     }
     m.site.surface = SeaSurface::Flat;
     m.site.depth = 5.0;
     m.poses[0].world_from_rig.translation.z = -3.5;
     m.objects[0].pose.translation.z = -5.0;
-    m.objects[0].material.pattern = Some(Pattern::Checker { size: 0.2, contrast: 0.3 });
+    m.objects[0].material.pattern = Some(Pattern::Checker {
+        size: 0.2,
+        contrast: 0.3,
+    });
     m.objects.push(Object {
         name: "rock".into(),
-        shape: Shape::Boulders { width: 2.0, length: 2.0, count: 6, radius: 0.3, seed: 2 },
-        pose: Pose { rotation: glam::DMat3::IDENTITY, translation: DVec3::new(0.0, 0.0, -5.0) },
+        shape: Shape::Boulders {
+            width: 2.0,
+            length: 2.0,
+            count: 6,
+            radius: 0.3,
+            seed: 2,
+        },
+        pose: Pose {
+            rotation: glam::DMat3::IDENTITY,
+            translation: DVec3::new(0.0, 0.0, -5.0),
+        },
         scale: DVec3::ONE,
         material: Material {
             albedo: [0.6, 0.5, 0.4],
-            pattern: Some(Pattern::Noise { size: 0.1, amount: 0.5, seed: 3 }),
+            pattern: Some(Pattern::Noise {
+                size: 0.1,
+                amount: 0.5,
+                seed: 3,
+            }),
         },
     });
     m.lights.push(rig_spot(DVec3::new(0.25, 0.0, 0.0), 10.0));
@@ -105,7 +134,9 @@ fn busy_model() -> Model {
     m.lights.push(Light {
         name: "sky".into(),
         mount: Mount::World,
-        kind: LightKind::Ambient { radiance: [0.05, 0.07, 0.1] },
+        kind: LightKind::Ambient {
+            radiance: [0.05, 0.07, 0.1],
+        },
     });
     let dir = DVec3::new(0.3, 0.1, -1.0).normalize();
     m.sun = Some(Sun {
@@ -134,8 +165,12 @@ fn same_bytes_with_one_and_two_threads_and_no_nan() {
         .iter()
         .map(|&n| {
             let dir = tempfile::tempdir().unwrap();
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
-            pool.install(|| render(&m, dir.path(), &RenderOptions::default())).unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap();
+            pool.install(|| render(&m, dir.path(), &RenderOptions::default()))
+                .unwrap();
             dir
         })
         .collect();
@@ -145,12 +180,19 @@ fn same_bytes_with_one_and_two_threads_and_no_nan() {
         assert!(a == b, "{f} differs between 1 and 2 threads");
     }
     let px = read_exr(&dirs[0].path().join("img_0000.exr"));
-    assert!(px.iter().all(|v| v.is_finite() && *v >= 0.0), "NaN, inf or negative pixel");
+    assert!(
+        px.iter().all(|v| v.is_finite() && *v >= 0.0),
+        "NaN, inf or negative pixel"
+    );
     // Not black: the scene is lit by four kinds of light.
     let mean = px.iter().map(|&v| v as f64).sum::<f64>() / px.len() as f64;
     assert!(mean > 1e-4, "mean {mean}");
     let depth = read_exr(&dirs[0].path().join("img_0000.depth.exr"));
     // Depth at the centre: the floor is 1.5 m below the camera (boulders may be nearer).
     let c = (18 * 48 + 24) * 3;
-    assert!(depth[c] > 0.5 && depth[c] <= 1.5 + 1e-4, "depth {}", depth[c]);
+    assert!(
+        depth[c] > 0.5 && depth[c] <= 1.5 + 1e-4,
+        "depth {}",
+        depth[c]
+    );
 }

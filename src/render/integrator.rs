@@ -128,7 +128,9 @@ impl<'a> Integrator<'a> {
             if fv != DVec3::ZERO {
                 // Water between p and the surface plane z = 0 (irradiance is given just below it).
                 let s = if p.z < 0.0 { p.z / sun.dir.z } else { 0.0 };
-                let blocked = self.scene.occluded_ray(&Ray { origin: p, dir }, f64::INFINITY);
+                let blocked = self
+                    .scene
+                    .occluded_ray(&Ray { origin: p, dir }, f64::INFINITY);
                 if !blocked {
                     l += fv * sun.irradiance * self.tr_seg(p, dir, s);
                 }
@@ -167,7 +169,9 @@ impl<'a> Integrator<'a> {
         let mut prev_pdf = 0.0;
         let mut depth = 0u32;
         loop {
-            let hit = self.scene.intersect(&Ray { origin: o, dir: d }, f64::INFINITY);
+            let hit = self
+                .scene
+                .intersect(&Ray { origin: o, dir: d }, f64::INFINITY);
             let mut t_end = hit.as_ref().map_or(f64::INFINITY, |h| h.t);
             let mut area_hit = None;
             for (i, a) in self.lights.areas.iter().enumerate() {
@@ -188,7 +192,11 @@ impl<'a> Integrator<'a> {
                     let c = ((rng.next() * 3.0) as usize).min(2);
                     let u = rng.next();
                     let st = m.sigma_t[c];
-                    let t = if st > 0.0 { a - (1.0 - u).ln() / st } else { f64::INFINITY };
+                    let t = if st > 0.0 {
+                        a - (1.0 - u).ln() / st
+                    } else {
+                        f64::INFINITY
+                    };
                     if t < b {
                         let trv = tr(m.sigma_t, t - a);
                         let pdf_d = mean(m.sigma_t * trv);
@@ -243,7 +251,11 @@ impl<'a> Integrator<'a> {
             if !can_scatter {
                 break;
             }
-            let n = if h.normal.dot(d) > 0.0 { -h.normal } else { h.normal };
+            let n = if h.normal.dot(d) > 0.0 {
+                -h.normal
+            } else {
+                h.normal
+            };
             let albedo = self.albedo(&h);
             if albedo == DVec3::ZERO {
                 break;
@@ -251,7 +263,11 @@ impl<'a> Integrator<'a> {
             let p = h.point + n * SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
             let f = |w: DVec3| {
                 let c = n.dot(w);
-                if c > 0.0 { albedo * (c / PI) } else { DVec3::ZERO }
+                if c > 0.0 {
+                    albedo * (c / PI)
+                } else {
+                    DVec3::ZERO
+                }
             };
             let pdf = |w: DVec3| n.dot(w).max(0.0) / PI;
             l += beta * self.direct(p, &f, &pdf, &|_, _| 1.0, rng);

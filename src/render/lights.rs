@@ -26,7 +26,11 @@ impl PointLight {
         match self.cone {
             Some((axis, cos_half)) => {
                 let d = (x - self.pos).normalize_or_zero();
-                if d.dot(axis) >= cos_half { self.intensity } else { DVec3::ZERO }
+                if d.dot(axis) >= cos_half {
+                    self.intensity
+                } else {
+                    DVec3::ZERO
+                }
             }
             None => self.intensity,
         }
@@ -56,7 +60,10 @@ impl AreaLight {
             return None;
         }
         let q = o + t * d - self.center;
-        let (u, v) = (q.dot(self.ax) / self.ax.length_squared(), q.dot(self.ay) / self.ay.length_squared());
+        let (u, v) = (
+            q.dot(self.ax) / self.ax.length_squared(),
+            q.dot(self.ay) / self.ay.length_squared(),
+        );
         (u.abs() <= 1.0 && v.abs() <= 1.0).then_some(t)
     }
 }
@@ -85,25 +92,42 @@ impl Lights {
                 Mount::Rig => world_from_rig.compose(p),
                 Mount::World => *p,
             };
-            let pt = |p: DVec3| to_world(&Pose { rotation: glam::DMat3::IDENTITY, translation: p }).translation;
+            let pt = |p: DVec3| {
+                to_world(&Pose {
+                    rotation: glam::DMat3::IDENTITY,
+                    translation: p,
+                })
+                .translation
+            };
             let vec = |v: DVec3| match l.mount {
                 Mount::Rig => world_from_rig.transform_vector(v),
                 Mount::World => v,
             };
             match l.kind {
-                LightKind::Point { position, intensity } => out.points.push(PointLight {
+                LightKind::Point {
+                    position,
+                    intensity,
+                } => out.points.push(PointLight {
                     pos: pt(position),
                     intensity: DVec3::from_array(intensity),
                     cone: None,
                 }),
-                LightKind::Spot { position, direction, half_angle, intensity } => {
-                    out.points.push(PointLight {
-                        pos: pt(position),
-                        intensity: DVec3::from_array(intensity),
-                        cone: Some((vec(direction).normalize(), half_angle.cos())),
-                    })
-                }
-                LightKind::Area { frame, width, height, radiance } => {
+                LightKind::Spot {
+                    position,
+                    direction,
+                    half_angle,
+                    intensity,
+                } => out.points.push(PointLight {
+                    pos: pt(position),
+                    intensity: DVec3::from_array(intensity),
+                    cone: Some((vec(direction).normalize(), half_angle.cos())),
+                }),
+                LightKind::Area {
+                    frame,
+                    width,
+                    height,
+                    radiance,
+                } => {
                     let f = to_world(&frame);
                     let ax = f.rotation.x_axis * (0.5 * width);
                     let ay = f.rotation.y_axis * (0.5 * height);
@@ -126,7 +150,10 @@ impl Lights {
                 (s.direction_air, s.irradiance)
             };
             if dir.z < 0.0 {
-                out.sun = Some(SunLight { dir: dir.normalize(), irradiance: DVec3::from_array(e) });
+                out.sun = Some(SunLight {
+                    dir: dir.normalize(),
+                    irradiance: DVec3::from_array(e),
+                });
             }
         }
         out

@@ -54,7 +54,11 @@ pub fn render_image(
     let medium = medium::Medium::new(model, cam_pos);
     let lights = lights::Lights::at_pose(model, world_from_rig);
     let integ = integrator::Integrator::new(scene, model, medium, lights);
-    let passes: Vec<usize> = if model.needs.per_channel_passes { vec![0, 1, 2] } else { vec![1] };
+    let passes: Vec<usize> = if model.needs.per_channel_passes {
+        vec![0, 1, 2]
+    } else {
+        vec![1]
+    };
     let rays: Vec<camera::CameraRays> = passes
         .iter()
         .map(|&c| camera::CameraRays::new(model, pose, cam, c))
@@ -74,7 +78,8 @@ pub fn render_image(
                 for (k, r) in rays.iter().enumerate() {
                     let mut acc = DVec3::ZERO;
                     for s in 0..spp {
-                        let mut rng = sampler::Sampler::new(seed, image_id, k as u64, pixel, s as u64);
+                        let mut rng =
+                            sampler::Sampler::new(seed, image_id, k as u64, pixel, s as u64);
                         let (du, dv) = rng.next2();
                         if let Some((o, d, wgt)) = r.ray(i as f64 + du, j as f64 + dv) {
                             let v = integ.li(o, d, &mut rng) * wgt;
@@ -95,7 +100,9 @@ pub fn render_image(
                 let r = &rays[if passes.len() == 1 { 0 } else { 1 }];
                 let z = r
                     .ray(i as f64 + 0.5, j as f64 + 0.5)
-                    .and_then(|(o, d, _)| scene.intersect(&scene::Ray { origin: o, dir: d }, f64::INFINITY))
+                    .and_then(|(o, d, _)| {
+                        scene.intersect(&scene::Ray { origin: o, dir: d }, f64::INFINITY)
+                    })
                     .map_or(0.0, |hit| cam_from_world.transform_point(hit.point).z);
                 drow.push(z as f32);
             }
@@ -111,7 +118,12 @@ pub fn render_image(
         rgb.extend(r);
         depth.extend(d);
     }
-    Ok(Image { width: w, height: h, rgb, depth })
+    Ok(Image {
+        width: w,
+        height: h,
+        rgb,
+        depth,
+    })
 }
 
 /// Linear float RGB → OpenEXR bytes on disk (atomic).
@@ -128,8 +140,16 @@ pub fn write_exr(path: &Path, width: u32, height: u32, data: &[[f32; 3]]) -> Res
 
 /// sRGB transfer of a linear value in [0, 1].
 fn srgb(x: f64) -> u8 {
-    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
-    let v = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    let x = if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let v = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
     (v * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
 }
 
@@ -160,14 +180,16 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     }
     let samples = opts.samples.unwrap_or(model.render.samples).max(1);
     let scene = scene::Scene::build(model)?;
-    let rows_total: u64 = poses.len() as u64
-        * model.cameras.iter().map(|c| c.height as u64).sum::<u64>();
+    let rows_total: u64 =
+        poses.len() as u64 * model.cameras.iter().map(|c| c.height as u64).sum::<u64>();
     let pb = if opts.progress {
         let pb = ProgressBar::new(rows_total);
         pb.set_style(
-            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})")
-                .map_err(|e| e.to_string())?
-                .progress_chars("=> "),
+            ProgressStyle::with_template(
+                "{msg:>12} [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})",
+            )
+            .map_err(|e| e.to_string())?
+            .progress_chars("=> "),
         );
         pb.set_message("rendering");
         Some(pb)
@@ -182,10 +204,19 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
             let name = model.image_name(p, c);
             let exr = out.join(format!("{name}.exr"));
             write_exr(&exr, img.width, img.height, &img.rgb)?;
-            write_png(&out.join(format!("{name}.png")), &img, model.render.exposure)?;
+            write_png(
+                &out.join(format!("{name}.png")),
+                &img,
+                model.render.exposure,
+            )?;
             if want_depth {
                 let d: Vec<[f32; 3]> = img.depth.iter().map(|&z| [z, z, z]).collect();
-                write_exr(&out.join(format!("{name}.depth.exr")), img.width, img.height, &d)?;
+                write_exr(
+                    &out.join(format!("{name}.depth.exr")),
+                    img.width,
+                    img.height,
+                    &d,
+                )?;
             }
             report.images.push(exr);
         }

@@ -12,7 +12,7 @@ pub struct Sampler {
 impl Sampler {
     /// The stream of one sample of one pixel.
     pub fn new(seed: u64, image: u64, pass: u64, pixel: u64, sample: u64) -> Sampler {
-        let mut h = mix64(seed ^ 0x5EED_0F_9053);
+        let mut h = mix64(seed ^ 0x005E_ED0F_9053);
         for k in [image, pass, pixel, sample] {
             h = mix64(h ^ k);
         }
@@ -30,6 +30,7 @@ impl Sampler {
 
     /// Uniform in [0, 1).
     #[inline]
+    #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }

@@ -24,7 +24,11 @@ pub fn nadir_model(h: f64) -> Model {
             phase: Phase::HenyeyGreenstein { g: 0.9 },
             extent: WaterExtent::Everywhere,
         }),
-        site: Site { depth: 10.0, surface: SeaSurface::None, altitude: 0.0 },
+        site: Site {
+            depth: 10.0,
+            surface: SeaSurface::None,
+            altitude: 0.0,
+        },
         sun: None,
         cameras: vec![Camera {
             name: "cam".into(),
@@ -46,15 +50,24 @@ pub fn nadir_model(h: f64) -> Model {
         lights: vec![],
         objects: vec![Object {
             name: "floor".into(),
-            shape: Shape::Plane { width: 20.0, height: 20.0 },
+            shape: Shape::Plane {
+                width: 20.0,
+                height: 20.0,
+            },
             pose: Pose::IDENTITY,
             scale: DVec3::ONE,
-            material: Material { albedo: [0.5; 3], pattern: None },
+            material: Material {
+                albedo: [0.5; 3],
+                pattern: None,
+            },
         }],
         targets: vec![],
         poses: vec![RigPose {
             name: "img_0000".into(),
-            world_from_rig: Pose { rotation: rot, translation: DVec3::new(0.0, 0.0, h) },
+            world_from_rig: Pose {
+                rotation: rot,
+                translation: DVec3::new(0.0, 0.0, h),
+            },
             time: 0.0,
             strip: 0,
         }],
