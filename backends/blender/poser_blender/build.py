@@ -42,8 +42,13 @@ def _matrix(m):
     return Matrix([list(map(float, row)) for row in np.asarray(m, dtype=float)])
 
 
+def blender_name(name):
+    """Blender names are C strings: NUL, the only character they cannot hold, becomes U+FFFD."""
+    return str(name).replace("\0", "\ufffd")
+
+
 def _new_object(coll, name, data):
-    obj = bpy.data.objects.new(name, data)
+    obj = bpy.data.objects.new(blender_name(name), data)
     coll.objects.link(obj)
     return obj
 
@@ -138,12 +143,13 @@ def _diffuse_material(name, material, scale=(1.0, 1.0, 1.0)):
         nt.links.new(tc.outputs["Object"], mp.inputs["Vector"])
         if pattern["type"] == "checker":
             size = float(pattern["size"])
-            mp.inputs["Location"].default_value = (0.5 * size, 0.5 * size, 0.5 * size)
             ck = nt.nodes.new("ShaderNodeTexChecker")
             ck.inputs["Scale"].default_value = 1.0 / size
             c2 = [a * float(pattern["contrast"]) for a in albedo]
-            ck.inputs["Color1"].default_value = (*albedo, 1.0)
-            ck.inputs["Color2"].default_value = (*c2, 1.0)
+            # Cycles picks Color1 where floor(x)+floor(y)+floor(z) is odd; poser's checker
+            # multiplies the albedo by `contrast` there (src/mesh.rs pattern_factor).
+            ck.inputs["Color1"].default_value = (*c2, 1.0)
+            ck.inputs["Color2"].default_value = (*albedo, 1.0)
             nt.links.new(mp.outputs[0], ck.inputs["Vector"])
             nt.links.new(ck.outputs["Color"], d.inputs["Color"])
         elif pattern["type"] == "noise":
@@ -579,6 +585,8 @@ def _build_objects(built, coll, desc, base_dir):
         scale = ob.get("scale", [1.0, 1.0, 1.0])
         if kind == "ply":
             me = _import_ply(os.path.join(base_dir, shape["path"]), name)
+            if shape.get("smooth"):
+                me.polygons.foreach_set("use_smooth", [True] * len(me.polygons))
         else:
             me = bpy.data.meshes.new(name)
             bm = bmesh.new()
@@ -588,23 +596,11 @@ def _build_objects(built, coll, desc, base_dir):
             elif kind == "box":
                 bmesh.ops.create_cube(bm, size=1.0)
                 bmesh.ops.scale(bm, vec=tuple(shape["size"]), verts=bm.verts)
-            elif kind == "sphere":
-                bmesh.ops.create_uvsphere(bm, u_segments=128, v_segments=64,
-                                          radius=shape["radius"])
-            elif kind == "cylinder":
-                bmesh.ops.create_cone(bm, cap_ends=True, segments=128, radius1=shape["radius"],
-                                      radius2=shape["radius"], depth=shape["height"])
             else:
                 bm.free()
                 raise ValueError(f"object {ob['name']!r}: shape {kind!r} has no Blender form")
             bm.to_mesh(me)
             bm.free()
-            smooth = kind in ("sphere", "cylinder")
-            me.polygons.foreach_set("use_smooth", [smooth] * len(me.polygons))
-            if kind == "cylinder":  # keep the caps flat
-                for p in me.polygons:
-                    if abs(p.normal.z) > 0.99:
-                        p.use_smooth = False
         me.materials.append(_diffuse_material(name, ob["material"], scale))
         obj = _new_object(coll, name, me)
         obj.matrix_world = _matrix(ob["matrix"])
@@ -719,7 +715,10 @@ def _write_png(exr_path, png_path, exposure, scene):
 
 
 def render(built, out_dir, samples=None, poses=None, progress=None, png=True):
-    """Render every (pose, camera) to `{image}.exr` (linear) and `{image}.png` in out_dir."""
+    """Render every (pose, camera) to `{image}.exr` (linear) and `{image}.png` in out_dir.
+
+    Files are written under a temporary name and renamed, so no half-written image is left.
+    """
     desc = built.desc
     scene = built.scene
     if samples:
@@ -727,9 +726,8 @@ def render(built, out_dir, samples=None, poses=None, progress=None, png=True):
     os.makedirs(out_dir, exist_ok=True)
     pose_ids = list(range(len(desc["poses"]))) if poses is None else list(poses)
     water = desc.get("water")
-    passes = [None]
-    if desc.get("per_channel_passes"):
-        passes = [0, 1, 2]
+    ref = int(desc.get("reference_channel", 1))
+    passes = [0, 1, 2] if desc.get("per_channel_passes") else [None]
     total = len(pose_ids) * len(desc["cameras"])
     done = 0
     written = []
@@ -741,28 +739,37 @@ def render(built, out_dir, samples=None, poses=None, progress=None, png=True):
             scene.camera = built.cameras[ci]
             scene.render.resolution_x = int(cam["width"])
             scene.render.resolution_y = int(cam["height"])
-            scale = geo.emitter_scale(_n_cam(desc, cam), water["ior"]) if water else [1.0] * 3
             image = pose["images"][ci]
             exr = os.path.join(out_dir, image + ".exr")
+            tmp = os.path.join(out_dir, f".poser-tmp-{ci}.exr")
+            n_cam = _n_cam(desc, cam)
             if passes == [None]:
+                # One pass with the reference channel's indices: the n^2 factor uses them too.
+                scale = [1.0] * 3
+                if water:
+                    scale = geo.emitter_scale([n_cam[ref]] * 3, [water["ior"][ref]] * 3)
                 _apply_emitters(built, scale)
-                _render_to(scene, exr)
+                _render_to(scene, tmp)
             else:
                 combined = None
+                scale = geo.emitter_scale(n_cam, water["ior"]) if water else [1.0] * 3
                 for c in passes:
                     _apply_emitters(built, scale, channel=c)
                     for node, ior in built.glass_nodes:
                         node.inputs["IOR"].default_value = float(ior(c))
-                    tmp = os.path.join(out_dir, f".{image}.pass{c}.exr")
                     _render_to(scene, tmp)
                     px = _load_pixels(tmp)
-                    os.remove(tmp)
                     if combined is None:
                         combined = np.zeros_like(px)
                     combined[..., c] = px[..., c]
-                _save_pixels(exr, combined, "OPEN_EXR", scene)
+                for node, ior in built.glass_nodes:
+                    node.inputs["IOR"].default_value = float(ior(ref))
+                _save_pixels(tmp, combined, "OPEN_EXR", scene)
             if png:
-                _write_png(exr, os.path.join(out_dir, image + ".png"), exposure, scene)
+                tmp_png = os.path.join(out_dir, f".poser-tmp-{ci}.png")
+                _write_png(tmp, tmp_png, exposure, scene)
+                os.replace(tmp_png, os.path.join(out_dir, image + ".png"))
+            os.replace(tmp, exr)
             written.append(exr)
             done += 1
             if progress:

@@ -73,6 +73,10 @@ pub struct Description {
 pub fn describe(model: &Model) -> Result<Description, String> {
     let mut assets = Vec::new();
     let mut warnings = Vec::new();
+    let base_dir = std::path::Path::new(&model.source)
+        .parent()
+        .map(|p| p.to_path_buf())
+        .unwrap_or_default();
     for cam in &model.cameras {
         if !cam.distortion.is_zero() {
             return Err(format!(
@@ -114,8 +118,9 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let images: Vec<String> =
-                (0..model.cameras.len()).map(|c| model.image_name(i, c)).collect();
+            let images: Vec<String> = (0..model.cameras.len())
+                .map(|c| model.image_name(i, c))
+                .collect();
             json!({
                 "name": p.name,
                 "world_from_rig": pose_rows(&p.world_from_rig),
@@ -144,14 +149,27 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         .iter()
         .map(|l| {
             let mut v = match &l.kind {
-                LightKind::Point { position, intensity } => {
+                LightKind::Point {
+                    position,
+                    intensity,
+                } => {
                     json!({"type": "point", "position": position, "intensity": intensity})
                 }
-                LightKind::Spot { position, direction, half_angle, intensity } => json!({
+                LightKind::Spot {
+                    position,
+                    direction,
+                    half_angle,
+                    intensity,
+                } => json!({
                     "type": "spot", "position": position, "direction": direction,
                     "half_angle": half_angle, "intensity": intensity
                 }),
-                LightKind::Area { frame, width, height, radiance } => json!({
+                LightKind::Area {
+                    frame,
+                    width,
+                    height,
+                    radiance,
+                } => json!({
                     "type": "area", "frame": pose_rows(frame), "width": width,
                     "height": height, "radiance": radiance
                 }),
@@ -166,14 +184,27 @@ pub fn describe(model: &Model) -> Result<Description, String> {
     let mut objects = Vec::new();
     for (i, o) in model.objects.iter().enumerate() {
         let shape = match &o.shape {
-            Shape::Plane { .. } | Shape::Box { .. } | Shape::Sphere { .. } | Shape::Cylinder { .. } => {
+            Shape::Plane { .. } | Shape::Box { .. } => {
                 serde_json::to_value(&o.shape).map_err(|e| e.to_string())?
             }
-            Shape::Mesh { .. } | Shape::Seabed { .. } | Shape::Boulders { .. } => {
+            Shape::Sphere { .. }
+            | Shape::Cylinder { .. }
+            | Shape::Mesh { .. }
+            | Shape::Seabed { .. }
+            | Shape::Boulders { .. } => {
+                // Tessellated by the shared mesh module (same triangles as the native
+                // renderer), in the object frame; pose and scale stay in `matrix`.
                 let path = format!("assets/object_{i}.ply");
-                let bytes = super::mesh_ply(o)?;
-                assets.push(Asset { path: path.clone(), bytes });
-                json!({"type": "ply", "path": path})
+                let mesh = crate::mesh::shape_mesh(&o.shape, &base_dir)
+                    .map_err(|e| format!("object `{}`: {e}", o.name))?;
+                let bytes =
+                    crate::mesh::ply_bytes(&mesh, crate::mesh::PlyFormat::BinaryLittleEndian);
+                let smooth = matches!(o.shape, Shape::Sphere { .. });
+                assets.push(Asset {
+                    path: path.clone(),
+                    bytes,
+                });
+                json!({"type": "ply", "path": path, "smooth": smooth})
             }
         };
         let m = pose_mat(&o.pose) * DMat4::from_scale(o.scale);
@@ -191,7 +222,10 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         match super::target_texture(t)? {
             Some(tex) => {
                 let path = format!("assets/target_{i}.png");
-                assets.push(Asset { path: path.clone(), bytes: tex.png });
+                assets.push(Asset {
+                    path: path.clone(),
+                    bytes: tex.png,
+                });
                 targets.push(json!({
                     "name": t.name,
                     "texture": path,
@@ -234,7 +268,11 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         "objects": objects,
         "targets": targets,
     });
-    Ok(Description { json, assets, warnings })
+    Ok(Description {
+        json,
+        assets,
+        warnings,
+    })
 }
 
 fn target_kind_name(k: &TargetKind) -> &'static str {
@@ -281,12 +319,18 @@ fn bounds(model: &Model) -> Value {
             Shape::Box { size } => 0.5 * size.length(),
             Shape::Sphere { radius } => *radius,
             Shape::Cylinder { radius, height } => radius.hypot(0.5 * height),
-            Shape::Seabed { width, length, roughness, .. } => {
-                0.5 * width.hypot(*length) + 4.0 * roughness
-            }
-            Shape::Boulders { width, length, radius, .. } => {
-                0.5 * width.hypot(*length) + 2.0 * radius
-            }
+            Shape::Seabed {
+                width,
+                length,
+                roughness,
+                ..
+            } => 0.5 * width.hypot(*length) + 4.0 * roughness,
+            Shape::Boulders {
+                width,
+                length,
+                radius,
+                ..
+            } => 0.5 * width.hypot(*length) + 2.0 * radius,
             Shape::Mesh { .. } => 10.0,
         };
         add(o.pose.translation, r * o.scale.max_element());
@@ -305,7 +349,11 @@ fn bounds(model: &Model) -> Value {
         .as_ref()
         .map(|w| {
             let t = w.extinction().into_iter().fold(f64::INFINITY, f64::min);
-            if t > 0.0 { (5.0 / t).clamp(5.0, 100.0) } else { 100.0 }
+            if t > 0.0 {
+                (5.0 / t).clamp(5.0, 100.0)
+            } else {
+                100.0
+            }
         })
         .unwrap_or(5.0);
     json!({"min": lo - DVec3::splat(margin), "max": hi + DVec3::splat(margin)})

@@ -22,7 +22,7 @@ pub mod data;
 pub mod pyliteral;
 
 use super::{RenderOptions, RenderReport};
-use crate::model::{Model, Object, Target};
+use crate::model::{Model, Target};
 use pyliteral::py_str;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -34,8 +34,14 @@ pub const MODULES: [(&str, &str); 3] = [
         "poser_blender.geometry",
         include_str!("../../../backends/blender/poser_blender/geometry.py"),
     ),
-    ("poser_blender.build", include_str!("../../../backends/blender/poser_blender/build.py")),
-    ("poser_blender", include_str!("../../../backends/blender/poser_blender/__init__.py")),
+    (
+        "poser_blender.build",
+        include_str!("../../../backends/blender/poser_blender/build.py"),
+    ),
+    (
+        "poser_blender",
+        include_str!("../../../backends/blender/poser_blender/__init__.py"),
+    ),
 ];
 
 const HEADER: &str = r#"#!/usr/bin/env python3
@@ -89,7 +95,11 @@ pub fn script_with_sources(description: &serde_json::Value, sources: bool) -> St
     let mut s = String::from(HEADER);
     s.push_str("POSER_BLENDER_SOURCES = {\n");
     for (name, src) in MODULES {
-        let body = if sources { py_str(src) } else { py_str("<source omitted>") };
+        let body = if sources {
+            py_str(src)
+        } else {
+            py_str("<source omitted>")
+        };
         s.push_str(&format!("    {}: {},\n", py_str(name), body));
     }
     s.push_str("}\n\n");
@@ -125,7 +135,10 @@ fn compile_report(model: &Model, out: &Path) -> Result<Compiled, String> {
     write(&out.join("scene.json"), pretty.as_bytes())?;
     let script_path = out.join("scene.py");
     write(&script_path, script(&desc.json).as_bytes())?;
-    Ok(Compiled { script: script_path, warnings: desc.warnings })
+    Ok(Compiled {
+        script: script_path,
+        warnings: desc.warnings,
+    })
 }
 
 /// Compile and render every requested pose with Cycles, then write the ground truth.
@@ -146,9 +159,12 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         cmd.arg("--poses").arg(list.join(","));
     }
     cmd.stdout(Stdio::piped()).stderr(Stdio::piped());
-    let mut child = cmd
-        .spawn()
-        .map_err(|e| format!("could not start {}: {e}", crate::backend::python::interpreter().display()))?;
+    let mut child = cmd.spawn().map_err(|e| {
+        format!(
+            "could not start {}: {e}",
+            crate::backend::python::interpreter().display()
+        )
+    })?;
     let total = (poses.len() * model.cameras.len()) as u64;
     let bar = if opts.progress {
         let b = indicatif::ProgressBar::new(total);
@@ -181,7 +197,10 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
             let mut it = rest.splitn(3, ' ');
             let done: u64 = it.next().and_then(|d| d.parse().ok()).unwrap_or(0);
             let _ = it.next();
-            if let Some(name) = it.next().and_then(|n| serde_json::from_str::<String>(n).ok()) {
+            if let Some(name) = it
+                .next()
+                .and_then(|n| serde_json::from_str::<String>(n).ok())
+            {
                 bar.set_message(name.clone());
                 images.push(out.join(format!("{name}.exr")));
             }
@@ -206,21 +225,15 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         return Err(msg);
     }
     write_truth(model, out)?;
-    Ok(RenderReport { images, seconds: t0.elapsed().as_secs_f64() })
+    Ok(RenderReport {
+        images,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }
 
 fn write_truth(model: &Model, out: &Path) -> Result<(), String> {
     let _ = (model, out);
     Ok(())
-}
-
-/// PLY bytes of a mesh-like object (glTF mesh or procedural site).
-fn mesh_ply(o: &Object) -> Result<Vec<u8>, String> {
-    Err(format!(
-        "object `{}`: meshes and procedural sites need the shared mesh module (src/mesh.rs), \
-         which this build does not have yet",
-        o.name
-    ))
 }
 
 /// A target's printed face as a PNG texture, with its size and the offset of its lower-left
