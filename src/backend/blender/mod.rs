@@ -35,8 +35,8 @@ pub const MODULES: [(&str, &str); 3] = [
         include_str!("../../../backends/blender/poser_blender/geometry.py"),
     ),
     (
-        "poser_blender.build",
-        include_str!("../../../backends/blender/poser_blender/build.py"),
+        "poser_blender.builder",
+        include_str!("../../../backends/blender/poser_blender/builder.py"),
     ),
     (
         "poser_blender",
@@ -66,7 +66,7 @@ def _load_poser_blender(sources):
     pkg.__path__ = []
     pkg.__package__ = "poser_blender"
     sys.modules["poser_blender"] = pkg
-    for name in ("poser_blender.geometry", "poser_blender.build"):
+    for name in ("poser_blender.geometry", "poser_blender.builder"):
         mod = types.ModuleType(name)
         mod.__package__ = "poser_blender"
         sys.modules[name] = mod
