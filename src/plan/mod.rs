@@ -1,3 +1,4 @@
 //! Survey planning: networks, GSD, coverage, dive profile, decompression, gas, Subsurface.
 
+pub mod deco;
 pub mod network;

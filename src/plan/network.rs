@@ -48,7 +48,9 @@ pub enum Orientation {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum NetworkSpec {
-    Explicit { poses: Vec<ExplicitPose> },
+    Explicit {
+        poses: Vec<ExplicitPose>,
+    },
     /// Parallel strips over a `width`×`length` rectangle centred on `center` (xy; z ignored),
     /// strips run along `heading` (rad, clockwise from north). `strips` forces the number of
     /// strips (else from `sidelap`). `cross_strips` adds a perpendicular pass.
@@ -67,11 +69,23 @@ pub enum NetworkSpec {
     },
     /// Archimedean spiral around `center` out to `radius`, nadir, turns `1 − sidelap`
     /// footprints apart.
-    Spiral { center: DVec3, radius: f64, altitude: f64, overlap: f64, sidelap: f64, trigger: Trigger },
+    Spiral {
+        center: DVec3,
+        radius: f64,
+        altitude: f64,
+        overlap: f64,
+        sidelap: f64,
+        trigger: Trigger,
+    },
     /// Rings around the point `center` at horizontal `radius`, one ring per `elevations` entry
     /// (rad above the horizontal plane of `center`, camera looking at `center`),
     /// `per_ring` images each.
-    Orbit { center: DVec3, radius: f64, elevations: Vec<f64>, per_ring: u32 },
+    Orbit {
+        center: DVec3,
+        radius: f64,
+        elevations: Vec<f64>,
+        per_ring: u32,
+    },
 }
 
 /// What the expansion needs to know about the camera and the site.
@@ -116,7 +130,10 @@ pub fn look_rotation(forward: DVec3, up: DVec3) -> Option<DMat3> {
 
 /// Expand a network into rig poses and its summary. Errors are messages for the user (the
 /// resolver attaches them to the network's span).
-pub fn expand(spec: &NetworkSpec, ctx: &NetworkContext) -> Result<(Vec<RigPose>, NetworkSummary), String> {
+pub fn expand(
+    spec: &NetworkSpec,
+    ctx: &NetworkContext,
+) -> Result<(Vec<RigPose>, NetworkSummary), String> {
     let _ = (spec, ctx, Pose::IDENTITY);
     Err("network expansion is not implemented yet".into())
 }
