@@ -1,4 +1,6 @@
 //! Survey planning: networks, GSD, coverage, dive profile, decompression, gas, Subsurface.
 
 pub mod deco;
+pub mod dive;
+pub mod gas;
 pub mod network;
