@@ -320,18 +320,19 @@ pub fn simulate(
             *next += every;
             let in_deco = tissues.in_deco();
             let (tts, stop) = tissues.tts(depth, cfg.ascent_rate, gas_mix, t);
-            let ndl = if phase == Phase::Bottom {
-                Some(tissues.ndl(depth, gas_mix))
-            } else {
-                None
-            };
+            let _ = phase;
+            let ndl = Some(tissues.ndl(depth, gas_mix));
             samples.push(Sample {
                 time: t,
                 depth,
                 ceiling: tissues.ceiling(),
                 ndl,
                 tts,
-                stop_depth: stop.map(|s| s.depth),
+                // The first planned stop; in deco without one (the ascent itself clears the
+                // ceiling), the ceiling rounded up to the 3 m level.
+                stop_depth: stop
+                    .map(|s| s.depth)
+                    .or_else(|| in_deco.then(|| ((tissues.ceiling() / 3.0).ceil() * 3.0).max(3.0))),
                 in_deco,
                 pressure: cfg.supply.pressure_after(used),
             });

@@ -4,3 +4,5 @@ pub mod deco;
 pub mod dive;
 pub mod gas;
 pub mod network;
+pub mod plot;
+pub mod ssrf;
