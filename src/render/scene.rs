@@ -147,10 +147,13 @@ impl Scene {
 
     /// Bounds of all geometry (`None` when empty).
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
-        self.nodes.first().filter(|_| !self.tris.is_empty()).map(|n| {
-            let f = |v: Vec3A| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
-            (f(n.lo), f(n.hi))
-        })
+        self.nodes
+            .first()
+            .filter(|_| !self.tris.is_empty())
+            .map(|n| {
+                let f = |v: Vec3A| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
+                (f(n.lo), f(n.hi))
+            })
     }
 
     fn build_bvh(&mut self) {
@@ -370,7 +373,13 @@ impl Scene {
         let d = ray.dir;
         let o32 = Vec3A::new(o.x as f32, o.y as f32, o.z as f32);
         let inv = Vec3A::ONE / Vec3A::new(d.x as f32, d.y as f32, d.z as f32);
-        let t32 = |t: f64| if t.is_finite() { (t * (1.0 + 1e-5)) as f32 } else { f32::INFINITY };
+        let t32 = |t: f64| {
+            if t.is_finite() {
+                (t * (1.0 + 1e-5)) as f32
+            } else {
+                f32::INFINITY
+            }
+        };
         let mut best: Option<(f64, u32)> = None;
         let mut stack = [0u32; 96];
         let mut sp = 0usize;
