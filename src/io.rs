@@ -38,7 +38,9 @@ pub fn write_atomic_with(
         .map_err(|e| format!("{}: {e}", dir.display()))?;
     let tmp_path = tmp.into_temp_path();
     f(&tmp_path)?;
-    tmp_path.persist(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    tmp_path
+        .persist(path)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(())
 }
 

@@ -7,7 +7,9 @@
 
 pub mod backend;
 pub mod cli;
+pub mod compare;
 pub mod io;
+pub mod mesh;
 pub mod model;
 pub mod optics;
 pub mod plan;

@@ -35,7 +35,10 @@ pub struct Pose {
 }
 
 impl Pose {
-    pub const IDENTITY: Pose = Pose { rotation: DMat3::IDENTITY, translation: DVec3::ZERO };
+    pub const IDENTITY: Pose = Pose {
+        rotation: DMat3::IDENTITY,
+        translation: DVec3::ZERO,
+    };
 
     /// Map a point from the child frame to the parent frame.
     pub fn transform_point(&self, p: DVec3) -> DVec3 {
@@ -48,7 +51,10 @@ impl Pose {
     /// The inverse transform (`child_from_parent`).
     pub fn inverse(&self) -> Pose {
         let rt = self.rotation.transpose();
-        Pose { rotation: rt, translation: -(rt * self.translation) }
+        Pose {
+            rotation: rt,
+            translation: -(rt * self.translation),
+        }
     }
     /// Composition `self ∘ other` (apply `other` first).
     pub fn compose(&self, other: &Pose) -> Pose {
@@ -123,7 +129,13 @@ impl Water {
     /// Single-scattering albedo σs/σt per channel (0 where σt = 0).
     pub fn albedo(&self) -> Rgb {
         let t = self.extinction();
-        [0, 1, 2].map(|c| if t[c] > 0.0 { self.scattering[c] / t[c] } else { 0.0 })
+        [0, 1, 2].map(|c| {
+            if t[c] > 0.0 {
+                self.scattering[c] / t[c]
+            } else {
+                0.0
+            }
+        })
     }
 }
 
@@ -134,7 +146,11 @@ pub enum IorSource {
     Constant,
     /// Quan–Fry (temperature, salinity, wavelength), with Millard–Seaver pressure correction
     /// when `depth` > 0.
-    Seawater { temperature: f64, salinity: f64, depth: f64 },
+    Seawater {
+        temperature: f64,
+        salinity: f64,
+        depth: f64,
+    },
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
@@ -174,7 +190,11 @@ pub enum SeaSurface {
     /// A flat air–water interface at z = 0.
     Flat,
     /// A wavy surface: significant wave height (m), dominant wavelength (m), wind speed (m/s).
-    Waves { height: f64, wavelength: f64, wind_speed: f64 },
+    Waves {
+        height: f64,
+        wavelength: f64,
+        wind_speed: f64,
+    },
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -282,13 +302,29 @@ pub enum Port {
     None,
     /// Flat port. Inner face `{x : normal·x = distance}`, outer face at `distance + thickness`.
     /// `normal` is a unit vector pointing from the camera into the water (untilted: +z).
-    Flat { normal: DVec3, distance: f64, thickness: f64, glass: Glass },
+    Flat {
+        normal: DVec3,
+        distance: f64,
+        thickness: f64,
+        glass: Glass,
+    },
     /// Dome port: spheres about `center` with radii `inner_radius` and
     /// `inner_radius + thickness`. `center` = 0 is a perfectly centred dome.
-    Dome { center: DVec3, inner_radius: f64, thickness: f64, glass: Glass },
+    Dome {
+        center: DVec3,
+        inner_radius: f64,
+        thickness: f64,
+        glass: Glass,
+    },
     /// Cylindrical port: coaxial cylinders of radii `inner_radius` and `inner_radius +
     /// thickness` about the line through `axis_point` with unit direction `axis`.
-    Cylinder { axis_point: DVec3, axis: DVec3, inner_radius: f64, thickness: f64, glass: Glass },
+    Cylinder {
+        axis_point: DVec3,
+        axis: DVec3,
+        inner_radius: f64,
+        thickness: f64,
+        glass: Glass,
+    },
 }
 
 impl Port {
@@ -336,10 +372,20 @@ pub enum LightKind {
     Point { position: DVec3, intensity: Rgb },
     /// Spot (strobe, LED): sharp cone of half-angle `half_angle` (rad) about unit `direction`,
     /// uniform `intensity` W/sr inside the cone, zero outside.
-    Spot { position: DVec3, direction: DVec3, half_angle: f64, intensity: Rgb },
+    Spot {
+        position: DVec3,
+        direction: DVec3,
+        half_angle: f64,
+        intensity: Rgb,
+    },
     /// One-sided rectangular area light emitting along its local +z (`frame` columns are
     /// its x, y, z axes), size `width`×`height` m, uniform `radiance` W/(m²·sr).
-    Area { frame: Pose, width: f64, height: f64, radiance: Rgb },
+    Area {
+        frame: Pose,
+        width: f64,
+        height: f64,
+        radiance: Rgb,
+    },
     /// Uniform radiance arriving from every direction, W/(m²·sr) (a crude stand-in for sky).
     Ambient { radiance: Rgb },
 }
@@ -363,20 +409,44 @@ pub struct Object {
 pub enum Shape {
     /// Triangle mesh from a glTF file (path resolved, relative to the scene file, and checked
     /// to stay inside the scene's directory tree).
-    Mesh { path: String },
+    Mesh {
+        path: String,
+    },
     /// Rectangle in the object's xy plane, centred, normal +z.
-    Plane { width: f64, height: f64 },
+    Plane {
+        width: f64,
+        height: f64,
+    },
     /// Axis-aligned box, centred.
-    Box { size: DVec3 },
-    Sphere { radius: f64 },
+    Box {
+        size: DVec3,
+    },
+    Sphere {
+        radius: f64,
+    },
     /// Cylinder along the object's z axis, centred.
-    Cylinder { radius: f64, height: f64 },
+    Cylinder {
+        radius: f64,
+        height: f64,
+    },
     /// Procedural seabed: a `width`×`length` heightfield on the object's xy plane, fractal
     /// relief of RMS `roughness` m, `resolution` m cell size, from `seed`.
-    Seabed { width: f64, length: f64, roughness: f64, resolution: f64, seed: u64 },
+    Seabed {
+        width: f64,
+        length: f64,
+        roughness: f64,
+        resolution: f64,
+        seed: u64,
+    },
     /// Procedural rock/coral field scattered on the seabed: `count` boulders of mean radius
     /// `radius` within `width`×`length`, from `seed`.
-    Boulders { width: f64, length: f64, count: u32, radius: f64, seed: u64 },
+    Boulders {
+        width: f64,
+        length: f64,
+        count: u32,
+        radius: f64,
+        seed: u64,
+    },
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -420,18 +490,37 @@ pub enum TargetKind {
     /// ((cols-1)×(rows-1)), row-major from the target's (-x, -y) corner.
     Checkerboard { cols: u32, rows: u32, square: f64 },
     /// Grid of black disks of `diameter` m at `spacing` m on white; points are the disk centres.
-    CircleGrid { cols: u32, rows: u32, spacing: f64, diameter: f64 },
+    CircleGrid {
+        cols: u32,
+        rows: u32,
+        spacing: f64,
+        diameter: f64,
+    },
     /// Coded targets (ring-coded disks), `count` of them placed on a grid of `spacing`; ids are
     /// their code numbers.
-    Coded { count: u32, spacing: f64, diameter: f64, first_code: u32 },
+    Coded {
+        count: u32,
+        spacing: f64,
+        diameter: f64,
+        first_code: u32,
+    },
     /// Scale bar of `length` m between two disk targets of `diameter` m.
-    ScaleBar { length: f64, width: f64, diameter: f64 },
+    ScaleBar {
+        length: f64,
+        width: f64,
+        diameter: f64,
+    },
     /// Siemens star GSD/resolution target of `diameter` m with `spokes` black sectors; its
     /// point is the centre.
     SiemensStar { diameter: f64, spokes: u32 },
     /// 3D test object: a staircase pyramid of `levels` steps of `step` height and `size` base
     /// width, with a disk target on every corner.
-    TestObject { size: f64, levels: u32, step: f64, diameter: f64 },
+    TestObject {
+        size: f64,
+        levels: u32,
+        step: f64,
+        diameter: f64,
+    },
 }
 
 // ------------------------------------------------------------------------------------------
@@ -551,7 +640,9 @@ impl Model {
 
     /// `world_from_camera` for camera `cam` at rig pose `pose`.
     pub fn world_from_camera(&self, pose: usize, cam: usize) -> Pose {
-        self.poses[pose].world_from_rig.compose(&self.cameras[cam].rig_from_camera)
+        self.poses[pose]
+            .world_from_rig
+            .compose(&self.cameras[cam].rig_from_camera)
     }
 
     /// Name of the image taken by camera `cam` at rig pose `pose`.

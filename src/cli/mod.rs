@@ -211,24 +211,56 @@ pub fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        Command::Validate { scenes, sets, deny_warnings } => {
-            validate::run(&scenes, &sets, deny_warnings)
-        }
+        Command::Validate {
+            scenes,
+            sets,
+            deny_warnings,
+        } => validate::run(&scenes, &sets, deny_warnings),
         Command::Explain { scene, json } => explain::run(&scene, json),
         Command::Schema { out, docs, check } => schema::run(&out, &docs, check),
-        Command::Project { scene, points, camera, frame, pose, channel, output } => {
-            project::run(&scene, &points, camera.as_deref(), frame, pose, &channel, output.as_deref())
-        }
+        Command::Project {
+            scene,
+            points,
+            camera,
+            frame,
+            pose,
+            channel,
+            output,
+        } => project::run(
+            &scene,
+            &points,
+            camera.as_deref(),
+            frame,
+            pose,
+            &channel,
+            output.as_deref(),
+        ),
         Command::Truth { scene, out } => truth::run(&scene, &out),
-        Command::Compile { scene, backend, out } => compile::run(&scene, backend, &out),
-        Command::Render { scene, backend, out, samples, poses, quiet } => {
-            render::run(&scene, backend, &out, samples, poses, quiet)
-        }
-        Command::Plan { scene, json, coverage } => plan::run(&scene, json, coverage.as_deref()),
+        Command::Compile {
+            scene,
+            backend,
+            out,
+        } => compile::run(&scene, backend, &out),
+        Command::Render {
+            scene,
+            backend,
+            out,
+            samples,
+            poses,
+            quiet,
+        } => render::run(&scene, backend, &out, samples, poses, quiet),
+        Command::Plan {
+            scene,
+            json,
+            coverage,
+        } => plan::run(&scene, json, coverage.as_deref()),
         Command::Bench { what, json, quick } => bench::run(&what, json.as_deref(), quick),
-        Command::Dive { scene, out, plot, json } => {
-            dive::run(&scene, out.as_deref(), plot.as_deref(), json)
-        }
+        Command::Dive {
+            scene,
+            out,
+            plot,
+            json,
+        } => dive::run(&scene, out.as_deref(), plot.as_deref(), json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

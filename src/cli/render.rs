@@ -12,13 +12,20 @@ pub fn run(
     quiet: bool,
 ) -> Result<(), CliError> {
     let model = load_model(scene)?;
-    if let Some(p) = poses.as_ref().and_then(|p| p.iter().find(|&&i| i >= model.poses.len())) {
+    if let Some(p) = poses
+        .as_ref()
+        .and_then(|p| p.iter().find(|&&i| i >= model.poses.len()))
+    {
         return Err(CliError::Usage(format!(
             "--poses: index {p} is out of range (the network has {} poses)",
             model.poses.len()
         )));
     }
-    let opts = RenderOptions { samples, poses, progress: !quiet };
+    let opts = RenderOptions {
+        samples,
+        poses,
+        progress: !quiet,
+    };
     let report = match backend {
         BackendArg::Native => crate::render::render(&model, out, &opts),
         BackendArg::Mitsuba => crate::backend::mitsuba::render(&model, out, &opts),

@@ -3,7 +3,11 @@
 
 /// Backscatter fraction of Henyey–Greenstein with asymmetry g.
 pub fn hg_backscatter(g: f64) -> f64 {
-    if g.abs() < 1e-9 { 0.5 } else { (1.0 - g) / (2.0 * g) * ((1.0 + g) / (1.0 + g * g).sqrt() - 1.0) }
+    if g.abs() < 1e-9 {
+        0.5
+    } else {
+        (1.0 - g) / (2.0 * g) * ((1.0 + g) / (1.0 + g * g).sqrt() - 1.0)
+    }
 }
 
 /// Backscatter fraction of Fournier–Forand with relative index `n` and Junge slope `mu`.

@@ -48,7 +48,9 @@ pub enum Orientation {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum NetworkSpec {
-    Explicit { poses: Vec<ExplicitPose> },
+    Explicit {
+        poses: Vec<ExplicitPose>,
+    },
     /// Parallel strips over a `width`×`length` rectangle centred on `center` (xy; z ignored),
     /// strips run along `heading` (rad, clockwise from north). `strips` forces the number of
     /// strips (else from `sidelap`). `cross_strips` adds a perpendicular pass.
@@ -67,11 +69,22 @@ pub enum NetworkSpec {
     },
     /// Archimedean spiral around `center` out to `radius`, nadir, turns `1 − sidelap`
     /// footprints apart.
-    Spiral { center: DVec3, radius: f64, altitude: f64, overlap: f64, sidelap: f64, trigger: Trigger },
-    /// Rings around the point `center` at horizontal `radius`, one ring per `elevations` entry
-    /// (rad above the horizontal plane of `center`, camera looking at `center`),
-    /// `per_ring` images each.
-    Orbit { center: DVec3, radius: f64, elevations: Vec<f64>, per_ring: u32 },
+    Spiral {
+        center: DVec3,
+        radius: f64,
+        altitude: f64,
+        overlap: f64,
+        sidelap: f64,
+        trigger: Trigger,
+    },
+    /// Rings on the sphere of `radius` about `center`, one ring per `elevations` entry (rad above
+    /// the horizontal plane of `center`), camera looking at `center`, `per_ring` images each.
+    Orbit {
+        center: DVec3,
+        radius: f64,
+        elevations: Vec<f64>,
+        per_ring: u32,
+    },
 }
 
 /// What the expansion needs to know about the camera and the site.
@@ -114,9 +127,564 @@ pub fn look_rotation(forward: DVec3, up: DVec3) -> Option<DMat3> {
     Some(DMat3::from_cols(x, y, z))
 }
 
+/// Largest number of rig poses a network may expand to (a typo in a spacing must not hang).
+pub const MAX_POSES: usize = 100_000;
+
 /// Expand a network into rig poses and its summary. Errors are messages for the user (the
 /// resolver attaches them to the network's span).
-pub fn expand(spec: &NetworkSpec, ctx: &NetworkContext) -> Result<(Vec<RigPose>, NetworkSummary), String> {
-    let _ = (spec, ctx, Pose::IDENTITY);
-    Err("network expansion is not implemented yet".into())
+pub fn expand(
+    spec: &NetworkSpec,
+    ctx: &NetworkContext,
+) -> Result<(Vec<RigPose>, NetworkSummary), String> {
+    if !(ctx.speed.is_finite() && ctx.speed > 0.0) {
+        return Err(format!(
+            "swim speed must be a positive number of m/s, got {}",
+            ctx.speed
+        ));
+    }
+    if !(ctx.focal_px.is_finite() && ctx.focal_px > 0.0 && ctx.magnification > 0.0) {
+        return Err("the camera's focal length must be positive".into());
+    }
+    let mut b = Builder::new(ctx.speed);
+    let mut summary = NetworkSummary {
+        speed: ctx.speed,
+        ..Default::default()
+    };
+    match spec {
+        NetworkSpec::Explicit { poses } => {
+            summary.kind = "explicit".into();
+            for (i, p) in poses.iter().enumerate() {
+                finite3(p.position, "pose position")?;
+                let rot = match &p.orientation {
+                    Orientation::LookAt { target, up } => {
+                        finite3(*target, "look_at target")?;
+                        look_rotation(*target - p.position, *up).ok_or_else(|| {
+                            format!("pose {}: the look-at target coincides with the position or the up vector is parallel to the view direction", i + 1)
+                        })?
+                    }
+                    Orientation::Rotation { rotation } => *rotation,
+                };
+                b.travel_to(p.position);
+                b.shoot(rot, 0);
+            }
+            summary.strips = 1;
+        }
+        NetworkSpec::Lawnmower {
+            center,
+            width,
+            length,
+            heading,
+            altitude,
+            overlap,
+            sidelap,
+            strips,
+            cross_strips,
+            tilt,
+            trigger,
+        } => {
+            summary.kind = if *cross_strips {
+                "lawnmower+cross".into()
+            } else {
+                "lawnmower".into()
+            };
+            positive(*altitude, "altitude")?;
+            nonneg(*width, "area width")?;
+            nonneg(*length, "area length")?;
+            fraction(*overlap, "overlap")?;
+            fraction(*sidelap, "sidelap")?;
+            let z = ctx.seabed_z + altitude;
+            let (fp_across, fp_along) = ctx.footprint_at(*altitude);
+            let along = along_spacing(trigger, *overlap, fp_along, ctx.speed)?;
+            let mut passes = vec![(*heading, *width, *length)];
+            if *cross_strips {
+                passes.push((heading + std::f64::consts::FRAC_PI_2, *length, *width));
+            }
+            let mut strip_no = 0u32;
+            let mut strip_spacing_used = None;
+            for (h, w, l) in passes {
+                let a = DVec3::new(h.sin(), h.cos(), 0.0);
+                let c = DVec3::new(h.cos(), -h.sin(), 0.0);
+                let n_strips = match strips {
+                    Some(n) if *n >= 1 => *n as usize,
+                    Some(_) => return Err("`strips` must be at least 1".into()),
+                    None => {
+                        let s = (1.0 - sidelap) * fp_across;
+                        if w <= 0.0 {
+                            1
+                        } else {
+                            (w / s - 1e-9).ceil() as usize + 1
+                        }
+                    }
+                };
+                check_count(n_strips, 1)?;
+                let ss = if n_strips > 1 {
+                    w / (n_strips - 1) as f64
+                } else {
+                    0.0
+                };
+                strip_spacing_used.get_or_insert(ss);
+                let per_strip = (l / along + 1e-9).floor() as usize + 1;
+                check_count(n_strips, per_strip)?;
+                let span = (per_strip - 1) as f64 * along;
+                let c0 = DVec3::new(center.x, center.y, z);
+                for i in 0..n_strips {
+                    let off = -w / 2.0 + i as f64 * ss;
+                    let dir = if i % 2 == 0 { a } else { -a };
+                    let base = c0 + c * off;
+                    let rot = nadir_rotation(dir, *tilt);
+                    for k in 0..per_strip {
+                        let s = -span / 2.0 + k as f64 * along;
+                        b.travel_to(base + dir * s);
+                        b.shoot(rot, strip_no);
+                    }
+                    strip_no += 1;
+                }
+            }
+            summary.altitude = Some(*altitude);
+            summary.spacing = Some(along);
+            summary.strip_spacing = strip_spacing_used;
+            summary.overlap = Some(1.0 - along / fp_along);
+            summary.sidelap = strip_spacing_used
+                .filter(|&s| s > 0.0)
+                .map(|s| 1.0 - s / fp_across);
+            summary.strips = strip_no;
+        }
+        NetworkSpec::Spiral {
+            center,
+            radius,
+            altitude,
+            overlap,
+            sidelap,
+            trigger,
+        } => {
+            summary.kind = "spiral".into();
+            positive(*altitude, "altitude")?;
+            positive(*radius, "spiral radius")?;
+            fraction(*overlap, "overlap")?;
+            fraction(*sidelap, "sidelap")?;
+            let (fp_across, fp_along) = ctx.footprint_at(*altitude);
+            let along = along_spacing(trigger, *overlap, fp_along, ctx.speed)?;
+            let turn = (1.0 - sidelap) * fp_across;
+            let bcoef = turn / std::f64::consts::TAU;
+            let theta_end = radius / bcoef;
+            let s_end = spiral_arc(bcoef, theta_end);
+            let n = (s_end / along + 1e-9).floor() as usize + 1;
+            check_count(n, 1)?;
+            let z = ctx.seabed_z + altitude;
+            let mut theta = 0.0;
+            for k in 0..n {
+                let target = k as f64 * along;
+                theta = spiral_theta(bcoef, target, theta);
+                let r = bcoef * theta;
+                let p = DVec3::new(center.x + r * theta.cos(), center.y + r * theta.sin(), z);
+                // Tangent of (r cos θ, r sin θ): (b cos θ − r sin θ, b sin θ + r cos θ).
+                let t = DVec3::new(
+                    bcoef * theta.cos() - r * theta.sin(),
+                    bcoef * theta.sin() + r * theta.cos(),
+                    0.0,
+                )
+                .normalize();
+                b.travel_to(p);
+                b.shoot(
+                    nadir_rotation(t, 0.0),
+                    (theta / std::f64::consts::TAU) as u32,
+                );
+            }
+            summary.altitude = Some(*altitude);
+            summary.spacing = Some(along);
+            summary.strip_spacing = Some(turn);
+            summary.overlap = Some(1.0 - along / fp_along);
+            summary.sidelap = Some(*sidelap);
+            summary.strips = (theta_end / std::f64::consts::TAU).ceil() as u32;
+        }
+        NetworkSpec::Orbit {
+            center,
+            radius,
+            elevations,
+            per_ring,
+        } => {
+            summary.kind = "orbit".into();
+            positive(*radius, "orbit radius")?;
+            finite3(*center, "orbit centre")?;
+            if elevations.is_empty() {
+                return Err("an orbit needs at least one ring (`elevations`)".into());
+            }
+            if *per_ring == 0 {
+                return Err("`per_ring` must be at least 1".into());
+            }
+            check_count(elevations.len(), *per_ring as usize)?;
+            for (ring, &e) in elevations.iter().enumerate() {
+                if !(e.is_finite() && e.abs() < std::f64::consts::FRAC_PI_2 + 1e-12) {
+                    return Err(format!(
+                        "ring elevation {} deg is outside [-90, 90]",
+                        e.to_degrees()
+                    ));
+                }
+                for k in 0..*per_ring {
+                    let phi = std::f64::consts::TAU * k as f64 / *per_ring as f64;
+                    let p = *center
+                        + *radius * DVec3::new(e.cos() * phi.cos(), e.cos() * phi.sin(), e.sin());
+                    let up = if e.cos() < 1e-6 {
+                        DVec3::new(-phi.cos(), -phi.sin(), 0.0) * e.signum()
+                    } else {
+                        DVec3::Z
+                    };
+                    let rot = look_rotation(*center - p, up).ok_or("degenerate orbit pose")?;
+                    b.travel_to(p);
+                    b.shoot(rot, ring as u32);
+                }
+            }
+            summary.strips = elevations.len() as u32;
+        }
+    }
+    if b.poses.is_empty() {
+        return Err("the network has no poses".into());
+    }
+    summary.path = b.path;
+    summary.path_length = b.distance;
+    summary.duration = b.distance / ctx.speed;
+    Ok((b.poses, summary))
+}
+
+/// Accumulates the swim path and the poses along it.
+struct Builder {
+    speed: f64,
+    path: Vec<DVec3>,
+    distance: f64,
+    poses: Vec<RigPose>,
+}
+
+impl Builder {
+    fn new(speed: f64) -> Self {
+        Builder {
+            speed,
+            path: Vec::new(),
+            distance: 0.0,
+            poses: Vec::new(),
+        }
+    }
+    fn travel_to(&mut self, p: DVec3) {
+        if let Some(last) = self.path.last() {
+            let d = last.distance(p);
+            if d == 0.0 {
+                return;
+            }
+            self.distance += d;
+        }
+        self.path.push(p);
+    }
+    fn shoot(&mut self, rotation: DMat3, strip: u32) {
+        let position = *self.path.last().expect("travel_to before shoot");
+        self.poses.push(RigPose {
+            name: format!("img_{:04}", self.poses.len() + 1),
+            world_from_rig: Pose {
+                rotation,
+                translation: position,
+            },
+            time: self.distance / self.speed,
+            strip,
+        });
+    }
+}
+
+/// Nadir camera travelling along `dir` (horizontal unit), image top towards the travel
+/// direction, tilted forward by `tilt` rad about the image x axis.
+fn nadir_rotation(dir: DVec3, tilt: f64) -> DMat3 {
+    let z = -DVec3::Z;
+    let y = -dir;
+    let x = y.cross(z);
+    let (s, c) = tilt.sin_cos();
+    let z2 = c * z - s * y;
+    let y2 = c * y + s * z;
+    DMat3::from_cols(x, y2, z2)
+}
+
+fn along_spacing(
+    trigger: &Trigger,
+    overlap: f64,
+    fp_along: f64,
+    speed: f64,
+) -> Result<f64, String> {
+    let s = match trigger {
+        Trigger::Overlap => (1.0 - overlap) * fp_along,
+        Trigger::Distance(d) => *d,
+        Trigger::Time(t) => t * speed,
+    };
+    if s.is_finite() && s > 0.0 {
+        Ok(s)
+    } else {
+        Err(format!(
+            "the spacing between exposures must be positive, got {s} m"
+        ))
+    }
+}
+
+fn check_count(a: usize, b: usize) -> Result<(), String> {
+    match a.checked_mul(b) {
+        Some(n) if n <= MAX_POSES => Ok(()),
+        _ => Err(format!(
+            "the network would have more than {MAX_POSES} poses; increase the spacing or shrink the area"
+        )),
+    }
+}
+
+fn positive(v: f64, what: &str) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{what} must be a positive number, got {v}"))
+    }
+}
+fn nonneg(v: f64, what: &str) -> Result<(), String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{what} must be zero or positive, got {v}"))
+    }
+}
+fn fraction(v: f64, what: &str) -> Result<(), String> {
+    if v.is_finite() && (0.0..1.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(format!("{what} must be in [0, 1), got {v}"))
+    }
+}
+fn finite3(v: DVec3, what: &str) -> Result<(), String> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(format!("{what} has a non-finite coordinate"))
+    }
+}
+
+/// Arc length of the Archimedean spiral r = bθ from 0 to θ.
+fn spiral_arc(b: f64, theta: f64) -> f64 {
+    0.5 * b * (theta * (1.0 + theta * theta).sqrt() + theta.asinh())
+}
+
+/// θ at arc length `s` (Newton from `guess`, monotone so it converges).
+fn spiral_theta(b: f64, s: f64, guess: f64) -> f64 {
+    let mut t = guess.max(0.0);
+    for _ in 0..60 {
+        let f = spiral_arc(b, t) - s;
+        let df = b * (1.0 + t * t).sqrt();
+        let step = f / df;
+        t = (t - step).max(0.0);
+        if step.abs() <= 1e-14 * t.max(1.0) {
+            break;
+        }
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ctx() -> NetworkContext {
+        NetworkContext {
+            width: 4000,
+            height: 3000,
+            focal_px: 3000.0,
+            magnification: 1.0,
+            seabed_z: -15.0,
+            speed: 0.2,
+        }
+    }
+
+    fn is_rotation(r: DMat3) -> bool {
+        (r.transpose() * r - DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .all(|v| v.abs() < 1e-12)
+            && (r.determinant() - 1.0).abs() < 1e-12
+    }
+
+    #[test]
+    fn lawnmower_counts_spacing_and_time() {
+        // Footprint at 3 m: 4 m × 3 m. Sidelap 0.5 → strip spacing ≤ 2 m; overlap 0.8 → 0.6 m.
+        let spec = NetworkSpec::Lawnmower {
+            center: DVec3::ZERO,
+            width: 10.0,
+            length: 6.0,
+            heading: 0.0,
+            altitude: 3.0,
+            overlap: 0.8,
+            sidelap: 0.5,
+            strips: None,
+            cross_strips: false,
+            tilt: 0.0,
+            trigger: Trigger::Overlap,
+        };
+        let (poses, s) = expand(&spec, &ctx()).unwrap();
+        assert_eq!(s.strips, 6); // 10 m / 2 m = 5 gaps
+        assert_eq!(poses.len(), 6 * 11); // 6 m / 0.6 m = 10 gaps
+        assert!((s.strip_spacing.unwrap() - 2.0).abs() < 1e-12);
+        // Path: 6 strips of 6 m + 5 turns of 2 m.
+        assert!((s.path_length - 46.0).abs() < 1e-9, "{}", s.path_length);
+        assert!((s.duration - 46.0 / 0.2).abs() < 1e-9);
+        let last = poses.last().unwrap();
+        assert!((last.time - s.duration).abs() < 1e-9);
+        for p in &poses {
+            assert!(is_rotation(p.world_from_rig.rotation));
+            assert!((p.world_from_rig.translation.z - (-12.0)).abs() < 1e-12);
+            // Looking straight down.
+            assert!(
+                (p.world_from_rig.rotation.z_axis - DVec3::new(0.0, 0.0, -1.0)).length() < 1e-12
+            );
+        }
+        // Boustrophedon: strip 1 runs opposite to strip 0; image top points along travel.
+        assert!(
+            (poses[0].world_from_rig.rotation.y_axis - DVec3::new(0.0, -1.0, 0.0)).length() < 1e-12
+        );
+        assert!(
+            (poses[11].world_from_rig.rotation.y_axis - DVec3::new(0.0, 1.0, 0.0)).length() < 1e-12
+        );
+    }
+
+    #[test]
+    fn cross_strips_double_the_pass() {
+        let mk = |cross| NetworkSpec::Lawnmower {
+            center: DVec3::ZERO,
+            width: 8.0,
+            length: 8.0,
+            heading: 0.3,
+            altitude: 3.0,
+            overlap: 0.7,
+            sidelap: 0.6,
+            strips: Some(4),
+            cross_strips: cross,
+            tilt: 0.0,
+            trigger: Trigger::Distance(1.0),
+        };
+        let (a, _) = expand(&mk(false), &ctx()).unwrap();
+        let (b, sb) = expand(&mk(true), &ctx()).unwrap();
+        assert_eq!(a.len(), 4 * 9);
+        assert_eq!(b.len(), 2 * a.len());
+        assert_eq!(sb.strips, 8);
+    }
+
+    #[test]
+    fn tilt_points_the_axis_forward() {
+        let spec = NetworkSpec::Lawnmower {
+            center: DVec3::ZERO,
+            width: 0.0,
+            length: 2.0,
+            heading: 0.0,
+            altitude: 3.0,
+            overlap: 0.8,
+            sidelap: 0.6,
+            strips: None,
+            cross_strips: false,
+            tilt: 30f64.to_radians(),
+            trigger: Trigger::Distance(1.0),
+        };
+        let (p, _) = expand(&spec, &ctx()).unwrap();
+        let z = p[0].world_from_rig.rotation.z_axis;
+        assert!(
+            (z - DVec3::new(0.0, 0.5, -(3f64.sqrt() / 2.0))).length() < 1e-12,
+            "{z}"
+        );
+        assert!(is_rotation(p[0].world_from_rig.rotation));
+    }
+
+    #[test]
+    fn orbit_looks_at_centre() {
+        let c = DVec3::new(1.0, 2.0, -10.0);
+        let spec = NetworkSpec::Orbit {
+            center: c,
+            radius: 2.0,
+            elevations: vec![0.3, 0.8],
+            per_ring: 12,
+        };
+        let (poses, s) = expand(&spec, &ctx()).unwrap();
+        assert_eq!(poses.len(), 24);
+        assert_eq!(s.strips, 2);
+        for p in &poses {
+            let t = p.world_from_rig.translation;
+            assert!((t.distance(c) - 2.0).abs() < 1e-12);
+            assert!((p.world_from_rig.rotation.z_axis - (c - t).normalize()).length() < 1e-12);
+            assert!(is_rotation(p.world_from_rig.rotation));
+            // Image up (−y) points upward in the world.
+            assert!(-p.world_from_rig.rotation.y_axis.z > 0.0);
+        }
+    }
+
+    #[test]
+    fn spiral_spacing_is_even_along_the_path() {
+        let spec = NetworkSpec::Spiral {
+            center: DVec3::ZERO,
+            radius: 5.0,
+            altitude: 2.0,
+            overlap: 0.8,
+            sidelap: 0.6,
+            trigger: Trigger::Distance(0.5),
+        };
+        let (poses, s) = expand(&spec, &ctx()).unwrap();
+        assert!(poses.len() > 50);
+        let r_last = poses
+            .last()
+            .unwrap()
+            .world_from_rig
+            .translation
+            .truncate()
+            .length();
+        assert!(r_last <= 5.0 + 1e-9 && r_last > 4.0, "{r_last}");
+        assert!(
+            (s.path_length - 0.5 * (poses.len() - 1) as f64).abs()
+                < 0.5 * 0.01 * poses.len() as f64
+        );
+    }
+
+    #[test]
+    fn errors_instead_of_hangs() {
+        let spec = NetworkSpec::Lawnmower {
+            center: DVec3::ZERO,
+            width: 1e6,
+            length: 1e6,
+            heading: 0.0,
+            altitude: 3.0,
+            overlap: 0.8,
+            sidelap: 0.6,
+            strips: None,
+            cross_strips: false,
+            tilt: 0.0,
+            trigger: Trigger::Distance(1e-3),
+        };
+        assert!(expand(&spec, &ctx()).unwrap_err().contains("more than"));
+        let empty = NetworkSpec::Explicit { poses: vec![] };
+        assert!(expand(&empty, &ctx()).unwrap_err().contains("no poses"));
+        let bad = NetworkSpec::Lawnmower {
+            center: DVec3::ZERO,
+            width: 1.0,
+            length: 1.0,
+            heading: 0.0,
+            altitude: f64::NAN,
+            overlap: 0.8,
+            sidelap: 0.6,
+            strips: None,
+            cross_strips: false,
+            tilt: 0.0,
+            trigger: Trigger::Overlap,
+        };
+        assert!(expand(&bad, &ctx()).is_err());
+    }
+
+    #[test]
+    fn explicit_look_at() {
+        let spec = NetworkSpec::Explicit {
+            poses: vec![ExplicitPose {
+                position: DVec3::new(0.0, -2.0, -1.0),
+                orientation: Orientation::LookAt {
+                    target: DVec3::new(0.0, 0.0, -1.0),
+                    up: DVec3::Z,
+                },
+            }],
+        };
+        let (p, _) = expand(&spec, &ctx()).unwrap();
+        let r = p[0].world_from_rig.rotation;
+        assert!((r.z_axis - DVec3::Y).length() < 1e-12);
+        assert!((r.y_axis - -DVec3::Z).length() < 1e-12);
+        assert!((r.x_axis - DVec3::X).length() < 1e-12);
+    }
 }

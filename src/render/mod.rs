@@ -1,4 +1,6 @@
 //! The native renderer: poser's own CPU path tracer (default backend, no Python).
+pub mod scene;
+
 use crate::backend::{RenderOptions, RenderReport};
 use crate::model::Model;
 use std::path::Path;

@@ -27,5 +27,7 @@ impl Failure {
 }
 
 pub fn load(_path: &Path, _sets: &[String]) -> Result<Loaded, Failure> {
-    Err(Failure { diagnostics: vec!["error: scene loading is not implemented yet\n".into()] })
+    Err(Failure {
+        diagnostics: vec!["error: scene loading is not implemented yet\n".into()],
+    })
 }

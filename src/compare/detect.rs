@@ -1,0 +1,198 @@
+//! Sub-pixel location of disk targets in rendered linear images, without perspective bias.
+//!
+//! A dark disk on a bright background is located by the area centroid of its "darkness"
+//! `w = (B − I)/(B − D)` inside a window around its predicted position, where the background
+//! B is estimated from the window's border and D is the disk's printed level. With a box pixel
+//! filter and a linear image, `w` is the fraction of each pixel covered by the disk, so the
+//! weighted centroid is the centroid of the disk's *image*. That image centroid is not the
+//! projection of the disk's centre (perspective and refraction shift it), so the truth to
+//! compare with is [`expected_centroid`]: the area centroid of the exactly projected disk
+//! outline. Both sides then measure the same quantity and no bias remains.
+
+use glam::DVec3;
+
+/// A single-channel linear image, row-major, row 0 at the top.
+pub struct Gray<'a> {
+    pub width: usize,
+    pub height: usize,
+    pub data: &'a [f32],
+}
+
+impl Gray<'_> {
+    fn at(&self, x: usize, y: usize) -> f64 {
+        self.data[y * self.width + x] as f64
+    }
+}
+
+/// Why a target could not be measured.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Miss {
+    /// The window around the prediction leaves the image.
+    NearBorder,
+    /// No contrast between disk and background (unlit, or not in the image).
+    NoContrast,
+}
+
+/// Measured centroid (pixel coordinates, centres at +0.5) of a dark disk expected near
+/// `predicted`, searching a square window of half-size `radius` px. `dark` is the disk's
+/// printed reflectance relative to the background's (e.g. 0.05/0.9); the background level is
+/// the median of the window border.
+pub fn disk_centroid(
+    img: &Gray,
+    predicted: [f64; 2],
+    radius: f64,
+    dark: f64,
+) -> Result<[f64; 2], Miss> {
+    let r = radius.ceil() as i64;
+    let (px, py) = (predicted[0].floor() as i64, predicted[1].floor() as i64);
+    let (x0, x1, y0, y1) = (px - r, px + r, py - r, py + r);
+    if x0 < 0 || y0 < 0 || x1 >= img.width as i64 || y1 >= img.height as i64 {
+        return Err(Miss::NearBorder);
+    }
+    let mut border = Vec::new();
+    for x in x0..=x1 {
+        border.push(img.at(x as usize, y0 as usize));
+        border.push(img.at(x as usize, y1 as usize));
+    }
+    for y in y0 + 1..y1 {
+        border.push(img.at(x0 as usize, y as usize));
+        border.push(img.at(x1 as usize, y as usize));
+    }
+    border.sort_by(|a, b| a.total_cmp(b));
+    let bg = border[border.len() / 2];
+    let depth = bg * (1.0 - dark);
+    if !(bg.is_finite() && depth > 0.0) {
+        return Err(Miss::NoContrast);
+    }
+    let (mut sw, mut sx, mut sy) = (0.0, 0.0, 0.0);
+    for y in y0 + 1..y1 {
+        for x in x0 + 1..x1 {
+            let w = ((bg - img.at(x as usize, y as usize)) / depth).clamp(-0.5, 1.5);
+            sw += w;
+            sx += w * (x as f64 + 0.5);
+            sy += w * (y as f64 + 0.5);
+        }
+    }
+    if sw < 0.5 {
+        return Err(Miss::NoContrast);
+    }
+    Ok([sx / sw, sy / sw])
+}
+
+/// Area centroid of the image of a disk of `radius` m centred at `center` with unit normal
+/// `normal` (world), given the exact projection `project` (world point → pixel). `None` when
+/// any outline point has no pixel.
+pub fn expected_centroid(
+    center: DVec3,
+    normal: DVec3,
+    radius: f64,
+    project: impl Fn(DVec3) -> Option<[f64; 2]>,
+) -> Option<[f64; 2]> {
+    let n = normal.normalize();
+    let a = n.any_orthonormal_vector();
+    let b = n.cross(a);
+    const N: usize = 512;
+    let mut pts = Vec::with_capacity(N);
+    for k in 0..N {
+        let t = std::f64::consts::TAU * k as f64 / N as f64;
+        pts.push(project(center + radius * (t.cos() * a + t.sin() * b))?);
+    }
+    polygon_centroid(&pts)
+}
+
+/// Area centroid of a simple polygon (shoelace).
+pub fn polygon_centroid(p: &[[f64; 2]]) -> Option<[f64; 2]> {
+    let (mut a, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    let o = p.first()?;
+    for i in 0..p.len() {
+        let (x0, y0) = (p[i][0] - o[0], p[i][1] - o[1]);
+        let j = (i + 1) % p.len();
+        let (x1, y1) = (p[j][0] - o[0], p[j][1] - o[1]);
+        let c = x0 * y1 - x1 * y0;
+        a += c;
+        cx += (x0 + x1) * c;
+        cy += (y0 + y1) * c;
+    }
+    if a.abs() < 1e-300 {
+        return None;
+    }
+    Some([o[0] + cx / (3.0 * a), o[1] + cy / (3.0 * a)])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Render a disk by exact supersampled coverage into a box-filtered image.
+    fn raster(w: usize, h: usize, c: [f64; 2], r: f64, bg: f32, fg: f32) -> Vec<f32> {
+        let s = 16;
+        let mut img = vec![0f32; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let mut inside = 0;
+                for j in 0..s {
+                    for i in 0..s {
+                        let px = x as f64 + (i as f64 + 0.5) / s as f64;
+                        let py = y as f64 + (j as f64 + 0.5) / s as f64;
+                        if (px - c[0]).powi(2) + (py - c[1]).powi(2) < r * r {
+                            inside += 1;
+                        }
+                    }
+                }
+                let f = inside as f32 / (s * s) as f32;
+                img[y * w + x] = bg * (1.0 - f) + fg * f;
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn finds_a_disk_to_a_hundredth_of_a_pixel() {
+        let c = [31.37, 22.81];
+        let data = raster(64, 48, c, 4.2, 0.9, 0.05);
+        let g = Gray {
+            width: 64,
+            height: 48,
+            data: &data,
+        };
+        let m = disk_centroid(&g, [30.0, 24.0], 8.0, 0.05 / 0.9).unwrap();
+        assert!(
+            (m[0] - c[0]).abs() < 0.01 && (m[1] - c[1]).abs() < 0.01,
+            "{m:?}"
+        );
+    }
+
+    #[test]
+    fn reports_border_and_blank() {
+        let data = vec![0.5f32; 32 * 32];
+        let g = Gray {
+            width: 32,
+            height: 32,
+            data: &data,
+        };
+        assert_eq!(
+            disk_centroid(&g, [2.0, 2.0], 5.0, 0.1),
+            Err(Miss::NearBorder)
+        );
+        assert_eq!(
+            disk_centroid(&g, [16.0, 16.0], 5.0, 0.1),
+            Err(Miss::NoContrast)
+        );
+    }
+
+    #[test]
+    fn oblique_disk_centroid_is_not_the_projected_centre() {
+        // Pinhole f = 100 px, disk of radius 0.2 m at 1 m, tilted 60°: the image centroid
+        // differs from the projection of the centre, and the polygon centroid captures it.
+        let proj = |p: DVec3| Some([100.0 * p.x / p.z + 50.0, 100.0 * p.y / p.z + 50.0]);
+        let c = DVec3::new(0.3, 0.0, 1.0);
+        let n = DVec3::new(60f64.to_radians().sin(), 0.0, -60f64.to_radians().cos());
+        let e = expected_centroid(c, n, 0.2, proj).unwrap();
+        let pc = proj(c).unwrap();
+        assert!((e[0] - pc[0]).abs() > 0.3, "{e:?} vs {pc:?}");
+        assert!((e[1] - pc[1]).abs() < 1e-9);
+        // A fronto-parallel disk's image centroid is the projected centre.
+        let e2 = expected_centroid(DVec3::new(0.0, 0.0, 1.0), DVec3::Z, 0.2, proj).unwrap();
+        assert!((e2[0] - 50.0).abs() < 1e-9 && (e2[1] - 50.0).abs() < 1e-9);
+    }
+}

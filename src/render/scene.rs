@@ -1,0 +1,551 @@
+//! The native renderer's geometry: every triangle of the model's objects and targets in one
+//! bounding-volume hierarchy (binned SAH, f64), with closest-hit and shadow (occlusion) queries.
+//!
+//! | item | meaning |
+//! |---|---|
+//! | [`SurfaceId`] | which object or target a triangle belongs to (for its material) |
+//! | [`Scene::build`] | objects via [`crate::mesh::object_mesh`]; targets as planes of their printed extent |
+//! | [`Scene::intersect`] | closest hit with `t ∈ (RAY_EPSILON, tmax)` |
+//! | [`Scene::occluded`] | is the open segment between two points blocked? |
+//!
+//! Queries are read-only, so one `Scene` is shared by every rendering thread.
+
+use crate::mesh::{TriMesh, object_mesh};
+use crate::model::Model;
+use glam::DVec3;
+use std::path::Path;
+
+/// Smallest accepted hit distance, m (self-intersection guard; geometry is f64).
+pub const RAY_EPSILON: f64 = 1e-7;
+
+/// A ray; `dir` need not be normalised (then `t` is in units of `|dir|`).
+#[derive(Debug, Clone, Copy)]
+pub struct Ray {
+    pub origin: DVec3,
+    pub dir: DVec3,
+}
+
+/// What a triangle belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SurfaceId {
+    /// Index into `model.objects`.
+    Object(u32),
+    /// Index into `model.targets`.
+    Target(u32),
+}
+
+/// A closest hit.
+#[derive(Debug, Clone, Copy)]
+pub struct Hit {
+    /// Ray parameter.
+    pub t: f64,
+    pub point: DVec3,
+    /// Unit geometric normal from the winding (not flipped towards the ray).
+    pub normal: DVec3,
+    /// Triangle index (in the scene's order).
+    pub triangle: u32,
+    pub surface: SurfaceId,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Tri {
+    v0: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    lo: DVec3,
+    hi: DVec3,
+    /// Inner node (`count == 0`): index of the left child (right = left + 1). Leaf: first
+    /// triangle.
+    start: u32,
+    count: u32,
+}
+
+/// All triangles of a model, with their BVH.
+#[derive(Debug, Clone, Default)]
+pub struct Scene {
+    tris: Vec<Tri>,
+    surface: Vec<SurfaceId>,
+    nodes: Vec<Node>,
+}
+
+const LEAF_SIZE: usize = 4;
+const BINS: usize = 16;
+
+impl Scene {
+    /// Tessellate every object and target of the model and build the BVH. glTF paths are
+    /// resolved against the directory of `model.source`.
+    pub fn build(model: &Model) -> Result<Scene, String> {
+        let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
+        let mut meshes = Vec::new();
+        for (i, o) in model.objects.iter().enumerate() {
+            meshes.push((SurfaceId::Object(i as u32), object_mesh(o, base)?));
+        }
+        for (i, t) in model.targets.iter().enumerate() {
+            meshes.push((SurfaceId::Target(i as u32), target_mesh(t)));
+        }
+        Ok(Scene::from_meshes(meshes))
+    }
+
+    /// Build from world-frame meshes.
+    pub fn from_meshes(meshes: Vec<(SurfaceId, TriMesh)>) -> Scene {
+        let mut tris = Vec::new();
+        let mut surface = Vec::new();
+        for (id, m) in &meshes {
+            for t in &m.triangles {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                let e1 = b - a;
+                let e2 = c - a;
+                if e1.cross(e2).length_squared() == 0.0 {
+                    continue; // degenerate: never hit
+                }
+                tris.push(Tri { v0: a, e1, e2 });
+                surface.push(*id);
+            }
+        }
+        let mut s = Scene {
+            tris,
+            surface,
+            nodes: Vec::new(),
+        };
+        s.build_bvh();
+        s
+    }
+
+    /// Number of (non-degenerate) triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Bounds of all geometry (`None` when empty).
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        self.nodes
+            .first()
+            .filter(|_| !self.tris.is_empty())
+            .map(|n| (n.lo, n.hi))
+    }
+
+    fn build_bvh(&mut self) {
+        let n = self.tris.len();
+        if n == 0 {
+            return;
+        }
+        let bounds: Vec<(DVec3, DVec3)> = self
+            .tris
+            .iter()
+            .map(|t| {
+                let (b, c) = (t.v0 + t.e1, t.v0 + t.e2);
+                (t.v0.min(b).min(c), t.v0.max(b).max(c))
+            })
+            .collect();
+        let cent: Vec<DVec3> = bounds.iter().map(|(l, h)| 0.5 * (*l + *h)).collect();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let mut nodes = Vec::with_capacity(2 * n / LEAF_SIZE + 1);
+        nodes.push(Node {
+            lo: DVec3::ZERO,
+            hi: DVec3::ZERO,
+            start: 0,
+            count: 0,
+        });
+        // Explicit stack: (node index, range start, range end).
+        let mut stack = vec![(0usize, 0usize, n)];
+        while let Some((ni, s, e)) = stack.pop() {
+            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            for &i in &order[s..e] {
+                let (l, h) = bounds[i as usize];
+                lo = lo.min(l);
+                hi = hi.max(h);
+                clo = clo.min(cent[i as usize]);
+                chi = chi.max(cent[i as usize]);
+            }
+            nodes[ni].lo = lo;
+            nodes[ni].hi = hi;
+            let count = e - s;
+            let make_leaf = |nodes: &mut Vec<Node>| {
+                nodes[ni].start = s as u32;
+                nodes[ni].count = count as u32;
+            };
+            if count <= LEAF_SIZE {
+                make_leaf(&mut nodes);
+                continue;
+            }
+            // Binned SAH over the widest centroid axis.
+            let ext = chi - clo;
+            let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                0
+            } else if ext.y >= ext.z {
+                1
+            } else {
+                2
+            };
+            if ext[axis] <= 0.0 {
+                // All centroids coincide: split in the middle of the list.
+                let mid = s + count / 2;
+                let l = nodes.len();
+                nodes.push(Node {
+                    lo,
+                    hi,
+                    start: 0,
+                    count: 0,
+                });
+                nodes.push(Node {
+                    lo,
+                    hi,
+                    start: 0,
+                    count: 0,
+                });
+                nodes[ni].start = l as u32;
+                nodes[ni].count = 0;
+                stack.push((l + 1, mid, e));
+                stack.push((l, s, mid));
+                continue;
+            }
+            let bin_of = |c: DVec3| {
+                (((c[axis] - clo[axis]) / ext[axis] * BINS as f64) as usize).min(BINS - 1)
+            };
+            let mut bcount = [0usize; BINS];
+            let mut blo = [DVec3::INFINITY; BINS];
+            let mut bhi = [DVec3::NEG_INFINITY; BINS];
+            for &i in &order[s..e] {
+                let b = bin_of(cent[i as usize]);
+                bcount[b] += 1;
+                blo[b] = blo[b].min(bounds[i as usize].0);
+                bhi[b] = bhi[b].max(bounds[i as usize].1);
+            }
+            let area = |l: DVec3, h: DVec3| {
+                let d = (h - l).max(DVec3::ZERO);
+                d.x * d.y + d.y * d.z + d.z * d.x
+            };
+            // Prefix/suffix sweeps.
+            let mut left_area = [0.0; BINS];
+            let mut left_n = [0usize; BINS];
+            let (mut l, mut h, mut c) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0);
+            for b in 0..BINS {
+                l = l.min(blo[b]);
+                h = h.max(bhi[b]);
+                c += bcount[b];
+                left_area[b] = if c > 0 { area(l, h) } else { 0.0 };
+                left_n[b] = c;
+            }
+            let (mut best, mut best_cost) = (usize::MAX, f64::INFINITY);
+            let (mut l, mut h, mut c) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0);
+            for b in (1..BINS).rev() {
+                l = l.min(blo[b]);
+                h = h.max(bhi[b]);
+                c += bcount[b];
+                let cost = left_area[b - 1] * left_n[b - 1] as f64 + area(l, h) * c as f64;
+                if left_n[b - 1] > 0 && c > 0 && cost < best_cost {
+                    best_cost = cost;
+                    best = b;
+                }
+            }
+            let leaf_cost = area(lo, hi) * count as f64;
+            if best != usize::MAX && best_cost >= leaf_cost && count <= 4 * LEAF_SIZE {
+                make_leaf(&mut nodes);
+                continue;
+            }
+            if best == usize::MAX {
+                // Cannot separate by bins: median split along the axis.
+                order[s..e].sort_by(|&a, &b| {
+                    cent[a as usize][axis]
+                        .total_cmp(&cent[b as usize][axis])
+                        .then(a.cmp(&b))
+                });
+                let mid = s + count / 2;
+                let l = nodes.len();
+                nodes.push(Node {
+                    lo,
+                    hi,
+                    start: 0,
+                    count: 0,
+                });
+                nodes.push(Node {
+                    lo,
+                    hi,
+                    start: 0,
+                    count: 0,
+                });
+                nodes[ni].start = l as u32;
+                nodes[ni].count = 0;
+                stack.push((l + 1, mid, e));
+                stack.push((l, s, mid));
+                continue;
+            }
+            // Partition (stable, deterministic).
+            let (left, right): (Vec<u32>, Vec<u32>) = order[s..e]
+                .iter()
+                .partition(|&&i| bin_of(cent[i as usize]) < best);
+            let mid = s + left.len();
+            order[s..mid].copy_from_slice(&left);
+            order[mid..e].copy_from_slice(&right);
+            let l = nodes.len();
+            nodes.push(Node {
+                lo,
+                hi,
+                start: 0,
+                count: 0,
+            });
+            nodes.push(Node {
+                lo,
+                hi,
+                start: 0,
+                count: 0,
+            });
+            nodes[ni].start = l as u32;
+            nodes[ni].count = 0;
+            stack.push((l + 1, mid, e));
+            stack.push((l, s, mid));
+        }
+        self.tris = order.iter().map(|&i| self.tris[i as usize]).collect();
+        self.surface = order.iter().map(|&i| self.surface[i as usize]).collect();
+        self.nodes = nodes;
+    }
+
+    #[inline]
+    fn slab(n: &Node, o: DVec3, inv: DVec3, tmax: f64) -> Option<f64> {
+        let t0 = (n.lo - o) * inv;
+        let t1 = (n.hi - o) * inv;
+        let tn = t0.min(t1);
+        let tf = t0.max(t1);
+        let enter = tn.x.max(tn.y).max(tn.z).max(0.0);
+        let exit = tf.x.min(tf.y).min(tf.z).min(tmax);
+        (enter <= exit).then_some(enter)
+    }
+
+    #[inline]
+    fn hit_tri(t: &Tri, o: DVec3, d: DVec3, tmax: f64) -> Option<f64> {
+        let p = d.cross(t.e2);
+        let det = t.e1.dot(p);
+        if det == 0.0 {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let s = o - t.v0;
+        let u = s.dot(p) * inv;
+        if !(0.0..=1.0).contains(&u) {
+            return None;
+        }
+        let q = s.cross(t.e1);
+        let v = d.dot(q) * inv;
+        if v < 0.0 || u + v > 1.0 {
+            return None;
+        }
+        let tt = t.e2.dot(q) * inv;
+        (tt > RAY_EPSILON && tt < tmax).then_some(tt)
+    }
+
+    /// Walk the BVH; `any` stops at the first hit.
+    fn traverse(&self, ray: &Ray, mut tmax: f64, any: bool) -> Option<(f64, u32)> {
+        if self.tris.is_empty() || tmax.is_nan() || tmax <= RAY_EPSILON {
+            return None;
+        }
+        let o = ray.origin;
+        let d = ray.dir;
+        let inv = DVec3::ONE / d;
+        let mut best: Option<(f64, u32)> = None;
+        let mut stack = [0u32; 96];
+        let mut sp = 0usize;
+        Self::slab(&self.nodes[0], o, inv, tmax)?;
+        let mut cur = 0u32;
+        loop {
+            let n = &self.nodes[cur as usize];
+            if n.count > 0 {
+                for k in n.start..n.start + n.count {
+                    if let Some(t) = Self::hit_tri(&self.tris[k as usize], o, d, tmax) {
+                        tmax = t;
+                        best = Some((t, k));
+                        if any {
+                            return best;
+                        }
+                    }
+                }
+            } else {
+                let (a, b) = (n.start, n.start + 1);
+                let ta = Self::slab(&self.nodes[a as usize], o, inv, tmax);
+                let tb = Self::slab(&self.nodes[b as usize], o, inv, tmax);
+                match (ta, tb) {
+                    (Some(x), Some(y)) => {
+                        let (near, far) = if x <= y { (a, b) } else { (b, a) };
+                        if sp < stack.len() {
+                            stack[sp] = far;
+                            sp += 1;
+                        }
+                        cur = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        cur = a;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        cur = b;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            // Pop the next node still in front of the current closest hit.
+            loop {
+                if sp == 0 {
+                    return best;
+                }
+                sp -= 1;
+                let c = stack[sp];
+                if Self::slab(&self.nodes[c as usize], o, inv, tmax).is_some() {
+                    cur = c;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Closest hit with `t ∈ (RAY_EPSILON, tmax)`.
+    pub fn intersect(&self, ray: &Ray, tmax: f64) -> Option<Hit> {
+        let (t, k) = self.traverse(ray, tmax, false)?;
+        let tri = &self.tris[k as usize];
+        Some(Hit {
+            t,
+            point: ray.origin + t * ray.dir,
+            normal: tri.e1.cross(tri.e2).normalize(),
+            triangle: k,
+            surface: self.surface[k as usize],
+        })
+    }
+
+    /// Whether anything blocks the open segment between `a` and `b` (both ends excluded by a
+    /// relative margin, so surfaces the points lie on do not count).
+    pub fn occluded(&self, a: DVec3, b: DVec3) -> bool {
+        let d = b - a;
+        let len = d.length();
+        if len.is_nan() || len <= 0.0 {
+            return false;
+        }
+        let margin = 1e-6 * (1.0 + a.abs().max_element().max(b.abs().max_element())) / len;
+        let o = a + d * margin;
+        self.traverse(&Ray { origin: o, dir: d }, 1.0 - 2.0 * margin, true)
+            .is_some()
+    }
+}
+
+/// A target's printed face as a plane mesh in the world frame (its extent from
+/// [`crate::targets`]).
+pub fn target_mesh(target: &crate::model::Target) -> TriMesh {
+    let (w, h) = target_extent(target);
+    crate::mesh::plane(w, h).transformed(&target.pose, DVec3::ONE)
+}
+
+/// Width and height (target x, y) of a target's printed face, m.
+pub fn target_extent(target: &crate::model::Target) -> (f64, f64) {
+    use crate::model::TargetKind as K;
+    match target.kind {
+        K::Checkerboard { cols, rows, square } => (cols as f64 * square, rows as f64 * square),
+        K::CircleGrid {
+            cols,
+            rows,
+            spacing,
+            ..
+        } => ((cols as f64 + 1.0) * spacing, (rows as f64 + 1.0) * spacing),
+        K::Coded { count, spacing, .. } => {
+            let c = (count as f64).sqrt().ceil().max(1.0);
+            let r = (count as f64 / c).ceil().max(1.0);
+            ((c + 1.0) * spacing, (r + 1.0) * spacing)
+        }
+        K::ScaleBar {
+            length,
+            width,
+            diameter,
+        } => (length + 2.0 * diameter, width),
+        K::SiemensStar { diameter, .. } => (diameter * 1.1, diameter * 1.1),
+        K::TestObject { size, .. } => (size, size),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh;
+
+    fn brute(meshes: &[(SurfaceId, TriMesh)], ray: &Ray) -> Option<f64> {
+        let mut best: Option<f64> = None;
+        for (_, m) in meshes {
+            for t in &m.triangles {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                let tri = Tri {
+                    v0: a,
+                    e1: b - a,
+                    e2: c - a,
+                };
+                if let Some(t) = Scene::hit_tri(&tri, ray.origin, ray.dir, f64::INFINITY)
+                    && best.is_none_or(|b| t < b)
+                {
+                    best = Some(t);
+                }
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn bvh_matches_brute_force() {
+        let meshes = vec![
+            (SurfaceId::Object(0), mesh::boulders(4.0, 4.0, 40, 0.3, 1)),
+            (
+                SurfaceId::Object(1),
+                mesh::seabed(6.0, 6.0, 0.1, 0.2, 2).unwrap(),
+            ),
+        ];
+        let scene = Scene::from_meshes(meshes.clone());
+        let mut h = 12345u64;
+        let mut rnd = || {
+            h = crate::mesh::mix64(h);
+            (h >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..400 {
+            let o = DVec3::new(rnd() * 6.0 - 3.0, rnd() * 6.0 - 3.0, 2.0);
+            let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, -1.0).normalize();
+            let ray = Ray { origin: o, dir: d };
+            let a = scene.intersect(&ray, f64::INFINITY).map(|h| h.t);
+            let b = brute(&meshes, &ray);
+            match (a, b) {
+                (Some(x), Some(y)) => assert!((x - y).abs() < 1e-12, "{x} {y}"),
+                (None, None) => {}
+                other => panic!("mismatch {other:?}"),
+            }
+            if let Some(t) = a {
+                assert!(scene.occluded(o, o + d * (t + 0.01)));
+                assert!(!scene.occluded(o, o + d * (t - 0.01)));
+            }
+        }
+    }
+
+    #[test]
+    fn plane_hit_point_and_normal() {
+        let s = Scene::from_meshes(vec![(SurfaceId::Target(3), mesh::plane(2.0, 2.0))]);
+        let h = s
+            .intersect(
+                &Ray {
+                    origin: DVec3::new(0.2, 0.3, 5.0),
+                    dir: -DVec3::Z,
+                },
+                100.0,
+            )
+            .unwrap();
+        assert!((h.t - 5.0).abs() < 1e-12);
+        assert_eq!(h.normal, DVec3::Z);
+        assert_eq!(h.surface, SurfaceId::Target(3));
+        assert!(
+            s.intersect(
+                &Ray {
+                    origin: DVec3::new(1.2, 0.0, 5.0),
+                    dir: -DVec3::Z
+                },
+                1e9
+            )
+            .is_none()
+        );
+    }
+}
