@@ -79,6 +79,8 @@ pub struct PassJob {
 pub struct Compiled {
     pub files: BTreeMap<String, Vec<u8>>,
     pub manifest: Manifest,
+    /// What the backend could not express exactly (also printed on stderr).
+    pub warnings: Vec<String>,
 }
 
 /// Whether `s` may be used as a file stem: ASCII letters, digits, `_`, `-`, `.`; not starting
@@ -87,7 +89,8 @@ pub fn is_safe_stem(s: &str) -> bool {
     !s.is_empty()
         && s.len() <= 200
         && !s.starts_with('.')
-        && s.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
 }
 
 /// A file-name fragment derived from a scene name (anything else becomes `_`).
@@ -95,7 +98,13 @@ fn slug(s: &str) -> String {
     let t: String = s
         .chars()
         .take(48)
-        .map(|c| if c.is_ascii_alphanumeric() || c == '_' || c == '-' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
     if t.is_empty() { "x".into() } else { t }
 }
@@ -104,36 +113,84 @@ fn seed_for(model: &Model, view_index: usize) -> u32 {
     (model.render.seed.wrapping_add(view_index as u64) & 0xffff_ffff) as u32
 }
 
-fn diffuse(material: &Material, object: &str) -> Result<El, String> {
-    if let Some(p) = &material.pattern {
-        let kind = match p {
-            Pattern::Checker { .. } => "checker",
-            Pattern::Noise { .. } => "noise",
-        };
-        return Err(format!(
-            "object `{object}`: the {kind} pattern is not supported by the Mitsuba backend yet\n  \
-             help: remove the pattern for Mitsuba, or render with the native backend"
-        ));
-    }
-    Ok(El::typed("bsdf", "twosided")
-        .child(El::typed("bsdf", "diffuse").rgb("reflectance", material.albedo)))
+/// The object's BSDF: two-sided Lambertian; a checker on a plane becomes a `checkerboard`
+/// texture with the native renderer's parity (`pattern_factor` in `crate::mesh`). Patterns
+/// Mitsuba cannot express on a shape are reported and the plain albedo is used.
+fn diffuse(o: &Object, plane: Option<(f64, f64)>, warnings: &mut Vec<String>) -> El {
+    let a = o.material.albedo;
+    let reflectance = match (&o.material.pattern, plane) {
+        (None, _) => El::typed("bsdf", "diffuse").rgb("reflectance", a),
+        (Some(Pattern::Checker { size, contrast }), Some((w, h))) if *size > 0.0 => {
+            // Object-frame x = (2u - 1)·w/2; the checkerboard's cell parity is that of
+            // ⌊2u'⌋ + ⌊2v'⌋, so u' = x/(2·size).
+            let (sx, sy) = (w * o.scale.x.abs(), h * o.scale.y.abs());
+            let (ax, ay) = (sx / (2.0 * size), sy / (2.0 * size));
+            El::typed("bsdf", "diffuse").child(
+                El::typed("texture", "checkerboard")
+                    .attr("name", "reflectance")
+                    .comment(format!("checker of {size} m, contrast {contrast}"))
+                    .rgb("color0", a)
+                    .rgb("color1", a.map(|x| x * contrast))
+                    .child(
+                        El::new("transform")
+                            .attr("name", "to_uv")
+                            .child(
+                                El::new("scale")
+                                    .attr("x", xml::num(ax))
+                                    .attr("y", xml::num(ay)),
+                            )
+                            .child(
+                                El::new("translate")
+                                    .attr("x", xml::num(-0.5 * ax))
+                                    .attr("y", xml::num(-0.5 * ay)),
+                            ),
+                    ),
+            )
+        }
+        (Some(p), _) => {
+            let kind = match p {
+                Pattern::Checker { .. } => "checker (on a non-plane shape)",
+                Pattern::Noise { .. } => "noise",
+            };
+            warnings.push(format!(
+                "object `{}`: the {kind} pattern cannot be expressed by the Mitsuba backend; \
+                 its plain albedo is used",
+                o.name
+            ));
+            El::typed("bsdf", "diffuse").rgb("reflectance", a)
+        }
+    };
+    El::typed("bsdf", "twosided").child(reflectance)
 }
 
-/// The Mitsuba shape(s) of one object.
-fn object_shapes(o: &Object, files: &mut BTreeMap<String, Vec<u8>>, index: usize) -> Result<Vec<El>, String> {
-    let _ = (files, index);
-    let bsdf = diffuse(&o.material, &o.name)?;
+/// The Mitsuba shape(s) of one object: analytic plugins for planes, boxes, spheres and
+/// cylinders; PLY meshes (world frame, from `crate::mesh`) for the rest.
+fn object_shapes(
+    model: &Model,
+    o: &Object,
+    files: &mut BTreeMap<String, Vec<u8>>,
+    index: usize,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<El>, String> {
     let s = o.scale;
     let m = o.pose.rotation;
     let t = o.pose.translation;
     let comment = format!("object `{}`", o.name);
     let uniform_xy = (s.x - s.y).abs() <= 1e-12 * s.x.abs().max(1.0);
     let uniform = uniform_xy && (s.x - s.z).abs() <= 1e-12 * s.x.abs().max(1.0);
+    let plane = match o.shape {
+        Shape::Plane { width, height } => Some((width, height)),
+        _ => None,
+    };
+    let bsdf = diffuse(o, plane, warnings);
     match &o.shape {
         Shape::Plane { width, height } => Ok(vec![
             El::typed("shape", "rectangle")
                 .comment(comment)
-                .to_world(m * DMat3::from_diagonal(s * DVec3::new(0.5 * width, 0.5 * height, 1.0)), t)
+                .to_world(
+                    m * DMat3::from_diagonal(s * DVec3::new(0.5 * width, 0.5 * height, 1.0)),
+                    t,
+                )
                 .child(bsdf),
         ]),
         Shape::Box { size } => Ok(vec![
@@ -165,31 +222,50 @@ fn object_shapes(o: &Object, files: &mut BTreeMap<String, Vec<u8>>, index: usize
                 let n = axis * sign;
                 out.push(
                     El::typed("shape", "disk")
-                        .to_world(DMat3::from_cols(m.x_axis * r, m.y_axis * r * sign, n), t + n * hz)
+                        .to_world(
+                            DMat3::from_cols(m.x_axis * r, m.y_axis * r * sign, n),
+                            t + n * hz,
+                        )
                         .child(bsdf.clone()),
                 );
             }
             Ok(out)
         }
-        other => Err(format!(
-            "object `{}`: {} shapes need triangle meshes, which the Mitsuba backend does not \
-             emit yet",
-            o.name,
-            match other {
-                Shape::Mesh { .. } => "mesh (glTF)",
-                Shape::Seabed { .. } => "seabed",
-                Shape::Boulders { .. } => "boulder",
-                Shape::Sphere { .. } => "non-uniformly scaled sphere",
-                Shape::Cylinder { .. } => "elliptic cylinder",
-                _ => "these",
+        _ => {
+            let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
+            let mesh = crate::mesh::object_mesh(o, base)?;
+            if mesh.triangles.is_empty() {
+                return Ok(vec![]);
             }
-        )),
+            let file = format!("meshes/{index:03}-{}.ply", slug(&o.name));
+            files.insert(
+                file.clone(),
+                crate::mesh::ply_bytes(&mesh, crate::mesh::PlyFormat::BinaryLittleEndian),
+            );
+            Ok(vec![
+                El::typed("shape", "ply")
+                    .comment(format!(
+                        "{comment}: {} triangles, world frame",
+                        mesh.triangles.len()
+                    ))
+                    .string("filename", &file)
+                    .boolean("face_normals", true)
+                    .child(bsdf),
+            ])
+        }
     }
 }
 
-fn target_shapes(t: &Target, files: &mut BTreeMap<String, Vec<u8>>, index: usize) -> Result<Vec<El>, String> {
+fn target_shapes(
+    t: &Target,
+    files: &mut BTreeMap<String, Vec<u8>>,
+    index: usize,
+) -> Result<Vec<El>, String> {
     let _ = (files, index);
-    Err(format!("target `{}`: target textures are not supported by the Mitsuba backend yet", t.name))
+    Err(format!(
+        "target `{}`: target textures are not supported by the Mitsuba backend yet",
+        t.name
+    ))
 }
 
 /// Compile the model to documents and assets, in memory.
@@ -197,7 +273,12 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
     if model.cameras.is_empty() {
         return Err("the scene has no camera".into());
     }
-    if let Some(i) = model.render.outputs.iter().position(|o| o != "rgb" && o != "truth") {
+    if let Some(i) = model
+        .render
+        .outputs
+        .iter()
+        .position(|o| o != "rgb" && o != "truth")
+    {
         // Only warn: the images and the truth are still right.
         eprintln!(
             "warning: output `{}` is not produced by the Mitsuba backend (only rgb and truth)",
@@ -209,11 +290,15 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
     }
     let mut files = BTreeMap::new();
     let mut shapes = Vec::new();
+    let mut warnings = Vec::new();
     for (i, o) in model.objects.iter().enumerate() {
-        shapes.extend(object_shapes(o, &mut files, i)?);
+        shapes.extend(object_shapes(model, o, &mut files, i, &mut warnings)?);
     }
     for (i, t) in model.targets.iter().enumerate() {
         shapes.extend(target_shapes(t, &mut files, i)?);
+    }
+    for w in &warnings {
+        eprintln!("warning: {w}");
     }
     let world = emit::world(model, shapes)?;
     let has_world = world.children.iter().any(|c| matches!(c, xml::Node::El(_)));
@@ -223,8 +308,11 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
         files.insert(WORLD_FILE.into(), world.to_document());
     }
 
-    let passes: Vec<Option<usize>> =
-        if model.needs.per_channel_passes { vec![Some(0), Some(1), Some(2)] } else { vec![None] };
+    let passes: Vec<Option<usize>> = if model.needs.per_channel_passes {
+        vec![Some(0), Some(1), Some(2)]
+    } else {
+        vec![None]
+    };
     let mut views = Vec::new();
     for p in 0..model.poses.len() {
         for c in 0..model.cameras.len() {
@@ -251,7 +339,11 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
                     model.cameras[c].name,
                     ["R", "G", "B"][channel],
                     CHANNEL_WAVELENGTHS_NM[channel],
-                    if pass.is_some() { "; this pass gives that channel only" } else { "" }
+                    if pass.is_some() {
+                        "; this pass gives that channel only"
+                    } else {
+                        ""
+                    }
                 );
                 let spec = emit::ViewSpec {
                     pose: p,
@@ -268,7 +360,10 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
                         "two views would both be written to `{file}`: rename the pose or camera"
                     ));
                 }
-                pass_jobs.push(PassJob { channel: *pass, xml: file });
+                pass_jobs.push(PassJob {
+                    channel: *pass,
+                    xml: file,
+                });
             }
             views.push(ViewJob {
                 image,
@@ -294,7 +389,11 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
     if files.insert(MANIFEST_FILE.into(), json).is_some() {
         return Err(format!("an image may not be named like `{MANIFEST_FILE}`"));
     }
-    Ok(Compiled { files, manifest })
+    Ok(Compiled {
+        files,
+        manifest,
+        warnings,
+    })
 }
 
 /// Write a compiled scene into `out` (each file atomically).
@@ -329,14 +428,26 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     let scene_dir = out.join("mitsuba");
     write(&compiled, &scene_dir)?;
     let poses = opts.pose_indices(model.poses.len());
-    let selected: Vec<&ViewJob> =
-        compiled.manifest.views.iter().filter(|v| poses.contains(&v.pose)).collect();
+    let selected: Vec<&ViewJob> = compiled
+        .manifest
+        .views
+        .iter()
+        .filter(|v| poses.contains(&v.pose))
+        .collect();
     let total: usize = selected.iter().map(|v| v.passes.len()).sum();
 
     let mut cmd = python::command(&driver_script());
     cmd.arg("--scene-dir").arg(&scene_dir).arg("--out").arg(out);
-    cmd.arg("--poses").arg(poses.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(","));
-    cmd.stdout(Stdio::piped()).stderr(Stdio::piped()).stdin(Stdio::null());
+    cmd.arg("--poses").arg(
+        poses
+            .iter()
+            .map(|p| p.to_string())
+            .collect::<Vec<_>>()
+            .join(","),
+    );
+    cmd.stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .stdin(Stdio::null());
     let mut child = cmd
         .spawn()
         .map_err(|e| format!("cannot run {}: {e}", python::interpreter().display()))?;
@@ -352,8 +463,10 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         indicatif::ProgressBar::hidden()
     };
     bar.set_style(
-        indicatif::ProgressStyle::with_template("mitsuba {bar:30} {pos}/{len} passes {msg} [{elapsed}]")
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        indicatif::ProgressStyle::with_template(
+            "mitsuba {bar:30} {pos}/{len} passes {msg} [{elapsed}]",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     let mut images = Vec::new();
     if let Some(stdout) = child.stdout.take() {
@@ -389,5 +502,8 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     }
     // Images are listed by the driver as file names relative to `out`.
     let images: Vec<PathBuf> = images.into_iter().map(|p| out.join(p)).collect();
-    Ok(RenderReport { images, seconds: t0.elapsed().as_secs_f64() })
+    Ok(RenderReport {
+        images,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }

@@ -74,18 +74,24 @@ impl MediumRegion {
 
 /// Decide where the medium goes for the camera at `cam_pos`.
 fn medium_region(model: &Model, cam_pos: DVec3) -> MediumRegion {
-    let Some(water) = &model.water else { return MediumRegion::None };
+    let Some(water) = &model.water else {
+        return MediumRegion::None;
+    };
     if !model.needs.medium {
         return MediumRegion::None;
     }
     match water.extent {
-        WaterExtent::BoxAroundCamera { half_size } => {
-            MediumRegion::Cube { min: cam_pos - half_size, max: cam_pos + half_size }
-        }
+        WaterExtent::BoxAroundCamera { half_size } => MediumRegion::Cube {
+            min: cam_pos - half_size,
+            max: cam_pos + half_size,
+        },
         WaterExtent::Everywhere => {
             let bounded_top = !matches!(model.site.surface, SeaSurface::None)
                 || model.sun.is_some()
-                || model.lights.iter().any(|l| matches!(l.kind, LightKind::Ambient { .. }));
+                || model
+                    .lights
+                    .iter()
+                    .any(|l| matches!(l.kind, LightKind::Ambient { .. }));
             let (lo, hi) = scene_bounds(model);
             let r = SEA_MARGIN.max(10.0 * (hi - lo).max_element());
             let c = 0.5 * (lo + hi);
@@ -122,7 +128,9 @@ fn scene_bounds(model: &Model) -> (DVec3, DVec3) {
     for l in &model.lights {
         if l.mount == Mount::World {
             match &l.kind {
-                LightKind::Point { position, .. } | LightKind::Spot { position, .. } => add(*position),
+                LightKind::Point { position, .. } | LightKind::Spot { position, .. } => {
+                    add(*position)
+                }
                 LightKind::Area { frame, .. } => add(frame.translation),
                 LightKind::Ambient { .. } => {}
             }
@@ -167,10 +175,14 @@ pub fn check_camera(cam: &Camera) -> Result<(), String> {
         ));
     }
     if cam.width == 0 || cam.height == 0 || !(cam.fx > 0.0) {
-        return Err(format!("camera `{name}`: image size and fx must be positive"));
+        return Err(format!(
+            "camera `{name}`: image size and fx must be positive"
+        ));
     }
     if thin_lens(cam).is_some() {
-        let off = (cam.cx - cam.width as f64 / 2.0).abs().max((cam.cy - cam.height as f64 / 2.0).abs());
+        let off = (cam.cx - cam.width as f64 / 2.0)
+            .abs()
+            .max((cam.cy - cam.height as f64 / 2.0).abs());
         if off > 1e-9 {
             return Err(format!(
                 "camera `{name}`: depth of field (focus distance and f-number) with an off-centre \
@@ -221,7 +233,9 @@ fn rect_to_world(el: El, centre: DVec3, e1: DVec3, e2: DVec3, n: DVec3, h1: f64,
 }
 
 fn dielectric(int_ior: f64, ext_ior: f64) -> El {
-    El::typed("bsdf", "dielectric").float("int_ior", int_ior).float("ext_ior", ext_ior)
+    El::typed("bsdf", "dielectric")
+        .float("int_ior", int_ior)
+        .float("ext_ior", ext_ior)
 }
 
 /// Port geometry in the world, with the smallest distance from the pupil to the glass (for
@@ -244,10 +258,21 @@ fn port_shapes(
     let rot = world_from_cam.rotation;
     let wp = |p: DVec3| world_from_cam.transform_point(p);
     let wv = |v: DVec3| (rot * v).normalize();
-    let outer = |el: El| if medium_outside { el.reference("exterior", WATER_ID) } else { el };
+    let outer = |el: El| {
+        if medium_outside {
+            el.reference("exterior", WATER_ID)
+        } else {
+            el
+        }
+    };
     match &cam.port {
         Port::None => Ok(None),
-        Port::Flat { normal, distance, thickness, glass } => {
+        Port::Flat {
+            normal,
+            distance,
+            thickness,
+            glass,
+        } => {
             let n_g = glass.ior[channel];
             let n = normal.normalize();
             if !(*distance > 0.0) || !(*thickness > 0.0) {
@@ -275,7 +300,8 @@ fn port_shapes(
             // Inner face, normal towards the camera: interior (behind the normal) is glass.
             shapes.push(
                 rect_to_world(
-                    El::typed("shape", "rectangle").comment(format!("port of `{name}`: inner face (air | glass)")),
+                    El::typed("shape", "rectangle")
+                        .comment(format!("port of `{name}`: inner face (air | glass)")),
                     wp(n * d),
                     we2,
                     we1,
@@ -288,7 +314,8 @@ fn port_shapes(
             // Outer face, normal towards the water.
             shapes.push(outer(
                 rect_to_world(
-                    El::typed("shape", "rectangle").comment(format!("port of `{name}`: outer face (glass | water)")),
+                    El::typed("shape", "rectangle")
+                        .comment(format!("port of `{name}`: outer face (glass | water)")),
                     wp(n * (d + t)),
                     we1,
                     we2,
@@ -304,18 +331,32 @@ fn port_shapes(
                 // Rectangle local x = other (half), y = wn (t/2), z = axis (outward normal).
                 shapes.push(outer(
                     El::typed("shape", "rectangle")
-                        .to_world(DMat3::from_cols(other * half, wn * (0.5 * t), axis), mid + axis * half)
+                        .to_world(
+                            DMat3::from_cols(other * half, wn * (0.5 * t), axis),
+                            mid + axis * half,
+                        )
                         .child(dielectric(n_g, n_out)),
                 ));
             }
             let extent = ((d + t).powi(2) + 2.0 * half * half).sqrt();
-            Ok(Some(PortShapes { shapes, clearance: d, extent }))
+            Ok(Some(PortShapes {
+                shapes,
+                clearance: d,
+                extent,
+            }))
         }
-        Port::Dome { center, inner_radius, thickness, glass } => {
+        Port::Dome {
+            center,
+            inner_radius,
+            thickness,
+            glass,
+        } => {
             let n_g = glass.ior[channel];
             let (r, t) = (*inner_radius, *thickness);
             if !(r > 0.0) || !(t > 0.0) {
-                return Err(format!("camera `{name}`: the dome port needs a positive radius and thickness"));
+                return Err(format!(
+                    "camera `{name}`: the dome port needs a positive radius and thickness"
+                ));
             }
             if center.length() >= r {
                 return Err(format!(
@@ -326,13 +367,17 @@ fn port_shapes(
             }
             let c = wp(*center);
             let inner = El::typed("shape", "sphere")
-                .comment(format!("dome port of `{name}`: inner sphere (air inside | glass)"))
+                .comment(format!(
+                    "dome port of `{name}`: inner sphere (air inside | glass)"
+                ))
                 .point("center", c)
                 .float("radius", r)
                 .child(dielectric(1.0, n_g));
             let outer_s = outer(
                 El::typed("shape", "sphere")
-                    .comment(format!("dome port of `{name}`: outer sphere (glass inside | water)"))
+                    .comment(format!(
+                        "dome port of `{name}`: outer sphere (glass inside | water)"
+                    ))
                     .point("center", c)
                     .float("radius", r + t)
                     .child(dielectric(n_g, n_out)),
@@ -343,12 +388,20 @@ fn port_shapes(
                 extent: center.length() + r + t,
             }))
         }
-        Port::Cylinder { axis_point, axis, inner_radius, thickness, glass } => {
+        Port::Cylinder {
+            axis_point,
+            axis,
+            inner_radius,
+            thickness,
+            glass,
+        } => {
             let n_g = glass.ior[channel];
             let (r, t) = (*inner_radius, *thickness);
             let u = axis.normalize();
             if !(r > 0.0) || !(t > 0.0) {
-                return Err(format!("camera `{name}`: the cylinder port needs a positive radius and thickness"));
+                return Err(format!(
+                    "camera `{name}`: the cylinder port needs a positive radius and thickness"
+                ));
             }
             // Pupil (origin) relative to the axis.
             let w = -*axis_point - (-*axis_point).dot(u) * u;
@@ -379,7 +432,13 @@ fn port_shapes(
             let mut shapes = Vec::new();
             for (rad, hl, int_ior, ext_ior, label) in [
                 (r, half_len, 1.0, n_g, "inner (air inside | glass)"),
-                (r + t, half_len + t, n_g, n_out, "outer (glass inside | water)"),
+                (
+                    r + t,
+                    half_len + t,
+                    n_g,
+                    n_out,
+                    "outer (glass inside | water)",
+                ),
             ] {
                 let is_outer = rad > r;
                 let cyl = El::typed("shape", "cylinder")
@@ -393,7 +452,10 @@ fn port_shapes(
                     let nrm = wv(u * sign);
                     let (e1, e2) = basis(nrm);
                     let disk = El::typed("shape", "disk")
-                        .to_world(DMat3::from_cols(e1 * rad, e2 * rad, nrm), wp(a0 + u * (sign * hl)))
+                        .to_world(
+                            DMat3::from_cols(e1 * rad, e2 * rad, nrm),
+                            wp(a0 + u * (sign * hl)),
+                        )
                         .child(dielectric(int_ior, ext_ior));
                     shapes.push(if is_outer { outer(disk) } else { disk });
                 }
@@ -440,7 +502,10 @@ pub fn ff_table(n: f64, mu: f64, samples: usize) -> Vec<f64> {
             (ff_cdf(n, mu, m0.clamp(-1.0, 1.0).acos()) - ff_cdf(n, mu, m1.acos())).max(0.0)
         })
         .collect();
-    let density: Vec<f64> = mass.iter().map(|m| m / (2.0 * std::f64::consts::PI * dmu)).collect();
+    let density: Vec<f64> = mass
+        .iter()
+        .map(|m| m / (2.0 * std::f64::consts::PI * dmu))
+        .collect();
     (0..samples)
         .map(|i| {
             if i == 0 {
@@ -491,7 +556,11 @@ fn water_medium(water: &Water) -> El {
             "water: absorption {:?} 1/m, scattering {:?} 1/m{}",
             water.absorption,
             water.scattering,
-            water.jerlov.as_ref().map(|j| format!(" (Jerlov {j})")).unwrap_or_default()
+            water
+                .jerlov
+                .as_ref()
+                .map(|j| format!(" (Jerlov {j})"))
+                .unwrap_or_default()
         ))
         .rgb("sigma_t", water.extinction())
         .rgb("albedo", water.albedo())
@@ -507,14 +576,15 @@ fn sensor(model: &Model, spec: &ViewSpec, near_clip: f64, in_water: bool) -> El 
     let to_world = pose.rotation * DMat3::from_diagonal(DVec3::new(-1.0, -1.0, 1.0));
     let mut s = match thin_lens(cam) {
         Some((aperture, focus)) => El::typed("sensor", "thinlens")
-            .comment(format!("f/{} focused at {focus} m", cam.f_number.unwrap_or(0.0)))
+            .comment(format!(
+                "f/{} focused at {focus} m",
+                cam.f_number.unwrap_or(0.0)
+            ))
             .float("aperture_radius", aperture)
             .float("focus_distance", focus),
         None => El::typed("sensor", "perspective"),
     };
-    s = s
-        .float("fov", fov)
-        .string("fov_axis", "x");
+    s = s.float("fov", fov).string("fov_axis", "x");
     if thin_lens(cam).is_none() {
         s = s
             .float("principal_point_offset_x", 0.5 - cam.cx / w)
@@ -523,7 +593,9 @@ fn sensor(model: &Model, spec: &ViewSpec, near_clip: f64, in_water: bool) -> El 
     s = s
         .float("near_clip", near_clip)
         .float("far_clip", 1e6)
-        .comment("OpenCV camera axes: Mitsuba's +X points left, so to_world = [R·diag(-1,-1,1) | C]")
+        .comment(
+            "OpenCV camera axes: Mitsuba's +X points left, so to_world = [R·diag(-1,-1,1) | C]",
+        )
         .to_world(to_world, pose.translation);
     if in_water {
         s = s.reference("medium", WATER_ID);
@@ -547,23 +619,38 @@ fn sensor(model: &Model, spec: &ViewSpec, near_clip: f64, in_water: bool) -> El 
 fn light(l: &Light, world_from_mount: &Pose) -> El {
     let comment = format!("light `{}`", l.name);
     match &l.kind {
-        LightKind::Point { position, intensity } => El::typed("emitter", "point")
+        LightKind::Point {
+            position,
+            intensity,
+        } => El::typed("emitter", "point")
             .comment(comment)
             .point("position", world_from_mount.transform_point(*position))
             .rgb("intensity", *intensity),
-        LightKind::Spot { position, direction, half_angle, intensity } => {
+        LightKind::Spot {
+            position,
+            direction,
+            half_angle,
+            intensity,
+        } => {
             let p = world_from_mount.transform_point(*position);
             let z = world_from_mount.transform_vector(*direction).normalize();
             let (x, y) = basis(z);
             let cutoff = half_angle.to_degrees();
             El::typed("emitter", "spot")
-                .comment(format!("{comment}: sharp cone (beam_width = cutoff_angle - 0.001°)"))
+                .comment(format!(
+                    "{comment}: sharp cone (beam_width = cutoff_angle - 0.001°)"
+                ))
                 .to_world(DMat3::from_cols(x, y, z), p)
                 .float("cutoff_angle", cutoff)
                 .float("beam_width", (cutoff - 1e-3).max(0.999 * cutoff))
                 .rgb("intensity", *intensity)
         }
-        LightKind::Area { frame, width, height, radiance } => {
+        LightKind::Area {
+            frame,
+            width,
+            height,
+            radiance,
+        } => {
             let f = world_from_mount.compose(frame);
             El::typed("shape", "rectangle")
                 .comment(format!("{comment}: one-sided, emits along its +z"))
@@ -577,23 +664,31 @@ fn light(l: &Light, world_from_mount: &Pose) -> El {
                 )
                 .child(El::typed("emitter", "area").rgb("radiance", *radiance))
         }
-        LightKind::Ambient { radiance } => {
-            El::typed("emitter", "constant").comment(comment).rgb("radiance", *radiance)
-        }
+        LightKind::Ambient { radiance } => El::typed("emitter", "constant")
+            .comment(comment)
+            .rgb("radiance", *radiance),
     }
 }
 
 fn sun(model: &Model) -> Result<Option<El>, String> {
-    let Some(sun) = &model.sun else { return Ok(None) };
+    let Some(sun) = &model.sun else {
+        return Ok(None);
+    };
     if model.needs.caustics {
-        return Err("the wavy sea surface (caustics) cannot be rendered by the Mitsuba backend: \
+        return Err(
+            "the wavy sea surface (caustics) cannot be rendered by the Mitsuba backend: \
                     sunlight refracted through a wavy dielectric surface is a caustic that \
                     Mitsuba's path tracer does not converge on\n  help: use `surface = \"flat\"` \
                     or render with the native backend"
-            .into());
+                .into(),
+        );
     }
     let (dir, e, note) = if model.water.is_some() {
-        (sun.direction_water, sun.irradiance_water, "refracted into the water, irradiance just below the surface")
+        (
+            sun.direction_water,
+            sun.irradiance_water,
+            "refracted into the water, irradiance just below the surface",
+        )
     } else {
         (sun.direction_air, sun.irradiance, "in air")
     };
@@ -604,10 +699,11 @@ fn sun(model: &Model) -> Result<Option<El>, String> {
                 sun.elevation.to_degrees(),
                 sun.azimuth.to_degrees()
             ))
-            .child(El::new("vector").attr("name", "direction").attr(
-                "value",
-                super::xml::triple(dir.normalize().to_array()),
-            ))
+            .child(
+                El::new("vector")
+                    .attr("name", "direction")
+                    .attr("value", super::xml::triple(dir.normalize().to_array())),
+            )
             .rgb("irradiance", e),
     ))
 }
@@ -616,7 +712,10 @@ fn sun(model: &Model) -> Result<Option<El>, String> {
 /// `shapes` are the already-built object/target shapes (they need asset files).
 pub fn world(model: &Model, shapes: Vec<El>) -> Result<El, String> {
     let mut root = El::new("scene").attr("version", "3.0.0");
-    root.push_comment(format!("poser scene `{}`: world content shared by every view", model.name));
+    root.push_comment(format!(
+        "poser scene `{}`: world content shared by every view",
+        model.name
+    ));
     if let Some(s) = sun(model)? {
         root.push(s);
     }
@@ -640,7 +739,13 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
     let emit_port = model.needs.refraction && !matches!(cam.port, Port::None);
     let n_out = model.ambient_ior()[spec.channel];
     let port = if emit_port {
-        port_shapes(cam, &world_from_cam, spec.channel, n_out, region.contains(cam_pos))?
+        port_shapes(
+            cam,
+            &world_from_cam,
+            spec.channel,
+            n_out,
+            region.contains(cam_pos),
+        )?
     } else {
         None
     };
@@ -657,7 +762,10 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
         }
     }
     let in_water = port.is_none() && region.contains(cam_pos);
-    let near_clip = port.as_ref().map(|p| (0.25 * p.clearance).min(1e-3)).unwrap_or(1e-3);
+    let near_clip = port
+        .as_ref()
+        .map(|p| (0.25 * p.clearance).min(1e-3))
+        .unwrap_or(1e-3);
 
     let mut root = El::new("scene").attr("version", "3.0.0");
     root.push_comment(spec.title.clone());
@@ -678,7 +786,9 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
             root.push(
                 El::typed("shape", "cube")
                     .comment(match water.extent {
-                        WaterExtent::Everywhere => "the sea: boundary of the water (no surface, no reflection)",
+                        WaterExtent::Everywhere => {
+                            "the sea: boundary of the water (no surface, no reflection)"
+                        }
                         WaterExtent::BoxAroundCamera { .. } => {
                             "water box around the camera; outside it, clear water"
                         }

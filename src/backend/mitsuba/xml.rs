@@ -25,7 +25,11 @@ pub enum Node {
 
 impl El {
     pub fn new(name: &'static str) -> El {
-        El { name, attrs: Vec::new(), children: Vec::new() }
+        El {
+            name,
+            attrs: Vec::new(),
+            children: Vec::new(),
+        }
     }
     /// `<name type="…">`.
     pub fn typed(name: &'static str, ty: &str) -> El {
@@ -54,13 +58,21 @@ impl El {
         self.child(El::new("float").attr("name", name).attr("value", num(v)))
     }
     pub fn integer(self, name: &str, v: i64) -> El {
-        self.child(El::new("integer").attr("name", name).attr("value", v.to_string()))
+        self.child(
+            El::new("integer")
+                .attr("name", name)
+                .attr("value", v.to_string()),
+        )
     }
     pub fn string(self, name: &str, v: &str) -> El {
         self.child(El::new("string").attr("name", name).attr("value", v))
     }
     pub fn boolean(self, name: &str, v: bool) -> El {
-        self.child(El::new("boolean").attr("name", name).attr("value", v.to_string()))
+        self.child(
+            El::new("boolean")
+                .attr("name", name)
+                .attr("value", v.to_string()),
+        )
     }
     /// `<rgb name="…" value="r, g, b"/>`.
     pub fn rgb(self, name: &str, v: [f64; 3]) -> El {
@@ -68,7 +80,11 @@ impl El {
     }
     /// `<point name="…" value="x, y, z"/>`.
     pub fn point(self, name: &str, p: DVec3) -> El {
-        self.child(El::new("point").attr("name", name).attr("value", triple(p.to_array())))
+        self.child(
+            El::new("point")
+                .attr("name", name)
+                .attr("value", triple(p.to_array())),
+        )
     }
     /// `<ref name="…" id="…"/>`.
     pub fn reference(self, name: &str, id: &str) -> El {
@@ -76,7 +92,11 @@ impl El {
     }
     /// `<transform name="to_world"><matrix value="…"/></transform>` for `p ↦ m·p + t`.
     pub fn to_world(self, m: DMat3, t: DVec3) -> El {
-        self.child(El::new("transform").attr("name", "to_world").child(matrix(m, t)))
+        self.child(
+            El::new("transform")
+                .attr("name", "to_world")
+                .child(matrix(m, t)),
+        )
     }
 
     /// Every attribute value in this tree, depth first (for validation).
@@ -128,9 +148,11 @@ fn write_el(w: &mut Writer<Vec<u8>>, e: &El) {
 /// Make arbitrary text safe inside `<!-- … -->`: XML-escaped, no `--`, no trailing `-`, no
 /// control characters, padded with spaces.
 pub fn comment_text(t: &str) -> String {
-    let cleaned: String =
-        t.chars().map(|c| if c.is_control() { ' ' } else { c }).collect::<String>();
-    let mut s = quick_xml::escape::escape(cleaned.as_str()).into_owned();
+    let cleaned: String = t
+        .chars()
+        .map(|c| if c.is_control() { ' ' } else { c })
+        .collect::<String>();
+    let mut s = quick_xml::escape::partial_escape(cleaned.as_str()).into_owned();
     while s.contains("--") {
         s = s.replace("--", "- -");
     }
@@ -144,7 +166,11 @@ pub fn num(x: f64) -> String {
         return format!("{x}");
     }
     let r: f64 = format!("{x:.9e}").parse().unwrap_or(x);
-    if r.abs() < 1e-12 { "0".to_string() } else { format!("{r}") }
+    if r.abs() < 1e-12 {
+        "0".to_string()
+    } else {
+        format!("{r}")
+    }
 }
 
 pub fn triple(v: [f64; 3]) -> String {
@@ -176,7 +202,11 @@ pub fn validate_finite(root: &El) -> Result<(), String> {
                 t.eq_ignore_ascii_case("nan") || t.eq_ignore_ascii_case("inf") || t == "-inf"
             })
         {
-            let name = el.attrs.iter().find(|(k, _)| *k == "name").map(|(_, v)| v.as_str());
+            let name = el
+                .attrs
+                .iter()
+                .find(|(k, _)| *k == "name")
+                .map(|(_, v)| v.as_str());
             bad = Some(format!(
                 "the Mitsuba scene would contain a non-finite number in <{}{}>: {v}",
                 el.name,
@@ -208,14 +238,18 @@ mod tests {
         let c = comment_text("a-->b<c>&--d-");
         assert!(!c.contains("--"), "{c}");
         assert!(!c.trim_end().ends_with('-') || c.ends_with(' '));
-        let doc = El::new("scene").comment("x --> <shape type=\"evil\"/> <!--").to_document();
+        let doc = El::new("scene")
+            .comment("x --> <shape type=\"evil\"/> <!--")
+            .to_document();
         let s = String::from_utf8(doc).unwrap();
         assert!(!s.contains("<shape"), "{s}");
     }
 
     #[test]
     fn attributes_are_escaped() {
-        let doc = El::new("scene").string("a", "\"/><evil x=\"&").to_document();
+        let doc = El::new("scene")
+            .string("a", "\"/><evil x=\"&")
+            .to_document();
         let s = String::from_utf8(doc).unwrap();
         assert!(s.contains("&quot;/&gt;&lt;evil x=&quot;&amp;"), "{s}");
     }
