@@ -1,6 +1,228 @@
-//! `poser explain`: the resolved model's key numbers for a person.
+//! `poser explain`: the resolved model's key numbers for a person — image count, GSD,
+//! footprint, indices per channel, lateral colour, what will be modelled and why
+//! (`--json`: the whole resolved model).
 use super::{CliError, SceneArgs};
+use crate::model::{Model, Port};
+use std::fmt::Write;
 
-pub fn run(_scene: &SceneArgs, _json: bool) -> Result<(), CliError> {
-    Err(CliError::Failed("explain: not implemented yet".into()))
+pub fn run(scene: &SceneArgs, json: bool) -> Result<(), CliError> {
+    let model = super::load_model(scene)?;
+    if json {
+        let s =
+            serde_json::to_string_pretty(&model).map_err(|e| CliError::Failed(e.to_string()))?;
+        println!("{s}");
+    } else {
+        print!("{}", explain(&model));
+    }
+    Ok(())
+}
+
+/// Nadir GSD (m/px) of camera `c` at distance `h` through its port into water of index `n`.
+fn gsd(m: &Model, c: usize, h: f64) -> f64 {
+    let cam = &m.cameras[c];
+    let mag = match (&cam.port, &m.water) {
+        (Port::Flat { .. }, Some(w)) => w.ior[1],
+        _ => 1.0,
+    };
+    h / (cam.fx * mag)
+}
+
+/// The text `poser explain` prints.
+pub fn explain(m: &Model) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "scene {} ({})", m.name, m.source);
+    if !m.description.is_empty() {
+        let _ = writeln!(s, "  {}", m.description);
+    }
+    let images = m.poses.len() * m.cameras.len();
+    let _ = writeln!(
+        s,
+        "images: {images} ({} rig pose{} × {} camera{}), network: {}",
+        m.poses.len(),
+        if m.poses.len() == 1 { "" } else { "s" },
+        m.cameras.len(),
+        if m.cameras.len() == 1 { "" } else { "s" },
+        m.network.kind
+    );
+    if m.network.path_length > 0.0 || m.network.duration > 0.0 {
+        let _ = writeln!(
+            s,
+            "path: {:.1} m at {:.2} m/s, {:.1} min{}",
+            m.network.path_length,
+            m.network.speed,
+            m.network.duration / 60.0,
+            if m.network.strips > 0 {
+                format!(", {} strips", m.network.strips)
+            } else {
+                String::new()
+            }
+        );
+    }
+    let _ = writeln!(
+        s,
+        "site: seabed at {:.2} m, surface {:?}",
+        m.site.depth, m.site.surface
+    );
+    match &m.water {
+        None => {
+            let _ = writeln!(s, "water: none (survey in air)");
+        }
+        Some(w) => {
+            let _ = writeln!(
+                s,
+                "water: n = [{:.5}, {:.5}, {:.5}] (R, G, B) from {:?}",
+                w.ior[0], w.ior[1], w.ior[2], w.ior_source
+            );
+            let _ = writeln!(
+                s,
+                "       σa = [{:.4}, {:.4}, {:.4}] 1/m, σs = [{:.4}, {:.4}, {:.4}] 1/m{}, phase {:?}",
+                w.absorption[0],
+                w.absorption[1],
+                w.absorption[2],
+                w.scattering[0],
+                w.scattering[1],
+                w.scattering[2],
+                w.jerlov
+                    .as_ref()
+                    .map(|j| format!(" (Jerlov {j})"))
+                    .unwrap_or_default(),
+                w.phase
+            );
+        }
+    }
+    if let Some(sun) = &m.sun {
+        let _ = writeln!(
+            s,
+            "sun: elevation {:.1}°, azimuth {:.1}°, in water {:.1}° from vertical",
+            sun.elevation.to_degrees(),
+            sun.azimuth.to_degrees(),
+            (-sun.direction_water.z)
+                .clamp(-1.0, 1.0)
+                .acos()
+                .to_degrees()
+        );
+    }
+    // Distance used for GSD: the network altitude, or the mean distance to the targets.
+    let dist = m.network.altitude.or_else(|| {
+        let mut sum = 0.0;
+        let mut n = 0usize;
+        for (pi, p) in m.poses.iter().enumerate() {
+            let _ = pi;
+            for t in &m.targets {
+                sum += (t.pose.translation - p.world_from_rig.translation).length();
+                n += 1;
+            }
+        }
+        (n > 0).then(|| sum / n as f64)
+    });
+    for (i, c) in m.cameras.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "camera {}: {}×{} px, f = {:.2} mm ({:.1} px), pitch {:.2} µm, {:?}",
+            c.name,
+            c.width,
+            c.height,
+            c.focal_length * 1e3,
+            c.fx,
+            c.pixel_pitch * 1e6,
+            c.lens
+        );
+        let port = match &c.port {
+            Port::None => "none".to_string(),
+            Port::Flat {
+                distance,
+                thickness,
+                glass,
+                normal,
+            } => format!(
+                "flat {} {:.1} mm thick, {:.1} mm from the pupil, tilt {:.2}°, n = [{:.4}, {:.4}, {:.4}]",
+                glass.name,
+                thickness * 1e3,
+                distance * 1e3,
+                normal.z.clamp(-1.0, 1.0).acos().to_degrees(),
+                glass.ior[0],
+                glass.ior[1],
+                glass.ior[2]
+            ),
+            Port::Dome {
+                center,
+                inner_radius,
+                thickness,
+                glass,
+            } => format!(
+                "dome {} r = {:.1} mm, {:.1} mm thick, decentred {:.2} mm, n = [{:.4}, {:.4}, {:.4}]",
+                glass.name,
+                inner_radius * 1e3,
+                thickness * 1e3,
+                center.length() * 1e3,
+                glass.ior[0],
+                glass.ior[1],
+                glass.ior[2]
+            ),
+            Port::Cylinder {
+                inner_radius,
+                thickness,
+                glass,
+                ..
+            } => format!(
+                "cylinder {} r = {:.1} mm, {:.1} mm thick, n = [{:.4}, {:.4}, {:.4}]",
+                glass.name,
+                inner_radius * 1e3,
+                thickness * 1e3,
+                glass.ior[0],
+                glass.ior[1],
+                glass.ior[2]
+            ),
+        };
+        let _ = writeln!(s, "  port: {port}");
+        if let Some(h) = dist {
+            let g = gsd(m, i, h);
+            let _ = writeln!(
+                s,
+                "  at {:.2} m: GSD {:.2} mm/px, footprint {:.2} × {:.2} m",
+                h,
+                g * 1e3,
+                g * c.width as f64,
+                g * c.height as f64
+            );
+        }
+    }
+    if let Some(o) = m.network.overlap {
+        let _ = writeln!(
+            s,
+            "overlap {:.0} %, side-lap {:.0} %",
+            o * 100.0,
+            m.network.sidelap.unwrap_or(0.0) * 100.0
+        );
+    }
+    let _ = writeln!(
+        s,
+        "targets: {} ({} known points); objects: {}; lights: {}",
+        m.targets.len(),
+        m.targets.iter().map(|t| t.points.len()).sum::<usize>(),
+        m.objects.len(),
+        m.lights.len()
+    );
+    let _ = writeln!(
+        s,
+        "lateral colour (R–B) at the corners: {:.3} px",
+        m.needs.lateral_color_px
+    );
+    let _ = writeln!(s, "will be modelled:");
+    for r in &m.needs.reasons {
+        let _ = writeln!(s, "  - {r}");
+    }
+    if let Some(d) = &m.diver {
+        let _ = writeln!(
+            s,
+            "diver: {:.2} m/s, SAC {:.1} l/min, GF {:.0}/{:.0}, {} cylinder{}",
+            d.speed,
+            d.sac * 60e3,
+            d.gf_low * 100.0,
+            d.gf_high * 100.0,
+            d.cylinders.len(),
+            if d.cylinders.len() == 1 { "" } else { "s" }
+        );
+    }
+    s
 }

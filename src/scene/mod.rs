@@ -1,33 +1,104 @@
 //! The scene format front end: TOML scene files (with includes and `--set` overrides) →
 //! diagnostics → the resolved [`Model`](crate::model::Model).
+//!
+//! Pipeline: [`source`] reads files into a spanned tree and merges includes and overrides;
+//! [`resolve`] reads every table through [`reader`] (unit conversion, unknown keys, type
+//! errors — all collected, never stopping at the first) into the model; [`check`] runs the
+//! whole-scene physical checks; [`diag`] renders everything rustc-style. The format itself
+//! (every table, key, unit and default) is documented in `docs/format.md`.
+pub mod check;
+pub mod diag;
+pub mod reader;
+pub mod resolve;
+pub mod source;
+
+pub use diag::{Diagnostic, Severity, Span};
+
 use crate::model::Model;
 use std::path::Path;
 
 /// A successfully loaded scene, with its warnings.
 pub struct Loaded {
     pub model: Model,
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Diagnostic>,
 }
 
 impl Loaded {
+    /// All warnings, rendered.
     pub fn render_warnings(&self) -> String {
-        self.warnings.join("")
+        self.warnings.iter().map(|d| d.rendered.as_str()).collect()
     }
 }
 
 /// A scene that failed to load; `render` gives the full diagnostic text.
 pub struct Failure {
-    pub diagnostics: Vec<String>,
+    /// Errors and warnings, in source order of discovery.
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl std::fmt::Debug for Failure {
+    /// The rendered diagnostics, so `load(..).unwrap()` panics with a readable message.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.render())
+    }
+}
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.render())
+    }
 }
 
 impl Failure {
     pub fn render(&self) -> String {
-        self.diagnostics.join("")
+        let mut s: String = self
+            .diagnostics
+            .iter()
+            .map(|d| d.rendered.as_str())
+            .collect();
+        let n = self.errors().count();
+        s.push_str(&format!(
+            "error: the scene is invalid ({n} error{})\n",
+            if n == 1 { "" } else { "s" }
+        ));
+        s
+    }
+    pub fn errors(&self) -> impl Iterator<Item = &Diagnostic> {
+        self.diagnostics.iter().filter(|d| d.is_error())
     }
 }
 
-pub fn load(_path: &Path, _sets: &[String]) -> Result<Loaded, Failure> {
-    Err(Failure {
-        diagnostics: vec!["error: scene loading is not implemented yet\n".into()],
-    })
+/// Load, validate and resolve a scene file with `--set KEY=VALUE` overrides.
+pub fn load(path: &Path, sets: &[String]) -> Result<Loaded, Failure> {
+    let mut sources = source::Sources::default();
+    let mut diags = Vec::new();
+    let root = source::load_file(path, &mut sources, &mut diags, &mut Vec::new(), None);
+    let Some(mut root) = root else {
+        return Err(finish_failure(diags, &sources));
+    };
+    source::apply_sets(&mut root, sets, &mut sources, &mut diags);
+    let mut cx = reader::Cx { diags };
+    let (model, spans) = resolve::resolve(&root, path, &sources, &mut cx);
+    if !cx.has_errors() {
+        check::scene(&mut cx, &model, &spans);
+    }
+    let mut diags = cx.diags;
+    for d in &mut diags {
+        d.finish(&sources);
+    }
+    if diags.iter().any(|d| d.is_error()) {
+        Err(Failure { diagnostics: diags })
+    } else {
+        Ok(Loaded {
+            model,
+            warnings: diags,
+        })
+    }
+}
+
+fn finish_failure(mut diags: Vec<Diagnostic>, sources: &source::Sources) -> Failure {
+    for d in &mut diags {
+        d.finish(sources);
+    }
+    Failure { diagnostics: diags }
 }

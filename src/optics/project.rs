@@ -1,0 +1,147 @@
+//! Exact projection of one camera (lens + port) for one colour channel, in the camera frame
+//! and in the world at any rig pose of the network.
+//!
+//! | method | what | failure |
+//! |---|---|---|
+//! | [`Projector::project_camera`] | camera-frame point in water → pixel on the sensor | [`NoSolution`] incl. `off_sensor` |
+//! | [`Projector::project_camera_unbounded`] | same, without the sensor-bounds check | |
+//! | [`Projector::project_world`] | world point at rig pose `i` → pixel | |
+//! | [`Projector::camera_ray`] | pixel → ray in water (camera frame) with Fresnel transmittance | |
+//! | [`Projector::pixel_ray_world`] | pixel → (origin, unit direction, transmittance) in the world | |
+//!
+//! Pixel coordinates follow OpenCV: pixel (i, j) covers [i, i+1]×[j, j+1], centre at +0.5.
+//! Nothing allocates after construction; `Projector` is `Send + Sync` and cheap to share.
+
+use super::NoSolution;
+use super::lens::Lens;
+use super::port::{PortRay, PortSolver};
+use crate::model::{Camera, Model, Pose};
+use glam::DVec3;
+
+#[derive(Debug, Clone)]
+pub struct Projector {
+    pub lens: Lens,
+    pub port: PortSolver,
+    pub width: f64,
+    pub height: f64,
+    pub channel: usize,
+    /// `world_from_camera` at every rig pose, and its inverse.
+    world_from_camera: Vec<Pose>,
+    camera_from_world: Vec<Pose>,
+}
+
+impl Projector {
+    /// The projector of camera `cam` of `model` for `channel` (0 = R, 1 = G, 2 = B).
+    pub fn new(model: &Model, cam: usize, channel: usize) -> Result<Projector, String> {
+        let camera = model.cameras.get(cam).ok_or_else(|| {
+            format!(
+                "camera index {cam} out of range ({} cameras)",
+                model.cameras.len()
+            )
+        })?;
+        if channel > 2 {
+            return Err(format!(
+                "channel {channel} out of range (0 = R, 1 = G, 2 = B)"
+            ));
+        }
+        let mut p = Projector::for_camera(camera, channel, model.ambient_ior()[channel])?;
+        p.world_from_camera = (0..model.poses.len())
+            .map(|i| model.world_from_camera(i, cam))
+            .collect();
+        p.camera_from_world = p.world_from_camera.iter().map(Pose::inverse).collect();
+        Ok(p)
+    }
+
+    /// A projector for one camera alone (camera frame only; no poses), in a medium of index
+    /// `n_water` (1 in air).
+    pub fn for_camera(camera: &Camera, channel: usize, n_water: f64) -> Result<Projector, String> {
+        let port = PortSolver::new(&camera.port, channel, 1.0, n_water)
+            .map_err(|e| format!("camera `{}`: {e}", camera.name))?;
+        Ok(Projector {
+            lens: Lens::from_camera(camera),
+            port,
+            width: camera.width as f64,
+            height: camera.height as f64,
+            channel,
+            world_from_camera: Vec::new(),
+            camera_from_world: Vec::new(),
+        })
+    }
+
+    /// Number of rig poses known to this projector.
+    pub fn poses(&self) -> usize {
+        self.world_from_camera.len()
+    }
+
+    /// `world_from_camera` at rig pose `pose` (panics if out of range, like slice indexing).
+    pub fn world_from_camera(&self, pose: usize) -> Pose {
+        self.world_from_camera[pose]
+    }
+
+    /// Whether a pixel position lies on the sensor `[0, w]×[0, h]`.
+    #[inline]
+    pub fn on_sensor(&self, px: [f64; 2]) -> bool {
+        px[0] >= 0.0 && px[0] <= self.width && px[1] >= 0.0 && px[1] <= self.height
+    }
+
+    /// Camera-frame point in water → pixel, wherever it falls (may be far off the sensor).
+    #[inline]
+    pub fn project_camera_unbounded(&self, p: DVec3) -> Result<[f64; 2], NoSolution> {
+        if !p.is_finite() {
+            return Err(NoSolution::NoConvergence);
+        }
+        let d = self.port.forward(p)?;
+        self.lens.project(d)
+    }
+
+    /// Camera-frame point in water → pixel on the sensor.
+    #[inline]
+    pub fn project_camera(&self, p: DVec3) -> Result<[f64; 2], NoSolution> {
+        let px = self.project_camera_unbounded(p)?;
+        if self.on_sensor(px) {
+            Ok(px)
+        } else {
+            Err(NoSolution::OffSensor)
+        }
+    }
+
+    /// World point seen from rig pose `pose` → pixel on the sensor.
+    #[inline]
+    pub fn project_world(&self, pose: usize, p_world: DVec3) -> Result<[f64; 2], NoSolution> {
+        self.project_camera(self.camera_from_world[pose].transform_point(p_world))
+    }
+
+    /// World point → pixel, without the sensor-bounds check.
+    #[inline]
+    pub fn project_world_unbounded(
+        &self,
+        pose: usize,
+        p_world: DVec3,
+    ) -> Result<[f64; 2], NoSolution> {
+        self.project_camera_unbounded(self.camera_from_world[pose].transform_point(p_world))
+    }
+
+    /// Pixel → ray in water, camera frame (origin on the port's outer surface).
+    #[inline]
+    pub fn camera_ray(&self, u: f64, v: f64) -> Result<PortRay, NoSolution> {
+        let d = self.lens.unproject(u, v)?;
+        self.port.backward(d)
+    }
+
+    /// Pixel → (origin, unit direction, Fresnel transmittance) of the ray in water, world frame.
+    #[inline]
+    pub fn pixel_ray_world(
+        &self,
+        pose: usize,
+        u: f64,
+        v: f64,
+    ) -> Result<(DVec3, DVec3, f64), NoSolution> {
+        let r = self.camera_ray(u, v)?;
+        let w = &self.world_from_camera[pose];
+        Ok((
+            w.transform_point(r.origin),
+            w.transform_vector(r.dir),
+            r.transmittance,
+        ))
+    }
+}

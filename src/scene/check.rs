@@ -1,0 +1,248 @@
+//! Physical checks: small per-value checks used while reading (positive sizes, indices ≥ 1,
+//! …) and whole-scene checks on the resolved model (targets inside the port glass, doubtful
+//! overlaps, strobes too close to the port).
+
+use super::diag::Diagnostic;
+use super::reader::{Cx, Tab};
+use super::resolve::Spans;
+use crate::model::*;
+
+pub fn positive(cx: &mut Cx, t: &Tab, key: &str, v: f64, unit: &str) {
+    if !(v > 0.0) {
+        let what = if key.contains("thickness") {
+            "non-positive thickness"
+        } else {
+            "value must be positive"
+        };
+        cx.push(
+            Diagnostic::error("E0045", format!("`{}` must be greater than 0", t.full(key)))
+                .label(
+                    t.span_of(key),
+                    format!(
+                        "{what}: {v}{}{unit}",
+                        if unit.is_empty() { "" } else { " " }
+                    ),
+                )
+                .help(format!("give a positive `{key}`")),
+        );
+    }
+}
+
+pub fn at_least(cx: &mut Cx, t: &Tab, key: &str, v: u32, min: u32) {
+    if v < min {
+        cx.push(
+            Diagnostic::error("E0046", format!("`{}` must be at least {min}", t.full(key)))
+                .label(t.span_of(key), format!("{v} is too small"))
+                .help(format!("use {min} or more")),
+        );
+    }
+}
+
+pub fn fits(cx: &mut Cx, t: &Tab, key: &str, v: f64, limit: f64, what: &str) {
+    if v > 0.0 && limit > 0.0 && v >= limit {
+        cx.push(
+            Diagnostic::error(
+                "E0047",
+                format!("`{}` is too large for {what}", t.full(key)),
+            )
+            .label(
+                t.span_of(key),
+                format!("the printed marks would overlap ({v} ≥ {limit} m)"),
+            )
+            .help(format!("make `{key}` smaller than {what}")),
+        );
+    }
+}
+
+pub fn non_negative_rgb(cx: &mut Cx, t: &Tab, key: &str, v: Rgb, unit: &str) {
+    if v.iter().any(|x| *x < 0.0) {
+        cx.push(
+            Diagnostic::error("E0048", format!("`{}` must not be negative", t.full(key)))
+                .label(
+                    t.span_of(key),
+                    format!(
+                        "negative value{}",
+                        if unit.is_empty() {
+                            String::new()
+                        } else {
+                            format!(" ({unit})")
+                        }
+                    ),
+                )
+                .help("use values ≥ 0"),
+        );
+    }
+}
+
+/// Refractive indices must be ≥ 1 (and sane).
+pub fn index(cx: &mut Cx, t: &Tab, key: &str, v: Rgb) {
+    if v.iter().any(|x| *x < 1.0) {
+        cx.push(
+            Diagnostic::error(
+                "E0049",
+                format!("refractive index below 1 in `{}`", t.full(key)),
+            )
+            .label(
+                t.span_of(key),
+                format!("n = [{}, {}, {}]", v[0], v[1], v[2]),
+            )
+            .help("an index is ≥ 1 (water ≈ 1.34, glass ≈ 1.5); did you mean a different number?"),
+        );
+    } else if v.iter().any(|x| *x > 4.0) {
+        cx.push(
+            Diagnostic::error(
+                "E0049",
+                format!("refractive index implausibly high in `{}`", t.full(key)),
+            )
+            .label(
+                t.span_of(key),
+                format!("n = [{}, {}, {}]", v[0], v[1], v[2]),
+            )
+            .help("optical materials have indices between 1 and ~2.5"),
+        );
+    }
+}
+
+/// Whole-scene checks on the resolved model.
+pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
+    // Target or object point inside the port glass (or between the pupil and the port).
+    for (pi, _) in m.poses.iter().enumerate().take(2000) {
+        for (ci, cam) in m.cameras.iter().enumerate() {
+            let cam_from_world = m.world_from_camera(pi, ci).inverse();
+            for (ti, t) in m.targets.iter().enumerate() {
+                if let Some(p) = t
+                    .points
+                    .iter()
+                    .find(|p| inside_housing(&cam.port, cam_from_world.transform_point(p.world)))
+                {
+                    if let Some(sp) = spans.targets.get(ti) {
+                        cx.push(
+                            Diagnostic::error("E0400", format!("target `{}` is inside the housing port of camera `{}`", t.name, cam.name))
+                                .label(*sp, format!("point {} is inside the glass or behind the port at pose {}", p.id, m.poses[pi].name))
+                                .help("move the target or the camera: targets must be in the water in front of the port"),
+                        );
+                    }
+                    return;
+                }
+            }
+        }
+    }
+    // Overlapping port surfaces between cameras of a rig (two housings intersecting).
+    for i in 0..m.cameras.len() {
+        for j in 0..i {
+            let (a, b) = (&m.cameras[i], &m.cameras[j]);
+            let d = (a.rig_from_camera.translation - b.rig_from_camera.translation).length();
+            let (ra, rb) = (port_radius(&a.port), port_radius(&b.port));
+            if ra > 0.0 && rb > 0.0 && d < ra + rb {
+                let sp = spans.camera.get(i).map(|c| c.port).unwrap_or(spans.network);
+                cx.push(
+                    Diagnostic::error(
+                        "E0401",
+                        format!("the ports of cameras `{}` and `{}` overlap", b.name, a.name),
+                    )
+                    .label(
+                        sp,
+                        format!(
+                            "pupils {d:.3} m apart, ports need at least {:.3} m",
+                            ra + rb
+                        ),
+                    )
+                    .help("increase the rig baseline or use smaller ports"),
+                );
+            }
+        }
+    }
+    // Doubtful side-lap.
+    if let (Some(s), Some(sp)) = (m.network.sidelap, spans.sidelap)
+        && s < 0.6
+    {
+        cx.push(
+            Diagnostic::warning(
+                "W0300",
+                format!("side-lap of {:.0} % is below 60 %", s * 100.0),
+            )
+            .label(sp, "low side-lap")
+            .help(
+                "photogrammetry between strips needs ≥ 60 % side-lap to tie reliably; expect gaps",
+            ),
+        );
+    }
+    // Strobes close to the optical axis and port: backscatter dominates.
+    if let Some(w) = &m.water {
+        let scatter = w.scattering.iter().cloned().fold(0.0, f64::max);
+        for (li, l) in m.lights.iter().enumerate() {
+            if l.mount != Mount::Rig {
+                continue;
+            }
+            let (LightKind::Spot { position, .. } | LightKind::Point { position, .. }) = l.kind
+            else {
+                continue;
+            };
+            let lateral = position.truncate().length();
+            if scatter > 0.0 && lateral < 0.15 {
+                if let Some((_, psp)) = spans.lights.get(li) {
+                    cx.push(
+                        Diagnostic::warning("W0310", format!("light `{}` is only {:.0} cm from the camera axis", l.name, lateral * 100.0))
+                            .label(*psp, "close to the port")
+                            .help("backscatter will dominate the image; mount strobes ≥ 30 cm to the side and aim them outwards"),
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Whether a point (camera frame) is inside the port glass or between the pupil and the port.
+fn inside_housing(port: &Port, p: glam::DVec3) -> bool {
+    match port {
+        Port::None => false,
+        Port::Flat {
+            normal,
+            distance,
+            thickness,
+            ..
+        } => {
+            let d = normal.dot(p);
+            // Within the housing's cross-section (a generous 20 cm radius) only.
+            let lateral = (p - *normal * d).length();
+            d <= distance + thickness && d > -0.05 && lateral < 0.2
+        }
+        Port::Dome {
+            center,
+            inner_radius,
+            thickness,
+            ..
+        } => (p - *center).length() <= inner_radius + thickness,
+        Port::Cylinder {
+            axis_point,
+            axis,
+            inner_radius,
+            thickness,
+            ..
+        } => {
+            let v = p - *axis_point;
+            let along = v.dot(*axis);
+            (v - *axis * along).length() <= inner_radius + thickness
+                && along.abs() < 0.2
+                && v.dot(glam::DVec3::Z) > -0.05
+        }
+    }
+}
+
+/// A rough outer radius of a port around the pupil, m (0 for no port).
+fn port_radius(port: &Port) -> f64 {
+    match port {
+        Port::None | Port::Flat { .. } => 0.0,
+        Port::Dome {
+            center,
+            inner_radius,
+            thickness,
+            ..
+        } => center.length() + inner_radius + thickness,
+        Port::Cylinder {
+            inner_radius,
+            thickness,
+            ..
+        } => inner_radius + thickness,
+    }
+}

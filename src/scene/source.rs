@@ -1,0 +1,521 @@
+//! Scene sources: reading TOML files into a spanned value tree ([`Node`]), resolving
+//! `include = [...]` (deep merge, cycle detection) and applying `--set a.b.c=value` overrides.
+//! Every node remembers the file and byte range it came from, so diagnostics can point into
+//! included files and at the command line.
+
+use super::diag::{Diagnostic, Span};
+use std::path::{Path, PathBuf};
+use toml::de::{DeTable, DeValue};
+
+/// Name of the pseudo-file holding the command-line overrides.
+pub const COMMAND_LINE: &str = "<command line>";
+
+/// All source texts a scene was read from (the scene, its includes, the command line).
+#[derive(Default)]
+pub struct Sources {
+    pub files: Vec<(String, String)>,
+    /// File-system path of each file (None for the command line).
+    pub paths: Vec<Option<PathBuf>>,
+}
+
+impl Sources {
+    pub fn add(&mut self, name: String, text: String, path: Option<PathBuf>) -> usize {
+        self.files.push((name, text));
+        self.paths.push(path);
+        self.files.len() - 1
+    }
+    /// Directory of the file a span points into (for resolving relative paths).
+    pub fn dir_of(&self, file: usize) -> Option<PathBuf> {
+        self.paths
+            .get(file)
+            .and_then(|p| p.as_ref())
+            .map(|p| p.parent().map(Path::to_path_buf).unwrap_or_default())
+    }
+}
+
+#[derive(Debug, Clone)]
+pub enum Val {
+    Str(String),
+    Int(i64),
+    Float(f64),
+    Bool(bool),
+    Datetime(String),
+    Array(Vec<Node>),
+    Table(Table),
+}
+
+#[derive(Debug, Clone)]
+pub struct Node {
+    pub val: Val,
+    pub span: Span,
+}
+
+#[derive(Debug, Clone)]
+pub struct Entry {
+    pub key: String,
+    pub key_span: Span,
+    pub node: Node,
+}
+
+/// A table with its entries in source order.
+#[derive(Debug, Clone, Default)]
+pub struct Table {
+    pub entries: Vec<Entry>,
+}
+
+impl Table {
+    pub fn get(&self, key: &str) -> Option<&Entry> {
+        self.entries.iter().find(|e| e.key == key)
+    }
+    fn get_mut(&mut self, key: &str) -> Option<&mut Entry> {
+        self.entries.iter_mut().find(|e| e.key == key)
+    }
+    fn remove(&mut self, key: &str) -> Option<Entry> {
+        let i = self.entries.iter().position(|e| e.key == key)?;
+        Some(self.entries.remove(i))
+    }
+}
+
+impl Val {
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Val::Str(_) => "a string",
+            Val::Int(_) => "an integer",
+            Val::Float(_) => "a float",
+            Val::Bool(_) => "a boolean",
+            Val::Datetime(_) => "a date-time",
+            Val::Array(_) => "an array",
+            Val::Table(_) => "a table",
+        }
+    }
+}
+
+fn convert(v: &toml::Spanned<DeValue<'_>>, file: usize, diags: &mut Vec<Diagnostic>) -> Node {
+    let r = v.span();
+    let span = Span {
+        file,
+        start: r.start,
+        end: r.end,
+    };
+    let val = match v.get_ref() {
+        DeValue::String(s) => Val::Str(s.to_string()),
+        DeValue::Integer(i) => match i64::from_str_radix(&i.as_str().replace('_', ""), i.radix()) {
+            Ok(x) => Val::Int(x),
+            Err(_) => {
+                diags.push(
+                    Diagnostic::error("E0002", "integer out of range")
+                        .label(span, "does not fit in a 64-bit integer")
+                        .help("write it as a float (e.g. `1e20`) or use a smaller number"),
+                );
+                Val::Int(0)
+            }
+        },
+        DeValue::Float(f) => Val::Float(
+            f.as_str()
+                .replace('_', "")
+                .parse::<f64>()
+                .unwrap_or(f64::NAN),
+        ),
+        DeValue::Boolean(b) => Val::Bool(*b),
+        DeValue::Datetime(d) => Val::Datetime(d.to_string()),
+        DeValue::Array(a) => Val::Array(a.iter().map(|x| convert(x, file, diags)).collect()),
+        DeValue::Table(t) => Val::Table(convert_table(t, file, diags)),
+    };
+    Node { val, span }
+}
+
+fn convert_table(t: &DeTable<'_>, file: usize, diags: &mut Vec<Diagnostic>) -> Table {
+    let mut entries: Vec<Entry> = t
+        .iter()
+        .map(|(k, v)| {
+            let ks = k.span();
+            Entry {
+                key: k.get_ref().to_string(),
+                key_span: Span {
+                    file,
+                    start: ks.start,
+                    end: ks.end,
+                },
+                node: convert(v, file, diags),
+            }
+        })
+        .collect();
+    entries.sort_by_key(|e| (e.key_span.start, e.key_span.end));
+    Table { entries }
+}
+
+/// Parse TOML text of file `file` into a table node. Syntax errors become diagnostics.
+pub fn parse_text(text: &str, file: usize, diags: &mut Vec<Diagnostic>) -> Option<Node> {
+    let (doc, errors) = DeTable::parse_recoverable(text);
+    if !errors.is_empty() {
+        for e in errors.iter().take(10) {
+            let r = e.span().unwrap_or(0..0);
+            let (start, end) = clamp_span(text, r.start, r.end);
+            let msg = e.message().trim().to_string();
+            let first = msg.lines().next().unwrap_or("invalid TOML").to_string();
+            diags.push(
+                Diagnostic::error("E0001", format!("TOML syntax error: {first}"))
+                    .label(Span { file, start, end }, first)
+                    .help(syntax_help(&msg)),
+            );
+        }
+        return None;
+    }
+    let span = Span {
+        file,
+        start: 0,
+        end: 0,
+    };
+    let mut d = Vec::new();
+    let t = convert_table(doc.get_ref(), file, &mut d);
+    diags.extend(d);
+    Some(Node {
+        val: Val::Table(t),
+        span,
+    })
+}
+
+fn clamp_span(text: &str, s: usize, e: usize) -> (usize, usize) {
+    let mut s = s.min(text.len());
+    while s > 0 && !text.is_char_boundary(s) {
+        s -= 1;
+    }
+    let mut e = e.max(s).min(text.len());
+    while e < text.len() && !text.is_char_boundary(e) {
+        e += 1;
+    }
+    (s, e)
+}
+
+fn syntax_help(msg: &str) -> String {
+    let m = msg.to_lowercase();
+    if m.contains("duplicate") {
+        "each key may appear only once per table; remove or rename one of them".into()
+    } else if m.contains("string") || m.contains("quote") {
+        "strings need double quotes on both ends, e.g. `thickness = \"10 mm\"`".into()
+    } else {
+        "see the TOML syntax at https://toml.io; values with units are strings: `depth = \"12 m\"`"
+            .into()
+    }
+}
+
+/// Deep merge `over` onto `base`: tables merge key by key, everything else is replaced.
+pub fn merge(base: &mut Node, over: Node) {
+    match (&mut base.val, over.val) {
+        (Val::Table(b), Val::Table(o)) => {
+            for e in o.entries {
+                match b.get_mut(&e.key) {
+                    Some(be) => {
+                        be.key_span = e.key_span;
+                        merge(&mut be.node, e.node);
+                    }
+                    None => b.entries.push(e),
+                }
+            }
+        }
+        (_, v) => {
+            base.val = v;
+            base.span = over.span;
+        }
+    }
+}
+
+/// Load `path` with its includes (recursively, relative to the including file), merged:
+/// included files first in order, then the file itself on top.
+pub fn load_file(
+    path: &Path,
+    sources: &mut Sources,
+    diags: &mut Vec<Diagnostic>,
+    stack: &mut Vec<PathBuf>,
+    included_from: Option<Span>,
+) -> Option<Node> {
+    let canon = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
+    if let Some(pos) = stack.iter().position(|p| *p == canon) {
+        let chain: Vec<String> = stack[pos..]
+            .iter()
+            .chain(std::iter::once(&canon))
+            .map(|p| display(p))
+            .collect();
+        let mut d = Diagnostic::error("E0011", "include cycle")
+            .help("remove one of the includes in the cycle; an included file must not include its includer");
+        if let Some(s) = included_from {
+            d = d.label(s, format!("includes `{}` again", display(path)));
+        }
+        diags.push(d.note(format!("cycle: {}", chain.join(" → "))));
+        return None;
+    }
+    if stack.len() > 32 {
+        diags.push(Diagnostic::error(
+            "E0011",
+            "includes nested too deeply (more than 32 levels)",
+        ));
+        return None;
+    }
+    let text = match std::fs::read(path) {
+        Ok(bytes) => match String::from_utf8(bytes) {
+            Ok(t) => t,
+            Err(_) => {
+                let mut d =
+                    Diagnostic::error("E0010", format!("`{}` is not UTF-8 text", display(path)))
+                        .help("save the scene file as UTF-8");
+                if let Some(s) = included_from {
+                    d = d.label(s, "included here");
+                }
+                diags.push(d);
+                return None;
+            }
+        },
+        Err(e) => {
+            let mut d = Diagnostic::error(
+                "E0010",
+                format!("cannot read `{}`: {}", display(path), io_reason(&e)),
+            );
+            d = match included_from {
+                Some(s) => d.label(s, "included here").help(
+                    "include paths are relative to the file that includes them; check the spelling",
+                ),
+                None => d.help("check the path of the scene file"),
+            };
+            diags.push(d);
+            return None;
+        }
+    };
+    let file = sources.add(display(path), text, Some(path.to_path_buf()));
+    let text = sources.files[file].1.clone();
+    let mut node = parse_text(&text, file, diags)?;
+    // Includes.
+    let Val::Table(t) = &mut node.val else {
+        return Some(node);
+    };
+    let Some(inc) = t.remove("include") else {
+        return Some(node);
+    };
+    let list: Vec<Node> = match inc.node.val {
+        Val::Str(_) => vec![inc.node.clone()],
+        Val::Array(a) => a,
+        _ => {
+            diags.push(
+                Diagnostic::error("E0020", "`include` must be a list of file paths")
+                    .label(inc.node.span, format!("found {}", inc.node.val.type_name()))
+                    .help("write `include = [\"../shared/rig_stereo.toml\"]`"),
+            );
+            vec![]
+        }
+    };
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut merged: Option<Node> = None;
+    stack.push(canon);
+    for item in list {
+        let Val::Str(rel) = &item.val else {
+            diags.push(
+                Diagnostic::error("E0020", "include entries must be strings")
+                    .label(item.span, format!("found {}", item.val.type_name()))
+                    .help("write the path in quotes: `include = [\"water.toml\"]`"),
+            );
+            continue;
+        };
+        let p = dir.join(rel);
+        if let Some(n) = load_file(&p, sources, diags, stack, Some(item.span)) {
+            match &mut merged {
+                Some(m) => merge(m, n),
+                None => merged = Some(n),
+            }
+        }
+    }
+    stack.pop();
+    match merged {
+        Some(mut m) => {
+            let span = node.span;
+            merge(&mut m, node);
+            m.span = span;
+            Some(m)
+        }
+        None => Some(node),
+    }
+}
+
+fn io_reason(e: &std::io::Error) -> String {
+    match e.kind() {
+        std::io::ErrorKind::NotFound => "no such file".into(),
+        std::io::ErrorKind::PermissionDenied => "permission denied".into(),
+        _ => {
+            let s = e.to_string();
+            // "Is a directory (os error 21)" → "is a directory"
+            s.split(" (os error").next().unwrap_or(&s).to_lowercase()
+        }
+    }
+}
+
+/// Display a path with forward slashes as given (relative stays relative).
+pub fn display(p: &Path) -> String {
+    let s = p.to_string_lossy().to_string();
+    s.strip_prefix("./").map(str::to_string).unwrap_or(s)
+}
+
+/// Apply `--set key.path=value` overrides onto `root`. Each override lives in the
+/// [`COMMAND_LINE`] pseudo-file so that diagnostics can point at it.
+pub fn apply_sets(
+    root: &mut Node,
+    sets: &[String],
+    sources: &mut Sources,
+    diags: &mut Vec<Diagnostic>,
+) {
+    if sets.is_empty() {
+        return;
+    }
+    let mut text = String::new();
+    let mut ranges = Vec::new();
+    for s in sets {
+        let start = text.len() + "--set ".len();
+        text.push_str("--set ");
+        text.push_str(s);
+        ranges.push((start, text.len()));
+        text.push('\n');
+    }
+    let file = sources.add(COMMAND_LINE.into(), text.clone(), None);
+    for (s, (start, end)) in sets.iter().zip(ranges) {
+        let whole = Span { file, start, end };
+        let Some(eq) = s.find('=') else {
+            diags.push(
+                Diagnostic::error("E0030", "an override needs `KEY=VALUE`")
+                    .label(whole, "no `=` here")
+                    .help("write e.g. `--set water.temperature=12`"),
+            );
+            continue;
+        };
+        let key = &s[..eq];
+        let raw = &s[eq + 1..];
+        let vstart = start + eq + 1;
+        // The value: TOML if it parses, else a plain string.
+        let mut vd = Vec::new();
+        let value = match DeValue::parse(raw) {
+            Ok(v) => {
+                let mut n = convert(&v, file, &mut vd);
+                shift(&mut n, vstart);
+                n
+            }
+            Err(_) => Node {
+                val: Val::Str(raw.trim().to_string()),
+                span: Span {
+                    file,
+                    start: vstart,
+                    end,
+                },
+            },
+        };
+        diags.extend(vd);
+        let mut segs = Vec::new();
+        let mut off = start;
+        for seg in key.split('.') {
+            segs.push((
+                seg.trim().to_string(),
+                Span {
+                    file,
+                    start: off,
+                    end: off + seg.len(),
+                },
+            ));
+            off += seg.len() + 1;
+        }
+        if segs.iter().any(|(k, _)| k.is_empty()) {
+            diags.push(
+                Diagnostic::error("E0030", "empty key in override")
+                    .label(
+                        Span {
+                            file,
+                            start,
+                            end: start + key.len(),
+                        },
+                        "a dotted path like `water.temperature` is expected",
+                    )
+                    .help("write e.g. `--set camera.port.thickness=\"12 mm\"`"),
+            );
+            continue;
+        }
+        set_path(root, &segs, value, diags);
+    }
+}
+
+fn shift(n: &mut Node, by: usize) {
+    n.span.start += by;
+    n.span.end += by;
+    match &mut n.val {
+        Val::Array(a) => a.iter_mut().for_each(|x| shift(x, by)),
+        Val::Table(t) => t.entries.iter_mut().for_each(|e| {
+            e.key_span.start += by;
+            e.key_span.end += by;
+            shift(&mut e.node, by)
+        }),
+        _ => {}
+    }
+}
+
+fn set_path(node: &mut Node, segs: &[(String, Span)], value: Node, diags: &mut Vec<Diagnostic>) {
+    let (key, kspan) = &segs[0];
+    match &mut node.val {
+        Val::Table(t) => {
+            if segs.len() == 1 {
+                match t.get_mut(key) {
+                    Some(e) => {
+                        e.key_span = *kspan;
+                        merge_or_replace(&mut e.node, value);
+                    }
+                    None => t.entries.push(Entry {
+                        key: key.clone(),
+                        key_span: *kspan,
+                        node: value,
+                    }),
+                }
+                return;
+            }
+            if t.get(key).is_none() {
+                t.entries.push(Entry {
+                    key: key.clone(),
+                    key_span: *kspan,
+                    node: Node {
+                        val: Val::Table(Table::default()),
+                        span: *kspan,
+                    },
+                });
+            }
+            let e = t.get_mut(key).expect("just inserted");
+            set_path(&mut e.node, &segs[1..], value, diags);
+        }
+        Val::Array(a) => {
+            let len = a.len();
+            match key.parse::<usize>() {
+                Ok(i) if i < len => {
+                    if segs.len() == 1 {
+                        a[i] = value;
+                    } else {
+                        set_path(&mut a[i], &segs[1..], value, diags);
+                    }
+                }
+                _ => diags.push(
+                    Diagnostic::error("E0031", format!("`{key}` is not an index of this list"))
+                        .label(*kspan, format!("the list has {len} entries"))
+                        .help(format!(
+                            "use an index from 0 to {} to override one entry",
+                            len.saturating_sub(1)
+                        )),
+                ),
+            }
+        }
+        other => diags.push(
+            Diagnostic::error(
+                "E0031",
+                format!("cannot set `{key}` inside {}", other.type_name()),
+            )
+            .label(*kspan, "this part of the path is not a table")
+            .help("only tables (and list entries by index) contain keys"),
+        ),
+    }
+}
+
+fn merge_or_replace(base: &mut Node, value: Node) {
+    if matches!((&base.val, &value.val), (Val::Table(_), Val::Table(_))) {
+        merge(base, value)
+    } else {
+        *base = value;
+    }
+}
