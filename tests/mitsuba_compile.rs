@@ -149,7 +149,10 @@ fn names_cannot_inject_xml() {
                     // No element or attribute carries the injected content.
                     for a in e.attributes() {
                         let v = a.unwrap().unescape_value().unwrap().into_owned();
-                        assert!(!v.contains("passwd") && v != "ply", "{f}: injected attribute {v}");
+                        assert!(
+                            !v.contains("passwd") && v != "ply",
+                            "{f}: injected attribute {v}"
+                        );
                     }
                 }
                 Ok(_) => {}
@@ -297,5 +300,57 @@ fn fournier_forand_table_keeps_the_backscatter_fraction() {
         // CDF sanity: 0 at 0, 1 at π.
         assert!(mitsuba::emit::ff_cdf(n, mu, 0.0).abs() < 1e-12);
         assert!((mitsuba::emit::ff_cdf(n, mu, std::f64::consts::PI) - 1.0).abs() < 1e-12);
+    }
+}
+
+/// Drop long number lists (tabulated phase values) from a snapshot.
+fn shorten(doc: &str) -> String {
+    doc.lines()
+        .map(|l| {
+            if l.contains("name=\"values\"") {
+                "      <string name=\"values\" value=\"…\"/>".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn example_scenarios_snapshots() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let mut paths: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    paths.sort();
+    assert!(!paths.is_empty(), "no scenarios in {}", dir.display());
+    for path in paths {
+        let stem = path.file_stem().unwrap().to_string_lossy().to_string();
+        let loaded = match poser::scene::load(&path, &[]) {
+            Ok(l) => l,
+            Err(f) => panic!("{}: {}", path.display(), f.render()),
+        };
+        let c = mitsuba::build(&loaded.model).unwrap_or_else(|e| panic!("{stem}: {e}"));
+        let names: Vec<String> = c.files.keys().cloned().collect();
+        let first = &c.manifest.views[0].passes[0].xml;
+        let mut snap = format!("files: {}\n\n", names.join(" "));
+        if let Some(w) = c.files.get(mitsuba::WORLD_FILE) {
+            snap.push_str(&format!(
+                "==== {} ====\n{}\n",
+                mitsuba::WORLD_FILE,
+                shorten(&String::from_utf8_lossy(w))
+            ));
+        }
+        snap.push_str(&format!(
+            "==== {first} ====\n{}\n",
+            shorten(&text(&c, first))
+        ));
+        insta::assert_snapshot!(format!("scenario_{stem}"), snap);
+        // Stable bytes for the real scenes too.
+        let again = mitsuba::build(&loaded.model).unwrap();
+        assert_eq!(c.files, again.files, "{stem}: compile is not byte-stable");
     }
 }

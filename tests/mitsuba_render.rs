@@ -386,3 +386,71 @@ fn lambertian_patch_radiance_matches_beer_lambert_inverse_square() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A checkerboard target seen from above in air under ambient light: the printed pattern is
+/// neither mirrored nor flipped (cell (0, 0) at the target's (-x, -y) corner is black, its
+/// neighbours along x and y are white), and black/white levels are linear reflectances.
+#[test]
+fn target_texture_orientation_and_levels() {
+    let mut m = base(
+        "orient",
+        camera("cam", Port::None),
+        None,
+        nadir(DVec3::new(0.0, 0.0, 1.0)),
+    );
+    m.render.samples = 8;
+    m.lights.push(Light {
+        name: "sky".into(),
+        mount: Mount::World,
+        kind: LightKind::Ambient { radiance: [1.0; 3] },
+    });
+    let kind = TargetKind::Checkerboard {
+        cols: 4,
+        rows: 3,
+        square: 0.1,
+    };
+    m.targets.push(Target {
+        name: "board".into(),
+        kind,
+        pose: Pose::IDENTITY,
+        points: vec![],
+    });
+    let mut cam = m.cameras[0].clone();
+    cam.rig_from_camera = Pose::IDENTITY;
+    let (img, dir) = render(&m, "mi-orient");
+    let cam_from_world = m.poses[0].world_from_rig.inverse();
+    let at = |x: f64, y: f64| {
+        // Mean over a 7×7 window (the cells are ≈ 14 px wide).
+        let p = pixel(&cam, cam_from_world.transform_point(DVec3::new(x, y, 0.0))).unwrap();
+        let mut s = 0.0;
+        for dy in -3..=3i64 {
+            for dx in -3..=3i64 {
+                let (i, j) = ((p[0] as i64 + dx) as usize, (p[1] as i64 + dy) as usize);
+                s += img.rgb[j * img.width + i][1] as f64;
+            }
+        }
+        s / 49.0
+    };
+    // Pattern 0.4 × 0.3 m centred: cell (i, j) centre at (-0.15 + 0.1 i, -0.1 + 0.1 j).
+    let (black, white) = (at(-0.15, -0.1), at(-0.05, -0.1));
+    let up = at(-0.15, 0.0);
+    eprintln!("cell (0,0) {black:.4}, (1,0) {white:.4}, (0,1) {up:.4}");
+    // Ambient radiance 1 on a Lambertian print: L = ρ (the PNG stores ρ·255, so ±0.2 %
+    // quantisation). The 7×7-window mean of 16 spp carries ≈ 1 % MIS noise (measured per-pixel
+    // sd ≈ 8 % at 8 spp); 5 % still separates black (0.05) from white (0.9) by far, which is
+    // what this test is about.
+    assert!(
+        (black - poser::targets::BLACK).abs() < 0.05 * poser::targets::WHITE,
+        "cell (0,0) = {black}; {}",
+        dir.display()
+    );
+    assert!(
+        (white / poser::targets::WHITE - 1.0).abs() < 0.05,
+        "cell (1,0) = {white}"
+    );
+    assert!(
+        (up / poser::targets::WHITE - 1.0).abs() < 0.05,
+        "cell (0,1) = {up}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

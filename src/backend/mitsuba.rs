@@ -256,16 +256,131 @@ fn object_shapes(
     }
 }
 
+/// Texture resolution for a target: at least [`TEXELS_PER_PIXEL`] texels per image pixel at
+/// the closest camera position (water magnifies by up to its index), clamped by
+/// `targets::texture` to its maximum size.
+fn target_px_per_m(model: &Model, t: &Target) -> f64 {
+    let fx = model
+        .cameras
+        .iter()
+        .map(|c| c.fx.max(c.fy))
+        .fold(0.0, f64::max);
+    let mut dmin = f64::INFINITY;
+    for p in 0..model.poses.len() {
+        for c in 0..model.cameras.len() {
+            let d = (model.world_from_camera(p, c).translation - t.pose.translation).length();
+            dmin = dmin.min(d);
+        }
+    }
+    let n = model.ambient_ior().iter().cloned().fold(1.0, f64::max);
+    let (w, h) = crate::targets::extent(&t.kind);
+    let dmin = (dmin - 0.5 * w.hypot(h)).max(0.05);
+    (TEXELS_PER_PIXEL * fx * n / dmin).clamp(500.0, 20_000.0)
+}
+
+/// Texels per image pixel for target textures at the closest camera.
+pub const TEXELS_PER_PIXEL: f64 = 2.0;
+
+fn lambert(albedo: f64) -> El {
+    El::typed("bsdf", "twosided")
+        .child(El::typed("bsdf", "diffuse").rgb("reflectance", [albedo; 3]))
+}
+
+/// A target: its printed face as a `rectangle` with a PNG texture from `targets::texture`
+/// (linear reflectance, `raw`), or for the 3D test object its steps as `cube`s and its disks as
+/// `disk`s.
 fn target_shapes(
+    model: &Model,
     t: &Target,
     files: &mut BTreeMap<String, Vec<u8>>,
     index: usize,
 ) -> Result<Vec<El>, String> {
-    let _ = (files, index);
-    Err(format!(
-        "target `{}`: target textures are not supported by the Mitsuba backend yet",
-        t.name
-    ))
+    let m = t.pose.rotation;
+    match t.kind {
+        TargetKind::TestObject {
+            size,
+            levels,
+            step,
+            diameter,
+        } => {
+            let mut out = Vec::new();
+            for k in 0..levels {
+                let (side, top) = crate::targets::test_object_step(size, levels, step, k);
+                out.push(
+                    El::typed("shape", "cube")
+                        .comment(format!("target `{}`: step {k}", t.name))
+                        .to_world(
+                            m * DMat3::from_diagonal(DVec3::new(
+                                0.5 * side,
+                                0.5 * side,
+                                0.5 * step,
+                            )),
+                            t.pose
+                                .transform_point(DVec3::new(0.0, 0.0, top - 0.5 * step)),
+                        )
+                        .child(lambert(crate::targets::WHITE)),
+                );
+            }
+            for (id, p) in crate::targets::local_points(&t.kind) {
+                let r = 0.5 * diameter;
+                out.push(
+                    El::typed("shape", "disk")
+                        .comment(format!("target `{}`: disk {id}", t.name))
+                        .to_world(
+                            DMat3::from_cols(m.x_axis * r, m.y_axis * r, m.z_axis),
+                            t.pose.transform_point(p + DVec3::new(0.0, 0.0, 1e-5)),
+                        )
+                        .child(lambert(crate::targets::BLACK)),
+                );
+            }
+            Ok(out)
+        }
+        _ => {
+            let (w, h) = crate::targets::extent(&t.kind);
+            let ppm = target_px_per_m(model, t);
+            let img = crate::targets::texture(&t.kind, ppm);
+            let mut png = Vec::new();
+            img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+                .map_err(|e| format!("target `{}`: cannot encode its texture: {e}", t.name))?;
+            let file = format!("textures/{index:03}-{}.png", slug(&t.name));
+            files.insert(file.clone(), png);
+            Ok(vec![
+                El::typed("shape", "rectangle")
+                    .comment(format!(
+                        "target `{}`: {w} m × {h} m, texture {}×{} px",
+                        t.name,
+                        img.width(),
+                        img.height()
+                    ))
+                    .to_world(
+                        m * DMat3::from_diagonal(DVec3::new(0.5 * w, 0.5 * h, 1.0)),
+                        t.pose.translation,
+                    )
+                    .child(
+                        El::typed("bsdf", "twosided").child(
+                            El::typed("bsdf", "diffuse").child(
+                                El::typed("texture", "bitmap")
+                                    .attr("name", "reflectance")
+                                    .string("filename", &file)
+                                    .comment("values are linear reflectance × 255, not sRGB")
+                                    .boolean("raw", true)
+                                    .string("filter_type", "bilinear")
+                                    .comment(
+                                        "the PNG's row 0 is the target's +y edge; Mitsuba's v = 0 \
+                                         is row 0, the rectangle's v = 0 is -y: flip v",
+                                    )
+                                    .child(
+                                        El::new("transform")
+                                            .attr("name", "to_uv")
+                                            .child(El::new("scale").attr("y", "-1"))
+                                            .child(El::new("translate").attr("y", "1")),
+                                    ),
+                            ),
+                        ),
+                    ),
+            ])
+        }
+    }
 }
 
 /// Compile the model to documents and assets, in memory.
@@ -295,7 +410,7 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
         shapes.extend(object_shapes(model, o, &mut files, i, &mut warnings)?);
     }
     for (i, t) in model.targets.iter().enumerate() {
-        shapes.extend(target_shapes(t, &mut files, i)?);
+        shapes.extend(target_shapes(model, t, &mut files, i)?);
     }
     for w in &warnings {
         eprintln!("warning: {w}");
