@@ -54,6 +54,20 @@ pub fn fits(cx: &mut Cx, t: &Tab, key: &str, v: f64, limit: f64, what: &str) {
     }
 }
 
+/// Reject counts that would make a target, field or image absurdly large (and the
+/// resolver allocate without bound).
+pub fn at_most(cx: &mut Cx, t: &Tab, key: &str, v: u64, max: u64, what: &str) -> bool {
+    if v > max {
+        cx.push(
+            Diagnostic::error("E0050", format!("`{}` is too large", t.full(key)))
+                .label(t.span_of(key), format!("{v} {what}; at most {max} are supported"))
+                .help(format!("use a smaller `{key}`")),
+        );
+        return false;
+    }
+    true
+}
+
 pub fn non_negative_rgb(cx: &mut Cx, t: &Tab, key: &str, v: Rgb, unit: &str) {
     if v.iter().any(|x| *x < 0.0) {
         cx.push(

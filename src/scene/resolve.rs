@@ -606,6 +606,7 @@ fn camera(
     let width = c.u32(cx, "width", 1600);
     let height = c.u32(cx, "height", 1200);
     for (k, v) in [("width", width), ("height", height)] {
+        check::at_most(cx, &c, k, v as u64, 65_536, "pixels");
         if v == 0 {
             let sp = c.span_of(k);
             cx.push(
@@ -1218,6 +1219,7 @@ fn objects(
                 let length = o.f64(cx, "length", Dim::Length, 20.0);
                 let count = o.u32(cx, "count", 30);
                 let radius = o.f64(cx, "radius", Dim::Length, 0.3);
+                let count = if check::at_most(cx, &o, "count", count as u64, 1_000_000, "boulders") { count } else { 0 };
                 check::positive(cx, &o, "width", width, "m");
                 check::positive(cx, &o, "length", length, "m");
                 check::positive(cx, &o, "radius", radius, "m");
@@ -1376,6 +1378,7 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 check::at_least(cx, &g, "cols", cols, 2);
                 check::at_least(cx, &g, "rows", rows, 2);
                 check::positive(cx, &g, "square", square, "m");
+                let (cols, rows) = limit_grid(cx, &g, cols, rows);
                 TargetKind::Checkerboard { cols, rows, square }
             }
             "circle_grid" => {
@@ -1388,6 +1391,7 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 check::positive(cx, &g, "spacing", spacing, "m");
                 check::positive(cx, &g, "diameter", diameter, "m");
                 check::fits(cx, &g, "diameter", diameter, spacing, "the spacing");
+                let (cols, rows) = limit_grid(cx, &g, cols, rows);
                 TargetKind::CircleGrid {
                     cols,
                     rows,
@@ -1401,6 +1405,7 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
                 let first_code = g.u32(cx, "first_code", 1);
                 check::at_least(cx, &g, "count", count, 1);
+                let count = if check::at_most(cx, &g, "count", count as u64, 10_000, "coded targets") { count } else { 1 };
                 check::positive(cx, &g, "spacing", spacing, "m");
                 check::positive(cx, &g, "diameter", diameter, "m");
                 check::fits(
@@ -1437,6 +1442,7 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 let spokes = g.u32(cx, "spokes", 16);
                 check::positive(cx, &g, "diameter", diameter, "m");
                 check::at_least(cx, &g, "spokes", spokes, 2);
+                let spokes = if check::at_most(cx, &g, "spokes", spokes as u64, 10_000, "spokes") { spokes } else { 16 };
                 TargetKind::SiemensStar { diameter, spokes }
             }
             _ => {
@@ -1446,6 +1452,7 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
                 check::positive(cx, &g, "size", size, "m");
                 check::at_least(cx, &g, "levels", levels, 1);
+                let levels = if check::at_most(cx, &g, "levels", levels as u64, 1000, "levels") { levels } else { 1 };
                 check::positive(cx, &g, "step", step, "m");
                 check::positive(cx, &g, "diameter", diameter, "m");
                 TargetKind::TestObject {
@@ -1481,6 +1488,20 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
 // ------------------------------------------------------------------------------------------
 // Network, diver
 // ------------------------------------------------------------------------------------------
+
+/// Grids of more than a million points are refused (and replaced by a small one so that
+/// checking continues without allocating them).
+fn limit_grid(cx: &mut Cx, g: &Tab, cols: u32, rows: u32) -> (u32, u32) {
+    if cols as u64 * rows as u64 > 1_000_000 {
+        cx.push(
+            Diagnostic::error("E0050", format!("`{}` has too many points", g.path))
+                .label(g.span_of("cols"), format!("{cols} × {rows} exceeds one million"))
+                .help("real targets have at most a few thousand points"),
+        );
+        return (2, 2);
+    }
+    (cols, rows)
+}
 
 fn trigger(cx: &mut Cx, t: &mut Tab) -> Trigger {
     let sp = t.span_of("trigger");
@@ -1695,6 +1716,7 @@ fn network(
                 );
             }
             let per_ring = t.u32(cx, "per_ring", 24);
+            let per_ring = if check::at_most(cx, &t, "per_ring", per_ring as u64, 100_000, "images per ring") { per_ring } else { 1 };
             check::at_least(cx, &t, "per_ring", per_ring, 1);
             NetworkSpec::Orbit {
                 center,
