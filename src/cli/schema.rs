@@ -12,7 +12,10 @@ pub const DOCS_FILE: &str = "format.md";
 pub fn run(out: &Path, docs: &Path, check: bool) -> Result<(), CliError> {
     let files = [
         (out.join(SCHEMA_FILE), crate::scene::format::schema_json()),
-        (docs.join(DOCS_FILE), crate::scene::format::format_markdown()),
+        (
+            docs.join(DOCS_FILE),
+            crate::scene::format::format_markdown(),
+        ),
     ];
     if check {
         let mut stale = Vec::new();
@@ -23,7 +26,14 @@ pub fn run(out: &Path, docs: &Path, check: bool) -> Result<(), CliError> {
             }
         }
         if stale.is_empty() {
-            println!("up to date: {}", files.iter().map(|f| f.0.display().to_string()).collect::<Vec<_>>().join(", "));
+            println!(
+                "up to date: {}",
+                files
+                    .iter()
+                    .map(|f| f.0.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
             return Ok(());
         }
         return Err(CliError::Failed(format!(
@@ -33,9 +43,11 @@ pub fn run(out: &Path, docs: &Path, check: bool) -> Result<(), CliError> {
     }
     for (p, text) in &files {
         if let Some(dir) = p.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| CliError::Failed(format!("{}: {e}", dir.display())))?;
+            std::fs::create_dir_all(dir)
+                .map_err(|e| CliError::Failed(format!("{}: {e}", dir.display())))?;
         }
-        crate::io::write_atomic(p, text.as_bytes()).map_err(|e| CliError::Failed(format!("{}: {e}", p.display())))?;
+        crate::io::write_atomic(p, text.as_bytes())
+            .map_err(|e| CliError::Failed(format!("{}: {e}", p.display())))?;
         println!("wrote {}", p.display());
     }
     Ok(())

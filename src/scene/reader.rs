@@ -46,7 +46,10 @@ thread_local! {
 /// `camera`).
 pub fn record_known_keys<R>(
     f: impl FnOnce() -> R,
-) -> (R, std::collections::BTreeMap<String, std::collections::BTreeSet<String>>) {
+) -> (
+    R,
+    std::collections::BTreeMap<String, std::collections::BTreeSet<String>>,
+) {
     RECORD.with(|r| *r.borrow_mut() = Some(Default::default()));
     let out = f();
     let map = RECORD.with(|r| r.borrow_mut().take()).unwrap_or_default();
@@ -331,8 +334,11 @@ impl<'a> Tab<'a> {
         if let Some(o) = options.iter().find(|o| **o == s) {
             return Some(o);
         }
-        let mut d = Diagnostic::error("E0102", format!("unknown {} `{s}`", self.full(key)))
-            .label(span, format!("expected one of: {}", options.join(", ")));
+        let mut d = Diagnostic::error(
+            "E0102",
+            format!("unknown value `{s}` for `{}`", self.full(key)),
+        )
+        .label(span, format!("expected one of: {}", options.join(", ")));
         if let Some(m) = did_you_mean(&s, options.iter().copied()) {
             d = d.help(format!("did you mean `{m}`?"));
         } else {
