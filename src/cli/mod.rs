@@ -9,6 +9,7 @@ use std::process::ExitCode;
 
 mod bench;
 mod common;
+mod compare;
 mod compile;
 mod dive;
 mod explain;
@@ -30,6 +31,7 @@ Examples:
   poser truth scenarios/reef_strip.toml -o out/truth
   poser compile scenarios/dome_orbit.toml --backend mitsuba -o out/mi
   poser render scenarios/dome_orbit.toml --backend blender -o out/cycles
+  poser compare scenarios/calibration_flat.toml --backends native,mitsuba -o out/cmp
   poser plan scenarios/paper_survey.toml
   poser dive scenarios/paper_survey.toml -o dive.ssrf
   poser schema";
@@ -171,6 +173,22 @@ pub enum Command {
         #[arg(long)]
         coverage: Option<PathBuf>,
     },
+    /// Render with several backends and report target-position and radiometric agreement.
+    Compare {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// Backends to compare.
+        #[arg(long, value_delimiter = ',', default_value = "native,mitsuba,blender")]
+        backends: Vec<BackendArg>,
+        #[arg(short, long)]
+        out: PathBuf,
+        /// Override samples per pixel.
+        #[arg(long)]
+        samples: Option<u32>,
+        /// Render only these pose indices (e.g. `0,3,5`).
+        #[arg(long, value_delimiter = ',')]
+        poses: Option<Vec<usize>>,
+    },
     /// Speed-against-error reports: `projection` (port solvers) or `render` (backends).
     Bench {
         /// What to benchmark: `projection` or `render`.
@@ -254,6 +272,13 @@ pub fn main() -> ExitCode {
             json,
             coverage,
         } => plan::run(&scene, json, coverage.as_deref()),
+        Command::Compare {
+            scene,
+            backends,
+            out,
+            samples,
+            poses,
+        } => compare::run(&scene, &backends, &out, samples, poses),
         Command::Bench { what, json, quick } => bench::run(&what, json.as_deref(), quick),
         Command::Dive {
             scene,

@@ -42,3 +42,293 @@ impl LinearImage {
         m.map(|v| v / self.rgb.len().max(1) as f64)
     }
 }
+
+use crate::backend::{RenderOptions, RenderReport};
+use crate::model::{Model, TargetKind};
+use crate::optics::project::Projector;
+use glam::DVec3;
+use report::{BackendResult, PairResult, Report};
+use std::time::Instant;
+
+/// The backends `poser compare` knows.
+pub const BACKENDS: &[&str] = &["native", "mitsuba", "blender"];
+
+/// A printed dark disk whose image can be located: centre, normal (world), radius, and the
+/// radius around the centre that is guaranteed white (m).
+#[derive(Debug, Clone)]
+pub struct Disk {
+    pub id: String,
+    pub center: DVec3,
+    pub normal: DVec3,
+    pub radius: f64,
+    pub clear_radius: f64,
+}
+
+/// Every locatable disk of the model's targets (circle grids, coded targets' centre dots,
+/// scale-bar ends).
+pub fn disks(model: &Model) -> Vec<Disk> {
+    let mut out = Vec::new();
+    for t in &model.targets {
+        let (radius, clear) = match t.kind {
+            TargetKind::CircleGrid {
+                spacing, diameter, ..
+            } => (diameter / 2.0, spacing - diameter / 2.0),
+            TargetKind::Coded { diameter, .. } => (diameter / 2.0, 0.8 * diameter),
+            TargetKind::ScaleBar {
+                width, diameter, ..
+            } => (diameter / 2.0, width / 2.0),
+            _ => continue,
+        };
+        let normal = t.pose.rotation.z_axis;
+        for p in &t.points {
+            out.push(Disk {
+                id: p.id.clone(),
+                center: p.world,
+                normal,
+                radius,
+                clear_radius: clear,
+            });
+        }
+    }
+    out
+}
+
+/// Where a disk should appear in image (pose, cam): expected image centroid and window
+/// half-size, or `None` when it is not (fully) visible or too small/crowded to measure.
+pub fn expected_disk(proj: &Projector, pose: usize, d: &Disk) -> Option<([f64; 2], f64)> {
+    let c = detect::expected_centroid(d.center, d.normal, d.radius, |p| {
+        proj.project_world(pose, p).ok()
+    })?;
+    // Facing the camera?
+    let cam = proj.world_from_camera(pose).translation;
+    if d.normal.dot(cam - d.center) <= 0.0 {
+        return None;
+    }
+    // Image radius of the disk and of its white surround, px.
+    let edge = proj
+        .project_world(
+            pose,
+            d.center + d.radius * d.normal.any_orthonormal_vector(),
+        )
+        .ok()?;
+    let r_img = ((edge[0] - c[0]).powi(2) + (edge[1] - c[1]).powi(2)).sqrt();
+    let scale = r_img / d.radius;
+    let half = (d.clear_radius * scale - 1.0).min(r_img + 4.0);
+    if r_img < 1.5 || half < r_img + 1.0 {
+        return None;
+    }
+    if c[0] - half < 1.0
+        || c[1] - half < 1.0
+        || c[0] + half > proj.width - 1.0
+        || c[1] + half > proj.height - 1.0
+    {
+        return None;
+    }
+    Some((c, half))
+}
+
+/// Render `model` with one backend into `out`.
+pub fn render_with(
+    backend: &str,
+    model: &Model,
+    out: &Path,
+    opts: &RenderOptions,
+) -> Result<RenderReport, String> {
+    match backend {
+        "native" => crate::render::render(model, out, opts),
+        "mitsuba" => crate::backend::mitsuba::render(model, out, opts),
+        "blender" => crate::backend::blender::render(model, out, opts),
+        other => Err(format!(
+            "unknown backend `{other}` (known: {})",
+            BACKENDS.join(", ")
+        )),
+    }
+}
+
+/// Measure every visible disk in the rendered images of `dir`: returns
+/// (id, image name, measured − expected in px) for each disk found, and how many were expected.
+pub fn measure_targets(
+    model: &Model,
+    dir: &Path,
+) -> Result<(Vec<(String, String, [f64; 2])>, usize), String> {
+    let disks = disks(model);
+    let dark = crate::targets::BLACK / crate::targets::WHITE;
+    let mut found = Vec::new();
+    let mut expected = 0;
+    for cam in 0..model.cameras.len() {
+        let proj = Projector::new(model, cam, 1)?;
+        for pose in 0..model.poses.len() {
+            let name = model.image_name(pose, cam);
+            let path = dir.join(format!("{name}.exr"));
+            if !path.exists() {
+                continue;
+            }
+            let img = LinearImage::read(&path)?;
+            let g = img.channel(1);
+            let gray = detect::Gray {
+                width: img.width,
+                height: img.height,
+                data: &g,
+            };
+            for d in &disks {
+                let Some((c, half)) = expected_disk(&proj, pose, d) else {
+                    continue;
+                };
+                expected += 1;
+                if let Ok(m) = detect::disk_centroid(&gray, c, half, dark) {
+                    found.push((d.id.clone(), name.clone(), [m[0] - c[0], m[1] - c[1]]));
+                }
+            }
+        }
+    }
+    Ok((found, expected))
+}
+
+/// Render with each backend and compare; writes `report.md`, `report.json`, `report.png` and
+/// difference images into `out`.
+pub fn run(
+    model: &Model,
+    backends: &[String],
+    out: &Path,
+    opts: &RenderOptions,
+) -> Result<Report, String> {
+    let mut report = Report {
+        scene: model.source.clone(),
+        samples: opts.samples.unwrap_or(model.render.samples),
+        ..Default::default()
+    };
+    for b in backends {
+        let dir = out.join(b);
+        let t0 = Instant::now();
+        let mut r = BackendResult {
+            backend: b.clone(),
+            ..Default::default()
+        };
+        match render_with(b, model, &dir, opts) {
+            Err(e) => r.error = Some(e),
+            Ok(rep) => {
+                r.seconds = t0.elapsed().as_secs_f64();
+                r.images = rep.images.len();
+                let (found, expected) = measure_targets(model, &dir)?;
+                r.targets_expected = expected;
+                r.targets_measured = found.len();
+                if !found.is_empty() {
+                    let d2: Vec<f64> = found
+                        .iter()
+                        .map(|(_, _, d)| d[0] * d[0] + d[1] * d[1])
+                        .collect();
+                    r.target_rms_px = Some((d2.iter().sum::<f64>() / d2.len() as f64).sqrt());
+                    r.target_max_px = Some(d2.iter().cloned().fold(0.0, f64::max).sqrt());
+                }
+                let mut sum = [0.0; 3];
+                let mut n = 0usize;
+                for img in &rep.images {
+                    let im = LinearImage::read(img)?;
+                    let m = im.mean();
+                    for c in 0..3 {
+                        sum[c] += m[c];
+                    }
+                    n += 1;
+                }
+                r.mean_rgb = sum.map(|s| s / n.max(1) as f64);
+            }
+        }
+        report.backends.push(r);
+    }
+    let ok: Vec<&BackendResult> = report
+        .backends
+        .iter()
+        .filter(|b| b.error.is_none())
+        .collect();
+    for i in 0..ok.len() {
+        for j in i + 1..ok.len() {
+            report.pairs.push(compare_pair(
+                model,
+                out,
+                &ok[i].backend,
+                &ok[j].backend,
+                ok[i].mean_rgb,
+                ok[j].mean_rgb,
+            )?);
+        }
+    }
+    crate::io::write_atomic(&out.join("report.md"), report.to_markdown().as_bytes())
+        .map_err(|e| e.to_string())?;
+    let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+    crate::io::write_atomic(&out.join("report.json"), json.as_bytes())
+        .map_err(|e| e.to_string())?;
+    let png = report.plot_png();
+    crate::io::write_atomic_with(&out.join("report.png"), |p| {
+        png.save(p).map_err(|e| e.to_string())
+    })?;
+    Ok(report)
+}
+
+fn compare_pair(
+    model: &Model,
+    out: &Path,
+    a: &str,
+    b: &str,
+    ma: [f64; 3],
+    mb: [f64; 3],
+) -> Result<PairResult, String> {
+    let mut pr = PairResult {
+        a: a.into(),
+        b: b.into(),
+        ..Default::default()
+    };
+    pr.mean_rel_diff = [0, 1, 2].map(|c| {
+        if ma[c] > 0.0 {
+            (mb[c] - ma[c]) / ma[c]
+        } else {
+            0.0
+        }
+    });
+    let mut rms_sum = 0.0;
+    let mut n = 0;
+    for cam in 0..model.cameras.len() {
+        for pose in 0..model.poses.len() {
+            let name = model.image_name(pose, cam);
+            let (pa, pb) = (
+                out.join(a).join(format!("{name}.exr")),
+                out.join(b).join(format!("{name}.exr")),
+            );
+            if !(pa.exists() && pb.exists()) {
+                continue;
+            }
+            let (ia, ib) = (LinearImage::read(&pa)?, LinearImage::read(&pb)?);
+            if (ia.width, ia.height) != (ib.width, ib.height) {
+                return Err(format!("{name}: {a} and {b} images differ in size"));
+            }
+            let lum = |p: &[f32; 3]| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0;
+            let mean_a = ia.rgb.iter().map(lum).sum::<f64>() / ia.rgb.len() as f64;
+            let diffs: Vec<f64> = ia
+                .rgb
+                .iter()
+                .zip(&ib.rgb)
+                .map(|(x, y)| lum(y) - lum(x))
+                .collect();
+            let rms = (diffs.iter().map(|d| d * d).sum::<f64>() / diffs.len() as f64).sqrt();
+            if mean_a > 0.0 {
+                rms_sum += rms / mean_a;
+                n += 1;
+            }
+            // |b − a| scaled so that 10 % of a's mean is white.
+            let scale = if mean_a > 0.0 {
+                255.0 / (0.1 * mean_a)
+            } else {
+                0.0
+            };
+            let img = image::GrayImage::from_fn(ia.width as u32, ia.height as u32, |x, y| {
+                let d = diffs[y as usize * ia.width + x as usize].abs() * scale;
+                image::Luma([d.min(255.0) as u8])
+            });
+            let p = out.join(format!("diff_{a}_{b}_{name}.png"));
+            crate::io::write_atomic_with(&p, |t| img.save(t).map_err(|e| e.to_string()))?;
+            pr.diff_images
+                .push(p.file_name().unwrap().to_string_lossy().into_owned());
+        }
+    }
+    pr.rms_rel_diff = if n > 0 { rms_sum / n as f64 } else { 0.0 };
+    Ok(pr)
+}

@@ -1,3 +1,8 @@
 //! Survey planning: networks, GSD, coverage, dive profile, decompression, gas, Subsurface.
 
+pub mod deco;
+pub mod dive;
+pub mod gas;
 pub mod network;
+pub mod plot;
+pub mod ssrf;

@@ -1,0 +1,871 @@
+"""Build a poser scene in Blender from its JSON description, and render it with Cycles.
+
+The description (format `poser-blender/1`) is written by `poser compile --backend blender`
+(Rust, `src/backend/blender`); every user string in it is data only. What gets built:
+
+| element | Blender representation |
+|---|---|
+| rig pose | Empty `poser_rig`, keyframed once per pose (frame = pose index, constant interpolation) |
+| camera | Empty (OpenCV frame) child of the rig + Camera child; exact intrinsics via lens/shift |
+| port | inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g) |
+| water | one closed mesh `poser_water` (box minus housings), Volume Coefficients node; per pose a shape key |
+| lights | point/spot (P = 4 pi I, radius 0, blend 0), sun (angle 0), area (P = L pi A), ambient = world |
+| objects | Blender primitives (plane/box/sphere/cylinder) or imported PLY assets; Diffuse BSDF |
+| targets | planes with the target's PNG texture |
+
+Emitters in water are scaled by (n_cam/n_water)^2 per camera before each render (the n^2
+convention, render-conventions §3.4).
+"""
+
+import json
+import math
+import os
+import sys
+import time
+
+import bpy
+import numpy as np
+
+from . import geometry as geo
+
+FORMAT = "poser-blender/1"
+
+
+# ------------------------------------------------------------------------------------------
+# Small helpers
+# ------------------------------------------------------------------------------------------
+
+
+def _matrix(m):
+    from mathutils import Matrix
+
+    return Matrix([list(map(float, row)) for row in np.asarray(m, dtype=float)])
+
+
+def blender_name(name):
+    """Blender names are C strings: NUL, the only character they cannot hold, becomes U+FFFD."""
+    return str(name).replace("\0", "\ufffd")
+
+
+def _new_object(coll, name, data):
+    obj = bpy.data.objects.new(blender_name(name), data)
+    coll.objects.link(obj)
+    return obj
+
+
+def _mesh_from(name, mesh, smooth):
+    me = bpy.data.meshes.new(name)
+    verts = np.asarray(mesh["verts"], dtype=float)
+    me.from_pydata([tuple(v) for v in verts], [], [tuple(f) for f in mesh["faces"]])
+    tags = mesh.get("tags")
+    if tags is not None:
+        me.polygons.foreach_set("material_index", [int(t) for t in tags])
+    me.polygons.foreach_set("use_smooth", [bool(smooth)] * len(me.polygons))
+    normals = mesh.get("normals")
+    if smooth and normals is not None and not np.isnan(normals).any():
+        me.normals_split_custom_set_from_vertices([tuple(n) for n in normals])
+    me.validate(clean_customdata=False)
+    me.update()
+    return me
+
+
+def _nodes(mat):
+    if mat.node_tree is None:  # Blender < 5 creates materials without nodes
+        mat.use_nodes = True
+    nt = mat.node_tree
+    for n in list(nt.nodes):
+        nt.nodes.remove(n)
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    out.target = "CYCLES"
+    return nt, out
+
+
+def _glass_material(name, ior, volume=None):
+    mat = bpy.data.materials.new(name)
+    nt, out = _nodes(mat)
+    g = nt.nodes.new("ShaderNodeBsdfGlass")
+    g.distribution = "GGX"
+    g.inputs["Roughness"].default_value = 0.0
+    g.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    g.inputs["IOR"].default_value = float(ior)
+    nt.links.new(g.outputs[0], out.inputs["Surface"])
+    if volume is not None:
+        _volume_node(nt, out, volume)
+    return mat, g
+
+
+def _volume_node(nt, out, water):
+    n = nt.nodes.new("ShaderNodeVolumeCoefficients")
+    ph = water["phase"]
+    if ph["kind"] == "fournier_forand":
+        n.phase = "FOURNIER_FORAND"
+        n.inputs["IOR"].default_value = float(ph["n"])
+        n.inputs["Backscatter"].default_value = float(ph["backscatter"])
+    else:
+        n.phase = "HENYEY_GREENSTEIN"
+        n.inputs["Anisotropy"].default_value = float(ph.get("g", 0.0))
+    n.inputs["Absorption Coefficients"].default_value = tuple(map(float, water["absorption"]))
+    n.inputs["Scatter Coefficients"].default_value = tuple(map(float, water["scattering"]))
+    nt.links.new(n.outputs[0], out.inputs["Volume"])
+    return n
+
+
+def _volume_only_material(name, water):
+    mat = bpy.data.materials.new(name)
+    nt, out = _nodes(mat)
+    _volume_node(nt, out, water)
+    return mat
+
+
+def _black_material(name, water=None):
+    mat = bpy.data.materials.new(name)
+    nt, out = _nodes(mat)
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    d.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    nt.links.new(d.outputs[0], out.inputs["Surface"])
+    if water is not None:
+        _volume_node(nt, out, water)
+    return mat
+
+
+def _diffuse_material(name, material, scale=(1.0, 1.0, 1.0)):
+    mat = bpy.data.materials.new(name)
+    nt, out = _nodes(mat)
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    d.inputs["Roughness"].default_value = 0.0
+    albedo = [float(a) for a in material["albedo"]]
+    d.inputs["Color"].default_value = (*albedo, 1.0)
+    pattern = material.get("pattern")
+    if pattern:
+        tc = nt.nodes.new("ShaderNodeTexCoord")
+        mp = nt.nodes.new("ShaderNodeMapping")
+        mp.inputs["Scale"].default_value = tuple(float(s) for s in scale)
+        nt.links.new(tc.outputs["Object"], mp.inputs["Vector"])
+        if pattern["type"] == "checker":
+            size = float(pattern["size"])
+            ck = nt.nodes.new("ShaderNodeTexChecker")
+            ck.inputs["Scale"].default_value = 1.0 / size
+            c2 = [a * float(pattern["contrast"]) for a in albedo]
+            # Cycles picks Color1 where floor(x)+floor(y)+floor(z) is odd; poser's checker
+            # multiplies the albedo by `contrast` there (src/mesh.rs pattern_factor).
+            ck.inputs["Color1"].default_value = (*c2, 1.0)
+            ck.inputs["Color2"].default_value = (*albedo, 1.0)
+            nt.links.new(mp.outputs[0], ck.inputs["Vector"])
+            nt.links.new(ck.outputs["Color"], d.inputs["Color"])
+        elif pattern["type"] == "noise":
+            nz = nt.nodes.new("ShaderNodeTexNoise")
+            nz.noise_dimensions = "4D"
+            nz.inputs["Scale"].default_value = 1.0 / float(pattern["size"])
+            nz.inputs["W"].default_value = float(pattern.get("seed", 0) % 1000)
+            mix = nt.nodes.new("ShaderNodeMix")
+            mix.data_type = "RGBA"
+            amount = float(pattern["amount"])
+            mix.inputs["Factor"].default_value = 1.0
+            nt.links.new(mp.outputs[0], nz.inputs["Vector"])
+            # albedo * (1 - amount + 2 amount * noise): mean albedo, relative amplitude amount.
+            mul = nt.nodes.new("ShaderNodeMath")
+            mul.operation = "MULTIPLY_ADD"
+            mul.inputs[1].default_value = 2.0 * amount
+            mul.inputs[2].default_value = 1.0 - amount
+            nt.links.new(nz.outputs["Fac"], mul.inputs[0])
+            mix.blend_type = "MULTIPLY"
+            mix.inputs[6].default_value = (*albedo, 1.0)
+            comb = nt.nodes.new("ShaderNodeCombineColor")
+            for i in range(3):
+                nt.links.new(mul.outputs[0], comb.inputs[i])
+            nt.links.new(comb.outputs[0], mix.inputs[7])
+            nt.links.new(mix.outputs[2], d.inputs["Color"])
+    nt.links.new(d.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def _texture_material(name, path):
+    mat = bpy.data.materials.new(name)
+    nt, out = _nodes(mat)
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    d.inputs["Roughness"].default_value = 0.0
+    tex = nt.nodes.new("ShaderNodeTexImage")
+    tex.interpolation = "Closest"
+    img = bpy.data.images.load(path, check_existing=True)
+    img.colorspace_settings.name = "Non-Color"
+    tex.image = img
+    tc = nt.nodes.new("ShaderNodeTexCoord")
+    nt.links.new(tc.outputs["UV"], tex.inputs["Vector"])
+    nt.links.new(tex.outputs["Color"], d.inputs["Color"])
+    nt.links.new(d.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+# ------------------------------------------------------------------------------------------
+# The scene
+# ------------------------------------------------------------------------------------------
+
+
+class Built:
+    """Handles to what `build` created, for rendering."""
+
+    def __init__(self, scene, desc):
+        self.scene = scene
+        self.desc = desc
+        self.rig = None
+        self.cameras = []  # bpy camera objects, in model order
+        self.lights = []  # (light data, colour, strength, in_water)
+        self.world_bg = None  # (background node, colour, strength, in_water)
+        self.glass_nodes = []  # (glass node, function(channel) -> ior)
+        self.water_nodes = []
+        self.water = None
+
+
+def validate(desc):
+    if not isinstance(desc, dict) or desc.get("format") != FORMAT:
+        raise ValueError(f"not a poser Blender scene description (expected format {FORMAT!r})")
+    if not desc.get("cameras"):
+        raise ValueError("the scene has no camera")
+    if not desc.get("poses"):
+        raise ValueError("the scene has no pose")
+
+
+def _channel(values, c):
+    return float(values[c])
+
+
+def build(desc, base_dir=".", scene=None):
+    """Build the described scene into `scene` (a new one when None); returns `Built`."""
+    validate(desc)
+    if scene is None:
+        scene = bpy.data.scenes.new(desc.get("name") or "poser")
+    built = Built(scene, desc)
+    coll = bpy.data.collections.new("poser: " + str(desc.get("name", "")))
+    scene.collection.children.link(coll)
+    water = desc.get("water")
+    built.water = water
+    ref = int(desc.get("reference_channel", 1))
+    n_w = water["ior"] if water else [1.0, 1.0, 1.0]
+
+    _render_settings(scene, desc)
+
+    # Rig, keyframed per pose.
+    rig = _new_object(coll, "poser_rig", None)
+    rig.empty_display_size = 0.1
+    rig.rotation_mode = "QUATERNION"
+    built.rig = rig
+    for i, pose in enumerate(desc["poses"]):
+        rig.matrix_world = _matrix(pose["world_from_rig"])
+        rig.keyframe_insert("location", frame=i)
+        rig.keyframe_insert("rotation_quaternion", frame=i)
+    _constant_interpolation(rig)
+    scene.frame_start = 0
+    scene.frame_end = len(desc["poses"]) - 1
+
+    # Cameras and the air->glass faces of their ports.
+    shells = []
+    for ci, cam in enumerate(desc["cameras"]):
+        frame = _new_object(coll, f"camera_frame:{cam['name']}", None)
+        frame.parent = rig
+        frame.matrix_parent_inverse.identity()
+        frame.matrix_basis = _matrix(cam["rig_from_camera"])
+        frame.empty_display_size = 0.05
+        data = bpy.data.cameras.new(f"camera:{cam['name']}")
+        _set_intrinsics(data, cam)
+        obj = _new_object(coll, f"camera:{cam['name']}", data)
+        obj.parent = frame
+        obj.matrix_parent_inverse.identity()
+        obj.matrix_basis = _matrix(geo.CV_TO_BLENDER)
+        built.cameras.append(obj)
+        h = geo.housing(cam)
+        if h is None:
+            shells.append(None)
+            continue
+        shell, inner = h
+        glass = cam["port"]["glass"]["ior"]
+        mat_in, node_in = _glass_material(f"glass air->glass:{cam['name']}", glass[ref])
+        built.glass_nodes.append((node_in, lambda c, g=glass: g[c]))
+        me = _mesh_from(f"port inner:{cam['name']}", inner, smooth=inner["normals"] is not None)
+        me.materials.append(mat_in)
+        inner_obj = _new_object(coll, f"port inner:{cam['name']}", me)
+        inner_obj.parent = frame
+        inner_obj.matrix_parent_inverse.identity()
+        shells.append((ci, shell, glass))
+
+    _build_water(built, coll, desc, shells, n_w, ref)
+    _build_lights(built, coll, desc)
+    _build_objects(built, coll, desc, base_dir)
+    _build_targets(built, coll, desc, base_dir)
+    if desc.get("surface", {}).get("kind") == "waves":
+        _build_waves(built, coll, desc, n_w, ref)
+    scene.frame_set(0)
+    return built
+
+
+def _constant_interpolation(obj):
+    ad = obj.animation_data
+    if ad is None or ad.action is None:
+        return
+    try:
+        curves = ad.action.fcurves
+    except AttributeError:  # Blender 5 layered actions
+        curves = []
+        for layer in ad.action.layers:
+            for strip in layer.strips:
+                for bag in strip.channelbags:
+                    curves.extend(bag.fcurves)
+    for fc in curves:
+        for kp in fc.keyframe_points:
+            kp.interpolation = "CONSTANT"
+
+
+def _set_intrinsics(data, cam):
+    data.clip_start = 1e-4
+    data.clip_end = 1e5
+    data.sensor_fit = "HORIZONTAL"
+    data.sensor_width = geo.SENSOR_WIDTH_MM
+    data.sensor_height = geo.SENSOR_WIDTH_MM * cam["height"] / cam["width"]
+    data.lens_unit = "MILLIMETERS"
+    lens = cam.get("lens", "rectilinear")
+    p = geo.blender_intrinsics(cam["fx"], cam["fy"], cam["cx"], cam["cy"], cam["width"],
+                               cam["height"])
+    data.shift_x = p["shift_x"]
+    data.shift_y = p["shift_y"]
+    data.lens = p["lens"]
+    if lens == "rectilinear":
+        data.type = "PERSP"
+    else:
+        f = geo.fisheye_params(lens, cam["fx"], cam["width"], cam["height"])
+        data.type = "PANO"
+        data.panorama_type = f["panorama_type"]
+        data.fisheye_fov = f["fisheye_fov"]
+        if "fisheye_lens" in f:
+            data.fisheye_lens = f["fisheye_lens"]
+    if cam.get("focus_distance") and cam.get("f_number"):
+        data.dof.use_dof = True
+        data.dof.focus_distance = float(cam["focus_distance"])
+        data.dof.aperture_fstop = float(cam["f_number"])
+
+
+def _render_settings(scene, desc):
+    r = desc["render"]
+    scene.render.engine = "CYCLES"
+    cy = scene.cycles
+    cy.device = "CPU"
+    cy.samples = int(r["samples"])
+    cy.use_adaptive_sampling = False
+    cy.use_denoising = False
+    cy.seed = int(r["seed"]) % (2**31)
+    cy.use_animated_seed = False
+    cy.pixel_filter_type = "BOX"
+    cy.filter_width = 1.0
+    cy.sample_clamp_direct = 0.0
+    cy.sample_clamp_indirect = 0.0
+    cy.blur_glossy = 0.0
+    cy.light_sampling_threshold = 0.0
+    cy.caustics_reflective = True
+    cy.caustics_refractive = True
+    b = max(int(r.get("max_bounces", 64)), 1)
+    cy.max_bounces = b
+    cy.transmission_bounces = b
+    cy.volume_bounces = b
+    cy.diffuse_bounces = b
+    cy.glossy_bounces = b
+    cy.transparent_max_bounces = b
+    scene.render.use_persistent_data = True
+    cam0 = desc["cameras"][0]
+    scene.render.resolution_x = int(cam0["width"])
+    scene.render.resolution_y = int(cam0["height"])
+    scene.render.resolution_percentage = 100
+    scene.render.pixel_aspect_x = 1.0
+    scene.render.pixel_aspect_y = 1.0
+    scene.render.film_transparent = False
+    scene.render.use_motion_blur = False
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    im = scene.render.image_settings
+    im.file_format = "OPEN_EXR"
+    im.color_depth = "32"
+    im.color_mode = "RGB"
+    im.exr_codec = "ZIP"
+    threads = int(os.environ.get("POSER_THREADS", "0"))
+    if threads > 0:
+        scene.render.threads_mode = "FIXED"
+        scene.render.threads = threads
+
+
+def _water_box(desc, pose_index):
+    """World-space (lo, hi) of the water volume's outer box for a pose."""
+    water = desc["water"]
+    ext = water["extent"]
+    if ext["kind"] == "box_around_camera":
+        hs = np.asarray(ext["half_size"], dtype=float)
+        pose = geo.mat4(desc["poses"][pose_index]["world_from_rig"])
+        los, his = [], []
+        for cam in desc["cameras"]:
+            c = (pose @ geo.mat4(cam["rig_from_camera"]))[:3, 3]
+            los.append(c - hs)
+            his.append(c + hs)
+        return np.min(los, axis=0), np.max(his, axis=0)
+    b = desc["bounds"]
+    lo = np.asarray(b["min"], dtype=float)
+    hi = np.asarray(b["max"], dtype=float)
+    if desc.get("surface", {}).get("kind") in ("flat", "waves"):
+        top = 0.0 if desc["surface"]["kind"] == "flat" else -0.5 * desc["surface"]["height"]
+        hi = hi.copy()
+        hi[2] = top
+        lo = lo.copy()
+        lo[2] = min(lo[2], top - 1.0)
+    return lo, hi
+
+
+def _water_mesh(desc, pose_index, shells):
+    lo, hi = _water_box(desc, pose_index)
+    parts = [geo.box_mesh(lo, hi, 0)]
+    pose = geo.mat4(desc["poses"][pose_index]["world_from_rig"])
+    for s in shells:
+        if s is None:
+            continue
+        ci, shell, _ = s
+        m = pose @ geo.mat4(desc["cameras"][ci]["rig_from_camera"])
+        parts.append(geo.reverse_mesh(geo.transform_mesh(shell, m)))
+    return geo.merge_meshes(parts)
+
+
+def _build_water(built, coll, desc, shells, n_w, ref):
+    water = desc.get("water")
+    if water is None:
+        # Air: the outer port face is a standalone glass surface (normals outward, IOR n_g).
+        for s in shells:
+            if s is None:
+                continue
+            ci, shell, glass = s
+            cam = desc["cameras"][ci]
+            mat, node = _glass_material(f"glass glass->air:{cam['name']}", glass[ref])
+            built.glass_nodes.append((node, lambda c, g=glass: g[c]))
+            me = _mesh_from(f"port outer:{cam['name']}", shell, smooth=shell["normals"] is not None)
+            me.materials.append(mat)
+            me.materials.append(mat)
+            me.materials.append(_black_material(f"housing:{cam['name']}"))
+            obj = _new_object(coll, f"port outer:{cam['name']}", me)
+            obj.parent = built.cameras[ci].parent
+            obj.matrix_parent_inverse.identity()
+        return
+    mesh = _water_mesh(desc, 0, shells)
+    me = _mesh_from("poser_water", mesh, smooth=True)
+    boundary = _volume_only_material("water boundary", water)
+    me.materials.append(boundary)
+    glass_mat = None
+    for s in shells:
+        if s is not None:
+            glass = s[2]
+            glass_mat, node = _glass_material("glass glass->water", n_w[ref] / glass[ref], water)
+            built.glass_nodes.append((node, lambda c, g=glass: n_w[c] / g[c]))
+            built.water_nodes.append(node)
+            break
+    me.materials.append(glass_mat or boundary)
+    me.materials.append(_black_material("housing", water))
+    obj = _new_object(coll, "poser_water", me)
+    obj.visible_shadow = True
+    n_poses = len(desc["poses"])
+    if n_poses > 1:
+        obj.shape_key_add(name="basis", from_mix=False)
+        for i in range(n_poses):
+            key = obj.shape_key_add(name=f"pose {i}", from_mix=False)
+            verts = _water_mesh(desc, i, shells)["verts"] if i else mesh["verts"]
+            key.data.foreach_set("co", np.asarray(verts, dtype=np.float32).ravel())
+            for f in range(n_poses):
+                key.value = 1.0 if f == i else 0.0
+                key.keyframe_insert("value", frame=f)
+        _constant_interpolation(me.shape_keys)
+
+
+def _build_lights(built, coll, desc):
+    water = desc.get("water")
+    in_water = water is not None
+    for li, light in enumerate(desc.get("lights", [])):
+        kind = light["type"]
+        name = f"light:{light['name']}"
+        if kind == "ambient":
+            _world(built, light["radiance"], in_water)
+            continue
+        if kind == "point":
+            data = bpy.data.lights.new(name, "POINT")
+            rot = np.eye(3)
+            pos = light["position"]
+            values, factor = light["intensity"], 4.0 * math.pi
+        elif kind == "spot":
+            data = bpy.data.lights.new(name, "SPOT")
+            data.spot_size = min(2.0 * float(light["half_angle"]), math.pi)
+            data.spot_blend = 0.0
+            data.show_cone = True
+            rot = geo.frame_looking_along(light["direction"])
+            pos = light["position"]
+            values, factor = light["intensity"], 4.0 * math.pi
+        elif kind == "area":
+            data = bpy.data.lights.new(name, "AREA")
+            data.shape = "RECTANGLE"
+            data.size = float(light["width"])
+            data.size_y = float(light["height"])
+            data.normalize = True
+            frame = geo.mat4(light["frame"])
+            # Model: emits along local +z; Blender: along local -z.
+            rot = frame[:3, :3] @ np.diag([1.0, -1.0, -1.0])
+            pos = frame[:3, 3]
+            values = light["radiance"]
+            factor = math.pi * float(light["width"]) * float(light["height"])
+        else:
+            raise ValueError(f"unknown light type {kind!r}")
+        if hasattr(data, "shadow_soft_size"):
+            data.shadow_soft_size = 0.0
+        if hasattr(data, "use_soft_falloff"):
+            data.use_soft_falloff = False
+        obj = _new_object(coll, name, data)
+        if light.get("mount") == "rig":
+            obj.parent = built.rig
+            obj.matrix_parent_inverse.identity()
+            obj.matrix_basis = _matrix(geo.compose(rot, pos))
+        else:
+            obj.matrix_world = _matrix(geo.compose(rot, pos))
+        built.lights.append({"data": data, "values": values, "factor": factor,
+                             "in_water": in_water})
+    sun = desc.get("sun")
+    if sun is not None:
+        data = bpy.data.lights.new("sun", "SUN")
+        data.angle = float(sun.get("angle", 0.0))
+        obj = _new_object(coll, "sun", data)
+        obj.matrix_world = _matrix(geo.compose(geo.frame_looking_along(sun["direction"]),
+                                               [0.0, 0.0, 10.0]))
+        if sun.get("caustics"):
+            data.cycles.is_caustics_light = True
+        built.lights.append({"data": data, "values": sun["irradiance"], "factor": 1.0,
+                             "in_water": bool(sun.get("in_water"))})
+    if built.world_bg is None:
+        _world(built, [0.0, 0.0, 0.0], in_water)
+
+
+def _world(built, radiance, in_water):
+    scene = built.scene
+    world = scene.world or bpy.data.worlds.new("poser world")
+    scene.world = world
+    if world.node_tree is None:
+        world.use_nodes = True
+    nt = world.node_tree
+    for n in list(nt.nodes):
+        nt.nodes.remove(n)
+    out = nt.nodes.new("ShaderNodeOutputWorld")
+    bg = nt.nodes.new("ShaderNodeBackground")
+    nt.links.new(bg.outputs[0], out.inputs["Surface"])
+    built.world_bg = {"node": bg, "values": radiance, "factor": 1.0, "in_water": in_water}
+
+
+def _apply_emitters(built, scale, channel=None):
+    """Set light and world strengths for a render: per-channel `scale` (n^2 correction for
+    emitters in water) and, for per-channel passes, only `channel`."""
+    one = (1.0, 1.0, 1.0)
+    for rec in built.lights + ([built.world_bg] if built.world_bg else []):
+        s = scale if rec["in_water"] else one
+        vals = list(rec["values"])
+        if channel is not None:
+            vals = [vals[channel]] * 3
+            s = [s[channel]] * 3
+        colour, strength = geo.light_power(vals, s, rec["factor"])
+        if "data" in rec:
+            rec["data"].color = colour
+            rec["data"].energy = strength
+        else:
+            rec["node"].inputs["Color"].default_value = (*colour, 1.0)
+            rec["node"].inputs["Strength"].default_value = strength
+
+
+def _build_objects(built, coll, desc, base_dir):
+    import bmesh
+
+    for ob in desc.get("objects", []):
+        shape = ob["shape"]
+        name = f"object:{ob['name']}"
+        kind = shape["type"]
+        scale = ob.get("scale", [1.0, 1.0, 1.0])
+        if kind == "ply":
+            me = _import_ply(os.path.join(base_dir, shape["path"]), name)
+            if shape.get("smooth"):
+                me.polygons.foreach_set("use_smooth", [True] * len(me.polygons))
+        else:
+            me = bpy.data.meshes.new(name)
+            bm = bmesh.new()
+            if kind == "plane":
+                bmesh.ops.create_grid(bm, x_segments=1, y_segments=1, size=0.5)
+                bmesh.ops.scale(bm, vec=(shape["width"], shape["height"], 1.0), verts=bm.verts)
+            elif kind == "box":
+                bmesh.ops.create_cube(bm, size=1.0)
+                bmesh.ops.scale(bm, vec=tuple(shape["size"]), verts=bm.verts)
+            else:
+                bm.free()
+                raise ValueError(f"object {ob['name']!r}: shape {kind!r} has no Blender form")
+            bm.to_mesh(me)
+            bm.free()
+        me.materials.append(_diffuse_material(name, ob["material"], scale))
+        obj = _new_object(coll, name, me)
+        obj.matrix_world = _matrix(ob["matrix"])
+
+
+def _import_ply(path, name):
+    before = set(bpy.data.objects)
+    bpy.ops.wm.ply_import(filepath=path)
+    new = [o for o in bpy.data.objects if o not in before]
+    if not new:
+        raise ValueError(f"could not import mesh {path}")
+    me = new[0].data
+    for o in new:
+        bpy.data.objects.remove(o)
+    me.name = name
+    return me
+
+
+def _build_targets(built, coll, desc, base_dir):
+    import bmesh
+
+    for t in desc.get("targets", []):
+        name = f"target:{t['name']}"
+        me = bpy.data.meshes.new(name)
+        bm = bmesh.new()
+        uv = bm.loops.layers.uv.new("UVMap")
+        w, h = float(t["width"]), float(t["height"])
+        cx, cy = float(t.get("origin", [0.0, 0.0])[0]), float(t.get("origin", [0.0, 0.0])[1])
+        vs = [bm.verts.new((cx + x * w, cy + y * h, 0.0))
+              for (x, y) in ((0, 0), (1, 0), (1, 1), (0, 1))]
+        face = bm.faces.new(vs)
+        for loop, (u, v) in zip(face.loops, ((0, 0), (1, 0), (1, 1), (0, 1))):
+            loop[uv].uv = (u, v)
+        bm.to_mesh(me)
+        bm.free()
+        me.materials.append(_texture_material(name, os.path.join(base_dir, t["texture"])))
+        obj = _new_object(coll, name, me)
+        obj.matrix_world = _matrix(t["matrix"])
+
+
+def _build_waves(built, coll, desc, n_w, ref):
+    s = desc["surface"]
+    me = bpy.data.meshes.new("sea surface")
+    obj = _new_object(coll, "sea surface", me)
+    mod = obj.modifiers.new("ocean", "OCEAN")
+    mod.geometry_mode = "GENERATE"
+    b = desc["bounds"]
+    extent = max(b["max"][0] - b["min"][0], b["max"][1] - b["min"][1], 10.0)
+    size = max(10.0 * float(s["wavelength"]), 10.0)
+    mod.spatial_size = int(min(size, 1000))
+    mod.repeat_x = mod.repeat_y = max(1, int(math.ceil(extent / mod.spatial_size)))
+    mod.resolution = 16
+    mod.wind_velocity = float(s["wind_speed"])
+    mod.wave_scale = 1.0
+    mod.choppiness = 0.0
+    mod.random_seed = int(desc["render"]["seed"]) % (2**31)
+    mod.use_normals = True
+    obj.location = (0.5 * (b["min"][0] + b["max"][0]) - 0.5 * extent,
+                    0.5 * (b["min"][1] + b["max"][1]) - 0.5 * extent, 0.0)
+    mat, node = _glass_material("sea surface", n_w[ref])
+    built.glass_nodes.append((node, lambda c: n_w[c]))
+    me.materials.append(mat)
+    obj.cycles.is_caustics_caster = True
+
+
+# ------------------------------------------------------------------------------------------
+# Rendering
+# ------------------------------------------------------------------------------------------
+
+
+def _n_cam(desc, cam):
+    """Index of the medium each camera's entrance pupil sits in, per channel."""
+    water = desc.get("water")
+    if water is None or cam["port"]["kind"] != "none":
+        return [1.0, 1.0, 1.0]
+    return list(water["ior"])
+
+
+def _load_pixels(path):
+    img = bpy.data.images.load(path, check_existing=False)
+    w, h = img.size
+    buf = np.empty(w * h * 4, dtype=np.float32)
+    img.pixels.foreach_get(buf)
+    bpy.data.images.remove(img)
+    return buf.reshape(h, w, 4)
+
+
+def _save_pixels(path, rgb, fmt, scene):
+    """Write bottom-up RGB(A) float pixels: 32-bit linear EXR or 8-bit PNG."""
+    h, w = rgb.shape[:2]
+    img = bpy.data.images.new("poser out", w, h, alpha=False, float_buffer=(fmt == "OPEN_EXR"))
+    rgba = np.ones((h, w, 4), dtype=np.float32)
+    rgba[..., :3] = rgb[..., :3]
+    img.pixels.foreach_set(rgba.ravel())
+    if fmt == "OPEN_EXR":
+        img.filepath_raw = path
+        img.file_format = "OPEN_EXR"
+        settings = scene.render.image_settings
+        img.save_render(path, scene=scene)
+        del settings
+    else:
+        img.filepath_raw = path
+        img.file_format = "PNG"
+        img.save()
+    bpy.data.images.remove(img)
+
+
+def _write_png(exr_path, png_path, exposure, scene):
+    px = _load_pixels(exr_path)
+    enc = geo.srgb_encode(px[..., :3] * exposure)
+    _save_pixels(png_path, enc.astype(np.float32), "PNG", scene)
+
+
+def render(built, out_dir, samples=None, poses=None, progress=None, png=True):
+    """Render every (pose, camera) to `{image}.exr` (linear) and `{image}.png` in out_dir.
+
+    Files are written under a temporary name and renamed, so no half-written image is left.
+    """
+    desc = built.desc
+    scene = built.scene
+    if samples:
+        scene.cycles.samples = int(samples)
+    os.makedirs(out_dir, exist_ok=True)
+    pose_ids = list(range(len(desc["poses"]))) if poses is None else list(poses)
+    water = desc.get("water")
+    ref = int(desc.get("reference_channel", 1))
+    passes = [0, 1, 2] if desc.get("per_channel_passes") else [None]
+    total = len(pose_ids) * len(desc["cameras"])
+    done = 0
+    written = []
+    exposure = float(desc["render"].get("exposure", 1.0))
+    for pi in pose_ids:
+        pose = desc["poses"][pi]
+        scene.frame_set(pi)
+        for ci, cam in enumerate(desc["cameras"]):
+            scene.camera = built.cameras[ci]
+            scene.render.resolution_x = int(cam["width"])
+            scene.render.resolution_y = int(cam["height"])
+            image = pose["images"][ci]
+            exr = os.path.join(out_dir, image + ".exr")
+            tmp = os.path.join(out_dir, f".poser-tmp-{ci}.exr")
+            n_cam = _n_cam(desc, cam)
+            if passes == [None]:
+                # One pass with the reference channel's indices: the n^2 factor uses them too.
+                scale = [1.0] * 3
+                if water:
+                    scale = geo.emitter_scale([n_cam[ref]] * 3, [water["ior"][ref]] * 3)
+                _apply_emitters(built, scale)
+                _render_to(scene, tmp)
+            else:
+                combined = None
+                scale = geo.emitter_scale(n_cam, water["ior"]) if water else [1.0] * 3
+                for c in passes:
+                    _apply_emitters(built, scale, channel=c)
+                    for node, ior in built.glass_nodes:
+                        node.inputs["IOR"].default_value = float(ior(c))
+                    _render_to(scene, tmp)
+                    px = _load_pixels(tmp)
+                    if combined is None:
+                        combined = np.zeros_like(px)
+                    combined[..., c] = px[..., c]
+                for node, ior in built.glass_nodes:
+                    node.inputs["IOR"].default_value = float(ior(ref))
+                _save_pixels(tmp, combined, "OPEN_EXR", scene)
+            if png:
+                tmp_png = os.path.join(out_dir, f".poser-tmp-{ci}.png")
+                _write_png(tmp, tmp_png, exposure, scene)
+                os.replace(tmp_png, os.path.join(out_dir, image + ".png"))
+            os.replace(tmp, exr)
+            written.append(exr)
+            done += 1
+            if progress:
+                progress(done, total, image)
+    return written
+
+
+def _render_to(scene, path):
+    scene.render.filepath = path
+    scene.render.use_file_extension = False
+    bpy.ops.render.render(write_still=True, scene=scene.name)
+
+
+# ------------------------------------------------------------------------------------------
+# Command line (`python scene.py [options]` / `blender -b -P scene.py -- [options]`)
+# ------------------------------------------------------------------------------------------
+
+USAGE = """options:
+  --out DIR          where to write the images (default: ./render beside the script)
+  --samples N        override samples per pixel
+  --poses I,J,...    render only these pose indices
+  --save-blend PATH  save the built scene as a .blend (textures packed)
+  --no-render        build (and save) only
+  --no-png           skip the PNG previews"""
+
+
+def parse_args(argv):
+    """Options after `--` (Blender) or after the script name (Python)."""
+    opts = {"out": None, "samples": None, "poses": None, "save_blend": None, "render": True,
+            "png": True}
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+
+        def value():
+            if i + 1 >= len(argv):
+                raise SystemExit(f"{a} needs a value\n{USAGE}")
+            return argv[i + 1]
+
+        if a == "--out":
+            opts["out"] = value()
+            i += 1
+        elif a == "--samples":
+            opts["samples"] = int(value())
+            i += 1
+        elif a == "--poses":
+            opts["poses"] = [int(x) for x in value().split(",") if x.strip()]
+            i += 1
+        elif a == "--save-blend":
+            opts["save_blend"] = value()
+            i += 1
+        elif a == "--no-render":
+            opts["render"] = False
+        elif a == "--no-png":
+            opts["png"] = False
+        elif a in ("-h", "--help"):
+            print(USAGE)
+            raise SystemExit(0)
+        else:
+            raise SystemExit(f"unknown option {a!r}\n{USAGE}")
+        i += 1
+    return opts
+
+
+def script_args(argv=None):
+    argv = list(sys.argv if argv is None else argv)
+    if "--" in argv:
+        return argv[argv.index("--") + 1:]
+    if argv and os.path.basename(argv[0]).lower().startswith("blender"):
+        return []
+    return argv[1:]
+
+
+def progress_line(done, total, image):
+    print(f"POSER_PROGRESS {done} {total} {json.dumps(image)}", flush=True)
+
+
+def main(desc, base_dir, argv=None):
+    """Entry point of a generated scene script."""
+    opts = parse_args(script_args(argv))
+    t0 = time.time()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.name = str(desc.get("name") or "poser")
+    built = build(desc, base_dir, scene)
+    if opts["save_blend"]:
+        path = os.path.abspath(opts["save_blend"])
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        try:
+            bpy.ops.file.pack_all()
+        except RuntimeError:
+            pass
+        bpy.ops.wm.save_as_mainfile(filepath=path, check_existing=False, compress=True)
+        print(f"POSER_SAVED {json.dumps(path)}", flush=True)
+    if opts["render"]:
+        out = opts["out"] or os.path.join(base_dir, "render")
+        written = render(built, out, opts["samples"], opts["poses"], progress_line, opts["png"])
+        print(f"POSER_DONE {len(written)} {time.time() - t0:.3f}", flush=True)
+    return built

@@ -1,0 +1,359 @@
+//! The scene description handed to the Python builder (`poser-blender/1`): the resolved model
+//! reduced to what Blender needs, as plain JSON data, plus the assets it refers to.
+//!
+//! | key | content |
+//! |---|---|
+//! | `format` | `"poser-blender/1"` |
+//! | `name`, `description` | the scenario's (data only) |
+//! | `render` | `samples`, `seed`, `max_bounces`, `exposure`, `outputs` |
+//! | `reference_channel` | channel whose indices a single RGB pass uses (1 = G, 550 nm) |
+//! | `per_channel_passes` | one pass per channel with that channel's indices (dispersion) |
+//! | `cameras[]` | `name`, `width`, `height`, `lens`, `fx`, `fy`, `cx`, `cy`, `focus_distance`, `f_number`, `rig_from_camera` (4×4), `port` (camera frame, as in the model) |
+//! | `poses[]` | `name`, `world_from_rig` (4×4), `images` (one name per camera), `time` |
+//! | `water` | the model's water (indices, σa, σs per channel, phase, extent) or `null` |
+//! | `surface` | the sea surface (`none`, `flat`, `waves`) |
+//! | `bounds` | world box holding everything, with a margin: the extent of scene-filling water |
+//! | `sun` | `direction` (propagation), `irradiance` (W/m² normal to it), `in_water`, `angle`, `caustics` |
+//! | `lights[]` | `name`, `mount`, `type` + the model's parameters; poses as 4×4 |
+//! | `objects[]` | `name`, `shape` (primitive or `{type: ply, path}`), `scale`, `matrix` (world, scale included), `material` |
+//! | `targets[]` | `name`, `texture` (PNG path), `width`, `height`, `origin`, `matrix` |
+//!
+//! Matrices are row-major 4×4 nested arrays.
+
+use crate::model::{LightKind, Model, Pose, SeaSurface, Shape, TargetKind};
+use glam::{DMat4, DVec3};
+use serde_json::{Value, json};
+
+/// Format tag checked by the Python builder.
+pub const FORMAT: &str = "poser-blender/1";
+
+/// Angular diameter of the sun, rad (used only when the sun shines through a wavy surface).
+const SUN_ANGLE: f64 = 0.00935;
+
+/// Row-major 4×4 of a pose.
+pub fn pose_rows(p: &Pose) -> Value {
+    let r = p.rotation;
+    let t = p.translation;
+    json!([
+        [r.x_axis.x, r.y_axis.x, r.z_axis.x, t.x],
+        [r.x_axis.y, r.y_axis.y, r.z_axis.y, t.y],
+        [r.x_axis.z, r.y_axis.z, r.z_axis.z, t.z],
+        [0.0, 0.0, 0.0, 1.0]
+    ])
+}
+
+fn mat_rows(m: &DMat4) -> Value {
+    let row = |i: usize| [0, 1, 2, 3].map(|j| m.col(j)[i]);
+    json!([row(0), row(1), row(2), row(3)])
+}
+
+fn pose_mat(p: &Pose) -> DMat4 {
+    DMat4::from_cols(
+        p.rotation.x_axis.extend(0.0),
+        p.rotation.y_axis.extend(0.0),
+        p.rotation.z_axis.extend(0.0),
+        p.translation.extend(1.0),
+    )
+}
+
+/// An asset file the description refers to, to be written beside the script.
+pub struct Asset {
+    pub path: String,
+    pub bytes: Vec<u8>,
+}
+
+/// The description and its assets.
+pub struct Description {
+    pub json: Value,
+    pub assets: Vec<Asset>,
+    pub warnings: Vec<String>,
+}
+
+/// Build the description of `model`.
+pub fn describe(model: &Model) -> Result<Description, String> {
+    let mut assets = Vec::new();
+    let mut warnings = Vec::new();
+    let base_dir = std::path::Path::new(&model.source)
+        .parent()
+        .map(|p| p.to_path_buf())
+        .unwrap_or_default();
+    for cam in &model.cameras {
+        if !cam.distortion.is_zero() {
+            return Err(format!(
+                "camera `{}`: Cycles has no Brown–Conrady distortion; the Blender backend cannot \
+                 render it exactly\n  help: set the distortion to zero for this backend, or use \
+                 the native or Mitsuba backend",
+                cam.name
+            ));
+        }
+        if (cam.fx - cam.fy).abs() > 1e-9 * cam.fx.abs().max(1.0) {
+            return Err(format!(
+                "camera `{}`: Cycles needs square pixels (fx = fy), got fx = {}, fy = {}",
+                cam.name, cam.fx, cam.fy
+            ));
+        }
+    }
+    let cameras: Vec<Value> = model
+        .cameras
+        .iter()
+        .map(|c| {
+            json!({
+                "name": c.name,
+                "width": c.width,
+                "height": c.height,
+                "lens": c.lens,
+                "fx": c.fx,
+                "fy": c.fy,
+                "cx": c.cx,
+                "cy": c.cy,
+                "focus_distance": c.focus_distance,
+                "f_number": c.f_number,
+                "rig_from_camera": pose_rows(&c.rig_from_camera),
+                "port": c.port,
+            })
+        })
+        .collect();
+    let poses: Vec<Value> = model
+        .poses
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let images: Vec<String> = (0..model.cameras.len())
+                .map(|c| model.image_name(i, c))
+                .collect();
+            json!({
+                "name": p.name,
+                "world_from_rig": pose_rows(&p.world_from_rig),
+                "images": images,
+                "time": p.time,
+            })
+        })
+        .collect();
+
+    let caustics = model.needs.caustics && matches!(model.site.surface, SeaSurface::Waves { .. });
+    let sun = model.sun.as_ref().map(|s| {
+        if caustics {
+            json!({"direction": s.direction_air, "irradiance": s.irradiance, "in_water": false,
+                   "angle": SUN_ANGLE, "caustics": true})
+        } else if model.water.is_some() {
+            json!({"direction": s.direction_water, "irradiance": s.irradiance_water,
+                   "in_water": true, "angle": 0.0, "caustics": false})
+        } else {
+            json!({"direction": s.direction_air, "irradiance": s.irradiance, "in_water": false,
+                   "angle": 0.0, "caustics": false})
+        }
+    });
+
+    let lights: Vec<Value> = model
+        .lights
+        .iter()
+        .map(|l| {
+            let mut v = match &l.kind {
+                LightKind::Point {
+                    position,
+                    intensity,
+                } => {
+                    json!({"type": "point", "position": position, "intensity": intensity})
+                }
+                LightKind::Spot {
+                    position,
+                    direction,
+                    half_angle,
+                    intensity,
+                } => json!({
+                    "type": "spot", "position": position, "direction": direction,
+                    "half_angle": half_angle, "intensity": intensity
+                }),
+                LightKind::Area {
+                    frame,
+                    width,
+                    height,
+                    radiance,
+                } => json!({
+                    "type": "area", "frame": pose_rows(frame), "width": width,
+                    "height": height, "radiance": radiance
+                }),
+                LightKind::Ambient { radiance } => json!({"type": "ambient", "radiance": radiance}),
+            };
+            v["name"] = json!(l.name);
+            v["mount"] = json!(l.mount);
+            v
+        })
+        .collect();
+
+    let mut objects = Vec::new();
+    for (i, o) in model.objects.iter().enumerate() {
+        let shape = match &o.shape {
+            Shape::Plane { .. } | Shape::Box { .. } => {
+                serde_json::to_value(&o.shape).map_err(|e| e.to_string())?
+            }
+            Shape::Sphere { .. }
+            | Shape::Cylinder { .. }
+            | Shape::Mesh { .. }
+            | Shape::Seabed { .. }
+            | Shape::Boulders { .. } => {
+                // Tessellated by the shared mesh module (same triangles as the native
+                // renderer), in the object frame; pose and scale stay in `matrix`.
+                let path = format!("assets/object_{i}.ply");
+                let mesh = crate::mesh::shape_mesh(&o.shape, &base_dir)
+                    .map_err(|e| format!("object `{}`: {e}", o.name))?;
+                let bytes =
+                    crate::mesh::ply_bytes(&mesh, crate::mesh::PlyFormat::BinaryLittleEndian);
+                let smooth = matches!(o.shape, Shape::Sphere { .. });
+                assets.push(Asset {
+                    path: path.clone(),
+                    bytes,
+                });
+                json!({"type": "ply", "path": path, "smooth": smooth})
+            }
+        };
+        let m = pose_mat(&o.pose) * DMat4::from_scale(o.scale);
+        objects.push(json!({
+            "name": o.name,
+            "shape": shape,
+            "scale": o.scale,
+            "matrix": mat_rows(&m),
+            "material": o.material,
+        }));
+    }
+
+    let mut targets = Vec::new();
+    for (i, t) in model.targets.iter().enumerate() {
+        match super::target_texture(t)? {
+            Some(tex) => {
+                let path = format!("assets/target_{i}.png");
+                assets.push(Asset {
+                    path: path.clone(),
+                    bytes: tex.png,
+                });
+                targets.push(json!({
+                    "name": t.name,
+                    "texture": path,
+                    "width": tex.width,
+                    "height": tex.height,
+                    "origin": tex.origin,
+                    "matrix": pose_rows(&t.pose),
+                }));
+            }
+            None => warnings.push(format!(
+                "target `{}` ({}): a 3D test object; the Blender backend does not draw it yet",
+                t.name,
+                target_kind_name(&t.kind)
+            )),
+        }
+    }
+
+    let json = json!({
+        "format": FORMAT,
+        "name": model.name,
+        "description": model.description,
+        "render": {
+            "samples": model.render.samples,
+            "seed": model.render.seed,
+            "max_bounces": model.render.max_bounces,
+            "exposure": model.render.exposure,
+            "outputs": model.render.outputs,
+        },
+        "reference_channel": 1,
+        "per_channel_passes": model.needs.per_channel_passes,
+        "caustics": caustics,
+        "cameras": cameras,
+        "poses": poses,
+        "water": model.water,
+        "surface": model.site.surface,
+        "bounds": bounds(model),
+        "sun": sun,
+        "lights": lights,
+        "objects": objects,
+        "targets": targets,
+    });
+    Ok(Description {
+        json,
+        assets,
+        warnings,
+    })
+}
+
+fn target_kind_name(k: &TargetKind) -> &'static str {
+    match k {
+        TargetKind::Checkerboard { .. } => "checkerboard",
+        TargetKind::CircleGrid { .. } => "circle grid",
+        TargetKind::Coded { .. } => "coded",
+        TargetKind::ScaleBar { .. } => "scale bar",
+        TargetKind::SiemensStar { .. } => "Siemens star",
+        TargetKind::TestObject { .. } => "test object",
+    }
+}
+
+/// A world box holding every camera position, light, object and target point, with a margin
+/// of several extinction lengths (clamped to 5–100 m) so that scene-filling water looks
+/// unbounded.
+fn bounds(model: &Model) -> Value {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    let mut add = |p: DVec3, r: f64| {
+        lo = lo.min(p - DVec3::splat(r));
+        hi = hi.max(p + DVec3::splat(r));
+    };
+    for i in 0..model.poses.len() {
+        for c in 0..model.cameras.len() {
+            add(model.world_from_camera(i, c).translation, 0.5);
+        }
+        for l in &model.lights {
+            let p = match &l.kind {
+                LightKind::Point { position, .. } | LightKind::Spot { position, .. } => *position,
+                LightKind::Area { frame, .. } => frame.translation,
+                LightKind::Ambient { .. } => continue,
+            };
+            let w = match l.mount {
+                crate::model::Mount::Rig => model.poses[i].world_from_rig.transform_point(p),
+                crate::model::Mount::World => p,
+            };
+            add(w, 0.5);
+        }
+    }
+    for o in &model.objects {
+        let r = match &o.shape {
+            Shape::Plane { width, height } => 0.5 * width.hypot(*height),
+            Shape::Box { size } => 0.5 * size.length(),
+            Shape::Sphere { radius } => *radius,
+            Shape::Cylinder { radius, height } => radius.hypot(0.5 * height),
+            Shape::Seabed {
+                width,
+                length,
+                roughness,
+                ..
+            } => 0.5 * width.hypot(*length) + 4.0 * roughness,
+            Shape::Boulders {
+                width,
+                length,
+                radius,
+                ..
+            } => 0.5 * width.hypot(*length) + 2.0 * radius,
+            Shape::Mesh { .. } => 10.0,
+        };
+        add(o.pose.translation, r * o.scale.max_element());
+    }
+    for t in &model.targets {
+        for p in &t.points {
+            add(p.world, 0.5);
+        }
+    }
+    if !lo.is_finite() {
+        lo = DVec3::splat(-1.0);
+        hi = DVec3::splat(1.0);
+    }
+    let margin = model
+        .water
+        .as_ref()
+        .map(|w| {
+            let t = w.extinction().into_iter().fold(f64::INFINITY, f64::min);
+            if t > 0.0 {
+                (5.0 / t).clamp(5.0, 100.0)
+            } else {
+                100.0
+            }
+        })
+        .unwrap_or(5.0);
+    json!({"min": lo - DVec3::splat(margin), "max": hi + DVec3::splat(margin)})
+}

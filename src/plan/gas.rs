@@ -1,0 +1,165 @@
+//! Breathing gas: real-gas cylinder contents (Subsurface's virial Z-factor fit), consumption
+//! from SAC and ambient pressure, and the reserve rules (fixed reserve, rule of thirds,
+//! Subsurface's minimum gas).
+//!
+//! | quantity | unit | note |
+//! |---|---|---|
+//! | cylinder `volume` | l (water capacity) | twin sets as one cylinder of the summed volume |
+//! | `pressure` | bar | gauge fill pressure |
+//! | contents | l at 1 atm | `V·(p/1.01325)/Z(p)` |
+//! | `sac` | l/min at 1 atm | consumption at depth = SAC·P_amb/1.01325 |
+
+use super::deco::{ATM, Gas};
+use serde::Serialize;
+
+/// Cubic "virial minus one" coefficients of Z(p) (p in bar) for O₂, N₂ and He at ≈ 300 K:
+/// the least-squares fit Subsurface uses (`core/gas-model.cpp`, data from Perry's Chemical
+/// Engineers' Handbook, 7th ed.). Z = 1 + Σ fᵢ·(c₀p + c₁p² + c₂p³).
+const Z_O2: [f64; 3] = [-7.18092073703e-04, 2.81852572808e-06, -1.50290620492e-09];
+const Z_N2: [f64; 3] = [-2.19260353292e-04, 2.92844845532e-06, -2.07613482075e-09];
+const Z_HE: [f64; 3] = [4.87320026468e-04, -8.83632921053e-08, 5.33304543646e-11];
+
+/// Compressibility factor Z of `gas` at `bar` (clamped to 0…500 bar, the fit's range).
+pub fn compressibility(gas: Gas, bar: f64) -> f64 {
+    let p = bar.clamp(0.0, 500.0);
+    let v = |c: &[f64; 3]| c[0] * p + c[1] * p * p + c[2] * p * p * p;
+    1.0 + gas.o2 * v(&Z_O2) + gas.he * v(&Z_HE) + gas.n2() * v(&Z_N2)
+}
+
+/// Free-gas contents (litres at 1 atm) of `volume_l` litres at `bar`.
+pub fn contents(gas: Gas, volume_l: f64, bar: f64) -> f64 {
+    if bar <= 0.0 {
+        return 0.0;
+    }
+    volume_l * (bar / ATM) / compressibility(gas, bar)
+}
+
+/// Pressure (bar) at which `volume_l` litres hold `litres` of free gas (inverse of
+/// [`contents`]); 0 when `litres` ≤ 0.
+pub fn pressure_for(gas: Gas, volume_l: f64, litres: f64) -> f64 {
+    if litres <= 0.0 || volume_l <= 0.0 {
+        return 0.0;
+    }
+    // contents() is monotonic in pressure over 0…500 bar; bisection to 1 mbar.
+    let (mut lo, mut hi) = (0.0_f64, 500.0_f64);
+    if contents(gas, volume_l, hi) < litres {
+        return f64::INFINITY;
+    }
+    while hi - lo > 1e-3 {
+        let mid = 0.5 * (lo + hi);
+        if contents(gas, volume_l, mid) < litres {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The diver's cylinders seen as one supply of one gas.
+#[derive(Debug, Clone, Serialize)]
+pub struct Supply {
+    /// Total water volume, l.
+    pub volume: f64,
+    /// Fill pressure, bar (the first cylinder's when they differ: contents are summed exactly).
+    pub fill: f64,
+    /// Free gas at fill, l.
+    pub start: f64,
+    /// Free gas left in the cylinders at the reserve pressure, l.
+    pub reserve: f64,
+    pub gas: Gas,
+    /// Names and sizes for messages.
+    pub description: String,
+}
+
+impl Supply {
+    /// Cylinders as (volume l, fill bar, gas); `reserve_bar` must remain at the surface.
+    pub fn new(cylinders: &[(String, f64, f64, Gas)], reserve_bar: f64) -> Option<Supply> {
+        let first = cylinders.first()?;
+        let gas = first.3;
+        let volume: f64 = cylinders.iter().map(|c| c.1).sum();
+        let start: f64 = cylinders.iter().map(|c| contents(c.3, c.1, c.2)).sum();
+        let reserve: f64 = cylinders
+            .iter()
+            .map(|c| contents(c.3, c.1, reserve_bar.min(c.2)))
+            .sum();
+        let description = cylinders
+            .iter()
+            .map(|c| format!("{} ({:.1} l at {:.0} bar)", c.0, c.1, c.2))
+            .collect::<Vec<_>>()
+            .join(" + ");
+        Some(Supply {
+            volume,
+            fill: first.2,
+            start,
+            reserve,
+            gas,
+            description,
+        })
+    }
+
+    /// Pressure left (bar) after breathing `used` litres (one pooled cylinder).
+    pub fn pressure_after(&self, used: f64) -> f64 {
+        pressure_for(self.gas, self.volume, (self.start - used).max(0.0))
+    }
+}
+
+/// Gas breathed in `dt` s at ambient `p_amb` bar with SAC `sac_lpm` l/min.
+pub fn consumption(sac_lpm: f64, p_amb: f64, dt: f64) -> f64 {
+    sac_lpm * (p_amb / ATM) * dt / 60.0
+}
+
+/// The three gas rules and what each allows.
+#[derive(Debug, Clone, Serialize)]
+pub struct GasCheck {
+    /// Free gas breathed over the whole dive, l.
+    pub used: f64,
+    /// Gas in the cylinders at the start, l.
+    pub start: f64,
+    /// Pressure at the end of the dive, bar (≤ 0 → ran out).
+    pub end_pressure: f64,
+    /// Reserve pressure asked for, bar, and whether it is kept.
+    pub reserve_bar: f64,
+    pub reserve_ok: bool,
+    /// Rule of thirds: at most two thirds of the start gas used.
+    pub thirds_ok: bool,
+    /// Subsurface's minimum gas at the end of the bottom time (SAC×4, 4 min problem solving at
+    /// the deepest depth + ascent gas ×4), l, and whether the gas left there covers it.
+    pub min_gas: f64,
+    pub min_gas_ok: bool,
+    /// Gas left when the bottom time ends, l.
+    pub at_end_of_bottom: f64,
+    /// Time at which the gas reaches the reserve, s from the start (None: never).
+    pub reserve_reached_at: Option<f64>,
+    /// Time at which the cylinders are empty, s (None: never).
+    pub empty_at: Option<f64>,
+}
+
+impl GasCheck {
+    /// Enough gas: the reserve is kept and the rule of thirds holds. (Subsurface's minimum
+    /// gas is reported as advice: its ×4 factor assumes sharing gas with a stressed buddy.)
+    pub fn ok(&self) -> bool {
+        self.reserve_ok && self.thirds_ok
+    }
+}
+
+/// Subsurface's minimum-gas defaults: SAC factor 4.0 and 4 min of problem solving.
+pub const SAC_FACTOR: f64 = 4.0;
+pub const PROBLEM_SOLVING: f64 = 240.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn z_factor_matches_subsurface_reference() {
+        // Reference notes: Z(air, 200 bar) ≈ 1.036; 12 l at 200 bar → 2287 l, at 232 bar → 2600 l.
+        let z = compressibility(Gas::AIR, 200.0);
+        assert!((z - 1.036).abs() < 0.001, "{z}");
+        assert!((contents(Gas::AIR, 12.0, 200.0) - 2287.0).abs() < 3.0);
+        assert!((contents(Gas::AIR, 12.0, 232.0) - 2600.0).abs() < 3.0);
+        // Inverse.
+        let p = pressure_for(Gas::AIR, 12.0, 2287.0);
+        assert!((p - 200.0).abs() < 0.05, "{p}");
+    }
+}

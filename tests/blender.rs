@@ -1,0 +1,294 @@
+//! Blender backend: generated scripts are data-only, and Cycles renders agree with analytic
+//! truth (projection and radiometry). Renders are 160×120 with the real `bpy`.
+
+mod blender_common;
+
+use blender_common::*;
+use glam::DVec3;
+use poser::backend::RenderOptions;
+use poser::compare::LinearImage;
+use poser::model::*;
+use std::path::Path;
+
+fn render(model: &Model, out: &Path, samples: u32) -> LinearImage {
+    require_bpy();
+    let opts = RenderOptions {
+        samples: Some(samples),
+        poses: None,
+        progress: false,
+    };
+    let report = poser::backend::blender::render(model, out, &opts).expect("Cycles render");
+    assert_eq!(report.images.len(), 1);
+    assert!(out.join("img_0001.png").exists(), "PNG preview written");
+    LinearImage::read(&report.images[0]).expect("EXR readable")
+}
+
+/// Pixel centre (u, v) → ray in the camera frame.
+fn pixel_ray(cam: &Camera, u: f64, v: f64) -> DVec3 {
+    DVec3::new((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0).normalize()
+}
+
+#[test]
+fn pinhole_centroid_matches_projection() {
+    // A black square (albedo 0) on a white sky (ambient radiance 1) in air, fronto-parallel,
+    // off-centre, with an off-centre principal point: the projection of a fronto-parallel
+    // square is a similarity, so its intensity centroid is the projection of its centre.
+    let centre = DVec3::new(0.31, -0.17, 0.0);
+    let mut patch = plane("patch", 0.4, 0.0, 0.0);
+    patch.pose.translation = centre;
+    let cam = camera("cam", Port::None);
+    let position = DVec3::new(0.05, 0.02, 3.0);
+    let m = model(
+        "pinhole",
+        cam.clone(),
+        position,
+        None,
+        vec![ambient(1.0)],
+        vec![patch],
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let img = render(&m, dir.path(), 256);
+    let (mut sw, mut su, mut sv) = (0.0, 0.0, 0.0);
+    for j in 0..img.height {
+        for i in 0..img.width {
+            let w = 1.0 - img.rgb[j * img.width + i][1] as f64;
+            assert!(w > -1e-4, "pixel ({i},{j}) brighter than the sky: {w}");
+            sw += w;
+            su += w * (i as f64 + 0.5);
+            sv += w * (j as f64 + 0.5);
+        }
+    }
+    let pc = m.world_from_camera(0, 0).inverse().transform_point(centre);
+    let (u, v) = (cam.fx * pc.x / pc.z + cam.cx, cam.fy * pc.y / pc.z + cam.cy);
+    let area = (0.4 * cam.fx / pc.z).powi(2);
+    let (eu, ev) = (su / sw - u, sv / sw - v);
+    eprintln!("pinhole centroid error: ({eu:.4}, {ev:.4}) px; area {sw:.2} vs {area:.2} px²");
+    // 256 spp: edge-coverage noise gives ≈0.007 px (σ); 0.03 px is > 4σ.
+    assert!(
+        eu.abs() < 0.03 && ev.abs() < 0.03,
+        "centroid off by ({eu}, {ev}) px"
+    );
+    // The flux equals the square's area in px² (emission 1 ↔ pixel value 1), to 0.5 %.
+    assert!((sw / area - 1.0).abs() < 5e-3, "area {sw} vs {area}");
+}
+
+/// Unpolarised Fresnel transmittance from index n1 into n2 at incidence cosine `ci`.
+fn fresnel_t(n1: f64, n2: f64, ci: f64) -> f64 {
+    let s2 = (n1 / n2).powi(2) * (1.0 - ci * ci);
+    let ct = (1.0 - s2).sqrt();
+    let rs = (n1 * ci - n2 * ct) / (n1 * ci + n2 * ct);
+    let rp = (n2 * ci - n1 * ct) / (n2 * ci + n1 * ct);
+    1.0 - 0.5 * (rs * rs + rp * rp)
+}
+
+/// Snell refraction of unit `d` at a plane with unit normal `n` (pointing against `d`).
+fn refract(d: DVec3, n: DVec3, eta: f64) -> DVec3 {
+    let ci = -d.dot(n);
+    let k = 1.0 - eta * eta * (1.0 - ci * ci);
+    (eta * d + (eta * ci - k.sqrt()) * n).normalize()
+}
+
+struct Patch {
+    /// World point seen by the pixel centre, and the camera-side water path length.
+    point: DVec3,
+    water_path: f64,
+    /// Product of the Fresnel transmittances along the camera ray and the n² factor.
+    factor: f64,
+}
+
+/// Expected linear radiance in each channel for a Lambertian plane z = `z_plane` (albedo ρ,
+/// normal +z) lit by a point light of intensity I at `light` in absorbing water.
+fn expected(m: &Model, light: DVec3, intensity: f64, rho: f64, p: &Patch) -> [f64; 3] {
+    let w = m.water.as_ref().unwrap();
+    let to_light = light - p.point;
+    let r = to_light.length();
+    let cos = to_light.z / r;
+    [0, 1, 2].map(|c| {
+        let e = intensity * cos / (r * r) * (-w.absorption[c] * r).exp();
+        rho / std::f64::consts::PI * e * (-w.absorption[c] * p.water_path).exp() * p.factor
+    })
+}
+
+fn patch_through(m: &Model, u: f64, v: f64, z_plane: f64) -> Patch {
+    let cam = &m.cameras[0];
+    let wfc = m.world_from_camera(0, 0);
+    let d = pixel_ray(cam, u, v);
+    match &cam.port {
+        Port::None => {
+            let o = wfc.translation;
+            let dw = wfc.transform_vector(d);
+            let t = (z_plane - o.z) / dw.z;
+            Patch {
+                point: o + t * dw,
+                water_path: t,
+                factor: 1.0,
+            }
+        }
+        Port::Flat {
+            normal,
+            distance,
+            thickness,
+            glass,
+        } => {
+            // The scene is rendered with the reference (G) channel's indices.
+            let (ng, nw) = (glass.ior[1], m.water.as_ref().unwrap().ior[1]);
+            let n = *normal;
+            let t1 = distance / d.dot(n);
+            let p1 = d * t1;
+            let d1 = refract(d, -n, 1.0 / ng);
+            let t2 = thickness / d1.dot(n);
+            let p2 = p1 + d1 * t2;
+            let d2 = refract(d1, -n, ng / nw);
+            let tr = fresnel_t(1.0, ng, d.dot(n)) * fresnel_t(ng, nw, d1.dot(n));
+            let o = wfc.transform_point(p2);
+            let dw = wfc.transform_vector(d2);
+            let t = (z_plane - o.z) / dw.z;
+            // Radiance entering the air from water is divided by n_w² (Mitsuba's physical
+            // convention; Cycles gets it from the emitter scaling).
+            Patch {
+                point: o + t * dw,
+                water_path: t,
+                factor: tr / (nw * nw),
+            }
+        }
+        _ => unreachable!(),
+    }
+}
+
+fn radiometry(port: Port, tag: &str) {
+    let rho = 0.5;
+    let intensity = 2.0;
+    let z_plane = -4.0;
+    let position = DVec3::new(0.0, 0.0, -2.0);
+    let light_rig = DVec3::new(0.1, 0.0, 0.0);
+    let strobe = Light {
+        name: "strobe".into(),
+        mount: Mount::Rig,
+        kind: LightKind::Point {
+            position: light_rig,
+            intensity: [intensity; 3],
+        },
+    };
+    let mut m = model(
+        tag,
+        camera("cam", port),
+        position,
+        Some(water([0.40, 0.10, 0.05], [0.0; 3])),
+        vec![strobe],
+        vec![plane("patch", 3.0, z_plane, rho)],
+    );
+    m.needs.medium = true;
+    let light = m.poses[0].world_from_rig.transform_point(light_rig);
+    let dir = tempfile::tempdir().unwrap();
+    let img = render(&m, dir.path(), 16);
+    // Central 12×12 pixels around the principal point.
+    let (i0, j0) = (m.cameras[0].cx as usize - 6, m.cameras[0].cy as usize - 6);
+    let mut got = [0.0; 3];
+    let mut want = [0.0; 3];
+    for j in j0..j0 + 12 {
+        for i in i0..i0 + 12 {
+            let p = patch_through(&m, i as f64 + 0.5, j as f64 + 0.5, z_plane);
+            let e = expected(&m, light, intensity, rho, &p);
+            let px = img.rgb[j * img.width + i];
+            for c in 0..3 {
+                got[c] += px[c] as f64;
+                want[c] += e[c];
+            }
+        }
+    }
+    for c in 0..3 {
+        let ratio = got[c] / want[c];
+        eprintln!("{tag}: channel {c}: Cycles/analytic = {ratio:.5}");
+        // Direct lighting from a point light through absorbing water is noise-free in Cycles;
+        // the ≈2e-4 left is the glass slab's inter-reflections, which the reference ignores.
+        // 0.5 % also covers float32 image storage and the pixel-area average.
+        assert!(
+            (ratio - 1.0).abs() < 5e-3,
+            "{tag} channel {c}: ratio {ratio}"
+        );
+    }
+}
+
+#[test]
+fn lambertian_patch_in_water_matches_beer_lambert_inverse_square() {
+    radiometry(Port::None, "camera_in_water");
+}
+
+#[test]
+fn lambertian_patch_through_flat_port_has_n2_and_fresnel() {
+    radiometry(flat_port(), "flat_port");
+}
+
+#[test]
+fn hostile_names_are_only_data() {
+    require_bpy();
+    let dir = tempfile::tempdir().unwrap();
+    let sentinel = dir.path().join("PWNED");
+    let s = sentinel.display().to_string();
+    let evil = [
+        format!("a\"b'c\n\"\"\"__import__('os').system('touch {s}')"),
+        format!("''' + __import__('os').system('touch {s}') + '''"),
+        format!("\\\"); import os; os.system('touch {s}'); (\""),
+        "é😀\u{2028}\r\t\0end".to_string(),
+    ];
+    let mut objects = Vec::new();
+    for (i, e) in evil.iter().enumerate() {
+        objects.push(plane(&format!("{i}{e}"), 0.5, -1.0 - i as f64, 0.5));
+    }
+    let mut m = model(
+        &evil[0],
+        camera(&evil[1], Port::None),
+        DVec3::new(0.0, 0.0, 1.0),
+        None,
+        vec![ambient(1.0)],
+        objects.clone(),
+    );
+    m.description = evil[2].clone();
+    m.poses[0].name = evil[3].clone();
+    poser::backend::blender::compile(&m, dir.path()).unwrap();
+    let script = std::fs::read_to_string(dir.path().join("scene.py")).unwrap();
+    assert!(script.is_ascii(), "the script is pure ASCII");
+    // Build only and save a .blend, then list the object names from it.
+    let blend = dir.path().join("hostile.blend");
+    let out = poser::backend::python::command(&dir.path().join("scene.py"))
+        .arg("--no-render")
+        .arg("--save-blend")
+        .arg(&blend)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!sentinel.exists(), "a scene name ran code");
+    let list = dir.path().join("list.py");
+    std::fs::write(
+        &list,
+        "import bpy, json, sys\nbpy.ops.wm.open_mainfile(filepath=sys.argv[1])\n\
+         print('NAMES=' + json.dumps(sorted(o.name for o in bpy.data.objects)))\n",
+    )
+    .unwrap();
+    let out = poser::backend::python::command(&list)
+        .arg(&blend)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("NAMES="))
+        .expect("names printed");
+    let names: Vec<String> = serde_json::from_str(line).unwrap();
+    for o in &objects {
+        // Blender names are C strings: NUL becomes U+FFFD; everything else round-trips.
+        let want = format!("object:{}", o.name).replace('\0', "\u{fffd}");
+        assert!(names.contains(&want), "{want:?} not among {names:?}");
+    }
+    assert!(names.contains(&format!("camera:{}", evil[1])), "{names:?}");
+    assert!(!sentinel.exists());
+}
