@@ -1304,7 +1304,51 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
                         .label(span, format!("`.{ext}` file"))
                         .help("convert the mesh to glTF (`.glb` or `.gltf`), e.g. with Blender's exporter"),
                 );
+            } else {
+                match std::fs::read(&p).map_err(|e| e.to_string()).and_then(|b| {
+                    gltf::Gltf::from_slice(&b)
+                        .map(|_| ())
+                        .map_err(|e| e.to_string())
+                }) {
+                    Ok(()) => {}
+                    Err(e) => cx.push(
+                        Diagnostic::error(
+                            "E0287",
+                            format!(
+                                "`{}` is not a readable glTF file",
+                                super::source::display(&p)
+                            ),
+                        )
+                        .label(span, e)
+                        .help("re-export the mesh as glTF 2.0 (`.glb`), e.g. from Blender"),
+                    ),
+                }
             }
+            // The model carries the canonical path, so every backend finds the file
+            // wherever it runs from; it must stay inside the scene's directory tree.
+            let canon = p.canonicalize().unwrap_or_else(|_| p.clone());
+            let roots: Vec<std::path::PathBuf> =
+                [Some(dir.clone()), scene.parent().map(Path::to_path_buf)]
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|d| {
+                        (if d.as_os_str().is_empty() {
+                            Path::new(".").to_path_buf()
+                        } else {
+                            d
+                        })
+                        .canonicalize()
+                        .ok()
+                    })
+                    .collect();
+            if !roots.iter().any(|r| canon.starts_with(r)) {
+                cx.push(
+                    Diagnostic::error("E0286", "the mesh file is outside the scene's directory")
+                        .label(span, "this path leaves the directory of the scene")
+                        .help("keep assets next to the scene (e.g. `assets/wreck.glb`) so the scene can be shared as one folder"),
+                );
+            }
+            return canon.to_string_lossy().to_string();
         }
         Ok(_) => cx.push(
             Diagnostic::error(
