@@ -54,17 +54,20 @@ def _new_object(coll, name, data):
 
 
 def _mesh_from(name, mesh, smooth):
+    """A Blender mesh; with `smooth`, shading uses the mesh's analytic normals (custom
+    normals) on faces that have them and the flat face normal elsewhere."""
     me = bpy.data.meshes.new(name)
     verts = np.asarray(mesh["verts"], dtype=float)
     me.from_pydata([tuple(v) for v in verts], [], [tuple(f) for f in mesh["faces"]])
     tags = mesh.get("tags")
     if tags is not None:
         me.polygons.foreach_set("material_index", [int(t) for t in tags])
-    me.polygons.foreach_set("use_smooth", [bool(smooth)] * len(me.polygons))
     normals = mesh.get("normals")
-    if smooth and normals is not None and not np.isnan(normals).any():
-        me.normals_split_custom_set_from_vertices([tuple(n) for n in normals])
-    me.validate(clean_customdata=False)
+    if smooth and normals is not None:
+        me.polygons.foreach_set("use_smooth", [True] * len(me.polygons))
+        me.normals_split_custom_set([tuple(n) for n in geo.loop_normals(mesh)])
+    else:
+        me.polygons.foreach_set("use_smooth", [False] * len(me.polygons))
     me.update()
     return me
 

@@ -379,19 +379,40 @@ def box_mesh(lo, hi, tag=0):
 
 
 def merge_meshes(meshes):
-    verts, faces, tags, normals = [], [], [], []
+    """One mesh from several; faces of parts without vertex normals are marked flat."""
+    verts, faces, tags, normals, smooth = [], [], [], [], []
     base = 0
     for m in meshes:
         verts.append(m["verts"])
         faces += [tuple(base + i for i in f) for f in m["faces"]]
         tags += list(m["tags"])
         nrm = m["normals"]
+        smooth += [nrm is not None] * len(m["faces"])
         if nrm is None:
             nrm = np.full_like(m["verts"], np.nan)
         normals.append(nrm)
         base += len(m["verts"])
     return {"verts": np.concatenate(verts), "faces": faces, "tags": tags,
-            "normals": np.concatenate(normals)}
+            "normals": np.concatenate(normals), "smooth": smooth}
+
+
+def loop_normals(mesh):
+    """Per-corner shading normals: the given vertex normal on smooth faces, the geometric face
+    normal on flat ones (so that a flat port face is never bent by its neighbours)."""
+    v = np.asarray(mesh["verts"], dtype=float)
+    nrm = mesh.get("normals")
+    smooth = mesh.get("smooth") or [nrm is not None] * len(mesh["faces"])
+    out = []
+    for f, sm in zip(mesh["faces"], smooth):
+        if sm:
+            out += [nrm[i] for i in f]
+        else:
+            fn = np.zeros(3)
+            for i in range(1, len(f) - 1):
+                fn += np.cross(v[f[i]] - v[f[0]], v[f[i + 1]] - v[f[0]])
+            fn /= np.linalg.norm(fn)
+            out += [fn] * len(f)
+    return out
 
 
 def srgb_encode(x):
