@@ -378,6 +378,34 @@ def box_mesh(lo, hi, tag=0):
     return _mesh(verts, faces, [tag] * 6, normals)
 
 
+def submesh(mesh, tag):
+    """The faces of `mesh` carrying `tag`, with only the vertices they use."""
+    faces = [f for f, t in zip(mesh["faces"], mesh["tags"]) if t == tag]
+    used = sorted({i for f in faces for i in f})
+    remap = {old: new for new, old in enumerate(used)}
+    normals = None if mesh["normals"] is None else mesh["normals"][used]
+    return _mesh(mesh["verts"][used], [tuple(remap[i] for i in f) for f in faces],
+                 [tag] * len(faces), normals)
+
+
+def inflate(mesh, eps):
+    """Move every vertex by `eps` along its outward normal (the given vertex normals, or the
+    mean of the adjacent face normals)."""
+    v = np.asarray(mesh["verts"], dtype=float)
+    if mesh["normals"] is not None:
+        n = np.asarray(mesh["normals"], dtype=float)
+    else:
+        n = np.zeros_like(v)
+        for f in mesh["faces"]:
+            fn = np.cross(v[f[1]] - v[f[0]], v[f[2]] - v[f[0]])
+            fn /= np.linalg.norm(fn)
+            for i in f:
+                n[i] += fn
+        n /= np.linalg.norm(n, axis=1)[:, None]
+    return {"verts": v + eps * n, "faces": mesh["faces"], "tags": mesh["tags"],
+            "normals": mesh["normals"]}
+
+
 def merge_meshes(meshes):
     """One mesh from several; faces of parts without vertex normals are marked flat."""
     verts, faces, tags, normals, smooth = [], [], [], [], []

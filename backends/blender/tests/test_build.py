@@ -41,14 +41,16 @@ def test_water_port_lights_and_poses_are_built(scene_desc):
     built = pbuild.build(scene_desc, ".", scene)
     water = bpy.data.objects["poser_water"]
     names = [m.name for m in water.data.materials]
-    assert names == ["water boundary", "glass glass->water", "housing"]
+    assert names == ["water boundary", "water boundary", "housing"]
     nodes = {n.bl_idname: n for n in water.data.materials[1].node_tree.nodes}
     vol = nodes["ShaderNodeVolumeCoefficients"]
     assert tuple(vol.inputs["Absorption Coefficients"].default_value) == pytest.approx(
         (0.4, 0.1, 0.05))
+    assert "ShaderNodeBsdfGlass" not in nodes, "the water boundary is a pure volume boundary"
     # Glass -> water face: IOR n_w/n_g (Cycles takes the ratio inside/outside per surface).
-    assert nodes["ShaderNodeBsdfGlass"].inputs["IOR"].default_value == pytest.approx(
-        1.334 / 1.518, rel=1e-6)
+    outer = bpy.data.objects["port outer:cam"].data.materials[0].node_tree.nodes
+    glass = [n for n in outer if n.bl_idname == "ShaderNodeBsdfGlass"][0]
+    assert glass.inputs["IOR"].default_value == pytest.approx(1.334 / 1.518, rel=1e-6)
     inner = bpy.data.objects["port inner:cam"].data.materials[0].node_tree.nodes
     glass = [n for n in inner if n.bl_idname == "ShaderNodeBsdfGlass"][0]
     assert glass.inputs["IOR"].default_value == pytest.approx(1.518, rel=1e-6)
