@@ -222,32 +222,24 @@ def housing_flat(cam, port):
 def _sphere_cap(center, radius, alpha, n_phi, n_theta, outward):
     """Spherical cap about +z, polar angle 0..alpha; returns verts, faces, normals, rim ids."""
     c = np.asarray(center, dtype=float)
-    verts = [c + np.array([0.0, 0.0, radius])]
-    normals = [np.array([0.0, 0.0, 1.0])]
-    for i in range(1, n_theta + 1):
-        th = alpha * i / n_theta
-        for j in range(n_phi):
-            ph = 2.0 * math.pi * j / n_phi
-            dirn = np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph),
-                             math.cos(th)])
-            verts.append(c + radius * dirn)
-            normals.append(dirn)
-    faces = []
-
-    def vid(i, j):
-        return 1 + (i - 1) * n_phi + (j % n_phi)
-
-    for j in range(n_phi):
-        faces.append((0, vid(1, j), vid(1, j + 1)))
+    th = alpha * np.arange(1, n_theta + 1) / n_theta
+    ph = 2.0 * math.pi * np.arange(n_phi) / n_phi
+    t, p = np.meshgrid(th, ph, indexing="ij")
+    dirs = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    normals = np.concatenate([[[0.0, 0.0, 1.0]], dirs.reshape(-1, 3)])
+    verts = c + radius * normals
+    j = np.arange(n_phi)
+    k = (j + 1) % n_phi
+    faces = [(0, 1 + a, 1 + b) for a, b in zip(j, k)]
     for i in range(1, n_theta):
-        for j in range(n_phi):
-            faces.append((vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)))
-    normals = np.asarray(normals)
+        r0, r1 = 1 + (i - 1) * n_phi, 1 + i * n_phi
+        faces += list(zip((r0 + j).tolist(), (r1 + j).tolist(), (r1 + k).tolist(),
+                          (r0 + k).tolist()))
     if not outward:
         faces = [tuple(reversed(f)) for f in faces]
         normals = -normals
-    rim = [vid(n_theta, j) for j in range(n_phi)]
-    return verts, faces, normals, rim
+    rim = (1 + (n_theta - 1) * n_phi + j).tolist()
+    return list(verts), faces, normals, rim
 
 
 def housing_dome(cam, port, n_phi=384, n_theta=96):

@@ -70,7 +70,7 @@ def _mesh_from(name, mesh, smooth):
 
 
 def _nodes(mat):
-    if hasattr(mat, "use_nodes") and mat.node_tree is None:
+    if mat.node_tree is None:  # Blender < 5 creates materials without nodes
         mat.use_nodes = True
     nt = mat.node_tree
     for n in list(nt.nodes):
@@ -545,7 +545,7 @@ def _world(built, radiance, in_water):
     scene = built.scene
     world = scene.world or bpy.data.worlds.new("poser world")
     scene.world = world
-    if hasattr(world, "use_nodes") and world.node_tree is None:
+    if world.node_tree is None:
         world.use_nodes = True
     nt = world.node_tree
     for n in list(nt.nodes):
