@@ -6,3 +6,4 @@ pub mod gas;
 pub mod network;
 pub mod plot;
 pub mod ssrf;
+pub mod survey;

@@ -222,32 +222,24 @@ def housing_flat(cam, port):
 def _sphere_cap(center, radius, alpha, n_phi, n_theta, outward):
     """Spherical cap about +z, polar angle 0..alpha; returns verts, faces, normals, rim ids."""
     c = np.asarray(center, dtype=float)
-    verts = [c + np.array([0.0, 0.0, radius])]
-    normals = [np.array([0.0, 0.0, 1.0])]
-    for i in range(1, n_theta + 1):
-        th = alpha * i / n_theta
-        for j in range(n_phi):
-            ph = 2.0 * math.pi * j / n_phi
-            dirn = np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph),
-                             math.cos(th)])
-            verts.append(c + radius * dirn)
-            normals.append(dirn)
-    faces = []
-
-    def vid(i, j):
-        return 1 + (i - 1) * n_phi + (j % n_phi)
-
-    for j in range(n_phi):
-        faces.append((0, vid(1, j), vid(1, j + 1)))
+    th = alpha * np.arange(1, n_theta + 1) / n_theta
+    ph = 2.0 * math.pi * np.arange(n_phi) / n_phi
+    t, p = np.meshgrid(th, ph, indexing="ij")
+    dirs = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
+    normals = np.concatenate([[[0.0, 0.0, 1.0]], dirs.reshape(-1, 3)])
+    verts = c + radius * normals
+    j = np.arange(n_phi)
+    k = (j + 1) % n_phi
+    faces = [(0, 1 + a, 1 + b) for a, b in zip(j, k)]
     for i in range(1, n_theta):
-        for j in range(n_phi):
-            faces.append((vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)))
-    normals = np.asarray(normals)
+        r0, r1 = 1 + (i - 1) * n_phi, 1 + i * n_phi
+        faces += list(zip((r0 + j).tolist(), (r1 + j).tolist(), (r1 + k).tolist(),
+                          (r0 + k).tolist()))
     if not outward:
         faces = [tuple(reversed(f)) for f in faces]
         normals = -normals
-    rim = [vid(n_theta, j) for j in range(n_phi)]
-    return verts, faces, normals, rim
+    rim = (1 + (n_theta - 1) * n_phi + j).tolist()
+    return list(verts), faces, normals, rim
 
 
 def housing_dome(cam, port, n_phi=384, n_theta=96):
@@ -386,20 +378,69 @@ def box_mesh(lo, hi, tag=0):
     return _mesh(verts, faces, [tag] * 6, normals)
 
 
+def submesh(mesh, tag):
+    """The faces of `mesh` carrying `tag`, with only the vertices they use."""
+    faces = [f for f, t in zip(mesh["faces"], mesh["tags"]) if t == tag]
+    used = sorted({i for f in faces for i in f})
+    remap = {old: new for new, old in enumerate(used)}
+    normals = None if mesh["normals"] is None else mesh["normals"][used]
+    return _mesh(mesh["verts"][used], [tuple(remap[i] for i in f) for f in faces],
+                 [tag] * len(faces), normals)
+
+
+def inflate(mesh, eps):
+    """Move every vertex by `eps` along its outward normal (the given vertex normals, or the
+    mean of the adjacent face normals)."""
+    v = np.asarray(mesh["verts"], dtype=float)
+    if mesh["normals"] is not None:
+        n = np.asarray(mesh["normals"], dtype=float)
+    else:
+        n = np.zeros_like(v)
+        for f in mesh["faces"]:
+            fn = np.cross(v[f[1]] - v[f[0]], v[f[2]] - v[f[0]])
+            fn /= np.linalg.norm(fn)
+            for i in f:
+                n[i] += fn
+        n /= np.linalg.norm(n, axis=1)[:, None]
+    return {"verts": v + eps * n, "faces": mesh["faces"], "tags": mesh["tags"],
+            "normals": mesh["normals"]}
+
+
 def merge_meshes(meshes):
-    verts, faces, tags, normals = [], [], [], []
+    """One mesh from several; faces of parts without vertex normals are marked flat."""
+    verts, faces, tags, normals, smooth = [], [], [], [], []
     base = 0
     for m in meshes:
         verts.append(m["verts"])
         faces += [tuple(base + i for i in f) for f in m["faces"]]
         tags += list(m["tags"])
         nrm = m["normals"]
+        smooth += [nrm is not None] * len(m["faces"])
         if nrm is None:
             nrm = np.full_like(m["verts"], np.nan)
         normals.append(nrm)
         base += len(m["verts"])
     return {"verts": np.concatenate(verts), "faces": faces, "tags": tags,
-            "normals": np.concatenate(normals)}
+            "normals": np.concatenate(normals), "smooth": smooth}
+
+
+def loop_normals(mesh):
+    """Per-corner shading normals: the given vertex normal on smooth faces, the geometric face
+    normal on flat ones (so that a flat port face is never bent by its neighbours)."""
+    v = np.asarray(mesh["verts"], dtype=float)
+    nrm = mesh.get("normals")
+    smooth = mesh.get("smooth") or [nrm is not None] * len(mesh["faces"])
+    out = []
+    for f, sm in zip(mesh["faces"], smooth):
+        if sm:
+            out += [nrm[i] for i in f]
+        else:
+            fn = np.zeros(3)
+            for i in range(1, len(f) - 1):
+                fn += np.cross(v[f[i]] - v[f[0]], v[f[i + 1]] - v[f[0]])
+            fn /= np.linalg.norm(fn)
+            out += [fn] * len(f)
+    return out
 
 
 def srgb_encode(x):

@@ -236,8 +236,7 @@ pub fn describe(model: &Model) -> Result<Description, String> {
                 }));
             }
             None => warnings.push(format!(
-                "target `{}` ({}) has no printed texture yet; it is not drawn by the Blender \
-                 backend",
+                "target `{}` ({}): a 3D test object; the Blender backend does not draw it yet",
                 t.name,
                 target_kind_name(&t.kind)
             )),

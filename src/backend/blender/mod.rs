@@ -22,7 +22,8 @@ pub mod data;
 pub mod pyliteral;
 
 use super::{RenderOptions, RenderReport};
-use crate::model::{Model, Target};
+use crate::model::{Model, Target, TargetKind};
+use image::ImageEncoder;
 use pyliteral::py_str;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -35,8 +36,8 @@ pub const MODULES: [(&str, &str); 3] = [
         include_str!("../../../backends/blender/poser_blender/geometry.py"),
     ),
     (
-        "poser_blender.build",
-        include_str!("../../../backends/blender/poser_blender/build.py"),
+        "poser_blender.builder",
+        include_str!("../../../backends/blender/poser_blender/builder.py"),
     ),
     (
         "poser_blender",
@@ -66,7 +67,7 @@ def _load_poser_blender(sources):
     pkg.__path__ = []
     pkg.__package__ = "poser_blender"
     sys.modules["poser_blender"] = pkg
-    for name in ("poser_blender.geometry", "poser_blender.build"):
+    for name in ("poser_blender.geometry", "poser_blender.builder"):
         mod = types.ModuleType(name)
         mod.__package__ = "poser_blender"
         sys.modules[name] = mod
@@ -109,6 +110,48 @@ pub fn script_with_sources(description: &serde_json::Value, sources: bool) -> St
     s
 }
 
+/// JSON for people: objects one key per line, arrays of scalars (vectors, matrix rows) on one
+/// line. Still plain JSON.
+pub fn readable_json(v: &serde_json::Value) -> String {
+    fn go(v: &serde_json::Value, indent: usize, out: &mut String) {
+        use serde_json::Value;
+        let pad = "  ".repeat(indent + 1);
+        match v {
+            Value::Object(m) if !m.is_empty() => {
+                out.push_str("{\n");
+                for (i, (k, x)) in m.iter().enumerate() {
+                    out.push_str(&pad);
+                    out.push_str(&Value::String(k.clone()).to_string());
+                    out.push_str(": ");
+                    go(x, indent + 1, out);
+                    out.push_str(if i + 1 < m.len() { ",\n" } else { "\n" });
+                }
+                out.push_str(&"  ".repeat(indent));
+                out.push('}');
+            }
+            Value::Array(a)
+                if !a.is_empty()
+                    && a.iter()
+                        .any(|x| x.is_object() || (x.is_array() && a.len() > 4)) =>
+            {
+                out.push_str("[\n");
+                for (i, x) in a.iter().enumerate() {
+                    out.push_str(&pad);
+                    go(x, indent + 1, out);
+                    out.push_str(if i + 1 < a.len() { ",\n" } else { "\n" });
+                }
+                out.push_str(&"  ".repeat(indent));
+                out.push(']');
+            }
+            other => out.push_str(&other.to_string()),
+        }
+    }
+    let mut s = String::new();
+    go(v, 0, &mut s);
+    s.push('\n');
+    s
+}
+
 /// Compile `model` into `out`: `scene.py`, `scene.json` and `assets/`.
 pub fn compile(model: &Model, out: &Path) -> Result<(), String> {
     compile_report(model, out).map(|_| ())
@@ -131,8 +174,10 @@ fn compile_report(model: &Model, out: &Path) -> Result<Compiled, String> {
     for a in &desc.assets {
         write(&out.join(&a.path), &a.bytes)?;
     }
-    let pretty = serde_json::to_string_pretty(&desc.json).map_err(|e| e.to_string())?;
-    write(&out.join("scene.json"), pretty.as_bytes())?;
+    write(
+        &out.join("scene.json"),
+        readable_json(&desc.json).as_bytes(),
+    )?;
     let script_path = out.join("scene.py");
     write(&script_path, script(&desc.json).as_bytes())?;
     Ok(Compiled {
@@ -245,7 +290,30 @@ pub struct TargetTexture {
     pub origin: [f64; 2],
 }
 
+/// Texels per metre of the target textures (0.5 mm texels; far below a pixel footprint at
+/// survey distances; `targets::texture` caps the side at 8192 px).
+pub const TARGET_PX_PER_M: f64 = 2000.0;
+
 fn target_texture(t: &Target) -> Result<Option<TargetTexture>, String> {
-    let _ = t;
-    Ok(None)
+    if matches!(t.kind, TargetKind::TestObject { .. }) {
+        // A 3D staircase: its printed face alone would misplace the disks on the steps.
+        return Ok(None);
+    }
+    let (w, h) = crate::targets::extent(&t.kind);
+    let img = crate::targets::texture(&t.kind, TARGET_PX_PER_M);
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
+        .write_image(
+            img.as_raw(),
+            img.width(),
+            img.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| format!("target `{}`: PNG encoding failed: {e}", t.name))?;
+    Ok(Some(TargetTexture {
+        png,
+        width: w,
+        height: h,
+        origin: [-w / 2.0, -h / 2.0],
+    }))
 }

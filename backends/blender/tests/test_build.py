@@ -1,0 +1,109 @@
+"""Building and rendering with the real bpy."""
+
+import json
+import math
+import os
+
+import bpy
+import numpy as np
+import pytest
+from bpy_extras.object_utils import world_to_camera_view
+from mathutils import Vector
+from poser_blender import builder as pbuild
+from poser_blender import geometry as geo
+
+
+def _fresh():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    return bpy.context.scene
+
+
+def test_camera_projects_like_opencv(scene_desc):
+    scene = _fresh()
+    built = pbuild.build(scene_desc, ".", scene)
+    cam = scene_desc["cameras"][0]
+    scene.camera = built.cameras[0]
+    scene.render.resolution_x, scene.render.resolution_y = cam["width"], cam["height"]
+    bpy.context.view_layer.update()
+    pose = np.asarray(scene_desc["poses"][0]["world_from_rig"])
+    for p_cam in ([0.3, -0.2, 2.0], [-0.5, 0.4, 3.0], [0.0, 0.0, 1.0]):
+        world = pose[:3, :3] @ np.asarray(p_cam) + pose[:3, 3]
+        ndc = world_to_camera_view(scene, built.cameras[0], Vector(world))
+        u = ndc.x * cam["width"]
+        v = (1.0 - ndc.y) * cam["height"]
+        # OpenCV: u = fx X/Z + cx (pixel centres at +0.5 are part of the convention).
+        assert u == pytest.approx(cam["fx"] * p_cam[0] / p_cam[2] + cam["cx"], abs=1e-4)
+        assert v == pytest.approx(cam["fy"] * p_cam[1] / p_cam[2] + cam["cy"], abs=1e-4)
+
+
+def test_water_port_lights_and_poses_are_built(scene_desc):
+    scene = _fresh()
+    built = pbuild.build(scene_desc, ".", scene)
+    water = bpy.data.objects["poser_water"]
+    names = [m.name for m in water.data.materials]
+    assert names == ["water boundary", "water boundary", "housing"]
+    nodes = {n.bl_idname: n for n in water.data.materials[1].node_tree.nodes}
+    vol = nodes["ShaderNodeVolumeCoefficients"]
+    assert tuple(vol.inputs["Absorption Coefficients"].default_value) == pytest.approx(
+        (0.4, 0.1, 0.05))
+    assert "ShaderNodeBsdfGlass" not in nodes, "the water boundary is a pure volume boundary"
+    # Glass -> water face: IOR n_w/n_g (Cycles takes the ratio inside/outside per surface).
+    outer = bpy.data.objects["port outer:cam"].data.materials[0].node_tree.nodes
+    glass = [n for n in outer if n.bl_idname == "ShaderNodeBsdfGlass"][0]
+    assert glass.inputs["IOR"].default_value == pytest.approx(1.334 / 1.518, rel=1e-6)
+    inner = bpy.data.objects["port inner:cam"].data.materials[0].node_tree.nodes
+    glass = [n for n in inner if n.bl_idname == "ShaderNodeBsdfGlass"][0]
+    assert glass.inputs["IOR"].default_value == pytest.approx(1.518, rel=1e-6)
+    # One shape key per pose (+ basis) moves the housing cut-out with the rig.
+    assert len(water.data.shape_keys.key_blocks) == 1 + len(scene_desc["poses"])
+    # n^2: the spot in water, seen from a camera in air, is scaled by (1/n_w)^2.
+    k = geo.emitter_scale([1.0] * 3, [1.334] * 3)
+    pbuild._apply_emitters(built, k)
+    spot = bpy.data.lights["light:strobe"]
+    assert spot.type == "SPOT" and spot.spot_blend == 0.0 and spot.shadow_soft_size == 0.0
+    assert spot.spot_size == pytest.approx(1.0)
+    assert spot.energy == pytest.approx(4.0 * math.pi * 2.0 / 1.334**2, rel=1e-6)
+    assert tuple(spot.color) == pytest.approx((0.5, 1.0, 0.25))
+    bg = scene.world.node_tree.nodes["Background"]
+    assert bg.inputs["Strength"].default_value == pytest.approx(0.2 / 1.334**2, rel=1e-6)
+
+
+def test_tiny_render_writes_linear_exr_and_srgb_png(scene_desc, tmp_path):
+    # Air, ambient only, no objects: every pixel sees the sky radiance exactly.
+    scene_desc["water"] = None
+    scene_desc["objects"] = []
+    scene_desc["lights"] = [scene_desc["lights"][1]]
+    scene_desc["cameras"][0]["port"] = {"kind": "none"}
+    scene = _fresh()
+    built = pbuild.build(scene_desc, ".", scene)
+    lines = []
+    written = pbuild.render(built, str(tmp_path), poses=[1],
+                            progress=lambda d, t, n: lines.append((d, t, n)))
+    assert written == [os.path.join(str(tmp_path), "p1.exr")]
+    assert lines == [(1, 1, "p1")]
+    px = pbuild._load_pixels(written[0])
+    assert px.shape == (24, 32, 4)
+    assert np.abs(px[..., :3] - 0.2).max() < 1e-6
+    png = pbuild._load_pixels(str(tmp_path / "p1.png"))
+    want = round(255 * float(geo.srgb_encode(0.2))) / 255.0
+    assert np.abs(png[..., :3] - want).max() < 1.5 / 255.0
+    assert sorted(os.listdir(tmp_path)) == ["p1.exr", "p1.png"], "no temporary files left"
+
+
+def test_description_is_checked():
+    with pytest.raises(ValueError):
+        pbuild.validate({"format": "something else"})
+    with pytest.raises(ValueError):
+        pbuild.validate(json.loads('{"format": "poser-blender/1", "cameras": [], "poses": []}'))
+
+
+def test_arguments():
+    opts = pbuild.parse_args(["--out", "o", "--samples", "8", "--poses", "0,2", "--no-png"])
+    assert opts["out"] == "o" and opts["samples"] == 8 and opts["poses"] == [0, 2]
+    assert not opts["png"] and opts["render"]
+    assert pbuild.script_args(["blender", "-b", "-P", "s.py", "--", "--no-render"]) == [
+        "--no-render"]
+    assert pbuild.script_args(["/usr/bin/blender", "-b", "-P", "s.py"]) == []
+    assert pbuild.script_args(["scene.py", "--samples", "4"]) == ["--samples", "4"]
+    with pytest.raises(SystemExit):
+        pbuild.parse_args(["--bogus"])
