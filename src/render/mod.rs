@@ -1,10 +1,229 @@
 //! The native renderer: poser's own CPU path tracer (default backend, no Python).
+//!
+//! `render(model, out, opts)` renders every selected rig pose with every camera and writes, per
+//! image (names from [`Model::image_name`]):
+//!
+//! | file | content |
+//! |---|---|
+//! | `OUT/<image>.exr` | linear RGB radiance (float32), Mitsuba's radiometric conventions |
+//! | `OUT/<image>.png` | sRGB preview of `render.exposure × radiance` |
+//! | `OUT/<image>.depth.exr` | camera-frame z of the first surface hit through each pixel centre, m (0: none); when `render.outputs` has `"depth"` |
+//! | `OUT/truth/…` | exact ground truth ([`crate::truth::write`]) when `render.outputs` has `"truth"` |
+//!
+//! Parallel over image rows with rayon; every pixel sample has its own counter-based random
+//! stream ([`sampler::Sampler`]), so the bytes do not depend on the number of threads. With
+//! `needs.per_channel_passes`, each channel is rendered with its own camera rays (dispersion).
+
+pub mod camera;
+pub mod integrator;
+pub mod lights;
+pub mod medium;
+pub mod sampler;
 pub mod scene;
 
 use crate::backend::{RenderOptions, RenderReport};
 use crate::model::Model;
+use glam::DVec3;
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
 use std::path::Path;
+use std::time::Instant;
 
-pub fn render(_model: &Model, _out: &Path, _opts: &RenderOptions) -> Result<RenderReport, String> {
-    Err("the native renderer is not implemented yet".into())
+/// One rendered image: linear RGB radiance (row-major, row 0 at the top) and depth.
+#[derive(Debug, Clone)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<[f32; 3]>,
+    pub depth: Vec<f32>,
+}
+
+/// Render one image (rig pose `pose`, camera `cam`) with `samples` per pixel.
+pub fn render_image(
+    model: &Model,
+    scene: &scene::Scene,
+    pose: usize,
+    cam: usize,
+    samples: u32,
+    progress: Option<&ProgressBar>,
+) -> Result<Image, String> {
+    let camera = &model.cameras[cam];
+    let (w, h) = (camera.width, camera.height);
+    let world_from_rig = &model.poses[pose].world_from_rig;
+    let cam_pos = model.world_from_camera(pose, cam).translation;
+    let medium = medium::Medium::new(model, cam_pos);
+    let lights = lights::Lights::at_pose(model, world_from_rig);
+    let integ = integrator::Integrator::new(scene, model, medium, lights);
+    let passes: Vec<usize> = if model.needs.per_channel_passes {
+        vec![0, 1, 2]
+    } else {
+        vec![1]
+    };
+    let rays: Vec<camera::CameraRays> = passes
+        .iter()
+        .map(|&c| camera::CameraRays::new(model, pose, cam, c))
+        .collect::<Result<_, _>>()?;
+    let image_id = (pose * model.cameras.len() + cam) as u64;
+    let seed = model.render.seed;
+    let spp = samples.max(1);
+    let cam_from_world = model.world_from_camera(pose, cam).inverse();
+    let rows: Vec<(Vec<[f32; 3]>, Vec<f32>)> = (0..h)
+        .into_par_iter()
+        .map(|j| {
+            let mut row = Vec::with_capacity(w as usize);
+            let mut drow = Vec::with_capacity(w as usize);
+            for i in 0..w {
+                let pixel = j as u64 * w as u64 + i as u64;
+                let mut sum = DVec3::ZERO;
+                for (k, r) in rays.iter().enumerate() {
+                    let mut acc = DVec3::ZERO;
+                    for s in 0..spp {
+                        let mut rng =
+                            sampler::Sampler::new(seed, image_id, k as u64, pixel, s as u64);
+                        let (du, dv) = rng.next2();
+                        if let Some((o, d, wgt)) = r.ray(i as f64 + du, j as f64 + dv) {
+                            let v = integ.li(o, d, &mut rng) * wgt;
+                            if v.is_finite() {
+                                acc += v;
+                            }
+                        }
+                    }
+                    acc /= spp as f64;
+                    if passes.len() == 1 {
+                        sum = acc;
+                    } else {
+                        sum[passes[k]] = acc[passes[k]];
+                    }
+                }
+                row.push([sum.x as f32, sum.y as f32, sum.z as f32]);
+                // Depth through the pixel centre (green channel rays).
+                let r = &rays[if passes.len() == 1 { 0 } else { 1 }];
+                let z = r
+                    .ray(i as f64 + 0.5, j as f64 + 0.5)
+                    .and_then(|(o, d, _)| {
+                        scene.intersect(&scene::Ray { origin: o, dir: d }, f64::INFINITY)
+                    })
+                    .map_or(0.0, |hit| cam_from_world.transform_point(hit.point).z);
+                drow.push(z as f32);
+            }
+            if let Some(pb) = progress {
+                pb.inc(1);
+            }
+            (row, drow)
+        })
+        .collect();
+    let mut rgb = Vec::with_capacity((w * h) as usize);
+    let mut depth = Vec::with_capacity((w * h) as usize);
+    for (r, d) in rows {
+        rgb.extend(r);
+        depth.extend(d);
+    }
+    Ok(Image {
+        width: w,
+        height: h,
+        rgb,
+        depth,
+    })
+}
+
+/// Linear float RGB → OpenEXR bytes on disk (atomic).
+pub fn write_exr(path: &Path, width: u32, height: u32, data: &[[f32; 3]]) -> Result<(), String> {
+    let flat: Vec<f32> = data.iter().flat_map(|p| *p).collect();
+    let img = image::Rgb32FImage::from_raw(width, height, flat)
+        .ok_or_else(|| format!("{}: image buffer has the wrong size", path.display()))?;
+    crate::io::write_atomic_with(path, |tmp| {
+        image::DynamicImage::ImageRgb32F(img)
+            .save_with_format(tmp, image::ImageFormat::OpenExr)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    })
+}
+
+/// sRGB transfer of a linear value in [0, 1].
+fn srgb(x: f64) -> u8 {
+    let x = if x.is_finite() {
+        x.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let v = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
+    (v * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+/// PNG preview (sRGB of `exposure × radiance`), atomic.
+pub fn write_png(path: &Path, img: &Image, exposure: f64) -> Result<(), String> {
+    let bytes: Vec<u8> = img
+        .rgb
+        .iter()
+        .flat_map(|p| p.map(|c| srgb(exposure * c as f64)))
+        .collect();
+    let buf = image::RgbImage::from_raw(img.width, img.height, bytes)
+        .ok_or_else(|| format!("{}: image buffer has the wrong size", path.display()))?;
+    crate::io::write_atomic_with(path, |tmp| {
+        buf.save_with_format(tmp, image::ImageFormat::Png)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    })
+}
+
+/// Render the model (see the module documentation for the outputs).
+pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderReport, String> {
+    let start = Instant::now();
+    if model.cameras.is_empty() {
+        return Err("the scene has no camera".into());
+    }
+    let poses = opts.pose_indices(model.poses.len());
+    if poses.is_empty() {
+        return Err("no rig pose to render".into());
+    }
+    let samples = opts.samples.unwrap_or(model.render.samples).max(1);
+    let scene = scene::Scene::build(model)?;
+    let rows_total: u64 =
+        poses.len() as u64 * model.cameras.iter().map(|c| c.height as u64).sum::<u64>();
+    let pb = if opts.progress {
+        let pb = ProgressBar::new(rows_total);
+        pb.set_style(
+            ProgressStyle::with_template(
+                "{msg:>12} [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})",
+            )
+            .map_err(|e| e.to_string())?
+            .progress_chars("=> "),
+        );
+        pb.set_message("rendering");
+        Some(pb)
+    } else {
+        None
+    };
+    let want_depth = model.render.outputs.iter().any(|o| o == "depth");
+    let mut report = RenderReport::default();
+    for &p in &poses {
+        for c in 0..model.cameras.len() {
+            let img = render_image(model, &scene, p, c, samples, pb.as_ref())?;
+            let name = model.image_name(p, c);
+            let exr = out.join(format!("{name}.exr"));
+            write_exr(&exr, img.width, img.height, &img.rgb)?;
+            write_png(
+                &out.join(format!("{name}.png")),
+                &img,
+                model.render.exposure,
+            )?;
+            if want_depth {
+                let d: Vec<[f32; 3]> = img.depth.iter().map(|&z| [z, z, z]).collect();
+                write_exr(
+                    &out.join(format!("{name}.depth.exr")),
+                    img.width,
+                    img.height,
+                    &d,
+                )?;
+            }
+            report.images.push(exr);
+        }
+    }
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
+    }
+    report.seconds = start.elapsed().as_secs_f64();
+    Ok(report)
 }

@@ -416,6 +416,11 @@ impl Scene {
         })
     }
 
+    /// Whether anything is hit along `ray` with `t ∈ (RAY_EPSILON, tmax)`.
+    pub fn occluded_ray(&self, ray: &Ray, tmax: f64) -> bool {
+        self.traverse(ray, tmax, true).is_some()
+    }
+
     /// Whether anything blocks the open segment between `a` and `b` (both ends excluded by a
     /// relative margin, so surfaces the points lie on do not count).
     pub fn occluded(&self, a: DVec3, b: DVec3) -> bool {
@@ -434,34 +439,34 @@ impl Scene {
 /// A target's printed face as a plane mesh in the world frame (its extent from
 /// [`crate::targets`]).
 pub fn target_mesh(target: &crate::model::Target) -> TriMesh {
+    if let crate::model::TargetKind::TestObject {
+        size, levels, step, ..
+    } = target.kind
+    {
+        // Staircase pyramid: step k is a box of the step's top side from z = k·step up.
+        let mut m = TriMesh::default();
+        for k in 0..levels {
+            let (side, top) = crate::targets::test_object_step(size, levels, step, k);
+            let mut b = crate::mesh::cuboid(DVec3::new(side, side, step));
+            for p in &mut b.positions {
+                p.z += top - 0.5 * step;
+            }
+            m.append(&b);
+        }
+        return m.transformed(&target.pose, DVec3::ONE);
+    }
     let (w, h) = target_extent(target);
     crate::mesh::plane(w, h).transformed(&target.pose, DVec3::ONE)
 }
 
+/// Printed reflectance at (x, y) of the target frame (grey, all channels).
+pub fn target_reflectance(kind: &crate::model::TargetKind, x: f64, y: f64) -> f64 {
+    crate::targets::reflectance(kind, x, y)
+}
+
 /// Width and height (target x, y) of a target's printed face, m.
 pub fn target_extent(target: &crate::model::Target) -> (f64, f64) {
-    use crate::model::TargetKind as K;
-    match target.kind {
-        K::Checkerboard { cols, rows, square } => (cols as f64 * square, rows as f64 * square),
-        K::CircleGrid {
-            cols,
-            rows,
-            spacing,
-            ..
-        } => ((cols as f64 + 1.0) * spacing, (rows as f64 + 1.0) * spacing),
-        K::Coded { count, spacing, .. } => {
-            let c = (count as f64).sqrt().ceil().max(1.0);
-            let r = (count as f64 / c).ceil().max(1.0);
-            ((c + 1.0) * spacing, (r + 1.0) * spacing)
-        }
-        K::ScaleBar {
-            length,
-            width,
-            diameter,
-        } => (length + 2.0 * diameter, width),
-        K::SiemensStar { diameter, .. } => (diameter * 1.1, diameter * 1.1),
-        K::TestObject { size, .. } => (size, size),
-    }
+    crate::targets::extent(&target.kind)
 }
 
 #[cfg(test)]

@@ -1,0 +1,57 @@
+//! Camera rays of one camera at one rig pose for one colour channel: pixel → (origin, unit
+//! direction, weight) in the medium the camera looks into, world frame.
+//!
+//! Rays come from the optics core ([`crate::optics::project::Projector`]): lens model and
+//! distortion, then exact refraction through every surface of the port, with the product of the
+//! Fresnel transmittances. The weight is that transmittance times the n² radiance law
+//! (render-conventions §3.4): a camera in air behind a port sees water radiance scaled by
+//! `(n_air/n_water)²`; a camera without a port sits in the medium and sees it unscaled.
+
+use crate::model::{Model, Port, Pose};
+use crate::optics::project::Projector;
+use glam::DVec3;
+
+/// Pixel → ray for one camera, pose and channel.
+#[derive(Debug, Clone)]
+pub struct CameraRays {
+    projector: Projector,
+    pose: usize,
+    world_from_camera: Pose,
+    /// (n_inside / n_water)² when the camera is behind a port, else 1.
+    n2_factor: f64,
+}
+
+impl CameraRays {
+    pub fn new(
+        model: &Model,
+        pose: usize,
+        cam: usize,
+        channel: usize,
+    ) -> Result<CameraRays, String> {
+        let c = &model.cameras[cam];
+        let n_w = model.ambient_ior()[channel];
+        let n2_factor = match c.port {
+            Port::None => 1.0,
+            _ => (1.0 / n_w).powi(2),
+        };
+        Ok(CameraRays {
+            projector: Projector::new(model, cam, channel)?,
+            pose,
+            world_from_camera: model.world_from_camera(pose, cam),
+            n2_factor,
+        })
+    }
+
+    /// `world_from_camera` of this image.
+    pub fn pose(&self) -> &Pose {
+        &self.world_from_camera
+    }
+
+    /// Ray through pixel position (u, v): (origin, unit direction, weight); `None` when no
+    /// ray leaves the camera there (beyond a fisheye's field, total internal reflection, …).
+    #[inline]
+    pub fn ray(&self, u: f64, v: f64) -> Option<(DVec3, DVec3, f64)> {
+        let (o, d, t) = self.projector.pixel_ray_world(self.pose, u, v).ok()?;
+        (o.is_finite() && d.is_finite() && t.is_finite()).then_some((o, d, t * self.n2_factor))
+    }
+}

@@ -1,0 +1,361 @@
+//! The light-transport estimator: a unidirectional volumetric path tracer in RGB.
+//!
+//! * Surfaces: two-sided Lambertian (albedo × pattern, or the target's printed reflectance).
+//! * Water: homogeneous per channel. Free-flight distances are sampled with a channel picked
+//!   uniformly and weighted by the one-sample MIS density over the three channels (spectral
+//!   MIS); a non-scattering water uses its analytic transmittance.
+//! * Next-event estimation at every vertex: point/spot lights and the sun (delta lights),
+//!   area lights (MIS with BSDF/phase sampling, power heuristic).
+//! * Equiangular sampling (Kulla & Fajardo 2012) of in-scattering from point/spot lights along
+//!   every medium segment, combined with distance sampling by MIS (power heuristic).
+//! * `max_bounces` = the largest number of scattering vertices (surface or medium) on a path;
+//!   Russian roulette after three.
+
+use super::lights::Lights;
+use super::medium::{Medium, tr};
+use super::sampler::Sampler;
+use super::scene::{Hit, Ray, Scene, SurfaceId};
+use crate::model::{Model, Pose};
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Offset of new ray origins along the surface normal, m.
+const SURFACE_OFFSET: f64 = 1e-6;
+
+#[inline]
+fn power(a: f64, b: f64) -> f64 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+}
+
+#[inline]
+fn mean(v: DVec3) -> f64 {
+    (v.x + v.y + v.z) / 3.0
+}
+
+/// Everything needed to estimate radiance along camera rays of one image.
+pub struct Integrator<'a> {
+    pub scene: &'a Scene,
+    pub model: &'a Model,
+    pub medium: Option<Medium>,
+    pub lights: Lights,
+    pub max_bounces: u32,
+    object_from_world: Vec<Pose>,
+    target_from_world: Vec<Pose>,
+}
+
+impl<'a> Integrator<'a> {
+    pub fn new(
+        scene: &'a Scene,
+        model: &'a Model,
+        medium: Option<Medium>,
+        lights: Lights,
+    ) -> Integrator<'a> {
+        Integrator {
+            scene,
+            model,
+            medium,
+            lights,
+            max_bounces: model.render.max_bounces,
+            object_from_world: model.objects.iter().map(|o| o.pose.inverse()).collect(),
+            target_from_world: model.targets.iter().map(|t| t.pose.inverse()).collect(),
+        }
+    }
+
+    /// Albedo per channel at a hit.
+    pub fn albedo(&self, h: &Hit) -> DVec3 {
+        match h.surface {
+            SurfaceId::Object(i) => {
+                let o = &self.model.objects[i as usize];
+                let a = DVec3::from_array(o.material.albedo);
+                match &o.material.pattern {
+                    Some(p) => {
+                        let q = self.object_from_world[i as usize].transform_point(h.point);
+                        a * crate::mesh::pattern_factor(p, q)
+                    }
+                    None => a,
+                }
+            }
+            SurfaceId::Target(i) => {
+                let t = &self.model.targets[i as usize];
+                let q = self.target_from_world[i as usize].transform_point(h.point);
+                DVec3::splat(super::scene::target_reflectance(&t.kind, q.x, q.y))
+            }
+        }
+    }
+
+    fn tr_seg(&self, o: DVec3, d: DVec3, len: f64) -> DVec3 {
+        match &self.medium {
+            Some(m) => m.transmittance(o, d, 0.0, len),
+            None => DVec3::ONE,
+        }
+    }
+
+    /// Radiance arriving at `p` from the delta lights and area lights, weighted by `f(dir)`
+    /// (BSDF·cos or phase) whose sampling density is `pdf(dir)` (for area-light MIS).
+    /// `point_weight(i)` is the MIS weight of point light `i` (1 at surfaces).
+    fn direct(
+        &self,
+        p: DVec3,
+        f: &dyn Fn(DVec3) -> DVec3,
+        pdf: &dyn Fn(DVec3) -> f64,
+        point_weight: &dyn Fn(usize, DVec3) -> f64,
+        rng: &mut Sampler,
+    ) -> DVec3 {
+        let mut l = DVec3::ZERO;
+        for (i, pl) in self.lights.points.iter().enumerate() {
+            let i_to = pl.intensity_to(p);
+            if i_to == DVec3::ZERO {
+                continue;
+            }
+            let wl = pl.pos - p;
+            let r2 = wl.length_squared();
+            let r = r2.sqrt();
+            let dir = wl / r;
+            let fv = f(dir);
+            if fv == DVec3::ZERO {
+                continue;
+            }
+            let w = point_weight(i, pl.pos);
+            if w <= 0.0 || self.scene.occluded(p, pl.pos) {
+                continue;
+            }
+            l += fv * i_to * self.tr_seg(p, dir, r) / r2 * w;
+        }
+        if let Some(sun) = &self.lights.sun {
+            let dir = -sun.dir;
+            let fv = f(dir);
+            if fv != DVec3::ZERO {
+                // Water between p and the surface plane z = 0 (irradiance is given just below it).
+                let s = if p.z < 0.0 { p.z / sun.dir.z } else { 0.0 };
+                let blocked = self
+                    .scene
+                    .occluded_ray(&Ray { origin: p, dir }, f64::INFINITY);
+                if !blocked {
+                    l += fv * sun.irradiance * self.tr_seg(p, dir, s);
+                }
+            }
+        }
+        for a in &self.lights.areas {
+            let (u1, u2) = rng.next2();
+            let q = a.center + a.ax * (2.0 * u1 - 1.0) + a.ay * (2.0 * u2 - 1.0);
+            let wl = q - p;
+            let r2 = wl.length_squared();
+            let r = r2.sqrt();
+            let dir = wl / r;
+            let cos_l = -dir.dot(a.normal);
+            if cos_l <= 0.0 || a.area <= 0.0 {
+                continue;
+            }
+            let fv = f(dir);
+            if fv == DVec3::ZERO {
+                continue;
+            }
+            let pdf_l = r2 / (a.area * cos_l);
+            if self.scene.occluded(p, q) {
+                continue;
+            }
+            let w = power(pdf_l, pdf(dir));
+            l += fv * a.radiance * self.tr_seg(p, dir, r) / pdf_l * w;
+        }
+        l
+    }
+
+    /// Radiance along the ray `o + t·d` (unit `d`), towards `o`.
+    pub fn li(&self, mut o: DVec3, mut d: DVec3, rng: &mut Sampler) -> DVec3 {
+        let mut l = DVec3::ZERO;
+        let mut beta = DVec3::ONE;
+        // Density of the direction sampled at the previous vertex (0: camera ray, no MIS).
+        let mut prev_pdf = 0.0;
+        let mut depth = 0u32;
+        loop {
+            let hit = self
+                .scene
+                .intersect(&Ray { origin: o, dir: d }, f64::INFINITY);
+            let mut t_end = hit.as_ref().map_or(f64::INFINITY, |h| h.t);
+            let mut area_hit = None;
+            for (i, a) in self.lights.areas.iter().enumerate() {
+                if let Some(t) = a.intersect(o, d, t_end) {
+                    t_end = t;
+                    area_hit = Some(i);
+                }
+            }
+            let can_scatter = depth < self.max_bounces;
+            if let Some(m) = &self.medium
+                && let Some((a, b)) = m.interval(o, d, 0.0, t_end)
+            {
+                if m.scatters() && can_scatter {
+                    // Equiangular in-scattering from point/spot lights.
+                    for pl in &self.lights.points {
+                        l += beta * self.equiangular(m, pl, o, d, a, b, rng);
+                    }
+                    let c = ((rng.next() * 3.0) as usize).min(2);
+                    let u = rng.next();
+                    let st = m.sigma_t[c];
+                    let t = if st > 0.0 {
+                        a - (1.0 - u).ln() / st
+                    } else {
+                        f64::INFINITY
+                    };
+                    if t < b {
+                        let trv = tr(m.sigma_t, t - a);
+                        let pdf_d = mean(m.sigma_t * trv);
+                        beta *= m.sigma_s * trv / pdf_d;
+                        let p = o + t * d;
+                        let phase = &m.phase;
+                        let f = |w: DVec3| DVec3::splat(phase.eval(d.dot(w)));
+                        let pdf = |w: DVec3| phase.eval(d.dot(w));
+                        let pw = |_i: usize, x: DVec3| {
+                            let pe = equiangular_pdf(o, d, a, b, x, t);
+                            power(pdf_d, pe)
+                        };
+                        l += beta * self.direct(p, &f, &pdf, &pw, rng);
+                        let (u1, u2) = rng.next2();
+                        let (nd, ppdf) = phase.sample(d, u1, u2);
+                        o = p;
+                        d = nd;
+                        prev_pdf = ppdf;
+                        depth += 1;
+                        if !self.roulette(&mut beta, depth, rng) {
+                            break;
+                        }
+                        continue;
+                    }
+                    let trv = tr(m.sigma_t, b - a);
+                    let p_pass = mean(trv);
+                    if p_pass <= 0.0 {
+                        break;
+                    }
+                    beta *= trv / p_pass;
+                } else {
+                    beta *= tr(m.sigma_t, b - a);
+                }
+            }
+            if let Some(i) = area_hit {
+                let a = &self.lights.areas[i];
+                let cos_l = -d.dot(a.normal);
+                if cos_l > 0.0 {
+                    let w = if prev_pdf > 0.0 {
+                        power(prev_pdf, t_end * t_end / (a.area * cos_l))
+                    } else {
+                        1.0
+                    };
+                    l += beta * a.radiance * w;
+                }
+                break;
+            }
+            let Some(h) = hit else {
+                l += beta * self.lights.ambient;
+                break;
+            };
+            if !can_scatter {
+                break;
+            }
+            let n = if h.normal.dot(d) > 0.0 {
+                -h.normal
+            } else {
+                h.normal
+            };
+            let albedo = self.albedo(&h);
+            if albedo == DVec3::ZERO {
+                break;
+            }
+            let p = h.point + n * SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
+            let f = |w: DVec3| {
+                let c = n.dot(w);
+                if c > 0.0 {
+                    albedo * (c / PI)
+                } else {
+                    DVec3::ZERO
+                }
+            };
+            let pdf = |w: DVec3| n.dot(w).max(0.0) / PI;
+            l += beta * self.direct(p, &f, &pdf, &|_, _| 1.0, rng);
+            // Cosine-weighted hemisphere: f·cos/pdf = albedo.
+            let (u1, u2) = rng.next2();
+            let r = u1.sqrt();
+            let phi = 2.0 * PI * u2;
+            let (tx, ty) = n.any_orthonormal_pair();
+            let z = (1.0 - u1).max(0.0).sqrt();
+            let nd = (tx * (r * phi.cos()) + ty * (r * phi.sin()) + n * z).normalize();
+            prev_pdf = z / PI;
+            beta *= albedo;
+            o = p;
+            d = nd;
+            depth += 1;
+            if !self.roulette(&mut beta, depth, rng) {
+                break;
+            }
+        }
+        l
+    }
+
+    fn roulette(&self, beta: &mut DVec3, depth: u32, rng: &mut Sampler) -> bool {
+        if depth < 3 {
+            return true;
+        }
+        let q = beta.max_element().min(0.95);
+        if q <= 0.0 || rng.next() >= q {
+            return false;
+        }
+        *beta /= q;
+        true
+    }
+
+    /// In-scattered radiance from point light `pl` along `[a, b]` of the ray, sampled
+    /// equiangularly and MIS-weighted against distance sampling. Excludes the ray's `beta`.
+    #[allow(clippy::too_many_arguments)]
+    fn equiangular(
+        &self,
+        m: &Medium,
+        pl: &super::lights::PointLight,
+        o: DVec3,
+        d: DVec3,
+        a: f64,
+        b: f64,
+        rng: &mut Sampler,
+    ) -> DVec3 {
+        let delta = (pl.pos - o).dot(d);
+        let dd = (o + delta * d - pl.pos).length().max(1e-9);
+        let ta = (a - delta).atan2(dd);
+        let tb = (b - delta).atan2(dd);
+        if tb <= ta {
+            return DVec3::ZERO;
+        }
+        let u = rng.next();
+        let t = delta + dd * (ta + u * (tb - ta)).tan();
+        if !(t >= a && t <= b) {
+            return DVec3::ZERO;
+        }
+        let pdf_e = dd / ((tb - ta) * (dd * dd + (t - delta) * (t - delta)));
+        let p = o + t * d;
+        let i_to = pl.intensity_to(p);
+        if i_to == DVec3::ZERO {
+            return DVec3::ZERO;
+        }
+        let wl = pl.pos - p;
+        let r2 = wl.length_squared();
+        let r = r2.sqrt();
+        let dir = wl / r;
+        let trc = tr(m.sigma_t, t - a);
+        let pdf_d = mean(m.sigma_t * trc);
+        let w = power(pdf_e, pdf_d);
+        if w <= 0.0 || self.scene.occluded(p, pl.pos) {
+            return DVec3::ZERO;
+        }
+        m.sigma_s * trc * m.phase.eval(d.dot(dir)) * i_to * self.tr_seg(p, dir, r) / r2
+            * (w / pdf_e)
+    }
+}
+
+/// Density of equiangular sampling of `t` on `[a, b]` for a light at `x`.
+fn equiangular_pdf(o: DVec3, d: DVec3, a: f64, b: f64, x: DVec3, t: f64) -> f64 {
+    let delta = (x - o).dot(d);
+    let dd = (o + delta * d - x).length().max(1e-9);
+    let ta = (a - delta).atan2(dd);
+    let tb = (b - delta).atan2(dd);
+    if tb <= ta {
+        return 0.0;
+    }
+    dd / ((tb - ta) * (dd * dd + (t - delta) * (t - delta)))
+}

@@ -1,0 +1,161 @@
+//! The lights of one rig pose in the world frame (rig-mounted lights moved with the rig).
+//!
+//! | light | radiometry (render-conventions §2) |
+//! |---|---|
+//! | point | intensity `I` W/sr per channel, irradiance `I·cos/r²` |
+//! | spot | point light restricted to the sharp cone `angle(direction, x − p) ≤ half_angle` |
+//! | area | one-sided rectangle emitting along its frame's +z, radiance `L` W/(m²·sr) |
+//! | sun | directional light in the water: propagation `direction_water`, irradiance `irradiance_water` just below z = 0, attenuated by the water between the point and z = 0 |
+//! | ambient | uniform radiance from every direction, reached by rays that leave the scene |
+
+use crate::model::{LightKind, Model, Mount, Pose};
+use glam::DVec3;
+
+#[derive(Debug, Clone)]
+pub struct PointLight {
+    pub pos: DVec3,
+    pub intensity: DVec3,
+    /// (unit axis, cos of the half angle) for spots.
+    pub cone: Option<(DVec3, f64)>,
+}
+
+impl PointLight {
+    /// Intensity towards `x` (zero outside a spot's cone).
+    #[inline]
+    pub fn intensity_to(&self, x: DVec3) -> DVec3 {
+        match self.cone {
+            Some((axis, cos_half)) => {
+                let d = (x - self.pos).normalize_or_zero();
+                if d.dot(axis) >= cos_half {
+                    self.intensity
+                } else {
+                    DVec3::ZERO
+                }
+            }
+            None => self.intensity,
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct AreaLight {
+    /// Centre, half-extent axes (world, length = half width/height) and unit normal (+z).
+    pub center: DVec3,
+    pub ax: DVec3,
+    pub ay: DVec3,
+    pub normal: DVec3,
+    pub area: f64,
+    pub radiance: DVec3,
+}
+
+impl AreaLight {
+    /// Ray parameter of a hit on the emitting or back face, within (eps, tmax).
+    pub fn intersect(&self, o: DVec3, d: DVec3, tmax: f64) -> Option<f64> {
+        let dn = d.dot(self.normal);
+        if dn == 0.0 {
+            return None;
+        }
+        let t = (self.center - o).dot(self.normal) / dn;
+        if !(t > 1e-7 && t < tmax) {
+            return None;
+        }
+        let q = o + t * d - self.center;
+        let (u, v) = (
+            q.dot(self.ax) / self.ax.length_squared(),
+            q.dot(self.ay) / self.ay.length_squared(),
+        );
+        (u.abs() <= 1.0 && v.abs() <= 1.0).then_some(t)
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct SunLight {
+    /// Unit propagation direction (z < 0).
+    pub dir: DVec3,
+    pub irradiance: DVec3,
+}
+
+/// Every light at one rig pose.
+#[derive(Debug, Clone, Default)]
+pub struct Lights {
+    pub points: Vec<PointLight>,
+    pub areas: Vec<AreaLight>,
+    pub sun: Option<SunLight>,
+    pub ambient: DVec3,
+}
+
+impl Lights {
+    pub fn at_pose(model: &Model, world_from_rig: &Pose) -> Lights {
+        let mut out = Lights::default();
+        for l in &model.lights {
+            let to_world = |p: &Pose| match l.mount {
+                Mount::Rig => world_from_rig.compose(p),
+                Mount::World => *p,
+            };
+            let pt = |p: DVec3| {
+                to_world(&Pose {
+                    rotation: glam::DMat3::IDENTITY,
+                    translation: p,
+                })
+                .translation
+            };
+            let vec = |v: DVec3| match l.mount {
+                Mount::Rig => world_from_rig.transform_vector(v),
+                Mount::World => v,
+            };
+            match l.kind {
+                LightKind::Point {
+                    position,
+                    intensity,
+                } => out.points.push(PointLight {
+                    pos: pt(position),
+                    intensity: DVec3::from_array(intensity),
+                    cone: None,
+                }),
+                LightKind::Spot {
+                    position,
+                    direction,
+                    half_angle,
+                    intensity,
+                } => out.points.push(PointLight {
+                    pos: pt(position),
+                    intensity: DVec3::from_array(intensity),
+                    cone: Some((vec(direction).normalize(), half_angle.cos())),
+                }),
+                LightKind::Area {
+                    frame,
+                    width,
+                    height,
+                    radiance,
+                } => {
+                    let f = to_world(&frame);
+                    let ax = f.rotation.x_axis * (0.5 * width);
+                    let ay = f.rotation.y_axis * (0.5 * height);
+                    out.areas.push(AreaLight {
+                        center: f.translation,
+                        ax,
+                        ay,
+                        normal: f.rotation.z_axis.normalize(),
+                        area: width * height,
+                        radiance: DVec3::from_array(radiance),
+                    })
+                }
+                LightKind::Ambient { radiance } => out.ambient += DVec3::from_array(radiance),
+            }
+        }
+        if let Some(s) = &model.sun {
+            let (dir, e) = if model.water.is_some() {
+                (s.direction_water, s.irradiance_water)
+            } else {
+                (s.direction_air, s.irradiance)
+            };
+            if dir.z < 0.0 {
+                out.sun = Some(SunLight {
+                    dir: dir.normalize(),
+                    irradiance: DVec3::from_array(e),
+                });
+            }
+        }
+        out
+    }
+}
