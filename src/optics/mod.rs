@@ -22,6 +22,7 @@ pub mod lens;
 pub mod phase;
 pub mod port;
 pub mod project;
+pub mod reference;
 pub mod sun;
 pub mod water;
 
