@@ -155,7 +155,7 @@ mod tests {
             height: 48,
             data: &data,
         };
-        let m = disk_centroid(&g, [30.0, 24.0], 8.0, 0.05 / 0.9).unwrap();
+        let m = disk_centroid(&g, [30.0, 24.0], 9.0, 0.05 / 0.9).unwrap();
         assert!(
             (m[0] - c[0]).abs() < 0.01 && (m[1] - c[1]).abs() < 0.01,
             "{m:?}"

@@ -70,9 +70,10 @@ pub fn disks(model: &Model) -> Vec<Disk> {
     let mut out = Vec::new();
     for t in &model.targets {
         let (radius, clear) = match t.kind {
+            // Half the spacing: the outer disks are that close to the board's edge.
             TargetKind::CircleGrid {
                 spacing, diameter, ..
-            } => (diameter / 2.0, spacing - diameter / 2.0),
+            } => (diameter / 2.0, spacing / 2.0),
             TargetKind::Coded { diameter, .. } => (diameter / 2.0, 0.8 * diameter),
             TargetKind::ScaleBar {
                 width, diameter, ..
@@ -113,8 +114,10 @@ pub fn expected_disk(proj: &Projector, pose: usize, d: &Disk) -> Option<([f64; 2
         .ok()?;
     let r_img = ((edge[0] - c[0]).powi(2) + (edge[1] - c[1]).powi(2)).sqrt();
     let scale = r_img / d.radius;
-    let half = (d.clear_radius * scale - 1.0).min(r_img + 4.0);
-    if r_img < 1.5 || half < r_img + 1.0 {
+    // 1.5 px of safety from the edge of the white surround (partly covered edge pixels).
+    let half = (d.clear_radius * scale - 1.5).min(r_img + 5.0);
+    // The border ring of the window must be clear of the disk.
+    if r_img < 1.5 || half < r_img + 2.0 {
         return None;
     }
     if c[0] - half < 1.0

@@ -2,7 +2,7 @@
 //! …) and whole-scene checks on the resolved model (targets inside the port glass, doubtful
 //! overlaps, strobes too close to the port).
 
-use super::diag::Diagnostic;
+use super::diag::{Diagnostic, num};
 use super::reader::{Cx, Tab};
 use super::resolve::Spans;
 use crate::model::*;
@@ -47,11 +47,32 @@ pub fn fits(cx: &mut Cx, t: &Tab, key: &str, v: f64, limit: f64, what: &str) {
             )
             .label(
                 t.span_of(key),
-                format!("the printed marks would overlap ({v} ≥ {limit} m)"),
+                format!(
+                    "the printed marks would overlap ({} ≥ {} m)",
+                    num(v),
+                    num(limit)
+                ),
             )
             .help(format!("make `{key}` smaller than {what}")),
         );
     }
+}
+
+/// Reject counts that would make a target, field or image absurdly large (and the
+/// resolver allocate without bound).
+pub fn at_most(cx: &mut Cx, t: &Tab, key: &str, v: u64, max: u64, what: &str) -> bool {
+    if v > max {
+        cx.push(
+            Diagnostic::error("E0050", format!("`{}` is too large", t.full(key)))
+                .label(
+                    t.span_of(key),
+                    format!("{v} {what}; at most {max} are supported"),
+                )
+                .help(format!("use a smaller `{key}`")),
+        );
+        return false;
+    }
+    true
 }
 
 pub fn non_negative_rgb(cx: &mut Cx, t: &Tab, key: &str, v: Rgb, unit: &str) {
@@ -84,7 +105,7 @@ pub fn index(cx: &mut Cx, t: &Tab, key: &str, v: Rgb) {
             )
             .label(
                 t.span_of(key),
-                format!("n = [{}, {}, {}]", v[0], v[1], v[2]),
+                format!("n = [{}, {}, {}]", num(v[0]), num(v[1]), num(v[2])),
             )
             .help("an index is ≥ 1 (water ≈ 1.34, glass ≈ 1.5); did you mean a different number?"),
         );
@@ -96,7 +117,7 @@ pub fn index(cx: &mut Cx, t: &Tab, key: &str, v: Rgb) {
             )
             .label(
                 t.span_of(key),
-                format!("n = [{}, {}, {}]", v[0], v[1], v[2]),
+                format!("n = [{}, {}, {}]", num(v[0]), num(v[1]), num(v[2])),
             )
             .help("optical materials have indices between 1 and ~2.5"),
         );
@@ -134,7 +155,10 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
             let d = (a.rig_from_camera.translation - b.rig_from_camera.translation).length();
             let (ra, rb) = (port_radius(&a.port), port_radius(&b.port));
             if ra > 0.0 && rb > 0.0 && d < ra + rb {
-                let sp = spans.camera.get(i).map(|c| c.port).unwrap_or(spans.network);
+                let sp = spans
+                    .baseline
+                    .or(spans.camera.get(i).map(|c| c.port))
+                    .unwrap_or(spans.network);
                 cx.push(
                     Diagnostic::error(
                         "E0401",
@@ -159,9 +183,9 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
         cx.push(
             Diagnostic::warning(
                 "W0300",
-                format!("side-lap of {:.0} % is below 60 %", s * 100.0),
+                format!("the strips give a side-lap of only {:.0} %", s * 100.0),
             )
-            .label(sp, "low side-lap")
+            .label(sp, "below the 60 % recommended")
             .help(
                 "photogrammetry between strips needs ≥ 60 % side-lap to tie reliably; expect gaps",
             ),

@@ -134,3 +134,13 @@ pub fn line_col(text: &str, at: usize) -> (usize, usize) {
         + 1;
     (line, col)
 }
+
+/// A number for messages: at most 6 significant digits, no float noise (`0.7`, not
+/// `0.7000000000000001`).
+pub fn num(v: f64) -> String {
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    let r: f64 = format!("{v:.5e}").parse().unwrap_or(v);
+    format!("{r}")
+}

@@ -8,6 +8,7 @@
 //! (every table, key, unit and default) is documented in `docs/format.md`.
 pub mod check;
 pub mod diag;
+pub mod format;
 pub mod reader;
 pub mod resolve;
 pub mod source;
@@ -79,9 +80,7 @@ pub fn load(path: &Path, sets: &[String]) -> Result<Loaded, Failure> {
     source::apply_sets(&mut root, sets, &mut sources, &mut diags);
     let mut cx = reader::Cx { diags };
     let (model, spans) = resolve::resolve(&root, path, &sources, &mut cx);
-    if !cx.has_errors() {
-        check::scene(&mut cx, &model, &spans);
-    }
+    check::scene(&mut cx, &model, &spans);
     let mut diags = cx.diags;
     for d in &mut diags {
         d.finish(&sources);

@@ -34,6 +34,45 @@ pub fn did_you_mean<'o>(word: &str, options: impl IntoIterator<Item = &'o str>) 
         .map(|x| x.1)
 }
 
+thread_local! {
+    /// When set, every table read records its known keys here (normalised path → keys); the
+    /// tests use it to keep the reader and `scene::format` (schema, docs) in step.
+    static RECORD: std::cell::RefCell<Option<std::collections::BTreeMap<String, std::collections::BTreeSet<String>>>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// Run `f` while recording the keys every table reader knows; returns them by normalised
+/// path (`lights`, `camera.port`, … — list indices removed, `rig.cameras` folded into
+/// `camera`).
+pub fn record_known_keys<R>(
+    f: impl FnOnce() -> R,
+) -> (
+    R,
+    std::collections::BTreeMap<String, std::collections::BTreeSet<String>>,
+) {
+    RECORD.with(|r| *r.borrow_mut() = Some(Default::default()));
+    let out = f();
+    let map = RECORD.with(|r| r.borrow_mut().take()).unwrap_or_default();
+    (out, map)
+}
+
+fn normalise_path(p: &str) -> String {
+    let mut s = String::new();
+    let mut skip = false;
+    for c in p.chars() {
+        match c {
+            '[' => skip = true,
+            ']' => skip = false,
+            _ if !skip => s.push(c),
+            _ => {}
+        }
+    }
+    if let Some(rest) = s.strip_prefix("rig.cameras") {
+        s = format!("camera{rest}");
+    }
+    s
+}
+
 /// One table being read.
 pub struct Tab<'a> {
     pub table: Option<&'a Table>,
@@ -168,6 +207,13 @@ impl<'a> Tab<'a> {
     }
     /// Same, naming the kind of table (e.g. "a flat port") in the message.
     pub fn finish_as(self, cx: &mut Cx, what: Option<&str>) {
+        RECORD.with(|r| {
+            if let Some(m) = r.borrow_mut().as_mut() {
+                m.entry(normalise_path(&self.path))
+                    .or_default()
+                    .extend(self.known.iter().map(|k| k.to_string()));
+            }
+        });
         let Some(t) = self.table else { return };
         for e in &t.entries {
             if self.known.contains(&e.key.as_str()) {
@@ -288,8 +334,11 @@ impl<'a> Tab<'a> {
         if let Some(o) = options.iter().find(|o| **o == s) {
             return Some(o);
         }
-        let mut d = Diagnostic::error("E0102", format!("unknown {} `{s}`", self.full(key)))
-            .label(span, format!("expected one of: {}", options.join(", ")));
+        let mut d = Diagnostic::error(
+            "E0102",
+            format!("unknown value `{s}` for `{}`", self.full(key)),
+        )
+        .label(span, format!("expected one of: {}", options.join(", ")));
         if let Some(m) = did_you_mean(&s, options.iter().copied()) {
             d = d.help(format!("did you mean `{m}`?"));
         } else {

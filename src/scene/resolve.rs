@@ -5,7 +5,7 @@
 //! `docs/format.md`); the checks here must stay in step with it.
 
 use super::check;
-use super::diag::{Diagnostic, Span};
+use super::diag::{Diagnostic, Span, num};
 use super::reader::{Cx, Tab};
 use super::source::{Node, Sources, Val, merge};
 use crate::model::*;
@@ -25,6 +25,8 @@ pub struct Spans {
     pub network: Span,
     pub sidelap: Option<Span>,
     pub water: Span,
+    /// The stereo baseline, when given.
+    pub baseline: Option<Span>,
 }
 
 #[derive(Default, Clone)]
@@ -128,7 +130,7 @@ fn site(cx: &mut Cx, t: &mut Tab, water: bool) -> Site {
     if !(depth >= 0.0) {
         cx.push(
             Diagnostic::error("E0200", "the site depth must not be negative")
-                .label(dspan, format!("{depth} m"))
+                .label(dspan, format!("{} m", num(depth)))
                 .help("depth is measured downwards from the surface: write `depth = \"12 m\"`"),
         );
     }
@@ -173,7 +175,7 @@ fn water(cx: &mut Cx, node: Option<&Node>, site: &Site, fallback: Span) -> Optio
                 let sp = w.span_of("temperature");
                 cx.push(
                     Diagnostic::error("E0201", "water temperature out of range")
-                        .label(sp, format!("{temperature} °C"))
+                        .label(sp, format!("{} °C", num(temperature)))
                         .help("liquid water in the sea is between -2 °C and 40 °C"),
                 );
             }
@@ -181,7 +183,7 @@ fn water(cx: &mut Cx, node: Option<&Node>, site: &Site, fallback: Span) -> Optio
                 let sp = w.span_of("salinity");
                 cx.push(
                     Diagnostic::error("E0201", "salinity out of range")
-                        .label(sp, format!("{salinity} PSU"))
+                        .label(sp, format!("{} PSU", num(salinity)))
                         .help("sea water is about 35 PSU, fresh water 0; the index formula holds up to ~45"),
                 );
             }
@@ -219,10 +221,15 @@ fn water(cx: &mut Cx, node: Option<&Node>, site: &Site, fallback: Span) -> Optio
                         jspan,
                         format!("known types: {}", optics::water::JERLOV_TYPES.join(", ")),
                     );
-                d = match super::reader::did_you_mean(
-                    &j,
-                    optics::water::JERLOV_TYPES.iter().copied(),
-                ) {
+                let fixed = j.to_uppercase().replace(['1', 'L'], "I");
+                let close = optics::water::JERLOV_TYPES
+                    .iter()
+                    .copied()
+                    .find(|t| **t == fixed || **t == j.to_uppercase())
+                    .or_else(|| {
+                        super::reader::did_you_mean(&j, optics::water::JERLOV_TYPES.iter().copied())
+                    });
+                d = match close {
                     Some(s) => d.help(format!("did you mean `{s}`?")),
                     None => d.help("oceanic types I–III, coastal 1C–9C (clearest first)"),
                 };
@@ -250,7 +257,7 @@ fn water(cx: &mut Cx, node: Option<&Node>, site: &Site, fallback: Span) -> Optio
             let sp = w.span_of("particle_index");
             cx.push(
                 Diagnostic::error("E0203", "Fournier–Forand needs a particle index above 1")
-                    .label(sp, format!("{n}"))
+                    .label(sp, num(n))
                     .help("the index of particles relative to water is typically 1.05–1.20"),
             );
         }
@@ -258,7 +265,7 @@ fn water(cx: &mut Cx, node: Option<&Node>, site: &Site, fallback: Span) -> Optio
             let sp = w.span_of("junge_slope");
             cx.push(
                 Diagnostic::error("E0203", "Fournier–Forand needs a Junge slope in (3, 5]")
-                    .label(sp, format!("{mu}"))
+                    .label(sp, num(mu))
                     .help("typical ocean values are 3.5–4"),
             );
         }
@@ -275,7 +282,7 @@ fn water(cx: &mut Cx, node: Option<&Node>, site: &Site, fallback: Span) -> Optio
                     "E0203",
                     "the Henyey–Greenstein g must be strictly between -1 and 1",
                 )
-                .label(sp, format!("g = {g}"))
+                .label(sp, format!("g = {}", num(g)))
                 .help("ocean water is strongly forward scattering: g ≈ 0.9"),
             );
         }
@@ -518,6 +525,7 @@ fn cameras(
     match kind {
         "stereo" => {
             let b = rig.f64(cx, "baseline", Dim::Length, 0.3);
+            spans.baseline = Some(rig.span_of("baseline"));
             check::positive(cx, &rig, "baseline", b, "m");
             let conv = rig.f64(cx, "convergence", Dim::Angle, 0.0);
             for (name, sx) in [("left", -1.0), ("right", 1.0)] {
@@ -606,6 +614,7 @@ fn camera(
     let width = c.u32(cx, "width", 1600);
     let height = c.u32(cx, "height", 1200);
     for (k, v) in [("width", width), ("height", height)] {
+        check::at_most(cx, &c, k, v as u64, 65_536, "pixels");
         if v == 0 {
             let sp = c.span_of(k);
             cx.push(
@@ -815,7 +824,7 @@ fn port(
                 let sp = p.span_of("pupil_distance");
                 cx.push(
                     Diagnostic::error("E0250", "the entrance pupil is outside the housing")
-                        .label(sp, format!("pupil_distance = {distance} m puts the pupil at or beyond the port"))
+                        .label(sp, format!("pupil_distance = {} m puts the pupil at or beyond the port", num(distance)))
                         .help("`pupil_distance` is from the entrance pupil forward to the inner face of the glass; it must be > 0"),
                 );
             }
@@ -1218,6 +1227,12 @@ fn objects(
                 let length = o.f64(cx, "length", Dim::Length, 20.0);
                 let count = o.u32(cx, "count", 30);
                 let radius = o.f64(cx, "radius", Dim::Length, 0.3);
+                let count = if check::at_most(cx, &o, "count", count as u64, 1_000_000, "boulders")
+                {
+                    count
+                } else {
+                    0
+                };
                 check::positive(cx, &o, "width", width, "m");
                 check::positive(cx, &o, "length", length, "m");
                 check::positive(cx, &o, "radius", radius, "m");
@@ -1289,7 +1304,51 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
                         .label(span, format!("`.{ext}` file"))
                         .help("convert the mesh to glTF (`.glb` or `.gltf`), e.g. with Blender's exporter"),
                 );
+            } else {
+                match std::fs::read(&p).map_err(|e| e.to_string()).and_then(|b| {
+                    gltf::Gltf::from_slice(&b)
+                        .map(|_| ())
+                        .map_err(|e| e.to_string())
+                }) {
+                    Ok(()) => {}
+                    Err(e) => cx.push(
+                        Diagnostic::error(
+                            "E0287",
+                            format!(
+                                "`{}` is not a readable glTF file",
+                                super::source::display(&p)
+                            ),
+                        )
+                        .label(span, e)
+                        .help("re-export the mesh as glTF 2.0 (`.glb`), e.g. from Blender"),
+                    ),
+                }
             }
+            // The model carries the canonical path, so every backend finds the file
+            // wherever it runs from; it must stay inside the scene's directory tree.
+            let canon = p.canonicalize().unwrap_or_else(|_| p.clone());
+            let roots: Vec<std::path::PathBuf> =
+                [Some(dir.clone()), scene.parent().map(Path::to_path_buf)]
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|d| {
+                        (if d.as_os_str().is_empty() {
+                            Path::new(".").to_path_buf()
+                        } else {
+                            d
+                        })
+                        .canonicalize()
+                        .ok()
+                    })
+                    .collect();
+            if !roots.iter().any(|r| canon.starts_with(r)) {
+                cx.push(
+                    Diagnostic::error("E0286", "the mesh file is outside the scene's directory")
+                        .label(span, "this path leaves the directory of the scene")
+                        .help("keep assets next to the scene (e.g. `assets/wreck.glb`) so the scene can be shared as one folder"),
+                );
+            }
+            return canon.to_string_lossy().to_string();
         }
         Ok(_) => cx.push(
             Diagnostic::error(
@@ -1376,6 +1435,7 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 check::at_least(cx, &g, "cols", cols, 2);
                 check::at_least(cx, &g, "rows", rows, 2);
                 check::positive(cx, &g, "square", square, "m");
+                let (cols, rows) = limit_grid(cx, &g, cols, rows);
                 TargetKind::Checkerboard { cols, rows, square }
             }
             "circle_grid" => {
@@ -1388,6 +1448,7 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 check::positive(cx, &g, "spacing", spacing, "m");
                 check::positive(cx, &g, "diameter", diameter, "m");
                 check::fits(cx, &g, "diameter", diameter, spacing, "the spacing");
+                let (cols, rows) = limit_grid(cx, &g, cols, rows);
                 TargetKind::CircleGrid {
                     cols,
                     rows,
@@ -1401,6 +1462,12 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
                 let first_code = g.u32(cx, "first_code", 1);
                 check::at_least(cx, &g, "count", count, 1);
+                let count =
+                    if check::at_most(cx, &g, "count", count as u64, 10_000, "coded targets") {
+                        count
+                    } else {
+                        1
+                    };
                 check::positive(cx, &g, "spacing", spacing, "m");
                 check::positive(cx, &g, "diameter", diameter, "m");
                 check::fits(
@@ -1437,6 +1504,11 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 let spokes = g.u32(cx, "spokes", 16);
                 check::positive(cx, &g, "diameter", diameter, "m");
                 check::at_least(cx, &g, "spokes", spokes, 2);
+                let spokes = if check::at_most(cx, &g, "spokes", spokes as u64, 10_000, "spokes") {
+                    spokes
+                } else {
+                    16
+                };
                 TargetKind::SiemensStar { diameter, spokes }
             }
             _ => {
@@ -1446,6 +1518,11 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                 let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
                 check::positive(cx, &g, "size", size, "m");
                 check::at_least(cx, &g, "levels", levels, 1);
+                let levels = if check::at_most(cx, &g, "levels", levels as u64, 1000, "levels") {
+                    levels
+                } else {
+                    1
+                };
                 check::positive(cx, &g, "step", step, "m");
                 check::positive(cx, &g, "diameter", diameter, "m");
                 TargetKind::TestObject {
@@ -1481,6 +1558,23 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
 // ------------------------------------------------------------------------------------------
 // Network, diver
 // ------------------------------------------------------------------------------------------
+
+/// Grids of more than a million points are refused (and replaced by a small one so that
+/// checking continues without allocating them).
+fn limit_grid(cx: &mut Cx, g: &Tab, cols: u32, rows: u32) -> (u32, u32) {
+    if cols as u64 * rows as u64 > 1_000_000 {
+        cx.push(
+            Diagnostic::error("E0050", format!("`{}` has too many points", g.path))
+                .label(
+                    g.span_of("cols"),
+                    format!("{cols} × {rows} exceeds one million"),
+                )
+                .help("real targets have at most a few thousand points"),
+        );
+        return (2, 2);
+    }
+    (cols, rows)
+}
 
 fn trigger(cx: &mut Cx, t: &mut Tab) -> Trigger {
     let sp = t.span_of("trigger");
@@ -1599,7 +1693,7 @@ fn network(
             let sp = t.span_of(key);
             cx.push(
                 Diagnostic::error("E0312", format!("`{key}` must be a fraction in [0, 1)"))
-                    .label(sp, format!("{v}"))
+                    .label(sp, num(v))
                     .help(format!("write e.g. `{key} = 0.6` or `{key} = \"60 %\"`")),
             );
             return d;
@@ -1695,6 +1789,18 @@ fn network(
                 );
             }
             let per_ring = t.u32(cx, "per_ring", 24);
+            let per_ring = if check::at_most(
+                cx,
+                &t,
+                "per_ring",
+                per_ring as u64,
+                100_000,
+                "images per ring",
+            ) {
+                per_ring
+            } else {
+                1
+            };
             check::at_least(cx, &t, "per_ring", per_ring, 1);
             NetworkSpec::Orbit {
                 center,
@@ -1739,8 +1845,10 @@ fn network(
                         up: DVec3::Y,
                     },
                 };
+                let parsed = position.is_some();
                 let position = position.unwrap_or(DVec3::ZERO);
                 if let Orientation::LookAt { target, up } = &orientation
+                    && parsed
                     && network::look_rotation(*target - position, *up).is_none()
                 {
                     let sp = p.span_of("look_at");
@@ -1829,7 +1937,7 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
             let sp = d.span_of(k);
             cx.push(
                 Diagnostic::error("E0320", format!("`{k}` must be a fraction in (0, 1]"))
-                    .label(sp, format!("{v}"))
+                    .label(sp, num(v))
                     .help(format!(
                         "gradient factors are fractions: `{k} = 0.3` or `{k} = \"30 %\"`"
                     )),
@@ -1840,7 +1948,7 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
         let sp = d.span_of("gf_low");
         cx.push(
             Diagnostic::error("E0320", "`gf_low` is above `gf_high`")
-                .label(sp, format!("{gf_low} > {gf_high}"))
+                .label(sp, format!("{} > {}", num(gf_low), num(gf_high)))
                 .help("the low gradient factor applies at depth and must not exceed the high one (e.g. 30/70)"),
         );
     }
@@ -1884,7 +1992,7 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
             let sp = c.span_of(if c.has("o2") { "o2" } else { "gas" });
             cx.push(
                 Diagnostic::error("E0322", "impossible gas mix")
-                    .label(sp, format!("O₂ {o2}, He {he}"))
+                    .label(sp, format!("O₂ {}, He {}", num(o2), num(he)))
                     .help("fractions must be ≥ 0, O₂ > 0, and O₂ + He ≤ 1"),
             );
         }

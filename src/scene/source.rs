@@ -231,10 +231,17 @@ pub fn load_file(
 ) -> Option<Node> {
     let canon = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
     if let Some(pos) = stack.iter().position(|p| *p == canon) {
-        let chain: Vec<String> = stack[pos..]
+        let chain: Vec<String> = sources
+            .paths
             .iter()
-            .chain(std::iter::once(&canon))
+            .flatten()
+            .filter(|p| {
+                p.canonicalize()
+                    .ok()
+                    .is_some_and(|c| stack[pos..].contains(&c))
+            })
             .map(|p| display(p))
+            .chain(std::iter::once(display(path)))
             .collect();
         let mut d = Diagnostic::error("E0011", "include cycle")
             .help("remove one of the includes in the cycle; an included file must not include its includer");
@@ -254,12 +261,21 @@ pub fn load_file(
     let text = match std::fs::read(path) {
         Ok(bytes) => match String::from_utf8(bytes) {
             Ok(t) => t,
-            Err(_) => {
+            Err(e) => {
+                let at = e.utf8_error().valid_up_to();
+                let lossy = String::from_utf8_lossy(e.as_bytes()).to_string();
+                let file = sources.add(display(path), lossy, Some(path.to_path_buf()));
+                let bad = Span {
+                    file,
+                    start: at,
+                    end: at + '\u{FFFD}'.len_utf8(),
+                };
                 let mut d =
                     Diagnostic::error("E0010", format!("`{}` is not UTF-8 text", display(path)))
+                        .label(bad, "invalid UTF-8 byte here")
                         .help("save the scene file as UTF-8");
                 if let Some(s) = included_from {
-                    d = d.label(s, "included here");
+                    d = d.also(s, "included here");
                 }
                 diags.push(d);
                 return None;

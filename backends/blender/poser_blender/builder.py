@@ -29,6 +29,10 @@ import numpy as np
 from . import geometry as geo
 
 FORMAT = "poser-blender/1"
+# Distance between a port's outer glass face and the water volume's boundary behind it, m:
+# above float32 resolution at survey coordinates, far below anything visible (the unabsorbed
+# layer changes transmittance by < 1e-5).
+WATER_GAP = 5e-5
 
 
 # ------------------------------------------------------------------------------------------
@@ -215,7 +219,6 @@ class Built:
         self.lights = []  # (light data, colour, strength, in_water)
         self.world_bg = None  # (background node, colour, strength, in_water)
         self.glass_nodes = []  # (glass node, function(channel) -> ior)
-        self.water_nodes = []
         self.water = None
 
 
@@ -335,10 +338,15 @@ def _set_intrinsics(data, cam):
     else:
         f = geo.fisheye_params(lens, cam["fx"], cam["width"], cam["height"])
         data.type = "PANO"
+        # Panoramic cameras take shift_y in units of the image height (measured: with the
+        # width, as for PERSP, the principal point lands (1 - H/W) short).
+        data.shift_y = (cam["cy"] - cam["height"] / 2.0) / cam["height"]
         data.panorama_type = f["panorama_type"]
         data.fisheye_fov = f["fisheye_fov"]
         if "fisheye_lens" in f:
             data.fisheye_lens = f["fisheye_lens"]
+        for k, c in enumerate(f.get("polynomial", [])):
+            setattr(data, f"fisheye_polynomial_k{k}", c)
     if cam.get("focus_distance") and cam.get("f_number"):
         data.dof.use_dof = True
         data.dof.focus_distance = float(cam["focus_distance"])
@@ -451,19 +459,29 @@ def _build_water(built, coll, desc, shells, n_w, ref):
             obj.parent = built.cameras[ci].parent
             obj.matrix_parent_inverse.identity()
         return
-    mesh = _water_mesh(desc, 0, shells)
+    # Each port's outer (glass->water) face is its own object: Glass BSDF with IOR n_w/n_g and
+    # normals towards the camera (the water side is "inside"). The water mesh's cut-out lies
+    # WATER_GAP further out and is a pure volume boundary: Cycles then keeps a volume-only
+    # shader on its volume stack (a glass shader there blocks distant-light shadow rays).
+    for s in shells:
+        if s is None:
+            continue
+        ci, shell, glass = s
+        cam = desc["cameras"][ci]
+        mat, node = _glass_material(f"glass glass->water:{cam['name']}", n_w[ref] / glass[ref])
+        built.glass_nodes.append((node, lambda c, g=glass: n_w[c] / g[c]))
+        face = geo.reverse_mesh(geo.submesh(shell, geo.GLASS_OUTER))
+        me = _mesh_from(f"port outer:{cam['name']}", face, smooth=face["normals"] is not None)
+        me.materials.append(mat)
+        obj = _new_object(coll, f"port outer:{cam['name']}", me)
+        obj.parent = built.cameras[ci].parent
+        obj.matrix_parent_inverse.identity()
+    gapped = [None if s is None else (s[0], geo.inflate(s[1], WATER_GAP), s[2]) for s in shells]
+    mesh = _water_mesh(desc, 0, gapped)
     me = _mesh_from("poser_water", mesh, smooth=True)
     boundary = _volume_only_material("water boundary", water)
     me.materials.append(boundary)
-    glass_mat = None
-    for s in shells:
-        if s is not None:
-            glass = s[2]
-            glass_mat, node = _glass_material("glass glass->water", n_w[ref] / glass[ref], water)
-            built.glass_nodes.append((node, lambda c, g=glass: n_w[c] / g[c]))
-            built.water_nodes.append(node)
-            break
-    me.materials.append(glass_mat or boundary)
+    me.materials.append(boundary)
     me.materials.append(_black_material("housing", water))
     obj = _new_object(coll, "poser_water", me)
     obj.visible_shadow = True
@@ -472,7 +490,7 @@ def _build_water(built, coll, desc, shells, n_w, ref):
         obj.shape_key_add(name="basis", from_mix=False)
         for i in range(n_poses):
             key = obj.shape_key_add(name=f"pose {i}", from_mix=False)
-            verts = _water_mesh(desc, i, shells)["verts"] if i else mesh["verts"]
+            verts = _water_mesh(desc, i, gapped)["verts"] if i else mesh["verts"]
             key.data.foreach_set("co", np.asarray(verts, dtype=np.float32).ravel())
             for f in range(n_poses):
                 key.value = 1.0 if f == i else 0.0

@@ -49,14 +49,15 @@ def blender_intrinsics(fx, fy, cx, cy, width, height):
 def fisheye_params(lens_model, fx, width, height):
     """Cycles panoramic camera parameters for a fisheye lens of focal length fx pixels.
 
-    Equisolid (r = 2 f sin(theta/2)) uses the real lens model with f in mm on a sensor of
-    36 mm width; equidistant (r = f theta) uses Cycles' FISHEYE_EQUIDISTANT, whose field of
-    view spans the image width: fov = W / f.
+    Equisolid (r = 2 f sin(theta/2)) uses Cycles' FISHEYE_EQUISOLID with f in mm on a sensor
+    of 36 mm width; equidistant (r = f theta) uses FISHEYE_LENS_POLYNOMIAL with theta = r/f.
     """
     lens_mm = fx * SENSOR_WIDTH_MM / width
     if lens_model == "fisheye_equidistant":
-        return {"panorama_type": "FISHEYE_EQUIDISTANT", "fisheye_fov": width / fx,
-                "lens": lens_mm}
+        # Cycles' own FISHEYE_EQUIDISTANT stretches its circle over the whole (non-square)
+        # frame; the lens polynomial theta = -k1 r (r in mm on the sensor) is exact instead.
+        return {"panorama_type": "FISHEYE_LENS_POLYNOMIAL", "fisheye_fov": 2.0 * math.pi,
+                "polynomial": [0.0, -1.0 / lens_mm, 0.0, 0.0, 0.0], "lens": lens_mm}
     if lens_model == "fisheye_equisolid":
         # Cycles clips at fisheye_fov; the full image diagonal must be inside it.
         r_max = 0.5 * math.hypot(width, height) / (2.0 * fx)
@@ -376,6 +377,34 @@ def box_mesh(lo, hi, tag=0):
             f = (base, base + 1, base + 2, base + 3)  # b x c = axis -> +axis normal
             faces.append(f if side else tuple(reversed(f)))
     return _mesh(verts, faces, [tag] * 6, normals)
+
+
+def submesh(mesh, tag):
+    """The faces of `mesh` carrying `tag`, with only the vertices they use."""
+    faces = [f for f, t in zip(mesh["faces"], mesh["tags"]) if t == tag]
+    used = sorted({i for f in faces for i in f})
+    remap = {old: new for new, old in enumerate(used)}
+    normals = None if mesh["normals"] is None else mesh["normals"][used]
+    return _mesh(mesh["verts"][used], [tuple(remap[i] for i in f) for f in faces],
+                 [tag] * len(faces), normals)
+
+
+def inflate(mesh, eps):
+    """Move every vertex by `eps` along its outward normal (the given vertex normals, or the
+    mean of the adjacent face normals)."""
+    v = np.asarray(mesh["verts"], dtype=float)
+    if mesh["normals"] is not None:
+        n = np.asarray(mesh["normals"], dtype=float)
+    else:
+        n = np.zeros_like(v)
+        for f in mesh["faces"]:
+            fn = np.cross(v[f[1]] - v[f[0]], v[f[2]] - v[f[0]])
+            fn /= np.linalg.norm(fn)
+            for i in f:
+                n[i] += fn
+        n /= np.linalg.norm(n, axis=1)[:, None]
+    return {"verts": v + eps * n, "faces": mesh["faces"], "tags": mesh["tags"],
+            "normals": mesh["normals"]}
 
 
 def merge_meshes(meshes):

@@ -1,0 +1,1283 @@
+//! The scene format as Rust types: the single description from which the JSON Schema
+//! (`schema/poser-scene.schema.json`, via schemars) and the format reference
+//! (`docs/format.md`) are generated. These types document; the reading itself is done by
+//! [`super::resolve`] with full diagnostics, and a test checks both agree key by key.
+//!
+//! Values with a physical dimension accept a plain number in the SI unit or a string with a
+//! unit (`"18 mm"`); see [`crate::units`]. Every field's doc comment gives its unit and
+//! default.
+#![allow(dead_code)]
+
+use schemars::{JsonSchema, Schema, SchemaGenerator, json_schema};
+use std::borrow::Cow;
+use std::marker::PhantomData;
+
+/// A physical dimension, for the schema of quantity values.
+pub trait Quantity {
+    const NAME: &'static str;
+    /// SI unit of plain numbers.
+    const UNIT: &'static str;
+    /// Example string.
+    const EXAMPLE: &'static str;
+}
+
+macro_rules! quantity {
+    ($t:ident, $name:expr, $unit:expr, $ex:expr) => {
+        #[doc = concat!("A ", $name, ": a number in ", $unit, " or a string like `\"", $ex, "\"`.")]
+        pub struct $t;
+        impl Quantity for $t {
+            const NAME: &'static str = $name;
+            const UNIT: &'static str = $unit;
+            const EXAMPLE: &'static str = $ex;
+        }
+        impl JsonSchema for $t {
+            fn inline_schema() -> bool {
+                true
+            }
+            fn schema_name() -> Cow<'static, str> {
+                Cow::Borrowed(stringify!($t))
+            }
+            fn json_schema(_: &mut SchemaGenerator) -> Schema {
+                scalar_schema::<$t>()
+            }
+        }
+    };
+}
+
+fn scalar_schema<Q: Quantity>() -> Schema {
+    if Q::UNIT.is_empty() {
+        return json_schema!({ "type": "number", "x-poser-kind": Q::NAME });
+    }
+    json_schema!({
+        "anyOf": [
+            { "type": "number" },
+            { "type": "string", "pattern": "^\\s*[-+]?[0-9_.]+([eE][-+]?[0-9]+)?\\s*\\S*" }
+        ],
+        "x-poser-kind": Q::NAME,
+        "x-poser-unit": Q::UNIT,
+        "x-poser-example": Q::EXAMPLE
+    })
+}
+
+quantity!(Length, "length", "m", "18 mm");
+quantity!(Angle, "angle", "rad", "30 deg");
+quantity!(Degrees, "angle", "deg", "43.5");
+quantity!(Speed, "speed", "m/s", "0.2 m/s");
+quantity!(Flow, "gas flow", "m³/s", "20 l/min");
+quantity!(Pressure, "pressure", "Pa", "232 bar");
+quantity!(Volume, "volume", "m³", "12 l");
+quantity!(Power, "power", "W", "50 W");
+quantity!(Intensity, "radiant intensity", "W/sr", "4 W/sr");
+quantity!(Radiance, "radiance", "W/(m²·sr)", "1 W/m2/sr");
+quantity!(Irradiance, "irradiance", "W/m²", "800 W/m2");
+quantity!(Temperature, "temperature", "°C", "18 °C");
+quantity!(Fraction, "fraction", "1", "60 %");
+quantity!(Gsd, "ground sampling distance", "m/px", "1 mm/px");
+quantity!(Number, "number", "", "1");
+
+/// A 3-vector of a quantity: `[x, y, z]` (numbers or unit strings) or one string
+/// `"x, y, z unit"`.
+pub struct Vec3<Q>(PhantomData<Q>);
+impl<Q: Quantity> JsonSchema for Vec3<Q> {
+    fn inline_schema() -> bool {
+        true
+    }
+    fn schema_name() -> Cow<'static, str> {
+        Cow::Owned(format!("Vec3_{}", Q::NAME))
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({
+            "anyOf": [
+                { "type": "array", "items": scalar_schema::<Q>(), "minItems": 3, "maxItems": 3 },
+                { "type": "string" }
+            ],
+            "x-poser-kind": format!("3-vector of {}", Q::NAME),
+            "x-poser-unit": Q::UNIT
+        })
+    }
+}
+
+/// A list of a quantity: `[a, b, …]` or one string `"a, b, … unit"`.
+pub struct List<Q>(PhantomData<Q>);
+impl<Q: Quantity> JsonSchema for List<Q> {
+    fn inline_schema() -> bool {
+        true
+    }
+    fn schema_name() -> Cow<'static, str> {
+        Cow::Owned(format!("List_{}", Q::NAME))
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({
+            "anyOf": [ { "type": "array", "items": scalar_schema::<Q>() }, { "type": "string" } ],
+            "x-poser-kind": format!("list of {}", Q::NAME),
+            "x-poser-unit": Q::UNIT
+        })
+    }
+}
+
+/// A per-channel value: one value for R, G and B, or `[r, g, b]`.
+pub struct PerChannel<Q>(PhantomData<Q>);
+impl<Q: Quantity> JsonSchema for PerChannel<Q> {
+    fn inline_schema() -> bool {
+        true
+    }
+    fn schema_name() -> Cow<'static, str> {
+        Cow::Owned(format!("PerChannel_{}", Q::NAME))
+    }
+    fn json_schema(_: &mut SchemaGenerator) -> Schema {
+        json_schema!({
+            "anyOf": [
+                scalar_schema::<Q>(),
+                { "type": "array", "items": scalar_schema::<Q>(), "minItems": 3, "maxItems": 3 }
+            ],
+            "x-poser-kind": format!("{} per channel (one value or [r, g, b])", Q::NAME),
+            "x-poser-unit": Q::UNIT
+        })
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+
+/// A poser scene: one survey — water, site, sun, camera rig with housing ports, lights,
+/// objects, targets, camera network, diver and render settings. Every table is optional
+/// except `[network]`; without `[water]` the survey is in air.
+#[derive(JsonSchema)]
+#[schemars(title = "poser scene", deny_unknown_fields)]
+pub struct Scene {
+    /// Scenario name. **Default:** the file name without `.toml`.
+    pub name: Option<String>,
+    /// Free text for trainers. **Default:** empty.
+    pub description: Option<String>,
+    /// Files merged *under* this one (paths relative to this file; tables deep-merge, later
+    /// files and this file win; cycles are errors). **Default:** none.
+    pub include: Option<Vec<String>>,
+    pub site: Option<Site>,
+    pub water: Option<Water>,
+    pub sun: Option<Sun>,
+    pub camera: Option<Camera>,
+    pub rig: Option<Rig>,
+    /// Lights other than the sun: `[[lights]]`, one table each.
+    pub lights: Option<Vec<Light>>,
+    /// Scene geometry: `[[objects]]`, one table each.
+    pub objects: Option<Vec<Object>>,
+    /// Calibration targets, scale bars, GSD targets: `[[targets]]`, one table each.
+    pub targets: Option<Vec<Target>>,
+    pub network: Option<Network>,
+    pub diver: Option<Diver>,
+    pub render: Option<Render>,
+}
+
+/// `[site]` — where the survey happens. The sea surface is the plane z = 0 (z up).
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Site {
+    /// Depth of the nominal seabed below the surface. **Unit:** m. **Default:** 10 m.
+    pub depth: Option<Length>,
+    /// Sea surface model. **Default:** `"flat"` with water, `"none"` without.
+    pub surface: Option<SurfaceKind>,
+    /// Significant wave height (`surface = "waves"`). **Unit:** m. **Default:** 0.5 m.
+    pub wave_height: Option<Length>,
+    /// Dominant wavelength of the waves. **Unit:** m. **Default:** 10 m.
+    pub wave_length: Option<Length>,
+    /// Wind speed driving the waves. **Unit:** m/s. **Default:** 5 m/s.
+    pub wind_speed: Option<Speed>,
+    /// Altitude of the water surface above sea level (dive planning). **Unit:** m.
+    /// **Default:** 0.
+    pub altitude: Option<Length>,
+}
+
+/// Sea surface model.
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceKind {
+    /// No interface is modelled (sunlight is a directional light in the water).
+    None,
+    /// A flat air–water interface at z = 0.
+    Flat,
+    /// A wavy surface (`wave_height`, `wave_length`, `wind_speed`); gives caustics.
+    Waves,
+}
+
+/// `[water]` — the medium. Without this table the survey is in air (no medium anywhere).
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Water {
+    /// Constant refractive index (one value or `[r, g, b]`). **Unit:** 1. **Default:**
+    /// computed from `temperature`, `salinity`, `ior_depth` at 650/550/450 nm (Quan–Fry with
+    /// Millard–Seaver pressure term).
+    pub ior: Option<PerChannel<Number>>,
+    /// Water temperature for the index. **Unit:** °C. **Default:** 20 °C.
+    pub temperature: Option<Temperature>,
+    /// Salinity for the index (0 fresh, 35 ocean). **Unit:** PSU. **Default:** 35.
+    pub salinity: Option<Number>,
+    /// Depth at which the index is evaluated (pressure term). **Unit:** m. **Default:** the
+    /// site depth.
+    pub ior_depth: Option<Length>,
+    /// Jerlov water type giving absorption and scattering per channel: I, IA, IB, II, III,
+    /// 1C, 3C, 5C, 7C, 9C. **Default:** `"IB"` unless `absorption`/`scattering` are given.
+    pub jerlov: Option<String>,
+    /// Absorption coefficient σa (overrides the Jerlov value). **Unit:** 1/m. **Default:**
+    /// from `jerlov`, else 0.
+    pub absorption: Option<PerChannel<Number>>,
+    /// Scattering coefficient σs (overrides the Jerlov value). **Unit:** 1/m. **Default:**
+    /// from `jerlov`, else 0.
+    pub scattering: Option<PerChannel<Number>>,
+    /// Phase function. **Default:** `"hg"`.
+    pub phase: Option<PhaseKind>,
+    /// Henyey–Greenstein asymmetry, in (-1, 1). **Unit:** 1. **Default:** 0.9.
+    pub g: Option<Number>,
+    /// Fournier–Forand: index of particles relative to water (> 1). **Unit:** 1.
+    /// **Default:** 1.1.
+    pub particle_index: Option<Number>,
+    /// Fournier–Forand: Junge slope μ in (3, 5]. **Unit:** 1. **Default:** 3.6.
+    pub junge_slope: Option<Number>,
+    /// Where the medium is. **Default:** `"everywhere"`.
+    pub extent: Option<ExtentKind>,
+    /// Half-size of the medium box around each camera (`extent = "box"`), one value or
+    /// `[x, y, z]`. **Unit:** m. **Default:** 2 m.
+    pub box_half_size: Option<PerChannel<Length>>,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum PhaseKind {
+    /// Henyey–Greenstein with asymmetry `g`.
+    Hg,
+    /// Fournier–Forand with `particle_index` and `junge_slope` (where a backend supports it).
+    FournierForand,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ExtentKind {
+    /// Water fills all space below the surface.
+    Everywhere,
+    /// Only a box around each camera (the original POSER's trick for fast volumes).
+    Box,
+}
+
+/// `[sun]` — daylight. Give `elevation` (+ `azimuth`), or `latitude`, `longitude` and
+/// `datetime`. Without this table there is no sun.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Sun {
+    /// Elevation above the horizon. **Unit:** rad (or `"55 deg"`). **Default:** none.
+    pub elevation: Option<Angle>,
+    /// Azimuth, clockwise from north. **Unit:** rad (or `"140 deg"`). **Default:** 180°
+    /// (south).
+    pub azimuth: Option<Angle>,
+    /// Latitude, north positive. **Unit:** degrees (plain numbers are degrees here).
+    pub latitude: Option<Degrees>,
+    /// Longitude, east positive. **Unit:** degrees (plain numbers are degrees here).
+    pub longitude: Option<Degrees>,
+    /// Local date and time with offset, e.g. `2024-06-21T10:30:00+02:00` (TOML date-time or
+    /// string).
+    pub datetime: Option<String>,
+    /// Irradiance on a plane normal to the sun, above the surface. **Unit:** W/m² per
+    /// channel. **Default:** 1.
+    pub irradiance: Option<PerChannel<Irradiance>>,
+}
+
+/// `[camera]` — the camera (for a stereo or multi-camera rig: the template every camera of
+/// the rig starts from).
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Camera {
+    /// Camera name (multi rigs). **Default:** `"cam"`, `"left"`/`"right"` (stereo),
+    /// `"cam<i>"` (multi).
+    pub name: Option<String>,
+    /// Entrance-pupil position in the rig frame (multi rigs). **Unit:** m. **Default:** 0.
+    pub position: Option<Vec3<Length>>,
+    /// Orientation in the rig frame as rotations about x, y, z (applied x first; multi
+    /// rigs). **Unit:** rad (or `"0, 30, 0 deg"`). **Default:** 0.
+    pub rotation: Option<Vec3<Angle>>,
+    /// Image width. **Unit:** px. **Default:** 1600.
+    pub width: Option<u32>,
+    /// Image height. **Unit:** px. **Default:** 1200.
+    pub height: Option<u32>,
+    /// Pixel pitch. **Unit:** m. **Default:** 3.76 µm (or from `sensor_width`).
+    pub pixel_pitch: Option<Length>,
+    /// Sensor width; the pixel pitch is `sensor_width / width`. **Unit:** m.
+    pub sensor_width: Option<Length>,
+    /// Focal length. **Unit:** m. **Default:** 16 mm.
+    pub focal_length: Option<Length>,
+    /// Focal length in pixels (instead of `focal_length`). **Unit:** px.
+    pub fx: Option<Number>,
+    /// Principal point `[cx, cy]`. **Unit:** px. **Default:** the image centre.
+    pub principal_point: Option<List<Number>>,
+    /// Lens projection. **Default:** `"rectilinear"`.
+    pub lens: Option<LensKind>,
+    /// Brown–Conrady distortion (OpenCV convention). **Default:** none.
+    pub distortion: Option<DistortionTable>,
+    /// Focus distance (depth of field). **Unit:** m. **Default:** pinhole (all sharp).
+    pub focus_distance: Option<Length>,
+    /// Aperture f-number. **Unit:** 1. **Default:** pinhole.
+    pub f_number: Option<Number>,
+    pub port: Option<PortTable>,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum LensKind {
+    /// r = f·tan θ.
+    Rectilinear,
+    /// r = f·θ.
+    FisheyeEquidistant,
+    /// r = 2f·sin(θ/2).
+    FisheyeEquisolid,
+}
+
+/// `[camera.distortion]` — Brown–Conrady coefficients on normalised coordinates (OpenCV).
+/// All default to 0.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct DistortionTable {
+    /// Radial k1. **Default:** 0.
+    pub k1: Option<Number>,
+    /// Radial k2. **Default:** 0.
+    pub k2: Option<Number>,
+    /// Radial k3. **Default:** 0.
+    pub k3: Option<Number>,
+    /// Tangential p1. **Default:** 0.
+    pub p1: Option<Number>,
+    /// Tangential p2. **Default:** 0.
+    pub p2: Option<Number>,
+}
+
+/// `[camera.port]` — the housing port, in the camera frame (x right, y down, z forward,
+/// origin at the entrance pupil). Which keys apply depends on `type`.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct PortTable {
+    /// Port kind. **Default:** `"flat"` with water, `"none"` in air.
+    #[serde(rename = "type")]
+    pub kind: Option<PortKind>,
+    /// Catalogue material: `N-BK7`, `fused_silica`, `PMMA` (acrylic), `sapphire`.
+    /// **Default:** `N-BK7` (flat), `PMMA` (dome, cylinder).
+    pub material: Option<String>,
+    /// Custom glass index instead of `material` (one value or `[r, g, b]`). **Unit:** 1.
+    pub ior: Option<PerChannel<Number>>,
+    /// Glass thickness (all kinds). **Unit:** m. **Default:** 10 mm (flat), 5 mm (dome,
+    /// cylinder).
+    pub thickness: Option<Length>,
+    /// Flat: distance from the entrance pupil to the inner face of the glass. **Unit:** m.
+    /// **Default:** 10 mm.
+    pub pupil_distance: Option<Length>,
+    /// Flat: tilt of the port normal away from the optical axis. **Unit:** rad.
+    /// **Default:** 0.
+    pub tilt: Option<Angle>,
+    /// Flat: direction of the tilt axis in the image plane, from +x towards +y. **Unit:**
+    /// rad. **Default:** 0 (tilt about the image x axis).
+    pub tilt_direction: Option<Angle>,
+    /// Dome, cylinder: inner radius. **Unit:** m. **Default:** 50 mm.
+    pub inner_radius: Option<Length>,
+    /// Dome: position of the dome centre relative to the entrance pupil (0 = perfectly
+    /// centred). **Unit:** m. **Default:** `[0, 0, 0]`.
+    pub decentering: Option<Vec3<Length>>,
+    /// Cylinder: axis direction in the camera frame. **Unit:** 1. **Default:** `[0, 1, 0]`.
+    pub axis: Option<Vec3<Number>>,
+    /// Cylinder: a point of the axis relative to the entrance pupil. **Unit:** m.
+    /// **Default:** `[0, 0, 0]`.
+    pub offset: Option<Vec3<Length>>,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum PortKind {
+    /// No housing (air survey or an idealised camera).
+    None,
+    /// Flat port: `thickness`, `pupil_distance`, `tilt`, `tilt_direction`.
+    Flat,
+    /// Dome port: `inner_radius`, `thickness`, `decentering`.
+    Dome,
+    /// Cylindrical port: `inner_radius`, `thickness`, `axis`, `offset`.
+    Cylinder,
+}
+
+/// `[rig]` — how many cameras and where. Without it: one camera at the rig origin.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Rig {
+    /// Rig kind. **Default:** `"single"`.
+    #[serde(rename = "type")]
+    pub kind: Option<RigKind>,
+    /// Stereo: distance between the two entrance pupils (left at −x/2, right at +x/2).
+    /// **Unit:** m. **Default:** 0.3 m.
+    pub baseline: Option<Length>,
+    /// Stereo: total toe-in angle between the two optical axes. **Unit:** rad.
+    /// **Default:** 0.
+    pub convergence: Option<Angle>,
+    /// Multi: one table per camera with `name`, `position`, `rotation` and any `[camera]`
+    /// keys to override (deep-merged over `[camera]`).
+    pub cameras: Option<Vec<Camera>>,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum RigKind {
+    Single,
+    Stereo,
+    Multi,
+}
+
+/// `[[lights]]` — one light. Which keys apply depends on `type`.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Light {
+    /// Light name. **Default:** `"light<i>"`.
+    pub name: Option<String>,
+    /// Light kind. **Default:** `"spot"`.
+    #[serde(rename = "type")]
+    pub kind: Option<LightKindName>,
+    /// Frame of `position`/`aim`/`target`: the rig (moves with the cameras; camera axes x
+    /// right, y down, z forward) or the world. **Default:** `"rig"` for spot/strobe/point,
+    /// `"world"` for area/ambient.
+    pub mount: Option<MountKind>,
+    /// Position. **Unit:** m. **Default:** `[0, 0, 0]`.
+    pub position: Option<Vec3<Length>>,
+    /// Spot/area: direction the light points (any length). **Unit:** 1. **Default:**
+    /// forward (rig `[0, 0, 1]`) or down (world `[0, 0, -1]`).
+    pub aim: Option<Vec3<Number>>,
+    /// Spot/area: a point to aim at (instead of `aim`). **Unit:** m.
+    pub target: Option<Vec3<Length>>,
+    /// Spot: full cone angle. **Unit:** rad. **Default:** 100°.
+    pub beam_angle: Option<Angle>,
+    /// Spot/point: electrical-equivalent radiant power, I = P/4π; area: emitted power,
+    /// L = P/(π·A). **Unit:** W (per channel). **Default:** 10 W (spot/point).
+    pub power: Option<PerChannel<Power>>,
+    /// Spot/point: radiant intensity instead of `power`. **Unit:** W/sr per channel.
+    pub intensity: Option<PerChannel<Intensity>>,
+    /// Area/ambient: radiance instead of `power`. **Unit:** W/(m²·sr) per channel.
+    /// **Default:** 1 (area), 0.1 (ambient).
+    pub radiance: Option<PerChannel<Radiance>>,
+    /// Colour multiplier per channel. **Unit:** 1. **Default:** `[1, 1, 1]`.
+    pub color: Option<PerChannel<Number>>,
+    /// Area: width. **Unit:** m. **Default:** 0.5 m.
+    pub width: Option<Length>,
+    /// Area: height. **Unit:** m. **Default:** 0.5 m.
+    pub height: Option<Length>,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum LightKindName {
+    /// Cone of `beam_angle` (strobe, video light).
+    Spot,
+    /// Same as `spot`.
+    Strobe,
+    /// Isotropic point light.
+    Point,
+    /// One-sided rectangle emitting along `aim`.
+    Area,
+    /// Uniform radiance from every direction.
+    Ambient,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum MountKind {
+    Rig,
+    World,
+}
+
+/// `[[objects]]` — one piece of geometry. Which keys apply depends on `shape`.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Object {
+    /// Object name. **Default:** `"object<i>"`.
+    pub name: Option<String>,
+    /// Shape. **Default:** `"box"`.
+    pub shape: Option<ShapeKind>,
+    /// Mesh: glTF file (`.glb`/`.gltf`), relative to the file that names it.
+    pub path: Option<String>,
+    /// Plane width / seabed and boulder field extent along x. **Unit:** m. **Default:** 1 m
+    /// (plane), 20 m (seabed, boulders).
+    pub width: Option<Length>,
+    /// Plane height (along y) / cylinder height (along z). **Unit:** m. **Default:** 1 m.
+    pub height: Option<Length>,
+    /// Seabed and boulder field extent along y. **Unit:** m. **Default:** 20 m.
+    pub length: Option<Length>,
+    /// Box: side lengths `[x, y, z]`. **Unit:** m. **Default:** `[1, 1, 1]`.
+    pub size: Option<Vec3<Length>>,
+    /// Sphere, cylinder radius; boulders: mean radius. **Unit:** m. **Default:** 0.5 m
+    /// (0.3 m for boulders).
+    pub radius: Option<Length>,
+    /// Seabed: RMS relief. **Unit:** m. **Default:** 0.1 m.
+    pub roughness: Option<Length>,
+    /// Seabed: heightfield cell size. **Unit:** m. **Default:** 0.05 m.
+    pub resolution: Option<Length>,
+    /// Boulders: how many. **Default:** 30.
+    pub count: Option<u32>,
+    /// Seabed, boulders: random seed. **Default:** render seed + object index.
+    pub seed: Option<u64>,
+    /// Position of the object's origin (world). **Unit:** m. **Default:** `[0, 0, 0]`;
+    /// seabed and boulders: `[0, 0, -site.depth]`.
+    pub position: Option<Vec3<Length>>,
+    /// Orientation as rotations about x, y, z (x first). **Unit:** rad. **Default:** 0.
+    pub rotation: Option<Vec3<Angle>>,
+    /// Turn the object's +z axis towards this world point (instead of `rotation`).
+    /// **Unit:** m.
+    pub look_at: Option<Vec3<Length>>,
+    /// Scale factor (one value or `[x, y, z]`). **Unit:** 1. **Default:** 1.
+    pub scale: Option<PerChannel<Number>>,
+    /// Lambertian albedo in [0, 1]. **Unit:** 1 per channel. **Default:** 0.3.
+    pub albedo: Option<PerChannel<Number>>,
+    pub pattern: Option<PatternTable>,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeKind {
+    Mesh,
+    Plane,
+    Box,
+    Sphere,
+    Cylinder,
+    Seabed,
+    Boulders,
+}
+
+/// `pattern = { … }` — procedural texture modulating an object's albedo.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct PatternTable {
+    /// Pattern kind: `"checker"` or `"noise"`. **Default:** `"noise"`.
+    #[serde(rename = "type")]
+    pub kind: Option<String>,
+    /// Checker square / noise feature size. **Unit:** m. **Default:** 0.1 m.
+    pub size: Option<Length>,
+    /// Checker: dark squares are albedo × contrast. **Unit:** 1. **Default:** 0.5.
+    pub contrast: Option<Number>,
+    /// Noise amplitude (0..1). **Unit:** 1. **Default:** 0.5.
+    pub amount: Option<Number>,
+    /// Noise seed. **Default:** 0.
+    pub seed: Option<u64>,
+}
+
+/// `[[targets]]` — a calibration target, scale bar or GSD target with known 3D points (ids
+/// `name/index`, or code numbers for coded targets). The printed face is the target's
+/// z = 0 plane, facing +z.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Target {
+    /// Target name (unique). **Default:** `"target<i>"`.
+    pub name: Option<String>,
+    /// Target kind. **Default:** `"checkerboard"`.
+    #[serde(rename = "type")]
+    pub kind: Option<TargetKindName>,
+    /// Checkerboard, circle grid: columns (squares / disks). **Default:** 9 / 7.
+    pub cols: Option<u32>,
+    /// Checkerboard, circle grid: rows. **Default:** 6 / 5.
+    pub rows: Option<u32>,
+    /// Checkerboard: square side. **Unit:** m. **Default:** 40 mm.
+    pub square: Option<Length>,
+    /// Circle grid, coded: centre spacing. **Unit:** m. **Default:** 50 mm / 100 mm.
+    pub spacing: Option<Length>,
+    /// Disk diameter (circle grid, coded, scale bar, test object) or star diameter.
+    /// **Unit:** m. **Default:** 20 mm (200 mm for a Siemens star).
+    pub diameter: Option<Length>,
+    /// Coded: number of targets. **Default:** 12.
+    pub count: Option<u32>,
+    /// Coded: code number of the first target. **Default:** 1.
+    pub first_code: Option<u32>,
+    /// Scale bar: distance between the two disk centres. **Unit:** m. **Default:** 1 m.
+    pub length: Option<Length>,
+    /// Scale bar: bar width. **Unit:** m. **Default:** 40 mm.
+    pub width: Option<Length>,
+    /// Siemens star: number of black sectors. **Default:** 16.
+    pub spokes: Option<u32>,
+    /// Test object: base width. **Unit:** m. **Default:** 0.5 m.
+    pub size: Option<Length>,
+    /// Test object: number of steps. **Default:** 3.
+    pub levels: Option<u32>,
+    /// Test object: step height. **Unit:** m. **Default:** 50 mm.
+    pub step: Option<Length>,
+    /// Centre of the target (world). **Unit:** m. **Default:** `[0, 0, 0]`.
+    pub position: Option<Vec3<Length>>,
+    /// Orientation as rotations about x, y, z (x first). **Unit:** rad. **Default:** 0
+    /// (face up).
+    pub rotation: Option<Vec3<Angle>>,
+    /// Turn the printed face towards this world point (instead of `rotation`). **Unit:** m.
+    pub look_at: Option<Vec3<Length>>,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum TargetKindName {
+    Checkerboard,
+    CircleGrid,
+    Coded,
+    ScaleBar,
+    SiemensStar,
+    TestObject,
+}
+
+/// `[network]` — where the images are taken. Which keys apply depends on `type`.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Network {
+    /// Network kind. **Default:** `"explicit"`.
+    #[serde(rename = "type")]
+    pub kind: Option<NetworkKind>,
+    /// Swim speed along the path. **Unit:** m/s. **Default:** the diver's speed, else 0.2.
+    pub speed: Option<Speed>,
+    /// Explicit: one `[[network.poses]]` table per rig position.
+    pub poses: Option<Vec<PoseTable>>,
+    /// Lawnmower, spiral: centre `[x, y]` (or `[x, y, z]`); orbit: the point looked at.
+    /// **Unit:** m. **Default:** `[0, 0]` (orbit: `[0, 0, -site.depth]`).
+    pub center: Option<List<Length>>,
+    /// Lawnmower: area extent across the strips. **Unit:** m. **Default:** 10 m.
+    pub width: Option<Length>,
+    /// Lawnmower: area extent along the strips. **Unit:** m. **Default:** 10 m.
+    pub length: Option<Length>,
+    /// Lawnmower: strip direction, clockwise from north. **Unit:** rad. **Default:** 0.
+    pub heading: Option<Angle>,
+    /// Lawnmower, spiral: camera height above the seabed (or give `gsd`). **Unit:** m.
+    pub altitude: Option<Length>,
+    /// Lawnmower, spiral: wanted nadir GSD through the port (instead of `altitude`).
+    /// **Unit:** m/px.
+    pub gsd: Option<Gsd>,
+    /// Lawnmower, spiral: forward overlap. **Unit:** fraction. **Default:** 0.8.
+    pub overlap: Option<Fraction>,
+    /// Lawnmower, spiral: side-lap between strips (< 0.6 gives a warning). **Unit:**
+    /// fraction. **Default:** 0.6.
+    pub sidelap: Option<Fraction>,
+    /// Lawnmower: number of strips. **Default:** from `sidelap`.
+    pub strips: Option<u32>,
+    /// Lawnmower: add a perpendicular pass. **Default:** false.
+    pub cross_strips: Option<bool>,
+    /// Lawnmower: oblique tilt forward from nadir. **Unit:** rad. **Default:** 0.
+    pub tilt: Option<Angle>,
+    /// Lawnmower, spiral: `"overlap"` (spacing from `overlap`), a distance (`"0.5 m"`) or a
+    /// time (`"2 s"`). **Default:** `"overlap"`.
+    pub trigger: Option<String>,
+    /// Spiral: outer radius; orbit: horizontal ring radius. **Unit:** m. **Default:** 5 m
+    /// (spiral), 2 m (orbit).
+    pub radius: Option<Length>,
+    /// Orbit: ring elevations above the horizontal plane through `center`. **Unit:** rad.
+    /// **Default:** `"20, 45 deg"`.
+    pub elevations: Option<List<Angle>>,
+    /// Orbit: images per ring. **Default:** 24.
+    pub per_ring: Option<u32>,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum NetworkKind {
+    /// Poses listed one by one in `[[network.poses]]`.
+    Explicit,
+    /// Parallel strips over a rectangle, optional cross strips.
+    Lawnmower,
+    /// Planar Archimedean spiral.
+    Spiral,
+    /// Rings around an object.
+    Orbit,
+}
+
+/// `[[network.poses]]` — one explicit rig position.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct PoseTable {
+    /// Entrance-pupil position of the rig (world). **Unit:** m. **Required.**
+    pub position: Option<Vec3<Length>>,
+    /// Point the optical axis at this world point. **Unit:** m. **Default:** straight down.
+    pub look_at: Option<Vec3<Length>>,
+    /// Up hint for `look_at` (image up is as close to it as possible). **Unit:** 1.
+    /// **Default:** `[0, 0, 1]`.
+    pub up: Option<Vec3<Number>>,
+    /// Orientation `world_from_rig` as rotations about x, y, z (instead of `look_at`;
+    /// 0 = looking up the world z axis). **Unit:** rad.
+    pub rotation: Option<Vec3<Angle>>,
+}
+
+/// `[diver]` — the diver (or vehicle) for planning and dive safety.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Diver {
+    /// Swim speed during the survey. **Unit:** m/s. **Default:** 0.2 m/s.
+    pub speed: Option<Speed>,
+    /// Descent rate. **Unit:** m/s. **Default:** 18 m/min.
+    pub descent_rate: Option<Speed>,
+    /// Ascent rate. **Unit:** m/s. **Default:** 9 m/min.
+    pub ascent_rate: Option<Speed>,
+    /// Surface air consumption. **Unit:** m³/s (write `"20 l/min"`). **Default:** 20 l/min.
+    pub sac: Option<Flow>,
+    /// Bühlmann gradient factor low. **Unit:** fraction (`0.3` or `"30 %"`). **Default:** 0.3.
+    pub gf_low: Option<Fraction>,
+    /// Bühlmann gradient factor high. **Unit:** fraction. **Default:** 0.7.
+    pub gf_high: Option<Fraction>,
+    /// Gas that must remain at the surface. **Unit:** Pa (write `"50 bar"`). **Default:**
+    /// 50 bar.
+    pub reserve: Option<Pressure>,
+    /// `"salt"` (1025 kg/m³) or `"fresh"` (1000 kg/m³). **Default:** `"salt"`.
+    pub water: Option<String>,
+    /// Cylinders carried: `[[diver.cylinders]]`. **Default:** one 12 l, 200 bar of air.
+    pub cylinders: Option<Vec<CylinderTable>>,
+}
+
+/// `[[diver.cylinders]]` — one cylinder.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct CylinderTable {
+    /// Cylinder name. **Default:** `"cylinder<i>"`.
+    pub name: Option<String>,
+    /// Water volume. **Unit:** m³ (write `"12 l"`). **Default:** 12 l.
+    pub volume: Option<Volume>,
+    /// Fill pressure. **Unit:** Pa (write `"232 bar"`). **Default:** 200 bar.
+    pub pressure: Option<Pressure>,
+    /// Gas: `"air"`, `"EAN32"`/`"nitrox32"`, `"TX18/45"` (trimix O₂/He), `"O2"`.
+    /// **Default:** `"air"`.
+    pub gas: Option<String>,
+    /// O₂ fraction (overrides `gas`). **Unit:** fraction.
+    pub o2: Option<Fraction>,
+    /// He fraction (overrides `gas`). **Unit:** fraction.
+    pub he: Option<Fraction>,
+}
+
+/// `[render]` — render settings shared by every backend (image size is on `[camera]`).
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Render {
+    /// Samples per pixel (≥ 1). **Default:** 64.
+    pub samples: Option<u32>,
+    /// Seed of every random choice of every backend. **Default:** 0.
+    pub seed: Option<u64>,
+    /// Maximum path length. **Default:** 8.
+    pub bounces: Option<u32>,
+    /// Render one pass per channel with that channel's indices (only done when the lateral
+    /// colour is ≥ 0.1 px). **Default:** false.
+    pub dispersion: Option<bool>,
+    /// Outputs wanted: any of `"rgb"`, `"depth"`, `"truth"`. **Default:** all three.
+    pub outputs: Option<Vec<String>>,
+    /// Exposure multiplier for the PNG preview (EXR stays linear). **Unit:** 1.
+    /// **Default:** 1.
+    pub exposure: Option<Number>,
+}
+
+// ------------------------------------------------------------------------------------------
+
+/// The JSON Schema of the scene format, pretty-printed with a trailing newline.
+pub fn schema_json() -> String {
+    let schema = schemars::schema_for!(Scene);
+    let mut v = serde_json::to_value(&schema).expect("schema serialises");
+    if let Some(o) = v.as_object_mut() {
+        o.insert(
+            "$id".into(),
+            serde_json::Value::String(
+                "https://github.com/poser/poser/schema/poser-scene.schema.json".into(),
+            ),
+        );
+    }
+    let mut s = serde_json::to_string_pretty(&v).expect("schema serialises");
+    s.push('\n');
+    s
+}
+
+/// Keys accepted per table path (`""` = top level, `"camera.port"`, `"lights"`, …), from
+/// the schema. Used by the tests that keep the reader and the documentation in step.
+pub fn keys_by_path() -> std::collections::BTreeMap<String, Vec<String>> {
+    let v: serde_json::Value = serde_json::from_str(&schema_json()).expect("valid JSON");
+    let mut out = std::collections::BTreeMap::new();
+    walk_keys(&v, &v, "", &mut out, 0);
+    out
+}
+
+fn resolve_ref<'a>(root: &'a serde_json::Value, v: &'a serde_json::Value) -> &'a serde_json::Value {
+    if let Some(r) = v.get("$ref").and_then(|r| r.as_str()) {
+        let name = r.rsplit('/').next().unwrap_or("");
+        if let Some(d) = root.get("$defs").and_then(|d| d.get(name)) {
+            return d;
+        }
+    }
+    v
+}
+
+/// The object schema inside `v` (following `$ref`, `anyOf` with null, arrays of tables).
+fn table_of<'a>(
+    root: &'a serde_json::Value,
+    v: &'a serde_json::Value,
+) -> Option<(&'a serde_json::Value, bool)> {
+    let v = resolve_ref(root, v);
+    if v.get("properties").is_some() {
+        return Some((v, false));
+    }
+    if let Some(items) = v.get("items") {
+        return table_of(root, items).map(|(t, _)| (t, true));
+    }
+    for k in ["anyOf", "oneOf"] {
+        if let Some(a) = v.get(k).and_then(|a| a.as_array()) {
+            for x in a {
+                if let Some(t) = table_of(root, x) {
+                    return Some(t);
+                }
+            }
+        }
+    }
+    if let Some(t) = v.get("type").and_then(|t| t.as_array())
+        && t.iter().any(|x| x == "array")
+        && let Some(items) = v.get("items")
+    {
+        return table_of(root, items).map(|(t, _)| (t, true));
+    }
+    None
+}
+
+fn walk_keys(
+    root: &serde_json::Value,
+    v: &serde_json::Value,
+    path: &str,
+    out: &mut std::collections::BTreeMap<String, Vec<String>>,
+    depth: usize,
+) {
+    let Some(props) = v.get("properties").and_then(|p| p.as_object()) else {
+        return;
+    };
+    out.insert(path.to_string(), props.keys().cloned().collect());
+    if depth > 4 {
+        return;
+    }
+    for (k, p) in props {
+        if let Some((t, _)) = table_of(root, p) {
+            let sub = if path.is_empty() {
+                k.clone()
+            } else {
+                format!("{path}.{k}")
+            };
+            walk_keys(root, t, &sub, out, depth + 1);
+        }
+    }
+}
+
+/// The format reference (`docs/format.md`), generated from the schema.
+pub fn format_markdown() -> String {
+    let v: serde_json::Value = serde_json::from_str(&schema_json()).expect("valid JSON");
+    let mut s = String::new();
+    s.push_str(
+        "<!-- Generated by `poser schema` from src/scene/format.rs. Do not edit by hand. -->\n",
+    );
+    s.push_str("# poser scene format reference\n\n");
+    s.push_str(
+        "A scene is one TOML file. Values with a physical dimension take a plain number in the SI \
+         unit listed, or a string with a unit: `\"18 mm\"`, `\"15 m\"`, `\"0.2 m/s\"`, `\"20 l/min\"`, \
+         `\"532 nm\"`, `\"30 deg\"`, `\"232 bar\"`, `\"12 l\"`, `\"50 W\"`, `\"4.5 µm\"`, `\"60 %\"`. \
+         Vectors are `[x, y, z]` or one string with a trailing unit (`\"0, 0.1, 2 m\"`). \
+         Per-channel values are one number for R, G and B or `[r, g, b]` (650/550/450 nm).\n\n",
+    );
+    s.push_str(
+        "World frame: metres, z up, x east, y north, sea surface z = 0, seabed z = −`site.depth`. \
+         Camera and rig frames: x right, y down, z forward (OpenCV), origin at the entrance pupil.\n\n",
+    );
+    s.push_str(
+        "Composition: `include = [\"../shared/rig.toml\"]` merges files under this one (deep merge \
+         of tables); `poser … --set a.b.c=value` overrides any value after includes (the value is \
+         read as TOML, else as a string; list entries by index: `--set network.poses.0.position=[0,0,-2]`).\n\n",
+    );
+    s.push_str(
+        "Editor support: the JSON Schema is `schema/poser-scene.schema.json`. With the Even Better \
+         TOML extension (taplo), put `#:schema ../schema/poser-scene.schema.json` as the first \
+         line of a scene (path relative to the scene), or map `scenarios/*.toml` to the schema in \
+         `.taplo.toml`:\n\n```toml\n[[rule]]\ninclude = [\"scenarios/**/*.toml\"]\n[rule.schema]\npath = \"./schema/poser-scene.schema.json\"\n```\n\n",
+    );
+    s.push_str("Check a scene with `poser validate SCENE`; see what it resolves to with `poser explain SCENE`.\n\n");
+    s.push_str("## Contents\n\n");
+    let mut sections = Vec::new();
+    collect_sections(&v, &v, "", &mut sections, 0);
+    for (path, _, _) in &sections {
+        let title = if path.is_empty() {
+            "top level".to_string()
+        } else {
+            path.clone()
+        };
+        s.push_str(&format!("- [{title}](#{})\n", anchor(&title)));
+    }
+    s.push('\n');
+    for (path, table, is_array) in &sections {
+        let title = if path.is_empty() {
+            "top level".to_string()
+        } else {
+            path.clone()
+        };
+        s.push_str(&format!("## {title}\n\n"));
+        if !path.is_empty() {
+            s.push_str(&format!(
+                "Written as `{}`.\n\n",
+                if *is_array {
+                    format!("[[{path}]]")
+                } else {
+                    format!("[{path}]")
+                }
+            ));
+        }
+        if let Some(d) = table.get("description").and_then(|d| d.as_str()) {
+            s.push_str(&one_line(d));
+            s.push_str("\n\n");
+        }
+        s.push_str("| key | value | meaning, unit, default |\n|---|---|---|\n");
+        let props = table
+            .get("properties")
+            .and_then(|p| p.as_object())
+            .cloned()
+            .unwrap_or_default();
+        for (k, p) in &props {
+            let (kind, mut sub) = describe(&v, p);
+            let mut desc = p
+                .get("description")
+                .and_then(|d| d.as_str())
+                .map(one_line)
+                .unwrap_or_default();
+            if let Some((t, _)) = table_of(&v, p) {
+                let full = if path.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{path}.{k}")
+                };
+                sub = Some(if full == "rig.cameras" {
+                    "camera".to_string()
+                } else {
+                    full
+                });
+                if desc.is_empty()
+                    && let Some(d) = t.get("description").and_then(|d| d.as_str())
+                {
+                    desc = one_line(d.split("\n\n").next().unwrap_or(d));
+                }
+            }
+            if let Some(sp) = sub {
+                desc = format!("{desc} See [{sp}](#{}).", anchor(&sp))
+                    .trim()
+                    .to_string();
+            }
+            s.push_str(&format!(
+                "| `{k}` | {kind} | {} |\n",
+                desc.replace('|', "\\|")
+            ));
+        }
+        s.push('\n');
+    }
+    s.push_str(UNITS_TABLE);
+    s
+}
+
+const UNITS_TABLE: &str = "## Units\n\n\
+| dimension | plain numbers | units in strings |\n|---|---|---|\n\
+| length | m | m, cm, mm, µm (um), nm, km, ft, in |\n\
+| angle | rad | rad, mrad, deg, ° |\n\
+| speed | m/s | m/s, cm/s, m/min, ft/min, km/h, kn |\n\
+| gas flow | m³/s | l/min, L/min, m3/s, cuft/min |\n\
+| pressure | Pa | Pa, kPa, MPa, bar, mbar, psi, atm |\n\
+| volume | m³ | m3, l, L, ml, cuft |\n\
+| time | s | s, ms, min, h |\n\
+| power | W | W, mW, kW |\n\
+| radiant intensity | W/sr | W/sr, mW/sr |\n\
+| radiance | W/(m²·sr) | W/m2/sr |\n\
+| irradiance | W/m² | W/m2 |\n\
+| temperature | °C | °C, C, degC, K, F |\n\
+| fraction | 1 | % |\n\
+| ground sampling distance | m/px | m/px, cm/px, mm/px |\n";
+
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+fn anchor(title: &str) -> String {
+    title
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || *c == '-' || *c == ' ' || *c == '_')
+        .collect::<String>()
+        .replace(' ', "-")
+}
+
+fn collect_sections(
+    root: &serde_json::Value,
+    v: &serde_json::Value,
+    path: &str,
+    out: &mut Vec<(String, serde_json::Value, bool)>,
+    depth: usize,
+) {
+    let Some(props) = v.get("properties").and_then(|p| p.as_object()) else {
+        return;
+    };
+    if !out.iter().any(|(p, _, _)| p == path) {
+        out.push((path.to_string(), v.clone(), false));
+    }
+    if depth > 3 {
+        return;
+    }
+    for (k, p) in props {
+        if let Some((t, arr)) = table_of(root, p) {
+            let sub = if path.is_empty() {
+                k.clone()
+            } else {
+                format!("{path}.{k}")
+            };
+            // rig.cameras repeats [camera]: document it once.
+            if sub == "rig.cameras" {
+                continue;
+            }
+            let before = out.len();
+            collect_sections(root, t, &sub, out, depth + 1);
+            if out.len() > before {
+                out[before].2 = arr;
+            }
+        }
+    }
+}
+
+/// (value description, sub-section path if the value is a table).
+fn describe(root: &serde_json::Value, p: &serde_json::Value) -> (String, Option<String>) {
+    let r = resolve_ref(root, p);
+    if let Some(kind) = find_kind(r) {
+        let unit = find_unit(r).filter(|u| !u.is_empty() && *u != "1");
+        return (
+            match unit {
+                Some(u) => format!("{kind} ({u})"),
+                None => kind,
+            },
+            None,
+        );
+    }
+    if let Some(e) = enum_values(root, r) {
+        return (
+            format!(
+                "one of {}",
+                e.iter()
+                    .map(|x| format!("`\"{x}\"`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            None,
+        );
+    }
+    if table_of(root, p).is_some() {
+        let arr = table_of(root, p).is_some_and(|t| t.1);
+        return (
+            if arr {
+                "list of tables".into()
+            } else {
+                "table".into()
+            },
+            None,
+        );
+    }
+    let t = type_name(r);
+    (t, None)
+}
+
+fn find_kind(v: &serde_json::Value) -> Option<String> {
+    if let Some(k) = v.get("x-poser-kind").and_then(|k| k.as_str()) {
+        return Some(k.to_string());
+    }
+    for k in ["anyOf", "oneOf"] {
+        if let Some(a) = v.get(k).and_then(|a| a.as_array()) {
+            for x in a {
+                if let Some(r) = find_kind(x) {
+                    return Some(r);
+                }
+            }
+        }
+    }
+    None
+}
+
+fn find_unit(v: &serde_json::Value) -> Option<&str> {
+    if let Some(k) = v.get("x-poser-unit").and_then(|k| k.as_str()) {
+        return Some(k);
+    }
+    for k in ["anyOf", "oneOf"] {
+        if let Some(a) = v.get(k).and_then(|a| a.as_array()) {
+            for x in a {
+                if let Some(r) = find_unit(x) {
+                    return Some(r);
+                }
+            }
+        }
+    }
+    None
+}
+
+fn enum_values(root: &serde_json::Value, v: &serde_json::Value) -> Option<Vec<String>> {
+    let v = resolve_ref(root, v);
+    if let Some(e) = v.get("enum").and_then(|e| e.as_array()) {
+        return Some(
+            e.iter()
+                .filter_map(|x| x.as_str().map(str::to_string))
+                .collect(),
+        );
+    }
+    if let Some(a) = v.get("oneOf").and_then(|a| a.as_array()) {
+        let mut out = Vec::new();
+        for x in a {
+            if let Some(c) = x.get("const").and_then(|c| c.as_str()) {
+                out.push(c.to_string());
+            } else if let Some(e) = x.get("enum").and_then(|e| e.as_array()) {
+                out.extend(e.iter().filter_map(|x| x.as_str().map(str::to_string)));
+            } else {
+                return None;
+            }
+        }
+        return Some(out);
+    }
+    if let Some(a) = v.get("anyOf").and_then(|a| a.as_array()) {
+        for x in a {
+            if x.get("type").and_then(|t| t.as_str()) == Some("null") {
+                continue;
+            }
+            if let Some(e) = enum_values(root, x) {
+                return Some(e);
+            }
+        }
+    }
+    None
+}
+
+fn type_name(v: &serde_json::Value) -> String {
+    let t = match v.get("type") {
+        Some(serde_json::Value::String(s)) => s.clone(),
+        Some(serde_json::Value::Array(a)) => a
+            .iter()
+            .filter_map(|x| x.as_str())
+            .filter(|x| *x != "null")
+            .collect::<Vec<_>>()
+            .join(" or "),
+        _ => "value".into(),
+    };
+    match t.as_str() {
+        "integer" => "integer".into(),
+        "boolean" => "true / false".into(),
+        "array" => match v.get("items").map(type_name).as_deref() {
+            Some("string") => "list of strings".into(),
+            Some(x) => format!("list of {x}"),
+            None => "list".into(),
+        },
+        other => other.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::{BTreeMap, BTreeSet};
+
+    /// Every key the reader accepts is documented in the schema, and every documented key is
+    /// read by some variant: load the examples with overrides that switch every `type`.
+    #[test]
+    fn reader_and_schema_agree_key_by_key() {
+        let variants: &[&[&str]] = &[
+            &[],
+            &["camera.port.type=\"dome\""],
+            &["camera.port.type=\"cylinder\""],
+            &["camera.port.type=\"none\"", "camera.distortion.k1=0.01"],
+            &["rig.type=\"stereo\""],
+            &[
+                "rig.type=\"multi\"",
+                "rig.cameras=[{name = \"a\"}, {name = \"b\", position = [0.3, 0, 0]}]",
+            ],
+            &["lights.0.type=\"point\"", "lights.1.type=\"area\""],
+            &["lights.0.type=\"ambient\""],
+            &["objects.0.shape=\"mesh\"", "objects.1.shape=\"plane\""],
+            &["objects.0.shape=\"box\"", "objects.1.shape=\"sphere\""],
+            &[
+                "objects.0.shape=\"cylinder\"",
+                "objects.0.pattern={type = \"checker\"}",
+            ],
+            &["targets.0.type=\"checkerboard\""],
+            &["targets.0.type=\"circle_grid\""],
+            &["targets.0.type=\"coded\""],
+            &["targets.0.type=\"siemens_star\""],
+            &["targets.0.type=\"test_object\""],
+            &["network.type=\"spiral\""],
+            &["network.type=\"orbit\""],
+            &[
+                "network.type=\"explicit\"",
+                "network.poses=[{position = [0, 0, -10]}]",
+            ],
+            &["diver.cylinders.0.o2=0.32"],
+            &["sun.elevation=0.5"],
+        ];
+        let mut known: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+        for v in variants {
+            let sets: Vec<String> = v.iter().map(|s| s.to_string()).collect();
+            let (_, m) = crate::scene::reader::record_known_keys(|| {
+                let _ =
+                    crate::scene::load(std::path::Path::new("scenarios/reef_strip.toml"), &sets);
+            });
+            for (k, s) in m {
+                known.entry(k).or_default().extend(s);
+            }
+        }
+        let schema = keys_by_path();
+        let mut problems = Vec::new();
+        for (path, keys) in &known {
+            let Some(doc) = schema.get(path) else {
+                problems.push(format!("table `{path}` is read but not in the schema"));
+                continue;
+            };
+            for k in keys {
+                if !doc.contains(k) {
+                    problems.push(format!("`{path}.{k}` is read but not documented"));
+                }
+            }
+            for k in doc {
+                if !keys.contains(k) && !(path.is_empty() && k == "include") {
+                    problems.push(format!("`{path}.{k}` is documented but never read"));
+                }
+            }
+        }
+        for path in schema.keys() {
+            if !known.contains_key(path)
+                && path != "rig.cameras"
+                && !path.starts_with("rig.cameras.")
+            {
+                problems.push(format!("table `{path}` is documented but never read"));
+            }
+        }
+        assert!(
+            problems.is_empty(),
+            "reader and schema disagree:\n{}",
+            problems.join("\n")
+        );
+    }
+
+    /// `schema/` and `docs/format.md` are regenerated by `poser schema`; stale files fail.
+    #[test]
+    fn generated_files_are_fresh() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let schema = std::fs::read_to_string(root.join("schema/poser-scene.schema.json"))
+            .unwrap_or_default();
+        let docs = std::fs::read_to_string(root.join("docs/format.md")).unwrap_or_default();
+        assert!(
+            schema == schema_json(),
+            "schema/poser-scene.schema.json is stale: run `cargo run -- schema`"
+        );
+        assert!(
+            docs == format_markdown(),
+            "docs/format.md is stale: run `cargo run -- schema`"
+        );
+    }
+
+    #[test]
+    fn schema_is_valid_json_with_every_table() {
+        let v: serde_json::Value = serde_json::from_str(&schema_json()).unwrap();
+        assert_eq!(v["additionalProperties"], serde_json::Value::Bool(false));
+        let k = keys_by_path();
+        for t in [
+            "water",
+            "site",
+            "sun",
+            "camera",
+            "camera.port",
+            "rig",
+            "lights",
+            "objects",
+            "targets",
+            "network",
+            "network.poses",
+            "diver",
+            "diver.cylinders",
+            "render",
+        ] {
+            assert!(k.contains_key(t), "schema lacks `{t}`");
+        }
+    }
+}

@@ -1,0 +1,246 @@
+//! The invalid-scene corpus (`tests/invalid/*.toml`): every scene's full diagnostic text is
+//! snapshotted with insta, and checked structurally so the test fails if diagnostics break:
+//! each scene declares the codes it must produce (`# expect: E0100 …`), its `--set`
+//! overrides (`# sets: a.b=c`), every error carries `file:line:column`, a source excerpt with
+//! a caret and a `help:` line. Files named `warn_*` are valid with warnings; the rest must be
+//! rejected. A proptest feeds garbled scenes and overrides and checks nothing panics.
+
+use poser::scene::{self, Severity};
+use std::path::{Path, PathBuf};
+
+fn header(text: &str, key: &str) -> Vec<String> {
+    text.lines()
+        .filter_map(|l| l.strip_prefix(&format!("# {key}:")))
+        .map(|s| s.trim().to_string())
+        .collect()
+}
+
+/// Load a corpus scene (path relative to the crate) and return (rendered text, diagnostics).
+fn run(rel: &Path) -> (String, Vec<poser::scene::Diagnostic>, bool) {
+    let bytes = std::fs::read(rel).unwrap();
+    let text = String::from_utf8_lossy(&bytes);
+    let sets = header(&text, "sets");
+    match scene::load(rel, &sets) {
+        Ok(l) => (l.render_warnings(), l.warnings, true),
+        Err(f) => (f.render(), f.diagnostics, false),
+    }
+}
+
+#[test]
+fn invalid_corpus() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut count = 0;
+    insta::glob!("invalid/*.toml", |path| {
+        count += 1;
+        let rel: PathBuf = path.strip_prefix(root).unwrap().to_path_buf();
+        let name = rel.file_name().unwrap().to_string_lossy().to_string();
+        let text = String::from_utf8_lossy(&std::fs::read(&rel).unwrap()).to_string();
+        let expect: Vec<String> = header(&text, "expect")
+            .iter()
+            .flat_map(|l| l.split_whitespace().map(str::to_string))
+            .collect();
+        assert!(!expect.is_empty(), "{name}: no `# expect:` header");
+        let (rendered, diags, ok) = run(&rel);
+        if name.starts_with("warn_") {
+            assert!(ok, "{name} should be valid (with warnings):\n{rendered}");
+        } else {
+            assert!(!ok, "{name} should be rejected but loaded");
+        }
+        for code in &expect {
+            assert!(
+                diags.iter().any(|d| d.code == code),
+                "{name}: expected diagnostic {code}, got:\n{rendered}"
+            );
+        }
+        for d in &diags {
+            let loc = d
+                .location
+                .as_deref()
+                .unwrap_or_else(|| panic!("{name}: {} has no location:\n{}", d.code, d.rendered));
+            // file:line:column with a path relative to the crate (stable snapshots).
+            let parts: Vec<&str> = loc.rsplitn(3, ':').collect();
+            assert_eq!(parts.len(), 3, "{name}: bad location {loc}");
+            assert!(
+                parts[0].parse::<usize>().is_ok() && parts[1].parse::<usize>().is_ok(),
+                "{name}: {loc}"
+            );
+            assert!(
+                !Path::new(parts[2]).is_absolute(),
+                "{name}: absolute path in {loc}"
+            );
+            assert!(
+                d.rendered.contains(&format!("┌─ {loc}")),
+                "{name}: location missing from:\n{}",
+                d.rendered
+            );
+            assert!(
+                d.rendered.contains('^'),
+                "{name}: no caret in:\n{}",
+                d.rendered
+            );
+            assert!(
+                d.rendered.contains("= help: "),
+                "{name}: no help line in:\n{}",
+                d.rendered
+            );
+            let tag = match d.severity {
+                Severity::Error => format!("error[{}]", d.code),
+                Severity::Warning => format!("warning[{}]", d.code),
+            };
+            assert!(
+                d.rendered.starts_with(&tag),
+                "{name}: rendered text does not start with {tag}"
+            );
+        }
+        insta::assert_snapshot!(rendered);
+    });
+    assert!(count >= 40, "the corpus has only {count} scenes");
+}
+
+/// All errors are reported at once, not just the first.
+#[test]
+fn many_errors_are_reported_together() {
+    let (_, diags, ok) = run(Path::new("tests/invalid/many_errors_at_once.toml"));
+    assert!(!ok);
+    assert!(
+        diags
+            .iter()
+            .filter(|d| d.severity == Severity::Error)
+            .count()
+            >= 5,
+        "{diags:#?}"
+    );
+}
+
+/// Diagnostics in an included file point into that file.
+#[test]
+fn include_errors_point_into_the_included_file() {
+    let (_, diags, _) = run(Path::new(
+        "tests/invalid/include_error_in_included_file.toml",
+    ));
+    let d = diags.iter().find(|d| d.code == "E0100").unwrap();
+    assert_eq!(
+        d.location.as_deref(),
+        Some("tests/invalid/shared/bad_rig.toml:5:1")
+    );
+    assert!(d.rendered.contains("did you mean `convergence`?"));
+}
+
+/// An override with a misspelt path points at the command line with "did you mean".
+#[test]
+fn set_errors_point_at_the_command_line() {
+    let (r, diags, _) = run(Path::new("tests/invalid/set_unknown_path.toml"));
+    let d = diags.iter().find(|d| d.code == "E0100").unwrap();
+    assert_eq!(d.location.as_deref(), Some("<command line>:1:13"));
+    assert!(r.contains("did you mean `temperature`?"));
+}
+
+mod fuzz {
+    use super::*;
+    use proptest::prelude::*;
+
+    const PIECES: &[&str] = &[
+        "=",
+        "[",
+        "]",
+        "[[",
+        "]]",
+        "{",
+        "}",
+        "\"",
+        ",",
+        ".",
+        "\n",
+        "#",
+        " ",
+        "nan",
+        "inf",
+        "-1",
+        "0",
+        "1e308",
+        "99999999999",
+        "\"18 mm\"",
+        "\"-3 deg\"",
+        "\"1e400 m\"",
+        "true",
+        "[]",
+        "{}",
+        "type = \"dome\"",
+        "include = [\"x.toml\"]",
+        "µ",
+        "ü",
+        "\u{0}",
+        "'",
+        "'''",
+    ];
+
+    fn examples() -> Vec<String> {
+        let mut v = Vec::new();
+        for e in std::fs::read_dir("scenarios").unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().and_then(|x| x.to_str()) == Some("toml") {
+                v.push(std::fs::read_to_string(p).unwrap());
+            }
+        }
+        v.sort();
+        v
+    }
+
+    fn mutate(mut s: String, ops: &[(usize, usize, usize)]) -> String {
+        for &(kind, pos, piece) in ops {
+            let mut at = pos % (s.len() + 1);
+            while !s.is_char_boundary(at) {
+                at -= 1;
+            }
+            match kind % 3 {
+                0 => s.insert_str(at, PIECES[piece % PIECES.len()]),
+                1 => {
+                    let mut end = (at + 1 + piece % 40).min(s.len());
+                    while !s.is_char_boundary(end) {
+                        end += 1;
+                    }
+                    s.replace_range(at..end, "");
+                }
+                _ => {
+                    // Replace the next number with a piece.
+                    if let Some(off) = s[at..].find(|c: char| c.is_ascii_digit()) {
+                        let st = at + off;
+                        let en = s[st..]
+                            .find(|c: char| !c.is_ascii_digit() && c != '.')
+                            .map(|e| st + e)
+                            .unwrap_or(s.len());
+                        s.replace_range(st..en, PIECES[piece % PIECES.len()]);
+                    }
+                }
+            }
+        }
+        s
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 160, failure_persistence: None, .. ProptestConfig::default() })]
+        #[test]
+        fn garbled_scenes_never_panic(
+            which in 0usize..3,
+            ops in proptest::collection::vec((0usize..3, 0usize..100_000, 0usize..1000), 1..6),
+            set_key in "[a-z_.0-9]{0,24}",
+            set_val in "[ -~]{0,12}",
+        ) {
+            let ex = examples();
+            let text = mutate(ex[which % ex.len()].clone(), &ops);
+            let dir = tempfile::tempdir().unwrap();
+            let p = dir.path().join("scene.toml");
+            std::fs::write(&p, text).unwrap();
+            let sets = vec![format!("{set_key}={set_val}")];
+            match scene::load(&p, &sets) {
+                Ok(l) => { let _ = l.render_warnings(); }
+                Err(f) => {
+                    prop_assert!(f.errors().count() > 0);
+                    for d in f.errors() {
+                        prop_assert!(!d.rendered.is_empty());
+                    }
+                }
+            }
+        }
+    }
+}
