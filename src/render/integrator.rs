@@ -7,7 +7,7 @@
 //! * Next-event estimation at every vertex: point/spot lights and the sun (delta lights),
 //!   area lights (MIS with BSDF/phase sampling, power heuristic).
 //! * Equiangular sampling (Kulla & Fajardo 2012) of in-scattering from point/spot lights along
-//!   every camera-ray medium segment, combined with distance sampling by MIS (power heuristic).
+//!   every medium segment, combined with distance sampling by MIS (power heuristic).
 //! * `max_bounces` = the largest number of scattering vertices (surface or medium) on a path;
 //!   Russian roulette after three.
 
@@ -185,9 +185,9 @@ impl<'a> Integrator<'a> {
                 && let Some((a, b)) = m.interval(o, d, 0.0, t_end)
             {
                 if m.scatters() && can_scatter {
-                    // Equiangular in-scattering from point/spot lights, on camera rays (where
-                    // strobe backscatter is; deeper vertices use distance sampling alone).
-                    let use_eq = depth == 0;
+                    // Equiangular in-scattering from point/spot lights on every segment: it
+                    // removes the 1/r² spikes of vertices that land near a strobe.
+                    let use_eq = true;
                     if use_eq {
                         for pl in &self.lights.points {
                             l += beta * self.equiangular(m, pl, o, d, a, b, rng);
