@@ -20,6 +20,8 @@ fn render(model: &Model, out: &Path, samples: u32) -> LinearImage {
     let report = poser::backend::blender::render(model, out, &opts).expect("Cycles render");
     assert_eq!(report.images.len(), 1);
     assert!(out.join("img_0001.png").exists(), "PNG preview written");
+    let truth = std::fs::read_dir(out.join("truth")).expect("ground truth beside the images");
+    assert!(truth.count() > 0, "ground truth files written");
     LinearImage::read(&report.images[0]).expect("EXR readable")
 }
 
