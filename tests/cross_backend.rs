@@ -30,7 +30,8 @@ const MAX_RMS_PX: f64 = 0.05;
 const MAX_ANALYTIC_REL: f64 = 0.01;
 
 fn load(name: &str) -> Model {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("tests/canonical/{name}.toml"));
+    let path =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("tests/canonical/{name}.toml"));
     match poser::scene::load(&path, &[]) {
         Ok(l) => l.model,
         Err(f) => panic!("{name}: {}", f.render()),
@@ -38,8 +39,13 @@ fn load(name: &str) -> Model {
 }
 
 fn render(backend: &str, model: &Model, dir: &Path, samples: Option<u32>) {
-    let opts = RenderOptions { samples, poses: None, progress: false };
-    poser::compare::render_with(backend, model, dir, &opts).unwrap_or_else(|e| panic!("{backend}: {e}"));
+    let opts = RenderOptions {
+        samples,
+        poses: None,
+        progress: false,
+    };
+    poser::compare::render_with(backend, model, dir, &opts)
+        .unwrap_or_else(|e| panic!("{backend}: {e}"));
 }
 
 fn geometry(backend: &str) {
@@ -50,9 +56,17 @@ fn geometry(backend: &str) {
         let dir = tmp.path().join(name);
         render(backend, &model, &dir, None);
         let (found, expected) = poser::compare::measure_targets(&model, &dir).unwrap();
-        assert!(expected >= 12, "{name}: only {expected} disks expected in view");
+        assert!(
+            expected >= 12,
+            "{name}: only {expected} disks expected in view"
+        );
         assert_eq!(found.len(), expected, "{name}: {backend} lost disks");
-        let rms = (found.iter().map(|(_, _, d)| d[0] * d[0] + d[1] * d[1]).sum::<f64>() / found.len() as f64).sqrt();
+        let rms = (found
+            .iter()
+            .map(|(_, _, d)| d[0] * d[0] + d[1] * d[1])
+            .sum::<f64>()
+            / found.len() as f64)
+            .sqrt();
         eprintln!("{backend} {name}: {} disks, RMS {rms:.4} px", found.len());
         if rms > MAX_RMS_PX {
             failures.push(format!("{name}: RMS {rms:.4} px > {MAX_RMS_PX}"));
@@ -78,7 +92,11 @@ fn analytic(model: &Model, u: f64, v: f64, c: usize) -> f64 {
         sun.irradiance_water[c] * dz * (-sa * (-p.z) / dz).exp()
     } else {
         match &model.lights[0].kind {
-            LightKind::Spot { position, intensity, .. } => {
+            LightKind::Spot {
+                position,
+                intensity,
+                ..
+            } => {
                 let to_l = *position - p;
                 let dl = to_l.length();
                 intensity[c] * (to_l / dl).dot(n).max(0.0) / (dl * dl) * (-sa * dl).exp()
@@ -94,7 +112,10 @@ fn radiometry(backend: &str, name: &str) {
     let model = load(name);
     let tmp = tempfile::tempdir().unwrap();
     render(backend, &model, tmp.path(), None);
-    let img = poser::compare::LinearImage::read(&tmp.path().join(format!("{}.exr", model.image_name(0, 0)))).unwrap();
+    let img = poser::compare::LinearImage::read(
+        &tmp.path().join(format!("{}.exr", model.image_name(0, 0))),
+    )
+    .unwrap();
     // Central 40×30 window.
     let (x0, y0) = (img.width / 2 - 20, img.height / 2 - 15);
     for c in 0..3 {
@@ -107,13 +128,18 @@ fn radiometry(backend: &str, name: &str) {
         }
         let rel = got / want - 1.0;
         eprintln!("{backend} {name} channel {c}: rendered/analytic − 1 = {rel:+.5}");
-        assert!(rel.abs() <= MAX_ANALYTIC_REL, "{backend} {name} channel {c}: {rel:+.4}");
+        assert!(
+            rel.abs() <= MAX_ANALYTIC_REL,
+            "{backend} {name} channel {c}: {rel:+.4}"
+        );
     }
 }
 
 fn image_mean(backend: &str, model: &Model, dir: &Path, samples: u32) -> [f64; 3] {
     render(backend, model, dir, Some(samples));
-    poser::compare::LinearImage::read(&dir.join(format!("{}.exr", model.image_name(0, 0)))).unwrap().mean()
+    poser::compare::LinearImage::read(&dir.join(format!("{}.exr", model.image_name(0, 0))))
+        .unwrap()
+        .mean()
 }
 
 #[test]
