@@ -175,3 +175,98 @@ fn within_ndl_no_stops() {
     assert!(a.stops.is_empty(), "{:?}", a.stops);
     assert!((a.tts - 120.0).abs() < 1e-6);
 }
+
+/// Subsurface's planner regression test `TestPlan::testMetric` (tests/testplan.cpp): 79 m on
+/// TX15/45 for 30 min including a 23 m/min descent, EAN36 and O₂ as deco gases (switch depths
+/// from pO₂ 1.6 rounded to 3 m: 33 m and 6 m), GF 100/100, sea water, 1 atm, ascent 30 ft/min,
+/// last 6 m at 10 ft/min, last stop at 6 m. Subsurface expects a runtime of 109 min and accepts
+/// 1 % + 60 s (its `compareDecoTime`); we use the same tolerance.
+#[test]
+fn subsurface_testplan_metric_runtime() {
+    let env = Environment {
+        surface_pressure: 1.01325,
+        water_density: 1030.0,
+    };
+    let bottom = Gas { o2: 0.15, he: 0.45 };
+    let ean36 = Gas { o2: 0.36, he: 0.0 };
+    let o2 = Gas { o2: 1.0, he: 0.0 };
+    let (sw36, swo2) = (
+        ean36.switch_depth(&env, 1.6, 3.0),
+        o2.switch_depth(&env, 1.6, 3.0),
+    );
+    assert_eq!((sw36, swo2), (33.0, 6.0), "switch depths as in the test");
+    let mut t = Tissues::surface(env, GradientFactors::NONE);
+    let droptime = (79_000 * 60 / 23_000) as f64; // integer seconds as in the test
+    t.travel(0.0, 79.0, bottom, droptime, 1.0);
+    t.expose(79.0, bottom, 30.0 * 60.0 - droptime);
+    let plan = AscentPlan {
+        rate: 0.3048 * 30.0 / 60.0,
+        rate_last6: 0.3048 * 10.0 / 60.0,
+        last_stop: 6.0,
+        deco_gases: vec![(ean36, sw36), (o2, swo2)],
+        switch_time: 60.0,
+        stop_step: 3.0,
+    };
+    let a = t.ascend_with(79.0, bottom, &plan, 1800.0);
+    let runtime = 1800.0 + a.tts;
+    let expected = 109.0 * 60.0;
+    let tol = 0.01 * expected + 60.0;
+    eprintln!(
+        "runtime {:.0} s (Subsurface 6540 s), stops {:?}, switches {:?}",
+        runtime, a.stops, a.switches
+    );
+    assert!(
+        (runtime - expected).abs() <= tol,
+        "runtime {runtime} s vs {expected} ± {tol}"
+    );
+    // The gas switches happen at 33 m and 6 m, in that order.
+    let depths: Vec<f64> = a.switches.iter().map(|s| s.1).collect();
+    assert_eq!(depths, vec![33.0, 6.0]);
+}
+
+/// `TestPlan::testImperial`: the same plan in feet — 260 ft, descent 75 ft/min, switch depths
+/// rounded to 10 ft (110 ft, 20 ft), stops every 10 ft, last stop 20 ft. Subsurface expects
+/// 111 min − 2 s, tolerance 1 % + 60 s.
+#[test]
+fn subsurface_testplan_imperial_runtime() {
+    let ft = 0.3048;
+    let env = Environment {
+        surface_pressure: 1.01325,
+        water_density: 1030.0,
+    };
+    let bottom = Gas { o2: 0.15, he: 0.45 };
+    let ean36 = Gas { o2: 0.36, he: 0.0 };
+    let o2 = Gas { o2: 1.0, he: 0.0 };
+    let (sw36, swo2) = (
+        ean36.switch_depth(&env, 1.6, 10.0 * ft),
+        o2.switch_depth(&env, 1.6, 10.0 * ft),
+    );
+    assert!(
+        (sw36 - 110.0 * ft).abs() < 1e-9 && (swo2 - 20.0 * ft).abs() < 1e-9,
+        "{sw36} {swo2}"
+    );
+    let depth = 260.0 * ft;
+    let mut t = Tissues::surface(env, GradientFactors::NONE);
+    // m_or_ft(79, 260).mm * 60 / m_or_ft(23, 75).mm with integer millimetres.
+    let droptime =
+        ((depth * 1000.0).round() as i64 * 60 / (75.0 * ft * 1000.0).round() as i64) as f64;
+    t.travel(0.0, depth, bottom, droptime, 1.0);
+    t.expose(depth, bottom, 30.0 * 60.0 - droptime);
+    let plan = AscentPlan {
+        rate: ft * 30.0 / 60.0,
+        rate_last6: ft * 10.0 / 60.0,
+        last_stop: 20.0 * ft,
+        deco_gases: vec![(ean36, sw36), (o2, swo2)],
+        switch_time: 60.0,
+        stop_step: 10.0 * ft,
+    };
+    let a = t.ascend_with(depth, bottom, &plan, 1800.0);
+    let runtime = 1800.0 + a.tts;
+    let expected = 111.0 * 60.0 - 2.0;
+    let tol = 0.01 * expected + 60.0;
+    eprintln!("imperial runtime {runtime:.0} s (Subsurface {expected} s)");
+    assert!(
+        (runtime - expected).abs() <= tol,
+        "runtime {runtime} s vs {expected} ± {tol}"
+    );
+}

@@ -146,4 +146,10 @@ fn bad_diver_is_an_error_not_a_panic() {
     let mut m = common::paper_model(None);
     m.poses.clear();
     assert!(plan_dive(&m, 10.0).is_err());
+    let mut m = common::paper_model(None);
+    m.water = None;
+    assert!(plan_dive(&m, 10.0).unwrap_err().contains("no water"));
+    // Without a diver, Subsurface's defaults are used and said so.
+    let r = plan_dive(&common::paper_model(None), 10.0).unwrap();
+    assert!(r.config.defaulted && (r.config.gf.high - 0.75).abs() < 1e-12);
 }

@@ -25,6 +25,10 @@ pub struct Lens {
     pub model: LensModel,
     pub distortion: Distortion,
     distorted: bool,
+    /// Largest r² (undistorted, normalised) where the radial distortion r·(1 + k1 r² + k2 r⁴ +
+    /// k3 r⁶) is still increasing; beyond it the image folds back and points are
+    /// [`NoSolution::OutsideLensField`].
+    pub r2_max: f64,
 }
 
 impl Lens {
@@ -36,6 +40,7 @@ impl Lens {
         model: LensModel,
         distortion: Distortion,
     ) -> Lens {
+        let r2_max = Self::fold_r2(&distortion);
         Lens {
             fx,
             fy,
@@ -44,7 +49,29 @@ impl Lens {
             model,
             distortion,
             distorted: !distortion.is_zero(),
+            r2_max,
         }
+    }
+
+    /// First s = r² > 0 where d/dr[r(1 + k1 s + k2 s² + k3 s³)] = 1 + 3k1 s + 5k2 s² + 7k3 s³
+    /// vanishes (∞ if never, searched up to s = 1e8).
+    fn fold_r2(d: &Distortion) -> f64 {
+        let g = |s: f64| 1.0 + s * (3.0 * d.k1 + s * (5.0 * d.k2 + s * 7.0 * d.k3));
+        let mut prev = 0.0;
+        let mut s = 1e-6;
+        while s <= 1e8 {
+            if g(s) <= 0.0 {
+                let (mut a, mut b) = (prev, s);
+                for _ in 0..200 {
+                    let m = 0.5 * (a + b);
+                    if g(m) > 0.0 { a = m } else { b = m }
+                }
+                return a;
+            }
+            prev = s;
+            s *= 1.05;
+        }
+        f64::INFINITY
     }
 
     pub fn from_camera(c: &Camera) -> Lens {
@@ -134,6 +161,9 @@ impl Lens {
                 }
             }
         };
+        if x * x + y * y > self.r2_max {
+            return Err(NoSolution::OutsideLensField);
+        }
         let (xd, yd) = self.distort(x, y);
         let u = self.fx * xd + self.cx;
         let v = self.fy * yd + self.cy;
@@ -150,6 +180,9 @@ impl Lens {
         let xd = (u - self.cx) / self.fx;
         let yd = (v - self.cy) / self.fy;
         let (x, y) = self.undistort(xd, yd).ok_or(NoSolution::OutsideLensField)?;
+        if x * x + y * y > self.r2_max {
+            return Err(NoSolution::OutsideLensField);
+        }
         let d = match self.model {
             LensModel::Rectilinear => DVec3::new(x, y, 1.0),
             LensModel::FisheyeEquidistant | LensModel::FisheyeEquisolid => {
@@ -233,6 +266,26 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn folded_distortion_is_outside_the_field() {
+        // k1 < 0: r(1 + k1 r²) peaks at r² = −1/(3 k1); beyond it the image folds back.
+        let l = lens(
+            LensModel::Rectilinear,
+            Distortion {
+                k1: -0.1,
+                ..Distortion::default()
+            },
+        );
+        assert!((l.r2_max - 1.0 / 0.3).abs() < 1e-9);
+        assert_eq!(
+            l.project(DVec3::new(2.0, 0.0, 1.0)),
+            Err(NoSolution::OutsideLensField)
+        );
+        assert!(l.project(DVec3::new(1.5, 0.0, 1.0)).is_ok());
+        // Pixels beyond the fold radius have no ray.
+        assert!(l.unproject(640.0 + 1000.0 * 1.3, 480.0).is_err());
     }
 
     #[test]

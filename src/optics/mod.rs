@@ -16,12 +16,14 @@
 // `!(x > y)` is deliberate throughout: it rejects NaN as well as the failing comparison.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod bench;
 pub mod glass;
 pub mod interface;
 pub mod lens;
 pub mod phase;
 pub mod port;
 pub mod project;
+pub mod reference;
 pub mod sun;
 pub mod water;
 

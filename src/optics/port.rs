@@ -703,8 +703,31 @@ impl CylinderPort {
     /// Off-axis cylinder: rays are skew; 2-D Newton with a central-difference Jacobian on the
     /// direction offset (α, β) ⊥ P̂, residual = the miss vector of P from the water ray.
     fn forward_skew(&self, p: DVec3) -> Result<DVec3, NoSolution> {
+        // Start from the solution of the same cylinder with the pupil moved onto its axis
+        // (exact for zero offset), then from the pinhole direction.
+        let centred = CylinderPort {
+            axis_point: DVec3::ZERO,
+            on_axis: true,
+            ..*self
+        };
+        let mut last = NoSolution::NoConvergence;
+        if let Ok(g) = centred.forward(p - self.axis_point) {
+            match self.newton_skew(p, g.normalize()) {
+                Ok(d) => return Ok(d),
+                Err(e) => last = e,
+            }
+        }
+        self.newton_skew(p, p.normalize()).map_err(|e| {
+            if e == NoSolution::NoConvergence {
+                last
+            } else {
+                e
+            }
+        })
+    }
+
+    fn newton_skew(&self, p: DVec3, e0: DVec3) -> Result<DVec3, NoSolution> {
         let l = p.length();
-        let e0 = p / l;
         let u1 = e0.any_orthonormal_vector();
         let u2 = e0.cross(u1);
         let resid = |x: DVec2| -> Result<DVec2, NoSolution> {
@@ -746,12 +769,12 @@ impl CylinderPort {
             let moved = (nx - x).length();
             x = nx;
             f = nf;
-            if moved <= 1e-15 || f.length() <= 1e-17 {
+            if moved <= 1e-15 * (1.0 + x.length()) || f.length() <= 1e-17 {
                 break;
             }
         }
         // Accept only a genuine solution: the ray passes within 1e-12 of P (relative).
-        if f.length() > 1e-12 {
+        if !(f.length() <= 1e-12) {
             return Err(NoSolution::NoConvergence);
         }
         Ok((e0 + u1 * x.x + u2 * x.y).normalize())

@@ -80,6 +80,11 @@ impl Gas {
     pub fn n2(&self) -> f64 {
         (1.0 - self.o2 - self.he).max(0.0)
     }
+    /// Switch depth for a pO₂ limit as Subsurface's `gas_mod`: the MOD rounded to the nearest
+    /// multiple of `round` m.
+    pub fn switch_depth(&self, env: &Environment, po2_max: f64, round: f64) -> f64 {
+        (self.mod_depth(env, po2_max) / round).round() * round
+    }
     /// Maximum operating depth for a pO₂ limit (bar), given the environment.
     pub fn mod_depth(&self, env: &Environment, po2_max: f64) -> f64 {
         env.depth_at(po2_max / self.o2)
@@ -176,6 +181,46 @@ pub struct Ascent {
     pub tts: f64,
     /// Path as (time from start of ascent, depth) points.
     pub path: Vec<(f64, f64)>,
+    /// Gas switches as (time from start of ascent, depth, new gas).
+    pub switches: Vec<(f64, f64, Gas)>,
+}
+
+/// How the ascent is flown (Subsurface planner preferences).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AscentPlan {
+    /// Ascent rate deeper than 6 m, m/s.
+    pub rate: f64,
+    /// Ascent rate in the last 6 m, m/s.
+    pub rate_last6: f64,
+    /// Depth of the last stop, m (3, or 6 with Subsurface's `last_stop`).
+    pub last_stop: f64,
+    /// Deco gases and the depth (m) from which each may be breathed.
+    pub deco_gases: Vec<(Gas, f64)>,
+    /// Minimum time at a gas switch, s (Subsurface's `min_switch_duration`; not for O₂).
+    pub switch_time: f64,
+    /// Spacing of stop levels, m (3 m; 10 ft = 3.048 m in imperial plans).
+    pub stop_step: f64,
+}
+
+impl AscentPlan {
+    /// One rate, last stop 3 m, no deco gas.
+    pub fn simple(rate: f64) -> AscentPlan {
+        AscentPlan {
+            rate,
+            rate_last6: rate,
+            last_stop: 3.0,
+            deco_gases: vec![],
+            switch_time: 60.0,
+            stop_step: 3.0,
+        }
+    }
+    fn rate_at(&self, depth: f64) -> f64 {
+        if depth <= 6.0 + 1e-9 {
+            self.rate_last6
+        } else {
+            self.rate
+        }
+    }
 }
 
 /// Result of a no-decompression-limit query.
@@ -359,43 +404,88 @@ impl Tissues {
         Ndl::Unlimited
     }
 
-    /// Check that ascending from `from` to `to` m at `rate` m/s never breaks the ceiling
-    /// (2 s steps, Subsurface's `trial_ascent`). Returns the state after the ascent if it is
-    /// clear.
-    fn trial_ascent(&self, from: f64, to: f64, rate: f64, gas: Gas) -> Option<Tissues> {
+    /// Check that ascending from `from` to `to` m never breaks the ceiling (2 s steps,
+    /// Subsurface's `trial_ascent`). Returns the state after the ascent and its duration if
+    /// it is clear.
+    fn trial_ascent(
+        &self,
+        from: f64,
+        to: f64,
+        plan: &AscentPlan,
+        gas: Gas,
+    ) -> Option<(Tissues, f64)> {
         let mut t = self.clone();
         let mut d = from;
+        let mut clock = 0.0;
         while d > to + 1e-9 {
+            let rate = plan.rate_at(d);
             let step = (2.0 * rate).min(d - to);
             t.travel(d, d - step, gas, step / rate, 2.0);
+            clock += step / rate;
             d -= step;
             if t.ceiling() > d + 1e-9 {
                 return None;
             }
         }
-        Some(t)
+        Some((t, clock))
     }
 
     /// Fly the ascent from `depth` to the surface at `rate` m/s on `gas`, with the stops the
     /// model requires (3 m levels, last stop at 3 m, stops ending on whole runtime minutes
     /// counted from `runtime` s). Consumes the state: afterwards it is the state at the surface.
     pub fn ascend(&mut self, depth: f64, rate: f64, gas: Gas, runtime: f64) -> Ascent {
-        const STEP: f64 = 3.0;
+        self.ascend_with(depth, gas, &AscentPlan::simple(rate), runtime)
+    }
+
+    /// [`Tissues::ascend`] with Subsurface planner options: a slower rate for the last 6 m, the
+    /// last stop at 6 m, and deco gases switched to at their switch depths (the richest gas
+    /// allowed at each level; a switch holds the diver at least `switch_time` at that level).
+    pub fn ascend_with(
+        &mut self,
+        depth: f64,
+        bottom_gas: Gas,
+        plan: &AscentPlan,
+        runtime: f64,
+    ) -> Ascent {
+        let step_m = plan.stop_step;
         let mut stops: Vec<Stop> = Vec::new();
         let mut path = vec![(0.0, depth)];
+        let mut switches = Vec::new();
         let mut clock = 0.0;
         let mut d = depth;
+        let mut gas = bottom_gas;
         let mut guard = 0;
+        let mut hold = 0.0; // time still to spend at this level for a gas switch
         while d > 1e-9 {
             guard += 1;
+            // Gas switch on arrival at a level.
+            if let Some(better) = plan
+                .deco_gases
+                .iter()
+                .filter(|(g, sw)| *sw + 1e-6 >= d && g.o2 > gas.o2)
+                .max_by(|a, b| a.0.o2.total_cmp(&b.0.o2))
+            {
+                gas = better.0;
+                switches.push((clock, d, gas));
+                hold = if gas.o2 >= 0.999 {
+                    0.0
+                } else {
+                    plan.switch_time
+                };
+            }
             // Next level: the 3 m multiple strictly above, or the surface from the last stop.
-            let mut next = ((d - 1e-6) / STEP).floor() * STEP;
-            if next < STEP - 1e-9 {
+            let mut next = ((d - 1e-6) / step_m).floor() * step_m;
+            if next < plan.last_stop - 1e-6 {
                 next = 0.0;
             }
-            match self.trial_ascent(d, next, rate, gas) {
-                Some(after) if guard < 100_000 => {
-                    clock += (d - next) / rate;
+            let trial = if hold > 0.0 {
+                None
+            } else {
+                self.trial_ascent(d, next, plan, gas)
+            };
+            match trial {
+                Some((after, dt)) if guard < 100_000 => {
+                    clock += dt;
                     *self = after;
                     d = next;
                     path.push((clock, d));
@@ -407,6 +497,10 @@ impl Tissues {
                     if wait < 1.0 {
                         wait += 60.0;
                     }
+                    while wait + 1e-9 < hold {
+                        wait += 60.0;
+                    }
+                    hold = 0.0;
                     self.expose(d, gas, wait);
                     clock += wait;
                     match stops.last_mut() {
@@ -427,6 +521,7 @@ impl Tissues {
             stops,
             tts: clock,
             path,
+            switches,
         }
     }
 

@@ -801,6 +801,9 @@ pub struct DiveReport {
 
 /// Plan the dive of a model's survey.
 pub fn plan_dive(model: &Model, sample_every: f64) -> Result<DiveReport, String> {
+    if model.water.is_none() {
+        return Err("the scene has no water (a survey in air): there is no dive to plan".into());
+    }
     let config = DiveConfig::from_model(model)?;
     let track = Track::from_model(model)?;
     let dive = simulate_fresh(&config, &track, Some(sample_every));

@@ -1,1 +1,521 @@
 //! Exact ground truth: where every target lands in every image, intrinsics, poses, COLMAP export.
+//!
+//! [`write`] produces, in one directory:
+//!
+//! | file | contents |
+//! |---|---|
+//! | `truth.json` | everything below in one document: cameras (intrinsics, lens, distortion, port with per-channel indices), images (pose, `world_from_camera` and `camera_from_world`), and per image the target points in view |
+//! | `points.csv` | `image,camera,pose,target,id,u,v,u_r,v_r,u_b,v_b,x,y,z,x_cam,y_cam,z_cam` — one row per visible target point; (u, v) is the G channel, pixel centres at +0.5 (OpenCV/COLMAP) |
+//! | `cameras.csv` | one row per camera: intrinsics, lens, distortion, port |
+//! | `images.csv` | one row per image: `world_from_camera` as quaternion (w, x, y, z) + translation |
+//! | `colmap/cameras.txt`, `colmap/images.txt`, `colmap/points3D.txt` | a COLMAP text model of the true poses and the visible target points (no port: COLMAP's text format has none; the port is recorded in a comment in Refractive COLMAP's parameter order) |
+//!
+//! A point is *in view* when its exact refractive projection (G channel) lands on the sensor,
+//! the camera is on the printed side of its target, and nothing in the scene (objects,
+//! targets; [`crate::render::scene::Scene::occluded`]) blocks the water path from the point to
+//! where its ray leaves the port.
+
+use crate::io::write_atomic;
+use crate::model::{Camera, LensModel, Model, Port, Pose};
+use crate::optics::project::Projector;
+use crate::render::scene::Scene;
+use glam::{DMat3, DQuat, DVec3};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One target point seen in one image.
+#[derive(Debug, Clone, Serialize)]
+pub struct Observation {
+    pub target: String,
+    pub id: String,
+    /// Pixel (G channel).
+    pub u: f64,
+    pub v: f64,
+    /// Pixel per channel `[R, G, B]` (`null` where that channel has no pixel on the sensor).
+    pub uv_rgb: [Option<[f64; 2]>; 3],
+    pub world: DVec3,
+    pub camera: DVec3,
+}
+
+/// One image of the network.
+#[derive(Debug, Clone, Serialize)]
+pub struct ImageTruth {
+    pub name: String,
+    pub camera: String,
+    pub camera_index: usize,
+    pub pose_index: usize,
+    /// `world_from_camera` rotation, row-major, and translation (camera centre).
+    pub world_from_camera: PoseJson,
+    pub camera_from_world: PoseJson,
+    pub points: Vec<Observation>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PoseJson {
+    pub rotation: [[f64; 3]; 3],
+    pub translation: [f64; 3],
+    /// Quaternion (w, x, y, z), w ≥ 0.
+    pub quaternion: [f64; 4],
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct CameraTruth {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+    pub lens: LensModel,
+    pub distortion: crate::model::Distortion,
+    pub port: Port,
+    /// Indices `[R, G, B]` of the camera-side medium, port glass and water.
+    pub ior_air: [f64; 3],
+    pub ior_glass: Option<[f64; 3]>,
+    pub ior_water: [f64; 3],
+    pub rig_from_camera: PoseJson,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Truth {
+    pub scene: String,
+    pub conventions: &'static str,
+    pub cameras: Vec<CameraTruth>,
+    pub images: Vec<ImageTruth>,
+}
+
+fn quat_wxyz(r: DMat3) -> [f64; 4] {
+    let q = DQuat::from_mat3(&r).normalize();
+    let q = if q.w < 0.0 { -q } else { q };
+    // `+ 0.0` turns −0 into 0 so files do not show "-0".
+    [q.w + 0.0, q.x + 0.0, q.y + 0.0, q.z + 0.0]
+}
+
+fn pose_json(p: &Pose) -> PoseJson {
+    let r = p.rotation;
+    PoseJson {
+        rotation: [0, 1, 2].map(|i| [r.x_axis[i], r.y_axis[i], r.z_axis[i]]),
+        translation: (p.translation + DVec3::ZERO).to_array(),
+        quaternion: quat_wxyz(r),
+    }
+}
+
+/// Compute the ground truth of every image (occlusion against the model's scene geometry).
+pub fn compute(model: &Model) -> Result<Truth, String> {
+    let scene = Scene::build(model)?;
+    compute_with(model, |a, b| scene.occluded(a, b))
+}
+
+/// Compute with a caller-supplied occlusion test `occluded(point, port_exit)` (world frame).
+pub fn compute_with(
+    model: &Model,
+    occluded: impl Fn(DVec3, DVec3) -> bool,
+) -> Result<Truth, String> {
+    let mut cameras = Vec::new();
+    let mut projectors = Vec::new();
+    for (ci, cam) in model.cameras.iter().enumerate() {
+        let pr: Vec<Projector> = (0..3)
+            .map(|ch| Projector::new(model, ci, ch))
+            .collect::<Result<_, _>>()?;
+        projectors.push(pr);
+        cameras.push(camera_truth(cam, model.ambient_ior()));
+    }
+    let mut images = Vec::new();
+    for pi in 0..model.poses.len() {
+        for (ci, cam) in model.cameras.iter().enumerate() {
+            let pr = &projectors[ci];
+            let wfc = model.world_from_camera(pi, ci);
+            let cfw = wfc.inverse();
+            let mut points = Vec::new();
+            for target in &model.targets {
+                let normal = target.pose.rotation.z_axis;
+                for tp in &target.points {
+                    let Ok(uv) = pr[1].project_world(pi, tp.world) else {
+                        continue;
+                    };
+                    // The water path: from the point back to where its ray leaves the port.
+                    let Ok((exit, _, _)) = pr[1].pixel_ray_world(pi, uv[0], uv[1]) else {
+                        continue;
+                    };
+                    if (exit - tp.world).dot(normal) <= 0.0 {
+                        continue; // seen from behind its own printed face
+                    }
+                    if occluded(tp.world, exit) {
+                        continue;
+                    }
+                    let uv_rgb = [0, 1, 2].map(|ch| pr[ch].project_world(pi, tp.world).ok());
+                    points.push(Observation {
+                        target: target.name.clone(),
+                        id: tp.id.clone(),
+                        u: uv[0],
+                        v: uv[1],
+                        uv_rgb,
+                        world: tp.world,
+                        camera: cfw.transform_point(tp.world),
+                    });
+                }
+            }
+            images.push(ImageTruth {
+                name: model.image_name(pi, ci),
+                camera: cam.name.clone(),
+                camera_index: ci,
+                pose_index: pi,
+                world_from_camera: pose_json(&wfc),
+                camera_from_world: pose_json(&cfw),
+                points,
+            });
+        }
+    }
+    Ok(Truth {
+        scene: model.name.clone(),
+        conventions: "world z up, metres; camera frame OpenCV (x right, y down, z forward), origin at the entrance pupil; pixel centres at +0.5; (u, v) = G channel (550 nm)",
+        cameras,
+        images,
+    })
+}
+
+fn camera_truth(cam: &Camera, water: [f64; 3]) -> CameraTruth {
+    CameraTruth {
+        name: cam.name.clone(),
+        width: cam.width,
+        height: cam.height,
+        fx: cam.fx,
+        fy: cam.fy,
+        cx: cam.cx,
+        cy: cam.cy,
+        lens: cam.lens,
+        distortion: cam.distortion,
+        port: cam.port.clone(),
+        ior_air: [1.0; 3],
+        ior_glass: cam.port.glass().map(|g| g.ior),
+        ior_water: water,
+        rig_from_camera: pose_json(&cam.rig_from_camera),
+    }
+}
+
+/// Quote a CSV field when needed (RFC 4180).
+pub fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+fn opt(x: Option<[f64; 2]>, i: usize) -> String {
+    x.map(|p| p[i].to_string()).unwrap_or_default()
+}
+
+/// Render the truth files as (relative path, bytes), in a fixed order.
+pub fn files(model: &Model, truth: &Truth) -> Result<Vec<(String, Vec<u8>)>, String> {
+    let mut out = Vec::new();
+    let json = serde_json::to_string_pretty(truth).map_err(|e| e.to_string())?;
+    out.push(("truth.json".to_string(), json.into_bytes()));
+
+    let mut pts =
+        String::from("image,camera,pose,target,id,u,v,u_r,v_r,u_b,v_b,x,y,z,x_cam,y_cam,z_cam\n");
+    for im in &truth.images {
+        for o in &im.points {
+            let _ = writeln!(
+                pts,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                csv_field(&im.name),
+                csv_field(&im.camera),
+                im.pose_index,
+                csv_field(&o.target),
+                csv_field(&o.id),
+                o.u,
+                o.v,
+                opt(o.uv_rgb[0], 0),
+                opt(o.uv_rgb[0], 1),
+                opt(o.uv_rgb[2], 0),
+                opt(o.uv_rgb[2], 1),
+                o.world.x,
+                o.world.y,
+                o.world.z,
+                o.camera.x,
+                o.camera.y,
+                o.camera.z
+            );
+        }
+    }
+    out.push(("points.csv".into(), pts.into_bytes()));
+
+    let mut cams = String::from(
+        "camera,width,height,fx,fy,cx,cy,lens,k1,k2,k3,p1,p2,port,port_params,glass,n_glass_r,n_glass_g,n_glass_b,n_water_r,n_water_g,n_water_b\n",
+    );
+    for c in &truth.cameras {
+        let d = c.distortion;
+        let g = c.ior_glass.unwrap_or([f64::NAN; 3]);
+        let gs = |i: usize| {
+            if c.ior_glass.is_some() {
+                g[i].to_string()
+            } else {
+                String::new()
+            }
+        };
+        let _ = writeln!(
+            cams,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            csv_field(&c.name),
+            c.width,
+            c.height,
+            c.fx,
+            c.fy,
+            c.cx,
+            c.cy,
+            lens_name(c.lens),
+            d.k1,
+            d.k2,
+            d.k3,
+            d.p1,
+            d.p2,
+            c.port.kind_name(),
+            port_params(&c.port)
+                .iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(" "),
+            csv_field(c.port.glass().map(|g| g.name.as_str()).unwrap_or("")),
+            gs(0),
+            gs(1),
+            gs(2),
+            c.ior_water[0],
+            c.ior_water[1],
+            c.ior_water[2]
+        );
+    }
+    out.push(("cameras.csv".into(), cams.into_bytes()));
+
+    let mut ims = String::from("image,camera,pose,qw,qx,qy,qz,tx,ty,tz,points\n");
+    for im in &truth.images {
+        let p = &im.world_from_camera;
+        let _ = writeln!(
+            ims,
+            "{},{},{},{},{},{},{},{},{},{},{}",
+            csv_field(&im.name),
+            csv_field(&im.camera),
+            im.pose_index,
+            p.quaternion[0],
+            p.quaternion[1],
+            p.quaternion[2],
+            p.quaternion[3],
+            p.translation[0],
+            p.translation[1],
+            p.translation[2],
+            im.points.len()
+        );
+    }
+    out.push(("images.csv".into(), ims.into_bytes()));
+
+    out.extend(colmap(model, truth));
+    Ok(out)
+}
+
+fn lens_name(l: LensModel) -> &'static str {
+    match l {
+        LensModel::Rectilinear => "rectilinear",
+        LensModel::FisheyeEquidistant => "fisheye_equidistant",
+        LensModel::FisheyeEquisolid => "fisheye_equisolid",
+    }
+}
+
+/// Port geometry in Refractive COLMAP's order (without the indices).
+fn port_params(p: &Port) -> Vec<f64> {
+    match p {
+        Port::None => vec![],
+        Port::Flat {
+            normal,
+            distance,
+            thickness,
+            ..
+        } => {
+            vec![normal.x, normal.y, normal.z, *distance, *thickness]
+        }
+        Port::Dome {
+            center,
+            inner_radius,
+            thickness,
+            ..
+        } => {
+            vec![center.x, center.y, center.z, *inner_radius, *thickness]
+        }
+        Port::Cylinder {
+            axis_point,
+            axis,
+            inner_radius,
+            thickness,
+            ..
+        } => vec![
+            axis_point.x,
+            axis_point.y,
+            axis_point.z,
+            axis.x,
+            axis.y,
+            axis.z,
+            *inner_radius,
+            *thickness,
+        ],
+    }
+}
+
+/// COLMAP text model of the true poses. Camera models: PINHOLE (no distortion), OPENCV
+/// (k3 = 0) or FULL_OPENCV; fisheyes as OPENCV_FISHEYE (exact for the equidistant model
+/// without distortion; otherwise approximate, said in a comment).
+fn colmap(model: &Model, truth: &Truth) -> Vec<(String, Vec<u8>)> {
+    let mut cams = String::from(
+        "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n",
+    );
+    let _ = writeln!(cams, "# Number of cameras: {}", truth.cameras.len());
+    for (i, c) in truth.cameras.iter().enumerate() {
+        let d = c.distortion;
+        let (name, params): (&str, Vec<f64>) = match c.lens {
+            LensModel::Rectilinear if d.is_zero() => ("PINHOLE", vec![c.fx, c.fy, c.cx, c.cy]),
+            LensModel::Rectilinear if d.k3 == 0.0 => (
+                "OPENCV",
+                vec![c.fx, c.fy, c.cx, c.cy, d.k1, d.k2, d.p1, d.p2],
+            ),
+            LensModel::Rectilinear => (
+                "FULL_OPENCV",
+                vec![
+                    c.fx, c.fy, c.cx, c.cy, d.k1, d.k2, d.p1, d.p2, d.k3, 0.0, 0.0, 0.0,
+                ],
+            ),
+            _ => {
+                if c.lens != LensModel::FisheyeEquidistant || !d.is_zero() {
+                    let _ = writeln!(
+                        cams,
+                        "# camera {}: {} lens with Brown distortion has no exact COLMAP model; OPENCV_FISHEYE below is approximate",
+                        i + 1,
+                        lens_name(c.lens)
+                    );
+                }
+                (
+                    "OPENCV_FISHEYE",
+                    vec![c.fx, c.fy, c.cx, c.cy, 0.0, 0.0, 0.0, 0.0],
+                )
+            }
+        };
+        if !matches!(c.port, Port::None) {
+            let g = c.ior_glass.unwrap_or([1.0; 3]);
+            let mut pp = port_params(&c.port);
+            pp.extend([1.0, g[1], c.ior_water[1]]);
+            let _ = writeln!(
+                cams,
+                "# camera {} `{}` port {} (Refractive COLMAP order, G channel): {}",
+                i + 1,
+                c.name.replace('\n', " "),
+                c.port.kind_name(),
+                pp.iter()
+                    .map(|x| x.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            );
+        }
+        let _ = writeln!(
+            cams,
+            "{} {} {} {} {}",
+            i + 1,
+            name,
+            c.width,
+            c.height,
+            params
+                .iter()
+                .map(|x| x.to_string())
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
+
+    // Point ids: every observed target point, in model order.
+    let mut ids: std::collections::HashMap<(&str, &str), usize> = std::collections::HashMap::new();
+    let mut point_list: Vec<(String, String, DVec3)> = Vec::new();
+    for t in &model.targets {
+        for p in &t.points {
+            let seen = truth
+                .images
+                .iter()
+                .any(|im| im.points.iter().any(|o| o.target == t.name && o.id == p.id));
+            if seen && !ids.contains_key(&(t.name.as_str(), p.id.as_str())) {
+                ids.insert((t.name.as_str(), p.id.as_str()), point_list.len() + 1);
+                point_list.push((t.name.clone(), p.id.clone(), p.world));
+            }
+        }
+    }
+    let mut tracks: Vec<Vec<(usize, usize)>> = vec![Vec::new(); point_list.len()];
+
+    let mut ims = String::from(
+        "# Image list with two lines of data per image:\n#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n#   POINTS2D[] as (X, Y, POINT3D_ID)\n",
+    );
+    let _ = writeln!(ims, "# Number of images: {}", truth.images.len());
+    for (k, im) in truth.images.iter().enumerate() {
+        let p = &im.camera_from_world;
+        let _ = writeln!(
+            ims,
+            "{} {} {} {} {} {} {} {} {} {}.png",
+            k + 1,
+            p.quaternion[0],
+            p.quaternion[1],
+            p.quaternion[2],
+            p.quaternion[3],
+            p.translation[0],
+            p.translation[1],
+            p.translation[2],
+            im.camera_index + 1,
+            im.name
+        );
+        let mut line = Vec::new();
+        for (j, o) in im.points.iter().enumerate() {
+            let pid = ids[&(o.target.as_str(), o.id.as_str())];
+            tracks[pid - 1].push((k + 1, j));
+            line.push(format!("{} {} {}", o.u, o.v, pid));
+        }
+        let _ = writeln!(ims, "{}", line.join(" "));
+    }
+
+    let mut p3 = String::from(
+        "# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n",
+    );
+    let _ = writeln!(p3, "# Number of points: {}", point_list.len());
+    for (i, (t, id, w)) in point_list.iter().enumerate() {
+        let _ = writeln!(
+            p3,
+            "# {} = {}/{}",
+            i + 1,
+            t.replace('\n', " "),
+            id.replace('\n', " ")
+        );
+        let tr: Vec<String> = tracks[i]
+            .iter()
+            .map(|(im, j)| format!("{im} {j}"))
+            .collect();
+        let _ = writeln!(
+            p3,
+            "{} {} {} {} 255 255 255 0 {}",
+            i + 1,
+            w.x,
+            w.y,
+            w.z,
+            tr.join(" ")
+        );
+    }
+    vec![
+        ("colmap/cameras.txt".into(), cams.into_bytes()),
+        ("colmap/images.txt".into(), ims.into_bytes()),
+        ("colmap/points3D.txt".into(), p3.into_bytes()),
+    ]
+}
+
+/// Compute the ground truth of `model` and write it into `dir` (see the module table). Every
+/// file is written atomically; nothing is written if the computation fails.
+pub fn write(model: &Model, dir: &Path) -> Result<(), String> {
+    let truth = compute(model)?;
+    let files = files(model, &truth)?;
+    for (rel, bytes) in files {
+        let path = dir.join(&rel);
+        write_atomic(&path, &bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    Ok(())
+}

@@ -338,10 +338,15 @@ def _set_intrinsics(data, cam):
     else:
         f = geo.fisheye_params(lens, cam["fx"], cam["width"], cam["height"])
         data.type = "PANO"
+        # Panoramic cameras take shift_y in units of the image height (measured: with the
+        # width, as for PERSP, the principal point lands (1 - H/W) short).
+        data.shift_y = (cam["cy"] - cam["height"] / 2.0) / cam["height"]
         data.panorama_type = f["panorama_type"]
         data.fisheye_fov = f["fisheye_fov"]
         if "fisheye_lens" in f:
             data.fisheye_lens = f["fisheye_lens"]
+        for k, c in enumerate(f.get("polynomial", [])):
+            setattr(data, f"fisheye_polynomial_k{k}", c)
     if cam.get("focus_distance") and cam.get("f_number"):
         data.dof.use_dof = True
         data.dof.focus_distance = float(cam["focus_distance"])

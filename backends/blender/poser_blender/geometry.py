@@ -49,14 +49,15 @@ def blender_intrinsics(fx, fy, cx, cy, width, height):
 def fisheye_params(lens_model, fx, width, height):
     """Cycles panoramic camera parameters for a fisheye lens of focal length fx pixels.
 
-    Equisolid (r = 2 f sin(theta/2)) uses the real lens model with f in mm on a sensor of
-    36 mm width; equidistant (r = f theta) uses Cycles' FISHEYE_EQUIDISTANT, whose field of
-    view spans the image width: fov = W / f.
+    Equisolid (r = 2 f sin(theta/2)) uses Cycles' FISHEYE_EQUISOLID with f in mm on a sensor
+    of 36 mm width; equidistant (r = f theta) uses FISHEYE_LENS_POLYNOMIAL with theta = r/f.
     """
     lens_mm = fx * SENSOR_WIDTH_MM / width
     if lens_model == "fisheye_equidistant":
-        return {"panorama_type": "FISHEYE_EQUIDISTANT", "fisheye_fov": width / fx,
-                "lens": lens_mm}
+        # Cycles' own FISHEYE_EQUIDISTANT stretches its circle over the whole (non-square)
+        # frame; the lens polynomial theta = -k1 r (r in mm on the sensor) is exact instead.
+        return {"panorama_type": "FISHEYE_LENS_POLYNOMIAL", "fisheye_fov": 2.0 * math.pi,
+                "polynomial": [0.0, -1.0 / lens_mm, 0.0, 0.0, 0.0], "lens": lens_mm}
     if lens_model == "fisheye_equisolid":
         # Cycles clips at fisheye_fov; the full image diagonal must be inside it.
         r_max = 0.5 * math.hypot(width, height) / (2.0 * fx)

@@ -107,3 +107,90 @@ def test_arguments():
     assert pbuild.script_args(["scene.py", "--samples", "4"]) == ["--samples", "4"]
     with pytest.raises(SystemExit):
         pbuild.parse_args(["--bogus"])
+
+
+@pytest.mark.parametrize("lens", ["fisheye_equidistant", "fisheye_equisolid"])
+def test_fisheye_projects_like_the_lens_model(lens, tmp_path):
+    # Small black squares facing the camera on a white sky, at field angles up to 70 degrees,
+    # with an off-centre principal point; their centroids must land where the lens model
+    # (r = f theta or r = 2 f sin(theta/2)) puts them.
+    W, H, fx, cx, cy = 160, 120, 40.0, 86.3, 55.1
+    eye = np.eye(4).tolist()
+    objs, dirs = [], []
+    for k, (th, ph) in enumerate([(0, 0), (30, 20), (55, 160), (70, -60), (45, -120)]):
+        th, ph = math.radians(th), math.radians(ph)
+        d = np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)])
+        m = np.eye(4)
+        m[:3, :3] = geo.frame_looking_along(d)
+        m[:3, 3] = 2.0 * d
+        objs.append({"name": f"sq{k}", "shape": {"type": "plane", "width": 0.06, "height": 0.06},
+                     "scale": [1, 1, 1], "matrix": m.tolist(),
+                     "material": {"albedo": [0, 0, 0], "pattern": None}})
+        dirs.append((th, ph))
+    desc = {"format": "poser-blender/1", "name": "fisheye",
+            "render": {"samples": 64, "seed": 1, "max_bounces": 2, "exposure": 1.0},
+            "cameras": [{"name": "c", "width": W, "height": H, "lens": lens, "fx": fx, "fy": fx,
+                         "cx": cx, "cy": cy, "rig_from_camera": eye, "port": {"kind": "none"}}],
+            "poses": [{"name": "p", "world_from_rig": eye, "images": ["p"]}],
+            "water": None, "surface": {"kind": "none"},
+            "bounds": {"min": [-5] * 3, "max": [5] * 3}, "sun": None,
+            "lights": [{"name": "sky", "mount": "world", "type": "ambient",
+                        "radiance": [1, 1, 1]}],
+            "objects": objs, "targets": []}
+    built = pbuild.build(desc, ".", _fresh())
+    exr = pbuild.render(built, str(tmp_path), png=False)[0]
+    w = np.clip(1.0 - pbuild._load_pixels(exr)[::-1, :, 1], 0.0, None)  # row 0 = top
+    for th, ph in dirs:
+        r = fx * th if lens == "fisheye_equidistant" else 2.0 * fx * math.sin(th / 2.0)
+        u, v = cx + r * math.cos(ph), cy + r * math.sin(ph)
+        i0, j0 = int(u) - 5, int(v) - 5
+        jj, ii = np.mgrid[j0:j0 + 11, i0:i0 + 11]
+        win = w[j0:j0 + 11, i0:i0 + 11]
+        mu = (win * (ii + 0.5)).sum() / win.sum()
+        mv = (win * (jj + 0.5)).sum() / win.sum()
+        # Measured <= 0.06 px; the 1.5 px^2 blobs carry ~0.03 px of 64-spp coverage noise and
+        # the square's own fisheye distortion, so 0.15 px.
+        assert abs(mu - u) < 0.15 and abs(mv - v) < 0.15, (lens, th, mu - u, mv - v)
+
+
+def test_every_feature_builds_and_renders(scene_desc, tmp_path):
+    # Two cameras (dome, cylinder), water in a box around them, waves with caustics and the
+    # sun above, area + point lights, a checker pattern, per-channel passes, a saved .blend.
+    d = scene_desc
+    cam2 = json.loads(json.dumps(d["cameras"][0]))
+    cam2["name"] = "right"
+    cam2["rig_from_camera"] = [[1, 0, 0, 0.1], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+    cam2["port"] = {"kind": "cylinder", "axis_point": [0, 0, 0], "axis": [0, 1, 0],
+                    "inner_radius": 0.05, "thickness": 0.005, "glass": cam2["port"]["glass"]}
+    d["cameras"][0]["port"] = {"kind": "dome", "center": [0, 0, 0.002], "inner_radius": 0.05,
+                               "thickness": 0.006, "glass": cam2["port"]["glass"]}
+    d["cameras"].append(cam2)
+    for p in d["poses"]:
+        p["images"] = ["left_" + p["name"], "right_" + p["name"]]
+    d["water"]["extent"] = {"kind": "box_around_camera", "half_size": [3.0, 3.0, 3.0]}
+    d["water"]["scattering"] = [0.05, 0.05, 0.05]
+    d["surface"] = {"kind": "waves", "height": 0.5, "wavelength": 4.0, "wind_speed": 5.0}
+    d["caustics"] = True
+    d["per_channel_passes"] = True
+    d["sun"] = {"direction": [0.3, 0.1, -0.95], "irradiance": [900, 950, 1000],
+                "in_water": False, "angle": 0.00935, "caustics": True}
+    d["lights"].append({"name": "panel", "mount": "world", "type": "area",
+                        "frame": [[1, 0, 0, 0], [0, -1, 0, 0], [0, 0, -1, 1.5], [0, 0, 0, 1]],
+                        "width": 0.5, "height": 0.3, "radiance": [10, 10, 10]})
+    d["lights"].append({"name": "bulb", "mount": "world", "type": "point",
+                        "position": [0.5, 0.5, 1.0], "intensity": [3, 3, 3]})
+    d["objects"][0]["material"]["pattern"] = {"type": "checker", "size": 0.2, "contrast": 0.3}
+    d["render"]["samples"] = 2
+    scene = _fresh()
+    built = pbuild.build(d, ".", scene)
+    assert bpy.data.objects["sea surface"].modifiers["ocean"].type == "OCEAN"
+    assert bpy.data.lights["light:panel"].type == "AREA"
+    written = pbuild.render(built, str(tmp_path), poses=[1])
+    assert [os.path.basename(p) for p in written] == ["left_p1.exr", "right_p1.exr"]
+    for p in written:
+        px = pbuild._load_pixels(p)[..., :3]
+        assert np.isfinite(px).all() and (px >= 0).all()
+        assert px.max() > 0.0
+    blend = tmp_path / "all.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), check_existing=False)
+    assert blend.stat().st_size > 0
