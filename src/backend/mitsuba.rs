@@ -19,7 +19,8 @@
 //!
 //! `render(model, out, opts)` compiles into `out/mitsuba/`, runs the driver (a progress bar on
 //! stderr), which writes `out/{image}.exr` (linear, float32) and `out/{image}.png` (sRGB
-//! preview × `render.exposure`), then writes the ground truth beside them.
+//! preview × `render.exposure`), then writes the ground truth into `out/truth/` (when the
+//! scene's outputs ask for `truth`).
 
 pub mod emit;
 pub mod xml;
@@ -681,6 +682,10 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     }
     // Images are listed by the driver as file names relative to `out`.
     let images: Vec<PathBuf> = images.into_iter().map(|p| out.join(p)).collect();
+    // Ground truth beside the images (same layout as the native renderer: `OUT/truth/`).
+    if model.render.outputs.iter().any(|o| o == "truth") {
+        crate::truth::write(&model, &out.join("truth"))?;
+    }
     Ok(RenderReport {
         images,
         seconds: t0.elapsed().as_secs_f64(),
