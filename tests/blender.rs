@@ -20,6 +20,8 @@ fn render(model: &Model, out: &Path, samples: u32) -> LinearImage {
     let report = poser::backend::blender::render(model, out, &opts).expect("Cycles render");
     assert_eq!(report.images.len(), 1);
     assert!(out.join("img_0001.png").exists(), "PNG preview written");
+    let truth = std::fs::read_dir(out.join("truth")).expect("ground truth beside the images");
+    assert!(truth.count() > 0, "ground truth files written");
     LinearImage::read(&report.images[0]).expect("EXR readable")
 }
 
@@ -297,9 +299,7 @@ fn hostile_names_are_only_data() {
 fn ports_project_like_the_optics_truth() {
     // The canonical scenes (tests/canonical): a 5×4 circle grid seen through each port kind.
     // Disk centroids are measured with `compare::detect` and compared with the exact
-    // refractive projection (`optics`). Only the 6 interior disks are checked: the outer
-    // disks' measuring windows reach past the target's 20 mm margin into the brighter sky,
-    // which biases them by 0.2–0.9 px whatever the backend.
+    // refractive projection (`optics`).
     require_bpy();
     for scene in [
         "pinhole_air",
@@ -325,28 +325,35 @@ fn ports_project_like_the_optics_truth() {
             expected,
             "{scene}: every visible disk is found"
         );
-        let interior: Vec<_> = found
+        assert_eq!(found.len(), 20, "{scene}");
+        // The cylinder's outer columns: native, Mitsuba and Cycles agree with each other but
+        // not with the truth's cylinder solver (up to 0.73 px, `poser compare`), so only its
+        // 6 interior disks are held to the bound here.
+        let checked: Vec<_> = found
             .iter()
             .filter(|(id, _, _)| {
                 let i: usize = id.rsplit('/').next().unwrap().parse().unwrap();
-                (1..4).contains(&(i % 5)) && (1..3).contains(&(i / 5))
+                scene != "cylinder_off_axis"
+                    || ((1..4).contains(&(i % 5)) && (1..3).contains(&(i / 5)))
             })
             .collect();
-        assert_eq!(interior.len(), 6, "{scene}");
-        let rms = (interior
+        let rms = (checked
             .iter()
             .map(|(_, _, d)| d[0] * d[0] + d[1] * d[1])
             .sum::<f64>()
-            / interior.len() as f64)
+            / checked.len() as f64)
             .sqrt();
-        let max = interior
+        let max = checked
             .iter()
             .map(|(_, _, d)| d[0].hypot(d[1]))
             .fold(0.0, f64::max);
-        eprintln!("{scene}: interior disks vs truth: rms {rms:.4} px, max {max:.4} px");
-        // Measured at 128 spp: max 0.04 px for every port; at 64 spp the Monte Carlo noise of
-        // the textured disk edges is ≈0.03 px (σ), so 0.12 px is a 4σ bound.
-        assert!(max < 0.12, "{scene}: max {max} px");
+        eprintln!(
+            "{scene}: {} disks vs truth: rms {rms:.4} px, max {max:.4} px",
+            checked.len()
+        );
+        // Measured max 0.045–0.083 px at 64 spp (the small disks' edge coverage noise is
+        // ≈0.03 px σ): 0.15 px bounds it at ~5σ.
+        assert!(max < 0.15, "{scene}: max {max} px");
     }
 }
 
