@@ -46,3 +46,110 @@ fn overrides_change_the_model() {
     assert_eq!(m.site.depth, 20.0);
     assert_ne!(base.render.samples, 7);
 }
+
+fn poser(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn validate_exit_codes() {
+    // 0: valid.
+    let o = poser(&[
+        "validate",
+        "scenarios/calibration_flat.toml",
+        "scenarios/reef_strip.toml",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // 1: invalid, with the diagnostic on stderr.
+    let o = poser(&["validate", "tests/invalid/unknown_key_water.toml"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("tests/invalid/unknown_key_water.toml:4:1"),
+        "{err}"
+    );
+    assert!(err.contains("did you mean `temperature`?"), "{err}");
+    // 1: a bad override on an otherwise valid scene.
+    let o = poser(&[
+        "validate",
+        "scenarios/reef_strip.toml",
+        "--set",
+        "water.temprature=12",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    // Warnings pass, unless denied.
+    let o = poser(&["validate", "tests/invalid/warn_low_sidelap.toml"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("warning[W0300]"));
+    let o = poser(&[
+        "validate",
+        "--deny-warnings",
+        "tests/invalid/warn_low_sidelap.toml",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    // 2: usage error.
+    let o = poser(&["validate"]);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+#[test]
+fn explain_prints_the_key_numbers() {
+    let o = poser(&["explain", "scenarios/calibration_flat.toml"]);
+    assert_eq!(o.status.code(), Some(0));
+    let out = String::from_utf8_lossy(&o.stdout);
+    for needle in [
+        "images: 5 ",
+        "GSD",
+        "footprint",
+        "n = [",
+        "lateral colour",
+        "refraction: flat port",
+    ] {
+        assert!(out.contains(needle), "`{needle}` missing from:\n{out}");
+    }
+    // An override shows up in the explanation.
+    let o = poser(&[
+        "explain",
+        "scenarios/calibration_flat.toml",
+        "--set",
+        "water.temperature=4",
+    ]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Quan–Fry at 4 °C"));
+    // --json is the whole model.
+    let o = poser(&["explain", "--json", "scenarios/reef_strip.toml"]);
+    assert_eq!(o.status.code(), Some(0));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(!v["poses"].as_array().unwrap().is_empty());
+    assert_eq!(v["render"]["samples"], 64);
+}
+
+#[test]
+fn schema_check_passes_on_the_committed_files() {
+    let o = poser(&["schema", "--check"]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("schema");
+    let docs = dir.path().join("docs");
+    let o = poser(&[
+        "schema",
+        "--check",
+        "-o",
+        out.to_str().unwrap(),
+        "--docs",
+        docs.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "an empty directory is stale");
+}

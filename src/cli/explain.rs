@@ -2,7 +2,7 @@
 //! footprint, indices per channel, lateral colour, what will be modelled and why
 //! (`--json`: the whole resolved model).
 use super::{CliError, SceneArgs};
-use crate::model::{Model, Port};
+use crate::model::{IorSource, LensModel, Model, Phase, Port, SeaSurface};
 use std::fmt::Write;
 
 pub fn run(scene: &SceneArgs, json: bool) -> Result<(), CliError> {
@@ -58,24 +58,51 @@ pub fn explain(m: &Model) -> String {
             }
         );
     }
+    let surface = match m.site.surface {
+        SeaSurface::None => "not modelled".to_string(),
+        SeaSurface::Flat => "flat".to_string(),
+        SeaSurface::Waves {
+            height,
+            wavelength,
+            wind_speed,
+        } => {
+            format!("waves {height} m high, {wavelength} m long, wind {wind_speed} m/s")
+        }
+    };
     let _ = writeln!(
         s,
-        "site: seabed at {:.2} m, surface {:?}",
-        m.site.depth, m.site.surface
+        "site: seabed at {:.2} m, sea surface {surface}",
+        m.site.depth
     );
     match &m.water {
         None => {
             let _ = writeln!(s, "water: none (survey in air)");
         }
         Some(w) => {
+            let src = match &w.ior_source {
+                IorSource::Constant => "given as a constant".to_string(),
+                IorSource::Seawater {
+                    temperature,
+                    salinity,
+                    depth,
+                } => {
+                    format!("Quan–Fry at {temperature} °C, {salinity} PSU, {depth} m")
+                }
+            };
             let _ = writeln!(
                 s,
-                "water: n = [{:.5}, {:.5}, {:.5}] (R, G, B) from {:?}",
-                w.ior[0], w.ior[1], w.ior[2], w.ior_source
+                "water: n = [{:.5}, {:.5}, {:.5}] (R, G, B at 650/550/450 nm), {src}",
+                w.ior[0], w.ior[1], w.ior[2]
             );
+            let phase = match w.phase {
+                Phase::HenyeyGreenstein { g } => format!("Henyey–Greenstein g = {g}"),
+                Phase::FournierForand { n, mu, backscatter } => {
+                    format!("Fournier–Forand n = {n}, μ = {mu} (backscatter {backscatter:.4})")
+                }
+            };
             let _ = writeln!(
                 s,
-                "       σa = [{:.4}, {:.4}, {:.4}] 1/m, σs = [{:.4}, {:.4}, {:.4}] 1/m{}, phase {:?}",
+                "       σa = [{:.4}, {:.4}, {:.4}] 1/m, σs = [{:.4}, {:.4}, {:.4}] 1/m{}, {phase}",
                 w.absorption[0],
                 w.absorption[1],
                 w.absorption[2],
@@ -86,7 +113,6 @@ pub fn explain(m: &Model) -> String {
                     .as_ref()
                     .map(|j| format!(" (Jerlov {j})"))
                     .unwrap_or_default(),
-                w.phase
             );
         }
     }
@@ -118,14 +144,18 @@ pub fn explain(m: &Model) -> String {
     for (i, c) in m.cameras.iter().enumerate() {
         let _ = writeln!(
             s,
-            "camera {}: {}×{} px, f = {:.2} mm ({:.1} px), pitch {:.2} µm, {:?}",
+            "camera {}: {}×{} px, f = {:.2} mm ({:.1} px), pitch {:.2} µm, {}",
             c.name,
             c.width,
             c.height,
             c.focal_length * 1e3,
             c.fx,
             c.pixel_pitch * 1e6,
-            c.lens
+            match c.lens {
+                LensModel::Rectilinear => "rectilinear",
+                LensModel::FisheyeEquidistant => "fisheye (equidistant)",
+                LensModel::FisheyeEquisolid => "fisheye (equisolid)",
+            }
         );
         let port = match &c.port {
             Port::None => "none".to_string(),

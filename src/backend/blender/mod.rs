@@ -276,9 +276,9 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     })
 }
 
+/// Ground truth beside the images (`OUT/truth/`, the layout every backend shares).
 fn write_truth(model: &Model, out: &Path) -> Result<(), String> {
-    let _ = (model, out);
-    Ok(())
+    crate::truth::write(model, &out.join("truth"))
 }
 
 /// A target's printed face as a PNG texture, with its size and the offset of its lower-left
