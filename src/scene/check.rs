@@ -203,8 +203,11 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
                 continue;
             };
             let lateral = position.truncate().length();
-            if scatter > 0.0 && lateral < 0.15 {
-                if let Some((_, psp)) = spans.lights.get(li) {
+            if scatter > 0.0
+                && lateral < 0.15
+                && let Some((_, psp)) = spans.lights.get(li)
+            {
+                {
                     cx.push(
                         Diagnostic::warning("W0310", format!("light `{}` is only {:.0} cm from the camera axis", l.name, lateral * 100.0))
                             .label(*psp, "close to the port")
