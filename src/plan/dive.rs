@@ -218,6 +218,8 @@ pub struct Sample {
     /// Time to surface, s, and the first stop depth (m) if in deco.
     pub tts: f64,
     pub stop_depth: Option<f64>,
+    /// Duration of that first stop, s.
+    pub stop_time: Option<f64>,
     pub in_deco: bool,
     /// Cylinder pressure, bar.
     pub pressure: f64,
@@ -333,6 +335,7 @@ pub fn simulate(
                 stop_depth: stop
                     .map(|s| s.depth)
                     .or_else(|| in_deco.then(|| ((tissues.ceiling() / 3.0).ceil() * 3.0).max(3.0))),
+                stop_time: stop.map(|s| s.duration),
                 in_deco,
                 pressure: cfg.supply.pressure_after(used),
             });
