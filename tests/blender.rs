@@ -183,12 +183,11 @@ fn radiometry(port: Port, tag: &str) {
     let light = m.poses[0].world_from_rig.transform_point(light_rig);
     let dir = tempfile::tempdir().unwrap();
     let img = render(&m, dir.path(), 16);
-    // Central 12×12 pixels around the principal point.
-    let (i0, j0) = (m.cameras[0].cx as usize - 6, m.cameras[0].cy as usize - 6);
+    // Every pixel (the plane fills the view): sums of rendered and analytic values.
     let mut got = [0.0; 3];
     let mut want = [0.0; 3];
-    for j in j0..j0 + 12 {
-        for i in i0..i0 + 12 {
+    for j in 0..img.height {
+        for i in 0..img.width {
             let p = patch_through(&m, i as f64 + 0.5, j as f64 + 0.5, z_plane);
             let e = expected(&m, light, intensity, rho, &p);
             let px = img.rgb[j * img.width + i];
@@ -374,12 +373,10 @@ fn sunlit_seabed_through_flat_port_matches_analytic_radiance() {
     let rho = m.objects[0].material.albedo[1];
     let dir = tempfile::tempdir().unwrap();
     let img = render(&m, dir.path(), 16);
-    let cam = &m.cameras[0];
-    let (i0, j0) = (cam.cx as usize - 6, cam.cy as usize - 6);
     let mut got = [0.0; 3];
     let mut want = [0.0; 3];
-    for j in j0..j0 + 12 {
-        for i in i0..i0 + 12 {
+    for j in 0..img.height {
+        for i in 0..img.width {
             let p = patch_through(&m, i as f64 + 0.5, j as f64 + 0.5, z_plane);
             let cos_w = -sun.direction_water.z;
             let px = img.rgb[j * img.width + i];
@@ -397,8 +394,11 @@ fn sunlit_seabed_through_flat_port_matches_analytic_radiance() {
     for c in 0..3 {
         let ratio = got[c] / want[c];
         eprintln!("sun_seabed: channel {c}: Cycles/analytic = {ratio:.5}");
-        // Direct sunlight on a Lambertian plane: no Monte Carlo noise; 0.5 % covers the slab's
-        // inter-reflections (≈2e-4) and float32 storage.
-        assert!((ratio - 1.0).abs() < 5e-3, "channel {c}: ratio {ratio}");
+        // Direct sunlight on a Lambertian plane: the only noise is the reflect-or-refract
+        // choice at the two glass faces (σ ≈ 0.04 % over the whole image at 16 spp). Measured:
+        // 0.9968, a systematic −0.32 % that appears only for the sun behind a port (1.0000
+        // without the port; a point light through the same port: +0.05 %) and is not
+        // understood yet. 0.6 % bounds it with the slab's inter-reflections (≈2e-4).
+        assert!((ratio - 1.0).abs() < 6e-3, "channel {c}: ratio {ratio}");
     }
 }
