@@ -384,10 +384,8 @@ pub fn simulate(
             track_gas(u, t);
             let c = ts.ceiling();
             max_ceiling = max_ceiling.max(c);
-            if ph == Phase::Bottom {
-                if c > 0.0 && deco_from.is_none() {
-                    deco_from = Some(t);
-                }
+            if ph == Phase::Bottom && c > 0.0 && deco_from.is_none() {
+                deco_from = Some(t);
             }
             record(t, d, ts, u, ph, &mut next_sample);
         },
@@ -589,13 +587,14 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
     if !problems.is_empty() {
         suggestions = remedies(cfg, track, dive);
     }
-    if let Some(n) = dive.min_ndl {
-        if !deco && n < 300.0 {
-            advice.push(format!(
-                "the NDL margin is thin: {} left at the tightest point",
-                mmss(n)
-            ));
-        }
+    if let Some(n) = dive.min_ndl
+        && !deco
+        && n < 300.0
+    {
+        advice.push(format!(
+            "the NDL margin is thin: {} left at the tightest point",
+            mmss(n)
+        ));
     }
     Verdict {
         within_ndl: !deco,

@@ -209,7 +209,9 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
 
     // GSD, distance and footprint at up to 400 poses.
     let idx = sample_indices(n, 400);
-    let per: Vec<Option<(f64, f64, f64, f64, f64)>> = idx
+    // (GSD, distance, GSD factor of the port, footprint across, footprint along) per pose.
+    type PoseMetrics = (f64, f64, f64, f64, f64);
+    let per: Vec<Option<PoseMetrics>> = idx
         .par_iter()
         .map(|&i| {
             let (o, d, _) = proj
@@ -236,7 +238,7 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
             Some((g, (p - w.translation).length(), g / air, across, along))
         })
         .collect();
-    let ok: Vec<(f64, f64, f64, f64, f64)> = per.into_iter().flatten().collect();
+    let ok: Vec<PoseMetrics> = per.into_iter().flatten().collect();
     if ok.len() < idx.len() {
         notes.push(format!(
             "{} of {} sampled images do not see the site at their centre or corners (footprint/GSD from the others)",
@@ -292,37 +294,36 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
         model.network.overlap,
         fp_along,
         model.network.spacing,
-    ) {
-        if o.mean < nom - 0.03 {
-            let need = (1.0 - nom) * fp.mean;
-            notes.push(format!(
-                "forward overlap {:.0} % is below the nominal {:.0} %: trigger every {need:.2} m \
+    ) && o.mean < nom - 0.03
+    {
+        let need = (1.0 - nom) * fp.mean;
+        notes.push(format!(
+            "forward overlap {:.0} % is below the nominal {:.0} %: trigger every {need:.2} m \
                  instead of {sp:.2} m ({:.0} images instead of {})",
-                o.mean * 100.0,
-                nom * 100.0,
-                (n as f64 * sp / need).ceil(),
-                n
-            ));
-        }
+            o.mean * 100.0,
+            nom * 100.0,
+            (n as f64 * sp / need).ceil(),
+            n
+        ));
     }
     if let (Some(sl), Some(nom), Some(fp), Some(ss)) = (
         sidelap,
         model.network.sidelap,
         fp_across,
         model.network.strip_spacing,
-    ) {
-        if sl.mean < nom - 0.03 && ss > 0.0 {
-            let need = (1.0 - nom) * fp.mean;
-            let width = ss * (model.network.strips.max(1) - 1) as f64;
-            notes.push(format!(
-                "side-lap {:.0} % is below the nominal {:.0} %: strips {need:.2} m apart instead of \
+    ) && sl.mean < nom - 0.03
+        && ss > 0.0
+    {
+        let need = (1.0 - nom) * fp.mean;
+        let width = ss * (model.network.strips.max(1) - 1) as f64;
+        notes.push(format!(
+            "side-lap {:.0} % is below the nominal {:.0} %: strips {need:.2} m apart instead of \
                  {ss:.2} m ({} strips instead of {} over the same {width:.1} m)",
-                sl.mean * 100.0,
-                nom * 100.0,
-                (width / need - 1e-9).ceil() as u64 + 1,
-                model.network.strips
-            ));
-        }
+            sl.mean * 100.0,
+            nom * 100.0,
+            (width / need - 1e-9).ceil() as u64 + 1,
+            model.network.strips
+        ));
     }
     let distance_for_gsd = [0.25e-3, 0.5e-3, 1e-3, 2e-3]
         .iter()
