@@ -185,9 +185,13 @@ impl<'a> Integrator<'a> {
                 && let Some((a, b)) = m.interval(o, d, 0.0, t_end)
             {
                 if m.scatters() && can_scatter {
-                    // Equiangular in-scattering from point/spot lights.
-                    for pl in &self.lights.points {
-                        l += beta * self.equiangular(m, pl, o, d, a, b, rng);
+                    // Equiangular in-scattering from point/spot lights on every segment: it
+                    // removes the 1/r² spikes of vertices that land near a strobe.
+                    let use_eq = true;
+                    if use_eq {
+                        for pl in &self.lights.points {
+                            l += beta * self.equiangular(m, pl, o, d, a, b, rng);
+                        }
                     }
                     let c = ((rng.next() * 3.0) as usize).min(2);
                     let u = rng.next();
@@ -206,8 +210,11 @@ impl<'a> Integrator<'a> {
                         let f = |w: DVec3| DVec3::splat(phase.eval(d.dot(w)));
                         let pdf = |w: DVec3| phase.eval(d.dot(w));
                         let pw = |_i: usize, x: DVec3| {
-                            let pe = equiangular_pdf(o, d, a, b, x, t);
-                            power(pdf_d, pe)
+                            if use_eq {
+                                power(pdf_d, equiangular_pdf(o, d, a, b, x, t))
+                            } else {
+                                1.0
+                            }
                         };
                         l += beta * self.direct(p, &f, &pdf, &pw, rng);
                         let (u1, u2) = rng.next2();

@@ -6,7 +6,7 @@
 //! | item | meaning |
 //! |---|---|
 //! | `sigma_a`, `sigma_s`, `sigma_t` | per channel, 1/m |
-//! | region | `z ≤ 0` when the site has a sea surface; ∩ the box `camera ± half_size` for `BoxAroundCamera` |
+//! | region | `z ≤ 0` when the site has a sea surface or daylight (sun, ambient); ∩ the box `camera ± half_size` for `BoxAroundCamera` |
 //! | phase | `cos θ` between propagation directions; FF as a piecewise-constant table in cos θ ([`FF_BINS`] bins, log-spaced in θ) — evaluation and sampling use the same table, so sample weights are exact |
 
 use crate::model::{Model, Phase, SeaSurface, WaterExtent};
@@ -170,7 +170,14 @@ impl Medium {
         }
         let mut lo = DVec3::NEG_INFINITY;
         let mut hi = DVec3::INFINITY;
-        if !matches!(model.site.surface, SeaSurface::None) {
+        // The sea ends at z = 0 when there is a surface, and also when daylight (sun, ambient
+        // sky) must come from above (the Mitsuba backend bounds its water the same way).
+        let daylight = model.sun.is_some()
+            || model
+                .lights
+                .iter()
+                .any(|l| matches!(l.kind, crate::model::LightKind::Ambient { .. }));
+        if !matches!(model.site.surface, SeaSurface::None) || daylight {
             hi.z = 0.0;
         }
         if let WaterExtent::BoxAroundCamera { half_size } = w.extent {

@@ -12,7 +12,7 @@
 
 use crate::mesh::{TriMesh, object_mesh};
 use crate::model::Model;
-use glam::DVec3;
+use glam::{DVec3, Vec3A};
 use std::path::Path;
 
 /// Smallest accepted hit distance, m (self-intersection guard; geometry is f64).
@@ -64,12 +64,37 @@ struct Node {
     count: u32,
 }
 
+/// Traversal node: f32 SIMD bounds, conservatively enlarged (geometry and hits stay f64).
+#[derive(Debug, Clone, Copy)]
+struct FNode {
+    lo: Vec3A,
+    hi: Vec3A,
+    start: u32,
+    count: u32,
+}
+
+impl FNode {
+    fn from_node(n: &Node) -> FNode {
+        let m = n.lo.abs().max(n.hi.abs()).max_element();
+        // f32 rounding of bounds and ray origins: a few ulps at the box's magnitude.
+        let eps = 4e-6 * (m + 1.0);
+        let lo = n.lo - DVec3::splat(eps);
+        let hi = n.hi + DVec3::splat(eps);
+        FNode {
+            lo: Vec3A::new(lo.x as f32, lo.y as f32, lo.z as f32),
+            hi: Vec3A::new(hi.x as f32, hi.y as f32, hi.z as f32),
+            start: n.start,
+            count: n.count,
+        }
+    }
+}
+
 /// All triangles of a model, with their BVH.
 #[derive(Debug, Clone, Default)]
 pub struct Scene {
     tris: Vec<Tri>,
     surface: Vec<SurfaceId>,
-    nodes: Vec<Node>,
+    nodes: Vec<FNode>,
 }
 
 const LEAF_SIZE: usize = 4;
@@ -125,7 +150,10 @@ impl Scene {
         self.nodes
             .first()
             .filter(|_| !self.tris.is_empty())
-            .map(|n| (n.lo, n.hi))
+            .map(|n| {
+                let f = |v: Vec3A| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
+                (f(n.lo), f(n.hi))
+            })
     }
 
     fn build_bvh(&mut self) {
@@ -302,17 +330,15 @@ impl Scene {
         }
         self.tris = order.iter().map(|&i| self.tris[i as usize]).collect();
         self.surface = order.iter().map(|&i| self.surface[i as usize]).collect();
-        self.nodes = nodes;
+        self.nodes = nodes.iter().map(FNode::from_node).collect();
     }
 
     #[inline]
-    fn slab(n: &Node, o: DVec3, inv: DVec3, tmax: f64) -> Option<f64> {
+    fn slab(n: &FNode, o: Vec3A, inv: Vec3A, tmax: f32) -> Option<f32> {
         let t0 = (n.lo - o) * inv;
         let t1 = (n.hi - o) * inv;
-        let tn = t0.min(t1);
-        let tf = t0.max(t1);
-        let enter = tn.x.max(tn.y).max(tn.z).max(0.0);
-        let exit = tf.x.min(tf.y).min(tf.z).min(tmax);
+        let enter = t0.min(t1).max_element().max(0.0);
+        let exit = t0.max(t1).min_element().min(tmax);
         (enter <= exit).then_some(enter)
     }
 
@@ -345,11 +371,19 @@ impl Scene {
         }
         let o = ray.origin;
         let d = ray.dir;
-        let inv = DVec3::ONE / d;
+        let o32 = Vec3A::new(o.x as f32, o.y as f32, o.z as f32);
+        let inv = Vec3A::ONE / Vec3A::new(d.x as f32, d.y as f32, d.z as f32);
+        let t32 = |t: f64| {
+            if t.is_finite() {
+                (t * (1.0 + 1e-5)) as f32
+            } else {
+                f32::INFINITY
+            }
+        };
         let mut best: Option<(f64, u32)> = None;
         let mut stack = [0u32; 96];
         let mut sp = 0usize;
-        Self::slab(&self.nodes[0], o, inv, tmax)?;
+        Self::slab(&self.nodes[0], o32, inv, t32(tmax))?;
         let mut cur = 0u32;
         loop {
             let n = &self.nodes[cur as usize];
@@ -365,8 +399,9 @@ impl Scene {
                 }
             } else {
                 let (a, b) = (n.start, n.start + 1);
-                let ta = Self::slab(&self.nodes[a as usize], o, inv, tmax);
-                let tb = Self::slab(&self.nodes[b as usize], o, inv, tmax);
+                let tm = t32(tmax);
+                let ta = Self::slab(&self.nodes[a as usize], o32, inv, tm);
+                let tb = Self::slab(&self.nodes[b as usize], o32, inv, tm);
                 match (ta, tb) {
                     (Some(x), Some(y)) => {
                         let (near, far) = if x <= y { (a, b) } else { (b, a) };
@@ -395,7 +430,7 @@ impl Scene {
                 }
                 sp -= 1;
                 let c = stack[sp];
-                if Self::slab(&self.nodes[c as usize], o, inv, tmax).is_some() {
+                if Self::slab(&self.nodes[c as usize], o32, inv, t32(tmax)).is_some() {
                     cur = c;
                     break;
                 }
