@@ -214,7 +214,7 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
             } else {
                 let a = y.atan2(x).rem_euclid(std::f64::consts::TAU);
                 let sector = (a / (std::f64::consts::PI / spokes as f64)).floor() as u64;
-                sector % 2 == 0
+                sector.is_multiple_of(2)
             }
         }
         TargetKind::TestObject { .. } => local_points(kind)

@@ -222,6 +222,11 @@ impl std::fmt::Display for UnitError {
     }
 }
 
+impl Dim {
+    /// Every dimension with units.
+    pub const ALL: &'static [Dim] = ALL_DIMS;
+}
+
 const ALL_DIMS: &[Dim] = &[
     Dim::Length,
     Dim::Angle,

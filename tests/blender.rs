@@ -183,12 +183,11 @@ fn radiometry(port: Port, tag: &str) {
     let light = m.poses[0].world_from_rig.transform_point(light_rig);
     let dir = tempfile::tempdir().unwrap();
     let img = render(&m, dir.path(), 16);
-    // Central 12×12 pixels around the principal point.
-    let (i0, j0) = (m.cameras[0].cx as usize - 6, m.cameras[0].cy as usize - 6);
+    // Every pixel (the plane fills the view): sums of rendered and analytic values.
     let mut got = [0.0; 3];
     let mut want = [0.0; 3];
-    for j in j0..j0 + 12 {
-        for i in i0..i0 + 12 {
+    for j in 0..img.height {
+        for i in 0..img.width {
             let p = patch_through(&m, i as f64 + 0.5, j as f64 + 0.5, z_plane);
             let e = expected(&m, light, intensity, rho, &p);
             let px = img.rgb[j * img.width + i];
@@ -299,9 +298,7 @@ fn hostile_names_are_only_data() {
 fn ports_project_like_the_optics_truth() {
     // The canonical scenes (tests/canonical): a 5×4 circle grid seen through each port kind.
     // Disk centroids are measured with `compare::detect` and compared with the exact
-    // refractive projection (`optics`). Only the 6 interior disks are checked: the outer
-    // disks' measuring windows reach past the target's 20 mm margin into the brighter sky,
-    // which biases them by 0.2–0.9 px whatever the backend.
+    // refractive projection (`optics`).
     require_bpy();
     for scene in [
         "pinhole_air",
@@ -327,28 +324,35 @@ fn ports_project_like_the_optics_truth() {
             expected,
             "{scene}: every visible disk is found"
         );
-        let interior: Vec<_> = found
+        assert_eq!(found.len(), 20, "{scene}");
+        // The cylinder's outer columns: native, Mitsuba and Cycles agree with each other but
+        // not with the truth's cylinder solver (up to 0.73 px, `poser compare`), so only its
+        // 6 interior disks are held to the bound here.
+        let checked: Vec<_> = found
             .iter()
             .filter(|(id, _, _)| {
                 let i: usize = id.rsplit('/').next().unwrap().parse().unwrap();
-                (1..4).contains(&(i % 5)) && (1..3).contains(&(i / 5))
+                scene != "cylinder_off_axis"
+                    || ((1..4).contains(&(i % 5)) && (1..3).contains(&(i / 5)))
             })
             .collect();
-        assert_eq!(interior.len(), 6, "{scene}");
-        let rms = (interior
+        let rms = (checked
             .iter()
             .map(|(_, _, d)| d[0] * d[0] + d[1] * d[1])
             .sum::<f64>()
-            / interior.len() as f64)
+            / checked.len() as f64)
             .sqrt();
-        let max = interior
+        let max = checked
             .iter()
             .map(|(_, _, d)| d[0].hypot(d[1]))
             .fold(0.0, f64::max);
-        eprintln!("{scene}: interior disks vs truth: rms {rms:.4} px, max {max:.4} px");
-        // Measured at 128 spp: max 0.04 px for every port; at 64 spp the Monte Carlo noise of
-        // the textured disk edges is ≈0.03 px (σ), so 0.12 px is a 4σ bound.
-        assert!(max < 0.12, "{scene}: max {max} px");
+        eprintln!(
+            "{scene}: {} disks vs truth: rms {rms:.4} px, max {max:.4} px",
+            checked.len()
+        );
+        // Measured max 0.045–0.083 px at 64 spp (the small disks' edge coverage noise is
+        // ≈0.03 px σ): 0.15 px bounds it at ~5σ.
+        assert!(max < 0.15, "{scene}: max {max} px");
     }
 }
 
@@ -369,12 +373,10 @@ fn sunlit_seabed_through_flat_port_matches_analytic_radiance() {
     let rho = m.objects[0].material.albedo[1];
     let dir = tempfile::tempdir().unwrap();
     let img = render(&m, dir.path(), 16);
-    let cam = &m.cameras[0];
-    let (i0, j0) = (cam.cx as usize - 6, cam.cy as usize - 6);
     let mut got = [0.0; 3];
     let mut want = [0.0; 3];
-    for j in j0..j0 + 12 {
-        for i in i0..i0 + 12 {
+    for j in 0..img.height {
+        for i in 0..img.width {
             let p = patch_through(&m, i as f64 + 0.5, j as f64 + 0.5, z_plane);
             let cos_w = -sun.direction_water.z;
             let px = img.rgb[j * img.width + i];
@@ -392,8 +394,11 @@ fn sunlit_seabed_through_flat_port_matches_analytic_radiance() {
     for c in 0..3 {
         let ratio = got[c] / want[c];
         eprintln!("sun_seabed: channel {c}: Cycles/analytic = {ratio:.5}");
-        // Direct sunlight on a Lambertian plane: no Monte Carlo noise; 0.5 % covers the slab's
-        // inter-reflections (≈2e-4) and float32 storage.
-        assert!((ratio - 1.0).abs() < 5e-3, "channel {c}: ratio {ratio}");
+        // Direct sunlight on a Lambertian plane: the only noise is the reflect-or-refract
+        // choice at the two glass faces (σ ≈ 0.04 % over the whole image at 16 spp). Measured:
+        // 0.9968: the housing casts a shadow on the seabed (≈70 of 19200 pixels, it moves with
+        // the sun direction; without the port: 1.0000). 0.6 % bounds it with the slab's
+        // inter-reflections (≈2e-4).
+        assert!((ratio - 1.0).abs() < 6e-3, "channel {c}: ratio {ratio}");
     }
 }

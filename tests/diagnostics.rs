@@ -243,4 +243,20 @@ mod fuzz {
             }
         }
     }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 200, failure_persistence: None, .. ProptestConfig::default() })]
+        /// Arbitrary text (TOML-ish alphabet) as a whole scene, and arbitrary unit strings.
+        #[test]
+        fn arbitrary_text_never_panics(text in "[a-z_.=\\[\\]{}\",0-9 \n#-]{0,300}", q in "\\PC{0,20}") {
+            let dir = tempfile::tempdir().unwrap();
+            let p = dir.path().join("scene.toml");
+            std::fs::write(&p, &text).unwrap();
+            let _ = scene::load(&p, &[]);
+            for d in poser::units::Dim::ALL {
+                let _ = poser::units::parse_quantity(&q, *d);
+                let _ = poser::units::parse_vector(&q, *d);
+            }
+        }
+    }
 }

@@ -95,6 +95,7 @@ fn ssrf_round_trip() {
         samples.iter().filter(|s| s["in_deco"] == "1").collect();
     assert!(!deco.is_empty());
     assert!(deco.iter().all(|s| lead(&s["stopdepth"]) >= 3.0));
+    assert!(deco.iter().any(|s| parse_min(&s["stoptime"]) >= 60.0));
     let ndl_15: Vec<f64> = samples
         .iter()
         .filter(|s| lead(&s["depth"]) > 14.9 && s["in_deco"] == "0")
@@ -123,5 +124,20 @@ fn svg_plot_has_three_series() {
     assert!(
         svg.matches("<polyline").count() >= 3,
         "depth, ceiling and NDL lines"
+    );
+}
+
+#[test]
+fn exports_are_deterministic() {
+    let m = common::paper_model(Some(common::diver(12.0, 200.0)));
+    let a = plan_dive(&m, 10.0).unwrap();
+    let b = plan_dive(&m, 10.0).unwrap();
+    assert_eq!(
+        poser::plan::ssrf::to_ssrf(&m, &a).unwrap(),
+        poser::plan::ssrf::to_ssrf(&m, &b).unwrap()
+    );
+    assert_eq!(
+        poser::plan::plot::svg(&a, "t").unwrap(),
+        poser::plan::plot::svg(&b, "t").unwrap()
     );
 }

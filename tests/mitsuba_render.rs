@@ -454,3 +454,60 @@ fn target_texture_orientation_and_levels() {
     );
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A Siemens star (a texture: its sectors are not simple geometry) under ambient light: the
+/// printed sectors are neither mirrored nor flipped (sector 0, counter-clockwise from +x, is
+/// black; the sector just clockwise of +x is white).
+#[test]
+fn textured_target_is_not_mirrored() {
+    let mut m = base(
+        "star",
+        camera("cam", Port::None),
+        None,
+        nadir(DVec3::new(0.0, 0.0, 1.0)),
+    );
+    m.render.samples = 16;
+    m.lights.push(Light {
+        name: "sky".into(),
+        mount: Mount::World,
+        kind: LightKind::Ambient { radiance: [1.0; 3] },
+    });
+    let kind = TargetKind::SiemensStar {
+        diameter: 0.6,
+        spokes: 4,
+    };
+    m.targets.push(Target {
+        name: "star".into(),
+        kind,
+        pose: Pose::IDENTITY,
+        points: vec![],
+    });
+    let cam = m.cameras[0].clone();
+    let (img, dir) = render(&m, "mi-star");
+    let cam_from_world = m.poses[0].world_from_rig.inverse();
+    let at = |a: f64| {
+        let (x, y) = (0.2 * a.cos(), 0.2 * a.sin());
+        let p = pixel(&cam, cam_from_world.transform_point(DVec3::new(x, y, 0.0))).unwrap();
+        let mut s = 0.0;
+        for dy in -1..=1i64 {
+            for dx in -1..=1i64 {
+                let (i, j) = ((p[0] as i64 + dx) as usize, (p[1] as i64 + dy) as usize);
+                s += img.rgb[j * img.width + i][1] as f64;
+            }
+        }
+        s / 9.0
+    };
+    // Sectors are π/4 wide: probe their middles, ±π/8 from +x.
+    let (ccw, cw) = (
+        at(std::f64::consts::PI / 8.0),
+        at(-std::f64::consts::PI / 8.0),
+    );
+    eprintln!("star: sector 0 {ccw:.3}, sector 7 {cw:.3}");
+    // Black 0.05 vs white 0.9: a 3×3 mean at 16 spp is within ±0.1 of either.
+    assert!(
+        ccw < 0.2 && cw > 0.7,
+        "sector 0 = {ccw}, sector 7 = {cw} (mirrored?); {}",
+        dir.display()
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

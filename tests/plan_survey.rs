@@ -72,6 +72,10 @@ fn achieved_overlap_matches_pinhole_geometry() {
         (o - (1.0 - 0.5 / along)).abs() <= 1.0 / 24.0 + 1e-9,
         "overlap {o}"
     );
+    // The nominal 80 % (from the test network's summary) is not reached: the remedy is the
+    // trigger distance (1 − 0.8) × footprint = 0.30 m.
+    let expect = format!("trigger every {:.2} m", 0.2 * along);
+    assert!(r.notes.iter().any(|n| n.contains(&expect)), "{:?}", r.notes);
     let s = r.sidelap.unwrap().mean;
     assert!(
         (s - (1.0 - 1.5 / across)).abs() <= 1.0 / 32.0 + 1e-9,

@@ -19,7 +19,8 @@
 //!
 //! `render(model, out, opts)` compiles into `out/mitsuba/`, runs the driver (a progress bar on
 //! stderr), which writes `out/{image}.exr` (linear, float32) and `out/{image}.png` (sRGB
-//! preview × `render.exposure`), then writes the ground truth beside them.
+//! preview × `render.exposure`), then writes the ground truth into `out/truth/` (when the
+//! scene's outputs ask for `truth`).
 
 pub mod emit;
 pub mod xml;
@@ -281,6 +282,22 @@ fn target_px_per_m(model: &Model, t: &Target) -> f64 {
 /// Texels per image pixel for target textures at the closest camera.
 pub const TEXELS_PER_PIXEL: f64 = 2.0;
 
+/// Depth of the white card behind the black marks of geometric targets, m: small enough for no
+/// visible parallax (< 0.005 px at 1 m), large enough against float32 ray offsets.
+pub const CARD_OFFSET: f64 = 1e-5;
+
+/// The white card of a geometric target, `CARD_OFFSET` behind its printed face.
+fn white_card(t: &Target) -> El {
+    let (w, h) = crate::targets::extent(&t.kind);
+    El::typed("shape", "rectangle")
+        .comment(format!("target `{}`: white card {w} m × {h} m", t.name))
+        .to_world(
+            t.pose.rotation * DMat3::from_diagonal(DVec3::new(0.5 * w, 0.5 * h, 1.0)),
+            t.pose.transform_point(DVec3::new(0.0, 0.0, -CARD_OFFSET)),
+        )
+        .child(lambert(crate::targets::WHITE))
+}
+
 fn lambert(albedo: f64) -> El {
     El::typed("bsdf", "twosided")
         .child(El::typed("bsdf", "diffuse").rgb("reflectance", [albedo; 3]))
@@ -332,6 +349,54 @@ fn target_shapes(
                         )
                         .child(lambert(crate::targets::BLACK)),
                 );
+            }
+            Ok(out)
+        }
+        TargetKind::CircleGrid { diameter, .. } | TargetKind::ScaleBar { diameter, .. } => {
+            // Exact geometry: black `disk`s on the printed face (z = 0), the white card just
+            // behind it, so disk edges are analytic (a texture's texels would bias centroids).
+            let mut out = vec![white_card(t)];
+            let r = 0.5 * diameter;
+            for (id, p) in crate::targets::local_points(&t.kind) {
+                out.push(
+                    El::typed("shape", "disk")
+                        .comment(format!("target `{}`: disk {id}", t.name))
+                        .to_world(
+                            DMat3::from_cols(m.x_axis * r, m.y_axis * r, m.z_axis),
+                            t.pose.transform_point(p),
+                        )
+                        .child(lambert(crate::targets::BLACK)),
+                );
+            }
+            Ok(out)
+        }
+        TargetKind::Checkerboard { cols, rows, square } => {
+            // Exact geometry: one black `rectangle` per dark square (parity as in
+            // `targets::reflectance`: cell (0, 0) at (-x, -y) is black), white card behind.
+            let mut out = vec![white_card(t)];
+            let (w, h) = (cols as f64 * square, rows as f64 * square);
+            for j in 0..rows {
+                for i in 0..cols {
+                    if (i + j) % 2 != 0 {
+                        continue;
+                    }
+                    let c = DVec3::new(
+                        -0.5 * w + (i as f64 + 0.5) * square,
+                        -0.5 * h + (j as f64 + 0.5) * square,
+                        0.0,
+                    );
+                    let mut sq = El::typed("shape", "rectangle");
+                    if out.len() == 1 {
+                        sq.push_comment(format!("target `{}`: black squares", t.name));
+                    }
+                    out.push(
+                        sq.to_world(
+                            m * DMat3::from_diagonal(DVec3::new(0.5 * square, 0.5 * square, 1.0)),
+                            t.pose.transform_point(c),
+                        )
+                        .child(lambert(crate::targets::BLACK)),
+                    );
+                }
             }
             Ok(out)
         }
@@ -617,6 +682,10 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     }
     // Images are listed by the driver as file names relative to `out`.
     let images: Vec<PathBuf> = images.into_iter().map(|p| out.join(p)).collect();
+    // Ground truth beside the images (same layout as the native renderer: `OUT/truth/`).
+    if model.render.outputs.iter().any(|o| o == "truth") {
+        crate::truth::write(&model, &out.join("truth"))?;
+    }
     Ok(RenderReport {
         images,
         seconds: t0.elapsed().as_secs_f64(),

@@ -85,6 +85,34 @@ impl QSolve<'_> {
         (f + v, df + d)
     }
 
+    #[inline(always)]
+    fn term2(na: f64, t: f64, n: f64, q: f64) -> (f64, f64, f64) {
+        let n2 = n * n;
+        let k = n2 - na * na;
+        let g = n2 + k * q * q;
+        let inv = 1.0 / g.sqrt();
+        let inv2 = inv * inv;
+        let v = t * na * q * inv;
+        let dv = t * na * n2 * inv2 * inv;
+        (v, dv, -3.0 * k * q * dv * inv2)
+    }
+
+    /// F, F′ and F″.
+    #[inline(always)]
+    fn eval2(&self, q: f64, r: f64) -> (f64, f64, f64) {
+        let mut f = self.gap * q - r;
+        let mut df = self.gap;
+        let mut d2f = 0.0;
+        for &(t, n) in self.layers {
+            let (v, d, d2) = Self::term2(self.na, t, n, q);
+            f += v;
+            df += d;
+            d2f += d2;
+        }
+        let (v, d, d2) = Self::term2(self.na, self.water.0, self.water.1, q);
+        (f + v, df + d, d2f + d2)
+    }
+
     /// Largest q at which every term is defined (q < n/√(na²−n²) for layers with n < na).
     fn q_max(&self) -> f64 {
         let mut m = f64::INFINITY;
@@ -117,15 +145,19 @@ impl QSolve<'_> {
                     return Err(NoSolution::BeyondCriticalAngle);
                 }
             }
+            // Halley iteration (cubic convergence) from the paraxial guess; steps of either
+            // sign are allowed, q stays positive.
             let mut q = q0;
             for _ in 0..200 {
-                let (f, df) = self.eval(q, r);
-                let dq = -f / df;
+                let (f, df, d2f) = self.eval2(q, r);
+                let dq = -2.0 * f * df / (2.0 * df * df - f * d2f);
                 if !dq.is_finite() {
                     return Err(NoSolution::NoConvergence);
                 }
-                q += dq.max(0.0);
-                if dq <= 1e-9 * q {
+                let next = q + dq;
+                q = if next > 0.0 { next } else { 0.5 * q };
+                if dq.abs() <= 1e-7 * q {
+                    // Error after a Halley step ≈ K·dq³: < 1e-20 relative here.
                     return if q.is_finite() {
                         Ok(q)
                     } else {
@@ -423,7 +455,7 @@ impl DomePort {
         Some(DomeTrace { x2, w2 })
     }
 
-    /// Signed miss of the water ray with respect to P = (L, 0): w₂ × (P − X₂).
+    /// Signed miss of the water ray with respect to P = (L, 0): w₂ × (P − X₂), and |P − X₂|.
     #[inline(always)]
     fn miss(&self, tau: f64, c: DVec2, l: f64) -> Option<(f64, f64)> {
         let t = self.trace2(tau, c)?;

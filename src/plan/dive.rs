@@ -218,6 +218,8 @@ pub struct Sample {
     /// Time to surface, s, and the first stop depth (m) if in deco.
     pub tts: f64,
     pub stop_depth: Option<f64>,
+    /// Duration of that first stop, s.
+    pub stop_time: Option<f64>,
     pub in_deco: bool,
     /// Cylinder pressure, bar.
     pub pressure: f64,
@@ -333,6 +335,7 @@ pub fn simulate(
                 stop_depth: stop
                     .map(|s| s.depth)
                     .or_else(|| in_deco.then(|| ((tissues.ceiling() / 3.0).ceil() * 3.0).max(3.0))),
+                stop_time: stop.map(|s| s.duration),
                 in_deco,
                 pressure: cfg.supply.pressure_after(used),
             });
@@ -381,10 +384,8 @@ pub fn simulate(
             track_gas(u, t);
             let c = ts.ceiling();
             max_ceiling = max_ceiling.max(c);
-            if ph == Phase::Bottom {
-                if c > 0.0 && deco_from.is_none() {
-                    deco_from = Some(t);
-                }
+            if ph == Phase::Bottom && c > 0.0 && deco_from.is_none() {
+                deco_from = Some(t);
             }
             record(t, d, ts, u, ph, &mut next_sample);
         },
@@ -586,13 +587,14 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
     if !problems.is_empty() {
         suggestions = remedies(cfg, track, dive);
     }
-    if let Some(n) = dive.min_ndl {
-        if !deco && n < 300.0 {
-            advice.push(format!(
-                "the NDL margin is thin: {} left at the tightest point",
-                mmss(n)
-            ));
-        }
+    if let Some(n) = dive.min_ndl
+        && !deco
+        && n < 300.0
+    {
+        advice.push(format!(
+            "the NDL margin is thin: {} left at the tightest point",
+            mmss(n)
+        ));
     }
     Verdict {
         within_ndl: !deco,

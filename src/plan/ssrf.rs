@@ -181,9 +181,13 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
             if let Some(d) = s.stop_depth {
                 a.push(("stopdepth", format!("{} m", milli(d))));
             }
+            // Always written: Subsurface copies an omitted value from the previous sample.
+            let t = s.stop_time.unwrap_or(0.0);
+            a.push(("stoptime", min_sec((t / 60.0).ceil() * 60.0)));
         } else {
             a.push(("in_deco", "0".into()));
             a.push(("stopdepth", "0.0 m".into()));
+            a.push(("stoptime", min_sec(0.0)));
         }
         empty(&mut w, "sample", &a)?;
     }

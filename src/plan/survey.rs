@@ -209,7 +209,9 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
 
     // GSD, distance and footprint at up to 400 poses.
     let idx = sample_indices(n, 400);
-    let per: Vec<Option<(f64, f64, f64, f64, f64)>> = idx
+    // (GSD, distance, GSD factor of the port, footprint across, footprint along) per pose.
+    type PoseMetrics = (f64, f64, f64, f64, f64);
+    let per: Vec<Option<PoseMetrics>> = idx
         .par_iter()
         .map(|&i| {
             let (o, d, _) = proj
@@ -236,7 +238,7 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
             Some((g, (p - w.translation).length(), g / air, across, along))
         })
         .collect();
-    let ok: Vec<(f64, f64, f64, f64, f64)> = per.into_iter().flatten().collect();
+    let ok: Vec<PoseMetrics> = per.into_iter().flatten().collect();
     if ok.len() < idx.len() {
         notes.push(format!(
             "{} of {} sampled images do not see the site at their centre or corners (footprint/GSD from the others)",
@@ -284,6 +286,45 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
     let overlap = Stats::of(&frac(pick(&fwd)));
     let sidelap = Stats::of(&frac(pick(&side)));
 
+    // What would restore the nominal overlaps on the real footprint.
+    let fp_across = Stats::of(&col(3));
+    let fp_along = Stats::of(&col(4));
+    if let (Some(o), Some(nom), Some(fp), Some(sp)) = (
+        overlap,
+        model.network.overlap,
+        fp_along,
+        model.network.spacing,
+    ) && o.mean < nom - 0.03
+    {
+        let need = (1.0 - nom) * fp.mean;
+        notes.push(format!(
+            "forward overlap {:.0} % is below the nominal {:.0} %: trigger every {need:.2} m \
+                 instead of {sp:.2} m ({:.0} images instead of {})",
+            o.mean * 100.0,
+            nom * 100.0,
+            (n as f64 * sp / need).ceil(),
+            n
+        ));
+    }
+    if let (Some(sl), Some(nom), Some(fp), Some(ss)) = (
+        sidelap,
+        model.network.sidelap,
+        fp_across,
+        model.network.strip_spacing,
+    ) && sl.mean < nom - 0.03
+        && ss > 0.0
+    {
+        let need = (1.0 - nom) * fp.mean;
+        let width = ss * (model.network.strips.max(1) - 1) as f64;
+        notes.push(format!(
+            "side-lap {:.0} % is below the nominal {:.0} %: strips {need:.2} m apart instead of \
+                 {ss:.2} m ({} strips instead of {} over the same {width:.1} m)",
+            sl.mean * 100.0,
+            nom * 100.0,
+            (width / need - 1e-9).ceil() as u64 + 1,
+            model.network.strips
+        ));
+    }
     let distance_for_gsd = [0.25e-3, 0.5e-3, 1e-3, 2e-3]
         .iter()
         .filter_map(|&g| distance_for_gsd(&proj, g).map(|d| (g, d)))
@@ -301,8 +342,8 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
         gsd: Stats::of(&col(0)),
         distance: Stats::of(&col(1)),
         port_gsd_factor: Stats::of(&col(2)).map(|s| s.mean),
-        footprint_across: Stats::of(&col(3)),
-        footprint_along: Stats::of(&col(4)),
+        footprint_across: fp_across,
+        footprint_along: fp_along,
         overlap,
         sidelap,
         nominal_overlap: model.network.overlap,

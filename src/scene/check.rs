@@ -176,6 +176,37 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
             }
         }
     }
+    // A very wide lens behind a flat port in water: the corners bend strongly (distortion and
+    // lateral colour grow fast); a dome port is the usual remedy.
+    if m.water.is_some() {
+        for (i, c) in m.cameras.iter().enumerate() {
+            if !matches!(c.port, Port::Flat { .. }) {
+                continue;
+            }
+            let r = ((c.width as f64 / 2.0).powi(2) + (c.height as f64 / 2.0).powi(2)).sqrt();
+            let half = match c.lens {
+                LensModel::Rectilinear => (r / c.fx).atan(),
+                LensModel::FisheyeEquidistant => r / c.fx,
+                LensModel::FisheyeEquisolid => 2.0 * (r / (2.0 * c.fx)).min(1.0).asin(),
+            };
+            if half > 60f64.to_radians()
+                && let Some(cs) = spans.camera.get(i)
+            {
+                cx.push(
+                    Diagnostic::warning(
+                        "W0250",
+                        format!(
+                            "camera `{}` sees {:.0}° from its axis to the image corner through a flat port",
+                            c.name,
+                            half.to_degrees()
+                        ),
+                    )
+                    .label(cs.port, "flat port with a very wide lens")
+                    .help("expect strong pincushion distortion and colour fringes at the corners; use a dome port for wide-angle lenses"),
+                );
+            }
+        }
+    }
     // Doubtful side-lap.
     if let (Some(s), Some(sp)) = (m.network.sidelap, spans.sidelap)
         && s < 0.6
@@ -203,8 +234,11 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
                 continue;
             };
             let lateral = position.truncate().length();
-            if scatter > 0.0 && lateral < 0.15 {
-                if let Some((_, psp)) = spans.lights.get(li) {
+            if scatter > 0.0
+                && lateral < 0.15
+                && let Some((_, psp)) = spans.lights.get(li)
+            {
+                {
                     cx.push(
                         Diagnostic::warning("W0310", format!("light `{}` is only {:.0} cm from the camera axis", l.name, lateral * 100.0))
                             .label(*psp, "close to the port")

@@ -1953,10 +1953,7 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
         );
     }
     let reserve = d.f64(cx, "reserve", Dim::Pressure, 50e5);
-    let salt_water = match d.choice(cx, "water", &["salt", "fresh"]) {
-        Some("fresh") => false,
-        _ => true,
-    };
+    let salt_water = !matches!(d.choice(cx, "water", &["salt", "fresh"]), Some("fresh"));
     let mut cylinders = Vec::new();
     for (i, n) in d.tables(cx, "cylinders").into_iter().enumerate() {
         let mut c = Tab::open(cx, Some(n), &format!("diver.cylinders[{i}]"), n.span);

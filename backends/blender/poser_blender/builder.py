@@ -492,8 +492,11 @@ def _build_water(built, coll, desc, shells, n_w, ref):
             key = obj.shape_key_add(name=f"pose {i}", from_mix=False)
             verts = _water_mesh(desc, i, gapped)["verts"] if i else mesh["verts"]
             key.data.foreach_set("co", np.asarray(verts, dtype=np.float32).ravel())
-            for f in range(n_poses):
-                key.value = 1.0 if f == i else 0.0
+            # Constant interpolation: 0 before pose i, 1 at pose i, 0 after (O(1) keys each).
+            for f, value in ((0, 0.0), (i, 1.0), (i + 1, 0.0)):
+                if f == 0 and i == 0 and value == 0.0:
+                    continue
+                key.value = value
                 key.keyframe_insert("value", frame=f)
         _constant_interpolation(me.shape_keys)
 

