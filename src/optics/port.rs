@@ -150,7 +150,13 @@ impl QSolve<'_> {
             let mut q = q0;
             for _ in 0..200 {
                 let (f, df, d2f) = self.eval2(q, r);
-                let dq = -2.0 * f * df / (2.0 * df * df - f * d2f);
+                // Halley while its correction is mild; plain Newton (monotone from the left
+                // for concave F) when F·F″ is comparable to F′² (far from the root).
+                let dq = if (f * d2f).abs() < 0.5 * df * df {
+                    -2.0 * f * df / (2.0 * df * df - f * d2f)
+                } else {
+                    -f / df
+                };
                 if !dq.is_finite() {
                     return Err(NoSolution::NoConvergence);
                 }
