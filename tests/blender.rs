@@ -396,9 +396,9 @@ fn sunlit_seabed_through_flat_port_matches_analytic_radiance() {
         eprintln!("sun_seabed: channel {c}: Cycles/analytic = {ratio:.5}");
         // Direct sunlight on a Lambertian plane: the only noise is the reflect-or-refract
         // choice at the two glass faces (σ ≈ 0.04 % over the whole image at 16 spp). Measured:
-        // 0.9968, a systematic −0.32 % that appears only for the sun behind a port (1.0000
-        // without the port; a point light through the same port: +0.05 %) and is not
-        // understood yet. 0.6 % bounds it with the slab's inter-reflections (≈2e-4).
+        // 0.9968: the housing casts a shadow on the seabed (≈70 of 19200 pixels, it moves with
+        // the sun direction; without the port: 1.0000). 0.6 % bounds it with the slab's
+        // inter-reflections (≈2e-4).
         assert!((ratio - 1.0).abs() < 6e-3, "channel {c}: ratio {ratio}");
     }
 }

@@ -119,3 +119,102 @@ fn cylinder_off_axis() {
     );
 }
 geometry_test!(dispersion, "dispersion");
+
+/// Analytic radiance through pixel (u, v): the scene's Lambertian patch lit by its one light
+/// (spot, or the sun refracted into the water), Beer–Lambert on both legs, inverse square,
+/// Fresnel through the port (`optics`), and the n² law at the port.
+fn analytic(model: &Model, u: f64, v: f64, c: usize) -> f64 {
+    use poser::model::{LightKind, Mount};
+    let proj = poser::optics::project::Projector::new(model, 0, c).unwrap();
+    let (o, d, t) = proj.pixel_ray_world(0, u, v).unwrap();
+    let obj = &model.objects[0];
+    let n = obj.pose.rotation.z_axis;
+    let s = (obj.pose.translation - o).dot(n) / d.dot(n);
+    let p = o + s * d;
+    let water = model.water.as_ref().unwrap();
+    let sa = water.absorption[c];
+    let e = if let Some(sun) = &model.sun {
+        let dz = -sun.direction_water.z;
+        sun.irradiance_water[c] * dz * (-sa * (-p.z) / dz).exp()
+    } else {
+        let l = &model.lights[0];
+        let LightKind::Spot {
+            position,
+            intensity,
+            ..
+        } = &l.kind
+        else {
+            panic!("unexpected light {l:?}")
+        };
+        let pos = match l.mount {
+            Mount::Rig => model.poses[0].world_from_rig.transform_point(*position),
+            Mount::World => *position,
+        };
+        let to_l = pos - p;
+        let dl = to_l.length();
+        intensity[c] * (to_l / dl).dot(n).max(0.0) / (dl * dl) * (-sa * dl).exp()
+    };
+    obj.material.albedo[c] / std::f64::consts::PI * e * (-sa * s).exp() * t / water.ior[c].powi(2)
+}
+
+/// Rendered/analytic over the central 40×30 window, per channel: (mean ratio, standard error
+/// of that mean from the per-pixel scatter).
+fn radiometry(name: &str) -> Vec<(f64, f64)> {
+    let model = load(name);
+    let tmp = tempfile::tempdir().unwrap();
+    let opts = RenderOptions {
+        samples: None,
+        poses: None,
+        progress: false,
+    };
+    poser::backend::mitsuba::render(&model, tmp.path(), &opts)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let img = poser::compare::LinearImage::read(
+        &tmp.path().join(format!("{}.exr", model.image_name(0, 0))),
+    )
+    .unwrap();
+    let (x0, y0) = (img.width / 2 - 20, img.height / 2 - 15);
+    (0..3)
+        .map(|c| {
+            let mut r = Vec::new();
+            for y in y0..y0 + 30 {
+                for x in x0..x0 + 40 {
+                    r.push(
+                        img.rgb[y * img.width + x][c] as f64
+                            / analytic(&model, x as f64 + 0.5, y as f64 + 0.5, c),
+                    );
+                }
+            }
+            let k = r.len() as f64;
+            let mean = r.iter().sum::<f64>() / k;
+            let sd = (r.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (k - 1.0)).sqrt();
+            eprintln!(
+                "mitsuba {name} channel {c}: rendered/analytic = {mean:.5} ± {:.5}",
+                sd / k.sqrt()
+            );
+            (mean, sd / k.sqrt())
+        })
+        .collect()
+}
+
+fn check_radiometry(name: &str) {
+    for (c, (mean, se)) in radiometry(name).into_iter().enumerate() {
+        // 4 standard errors of the window mean (Mitsuba's noise on this image) + 0.5 % for what
+        // the analytic value leaves out (slab inter-reflections, pixel-area averaging).
+        let tol = 4.0 * se + 0.005;
+        assert!(
+            (mean - 1.0).abs() <= tol,
+            "{name} channel {c}: {mean:.5} (tolerance ±{tol:.4})"
+        );
+    }
+}
+
+#[test]
+fn radiometry_absorbing_strobe() {
+    check_radiometry("absorbing_strobe");
+}
+
+#[test]
+fn radiometry_sun_seabed() {
+    check_radiometry("sun_seabed");
+}

@@ -21,7 +21,7 @@ use glam::{DMat3, DVec3};
 use std::path::Path;
 
 /// Relative RMSE the report times each backend to.
-pub const TARGET_RMSE: f64 = 0.05;
+pub const TARGET_RMSE: f64 = 0.10;
 /// Samples per pixel of the converged references.
 pub const REF_SPP: u32 = 1024;
 pub const QUICK_REF_SPP: u32 = 256;
