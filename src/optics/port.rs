@@ -811,11 +811,16 @@ impl CylinderPort {
                 break;
             }
         }
-        // Accept only a genuine solution: the ray passes within 1e-12 of P (relative).
-        if !(f.length() <= 1e-12) {
+        // Accept only a genuine solution: the full 3-D miss of P by the water ray (not just
+        // its part across e0) is within 1e-12 of the distance.
+        let v = (e0 + u1 * x.x + u2 * x.y).normalize();
+        let ray = self.backward(v)?;
+        let d = p - ray.origin;
+        let miss = (d - ray.dir * d.dot(ray.dir)).length();
+        if !(f.length() <= 1e-12 && miss <= 1e-12 * l && d.dot(ray.dir) > 0.0) {
             return Err(NoSolution::NoConvergence);
         }
-        Ok((e0 + u1 * x.x + u2 * x.y).normalize())
+        Ok(v)
     }
 }
 
