@@ -544,3 +544,27 @@ fn lateral_colour_at_the_corners() {
     cam.port = Port::None;
     assert_eq!(poser::optics::lateral_color_px(&cam, water), 0.0);
 }
+
+#[test]
+fn tilted_flat_port_ray_89_98_degrees_off_its_normal() {
+    // Found by the million-case property test: a fisheye ray almost parallel to a tilted port
+    // (cos = 2.2e-4) needs q ≈ 4000; the solver must switch from Halley to monotone Newton
+    // far from the root instead of giving up.
+    let l = Lens::new(
+        395.3125,
+        395.3125,
+        635.7477672351733,
+        673.7670935898929,
+        LensModel::FisheyeEquisolid,
+        Distortion::default(),
+    );
+    let n = DVec3::new(0.22104378626465523, -0.0808534024916798, 0.9719065653957194);
+    let port =
+        PortSolver::Flat(FlatPort::new(n, 0.04464238403980347, &[(0.0, 1.3)], 1.0, 1.32).unwrap());
+    for (u, v, s) in [(142.0, 637.0, 100.0), (142.0, 643.0, 27.825594022071257)] {
+        let ray = port.backward(l.unproject(u, v).unwrap()).unwrap();
+        let p = ray.origin + ray.dir * s;
+        let got = l.project(port.forward(p).unwrap()).unwrap();
+        assert!(dist(got, [u, v]) < EXACT_PX, "({u},{v}): {got:?}");
+    }
+}

@@ -150,7 +150,13 @@ impl QSolve<'_> {
             let mut q = q0;
             for _ in 0..200 {
                 let (f, df, d2f) = self.eval2(q, r);
-                let dq = -2.0 * f * df / (2.0 * df * df - f * d2f);
+                // Halley while its correction is mild; plain Newton (monotone from the left
+                // for concave F) when F·F″ is comparable to F′² (far from the root).
+                let dq = if (f * d2f).abs() < 0.5 * df * df {
+                    -2.0 * f * df / (2.0 * df * df - f * d2f)
+                } else {
+                    -f / df
+                };
                 if !dq.is_finite() {
                     return Err(NoSolution::NoConvergence);
                 }
@@ -805,11 +811,16 @@ impl CylinderPort {
                 break;
             }
         }
-        // Accept only a genuine solution: the ray passes within 1e-12 of P (relative).
-        if !(f.length() <= 1e-12) {
+        // Accept only a genuine solution: the full 3-D miss of P by the water ray (not just
+        // its part across e0) is within 1e-12 of the distance.
+        let v = (e0 + u1 * x.x + u2 * x.y).normalize();
+        let ray = self.backward(v)?;
+        let d = p - ray.origin;
+        let miss = (d - ray.dir * d.dot(ray.dir)).length();
+        if !(f.length() <= 1e-12 && miss <= 1e-12 * l && d.dot(ray.dir) > 0.0) {
             return Err(NoSolution::NoConvergence);
         }
-        Ok((e0 + u1 * x.x + u2 * x.y).normalize())
+        Ok(v)
     }
 }
 
