@@ -4,6 +4,8 @@
 //! * Water: homogeneous per channel. Free-flight distances are sampled with a channel picked
 //!   uniformly and weighted by the one-sample MIS density over the three channels (spectral
 //!   MIS); a non-scattering water uses its analytic transmittance.
+//! * Next-event estimation at the surface ending a water segment is weighted by the analytic
+//!   transmittance on both branches of the free-flight sample.
 //! * Next-event estimation at every vertex: point/spot lights and the sun (delta lights),
 //!   area lights (MIS with BSDF/phase sampling, power heuristic).
 //! * Equiangular sampling (Kulla & Fajardo 2012) of in-scattering from point/spot lights along
@@ -181,6 +183,10 @@ impl<'a> Integrator<'a> {
                 }
             }
             let can_scatter = depth < self.max_bounces;
+            // Weight of next-event estimation at the surface ending this segment: the analytic
+            // transmittance, whichever way the free flight below goes (both branches add it
+            // exactly once), so direct light on surfaces carries no free-flight noise.
+            let mut beta_nee = beta;
             if let Some(m) = &self.medium
                 && let Some((a, b)) = m.interval(o, d, 0.0, t_end)
             {
@@ -202,6 +208,11 @@ impl<'a> Integrator<'a> {
                         f64::INFINITY
                     };
                     if t < b {
+                        if area_hit.is_none()
+                            && let Some(h) = &hit
+                        {
+                            l += beta * tr(m.sigma_t, b - a) * self.surface_direct(h, d, rng);
+                        }
                         let trv = tr(m.sigma_t, t - a);
                         let pdf_d = mean(m.sigma_t * trv);
                         beta *= m.sigma_s * trv / pdf_d;
@@ -233,9 +244,11 @@ impl<'a> Integrator<'a> {
                     if p_pass <= 0.0 {
                         break;
                     }
+                    beta_nee = beta * trv;
                     beta *= trv / p_pass;
                 } else {
                     beta *= tr(m.sigma_t, b - a);
+                    beta_nee = beta;
                 }
             }
             if let Some(i) = area_hit {
@@ -268,16 +281,7 @@ impl<'a> Integrator<'a> {
                 break;
             }
             let p = h.point + n * SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
-            let f = |w: DVec3| {
-                let c = n.dot(w);
-                if c > 0.0 {
-                    albedo * (c / PI)
-                } else {
-                    DVec3::ZERO
-                }
-            };
-            let pdf = |w: DVec3| n.dot(w).max(0.0) / PI;
-            l += beta * self.direct(p, &f, &pdf, &|_, _| 1.0, rng);
+            l += beta_nee * self.surface_direct(&h, d, rng);
             // Cosine-weighted hemisphere: f·cos/pdf = albedo.
             let (u1, u2) = rng.next2();
             let r = u1.sqrt();
@@ -295,6 +299,31 @@ impl<'a> Integrator<'a> {
             }
         }
         l
+    }
+
+    /// Next-event estimate of the light reflected at surface hit `h` towards `-d` (no path
+    /// weight).
+    fn surface_direct(&self, h: &Hit, d: DVec3, rng: &mut Sampler) -> DVec3 {
+        let n = if h.normal.dot(d) > 0.0 {
+            -h.normal
+        } else {
+            h.normal
+        };
+        let albedo = self.albedo(h);
+        if albedo == DVec3::ZERO {
+            return DVec3::ZERO;
+        }
+        let p = h.point + n * SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
+        let f = |w: DVec3| {
+            let c = n.dot(w);
+            if c > 0.0 {
+                albedo * (c / PI)
+            } else {
+                DVec3::ZERO
+            }
+        };
+        let pdf = |w: DVec3| n.dot(w).max(0.0) / PI;
+        self.direct(p, &f, &pdf, &|_, _| 1.0, rng)
     }
 
     fn roulette(&self, beta: &mut DVec3, depth: u32, rng: &mut Sampler) -> bool {
