@@ -48,16 +48,30 @@ fn render(backend: &str, model: &Model, dir: &Path, samples: Option<u32>) {
         .unwrap_or_else(|e| panic!("{backend}: {e}"));
 }
 
+/// Samples per pixel for the geometry checks. The disk centroids' scatter is Monte Carlo noise
+/// (the mean offsets stay ≤ 0.03 px at any spp). Measured RMS at 16 spp: native 0.04–0.05 px,
+/// Cycles 0.11–0.15 px, Mitsuba 0.15–0.28 px (their ambient-light estimates are noisier); at
+/// 256 spp Cycles 0.010–0.017 px and Mitsuba 0.04–0.07 px. Each backend gets the samples that
+/// bring its noise well under the 0.05 px target.
+fn geometry_samples(backend: &str) -> Option<u32> {
+    match backend {
+        "native" => Some(64),
+        "blender" => Some(256),
+        _ => Some(1024),
+    }
+}
+
 fn geometry(backend: &str) {
     let tmp = tempfile::tempdir().unwrap();
     let mut failures = Vec::new();
     for name in GEOMETRY {
         let model = load(name);
         let dir = tmp.path().join(name);
-        render(backend, &model, &dir, None);
+        render(backend, &model, &dir, geometry_samples(backend));
         let (found, expected) = poser::compare::measure_targets(&model, &dir).unwrap();
+        // The cylinder port stretches the image across its axis, so fewer disks fit.
         assert!(
-            expected >= 12,
+            expected >= 8,
             "{name}: only {expected} disks expected in view"
         );
         assert_eq!(found.len(), expected, "{name}: {backend} lost disks");
@@ -153,19 +167,16 @@ fn image_mean(backend: &str, model: &Model, dir: &Path, samples: u32) -> [f64; 3
 }
 
 #[test]
-#[ignore = "WIP: backend not yet passing (lead tracks)"]
 fn native_geometry() {
     geometry("native");
 }
 
 #[test]
-#[ignore = "WIP: backend not yet passing (lead tracks)"]
 fn native_radiometry_strobe() {
     radiometry("native", "absorbing_strobe");
 }
 
 #[test]
-#[ignore = "WIP: backend not yet passing (lead tracks)"]
 fn native_radiometry_sun() {
     radiometry("native", "sun_seabed");
 }
@@ -186,7 +197,6 @@ fn analytic_reference_is_sane() {
 }
 
 #[test]
-#[ignore = "WIP: backend not yet passing (lead tracks)"]
 fn blender_geometry() {
     geometry("blender");
 }
@@ -197,7 +207,45 @@ fn blender_radiometry_strobe() {
 }
 
 #[test]
-#[ignore = "WIP: backend not yet passing (lead tracks)"]
 fn blender_radiometry_sun() {
     radiometry("blender", "sun_seabed");
+}
+
+#[test]
+fn mitsuba_geometry() {
+    geometry("mitsuba");
+}
+
+#[test]
+fn mitsuba_radiometry_strobe() {
+    radiometry("mitsuba", "absorbing_strobe");
+}
+
+#[test]
+fn mitsuba_radiometry_sun() {
+    radiometry("mitsuba", "sun_seabed");
+}
+
+/// Issue 7's target between backends in scattering water (image means, per channel).
+const MAX_BETWEEN_BACKENDS: f64 = 0.02;
+
+#[test]
+fn backends_agree_in_scattering_water() {
+    let model = load("scattering_backscatter");
+    let tmp = tempfile::tempdir().unwrap();
+    let means: Vec<(&str, [f64; 3])> = ["native", "mitsuba", "blender"]
+        .into_iter()
+        .map(|b| (b, image_mean(b, &model, &tmp.path().join(b), 256)))
+        .collect();
+    let (_, reference) = means[1]; // Mitsuba: the radiometric reference (n² law)
+    for (b, m) in &means {
+        for c in 0..3 {
+            let rel = m[c] / reference[c] - 1.0;
+            eprintln!("scattering: {b} / mitsuba − 1, channel {c} = {rel:+.4}");
+            assert!(
+                rel.abs() <= MAX_BETWEEN_BACKENDS,
+                "{b} channel {c}: {rel:+.4}"
+            );
+        }
+    }
 }

@@ -61,7 +61,10 @@ pub struct Disk {
     pub center: DVec3,
     pub normal: DVec3,
     pub radius: f64,
+    /// Half-size of the white region around the disk, m: a square cell along the target's
+    /// x/y axes (`x_axis` given) or a circle (`x_axis` `None`).
     pub clear_radius: f64,
+    pub x_axis: Option<DVec3>,
 }
 
 /// Every locatable disk of the model's targets (circle grids, coded targets' centre dots,
@@ -81,6 +84,8 @@ pub fn disks(model: &Model) -> Vec<Disk> {
             _ => continue,
         };
         let normal = t.pose.rotation.z_axis;
+        let x_axis =
+            matches!(t.kind, TargetKind::CircleGrid { .. }).then_some(t.pose.rotation.x_axis);
         for p in &t.points {
             out.push(Disk {
                 id: p.id.clone(),
@@ -88,6 +93,7 @@ pub fn disks(model: &Model) -> Vec<Disk> {
                 normal,
                 radius,
                 clear_radius: clear,
+                x_axis,
             });
         }
     }
@@ -105,19 +111,38 @@ pub fn expected_disk(proj: &Projector, pose: usize, d: &Disk) -> Option<([f64; 2
     if d.normal.dot(cam - d.center) <= 0.0 {
         return None;
     }
-    // Image radius of the disk and of its white surround, px.
-    let edge = proj
-        .project_world(
-            pose,
-            d.center + d.radius * d.normal.any_orthonormal_vector(),
-        )
-        .ok()?;
-    let r_img = ((edge[0] - c[0]).powi(2) + (edge[1] - c[1]).powi(2)).sqrt();
-    let scale = r_img / d.radius;
+    // Chebyshev (max-norm) distances from the centroid: the disk's outline must stay inside
+    // the window's border ring, the white surround's outline outside the window. Sampled
+    // outlines handle anisotropic magnification (cylinder ports, oblique views).
+    let cheb = |p: [f64; 2]| (p[0] - c[0]).abs().max((p[1] - c[1]).abs());
+    let a = d
+        .x_axis
+        .unwrap_or_else(|| d.normal.any_orthonormal_vector());
+    let b = d.normal.cross(a);
+    const N: usize = 64;
+    let mut r_disk: f64 = 0.0;
+    let mut r_clear = f64::INFINITY;
+    for k in 0..N {
+        let t = std::f64::consts::TAU * k as f64 / N as f64;
+        let (ct, st) = (t.cos(), t.sin());
+        let p = proj
+            .project_world(pose, d.center + d.radius * (ct * a + st * b))
+            .ok()?;
+        r_disk = r_disk.max(cheb(p));
+        // Square cell: scale the direction onto the square's boundary.
+        let s = if d.x_axis.is_some() {
+            1.0 / ct.abs().max(st.abs())
+        } else {
+            1.0
+        };
+        let q = proj
+            .project_world(pose, d.center + d.clear_radius * s * (ct * a + st * b))
+            .ok()?;
+        r_clear = r_clear.min(cheb(q));
+    }
     // 1.5 px of safety from the edge of the white surround (partly covered edge pixels).
-    let half = (d.clear_radius * scale - 1.5).min(r_img + 5.0);
-    // The border ring of the window must be clear of the disk.
-    if r_img < 1.5 || half < r_img + 2.0 {
+    let half = (r_clear - 1.5).min(r_disk + 5.0);
+    if r_disk < 1.5 || half < r_disk + 2.0 {
         return None;
     }
     if c[0] - half < 1.0
