@@ -324,18 +324,11 @@ fn ports_project_like_the_optics_truth() {
             expected,
             "{scene}: every visible disk is found"
         );
-        assert_eq!(found.len(), 20, "{scene}");
-        // The cylinder's outer columns: native, Mitsuba and Cycles agree with each other but
-        // not with the truth's cylinder solver (up to 0.73 px, `poser compare`), so only its
-        // 6 interior disks are held to the bound here.
-        let checked: Vec<_> = found
-            .iter()
-            .filter(|(id, _, _)| {
-                let i: usize = id.rsplit('/').next().unwrap().parse().unwrap();
-                scene != "cylinder_off_axis"
-                    || ((1..4).contains(&(i % 5)) && (1..3).contains(&(i / 5)))
-            })
-            .collect();
+        // The cylinder stretches the grid across its axis, so only its disks whose window
+        // stays on the card are measured (9 of 20); every other scene shows all 20.
+        let min = if scene == "cylinder_off_axis" { 8 } else { 20 };
+        assert!(found.len() >= min, "{scene}: {} disks", found.len());
+        let checked = &found;
         let rms = (checked
             .iter()
             .map(|(_, _, d)| d[0] * d[0] + d[1] * d[1])
