@@ -7,11 +7,13 @@ The description (format `poser-blender/1`) is written by `poser compile --backen
 |---|---|
 | rig pose | Empty `poser_rig`, keyframed once per pose (frame = pose index, constant interpolation) |
 | camera | Empty (OpenCV frame) child of the rig + Camera child; exact intrinsics via lens/shift |
-| port | inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g) |
+| distortion, fx != fy | CUSTOM camera running poser's fixed OSL shader `camera.osl` (parameters only): Newton inverse of Brown-Conrady per film sample, as src/optics/lens.rs; exact, no resampling |
+| port | inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g); no housing shadow (HOUSING_SHADOW) |
 | water | one closed mesh `poser_water` (box minus housings), Volume Coefficients node; per pose a shape key |
 | lights | point/spot (P = 4 pi I, radius 0, blend 0), sun (angle 0), area (P = L pi A), ambient = world |
 | objects | Blender primitives (plane/box/sphere/cylinder) or imported PLY assets; Diffuse BSDF |
-| targets | planes with the target's PNG texture |
+| targets | planes with the target's PNG texture; 3D test objects as white boxes + black disks |
+| depth (`render.outputs` has "depth") | a second 1-sample render per image: glass -> Refraction BSDF, water off, surfaces emit their camera-frame z; `<image>.depth.exr` |
 
 Emitters in water are scaled by (n_cam/n_water)^2 per camera before each render (the n^2
 convention, render-conventions §3.4).

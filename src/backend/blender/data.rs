@@ -78,7 +78,9 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         .map(|p| p.to_path_buf())
         .unwrap_or_default();
     for cam in &model.cameras {
-        if (!cam.distortion.is_zero() || cam.fx != cam.fy)
+        // Same test as the builder's `needs_custom_camera`.
+        let square = (cam.fx - cam.fy).abs() <= 1e-9 * cam.fx.abs();
+        if (!cam.distortion.is_zero() || !square)
             && cam.focus_distance.is_some()
             && cam.f_number.is_some()
         {
@@ -292,7 +294,9 @@ fn test_object(t: &crate::model::Target) -> Value {
         .collect();
     let disks: Vec<Value> = crate::targets::local_points(&t.kind)
         .into_iter()
-        .map(|(id, p)| json!({"id": id, "center": [p.x, p.y, p.z + 1e-5], "radius": 0.5 * diameter}))
+        .map(
+            |(id, p)| json!({"id": id, "center": [p.x, p.y, p.z + 1e-5], "radius": 0.5 * diameter}),
+        )
         .collect();
     json!({
         "name": t.name,

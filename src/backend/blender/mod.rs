@@ -5,7 +5,7 @@
 //!
 //! | file | content |
 //! |---|---|
-//! | `scene.py` | the builder package `backends/blender/poser_blender` (embedded source) + the scene description as a JSON string literal, decoded with `json.loads` |
+//! | `scene.py` | the builder package `backends/blender/poser_blender` (embedded source, with its fixed OSL camera shader `camera.osl`) + the scene description as a JSON string literal, decoded with `json.loads` |
 //! | `scene.json` | the same description, pretty-printed (for the Blender add-on and for diffing) |
 //! | `assets/` | PLY meshes and target textures the description refers to |
 //!
