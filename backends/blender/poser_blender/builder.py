@@ -474,13 +474,19 @@ def _render_settings(scene, desc):
     cy.light_sampling_threshold = 0.0
     cy.caustics_reflective = True
     cy.caustics_refractive = True
-    b = max(int(r.get("max_bounces", 64)), 1)
-    cy.max_bounces = b
-    cy.transmission_bounces = b
+    # poser's max_bounces counts scattering vertices (surface or medium) on a path; Cycles
+    # counts the events after which a path continues (0 = direct light and single
+    # scattering only), and counts each glass face a camera ray crosses as a transmission
+    # bounce. So every budget is one less than poser's, and the port's faces are added to
+    # the total and transmission budgets.
+    b = max(int(r.get("max_bounces", 64)), 1) - 1
+    glass = int(r.get("port_interfaces", 0))
+    cy.max_bounces = b + glass
+    cy.transmission_bounces = b + glass
     cy.volume_bounces = b
     cy.diffuse_bounces = b
     cy.glossy_bounces = b
-    cy.transparent_max_bounces = b
+    cy.transparent_max_bounces = 64
     scene.render.use_persistent_data = True
     cam0 = desc["cameras"][0]
     scene.render.resolution_x = int(cam0["width"])

@@ -249,6 +249,7 @@ pub fn describe(model: &Model) -> Result<Description, String> {
             "samples": model.render.samples,
             "seed": model.render.seed,
             "max_bounces": model.render.max_bounces,
+            "port_interfaces": model.port_interfaces(),
             "exposure": model.render.exposure,
             "outputs": model.render.outputs,
         },
