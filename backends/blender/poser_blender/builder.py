@@ -310,6 +310,7 @@ def build(desc, base_dir=".", scene=None):
         inner_obj.matrix_parent_inverse.identity()
         shells.append((ci, shell, glass))
 
+    scene.camera = built.cameras[0]  # the saved .blend opens looking through camera 0
     _build_water(built, coll, desc, shells, n_w, ref)
     _build_lights(built, coll, desc)
     _build_objects(built, coll, desc, base_dir)
@@ -381,8 +382,11 @@ def _custom_camera(data, cam):
     code, digest = _osl_bytecode(text.as_string())
     data.type = "CUSTOM"
     data.custom_mode = "INTERNAL"
-    # Assigning the text runs Cycles' own update (it needs the `oslquery` module, which the
-    # bpy wheel does not put on sys.path); the bytecode and parameters are set here anyway.
+    # Assigning the text runs Cycles' own update, which compiles the shader and creates the
+    # parameter properties (shown in the Lens panel); it needs the `oslquery` module, which
+    # the bpy wheel ships but does not put on sys.path. The bytecode and the parameters are
+    # set here in any case.
+    _ensure_oslquery()
     _quiet(lambda: setattr(data, "custom_shader", text))
     data.custom_bytecode = code
     data.custom_bytecode_hash = digest
@@ -397,6 +401,18 @@ def _custom_camera(data, cam):
     r2 = cam.get("r2_max")
     params["r2_max"] = 1e30 if r2 is None else float(min(r2, 1e30))
     data.update_tag()
+
+
+def _ensure_oslquery():
+    try:
+        import oslquery  # noqa: F401
+    except ImportError:
+        lib = os.path.join(bpy.utils.resource_path("LOCAL"), "python", "lib")
+        if os.path.isdir(lib):
+            for d in sorted(os.listdir(lib)):
+                site = os.path.join(lib, d, "site-packages")
+                if os.path.isdir(os.path.join(site, "oslquery")) and site not in sys.path:
+                    sys.path.append(site)
 
 
 def _quiet(fn):

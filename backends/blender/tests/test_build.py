@@ -192,7 +192,12 @@ def test_custom_camera_projects_with_distortion(lens, tmp_path):
                         "radiance": [1, 1, 1]}],
             "objects": objs, "targets": []}
     built = pbuild.build(desc, ".", _fresh())
-    assert built.cameras[0].data.type == "CUSTOM"
+    data = built.cameras[0].data
+    assert data.type == "CUSTOM" and data.custom_mode == "INTERNAL"
+    assert data.custom_shader.name == "poser_camera.osl" and data.custom_bytecode
+    assert data.cycles_custom["k1"] == pytest.approx(dist["k1"])
+    assert data.cycles_custom["fy"] == pytest.approx(fy)
+    assert built.scene.camera == built.cameras[0]
     exr = pbuild.render(built, str(tmp_path), png=False)[0]
     w = np.clip(1.0 - pbuild._load_pixels(exr)[::-1, :, 1], 0.0, None)  # row 0 = top
     errs = []
