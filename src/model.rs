@@ -336,6 +336,15 @@ impl Port {
             }
         }
     }
+    /// Refractive surfaces a camera ray crosses on its way out (inner and outer glass faces).
+    /// Mitsuba and Cycles count each as a path vertex, so their bounce budgets add these to
+    /// the model's `max_bounces` (which, like the native tracer, counts scattering only).
+    pub fn interfaces(&self) -> u32 {
+        match self {
+            Port::None => 0,
+            Port::Flat { .. } | Port::Dome { .. } | Port::Cylinder { .. } => 2,
+        }
+    }
     pub fn kind_name(&self) -> &'static str {
         match self {
             Port::None => "none",
@@ -652,5 +661,14 @@ impl Model {
         } else {
             format!("{}_{}", self.cameras[cam].name, self.poses[pose].name)
         }
+    }
+
+    /// The most port interfaces any camera's rays cross ([`Port::interfaces`]).
+    pub fn port_interfaces(&self) -> u32 {
+        self.cameras
+            .iter()
+            .map(|c| c.port.interfaces())
+            .max()
+            .unwrap_or(0)
     }
 }

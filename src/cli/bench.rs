@@ -1,8 +1,19 @@
 //! `poser bench`: speed-against-error reports (projection solvers; render backends).
 use super::CliError;
-use std::path::Path;
+use std::path::PathBuf;
 
-pub fn run(what: &str, json: Option<&Path>, quick: bool) -> Result<(), CliError> {
+pub fn run(
+    what: &str,
+    json: Option<PathBuf>,
+    quick: bool,
+    backends: Vec<String>,
+    plot: Option<PathBuf>,
+) -> Result<(), CliError> {
+    if what != "render" && (!backends.is_empty() || plot.is_some()) {
+        return Err(CliError::Usage(
+            "--backends and --plot apply to `poser bench render` only".into(),
+        ));
+    }
     match what {
         "projection" => {
             if cfg!(debug_assertions) {
@@ -12,7 +23,7 @@ pub fn run(what: &str, json: Option<&Path>, quick: bool) -> Result<(), CliError>
             }
             let rows = crate::optics::bench::run(quick);
             print!("{}", crate::optics::bench::table(&rows));
-            if let Some(path) = json {
+            if let Some(path) = json.as_deref() {
                 let text = serde_json::to_string_pretty(&rows)
                     .map_err(|e| CliError::Failed(e.to_string()))?;
                 crate::io::write_atomic(path, text.as_bytes())
@@ -20,7 +31,22 @@ pub fn run(what: &str, json: Option<&Path>, quick: bool) -> Result<(), CliError>
             }
             Ok(())
         }
-        "render" => crate::render::bench::run(json, quick).map_err(CliError::Failed),
+        "render" => {
+            if cfg!(debug_assertions) {
+                eprintln!(
+                    "warning: this is a debug build; speeds are not representative (use --release)"
+                );
+            }
+            let opts = crate::render::bench::BenchOptions {
+                quick,
+                backends,
+                json,
+                plot,
+            };
+            crate::render::bench::run(&opts)
+                .map(|_| ())
+                .map_err(CliError::Failed)
+        }
         other => Err(CliError::Usage(format!(
             "bench `{other}`: expected `projection` or `render`"
         ))),

@@ -199,6 +199,12 @@ pub enum Command {
         /// Smaller, quicker run.
         #[arg(long)]
         quick: bool,
+        /// `render` only: the backends to compare (default: all three).
+        #[arg(long, value_delimiter = ',')]
+        backends: Vec<String>,
+        /// `render` only: write the speed-against-error curves as an SVG plot.
+        #[arg(long)]
+        plot: Option<PathBuf>,
     },
     /// Dive profile, decompression and gas verdict; export to Subsurface.
     Dive {
@@ -279,7 +285,13 @@ pub fn main() -> ExitCode {
             samples,
             poses,
         } => compare::run(&scene, &backends, &out, samples, poses),
-        Command::Bench { what, json, quick } => bench::run(&what, json.as_deref(), quick),
+        Command::Bench {
+            what,
+            json,
+            quick,
+            backends,
+            plot,
+        } => bench::run(&what, json, quick, backends, plot),
         Command::Dive {
             scene,
             out,

@@ -16,7 +16,7 @@
 //! | point / spot | `point` / `spot` (W/sr; `cutoff_angle` = half angle, sharp edge) | |
 //! | area | `rectangle` + `area` emitter (one-sided, +z) | |
 //! | ambient | `constant` | |
-//! | integrator | `volpath`, `max_depth = max_bounces + 1` | Mitsuba counts path segments |
+//! | integrator | `volpath`, `max_depth = max_bounces + 1 + port interfaces` | Mitsuba counts every vertex, glass faces included |
 //!
 //! Indices: a dielectric needs one number per side; without per-channel passes the G channel
 //! (550 nm) index is used, with them each pass uses its own channel's indices.
@@ -771,8 +771,11 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
     root.push_comment(spec.title.clone());
     root.push(
         El::typed("integrator", "volpath")
-            .comment("max_depth counts path segments: max_bounces + 1")
-            .integer("max_depth", model.render.max_bounces as i64 + 1),
+            .comment("max_depth counts path vertices: max_bounces + 1, plus the port's glass faces")
+            .integer(
+                "max_depth",
+                model.render.max_bounces as i64 + 1 + model.port_interfaces() as i64,
+            ),
     );
     if let Some(w) = &spec.world_file {
         root.push(El::new("include").attr("filename", w.as_str()));
