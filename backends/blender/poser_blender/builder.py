@@ -400,6 +400,14 @@ def _custom_camera(data, cam):
                       "fisheye_equisolid": 2}[cam.get("lens", "rectilinear")]
     r2 = cam.get("r2_max")
     params["r2_max"] = 1e30 if r2 is None else float(min(r2, 1e30))
+    # Thin lens (as Mitsuba's `thinlens` and Cycles' own cameras): aperture radius f/(2N),
+    # focus plane at z = focus_distance.
+    aperture, focus = 0.0, 1.0
+    if cam.get("focus_distance") and cam.get("f_number") and cam.get("focal_length"):
+        aperture = float(cam["focal_length"]) / (2.0 * float(cam["f_number"]))
+        focus = float(cam["focus_distance"])
+    params["aperture_radius"] = aperture
+    params["focus_distance"] = focus
     data.update_tag()
 
 
@@ -469,7 +477,8 @@ def _set_intrinsics(data, cam):
     if cam.get("focus_distance") and cam.get("f_number"):
         data.dof.use_dof = True
         data.dof.focus_distance = float(cam["focus_distance"])
-        data.dof.aperture_fstop = float(cam["f_number"])
+        data.dof.aperture_fstop = geo.blender_fstop(float(cam["f_number"]), data.lens,
+                                                    cam.get("focal_length"))
 
 
 def _render_settings(scene, desc):
