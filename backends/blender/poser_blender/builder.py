@@ -1085,8 +1085,12 @@ def render_depth(built, cam_index, path):
         cache = built.depth_twins = {}
     saved_mats = []
     saved_hidden = []
+    seen = set()
     for obj in scene.objects:
         if obj.type == "MESH" and obj.data is not None:
+            if obj.data.name in seen:  # mesh data shared by several objects: swap once
+                continue
+            seen.add(obj.data.name)
             mats = list(obj.data.materials)
             if not mats:
                 obj.data.materials.append(None)
