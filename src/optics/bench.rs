@@ -385,60 +385,91 @@ pub struct Row {
     pub failures: usize,
 }
 
-type Solver<'a> = Box<dyn Fn(DVec3) -> Result<[f64; 2], NoSolution> + 'a>;
+/// Errors against `refs` and one-core speed of `solve` over `pts` (monomorphised per solver:
+/// no dynamic dispatch in the timed loop).
+fn measure<F: Fn(DVec3) -> Result<[f64; 2], NoSolution>>(
+    pts: &[DVec3],
+    refs: &[Option<[f64; 2]>],
+    min_time: f64,
+    solve: F,
+) -> (usize, f64, f64, f64, f64, usize) {
+    let mut errs = Vec::new();
+    let mut failures = 0;
+    for (p, r) in pts.iter().zip(refs) {
+        let Some(r) = r else { continue };
+        match solve(*p) {
+            Ok(x) if x[0].is_finite() && x[1].is_finite() => {
+                errs.push((x[0] - r[0]).hypot(x[1] - r[1]))
+            }
+            _ => failures += 1,
+        }
+    }
+    errs.sort_by(f64::total_cmp);
+    let median = errs.get(errs.len() / 2).copied().unwrap_or(f64::NAN);
+    let max = errs.last().copied().unwrap_or(f64::NAN);
+    // Timing: whole passes over the set until `min_time` of thread CPU time has elapsed.
+    let t0 = Instant::now();
+    let c0 = thread_cpu_seconds();
+    let mut count = 0usize;
+    while thread_cpu_seconds() - c0 < min_time || count == 0 {
+        for p in pts.iter() {
+            std::hint::black_box(solve(std::hint::black_box(*p)).ok());
+        }
+        count += pts.len();
+    }
+    let pps = count as f64 / (thread_cpu_seconds() - c0);
+    let pps_wall = count as f64 / t0.elapsed().as_secs_f64();
+    (errs.len(), pps, pps_wall, median, max, failures)
+}
 
-/// Run the whole comparison. `quick`: fewer points and shorter timing.
+/// Run the whole comparison. `quick`: fewer points and shorter timing. The environment
+/// variable `POSER_BENCH_FILTER` (a substring of `port/points/solver`, e.g. `dome/` or
+/// `/poser`) restricts the rows, for profiling one solver under valgrind.
 pub fn run(quick: bool) -> Vec<Row> {
+    let filter = std::env::var("POSER_BENCH_FILTER").unwrap_or_default();
+    let wanted = |port: &str, set: &str, solver: &str| {
+        format!("{port}/{set}/{solver}").contains(filter.as_str())
+    };
     let n = if quick { 1000 } else { 10000 };
     let min_time = if quick { 0.05 } else { 0.5 };
     let lens = bench_lens();
     let mut rows = Vec::new();
     for case in cases(n) {
         for (set, pts) in [("ordinary", &case.ordinary), ("grazing", &case.grazing)] {
+            let want = |solver: &str| wanted(case.name, set, solver);
+            if !(want("poser") || want("colmap_gn") || want("agrawal")) {
+                continue;
+            }
             let refs: Vec<Option<[f64; 2]>> = pts
                 .iter()
                 .map(|p| reference_pixel(&case.port, &lens, *p))
                 .collect();
             let port = case.port;
-            let mut solvers: Vec<(&str, Solver)> = vec![
-                ("poser", Box::new(move |p| poser_project(&port, &lens, p))),
-                ("colmap_gn", Box::new(move |p| colmap_gn(&port, &lens, p))),
-            ];
-            if let PortSolver::Flat(f) = case.port {
-                solvers.push(("agrawal", Box::new(move |p| agrawal(&f, &lens, p))));
+            let mut results = Vec::new();
+            if want("poser") {
+                results.push((
+                    "poser",
+                    measure(pts, &refs, min_time, |p| poser_project(&port, &lens, p)),
+                ));
             }
-            for (name, solve) in &solvers {
-                let mut errs = Vec::new();
-                let mut failures = 0;
-                for (p, r) in pts.iter().zip(&refs) {
-                    let Some(r) = r else { continue };
-                    match solve(*p) {
-                        Ok(x) if x[0].is_finite() && x[1].is_finite() => {
-                            errs.push((x[0] - r[0]).hypot(x[1] - r[1]))
-                        }
-                        _ => failures += 1,
-                    }
-                }
-                errs.sort_by(f64::total_cmp);
-                let median = errs.get(errs.len() / 2).copied().unwrap_or(f64::NAN);
-                let max = errs.last().copied().unwrap_or(f64::NAN);
-                // Timing: whole passes over the set until `min_time` has elapsed.
-                let t0 = Instant::now();
-                let c0 = thread_cpu_seconds();
-                let mut count = 0usize;
-                while thread_cpu_seconds() - c0 < min_time || count == 0 {
-                    for p in pts.iter() {
-                        std::hint::black_box(solve(std::hint::black_box(*p)).ok());
-                    }
-                    count += pts.len();
-                }
-                let pps = count as f64 / (thread_cpu_seconds() - c0);
-                let pps_wall = count as f64 / t0.elapsed().as_secs_f64();
+            if want("colmap_gn") {
+                results.push((
+                    "colmap_gn",
+                    measure(pts, &refs, min_time, |p| colmap_gn(&port, &lens, p)),
+                ));
+            }
+            if let (PortSolver::Flat(f), true) = (case.port, want("agrawal")) {
+                results.push((
+                    "agrawal",
+                    measure(pts, &refs, min_time, |p| agrawal(&f, &lens, p)),
+                ));
+            }
+            for (name, (n, pps, pps_wall, median, max, failures)) in results {
                 rows.push(Row {
                     port: case.name.into(),
                     points: set.into(),
-                    solver: (*name).into(),
-                    n: errs.len(),
+                    solver: name.into(),
+                    n,
                     points_per_second: pps,
                     points_per_second_wall: pps_wall,
                     median_error_px: median,

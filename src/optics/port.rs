@@ -44,161 +44,203 @@ pub struct FlatPort {
     pub n_air: f64,
     pub n_water: f64,
     total_thickness: f64,
-    /// Σ tᵢ·na/nᵢ over the camera-side gap and the glass (the paraxial optical length).
-    paraxial_port: f64,
-    /// Every index ≥ n_air: F is concave and Newton from the left needs no bracket.
-    concave: bool,
+    /// The q-equation's per-port constants.
+    slabs: Slabs,
 }
 
-/// Scalar q-equation for parallel layers (`optics.md` §1.3): layers (thickness, index) with
-/// the camera medium index `na`; the first layer is the camera-side gap.
+/// Scalar q-equation for parallel layers (`optics.md` §1.3) with every per-port constant
+/// precomputed once: the camera-side gap (index `na`), up to [`MAX_LAYERS`] glass layers, and
+/// the water (index `nw`), whose depth D is the only per-point parameter besides r.
+///
+/// `F(q) = gap·q + Σᵢ tᵢ·na·q/√(nᵢ² + (nᵢ² − na²)q²) + D·na·q/√(nw² + (nw² − na²)q²) − r`.
 #[derive(Debug, Clone, Copy)]
-struct QSolve<'a> {
+struct Slabs {
     na: f64,
     gap: f64,
-    layers: &'a [(f64, f64)],
-    water: (f64, f64),
+    n: usize,
+    /// Per glass layer: tᵢ·na, nᵢ², nᵢ² − na².
+    tna: [f64; MAX_LAYERS],
+    n2: [f64; MAX_LAYERS],
+    k: [f64; MAX_LAYERS],
+    /// Water: na, nw, nw², nw² − na².
+    nw: f64,
+    nw2: f64,
+    kw: f64,
+    /// Every index ≥ na: F is concave and increasing (no bracket needed).
+    concave: bool,
+    /// gap + Σ tᵢ·na/nᵢ (paraxial optical length of the port, camera-medium units).
+    parax: f64,
+    /// (gap·nw/na + Σ tᵢ·nw/nᵢ): the port in paraxial water units (first guess of tan θw).
+    water_units: f64,
+    /// Σ tᵢ·na/√(nᵢ² − na²) when every nᵢ > na (the layers' asymptote as q → ∞), else ∞.
+    asym: f64,
+    /// na/√(nw² − na²): the limit of tan θw as q → ∞ (∞ when nw ≤ na).
+    tw_inf: f64,
+    /// Largest q at which every term is defined (q < n/√(na²−n²) for layers with n < na),
+    /// ignoring the water.
+    q_max_layers: f64,
 }
 
-impl QSolve<'_> {
-    #[inline(always)]
-    fn term(na: f64, t: f64, n: f64, q: f64) -> (f64, f64) {
-        // t·na·q/√(n² + (n²−na²)q²) and its derivative t·na·n²/(…)^{3/2}
-        let n2 = n * n;
-        let g = n2 + (n2 - na * na) * q * q;
-        let s = g.sqrt();
-        let inv = 1.0 / s;
-        let v = t * na * q * inv;
-        (v, t * na * n2 * inv * inv * inv)
-    }
-
-    #[inline(always)]
-    fn eval(&self, q: f64, r: f64) -> (f64, f64) {
-        let mut f = self.gap * q - r;
-        let mut df = self.gap;
-        for &(t, n) in self.layers {
-            let (v, d) = Self::term(self.na, t, n, q);
-            f += v;
-            df += d;
+impl Slabs {
+    fn new(na: f64, gap: f64, layers: &[(f64, f64)], nw: f64) -> Slabs {
+        let mut s = Slabs {
+            na,
+            gap,
+            n: layers.len(),
+            tna: [0.0; MAX_LAYERS],
+            n2: [1.0; MAX_LAYERS],
+            k: [0.0; MAX_LAYERS],
+            nw,
+            nw2: nw * nw,
+            kw: nw * nw - na * na,
+            concave: nw >= na && layers.iter().all(|&(_, n)| n >= na),
+            parax: gap + layers.iter().map(|&(t, n)| t * na / n).sum::<f64>(),
+            water_units: gap * nw / na + layers.iter().map(|&(t, n)| t * nw / n).sum::<f64>(),
+            asym: 0.0,
+            tw_inf: if nw > na {
+                na / (nw * nw - na * na).sqrt()
+            } else {
+                f64::INFINITY
+            },
+            q_max_layers: f64::INFINITY,
+        };
+        for (i, &(t, n)) in layers.iter().enumerate() {
+            s.tna[i] = t * na;
+            s.n2[i] = n * n;
+            s.k[i] = n * n - na * na;
+            s.asym += if n > na {
+                t * na / (n * n - na * na).sqrt()
+            } else if t > 0.0 {
+                f64::INFINITY
+            } else {
+                0.0
+            };
+            if n < na && t > 0.0 {
+                s.q_max_layers = s.q_max_layers.min(n / (na * na - n * n).sqrt());
+            }
         }
-        let (v, d) = Self::term(self.na, self.water.0, self.water.1, q);
-        (f + v, df + d)
+        s
     }
 
+    /// One term t·na·q/√(n² + k q²) with its first and second derivatives.
     #[inline(always)]
-    fn term2(na: f64, t: f64, n: f64, q: f64) -> (f64, f64, f64) {
-        let n2 = n * n;
-        let k = n2 - na * na;
+    fn term2(tna: f64, n2: f64, k: f64, q: f64) -> (f64, f64, f64) {
         let g = n2 + k * q * q;
         let inv = 1.0 / g.sqrt();
         let inv2 = inv * inv;
-        let v = t * na * q * inv;
-        let dv = t * na * n2 * inv2 * inv;
+        let v = tna * q * inv;
+        let dv = tna * n2 * inv2 * inv;
         (v, dv, -3.0 * k * q * dv * inv2)
     }
 
-    /// F, F′ and F″.
+    /// F, F′ and F″ at q for water depth `depth`.
     #[inline(always)]
-    fn eval2(&self, q: f64, r: f64) -> (f64, f64, f64) {
-        let mut f = self.gap * q - r;
-        let mut df = self.gap;
-        let mut d2f = 0.0;
-        for &(t, n) in self.layers {
-            let (v, d, d2) = Self::term2(self.na, t, n, q);
+    fn eval2(&self, q: f64, r: f64, depth: f64) -> (f64, f64, f64) {
+        let (mut f, mut df, mut d2f) = Self::term2(depth * self.na, self.nw2, self.kw, q);
+        f += self.gap * q - r;
+        df += self.gap;
+        for i in 0..self.n {
+            let (v, d, d2) = Self::term2(self.tna[i], self.n2[i], self.k[i], q);
             f += v;
             df += d;
             d2f += d2;
         }
-        let (v, d, d2) = Self::term2(self.na, self.water.0, self.water.1, q);
-        (f + v, df + d, d2f + d2)
+        (f, df, d2f)
     }
 
-    /// Largest q at which every term is defined (q < n/√(na²−n²) for layers with n < na).
-    fn q_max(&self) -> f64 {
-        let mut m = f64::INFINITY;
-        for &(t, n) in self.layers.iter().chain(std::iter::once(&self.water)) {
-            if n < self.na && t > 0.0 {
-                m = m.min(n / (self.na * self.na - n * n).sqrt());
-            }
-        }
-        m
-    }
-
-    /// Solve F(q) = 0 for q ≥ 0 (q = tan of the camera-side angle). `q0` must satisfy F ≤ 0.
+    /// Solve F(q) = 0 for q ≥ 0 (q = tan of the camera-side angle to the port normal).
     #[inline]
-    fn solve(&self, r: f64, q0: f64, concave: bool) -> Result<f64, NoSolution> {
-        if concave {
-            // Concave increasing F, F(q0) ≤ 0: Newton rises monotonically to the root.
-            // If the camera-side gap is 0, F is bounded: check the asymptote first.
-            if self.gap == 0.0 {
-                let mut lim = 0.0;
-                for &(t, n) in self.layers.iter().chain(std::iter::once(&self.water)) {
-                    lim += if n > self.na {
-                        t * self.na / (n * n - self.na * self.na).sqrt()
-                    } else if t > 0.0 {
-                        f64::INFINITY
-                    } else {
-                        0.0
-                    };
-                }
-                if lim <= r {
-                    return Err(NoSolution::BeyondCriticalAngle);
-                }
-            }
-            // Halley iteration (cubic convergence) from the paraxial guess; steps of either
-            // sign are allowed, q stays positive.
-            let mut q = q0;
-            for _ in 0..200 {
-                let (f, df, d2f) = self.eval2(q, r);
-                // Halley while its correction is mild; plain Newton (monotone from the left
-                // for concave F) when F·F″ is comparable to F′² (far from the root).
-                let dq = if (f * d2f).abs() < 0.5 * df * df {
-                    -2.0 * f * df / (2.0 * df * df - f * d2f)
-                } else {
-                    -f / df
-                };
-                if !dq.is_finite() {
-                    return Err(NoSolution::NoConvergence);
-                }
-                let next = q + dq;
-                q = if next > 0.0 { next } else { 0.5 * q };
-                if dq.abs() <= 1e-7 * q {
-                    // Error after a Halley step ≈ K·dq³: < 1e-20 relative here.
-                    return if q.is_finite() {
-                        Ok(q)
-                    } else {
-                        Err(NoSolution::BeyondCriticalAngle)
-                    };
-                }
-            }
-            Err(NoSolution::NoConvergence)
-        } else {
-            // Some layer is optically thinner than the camera medium: F → ∞ at q_max.
-            // Safeguarded Newton on [lo, hi].
-            let (mut lo, mut hi): (f64, f64) = (0.0, self.q_max());
-            let mut q = q0.min(0.5 * hi);
-            for _ in 0..400 {
-                let (f, df) = self.eval(q, r);
-                if f.is_finite() && f <= 0.0 {
-                    lo = lo.max(q);
-                } else {
-                    hi = hi.min(q);
-                }
-                let mut next = q - f / df;
-                if !(next.is_finite() && next > lo && next < hi) {
-                    next = if hi.is_finite() {
-                        0.5 * (lo + hi)
-                    } else {
-                        2.0 * lo + 1.0
-                    };
-                }
-                if (next - q).abs() <= 1e-15 * next.abs() || hi - lo <= 1e-16 * hi {
-                    return Ok(next);
-                }
-                q = next;
-            }
-            Err(NoSolution::NoConvergence)
+    fn solve(&self, r: f64, depth: f64) -> Result<f64, NoSolution> {
+        if !self.concave {
+            return self.solve_bracketed(r, depth);
         }
+        // F is bounded by its asymptote gap·q + Σ tᵢ Tᵢ + D·T_w: with no camera-side gap no
+        // ray reaches points beyond it.
+        let asym = self.asym + depth * self.tw_inf;
+        if self.gap == 0.0 && asym <= r {
+            return Err(NoSolution::BeyondCriticalAngle);
+        }
+        // First guess. Ordinary points: the water dominates, so guess tan θw from the port in
+        // paraxial water units and map it exactly to q (exact when the port is infinitely
+        // thin). Near grazing (tan θw close to its limit): the larger of the two lower bounds
+        // of the root, the paraxial q and the asymptote (r − Σ tᵢTᵢ − D·T_w)/gap.
+        let x0 = r / (depth + self.water_units);
+        let q0 = if x0 < 0.9 * self.tw_inf {
+            self.nw * x0 / (self.na * self.na - self.kw * x0 * x0).sqrt()
+        } else {
+            let parax = r / (self.parax + depth * self.na / self.nw);
+            if self.gap > 0.0 {
+                parax.max((r - asym) / self.gap)
+            } else {
+                parax
+            }
+        };
+        // Halley (cubic; error constant < 0.4 on the benchmark sets, so a relative step
+        // ≤ 1e-5 leaves an error ≲ 1e-15·q); plain Newton while F·F″ is comparable to F′²
+        // (far from the root), where a step ≤ 1e-8 leaves ≲ 1e-16·q.
+        let mut q = q0;
+        for _ in 0..200 {
+            let (f, df, d2f) = self.eval2(q, r, depth);
+            let halley = (f * d2f).abs() < 0.5 * df * df;
+            let dq = if halley {
+                -2.0 * f * df / (2.0 * df * df - f * d2f)
+            } else {
+                -f / df
+            };
+            if !dq.is_finite() {
+                return Err(NoSolution::NoConvergence);
+            }
+            let next = q + dq;
+            q = if next > 0.0 { next } else { 0.5 * q };
+            if dq.abs() <= if halley { 1e-5 } else { 1e-8 } * q {
+                return if q.is_finite() {
+                    Ok(q)
+                } else {
+                    Err(NoSolution::BeyondCriticalAngle)
+                };
+            }
+        }
+        Err(NoSolution::NoConvergence)
+    }
+
+    /// F and F′ (for the bracketed solver).
+    #[inline]
+    fn eval(&self, q: f64, r: f64, depth: f64) -> (f64, f64) {
+        let (f, df, _) = self.eval2(q, r, depth);
+        (f, df)
+    }
+
+    /// Some layer is optically thinner than the camera medium: F → ∞ at q_max.
+    /// Safeguarded Newton on [lo, hi].
+    #[cold]
+    fn solve_bracketed(&self, r: f64, depth: f64) -> Result<f64, NoSolution> {
+        let mut hi = self.q_max_layers;
+        if self.nw < self.na && depth > 0.0 {
+            hi = hi.min(self.nw / (self.na * self.na - self.nw2).sqrt());
+        }
+        let mut lo: f64 = 0.0;
+        let mut q = 0.0f64.min(0.5 * hi);
+        for _ in 0..400 {
+            let (f, df) = self.eval(q, r, depth);
+            if f.is_finite() && f <= 0.0 {
+                lo = lo.max(q);
+            } else {
+                hi = hi.min(q);
+            }
+            let mut next = q - f / df;
+            if !(next.is_finite() && next > lo && next < hi) {
+                next = if hi.is_finite() {
+                    0.5 * (lo + hi)
+                } else {
+                    2.0 * lo + 1.0
+                };
+            }
+            if (next - q).abs() <= 1e-15 * next.abs() || hi - lo <= 1e-16 * hi {
+                return Ok(next);
+            }
+            q = next;
+        }
+        Err(NoSolution::NoConvergence)
     }
 }
 
@@ -231,8 +273,6 @@ impl FlatPort {
         let mut arr = [(0.0, 1.0); MAX_LAYERS];
         arr[..layers.len()].copy_from_slice(layers);
         let total: f64 = layers.iter().map(|l| l.0).sum();
-        let parax = distance + layers.iter().map(|&(t, ni)| t * n_air / ni).sum::<f64>();
-        let concave = layers.iter().all(|&(_, ni)| ni >= n_air) && n_water >= n_air;
         Ok(FlatPort {
             normal: n,
             distance,
@@ -241,8 +281,7 @@ impl FlatPort {
             n_air,
             n_water,
             total_thickness: total,
-            paraxial_port: parax,
-            concave,
+            slabs: Slabs::new(n_air, distance, layers, n_water),
         })
     }
 
@@ -302,19 +341,7 @@ impl FlatPort {
             return Ok(nrm);
         }
         let perp = p - a * nrm;
-        let qs = QSolve {
-            na: self.n_air,
-            gap: self.distance,
-            layers: self.layers(),
-            water: (depth, self.n_water),
-        };
-        // Paraxial guess r / Σ tᵢ na/nᵢ: F ≤ 0 there (each term ≤ tᵢ na q / nᵢ).
-        let q0 = if self.concave {
-            r / (self.paraxial_port + depth * self.n_air / self.n_water)
-        } else {
-            0.0
-        };
-        let q = qs.solve(r, q0, self.concave)?;
+        let q = self.slabs.solve(r, depth)?;
         Ok(nrm + perp * (q / r))
     }
 }
@@ -332,6 +359,13 @@ pub struct DomePort {
     ecc: f64,
     /// tan(asin(|C|/R₁)): half-width of the guaranteed bracket on τ.
     bracket: f64,
+    /// Moment constants: the sines of the four refraction angles are `p·k[i]` for the signed
+    /// distance p of the camera ray from C (k = 1/R₁, (na/ng)/R₁, (na/ng)/R₂, (na/nw)/R₂).
+    k: [f64; 4],
+    /// na/nw: the water ray's moment about C is `na/nw` times the camera ray's.
+    kw: f64,
+    /// dΘ/dp at p = 0 (Θ = total turning of the ray), for the first-order guess.
+    dtheta0: f64,
 }
 
 /// Outcome of tracing one 2-D dome ray.
@@ -372,7 +406,17 @@ impl DomePort {
         let s = e / inner_radius;
         // Widen slightly so the bound itself is never the root's own rounding victim.
         let bracket = (s / (1.0 - s * s).sqrt()) * (1.0 + 1e-6) + 1e-15;
+        let r2 = inner_radius + thickness;
+        let k = [
+            1.0 / inner_radius,
+            n_air / n_glass / inner_radius,
+            n_air / n_glass / r2,
+            n_air / n_water / r2,
+        ];
         Ok(DomePort {
+            k,
+            kw: n_air / n_water,
+            dtheta0: -k[0] + k[1] - k[2] + k[3],
             center,
             r1: inner_radius,
             r2: inner_radius + thickness,
@@ -493,8 +537,84 @@ impl DomePort {
         }
         let e2 = cperp / c2;
         let c = DVec2::new(self.center.dot(e1), c2);
+        if let Some(u) = self.halley(c, l) {
+            return Ok(e1 * u.x + e2 * u.y);
+        }
         let tau = self.solve_tau(c, l)?;
         Ok(e1 + e2 * tau)
+    }
+
+    /// Fast path: Halley's method on the moment equation, from a first-order guess. In the
+    /// plane (O, C, P) with P = (L, 0) and C = c, a camera ray of unit direction u has the
+    /// signed moment p = (O − C) × u about C. At a sphere centred on C, n·(X − C) × w is
+    /// conserved (the normal is radial), so the glass and water rays have moments
+    /// (na/ng)·p and (na/nw)·p, the sines of the four refraction angles are p·kᵢ, and the
+    /// water ray is u turned by Θ(p) = −asin(p/R₁) + asin(p·na/(ng R₁)) − asin(p·na/(ng R₂))
+    /// + asin(p·na/(nw R₂)), exactly, with no intersection to compute. P lies on the water
+    /// ray iff m = (P − C) × w − (na/nw)·p = 0. m, m′ and m″ with respect to the rotation
+    /// angle of u are analytic. Returns the unit camera direction (u₁ along P, u₂ along
+    /// C⊥), or `None` (then the bracketed solver decides).
+    #[inline]
+    fn halley(&self, c: DVec2, l: f64) -> Option<DVec2> {
+        let k = self.k;
+        let kw = self.kw;
+        let pc = DVec2::new(l - c.x, -c.y);
+        // First-order guess: small angles and Θ ≈ Θ′(0)·p.
+        let k0 = self.dtheta0;
+        let tau0 = -c.y * (pc.x * k0 + 1.0 - kw) / (pc.x * (1.0 - k0 * c.x) + kw * c.x);
+        if !(tau0.abs() <= self.bracket) {
+            return None;
+        }
+        let mut u = DVec2::new(1.0, tau0) * (1.0 / (1.0 + tau0 * tau0).sqrt());
+        for _ in 0..16 {
+            let p = c.y * u.x - c.x * u.y;
+            let s = [p * k[0], p * k[1], p * k[2], p * k[3]];
+            let co2 = [
+                1.0 - s[0] * s[0],
+                1.0 - s[1] * s[1],
+                1.0 - s[2] * s[2],
+                1.0 - s[3] * s[3],
+            ];
+            if !(co2[0] > 0.0 && co2[1] > 0.0 && co2[2] > 0.0 && co2[3] > 0.0) {
+                return None; // total internal reflection (or grazing a sphere)
+            }
+            let co = [co2[0].sqrt(), co2[1].sqrt(), co2[2].sqrt(), co2[3].sqrt()];
+            // Rotation by Θ: conj(A₁)·B₁·conj(A₂)·B₂ with A, B = (cos, sin) of each angle.
+            let z1 = DVec2::new(co[0] * co[1] + s[0] * s[1], co[0] * s[1] - s[0] * co[1]);
+            let z2 = DVec2::new(co[2] * co[3] + s[2] * s[3], co[2] * s[3] - s[2] * co[3]);
+            let z = DVec2::new(z1.x * z2.x - z1.y * z2.y, z1.x * z2.y + z1.y * z2.x);
+            let w = DVec2::new(z.x * u.x - z.y * u.y, z.x * u.y + z.y * u.x);
+            let cr = pc.perp_dot(w);
+            let dt = pc.dot(w);
+            let m = cr - kw * p;
+            // Θ′(p) = Σ ±kᵢ/cosᵢ and Θ″(p) = Σ ±kᵢ³ p/cosᵢ³.
+            let inv = [1.0 / co[0], 1.0 / co[1], 1.0 / co[2], 1.0 / co[3]];
+            let th1 = -k[0] * inv[0] + k[1] * inv[1] - k[2] * inv[2] + k[3] * inv[3];
+            let cube = |i: usize| k[i] * k[i] * k[i] * inv[i] * inv[i] * inv[i];
+            let th2 = p * (-cube(0) + cube(1) - cube(2) + cube(3));
+            let dp = -c.dot(u); // p′; p″ = −p
+            let g = 1.0 + th1 * dp;
+            let dm = dt * g - kw * dp;
+            let d2m = -cr * g * g + dt * (th2 * dp * dp - th1 * p) + kw * p;
+            // Halley (cubic, error constant ≈ 0.6 here: a step ≤ 5e-6 leaves ≲ 1e-16 rad);
+            // Newton (error constant ≈ 0.1: a step ≤ 1e-8 leaves ≲ 1e-17) when far.
+            let halley = (m * d2m).abs() < 0.5 * dm * dm;
+            let step = if halley {
+                -2.0 * m * dm / (2.0 * dm * dm - m * d2m)
+            } else {
+                -m / dm
+            };
+            if !step.is_finite() {
+                return None;
+            }
+            let v = u + u.perp() * step;
+            u = v * (1.0 / v.length());
+            if step.abs() <= if halley { 5e-6 } else { 1e-8 } {
+                // Inside the guaranteed bracket, in front of the camera.
+                return (u.x > 0.0 && u.y.abs() <= self.bracket * u.x).then_some(u);
+            }
+        }
+        None
     }
 
     fn solve_tau(&self, c: DVec2, l: f64) -> Result<f64, NoSolution> {
@@ -603,6 +723,8 @@ pub struct CylinderPort {
     pub n_water: f64,
     /// The entrance pupil lies on the axis (within 1e-13·R₁): meridional q-equation.
     on_axis: bool,
+    /// The meridional q-equation's constants (gap R₁, one glass layer).
+    slabs: Slabs,
 }
 
 impl CylinderPort {
@@ -648,6 +770,7 @@ impl CylinderPort {
             n_glass,
             n_water,
             on_axis: off <= 1e-13 * inner_radius,
+            slabs: Slabs::new(n_air, inner_radius, &[(thickness, n_glass)], n_water),
         })
     }
 
@@ -716,23 +839,7 @@ impl CylinderPort {
             if r == 0.0 {
                 return Ok(e_rho);
             }
-            let depth = rho - self.r2;
-            let layers = [(self.r2 - self.r1, self.n_glass)];
-            let qs = QSolve {
-                na: self.n_air,
-                gap: self.r1,
-                layers: &layers,
-                water: (depth, self.n_water),
-            };
-            let concave = self.n_glass >= self.n_air && self.n_water >= self.n_air;
-            let q0 = if concave {
-                r / (self.r1
-                    + (self.r2 - self.r1) * self.n_air / self.n_glass
-                    + depth * self.n_air / self.n_water)
-            } else {
-                0.0
-            };
-            let q = qs.solve(r, q0, concave)?;
+            let q = self.slabs.solve(r, rho - self.r2)?;
             return Ok(e_rho + a * (q * z.signum()));
         }
         self.forward_skew(p)

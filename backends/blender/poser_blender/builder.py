@@ -7,11 +7,13 @@ The description (format `poser-blender/1`) is written by `poser compile --backen
 |---|---|
 | rig pose | Empty `poser_rig`, keyframed once per pose (frame = pose index, constant interpolation) |
 | camera | Empty (OpenCV frame) child of the rig + Camera child; exact intrinsics via lens/shift |
-| port | inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g) |
+| distortion, fx != fy | CUSTOM camera running poser's fixed OSL shader `camera.osl` (parameters only): Newton inverse of Brown-Conrady per film sample, as src/optics/lens.rs; exact, no resampling |
+| port | inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g); no housing shadow (HOUSING_SHADOW) |
 | water | one closed mesh `poser_water` (box minus housings), Volume Coefficients node; per pose a shape key |
 | lights | point/spot (P = 4 pi I, radius 0, blend 0), sun (angle 0), area (P = L pi A), ambient = world |
 | objects | Blender primitives (plane/box/sphere/cylinder) or imported PLY assets; Diffuse BSDF |
-| targets | planes with the target's PNG texture |
+| targets | planes with the target's PNG texture; 3D test objects as white boxes + black disks |
+| depth (`render.outputs` has "depth") | a second 1-sample render per image: glass -> Refraction BSDF, water off, surfaces emit their camera-frame z; `<image>.depth.exr` |
 
 Emitters in water are scaled by (n_cam/n_water)^2 per camera before each render (the n^2
 convention, render-conventions §3.4).
@@ -33,6 +35,14 @@ FORMAT = "poser-blender/1"
 # above float32 resolution at survey coordinates, far below anything visible (the unabsorbed
 # layer changes transmittance by < 1e-5).
 WATER_GAP = 5e-5
+# HOUSING_SHADOW: the port glass objects are invisible to shadow rays and, in water, the
+# housing body is a pure volume boundary of the water mesh, so the camera housing casts no
+# shadow, as in the native backend (whose scene has no housing) and the analytic truth.
+# Measured on tests/canonical/sun_seabed.toml (160x120, 16 spp): with the shadow, 85 pixels
+# in one corner were at 16 % of their sunlit radiance and the image mean was 0.37 % low
+# (Cycles/analytic 0.9968); without it 1.0005. Consequence: a light placed inside a housing
+# shines through its port unrefracted (as in the native backend); put lights in the water
+# (render-conventions section 4).
 
 
 # ------------------------------------------------------------------------------------------
@@ -98,6 +108,7 @@ def _glass_material(name, ior, volume=None):
     nt.links.new(g.outputs[0], out.inputs["Surface"])
     if volume is not None:
         _volume_node(nt, out, volume)
+    mat["poser_role"] = "glass"
     return mat, g
 
 
@@ -121,6 +132,7 @@ def _volume_only_material(name, water):
     mat = bpy.data.materials.new(name)
     nt, out = _nodes(mat)
     _volume_node(nt, out, water)
+    mat["poser_role"] = "boundary"
     return mat
 
 
@@ -132,6 +144,7 @@ def _black_material(name, water=None):
     nt.links.new(d.outputs[0], out.inputs["Surface"])
     if water is not None:
         _volume_node(nt, out, water)
+    mat["poser_role"] = "housing"
     return mat
 
 
@@ -220,6 +233,9 @@ class Built:
         self.world_bg = None  # (background node, colour, strength, in_water)
         self.glass_nodes = []  # (glass node, function(channel) -> ior)
         self.water = None
+        self.depth_mat = None  # created on the first depth render
+        self.depth_nodes = None
+        self.depth_twins = {}
 
 
 def validate(desc):
@@ -289,10 +305,12 @@ def build(desc, base_dir=".", scene=None):
         me = _mesh_from(f"port inner:{cam['name']}", inner, smooth=inner["normals"] is not None)
         me.materials.append(mat_in)
         inner_obj = _new_object(coll, f"port inner:{cam['name']}", me)
+        inner_obj.visible_shadow = False  # HOUSING_SHADOW
         inner_obj.parent = frame
         inner_obj.matrix_parent_inverse.identity()
         shells.append((ci, shell, glass))
 
+    scene.camera = built.cameras[0]  # the saved .blend opens looking through camera 0
     _build_water(built, coll, desc, shells, n_w, ref)
     _build_lights(built, coll, desc)
     _build_objects(built, coll, desc, base_dir)
@@ -320,6 +338,112 @@ def _constant_interpolation(obj):
             kp.interpolation = "CONSTANT"
 
 
+# Sources of the package's non-Python files (the custom camera shader), filled in by a
+# generated script that embeds them; read from beside this module otherwise.
+RESOURCES = {}
+
+
+def resource(name):
+    """Text of a package resource file (`camera.osl`)."""
+    if name in RESOURCES:
+        return RESOURCES[name]
+    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), name),
+              encoding="utf-8") as f:
+        return f.read()
+
+
+def _osl_bytecode(source):
+    """Compile OSL source with Cycles' bundled compiler; returns (bytecode, md5 hex)."""
+    import hashlib
+    import tempfile
+
+    import _cycles
+
+    with tempfile.TemporaryDirectory(prefix="poser-osl-") as tmp:
+        src = os.path.join(tmp, "poser_camera.osl")
+        oso = os.path.join(tmp, "poser_camera.oso")
+        with open(src, "w", encoding="utf-8") as f:
+            f.write(source)
+        if not _cycles.osl_compile(src, oso):
+            raise RuntimeError("Cycles could not compile poser's camera shader (camera.osl)")
+        with open(oso, encoding="utf-8") as f:
+            code = f.read()
+    return code, hashlib.md5(code.encode(), usedforsecurity=False).hexdigest()
+
+
+def _custom_camera(data, cam):
+    """Cycles custom (OSL) camera running poser_blender/camera.osl: exact OpenCV intrinsics,
+    fx != fy, Brown-Conrady distortion on any lens model. The shader is poser's fixed file;
+    the scene's numbers are only its parameters."""
+    text = bpy.data.texts.get("poser_camera.osl")
+    if text is None:
+        text = bpy.data.texts.new("poser_camera.osl")
+        text.from_string(resource("camera.osl"))
+    code, digest = _osl_bytecode(text.as_string())
+    data.type = "CUSTOM"
+    data.custom_mode = "INTERNAL"
+    # Assigning the text runs Cycles' own update, which compiles the shader and creates the
+    # parameter properties (shown in the Lens panel); it needs the `oslquery` module, which
+    # the bpy wheel ships but does not put on sys.path. The bytecode and the parameters are
+    # set here in any case.
+    _ensure_oslquery()
+    _quiet(lambda: setattr(data, "custom_shader", text))
+    data.custom_bytecode = code
+    data.custom_bytecode_hash = digest
+    d = cam.get("distortion") or {}
+    params = data.cycles_custom
+    for k in ("width", "height", "fx", "fy", "cx", "cy"):
+        params[k] = float(cam[k])
+    for k in ("k1", "k2", "k3", "p1", "p2"):
+        params[k] = float(d.get(k, 0.0))
+    params["lens"] = {"rectilinear": 0, "fisheye_equidistant": 1,
+                      "fisheye_equisolid": 2}[cam.get("lens", "rectilinear")]
+    r2 = cam.get("r2_max")
+    params["r2_max"] = 1e30 if r2 is None else float(min(r2, 1e30))
+    # Thin lens (as Mitsuba's `thinlens` and Cycles' own cameras): aperture radius f/(2N),
+    # focus plane at z = focus_distance.
+    aperture, focus = 0.0, 1.0
+    if cam.get("focus_distance") and cam.get("f_number") and cam.get("focal_length"):
+        aperture = float(cam["focal_length"]) / (2.0 * float(cam["f_number"]))
+        focus = float(cam["focus_distance"])
+    params["aperture_radius"] = aperture
+    params["focus_distance"] = focus
+    data.update_tag()
+
+
+def _ensure_oslquery():
+    try:
+        import oslquery  # noqa: F401
+    except ImportError:
+        lib = os.path.join(bpy.utils.resource_path("LOCAL"), "python", "lib")
+        if os.path.isdir(lib):
+            for d in sorted(os.listdir(lib)):
+                site = os.path.join(lib, d, "site-packages")
+                if os.path.isdir(os.path.join(site, "oslquery")) and site not in sys.path:
+                    sys.path.append(site)
+
+
+def _quiet(fn):
+    """Run fn with Blender's report printing to stderr suppressed (fd level)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            return fn()
+    finally:
+        sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def needs_custom_camera(cam):
+    """Distortion or non-square pixels: the built-in cameras cannot represent them."""
+    d = cam.get("distortion") or {}
+    distorted = any(float(d.get(k, 0.0)) != 0.0 for k in ("k1", "k2", "k3", "p1", "p2"))
+    return distorted or abs(float(cam["fx"]) - float(cam["fy"])) > 1e-9 * abs(float(cam["fx"]))
+
+
 def _set_intrinsics(data, cam):
     data.clip_start = 1e-4
     data.clip_end = 1e5
@@ -328,6 +452,9 @@ def _set_intrinsics(data, cam):
     data.sensor_height = geo.SENSOR_WIDTH_MM * cam["height"] / cam["width"]
     data.lens_unit = "MILLIMETERS"
     lens = cam.get("lens", "rectilinear")
+    if needs_custom_camera(cam):
+        _custom_camera(data, cam)
+        return
     p = geo.blender_intrinsics(cam["fx"], cam["fy"], cam["cx"], cam["cy"], cam["width"],
                                cam["height"])
     data.shift_x = p["shift_x"]
@@ -350,7 +477,8 @@ def _set_intrinsics(data, cam):
     if cam.get("focus_distance") and cam.get("f_number"):
         data.dof.use_dof = True
         data.dof.focus_distance = float(cam["focus_distance"])
-        data.dof.aperture_fstop = float(cam["f_number"])
+        data.dof.aperture_fstop = geo.blender_fstop(float(cam["f_number"]), data.lens,
+                                                    cam.get("focal_length"))
 
 
 def _render_settings(scene, desc):
@@ -462,6 +590,7 @@ def _build_water(built, coll, desc, shells, n_w, ref):
             me.materials.append(mat)
             me.materials.append(_black_material(f"housing:{cam['name']}"))
             obj = _new_object(coll, f"port outer:{cam['name']}", me)
+            obj.visible_shadow = False  # HOUSING_SHADOW
             obj.parent = built.cameras[ci].parent
             obj.matrix_parent_inverse.identity()
         return
@@ -480,6 +609,7 @@ def _build_water(built, coll, desc, shells, n_w, ref):
         me = _mesh_from(f"port outer:{cam['name']}", face, smooth=face["normals"] is not None)
         me.materials.append(mat)
         obj = _new_object(coll, f"port outer:{cam['name']}", me)
+        obj.visible_shadow = False  # HOUSING_SHADOW
         obj.parent = built.cameras[ci].parent
         obj.matrix_parent_inverse.identity()
     gapped = [None if s is None else (s[0], geo.inflate(s[1], WATER_GAP), s[2]) for s in shells]
@@ -488,7 +618,9 @@ def _build_water(built, coll, desc, shells, n_w, ref):
     boundary = _volume_only_material("water boundary", water)
     me.materials.append(boundary)
     me.materials.append(boundary)
-    me.materials.append(_black_material("housing", water))
+    # The housing body too (HOUSING_SHADOW): a black surface here, even one made transparent
+    # for shadow rays, still shadowed the sun (measured); a pure volume boundary does not.
+    me.materials.append(boundary)
     obj = _new_object(coll, "poser_water", me)
     obj.visible_shadow = True
     n_poses = len(desc["poses"])
@@ -654,6 +786,9 @@ def _build_targets(built, coll, desc, base_dir):
 
     for t in desc.get("targets", []):
         name = f"target:{t['name']}"
+        if t.get("kind") == "test_object":
+            _build_test_object(coll, t, name)
+            continue
         me = bpy.data.meshes.new(name)
         bm = bmesh.new()
         uv = bm.loops.layers.uv.new("UVMap")
@@ -669,6 +804,51 @@ def _build_targets(built, coll, desc, base_dir):
         me.materials.append(_texture_material(name, os.path.join(base_dir, t["texture"])))
         obj = _new_object(coll, name, me)
         obj.matrix_world = _matrix(t["matrix"])
+
+
+# Segments of the polygon standing for each disk of a 3D test object: its centroid is the
+# disk's centre exactly; its area is 0.16 % smaller than the disk's (no effect on centroids).
+DISK_SEGMENTS = 64
+
+
+def _build_test_object(coll, t, name):
+    """3D test object: white boxes (the steps) and black disks on their top corners, all in
+    the target frame given by `matrix`; one mesh with two material slots."""
+    verts, faces, mats = [], [], []
+    for st in t["steps"]:
+        c = np.asarray(st["center"], dtype=float)
+        h = 0.5 * np.asarray(st["size"], dtype=float)
+        base = len(verts)
+        for z in (-1.0, 1.0):
+            for y in (-1.0, 1.0):
+                for x in (-1.0, 1.0):
+                    verts.append(tuple(c + h * (x, y, z)))
+        # Corner index = x + 2 y + 4 z (each of x, y, z in {0, 1}); outward windings.
+        for f in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2),
+                  (1, 3, 7, 5)):
+            faces.append(tuple(base + i for i in f))
+            mats.append(0)
+    for d in t["disks"]:
+        c = np.asarray(d["center"], dtype=float)
+        r = float(d["radius"])
+        base = len(verts)
+        for k in range(DISK_SEGMENTS):
+            a = 2.0 * math.pi * k / DISK_SEGMENTS
+            verts.append((c[0] + r * math.cos(a), c[1] + r * math.sin(a), c[2]))
+        faces.append(tuple(range(base, base + DISK_SEGMENTS)))
+        mats.append(1)
+    me = bpy.data.meshes.new(name)
+    me.from_pydata(verts, [], faces)
+    me.polygons.foreach_set("material_index", mats)
+    me.polygons.foreach_set("use_smooth", [False] * len(faces))
+    me.update()
+    grey = {"albedo": [float(t["white"])] * 3, "pattern": None}
+    me.materials.append(_diffuse_material(name + " white", grey))
+    grey = {"albedo": [float(t["black"])] * 3, "pattern": None}
+    me.materials.append(_diffuse_material(name + " black", grey))
+    obj = _new_object(coll, name, me)
+    obj.matrix_world = _matrix(t["matrix"])
+    return obj
 
 
 def _build_waves(built, coll, desc, n_w, ref):
@@ -799,12 +979,153 @@ def render(built, out_dir, samples=None, poses=None, progress=None, png=True):
                 tmp_png = os.path.join(out_dir, f".poser-tmp-{ci}.png")
                 _write_png(tmp, tmp_png, exposure, scene)
                 os.replace(tmp_png, os.path.join(out_dir, image + ".png"))
+            if wants_depth(desc):
+                tmp_depth = os.path.join(out_dir, f".poser-tmp-{ci}.depth.exr")
+                render_depth(built, ci, tmp_depth)
+                os.replace(tmp_depth, os.path.join(out_dir, image + ".depth.exr"))
             os.replace(tmp, exr)
             written.append(exr)
             done += 1
             if progress:
                 progress(done, total, image)
     return written
+
+
+# ------------------------------------------------------------------------------------------
+# Depth pass
+# ------------------------------------------------------------------------------------------
+
+# Box-filter width of the depth render, px (Cycles' minimum): its one sample per pixel lands
+# within +-0.005 px of the pixel centre, where the native backend evaluates depth.
+DEPTH_FILTER_WIDTH = 0.01
+
+
+def _depth_twin(mat, depth_mat, cache):
+    """The material a surface gets for the depth render: glass -> Refraction BSDF with the
+    same index ratio (no Fresnel reflection, so one sample follows the camera ray through the
+    port exactly), volume boundaries -> transparent, housings -> black, everything else ->
+    the camera-z emission."""
+    if mat is None:
+        return depth_mat
+    role = mat.get("poser_role")
+    if role is None:
+        return depth_mat
+    key = mat.name
+    twin = cache.get(key)
+    if role == "glass":
+        ior = [n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfGlass"][0]
+        ior = float(ior.inputs["IOR"].default_value)
+        if twin is None:
+            twin = bpy.data.materials.new("depth " + key)
+            nt, out = _nodes(twin)
+            r = nt.nodes.new("ShaderNodeBsdfRefraction")
+            r.distribution = "GGX"
+            r.inputs["Roughness"].default_value = 0.0
+            r.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+            nt.links.new(r.outputs[0], out.inputs["Surface"])
+        r = [n for n in twin.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfRefraction"][0]
+        r.inputs["IOR"].default_value = ior
+    elif twin is None:
+        twin = bpy.data.materials.new("depth " + key)
+        nt, out = _nodes(twin)
+        if role == "boundary":
+            t = nt.nodes.new("ShaderNodeBsdfTransparent")
+            t.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        else:
+            t = nt.nodes.new("ShaderNodeBsdfDiffuse")
+            t.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+        nt.links.new(t.outputs[0], out.inputs["Surface"])
+    cache[key] = twin
+    return twin
+
+
+def _depth_material(built):
+    """One emission material whose strength is the camera-frame z of the shaded point:
+    dot(P - C, z_cam) with C and z_cam (world) set per image."""
+    if getattr(built, "depth_mat", None) is not None:
+        return built.depth_mat
+    mat = bpy.data.materials.new("poser depth")
+    nt, out = _nodes(mat)
+    geom = nt.nodes.new("ShaderNodeNewGeometry")
+    sub = nt.nodes.new("ShaderNodeVectorMath")
+    sub.operation = "SUBTRACT"
+    dot = nt.nodes.new("ShaderNodeVectorMath")
+    dot.operation = "DOT_PRODUCT"
+    em = nt.nodes.new("ShaderNodeEmission")
+    em.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    nt.links.new(geom.outputs["Position"], sub.inputs[0])
+    nt.links.new(sub.outputs["Vector"], dot.inputs[0])
+    nt.links.new(dot.outputs["Value"], em.inputs["Strength"])
+    nt.links.new(em.outputs[0], out.inputs["Surface"])
+    mat.cycles.emission_sampling = "NONE"
+    built.depth_mat = mat
+    built.depth_nodes = (sub, dot)
+    return mat
+
+
+def wants_depth(desc):
+    return "depth" in (desc["render"].get("outputs") or [])
+
+
+def render_depth(built, cam_index, path):
+    """Render the camera-frame z (m) of the first surface seen through each pixel centre
+    (through the port, as the native backend's depth) to a linear RGB EXR at `path`; 0 where
+    the ray meets no surface. The scene's lights, world and water are off for this render."""
+    scene = built.scene
+    depth_mat = _depth_material(built)
+    sub, dot = built.depth_nodes
+    scene.frame_set(scene.frame_current)
+    m = np.array(built.cameras[cam_index].matrix_world)
+    centre = m[:3, 3]
+    z_cv = -m[:3, 2] / np.linalg.norm(m[:3, 2])  # Blender looks along local -Z
+    sub.inputs[1].default_value = tuple(map(float, centre))
+    dot.inputs[1].default_value = tuple(map(float, z_cv))
+    cache = getattr(built, "depth_twins", None)
+    if cache is None:
+        cache = built.depth_twins = {}
+    saved_mats = []
+    saved_hidden = []
+    seen = set()
+    for obj in scene.objects:
+        if obj.type == "MESH" and obj.data is not None:
+            if obj.data.name in seen:  # mesh data shared by several objects: swap once
+                continue
+            seen.add(obj.data.name)
+            mats = list(obj.data.materials)
+            if not mats:
+                obj.data.materials.append(None)
+                mats = [None]
+                saved_mats.append((obj.data, None))
+            else:
+                saved_mats.append((obj.data, mats))
+            for i, mt in enumerate(mats):
+                obj.data.materials[i] = _depth_twin(mt, depth_mat, cache)
+        elif obj.type == "LIGHT" and not obj.hide_render:
+            obj.hide_render = True
+            saved_hidden.append(obj)
+    cy = scene.cycles
+    settings = (cy.samples, cy.filter_width, cy.pixel_filter_type)
+    bg = built.world_bg["node"].inputs["Strength"] if built.world_bg else None
+    bg_strength = bg.default_value if bg is not None else None
+    try:
+        cy.samples = 1
+        cy.pixel_filter_type = "BOX"
+        cy.filter_width = DEPTH_FILTER_WIDTH
+        if bg is not None:
+            bg.default_value = 0.0
+        _render_to(scene, path)
+    finally:
+        cy.samples, cy.filter_width, cy.pixel_filter_type = settings
+        if bg is not None:
+            bg.default_value = bg_strength
+        for obj in saved_hidden:
+            obj.hide_render = False
+        for me, mats in saved_mats:
+            if mats is None:
+                me.materials.clear()
+            else:
+                for i, mt in enumerate(mats):
+                    me.materials[i] = mt
 
 
 def _render_to(scene, path):

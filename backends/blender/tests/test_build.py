@@ -41,7 +41,8 @@ def test_water_port_lights_and_poses_are_built(scene_desc):
     built = pbuild.build(scene_desc, ".", scene)
     water = bpy.data.objects["poser_water"]
     names = [m.name for m in water.data.materials]
-    assert names == ["water boundary", "water boundary", "housing"]
+    # The housing body is a pure volume boundary too (no housing shadow, HOUSING_SHADOW).
+    assert names == ["water boundary", "water boundary", "water boundary"]
     nodes = {n.bl_idname: n for n in water.data.materials[1].node_tree.nodes}
     vol = nodes["ShaderNodeVolumeCoefficients"]
     assert tuple(vol.inputs["Absorption Coefficients"].default_value) == pytest.approx(
@@ -153,6 +154,70 @@ def test_fisheye_projects_like_the_lens_model(lens, tmp_path):
         assert abs(mu - u) < 0.15 and abs(mv - v) < 0.15, (lens, th, mu - u, mv - v)
 
 
+def _distort(x, y, d):
+    """Brown-Conrady (OpenCV), as src/optics/lens.rs `Lens::distort`."""
+    r2 = x * x + y * y
+    radial = 1.0 + r2 * (d["k1"] + r2 * (d["k2"] + r2 * d["k3"]))
+    return (x * radial + 2.0 * d["p1"] * x * y + d["p2"] * (r2 + 2.0 * x * x),
+            y * radial + d["p1"] * (r2 + 2.0 * y * y) + 2.0 * d["p2"] * x * y)
+
+
+@pytest.mark.parametrize("lens", ["rectilinear", "fisheye_equidistant"])
+def test_custom_camera_projects_with_distortion(lens, tmp_path):
+    # poser's OSL camera (camera.osl): Brown-Conrady distortion and fx != fy. Small black
+    # squares on a white sky must land where lens model + distortion put their centres.
+    W, H, fx, fy, cx, cy = 160, 120, 110.0, 104.0, 86.3, 55.1
+    dist = {"k1": -0.21, "k2": 0.05, "k3": -0.004, "p1": 0.0015, "p2": -0.001}
+    eye = np.eye(4).tolist()
+    objs, dirs = [], []
+    for k, (th, ph) in enumerate([(0, 0), (20, 20), (30, 160), (33, -30), (25, -120)]):
+        th, ph = math.radians(th), math.radians(ph)
+        d = np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)])
+        m = np.eye(4)
+        m[:3, :3] = geo.frame_looking_along(d)
+        m[:3, 3] = 2.0 * d
+        objs.append({"name": f"sq{k}", "shape": {"type": "plane", "width": 0.04, "height": 0.04},
+                     "scale": [1, 1, 1], "matrix": m.tolist(),
+                     "material": {"albedo": [0, 0, 0], "pattern": None}})
+        dirs.append((th, ph))
+    desc = {"format": "poser-blender/1", "name": "distorted",
+            "render": {"samples": 64, "seed": 1, "max_bounces": 2, "exposure": 1.0},
+            "cameras": [{"name": "c", "width": W, "height": H, "lens": lens, "fx": fx, "fy": fy,
+                         "cx": cx, "cy": cy, "distortion": dist, "r2_max": None,
+                         "rig_from_camera": eye, "port": {"kind": "none"}}],
+            "poses": [{"name": "p", "world_from_rig": eye, "images": ["p"]}],
+            "water": None, "surface": {"kind": "none"},
+            "bounds": {"min": [-5] * 3, "max": [5] * 3}, "sun": None,
+            "lights": [{"name": "sky", "mount": "world", "type": "ambient",
+                        "radiance": [1, 1, 1]}],
+            "objects": objs, "targets": []}
+    built = pbuild.build(desc, ".", _fresh())
+    data = built.cameras[0].data
+    assert data.type == "CUSTOM" and data.custom_mode == "INTERNAL"
+    assert data.custom_shader.name == "poser_camera.osl" and data.custom_bytecode
+    assert data.cycles_custom["k1"] == pytest.approx(dist["k1"])
+    assert data.cycles_custom["fy"] == pytest.approx(fy)
+    assert built.scene.camera == built.cameras[0]
+    exr = pbuild.render(built, str(tmp_path), png=False)[0]
+    w = np.clip(1.0 - pbuild._load_pixels(exr)[::-1, :, 1], 0.0, None)  # row 0 = top
+    errs = []
+    for th, ph in dirs:
+        r = math.tan(th) if lens == "rectilinear" else th
+        xd, yd = _distort(r * math.cos(ph), r * math.sin(ph), dist)
+        u, v = fx * xd + cx, fy * yd + cy
+        i0, j0 = int(u) - 5, int(v) - 5
+        jj, ii = np.mgrid[j0:j0 + 11, i0:i0 + 11]
+        win = w[j0:j0 + 11, i0:i0 + 11]
+        mu = (win * (ii + 0.5)).sum() / win.sum()
+        mv = (win * (jj + 0.5)).sum() / win.sum()
+        errs.append((mu - u, mv - v))
+    print(lens, "centroid errors (px):", errs)
+    for eu, ev in errs:
+        # The ~2 px^2 blobs carry ~0.03 px of 64-spp coverage noise, and the distortion
+        # bends each square (its centroid is not exactly its centre's image): 0.15 px.
+        assert abs(eu) < 0.15 and abs(ev) < 0.15, (lens, errs)
+
+
 def test_every_feature_builds_and_renders(scene_desc, tmp_path):
     # Two cameras (dome, cylinder), water in a box around them, waves with caustics and the
     # sun above, area + point lights, a checker pattern, per-channel passes, a saved .blend.
@@ -221,3 +286,70 @@ def test_water_cut_out_follows_the_rig_per_pose(scene_desc):
     rig = bpy.data.objects["poser_rig"]
     scene.frame_set(1)
     assert rig.matrix_world.translation.x == pytest.approx(0.5)
+
+
+def test_depth_pass_is_camera_z_through_the_port(scene_desc, tmp_path):
+    # Flat port, water, camera 2 m above the floor looking straight down: every pixel sees
+    # the floor, at camera-frame z = 2 m, whatever the refraction does to the ray directions.
+    scene_desc["render"]["outputs"] = ["rgb", "depth"]
+    scene_desc["poses"] = scene_desc["poses"][:1]
+    built = pbuild.build(scene_desc, ".", _fresh())
+    pbuild.render(built, str(tmp_path), png=False)
+    z = pbuild._load_pixels(str(tmp_path / "p0.depth.exr"))
+    assert not (tmp_path / ".poser-tmp-0.depth.exr").exists()
+    # float32 storage and Cycles' single-precision intersections: ~1e-6 relative; 1e-4 m
+    # leaves room for the 0.005 px sample jitter (no depth gradient here).
+    assert np.abs(z[..., :3] - 2.0).max() < 1e-4, z[..., 0].min()
+    # The RGB image is unchanged by the depth render (lights restored): lit floor.
+    rgb = pbuild._load_pixels(str(tmp_path / "p0.exr"))
+    assert rgb[..., 1].mean() > 0.0
+
+
+@pytest.mark.parametrize("camera", ["PERSP", "CUSTOM"])
+def test_depth_of_field_is_the_physical_thin_lens(camera, tmp_path):
+    # Thin lens with aperture radius A = f/(2N) focused at F (Mitsuba's `thinlens`): a black
+    # square of side s px at depth z is blurred by a uniform disk of radius
+    # R = fx A |z - F| / (z F) px, so its darkness has variance R^2/4 + s^2/12 per axis. Both
+    # Blender cameras (PERSP with the converted f-stop, and poser's OSL camera) must give it.
+    W = H = 64
+    fx, cx, cy = 100.0, 32.3, 31.8
+    f, n_stop, focus, z, side = 0.1, 1.0, 0.5, 2.0, 0.1
+    eye = np.eye(4).tolist()
+    m = np.eye(4)
+    m[:3, :3] = geo.frame_looking_along([0.0, 0.0, 1.0])
+    m[:3, 3] = [0.0, 0.0, z]
+    dist = {"k1": 1e-12 if camera == "CUSTOM" else 0.0, "k2": 0.0, "k3": 0.0, "p1": 0.0,
+            "p2": 0.0}
+    desc = {"format": "poser-blender/1", "name": "dof",
+            "render": {"samples": 256, "seed": 2, "max_bounces": 2, "exposure": 1.0},
+            "cameras": [{"name": "c", "width": W, "height": H, "lens": "rectilinear",
+                         "fx": fx, "fy": fx, "cx": cx, "cy": cy, "distortion": dist,
+                         "r2_max": None, "focus_distance": focus, "f_number": n_stop,
+                         "focal_length": f, "rig_from_camera": eye, "port": {"kind": "none"}}],
+            "poses": [{"name": "p", "world_from_rig": eye, "images": ["p"]}],
+            "water": None, "surface": {"kind": "none"},
+            "bounds": {"min": [-5] * 3, "max": [5] * 3}, "sun": None,
+            "lights": [{"name": "sky", "mount": "world", "type": "ambient",
+                        "radiance": [1, 1, 1]}],
+            "objects": [{"name": "sq", "shape": {"type": "plane", "width": side,
+                                                 "height": side},
+                         "scale": [1, 1, 1], "matrix": m.tolist(),
+                         "material": {"albedo": [0, 0, 0], "pattern": None}}],
+            "targets": []}
+    built = pbuild.build(desc, ".", _fresh())
+    assert built.cameras[0].data.type == camera
+    exr = pbuild.render(built, str(tmp_path), png=False)[0]
+    w = 1.0 - pbuild._load_pixels(exr)[::-1, :, 1].astype(float)  # row 0 = top
+    jj, ii = np.mgrid[0:H, 0:W]
+    sw = w.sum()
+    mu, mv = (w * (ii + 0.5)).sum() / sw, (w * (jj + 0.5)).sum() / sw
+    var = 0.5 * ((w * ((ii + 0.5 - mu) ** 2 + (jj + 0.5 - mv) ** 2)).sum() / sw)
+    r = fx * f / (2.0 * n_stop) * abs(z - focus) / (z * focus)
+    s = fx * side / z
+    want = r * r / 4.0 + s * s / 12.0
+    print(camera, "blur variance", var, "expected", want, "flux", sw, "vs", s * s)
+    # 256 spp over ~200 blurred pixels: the variance estimate carries ~3 % noise; 10 %
+    # still rejects the 36 mm-sensor aperture (variance x0.45 here) by far.
+    assert var == pytest.approx(want, rel=0.10)
+    assert sw == pytest.approx(s * s, rel=0.05)
+    assert mu == pytest.approx(cx, abs=0.2) and mv == pytest.approx(cy, abs=0.2)

@@ -8,7 +8,7 @@
 //! | `render` | `samples`, `seed`, `max_bounces`, `exposure`, `outputs` |
 //! | `reference_channel` | channel whose indices a single RGB pass uses (1 = G, 550 nm) |
 //! | `per_channel_passes` | one pass per channel with that channel's indices (dispersion) |
-//! | `cameras[]` | `name`, `width`, `height`, `lens`, `fx`, `fy`, `cx`, `cy`, `focus_distance`, `f_number`, `rig_from_camera` (4×4), `port` (camera frame, as in the model) |
+//! | `cameras[]` | `name`, `width`, `height`, `lens`, `fx`, `fy`, `cx`, `cy`, `focus_distance`, `f_number`, `focal_length` (m; thin-lens aperture radius = focal_length / 2N), `distortion` (`k1`, `k2`, `k3`, `p1`, `p2`), `r2_max` (lens field, `null`: unbounded), `rig_from_camera` (4×4), `port` (camera frame, as in the model) |
 //! | `poses[]` | `name`, `world_from_rig` (4×4), `images` (one name per camera), `time` |
 //! | `water` | the model's water (indices, σa, σs per channel, phase, extent) or `null` |
 //! | `surface` | the sea surface (`none`, `flat`, `waves`) |
@@ -16,7 +16,7 @@
 //! | `sun` | `direction` (propagation), `irradiance` (W/m² normal to it), `in_water`, `angle`, `caustics` |
 //! | `lights[]` | `name`, `mount`, `type` + the model's parameters; poses as 4×4 |
 //! | `objects[]` | `name`, `shape` (primitive or `{type: ply, path}`), `scale`, `matrix` (world, scale included), `material` |
-//! | `targets[]` | `name`, `texture` (PNG path), `width`, `height`, `origin`, `matrix` |
+//! | `targets[]` | printed targets: `name`, `texture` (PNG path), `width`, `height`, `origin`, `matrix`; 3D test objects: `name`, `kind` = `"test_object"`, `steps[]` (`size`, `center`: boxes in the target frame), `disks[]` (`id`, `center`, `radius`), `white`, `black` (reflectances), `matrix` |
 //!
 //! Matrices are row-major 4×4 nested arrays.
 
@@ -72,27 +72,12 @@ pub struct Description {
 /// Build the description of `model`.
 pub fn describe(model: &Model) -> Result<Description, String> {
     let mut assets = Vec::new();
-    let mut warnings = Vec::new();
+    // Nothing the Blender backend draws approximately today; kept for `compile`'s report.
+    let warnings = Vec::new();
     let base_dir = std::path::Path::new(&model.source)
         .parent()
         .map(|p| p.to_path_buf())
         .unwrap_or_default();
-    for cam in &model.cameras {
-        if !cam.distortion.is_zero() {
-            return Err(format!(
-                "camera `{}`: Cycles has no Brown–Conrady distortion; the Blender backend cannot \
-                 render it exactly\n  help: set the distortion to zero for this backend, or use \
-                 the native or Mitsuba backend",
-                cam.name
-            ));
-        }
-        if (cam.fx - cam.fy).abs() > 1e-9 * cam.fx.abs().max(1.0) {
-            return Err(format!(
-                "camera `{}`: Cycles needs square pixels (fx = fy), got fx = {}, fy = {}",
-                cam.name, cam.fx, cam.fy
-            ));
-        }
-    }
     let cameras: Vec<Value> = model
         .cameras
         .iter()
@@ -108,6 +93,11 @@ pub fn describe(model: &Model) -> Result<Description, String> {
                 "cy": c.cy,
                 "focus_distance": c.focus_distance,
                 "f_number": c.f_number,
+                "focal_length": c.focal_length,
+                "distortion": c.distortion,
+                // Largest undistorted r² inside the lens field (null: no fold).
+                "r2_max": Some(crate::optics::lens::Lens::from_camera(c).r2_max)
+                    .filter(|r| r.is_finite()),
                 "rig_from_camera": pose_rows(&c.rig_from_camera),
                 "port": c.port,
             })
@@ -235,11 +225,7 @@ pub fn describe(model: &Model) -> Result<Description, String> {
                     "matrix": pose_rows(&t.pose),
                 }));
             }
-            None => warnings.push(format!(
-                "target `{}` ({}): a 3D test object; the Blender backend does not draw it yet",
-                t.name,
-                target_kind_name(&t.kind)
-            )),
+            None => targets.push(test_object(t)),
         }
     }
 
@@ -275,15 +261,41 @@ pub fn describe(model: &Model) -> Result<Description, String> {
     })
 }
 
-fn target_kind_name(k: &TargetKind) -> &'static str {
-    match k {
-        TargetKind::Checkerboard { .. } => "checkerboard",
-        TargetKind::CircleGrid { .. } => "circle grid",
-        TargetKind::Coded { .. } => "coded",
-        TargetKind::ScaleBar { .. } => "scale bar",
-        TargetKind::SiemensStar { .. } => "Siemens star",
-        TargetKind::TestObject { .. } => "test object",
-    }
+/// The 3D test object (staircase pyramid) as data: its steps as boxes (target frame, the same
+/// cuboids as the native renderer's `target_mesh` and Mitsuba's `cube`s) and its disks as
+/// flat black disks 10 µm above each step's top face (as in the Mitsuba backend), with the
+/// printed reflectances.
+fn test_object(t: &crate::model::Target) -> Value {
+    let TargetKind::TestObject {
+        size,
+        levels,
+        step,
+        diameter,
+    } = t.kind
+    else {
+        unreachable!("only test objects have no texture")
+    };
+    let steps: Vec<Value> = (0..levels)
+        .map(|k| {
+            let (side, top) = crate::targets::test_object_step(size, levels, step, k);
+            json!({"size": [side, side, step], "center": [0.0, 0.0, top - 0.5 * step]})
+        })
+        .collect();
+    let disks: Vec<Value> = crate::targets::local_points(&t.kind)
+        .into_iter()
+        .map(
+            |(id, p)| json!({"id": id, "center": [p.x, p.y, p.z + 1e-5], "radius": 0.5 * diameter}),
+        )
+        .collect();
+    json!({
+        "name": t.name,
+        "kind": "test_object",
+        "steps": steps,
+        "disks": disks,
+        "white": crate::targets::WHITE,
+        "black": crate::targets::BLACK,
+        "matrix": pose_rows(&t.pose),
+    })
 }
 
 /// A world box holding every camera position, light, object and target point, with a margin
