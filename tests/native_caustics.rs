@@ -88,8 +88,10 @@ fn caustic_contrast_is_zero_when_flat_and_peaks_at_a_focal_depth() {
             s / m
         })
         .collect();
-    // Focal depth of the peak component, a·k²·(n−1)/n = 1/z: with a = Hs/(2√2) ≈ 0.106 m,
-    // k = 2π/4 m: z ≈ 15 m; the steeper high-frequency components focus earlier.
+    // Focal depth of one sinusoid of amplitude a and wavenumber k: 1/(a·k²·(n−1)/n). The
+    // peak component (a ≈ Hs/(2√2) ≈ 0.1 m, k = 2π/4 m) focuses at ≈ 15 m, but the short,
+    // steep components of the spectrum's tail (down to λp/12) focus within a few metres: the
+    // sum peaks at a few metres (measured: 2.5 m, contrast 1.2).
     for (k, ck) in c.iter().enumerate() {
         eprintln!("z {:7.2} m  contrast {ck:.4}", v.planes()[k]);
     }
@@ -100,16 +102,24 @@ fn caustic_contrast_is_zero_when_flat_and_peaks_at_a_focal_depth() {
     eprintln!("max contrast {cmax:.3} at z = {:.2} m", v.planes()[kmax]);
     // Just below the troughs the irradiance is nearly uniform (the slopes have not had the
     // distance to focus): small contrast.
-    assert!(c[0] < 0.25 * cmax, "top contrast {} vs max {cmax}", c[0]);
+    assert!(c[0] < 0.5 * cmax, "top contrast {} vs max {cmax}", c[0]);
     // Rises to a maximum strictly inside the depth range …
     assert!(kmax > 0 && kmax < PLANES - 1, "max at plane {kmax}");
     assert!(cmax > 0.3, "max contrast {cmax}");
-    // … monotonically at first (3 planes, nearly monotone: allow 2 % wiggle) …
-    for k in 1..kmax.min(4) {
-        assert!(c[k] > 0.98 * c[k - 1], "not rising at plane {k}: {c:?}");
+    // … monotonically up to it …
+    for k in 1..=kmax {
+        assert!(c[k] > c[k - 1], "not rising at plane {k}: {c:?}");
     }
-    // … then falls (defocusing and the sun's disk blur).
-    assert!(c[PLANES - 1] < 0.8 * cmax, "deep contrast {} vs {cmax}", c[PLANES - 1]);
+    // … then falls (defocusing and the sun's disk blur), monotonically (measured: to 0.2 at
+    // 30 m; smooth in depth, so no wiggle allowance).
+    for k in kmax + 1..PLANES {
+        assert!(c[k] < c[k - 1], "not falling at plane {k}: {c:?}");
+    }
+    assert!(
+        c[PLANES - 1] < 0.5 * cmax,
+        "deep contrast {} vs {cmax}",
+        c[PLANES - 1]
+    );
 }
 
 /// A sunlit sandy floor 4 m deep in clear water, camera 2.5 m above it looking down.
@@ -165,7 +175,11 @@ fn rendered_seabed_shows_caustics_and_keeps_its_mean() {
     eprintln!("caustic volume built in {:.2} s", vol.build_seconds);
     let a = render_image(&flat, &sf, 0, 0, 4, None).unwrap();
     let b = render_image(&wavy, &sw, 0, 0, 4, None).unwrap();
-    assert!(b.rgb.iter().all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
+    assert!(
+        b.rgb
+            .iter()
+            .all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0))
+    );
     let (ma, sa) = stats(&a.rgb);
     let (mb, sb) = stats(&b.rgb);
     // What the footprint (3 m × 2.2 m, about 2 × 1.5 wavelengths) samples of the pattern:

@@ -104,8 +104,13 @@ impl WaveField {
             let w = (OMEGA_MIN * wp) + (i as f64 + rng.next()) * dw;
             let r = wp / w;
             let s_w = w.powi(-5) * (-1.25 * r.powi(4)).exp() * wp.powi(4);
-            let s = (s_peak * if w < wp { (w / wp).powi(5) } else { (w / wp).powf(-2.5) })
-                .clamp(1.0, 80.0);
+            let s = (s_peak
+                * if w < wp {
+                    (w / wp).powi(5)
+                } else {
+                    (w / wp).powf(-2.5)
+                })
+            .clamp(1.0, 80.0);
             // Rejection sampling of the Mitsuyasu spread about the wind direction.
             let mut theta = 0.0;
             for _ in 0..1000 {
@@ -213,7 +218,11 @@ mod tests {
         // so the grid mean of h² is the exact spatial variance up to rounding (1e-9 relative).
         for (hs, lam, u) in [(0.5, 10.0, 5.0), (0.2, 3.0, 12.0), (1.5, 40.0, 1.0)] {
             let f = WaveField::new(hs, lam, u, 0.0, 7);
-            assert!(f.components.len() >= 10, "{} components", f.components.len());
+            assert!(
+                f.components.len() >= 10,
+                "{} components",
+                f.components.len()
+            );
             let n = 256;
             let (mut s, mut s2) = (0.0, 0.0);
             for i in 0..n {
@@ -250,7 +259,11 @@ mod tests {
         assert_eq!(f, field());
         assert_ne!(f, WaveField::new(0.5, 10.0, 5.0, 0.3, 43));
         assert!(WaveField::new(0.0, 10.0, 5.0, 0.0, 1).components.is_empty());
-        assert!(WaveField::new(f64::NAN, 10.0, 5.0, 0.0, 1).components.is_empty());
+        assert!(
+            WaveField::new(f64::NAN, 10.0, 5.0, 0.0, 1)
+                .components
+                .is_empty()
+        );
     }
 
     #[test]

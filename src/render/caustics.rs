@@ -328,7 +328,10 @@ mod tests {
             let (mean, sd) = v.plane_stats(k);
             // Regular ray grid at twice the cell density + bilinear splat = a partition of
             // unity: uniform to f32 rounding.
-            assert!((mean - 1.0).abs() < 1e-6 && sd < 1e-5, "plane {k}: {mean} {sd}");
+            assert!(
+                (mean - 1.0).abs() < 1e-6 && sd < 1e-5,
+                "plane {k}: {mean} {sd}"
+            );
         }
         assert!((v.factor(DVec3::new(3.3, -7.1, -4.0)) - 1.0).abs() < 1e-5);
     }
