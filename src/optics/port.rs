@@ -177,9 +177,16 @@ impl Slabs {
     /// depth. Working with t needs no √ for r and keeps r → 0 exact (t → 1/F′(0)).
     #[inline]
     fn solve_ratio(&self, r2: f64, depth: f64) -> Result<f64, NoSolution> {
+        self.solve_ratio_counted(r2, depth).map(|(t, _)| t)
+    }
+
+    /// [`Slabs::solve_ratio`] and the number of evaluations of F it took (0 off the fast
+    /// path).
+    #[inline(always)]
+    fn solve_ratio_counted(&self, r2: f64, depth: f64) -> Result<(f64, u32), NoSolution> {
         if !self.concave {
             let r = r2.sqrt();
-            return self.solve_bracketed(r, depth).map(|q| q / r);
+            return self.solve_bracketed(r, depth).map(|q| (q / r, 0));
         }
         // F is bounded by its asymptote gap·q + Σ tᵢ Tᵢ + D·T_w: with no camera-side gap no
         // ray reaches points beyond it.
@@ -206,12 +213,13 @@ impl Slabs {
             }
         };
         // Halley (cubic; error constant < 0.4 on the benchmark sets, so a relative step
-        // ≤ 1e-5 leaves an error ≲ 1e-15·q); plain Newton while F·F″ is comparable to F′²
-        // (far from the root), where a step ≤ 1e-8 leaves ≲ 1e-16·q.
+        // ≤ 1e-5 leaves an error ≲ 1e-15·q) while its denominator 2F′² − F·F″ stays above
+        // F′²/2 (the step is then at most 4 Newton steps); plain Newton otherwise (far from
+        // the root), where a step ≤ 1e-8 leaves ≲ 1e-16·q.
         let mut t = t0;
-        for _ in 0..200 {
+        for evals in 1..=200 {
             let (f, df, d2f) = self.eval2_ratio(t, r2, depth);
-            let halley = (f * d2f).abs() < 0.5 * df * df;
+            let halley = (f * d2f).abs() < 1.5 * df * df;
             let dt = if halley {
                 -2.0 * f * df / (2.0 * df * df - f * d2f)
             } else {
@@ -224,7 +232,7 @@ impl Slabs {
             t = if next > 0.0 { next } else { 0.5 * t };
             if dt.abs() <= if halley { 1e-5 } else { 1e-8 } * t {
                 return if t.is_finite() {
-                    Ok(t)
+                    Ok((t, evals))
                 } else {
                     Err(NoSolution::BeyondCriticalAngle)
                 };
@@ -587,6 +595,12 @@ impl DomePort {
     /// C⊥), or `None` (then the bracketed solver decides).
     #[inline]
     fn halley(&self, c: DVec2, l: f64) -> Option<DVec2> {
+        self.halley_counted(c, l).map(|(u, _)| u)
+    }
+
+    /// [`DomePort::halley`] and the number of evaluations of m it took.
+    #[inline(always)]
+    fn halley_counted(&self, c: DVec2, l: f64) -> Option<(DVec2, u32)> {
         let k = self.k;
         let kw = self.kw;
         let pc = DVec2::new(l - c.x, -c.y);
@@ -597,7 +611,7 @@ impl DomePort {
             return None;
         }
         let mut u = DVec2::new(1.0, tau0) * (1.0 / (1.0 + tau0 * tau0).sqrt());
-        for _ in 0..16 {
+        for evals in 1..=16 {
             let p = c.y * u.x - c.x * u.y;
             let s = [p * k[0], p * k[1], p * k[2], p * k[3]];
             let co2 = [
@@ -642,7 +656,7 @@ impl DomePort {
             u = v * (1.0 / v.length());
             if step.abs() <= if halley { 5e-6 } else { 1e-8 } {
                 // Inside the guaranteed bracket, in front of the camera.
-                return (u.x > 0.0 && u.y.abs() <= self.bracket * u.x).then_some(u);
+                return (u.x > 0.0 && u.y.abs() <= self.bracket * u.x).then_some((u, evals));
             }
         }
         None
@@ -1041,9 +1055,13 @@ impl PortSolver {
         }
     }
 
-    /// Point in water (camera frame) → camera ray direction (not unit).
+    /// Point in water (camera frame) → camera ray direction (not unit). A non-finite point
+    /// has no solution (`no_convergence`).
     #[inline]
     pub fn forward(&self, p: DVec3) -> Result<DVec3, NoSolution> {
+        if !p.is_finite() {
+            return Err(NoSolution::NoConvergence);
+        }
         match self {
             PortSolver::None => {
                 if p == DVec3::ZERO {
@@ -1126,7 +1144,7 @@ impl Slabs {
                     df += d;
                     d2f += d2;
                 }
-                let halley = (f * d2f).abs() < 0.5 * df * df;
+                let halley = (f * d2f).abs() < 1.5 * df * df;
                 let dt = if halley {
                     -2.0 * f * df / (2.0 * df * df - f * d2f)
                 } else {
@@ -1377,6 +1395,81 @@ impl PortSolver {
                 for (p, o) in ps.iter().zip(out.iter_mut()) {
                     *o = self.forward(*p);
                 }
+            }
+        }
+        // As in `forward`: a non-finite point has no solution.
+        for (p, o) in ps.iter().zip(out.iter_mut()) {
+            if !p.is_finite() {
+                *o = Err(NoSolution::NoConvergence);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optics::bench::cases;
+
+    /// Evaluations of the fast solver per point of the benchmark's sets (`None`: the point
+    /// left the fast path), for the flat port and the on-axis cylinder (q-equation) and the
+    /// decentred dome (moment equation).
+    fn evaluations(port: &PortSolver, p: DVec3) -> Option<u32> {
+        match port {
+            PortSolver::Flat(f) => {
+                let a = f.normal.dot(p);
+                let depth = a - f.distance - f.total_thickness;
+                let r2 = f.normal.cross(p).length_squared();
+                f.slabs.solve_ratio_counted(r2, depth).ok().map(|x| x.1)
+            }
+            PortSolver::Cylinder(c) => {
+                let z = c.axis.dot(p);
+                let rho = c.axis.cross(p - c.axis_point).length();
+                c.slabs
+                    .solve_ratio_counted(z * z, rho - c.r2)
+                    .ok()
+                    .map(|x| x.1)
+            }
+            PortSolver::Dome(d) => {
+                let l = p.length();
+                let e1 = p / l;
+                let cperp = d.center - d.center.dot(e1) * e1;
+                let c = DVec2::new(d.center.dot(e1), cperp.length());
+                d.halley_counted(c, l).map(|x| x.1)
+            }
+            PortSolver::None => None,
+        }
+    }
+
+    #[test]
+    fn fast_paths_are_taken_and_converge_in_few_evaluations() {
+        // A regression here is a slowdown, not a wrong pixel: the fallbacks (bracketed
+        // solvers) still give exact answers, so only this test notices a broken first guess
+        // or stopping rule. Bounds: the evaluation counts measured on these sets (every port:
+        // 2 on ordinary points, ≤ 4 on grazing ones).
+        for c in cases(3000) {
+            for (set, pts, bound) in [("ordinary", &c.ordinary, 2), ("grazing", &c.grazing, 4)] {
+                let mut hist = [0usize; 8];
+                for p in pts {
+                    let n = evaluations(&c.port, *p)
+                        .unwrap_or_else(|| panic!("{}/{set}: {p:?} left the fast path", c.name));
+                    hist[(n as usize).min(7)] += 1;
+                }
+                let worst = hist.iter().rposition(|&k| k > 0).unwrap();
+                assert!(
+                    worst <= bound,
+                    "{}/{set}: up to {worst} evaluations (histogram {hist:?})",
+                    c.name
+                );
+                // On average the ordinary sets need no more than 2, the grazing ones ≤ 3.2.
+                let mean = hist.iter().enumerate().map(|(i, k)| i * k).sum::<usize>() as f64
+                    / pts.len() as f64;
+                let mean_bound = if set == "ordinary" { 2.0 } else { 3.2 };
+                assert!(
+                    mean <= mean_bound,
+                    "{}/{set}: mean {mean} evaluations",
+                    c.name
+                );
             }
         }
     }
