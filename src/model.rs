@@ -258,6 +258,28 @@ pub struct Camera {
     pub rig_from_camera: Pose,
 }
 
+impl Camera {
+    /// The same camera with its pixel grid resampled by `scale` (a preview at a fraction of the
+    /// resolution): same sensor, field of view, lens, distortion and port; sizes rounded to
+    /// whole pixels (at least 1) and the intrinsics scaled per axis by the exact ratio of the
+    /// new to the old size, so that every ray keeps its place on the sensor.
+    pub fn with_resolution_scale(&self, scale: f64) -> Camera {
+        let w = ((self.width as f64 * scale).round() as u32).max(1);
+        let h = ((self.height as f64 * scale).round() as u32).max(1);
+        let (sx, sy) = (w as f64 / self.width as f64, h as f64 / self.height as f64);
+        Camera {
+            width: w,
+            height: h,
+            pixel_pitch: self.pixel_pitch / sx,
+            fx: self.fx * sx,
+            fy: self.fy * sy,
+            cx: self.cx * sx,
+            cy: self.cy * sy,
+            ..self.clone()
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LensModel {
@@ -661,6 +683,14 @@ impl Model {
         } else {
             format!("{}_{}", self.cameras[cam].name, self.poses[pose].name)
         }
+    }
+
+    /// Every camera resampled by `scale` ([`Camera::with_resolution_scale`]).
+    pub fn with_resolution_scale(mut self, scale: f64) -> Model {
+        for c in &mut self.cameras {
+            *c = c.with_resolution_scale(scale);
+        }
+        self
     }
 
     /// The most port interfaces any camera's rays cross ([`Port::interfaces`]).

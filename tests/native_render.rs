@@ -277,3 +277,102 @@ fn target_centroids_match_refractive_projection() {
     eprintln!("centroid RMS error {e:.4} px, noise {noise:.4} px, tolerance {tol:.4} px");
     assert!(e < tol, "centroid RMS error {e} px > {tol} px");
 }
+
+/// `poser render --scale`: a preview camera sees every point where the full camera does, at
+/// the scaled pixel position (exactly, through the refractive port), for any scale.
+#[test]
+fn resolution_scale_keeps_every_ray_in_place() {
+    let path =
+        std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios/reef_strip.toml");
+    let model = poser::scene::load(&path, &[]).unwrap().model;
+    let full = poser::optics::project::Projector::new(&model, 0, 1).unwrap();
+    for scale in [0.25, 0.1, 0.333, 2.0] {
+        let small_model = model.clone().with_resolution_scale(scale);
+        let c0 = &model.cameras[0];
+        let c1 = &small_model.cameras[0];
+        assert_eq!(c1.width, (c0.width as f64 * scale).round() as u32);
+        let (sx, sy) = (
+            c1.width as f64 / c0.width as f64,
+            c1.height as f64 / c0.height as f64,
+        );
+        let small = poser::optics::project::Projector::new(&small_model, 0, 1).unwrap();
+        let mut checked = 0;
+        let cam = model.world_from_camera(0, 0);
+        for k in 0..50 {
+            // A fan of points 2 m in front of the camera, out to the image corners.
+            let q = DVec3::new(-0.9 + 0.036 * k as f64, 0.6 - 0.024 * k as f64, 2.0);
+            let p = cam.transform_point(q);
+            if let Ok([u, v]) = full.project_world(0, p) {
+                let [u1, v1] = small.project_world(0, p).unwrap();
+                assert!((u1 - u * sx).abs() < 1e-6 && (v1 - v * sy).abs() < 1e-6);
+                checked += 1;
+            }
+        }
+        assert!(checked > 40, "{checked} points in view");
+    }
+}
+
+/// Sunlit seabed in forward-scattering water (the typical survey): sampling surface bounces
+/// from the mixture of the cosine lobe and the sun's aureole leaves the estimate unchanged and
+/// cuts its variance. Measured (20 000 paths straight down, bounces = 2): the means agree well
+/// within the noise (5.05 vs 4.89 ± 0.27) and the variance falls 14× (94 vs 1317).
+#[test]
+fn aureole_sampling_is_unbiased_and_cuts_sunlit_seabed_noise() {
+    use poser::render::{integrator::Integrator, lights::Lights, medium::Medium, sampler::Sampler};
+    let mut m = nadir_model(2.0);
+    {
+        let w = m.water.as_mut().unwrap();
+        w.absorption = [0.05; 3];
+        w.scattering = [0.3; 3];
+        w.phase = Phase::HenyeyGreenstein { g: 0.92 };
+    }
+    let dir = DVec3::new(0.3, 0.1, -1.0).normalize();
+    m.sun = Some(Sun {
+        elevation: 1.0,
+        azimuth: 0.0,
+        irradiance: [800.0; 3],
+        direction_air: dir,
+        direction_water: dir,
+        irradiance_water: [600.0; 3],
+        from_time: None,
+    });
+    m.render.max_bounces = 2;
+    // The sea ends at z = 0 under a sun: sink the floor and the camera 10 m.
+    m.poses[0].world_from_rig.translation.z -= 10.0;
+    for o in &mut m.objects {
+        o.pose.translation.z -= 10.0;
+    }
+    let scene = Scene::build(&m).unwrap();
+    let cam = m.world_from_camera(0, 0);
+    let make = || {
+        Integrator::new(
+            &scene,
+            &m,
+            Medium::new(&m, cam.translation),
+            Lights::at_pose(&m, &m.poses[0].world_from_rig),
+        )
+    };
+    let guided = make();
+    assert!(guided.aureole.is_some(), "sun + g = 0.92 water must guide");
+    let mut plain = make();
+    plain.aureole = None;
+    let n = 20_000u64;
+    let stats = |integ: &Integrator| {
+        let v: Vec<f64> = (0..n)
+            .map(|k| {
+                let mut rng = Sampler::new(7, 0, 0, 0, k);
+                integ.li(cam.translation, -DVec3::Z, &mut rng).y
+            })
+            .collect();
+        assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0));
+        let mean = v.iter().sum::<f64>() / n as f64;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        (mean, var)
+    };
+    let (mg, vg) = stats(&guided);
+    let (mp, vp) = stats(&plain);
+    let se = (vg / n as f64 + vp / n as f64).sqrt();
+    eprintln!("guided {mg:.4} (var {vg:.4}), cosine {mp:.4} (var {vp:.4}), se {se:.4}");
+    assert!((mg - mp).abs() < 4.0 * se, "biased: {mg} vs {mp} ± {se}");
+    assert!(vg < 0.25 * vp, "no variance reduction: {vg} vs {vp}");
+}

@@ -159,6 +159,10 @@ pub enum Command {
         /// Render only these pose indices (e.g. `0,3,5`).
         #[arg(long, value_delimiter = ',')]
         poses: Option<Vec<usize>>,
+        /// Preview at a fraction of the cameras' resolution (e.g. `0.25`): same field of view,
+        /// lens and port; the ground truth is written for the scaled images.
+        #[arg(long)]
+        scale: Option<f64>,
         /// Hide the progress bar.
         #[arg(long)]
         quiet: bool,
@@ -271,8 +275,9 @@ pub fn main() -> ExitCode {
             out,
             samples,
             poses,
+            scale,
             quiet,
-        } => render::run(&scene, backend, &out, samples, poses, quiet),
+        } => render::run(&scene, backend, &out, samples, poses, scale, quiet),
         Command::Plan {
             scene,
             json,

@@ -9,9 +9,18 @@ pub fn run(
     out: &Path,
     samples: Option<u32>,
     poses: Option<Vec<usize>>,
+    scale: Option<f64>,
     quiet: bool,
 ) -> Result<(), CliError> {
-    let model = load_model(scene)?;
+    let mut model = load_model(scene)?;
+    if let Some(s) = scale {
+        if !(s.is_finite() && s > 0.0 && s <= 4.0) {
+            return Err(CliError::Usage(format!(
+                "--scale {s}: expected a factor in (0, 4], e.g. 0.25 for a quarter-resolution preview"
+            )));
+        }
+        model = model.with_resolution_scale(s);
+    }
     if let Some(p) = poses
         .as_ref()
         .and_then(|p| p.iter().find(|&&i| i >= model.poses.len()))

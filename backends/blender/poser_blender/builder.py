@@ -310,6 +310,7 @@ def build(desc, base_dir=".", scene=None):
         inner_obj.matrix_parent_inverse.identity()
         shells.append((ci, shell, glass))
 
+    scene.camera = built.cameras[0]  # the saved .blend opens looking through camera 0
     _build_water(built, coll, desc, shells, n_w, ref)
     _build_lights(built, coll, desc)
     _build_objects(built, coll, desc, base_dir)
@@ -381,8 +382,11 @@ def _custom_camera(data, cam):
     code, digest = _osl_bytecode(text.as_string())
     data.type = "CUSTOM"
     data.custom_mode = "INTERNAL"
-    # Assigning the text runs Cycles' own update (it needs the `oslquery` module, which the
-    # bpy wheel does not put on sys.path); the bytecode and parameters are set here anyway.
+    # Assigning the text runs Cycles' own update, which compiles the shader and creates the
+    # parameter properties (shown in the Lens panel); it needs the `oslquery` module, which
+    # the bpy wheel ships but does not put on sys.path. The bytecode and the parameters are
+    # set here in any case.
+    _ensure_oslquery()
     _quiet(lambda: setattr(data, "custom_shader", text))
     data.custom_bytecode = code
     data.custom_bytecode_hash = digest
@@ -396,7 +400,27 @@ def _custom_camera(data, cam):
                       "fisheye_equisolid": 2}[cam.get("lens", "rectilinear")]
     r2 = cam.get("r2_max")
     params["r2_max"] = 1e30 if r2 is None else float(min(r2, 1e30))
+    # Thin lens (as Mitsuba's `thinlens` and Cycles' own cameras): aperture radius f/(2N),
+    # focus plane at z = focus_distance.
+    aperture, focus = 0.0, 1.0
+    if cam.get("focus_distance") and cam.get("f_number") and cam.get("focal_length"):
+        aperture = float(cam["focal_length"]) / (2.0 * float(cam["f_number"]))
+        focus = float(cam["focus_distance"])
+    params["aperture_radius"] = aperture
+    params["focus_distance"] = focus
     data.update_tag()
+
+
+def _ensure_oslquery():
+    try:
+        import oslquery  # noqa: F401
+    except ImportError:
+        lib = os.path.join(bpy.utils.resource_path("LOCAL"), "python", "lib")
+        if os.path.isdir(lib):
+            for d in sorted(os.listdir(lib)):
+                site = os.path.join(lib, d, "site-packages")
+                if os.path.isdir(os.path.join(site, "oslquery")) and site not in sys.path:
+                    sys.path.append(site)
 
 
 def _quiet(fn):
@@ -453,7 +477,8 @@ def _set_intrinsics(data, cam):
     if cam.get("focus_distance") and cam.get("f_number"):
         data.dof.use_dof = True
         data.dof.focus_distance = float(cam["focus_distance"])
-        data.dof.aperture_fstop = float(cam["f_number"])
+        data.dof.aperture_fstop = geo.blender_fstop(float(cam["f_number"]), data.lens,
+                                                    cam.get("focal_length"))
 
 
 def _render_settings(scene, desc):
@@ -1060,8 +1085,12 @@ def render_depth(built, cam_index, path):
         cache = built.depth_twins = {}
     saved_mats = []
     saved_hidden = []
+    seen = set()
     for obj in scene.objects:
         if obj.type == "MESH" and obj.data is not None:
+            if obj.data.name in seen:  # mesh data shared by several objects: swap once
+                continue
+            seen.add(obj.data.name)
             mats = list(obj.data.materials)
             if not mats:
                 obj.data.materials.append(None)

@@ -46,6 +46,17 @@ def blender_intrinsics(fx, fy, cx, cy, width, height):
     }
 
 
+def blender_fstop(f_number, lens_mm, focal_length):
+    """Blender f-stop giving the physical thin-lens aperture radius focal_length / (2 N).
+
+    Cycles takes the aperture radius as lens / (2 f-stop) with `lens` in mm, and poser's
+    `lens` is fx * 36 mm / W (a 36 mm wide virtual sensor), not the physical focal length:
+    f-stop = N * lens[m] / focal_length. Without a focal length, N itself."""
+    if not focal_length:
+        return float(f_number)
+    return float(f_number) * float(lens_mm) * 1e-3 / float(focal_length)
+
+
 def fisheye_params(lens_model, fx, width, height):
     """Cycles panoramic camera parameters for a fisheye lens of focal length fx pixels.
 

@@ -192,7 +192,12 @@ def test_custom_camera_projects_with_distortion(lens, tmp_path):
                         "radiance": [1, 1, 1]}],
             "objects": objs, "targets": []}
     built = pbuild.build(desc, ".", _fresh())
-    assert built.cameras[0].data.type == "CUSTOM"
+    data = built.cameras[0].data
+    assert data.type == "CUSTOM" and data.custom_mode == "INTERNAL"
+    assert data.custom_shader.name == "poser_camera.osl" and data.custom_bytecode
+    assert data.cycles_custom["k1"] == pytest.approx(dist["k1"])
+    assert data.cycles_custom["fy"] == pytest.approx(fy)
+    assert built.scene.camera == built.cameras[0]
     exr = pbuild.render(built, str(tmp_path), png=False)[0]
     w = np.clip(1.0 - pbuild._load_pixels(exr)[::-1, :, 1], 0.0, None)  # row 0 = top
     errs = []
@@ -298,3 +303,53 @@ def test_depth_pass_is_camera_z_through_the_port(scene_desc, tmp_path):
     # The RGB image is unchanged by the depth render (lights restored): lit floor.
     rgb = pbuild._load_pixels(str(tmp_path / "p0.exr"))
     assert rgb[..., 1].mean() > 0.0
+
+
+@pytest.mark.parametrize("camera", ["PERSP", "CUSTOM"])
+def test_depth_of_field_is_the_physical_thin_lens(camera, tmp_path):
+    # Thin lens with aperture radius A = f/(2N) focused at F (Mitsuba's `thinlens`): a black
+    # square of side s px at depth z is blurred by a uniform disk of radius
+    # R = fx A |z - F| / (z F) px, so its darkness has variance R^2/4 + s^2/12 per axis. Both
+    # Blender cameras (PERSP with the converted f-stop, and poser's OSL camera) must give it.
+    W = H = 64
+    fx, cx, cy = 100.0, 32.3, 31.8
+    f, n_stop, focus, z, side = 0.1, 1.0, 0.5, 2.0, 0.1
+    eye = np.eye(4).tolist()
+    m = np.eye(4)
+    m[:3, :3] = geo.frame_looking_along([0.0, 0.0, 1.0])
+    m[:3, 3] = [0.0, 0.0, z]
+    dist = {"k1": 1e-12 if camera == "CUSTOM" else 0.0, "k2": 0.0, "k3": 0.0, "p1": 0.0,
+            "p2": 0.0}
+    desc = {"format": "poser-blender/1", "name": "dof",
+            "render": {"samples": 256, "seed": 2, "max_bounces": 2, "exposure": 1.0},
+            "cameras": [{"name": "c", "width": W, "height": H, "lens": "rectilinear",
+                         "fx": fx, "fy": fx, "cx": cx, "cy": cy, "distortion": dist,
+                         "r2_max": None, "focus_distance": focus, "f_number": n_stop,
+                         "focal_length": f, "rig_from_camera": eye, "port": {"kind": "none"}}],
+            "poses": [{"name": "p", "world_from_rig": eye, "images": ["p"]}],
+            "water": None, "surface": {"kind": "none"},
+            "bounds": {"min": [-5] * 3, "max": [5] * 3}, "sun": None,
+            "lights": [{"name": "sky", "mount": "world", "type": "ambient",
+                        "radiance": [1, 1, 1]}],
+            "objects": [{"name": "sq", "shape": {"type": "plane", "width": side,
+                                                 "height": side},
+                         "scale": [1, 1, 1], "matrix": m.tolist(),
+                         "material": {"albedo": [0, 0, 0], "pattern": None}}],
+            "targets": []}
+    built = pbuild.build(desc, ".", _fresh())
+    assert built.cameras[0].data.type == camera
+    exr = pbuild.render(built, str(tmp_path), png=False)[0]
+    w = 1.0 - pbuild._load_pixels(exr)[::-1, :, 1].astype(float)  # row 0 = top
+    jj, ii = np.mgrid[0:H, 0:W]
+    sw = w.sum()
+    mu, mv = (w * (ii + 0.5)).sum() / sw, (w * (jj + 0.5)).sum() / sw
+    var = 0.5 * ((w * ((ii + 0.5 - mu) ** 2 + (jj + 0.5 - mv) ** 2)).sum() / sw)
+    r = fx * f / (2.0 * n_stop) * abs(z - focus) / (z * focus)
+    s = fx * side / z
+    want = r * r / 4.0 + s * s / 12.0
+    print(camera, "blur variance", var, "expected", want, "flux", sw, "vs", s * s)
+    # 256 spp over ~200 blurred pixels: the variance estimate carries ~3 % noise; 10 %
+    # still rejects the 36 mm-sensor aperture (variance x0.45 here) by far.
+    assert var == pytest.approx(want, rel=0.10)
+    assert sw == pytest.approx(s * s, rel=0.05)
+    assert mu == pytest.approx(cx, abs=0.2) and mv == pytest.approx(cy, abs=0.2)

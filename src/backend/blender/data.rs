@@ -8,7 +8,7 @@
 //! | `render` | `samples`, `seed`, `max_bounces`, `exposure`, `outputs` |
 //! | `reference_channel` | channel whose indices a single RGB pass uses (1 = G, 550 nm) |
 //! | `per_channel_passes` | one pass per channel with that channel's indices (dispersion) |
-//! | `cameras[]` | `name`, `width`, `height`, `lens`, `fx`, `fy`, `cx`, `cy`, `focus_distance`, `f_number`, `distortion` (`k1`, `k2`, `k3`, `p1`, `p2`), `r2_max` (lens field, `null`: unbounded), `rig_from_camera` (4×4), `port` (camera frame, as in the model) |
+//! | `cameras[]` | `name`, `width`, `height`, `lens`, `fx`, `fy`, `cx`, `cy`, `focus_distance`, `f_number`, `focal_length` (m; thin-lens aperture radius = focal_length / 2N), `distortion` (`k1`, `k2`, `k3`, `p1`, `p2`), `r2_max` (lens field, `null`: unbounded), `rig_from_camera` (4×4), `port` (camera frame, as in the model) |
 //! | `poses[]` | `name`, `world_from_rig` (4×4), `images` (one name per camera), `time` |
 //! | `water` | the model's water (indices, σa, σs per channel, phase, extent) or `null` |
 //! | `surface` | the sea surface (`none`, `flat`, `waves`) |
@@ -72,25 +72,12 @@ pub struct Description {
 /// Build the description of `model`.
 pub fn describe(model: &Model) -> Result<Description, String> {
     let mut assets = Vec::new();
-    let mut warnings = Vec::new();
+    // Nothing the Blender backend draws approximately today; kept for `compile`'s report.
+    let warnings = Vec::new();
     let base_dir = std::path::Path::new(&model.source)
         .parent()
         .map(|p| p.to_path_buf())
         .unwrap_or_default();
-    for cam in &model.cameras {
-        // Same test as the builder's `needs_custom_camera`.
-        let square = (cam.fx - cam.fy).abs() <= 1e-9 * cam.fx.abs();
-        if (!cam.distortion.is_zero() || !square)
-            && cam.focus_distance.is_some()
-            && cam.f_number.is_some()
-        {
-            warnings.push(format!(
-                "camera `{}`: rendered with poser's custom (OSL) camera for its distortion or \
-                 non-square pixels, which is a pinhole: depth of field is not rendered",
-                cam.name
-            ));
-        }
-    }
     let cameras: Vec<Value> = model
         .cameras
         .iter()
@@ -106,6 +93,7 @@ pub fn describe(model: &Model) -> Result<Description, String> {
                 "cy": c.cy,
                 "focus_distance": c.focus_distance,
                 "f_number": c.f_number,
+                "focal_length": c.focal_length,
                 "distortion": c.distortion,
                 // Largest undistorted r² inside the lens field (null: no fold).
                 "r2_max": Some(crate::optics::lens::Lens::from_camera(c).r2_max)
