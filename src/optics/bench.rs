@@ -163,6 +163,20 @@ pub fn poser_project(port: &PortSolver, lens: &Lens, p: DVec3) -> Result<[f64; 2
     lens.project(port.forward(p)?)
 }
 
+/// poser's batch solver ([`PortSolver::forward_many`], lanes in lock step) then the lens.
+pub fn poser_project_many(
+    port: &PortSolver,
+    lens: &Lens,
+    ps: &[DVec3],
+    dirs: &mut [Result<DVec3, NoSolution>],
+    out: &mut [Result<[f64; 2], NoSolution>],
+) {
+    port.forward_many(ps, dirs);
+    for (d, o) in dirs.iter().zip(out.iter_mut()) {
+        *o = d.and_then(|d| lens.project(d));
+    }
+}
+
 /// Refractive COLMAP's Gauss–Newton `IterativeProjection`, transcribed in f64.
 pub fn colmap_gn(port: &PortSolver, lens: &Lens, p: DVec3) -> Result<[f64; 2], NoSolution> {
     let dist = p.length();
@@ -422,6 +436,49 @@ fn measure<F: Fn(DVec3) -> Result<[f64; 2], NoSolution>>(
     (errs.len(), pps, pps_wall, median, max, failures)
 }
 
+/// [`measure`] for the batch solver: errors per point, speed over whole passes.
+fn measure_batch(
+    port: &PortSolver,
+    lens: &Lens,
+    pts: &[DVec3],
+    refs: &[Option<[f64; 2]>],
+    min_time: f64,
+) -> (usize, f64, f64, f64, f64, usize) {
+    let mut dirs = vec![Err(NoSolution::NoConvergence); pts.len()];
+    let mut out = vec![Err(NoSolution::NoConvergence); pts.len()];
+    poser_project_many(port, lens, pts, &mut dirs, &mut out);
+    let mut errs = Vec::new();
+    let mut failures = 0;
+    for (x, r) in out.iter().zip(refs) {
+        let Some(r) = r else { continue };
+        match x {
+            Ok(x) if x[0].is_finite() && x[1].is_finite() => {
+                errs.push((x[0] - r[0]).hypot(x[1] - r[1]))
+            }
+            _ => failures += 1,
+        }
+    }
+    errs.sort_by(f64::total_cmp);
+    let median = errs.get(errs.len() / 2).copied().unwrap_or(f64::NAN);
+    let max = errs.last().copied().unwrap_or(f64::NAN);
+    let t0 = Instant::now();
+    let c0 = thread_cpu_seconds();
+    let mut count = 0usize;
+    while thread_cpu_seconds() - c0 < min_time || count == 0 {
+        poser_project_many(
+            port,
+            lens,
+            std::hint::black_box(pts),
+            &mut dirs,
+            std::hint::black_box(&mut out),
+        );
+        count += pts.len();
+    }
+    let pps = count as f64 / (thread_cpu_seconds() - c0);
+    let pps_wall = count as f64 / t0.elapsed().as_secs_f64();
+    (errs.len(), pps, pps_wall, median, max, failures)
+}
+
 /// Run the whole comparison. `quick`: fewer points and shorter timing. The environment
 /// variable `POSER_BENCH_FILTER` (a substring of `port/points/solver`, e.g. `dome/` or
 /// `/poser`) restricts the rows, for profiling one solver under valgrind.
@@ -437,7 +494,7 @@ pub fn run(quick: bool) -> Vec<Row> {
     for case in cases(n) {
         for (set, pts) in [("ordinary", &case.ordinary), ("grazing", &case.grazing)] {
             let want = |solver: &str| wanted(case.name, set, solver);
-            if !(want("poser") || want("colmap_gn") || want("agrawal")) {
+            if !(want("poser") || want("poser_batch") || want("colmap_gn") || want("agrawal")) {
                 continue;
             }
             let refs: Vec<Option<[f64; 2]>> = pts
@@ -450,6 +507,12 @@ pub fn run(quick: bool) -> Vec<Row> {
                 results.push((
                     "poser",
                     measure(pts, &refs, min_time, |p| poser_project(&port, &lens, p)),
+                ));
+            }
+            if want("poser_batch") {
+                results.push((
+                    "poser_batch",
+                    measure_batch(&port, &lens, pts, &refs, min_time),
                 ));
             }
             if want("colmap_gn") {

@@ -5,6 +5,7 @@
 //! |---|---|---|
 //! | [`Projector::project_camera`] | camera-frame point in water → pixel on the sensor | [`NoSolution`] incl. `off_sensor` |
 //! | [`Projector::project_camera_unbounded`] | same, without the sensor-bounds check | |
+//! | [`Projector::project_camera_many`] | many camera-frame points → pixels (batch port solver, same results) | per point |
 //! | [`Projector::project_world`] | world point at rig pose `i` → pixel | |
 //! | [`Projector::camera_ray`] | pixel → ray in water (camera frame) with Fresnel transmittance | |
 //! | [`Projector::pixel_ray_world`] | pixel → (origin, unit direction, transmittance) in the world | |
@@ -103,6 +104,49 @@ impl Projector {
         } else {
             Err(NoSolution::OffSensor)
         }
+    }
+
+    /// Many camera-frame points → pixels, wherever they fall: the same results as
+    /// [`Projector::project_camera_unbounded`] point by point, computed with the batch port
+    /// solver ([`PortSolver::forward_many`]). `out[i]` is for `ps[i]` (equal lengths).
+    pub fn project_camera_many_unbounded(
+        &self,
+        ps: &[DVec3],
+        out: &mut [Result<[f64; 2], NoSolution>],
+    ) {
+        assert_eq!(ps.len(), out.len(), "one output per point");
+        const CHUNK: usize = 64;
+        let mut dirs = [Err(NoSolution::NoConvergence); CHUNK];
+        for (pc, oc) in ps.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
+            let dirs = &mut dirs[..pc.len()];
+            self.port.forward_many(pc, dirs);
+            for ((p, d), o) in pc.iter().zip(dirs.iter()).zip(oc.iter_mut()) {
+                *o = if p.is_finite() {
+                    d.and_then(|d| self.lens.project(d))
+                } else {
+                    Err(NoSolution::NoConvergence)
+                };
+            }
+        }
+    }
+
+    /// Many camera-frame points → pixels on the sensor ([`Projector::project_camera`] point
+    /// by point, with the batch port solver).
+    pub fn project_camera_many(&self, ps: &[DVec3], out: &mut [Result<[f64; 2], NoSolution>]) {
+        self.project_camera_many_unbounded(ps, out);
+        for o in out.iter_mut() {
+            if let Ok(px) = *o {
+                if !self.on_sensor(px) {
+                    *o = Err(NoSolution::OffSensor);
+                }
+            }
+        }
+    }
+
+    /// World point → camera frame at rig pose `pose` (panics if out of range).
+    #[inline]
+    pub fn world_to_camera(&self, pose: usize, p_world: DVec3) -> DVec3 {
+        self.camera_from_world[pose].transform_point(p_world)
     }
 
     /// World point seen from rig pose `pose` → pixel on the sensor.
