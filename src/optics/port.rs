@@ -906,13 +906,45 @@ impl CylinderPort {
                 Err(e) => last = e,
             }
         }
-        self.newton_skew(p, p.normalize()).map_err(|e| {
+        match self.newton_skew(p, p.normalize()) {
+            Ok(d) => return Ok(d),
+            Err(NoSolution::NoConvergence) => {}
+            Err(e) => last = e,
+        }
+        // Both starts failed (a strongly decentred pupil, rays far from the sensor: Newton
+        // diverges, or converges to the line's backward branch, which the acceptance test
+        // rejects). Continuation in the decentring: move the pupil from the axis to its
+        // place in 8 steps, keeping P fixed relative to the cylinder, each solve starting
+        // from the previous one.
+        self.continuation(p).map_err(|e| {
             if e == NoSolution::NoConvergence {
                 last
             } else {
                 e
             }
         })
+    }
+
+    #[cold]
+    fn continuation(&self, p: DVec3) -> Result<DVec3, NoSolution> {
+        let a0 = self.axis_point;
+        let centred = CylinderPort {
+            axis_point: DVec3::ZERO,
+            on_axis: true,
+            ..*self
+        };
+        let mut g = centred.forward(p - a0)?.normalize();
+        const STEPS: u32 = 8;
+        for k in 1..=STEPS {
+            let lam = k as f64 / STEPS as f64;
+            let port = CylinderPort {
+                axis_point: a0 * lam,
+                on_axis: false,
+                ..*self
+            };
+            g = port.newton_skew(p - a0 * (1.0 - lam), g)?.normalize();
+        }
+        Ok(g)
     }
 
     fn newton_skew(&self, p: DVec3, e0: DVec3) -> Result<DVec3, NoSolution> {
