@@ -153,3 +153,50 @@ fn schema_check_passes_on_the_committed_files() {
     ]);
     assert_eq!(o.status.code(), Some(1), "an empty directory is stale");
 }
+
+/// The README's main job, as a user types it, at a smaller scale and two poses: linear EXR,
+/// PNG and ground truth per image, images of the scaled size, a non-black and unsaturated
+/// preview (the scenario's exposure suits its radiance).
+#[test]
+fn readme_main_job_renders_previews_with_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("reef");
+    let o = poser(&[
+        "render",
+        "scenarios/reef_strip.toml",
+        "-o",
+        out.to_str().unwrap(),
+        "--scale",
+        "0.05",
+        "--samples",
+        "2",
+        "--poses",
+        "0,1",
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for img in ["img_0001", "img_0002"] {
+        let png = image::open(out.join(format!("{img}.png")))
+            .unwrap()
+            .into_rgb8();
+        assert_eq!((png.width(), png.height()), (60, 40));
+        let px: Vec<u8> = png.into_raw();
+        let mean = px.iter().map(|&v| v as f64).sum::<f64>() / px.len() as f64;
+        let saturated = px.iter().filter(|&&v| v == 255).count() as f64 / px.len() as f64;
+        assert!(
+            mean > 20.0 && saturated < 0.05,
+            "{img}: mean {mean}, saturated {saturated}"
+        );
+        assert!(out.join(format!("{img}.exr")).is_file());
+    }
+    assert!(out.join("truth").is_dir());
+    let bad = poser(&[
+        "render",
+        "scenarios/reef_strip.toml",
+        "-o",
+        "/tmp/x",
+        "--scale",
+        "0",
+    ]);
+    assert_eq!(bad.status.code(), Some(2), "--scale 0 is a usage error");
+}

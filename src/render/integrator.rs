@@ -6,14 +6,16 @@
 //!   MIS); a non-scattering water uses its analytic transmittance.
 //! * Next-event estimation at the surface ending a water segment is weighted by the analytic
 //!   transmittance on both branches of the free-flight sample.
-//! * Next-event estimation at every vertex: point/spot lights and the sun (delta lights),
+//! * Next-event estimation at every vertex: point/spot lights and the sun (delta lights; under
+//!   a wavy surface the sun is scaled by the caustic factor at the vertex, [`super::caustics`]),
 //!   area lights (MIS with BSDF/phase sampling, power heuristic).
 //! * Equiangular sampling (Kulla & Fajardo 2012) of in-scattering from point/spot lights along
 //!   every medium segment, combined with distance sampling by MIS (power heuristic).
-//! * Surface bounces in sunlit, scattering water sample a mixture of the cosine lobe and the
-//!   phase function's lobe around the sun ([`AUREOLE_FRACTION`]; one-sample MIS, so unbiased):
-//!   the forward-scattered sun (the aureole, p(0°) ≈ 300× the isotropic value at g = 0.92) is
-//!   what lights a seabed from above, and cosine sampling alone finds it as fireflies.
+//! * In sunlit, scattering water, bounces at surfaces and in the medium sample a mixture of
+//!   their own lobe (cosine, or the phase function about the path) and the phase function's
+//!   lobe about the sun ([`AUREOLE_FRACTION`]; one-sample MIS, so unbiased): the
+//!   forward-scattered sun (the aureole, p(0°) ≈ 300× the isotropic value at g = 0.92) is what
+//!   lights a seabed from above, and the path's own lobe alone finds it as fireflies.
 //! * `max_bounces` = the largest number of scattering vertices (surface or medium) on a path;
 //!   Russian roulette after three.
 
@@ -136,6 +138,32 @@ impl<'a> Integrator<'a> {
         (w, self.surface_pdf(n, w))
     }
 
+    /// Density (per sr) of the direction `w` sampled at a medium vertex reached along `d`:
+    /// the phase function about `d`, or its mixture with the phase lobe about the sun.
+    fn medium_pdf(&self, d: DVec3, w: DVec3) -> f64 {
+        let Some(m) = &self.medium else { return 0.0 };
+        let p = m.phase.eval(d.dot(w));
+        match self.aureole {
+            Some(s) => (1.0 - AUREOLE_FRACTION) * p + AUREOLE_FRACTION * m.phase.eval(s.dot(w)),
+            None => p,
+        }
+    }
+
+    /// Sample the direction leaving a medium vertex reached along `d`; returns (direction,
+    /// density).
+    fn sample_medium(&self, d: DVec3, rng: &mut Sampler) -> (DVec3, f64) {
+        let Some(m) = &self.medium else {
+            return (d, 0.0);
+        };
+        let pick = rng.next();
+        let (u1, u2) = rng.next2();
+        let w = match self.aureole {
+            Some(s) if pick < AUREOLE_FRACTION => m.phase.sample(s, u1, u2).0,
+            _ => m.phase.sample(d, u1, u2).0,
+        };
+        (w, self.medium_pdf(d, w))
+    }
+
     fn tr_seg(&self, o: DVec3, d: DVec3, len: f64) -> DVec3 {
         match &self.medium {
             Some(m) => m.transmittance(o, d, 0.0, len),
@@ -184,7 +212,10 @@ impl<'a> Integrator<'a> {
                     .scene
                     .occluded_ray(&Ray { origin: p, dir }, f64::INFINITY);
                 if !blocked {
-                    l += fv * sun.irradiance * self.tr_seg(p, dir, s);
+                    // Caustics under waves: the irradiance relative to the flat surface at p
+                    // (the direction stays the flat-surface one; see render::caustics).
+                    let c = self.scene.caustics.as_ref().map_or(1.0, |v| v.factor(p));
+                    l += fv * sun.irradiance * (self.tr_seg(p, dir, s) * c);
                 }
             }
         }
@@ -269,7 +300,7 @@ impl<'a> Integrator<'a> {
                         let p = o + t * d;
                         let phase = &m.phase;
                         let f = |w: DVec3| DVec3::splat(phase.eval(d.dot(w)));
-                        let pdf = |w: DVec3| phase.eval(d.dot(w));
+                        let pdf = |w: DVec3| self.medium_pdf(d, w);
                         let pw = |_i: usize, x: DVec3| {
                             if use_eq {
                                 power(pdf_d, equiangular_pdf(o, d, a, b, x, t))
@@ -278,8 +309,11 @@ impl<'a> Integrator<'a> {
                             }
                         };
                         l += beta * self.direct(p, &f, &pdf, &pw, rng);
-                        let (u1, u2) = rng.next2();
-                        let (nd, ppdf) = phase.sample(d, u1, u2);
+                        let (nd, ppdf) = self.sample_medium(d, rng);
+                        if ppdf <= 0.0 {
+                            break;
+                        }
+                        beta *= phase.eval(d.dot(nd)) / ppdf;
                         o = p;
                         d = nd;
                         prev_pdf = ppdf;
