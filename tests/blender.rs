@@ -444,25 +444,30 @@ fn fisheyes_project_like_the_optics_truth() {
     }
 }
 
+/// A canonical scene with `outputs = ["rgb", "depth"]`, a scratch directory and render options.
+fn depth_scene(name: &str, samples: u32) -> (Model, tempfile::TempDir, RenderOptions) {
+    let model = poser::scene::load(
+        Path::new(&format!("tests/canonical/{name}.toml")),
+        &["render.outputs=[\"rgb\", \"depth\"]".to_string()],
+    )
+    .map_err(|f| f.render())
+    .unwrap()
+    .model;
+    let opts = RenderOptions {
+        samples: Some(samples),
+        poses: None,
+        progress: false,
+    };
+    (model, tempfile::tempdir().unwrap(), opts)
+}
+
 #[test]
 fn depth_pass_is_camera_z_of_the_first_surface_through_the_port() {
     // The tilted flat port scene with `outputs = ["rgb", "depth"]`: `<image>.depth.exr` holds
     // the camera-frame z of the surface seen through each pixel centre (the native backend's
     // definition). Expected: the exact refracted pixel ray (`optics`) meets the card's plane.
     require_bpy();
-    let model = poser::scene::load(
-        Path::new("tests/canonical/flat_tilted.toml"),
-        &["render.outputs=[\"rgb\", \"depth\"]".to_string()],
-    )
-    .map_err(|f| f.render())
-    .unwrap()
-    .model;
-    let dir = tempfile::tempdir().unwrap();
-    let opts = RenderOptions {
-        samples: Some(4),
-        poses: None,
-        progress: false,
-    };
+    let (model, dir, opts) = depth_scene("flat_tilted", 4);
     poser::backend::blender::render(&model, dir.path(), &opts).unwrap();
     let depth = LinearImage::read(&dir.path().join("img_0001.depth.exr")).expect("depth EXR");
     assert_eq!((depth.width, depth.height), (160, 120));
@@ -625,19 +630,7 @@ fn depth_pass_matches_the_native_backend() {
     // Same file name, format and definition as `src/render`: both backends render the
     // decentred dome scene's depth; per pixel they must agree.
     require_bpy();
-    let model = poser::scene::load(
-        Path::new("tests/canonical/dome_decentred.toml"),
-        &["render.outputs=[\"rgb\", \"depth\"]".to_string()],
-    )
-    .map_err(|f| f.render())
-    .unwrap()
-    .model;
-    let dir = tempfile::tempdir().unwrap();
-    let opts = RenderOptions {
-        samples: Some(1),
-        poses: None,
-        progress: false,
-    };
+    let (model, dir, opts) = depth_scene("dome_decentred", 1);
     let read = |b: &str| {
         let out = dir.path().join(b);
         poser::compare::render_with(b, &model, &out, &opts).unwrap();

@@ -139,15 +139,7 @@ fn busy_model() -> Model {
         },
     });
     let dir = DVec3::new(0.3, 0.1, -1.0).normalize();
-    m.sun = Some(Sun {
-        elevation: 1.0,
-        azimuth: 0.3,
-        irradiance: [500.0; 3],
-        direction_air: dir,
-        direction_water: dir,
-        irradiance_water: [400.0, 420.0, 430.0],
-        from_time: None,
-    });
+    m.sun = Some(sun_along(dir, [500.0; 3], [400.0, 420.0, 430.0]));
     m.cameras[0].width = 48;
     m.cameras[0].height = 36;
     m.cameras[0].cx = 24.0;
@@ -327,15 +319,7 @@ fn aureole_sampling_is_unbiased_and_cuts_sunlit_seabed_noise() {
         w.phase = Phase::HenyeyGreenstein { g: 0.92 };
     }
     let dir = DVec3::new(0.3, 0.1, -1.0).normalize();
-    m.sun = Some(Sun {
-        elevation: 1.0,
-        azimuth: 0.0,
-        irradiance: [800.0; 3],
-        direction_air: dir,
-        direction_water: dir,
-        irradiance_water: [600.0; 3],
-        from_time: None,
-    });
+    m.sun = Some(sun_along(dir, [800.0; 3], [600.0; 3]));
     m.render.max_bounces = 2;
     // The sea ends at z = 0 under a sun: sink the floor and the camera 10 m.
     m.poses[0].world_from_rig.translation.z -= 10.0;

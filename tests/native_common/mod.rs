@@ -98,3 +98,17 @@ pub fn rig_spot(offset: DVec3, intensity: f64) -> Light {
         },
     }
 }
+
+/// A sun whose light propagates along `dir` in air and in the water (no refraction), with the
+/// given irradiance above and below the surface.
+pub fn sun_along(dir: DVec3, irradiance: [f64; 3], irradiance_water: [f64; 3]) -> Sun {
+    Sun {
+        elevation: (-dir.z).asin(),
+        azimuth: 0.0,
+        irradiance,
+        direction_air: dir,
+        direction_water: dir,
+        irradiance_water,
+        from_time: None,
+    }
+}

@@ -103,26 +103,21 @@ pub fn script(description: &serde_json::Value) -> String {
 /// The script with (or, for readable snapshots, without) the embedded module sources.
 pub fn script_with_sources(description: &serde_json::Value, sources: bool) -> String {
     let mut s = String::from(HEADER);
-    s.push_str("POSER_BLENDER_SOURCES = {\n");
-    for (name, src) in MODULES {
-        let body = if sources {
-            py_str(src)
-        } else {
-            py_str("<source omitted>")
-        };
-        s.push_str(&format!("    {}: {},\n", py_str(name), body));
+    for (table, files) in [
+        ("POSER_BLENDER_SOURCES", &MODULES[..]),
+        ("POSER_BLENDER_RESOURCES", &RESOURCES[..]),
+    ] {
+        s.push_str(&format!("{table} = {{\n"));
+        for (name, src) in files {
+            let body = if sources {
+                py_str(src)
+            } else {
+                py_str("<source omitted>")
+            };
+            s.push_str(&format!("    {}: {},\n", py_str(name), body));
+        }
+        s.push_str("}\n\n");
     }
-    s.push_str("}\n\n");
-    s.push_str("POSER_BLENDER_RESOURCES = {\n");
-    for (name, src) in RESOURCES {
-        let body = if sources {
-            py_str(src)
-        } else {
-            py_str("<source omitted>")
-        };
-        s.push_str(&format!("    {}: {},\n", py_str(name), body));
-    }
-    s.push_str("}\n\n");
     let json = serde_json::to_string(description).expect("JSON values always serialise");
     s.push_str(&format!("SCENE_JSON = {}\n", py_str(&json)));
     s.push_str(FOOTER);
