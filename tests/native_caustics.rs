@@ -275,9 +275,10 @@ fn caustics_scenario_needs_caustics_and_mitsuba_refuses_it() {
         .0;
     let (mean, sd) = v.plane_stats(k);
     eprintln!(
-        "seabed plane z {:.2}: mean {mean:.4}, contrast {:.3}",
+        "seabed plane z {:.2}: mean {mean:.4}, contrast {:.3}; volume built in {:.2} s",
         z[k],
-        sd / mean
+        sd / mean,
+        v.build_seconds
     );
     assert!(sd / mean > 0.3 && (mean - 1.0).abs() < 0.01);
     let e = poser::backend::mitsuba::build(&m)
