@@ -281,9 +281,9 @@ fn caustics_scenario_needs_caustics_and_mitsuba_refuses_it() {
         v.build_seconds
     );
     assert!(sd / mean > 0.3 && (mean - 1.0).abs() < 0.01);
-    let e = poser::backend::mitsuba::build(&m)
-        .err()
-        .expect("Mitsuba must refuse waves");
+    let Err(e) = poser::backend::mitsuba::build(&m) else {
+        panic!("Mitsuba must refuse waves");
+    };
     assert!(
         e.contains("wavy sea surface") && e.contains("cannot be rendered"),
         "{e}"

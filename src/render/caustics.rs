@@ -39,6 +39,9 @@
 //! order (planes in parallel, each by one thread); no NaN (rays with a non-finite or
 //! non-positive weight are skipped).
 
+// `!(x > y)` is deliberate: it rejects NaN as well as the failing comparison.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::model::{Model, SeaSurface};
 use crate::optics::interface::{fresnel_transmittance, refract};
 use crate::optics::waves::{WIND_DIRECTION, WaveField};
