@@ -636,8 +636,8 @@ impl DomePort {
     /// signed moment p = (O − C) × u about C. At a sphere centred on C, n·(X − C) × w is
     /// conserved (the normal is radial), so the glass and water rays have moments
     /// (na/ng)·p and (na/nw)·p, the sines of the four refraction angles are p·kᵢ, and the
-    /// water ray is u turned by Θ(p) = −asin(p/R₁) + asin(p·na/(ng R₁)) − asin(p·na/(ng R₂))
-    /// + asin(p·na/(nw R₂)), exactly, with no intersection to compute. P lies on the water
+    /// water ray is u turned by Θ(p) = −asin(p/R₁) + asin(p·na/(ng R₁)) −
+    /// asin(p·na/(ng R₂)) + asin(p·na/(nw R₂)), exactly, with no intersection to compute. P lies on the water
     /// ray iff m = (P − C) × w − (na/nw)·p = 0. m, m′ and m″ with respect to the rotation
     /// angle of u are analytic. Returns the unit camera direction (u₁ along P, u₂ along
     /// C⊥), or `None` (then the bracketed solver decides).
