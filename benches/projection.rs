@@ -1,7 +1,11 @@
-//! Criterion benchmark of the forward-projection solvers per port (poser vs Refractive
-//! COLMAP's Gauss–Newton vs Agrawal's polynomial). Errors: `poser bench projection`.
+//! Criterion benchmark of the forward-projection solvers per port (poser point by point and
+//! batched, vs Refractive COLMAP's Gauss–Newton vs Agrawal's polynomial). Errors:
+//! `poser bench projection`.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use poser::optics::bench::{agrawal, bench_lens, cases, colmap_gn, poser_project};
+use poser::optics::NoSolution;
+use poser::optics::bench::{
+    agrawal, bench_lens, cases, colmap_gn, poser_project, poser_project_many,
+};
 use poser::optics::port::PortSolver;
 use std::hint::black_box;
 
@@ -17,6 +21,14 @@ fn projection(c: &mut Criterion) {
                     for p in pts.iter() {
                         black_box(poser_project(&port, &lens, black_box(*p)).ok());
                     }
+                })
+            });
+            let mut dirs = vec![Err(NoSolution::NoConvergence); pts.len()];
+            let mut out = vec![Err(NoSolution::NoConvergence); pts.len()];
+            g.bench_function("poser_batch", |b| {
+                b.iter(|| {
+                    poser_project_many(&port, &lens, black_box(pts), &mut dirs, &mut out);
+                    black_box(&out);
                 })
             });
             g.sample_size(10);

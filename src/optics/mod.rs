@@ -10,6 +10,7 @@
 //! | [`lens`] | rectilinear + Brown, equidistant and equisolid fisheye |
 //! | [`port`] | flat (multi-layer, tilted), dome (decentred), cylinder (on/off axis) |
 //! | [`project`] | [`project::Projector`]: camera + port + poses for one channel |
+//! | [`waves`] | seeded periodic random sea surface (Pierson–Moskowitz, Mitsuyasu spread) for caustics |
 //!
 //! "No solution" is always an explicit [`NoSolution`], never NaN.
 
@@ -26,6 +27,7 @@ pub mod project;
 pub mod reference;
 pub mod sun;
 pub mod water;
+pub mod waves;
 
 use crate::model::{Camera, Rgb};
 use serde::{Deserialize, Serialize};

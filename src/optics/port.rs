@@ -172,6 +172,52 @@ impl Slabs {
         (f, df, d2f)
     }
 
+    /// The Halley step from G, G′, G″ while its denominator 2G′² − G·G″ stays above G′²/2
+    /// (then the step is at most 4 Newton steps), else the Newton step; and which one.
+    #[inline(always)]
+    fn halley_step(f: f64, df: f64, d2f: f64) -> (f64, bool) {
+        let halley = (f * d2f).abs() < 1.5 * df * df;
+        let dt = if halley {
+            -2.0 * f * df / (2.0 * df * df - f * d2f)
+        } else {
+            -f / df
+        };
+        (dt, halley)
+    }
+
+    /// [`Slabs::halley_step`] for exactly one glass layer with a single division: with
+    /// s_g, s_w the two square roots and P = s_g·s_w, H₀ = G·P, H₁ = G′·P³ and H₂ = G″·P⁵ are
+    /// polynomials in s_g, s_w, and the Halley step is −2H₀H₁P²/(2H₁² − H₀H₂) (Newton:
+    /// −H₀P²/H₁). Falls back to the per-term form if that overflows (q ≳ 1e25).
+    #[inline(always)]
+    fn step_one_layer(&self, t: f64, r2: f64, depth: f64) -> (f64, bool) {
+        let (ag, n2g, kg) = (self.tna[0], self.n2[0], self.k[0]);
+        let aw = depth * self.na;
+        let (n2w, kw) = (self.nw2, self.kw);
+        let tt = t * t;
+        let a = (n2g + kg * r2 * tt).sqrt();
+        let b = (n2w + kw * r2 * tt).sqrt();
+        let p = a * b;
+        let (a2, b2) = (a * a, b * b);
+        let (a3, b3) = (a2 * a, b2 * b);
+        let h0 = (self.gap * t - 1.0) * p + ag * t * b + aw * t * a;
+        let h1 = self.gap * p * p * p + ag * n2g * b3 + aw * n2w * a3;
+        let h2 = -3.0 * r2 * t * (ag * kg * n2g * b3 * b2 + aw * kw * n2w * a3 * a2);
+        let p2 = p * p;
+        let halley = (h0 * h2).abs() < 1.5 * h1 * h1;
+        let dt = if halley {
+            -2.0 * h0 * h1 * p2 / (2.0 * h1 * h1 - h0 * h2)
+        } else {
+            -h0 * p2 / h1
+        };
+        if dt.is_finite() {
+            (dt, halley)
+        } else {
+            let (f, df, d2f) = self.eval2_ratio(t, r2, depth);
+            Self::halley_step(f, df, d2f)
+        }
+    }
+
     /// Solve F(q) = 0 for the ratio t = q/r ≥ 0 (q = tan of the camera-side angle to the port
     /// normal, r = distance of the point from the port axis), given r² (> 0) and the water
     /// depth. Working with t needs no √ for r and keeps r → 0 exact (t → 1/F′(0)).
@@ -218,12 +264,11 @@ impl Slabs {
         // the root), where a step ≤ 1e-8 leaves ≲ 1e-16·q.
         let mut t = t0;
         for evals in 1..=200 {
-            let (f, df, d2f) = self.eval2_ratio(t, r2, depth);
-            let halley = (f * d2f).abs() < 1.5 * df * df;
-            let dt = if halley {
-                -2.0 * f * df / (2.0 * df * df - f * d2f)
+            let (dt, halley) = if self.n == 1 {
+                self.step_one_layer(t, r2, depth)
             } else {
-                -f / df
+                let (f, df, d2f) = self.eval2_ratio(t, r2, depth);
+                Self::halley_step(f, df, d2f)
             };
             if !dt.is_finite() {
                 return Err(NoSolution::NoConvergence);
@@ -906,13 +951,45 @@ impl CylinderPort {
                 Err(e) => last = e,
             }
         }
-        self.newton_skew(p, p.normalize()).map_err(|e| {
+        match self.newton_skew(p, p.normalize()) {
+            Ok(d) => return Ok(d),
+            Err(NoSolution::NoConvergence) => {}
+            Err(e) => last = e,
+        }
+        // Both starts failed (a strongly decentred pupil, rays far from the sensor: Newton
+        // diverges, or converges to the line's backward branch, which the acceptance test
+        // rejects). Continuation in the decentring: move the pupil from the axis to its
+        // place in 8 steps, keeping P fixed relative to the cylinder, each solve starting
+        // from the previous one.
+        self.continuation(p).map_err(|e| {
             if e == NoSolution::NoConvergence {
                 last
             } else {
                 e
             }
         })
+    }
+
+    #[cold]
+    fn continuation(&self, p: DVec3) -> Result<DVec3, NoSolution> {
+        let a0 = self.axis_point;
+        let centred = CylinderPort {
+            axis_point: DVec3::ZERO,
+            on_axis: true,
+            ..*self
+        };
+        let mut g = centred.forward(p - a0)?.normalize();
+        const STEPS: u32 = 8;
+        for k in 1..=STEPS {
+            let lam = k as f64 / STEPS as f64;
+            let port = CylinderPort {
+                axis_point: a0 * lam,
+                on_axis: false,
+                ..*self
+            };
+            g = port.newton_skew(p - a0 * (1.0 - lam), g)?.normalize();
+        }
+        Ok(g)
     }
 
     fn newton_skew(&self, p: DVec3, e0: DVec3) -> Result<DVec3, NoSolution> {
@@ -1134,21 +1211,20 @@ impl Slabs {
         }
         for _ in 0..12 {
             for l in 0..LANES {
-                let (mut f, mut df, mut d2f) =
-                    term(depth[l] * self.na, self.nw2, self.kw, t[l], r2[l]);
-                f += self.gap * t[l] - 1.0;
-                df += self.gap;
-                for i in 0..N {
-                    let (v, d, d2) = term(self.tna[i], self.n2[i], self.k[i], t[l], r2[l]);
-                    f += v;
-                    df += d;
-                    d2f += d2;
-                }
-                let halley = (f * d2f).abs() < 1.5 * df * df;
-                let dt = if halley {
-                    -2.0 * f * df / (2.0 * df * df - f * d2f)
+                let (dt, halley) = if N == 1 {
+                    self.step_one_layer(t[l], r2[l], depth[l])
                 } else {
-                    -f / df
+                    let (mut f, mut df, mut d2f) =
+                        term(depth[l] * self.na, self.nw2, self.kw, t[l], r2[l]);
+                    f += self.gap * t[l] - 1.0;
+                    df += self.gap;
+                    for i in 0..N {
+                        let (v, d, d2) = term(self.tna[i], self.n2[i], self.k[i], t[l], r2[l]);
+                        f += v;
+                        df += d;
+                        d2f += d2;
+                    }
+                    Self::halley_step(f, df, d2f)
                 };
                 let next = t[l] + dt;
                 let next = if next > 0.0 { next } else { 0.5 * t[l] };

@@ -6,7 +6,8 @@
 //!   MIS); a non-scattering water uses its analytic transmittance.
 //! * Next-event estimation at the surface ending a water segment is weighted by the analytic
 //!   transmittance on both branches of the free-flight sample.
-//! * Next-event estimation at every vertex: point/spot lights and the sun (delta lights),
+//! * Next-event estimation at every vertex: point/spot lights and the sun (delta lights; under
+//!   a wavy surface the sun is scaled by the caustic factor at the vertex, [`super::caustics`]),
 //!   area lights (MIS with BSDF/phase sampling, power heuristic).
 //! * Equiangular sampling (Kulla & Fajardo 2012) of in-scattering from point/spot lights along
 //!   every medium segment, combined with distance sampling by MIS (power heuristic).
@@ -211,7 +212,10 @@ impl<'a> Integrator<'a> {
                     .scene
                     .occluded_ray(&Ray { origin: p, dir }, f64::INFINITY);
                 if !blocked {
-                    l += fv * sun.irradiance * self.tr_seg(p, dir, s);
+                    // Caustics under waves: the irradiance relative to the flat surface at p
+                    // (the direction stays the flat-surface one; see render::caustics).
+                    let c = self.scene.caustics.as_ref().map_or(1.0, |v| v.factor(p));
+                    l += fv * sun.irradiance * (self.tr_seg(p, dir, s) * c);
                 }
             }
         }

@@ -16,6 +16,7 @@
 
 pub mod bench;
 pub mod camera;
+pub mod caustics;
 pub mod integrator;
 pub mod lights;
 pub mod medium;

@@ -7,6 +7,7 @@
 //! | [`Scene::build`] | objects via [`crate::mesh::object_mesh`]; targets as planes of their printed extent |
 //! | [`Scene::intersect`] | closest hit with `t ∈ (RAY_EPSILON, tmax)` |
 //! | [`Scene::occluded`] | is the open segment between two points blocked? |
+//! | [`Scene::caustics`] | the sun's caustic volume under waves, precomputed once ([`super::caustics`]) |
 //!
 //! Queries are read-only, so one `Scene` is shared by every rendering thread.
 
@@ -95,6 +96,9 @@ pub struct Scene {
     tris: Vec<Tri>,
     surface: Vec<SurfaceId>,
     nodes: Vec<FNode>,
+    /// The sun's caustics under a wavy surface ([`super::caustics`]), built by [`Scene::build`]
+    /// when the model needs them.
+    pub caustics: Option<std::sync::Arc<super::caustics::CausticVolume>>,
 }
 
 const LEAF_SIZE: usize = 4;
@@ -112,7 +116,15 @@ impl Scene {
         for (i, t) in model.targets.iter().enumerate() {
             meshes.push((SurfaceId::Target(i as u32), target_mesh(t)));
         }
-        Ok(Scene::from_meshes(meshes))
+        let mut scene = Scene::from_meshes(meshes);
+        if model.needs.caustics {
+            // Planes down to below the deepest geometry (or the nominal seabed).
+            let lo = scene.bounds().map_or(-model.site.depth, |(lo, _)| lo.z);
+            let z_bottom = lo.min(-model.site.depth) - 0.5;
+            scene.caustics =
+                super::caustics::CausticVolume::for_model(model, z_bottom).map(std::sync::Arc::new);
+        }
+        Ok(scene)
     }
 
     /// Build from world-frame meshes.
@@ -135,6 +147,7 @@ impl Scene {
             tris,
             surface,
             nodes: Vec::new(),
+            caustics: None,
         };
         s.build_bvh();
         s
