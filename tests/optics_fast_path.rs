@@ -193,13 +193,16 @@ fn check_against_reference(
     (worst, checked)
 }
 
+/// A port, its ordinary and grazing points, and whether 1e-9 px holds strictly at grazing.
+type PortSets = (String, PortSolver, Vec<DVec3>, Vec<DVec3>, bool);
+
 #[test]
 fn fast_solvers_match_the_reference_on_ordinary_and_grazing_points_for_every_port() {
     // Tolerance: the 1e-9 px, against the double-double reference. Grazing pixels run
     // to ≈ 1e5 px, where f64 rounding alone is ~1e-11 px.
     // The benchmark's three ports (the sets) are held to 1e-9 px strictly; the other
     // ports' grazing points to max(1e-9 px, the f64 conditioning floor of the point).
-    let mut all: Vec<(String, PortSolver, Vec<DVec3>, Vec<DVec3>, bool)> = cases(1500)
+    let mut all: Vec<PortSets> = cases(1500)
         .into_iter()
         .map(|c| (c.name.to_string(), c.port, c.ordinary, c.grazing, true))
         .collect();

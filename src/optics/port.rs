@@ -3,9 +3,12 @@
 //!
 //! | port | parameters (camera frame, metres) | forward solver |
 //! |---|---|---|
-//! | [`FlatPort`] | unit normal N (camera → water), inner-face distance d ≥ 0, glass layers (thickness, index)… | Newton on the scalar q-equation from the paraxial guess (monotone, no bracket needed when every n ≥ n_air; safeguarded bisection otherwise) |
-//! | [`DomePort`] | centre C (|C| < R₁), inner radius R₁, thickness t | 1-D secant in the plane (O, C, P) inside the guaranteed bracket ±asin(|C|/R₁); pinhole when centred |
-//! | [`CylinderPort`] | axis point, unit axis, inner radius, thickness | on its axis: the flat q-equation in the meridional plane; off it: 2-D Newton (skew rays) |
+//! | [`FlatPort`] | unit normal N (camera → water), inner-face distance d ≥ 0, glass layers (thickness, index)… | Halley on the scalar q-equation in ratio form t = q/r, from the water-unit guess (≤ 2 evaluations on ordinary points; no bracket needed when every n ≥ n_air; safeguarded Newton–bisection otherwise) |
+//! | [`DomePort`] | centre C (|C| < R₁), inner radius R₁, thickness t | Halley on the exact moment equation in the plane (O, C, P) from the first-order guess; bracketed secant/Illinois inside ±asin(|C|/R₁) as fallback; pinhole when centred |
+//! | [`CylinderPort`] | axis point, unit axis, inner radius, thickness | on its axis: the flat q-equation in the meridional plane; off it: 2-D Newton (skew rays) from two starts, then continuation in the decentring |
+//!
+//! [`PortSolver::forward_many`] solves many points with [`LANES`] in lock step (same results
+//! bit for bit as [`PortSolver::forward`], about twice the throughput).
 //!
 //! All ports share the conventions of Refractive COLMAP (`optics.md` §1.1). The backward
 //! transmittance is the product of the unpolarised Fresnel transmittances of every interface
@@ -633,8 +636,8 @@ impl DomePort {
     /// signed moment p = (O − C) × u about C. At a sphere centred on C, n·(X − C) × w is
     /// conserved (the normal is radial), so the glass and water rays have moments
     /// (na/ng)·p and (na/nw)·p, the sines of the four refraction angles are p·kᵢ, and the
-    /// water ray is u turned by Θ(p) = −asin(p/R₁) + asin(p·na/(ng R₁)) − asin(p·na/(ng R₂))
-    /// + asin(p·na/(nw R₂)), exactly, with no intersection to compute. P lies on the water
+    /// water ray is u turned by Θ(p) = −asin(p/R₁) + asin(p·na/(ng R₁)) −
+    /// asin(p·na/(ng R₂)) + asin(p·na/(nw R₂)), exactly, with no intersection to compute. P lies on the water
     /// ray iff m = (P − C) × w − (na/nw)·p = 0. m, m′ and m″ with respect to the rotation
     /// angle of u are analytic. Returns the unit camera direction (u₁ along P, u₂ along
     /// C⊥), or `None` (then the bracketed solver decides).
@@ -1344,7 +1347,7 @@ impl CylinderPort {
 }
 
 impl DomePort {
-    /// [`DomePort::forward`] for many points: [`DomePort::halley`]'s iteration on
+    /// [`DomePort::forward`] for many points: the Halley iteration of `DomePort::halley` on
     /// [`LANES`] points in lock step; any lane that leaves the fast path is re-solved by
     /// the scalar solver.
     pub fn forward_many(&self, ps: &[DVec3], out: &mut [Result<DVec3, NoSolution>]) {

@@ -135,10 +135,10 @@ impl Projector {
     pub fn project_camera_many(&self, ps: &[DVec3], out: &mut [Result<[f64; 2], NoSolution>]) {
         self.project_camera_many_unbounded(ps, out);
         for o in out.iter_mut() {
-            if let Ok(px) = *o {
-                if !self.on_sensor(px) {
-                    *o = Err(NoSolution::OffSensor);
-                }
+            if let Ok(px) = *o
+                && !self.on_sensor(px)
+            {
+                *o = Err(NoSolution::OffSensor);
             }
         }
     }
