@@ -14,6 +14,7 @@ pub mod model;
 pub mod optics;
 pub mod plan;
 pub mod render;
+pub mod rng;
 pub mod scene;
 pub mod targets;
 pub mod truth;

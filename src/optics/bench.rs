@@ -20,21 +20,10 @@ use super::lens::Lens;
 use super::port::{CylinderPort, DomePort, FlatPort, PortSolver};
 use super::reference;
 use crate::model::{Distortion, LensModel};
+use crate::rng::SplitMix64;
 use glam::{DVec2, DVec3};
 use serde::Serialize;
 use std::time::Instant;
-
-/// Deterministic splitmix64.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// The benchmark camera: 5568×4176, f = 3200 px (as in Refractive COLMAP's tests).
 pub fn bench_lens() -> Lens {
@@ -90,29 +79,29 @@ pub fn cases(n: usize) -> Vec<Case> {
         ("dome", dome, DVec3::Z),
         ("cylinder", cyl, DVec3::Y),
     ] {
-        let mut rng = Rng(0x5EED ^ name.len() as u64);
+        let mut rng = SplitMix64(0x5EED ^ name.len() as u64);
         let ordinary: Vec<DVec3> = points_from_rays(
             &port,
             (0..n).map(|_| {
                 let d = lens
-                    .unproject(rng.next() * 5568.0, rng.next() * 4176.0)
+                    .unproject(rng.next_f64() * 5568.0, rng.next_f64() * 4176.0)
                     .unwrap();
-                (d, 0.3 * 100f64.powf(rng.next()))
+                (d, 0.3 * 100f64.powf(rng.next_f64()))
             }),
         );
         let grazing: Vec<DVec3> = points_from_rays(
             &port,
             (0..n).map(|_| {
                 // 75°–88° off the port axis, in the image plane's direction (toward +x).
-                let th = (75.0 + 13.0 * rng.next()).to_radians();
-                let ph = (rng.next() - 0.5) * 0.6;
+                let th = (75.0 + 13.0 * rng.next_f64()).to_radians();
+                let ph = (rng.next_f64() - 0.5) * 0.6;
                 let d = if axis == DVec3::Z {
                     DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos())
                 } else {
                     // cylinder: toward the axis (y), seen from +z
                     DVec3::new(th.cos() * ph.sin(), th.sin(), th.cos() * ph.cos())
                 };
-                (d, 0.3 * 100f64.powf(rng.next()))
+                (d, 0.3 * 100f64.powf(rng.next_f64()))
             }),
         );
         out.push(Case {

@@ -26,6 +26,7 @@
 //!   the caustics be computed over one period and tiled.
 //! * The field is bounded: `|h| ≤ Σ|aᵢ|` ([`WaveField::max_abs_height`]).
 
+use crate::rng::SplitMix64;
 use std::f64::consts::PI;
 
 /// Standard gravity, m/s².
@@ -59,19 +60,6 @@ pub struct WaveField {
     pub peak_wavelength: f64,
 }
 
-/// SplitMix64 (deterministic, platform independent).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
-
 impl WaveField {
     /// The surface for significant height `height` (m, > 0), peak wavelength `wavelength`
     /// (m, > 0), wind speed `wind_speed` (m/s, ≥ 0), travelling towards `wind_direction` (rad).
@@ -93,7 +81,7 @@ impl WaveField {
         if !(height > 0.0 && wavelength > 0.0 && height.is_finite() && wavelength.is_finite()) {
             return out;
         }
-        let mut rng = Rng(seed ^ 0x5EA5_0F7A_7E5F_u64);
+        let mut rng = SplitMix64(seed ^ 0x5EA5_0F7A_7E5F_u64);
         let wp = (G * 2.0 * PI / wavelength).sqrt();
         let s_peak = 11.5 * (wp * wind_speed.max(0.0) / G).max(1e-6).powf(-2.5);
         let dw = (OMEGA_MAX - OMEGA_MIN) * wp / COMPONENTS as f64;
@@ -101,7 +89,7 @@ impl WaveField {
         // (m, n) → index into components
         let mut cells: Vec<((i64, i64), usize)> = Vec::new();
         for i in 0..COMPONENTS {
-            let w = (OMEGA_MIN * wp) + (i as f64 + rng.next()) * dw;
+            let w = (OMEGA_MIN * wp) + (i as f64 + rng.next_f64()) * dw;
             let r = wp / w;
             let s_w = w.powi(-5) * (-1.25 * r.powi(4)).exp() * wp.powi(4);
             let s = (s_peak
@@ -114,8 +102,8 @@ impl WaveField {
             // Rejection sampling of the Mitsuyasu spread about the wind direction.
             let mut theta = 0.0;
             for _ in 0..1000 {
-                let t = (2.0 * rng.next() - 1.0) * PI;
-                if rng.next() <= (t / 2.0).cos().abs().powf(2.0 * s) {
+                let t = (2.0 * rng.next_f64() - 1.0) * PI;
+                if rng.next_f64() <= (t / 2.0).cos().abs().powf(2.0 * s) {
                     theta = t;
                     break;
                 }
@@ -128,7 +116,7 @@ impl WaveField {
                 m = 1;
             }
             let energy = 2.0 * s_w * dw; // a²
-            let phase = 2.0 * PI * rng.next();
+            let phase = 2.0 * PI * rng.next_f64();
             match cells.iter().find(|(c, _)| *c == (m, n)) {
                 Some(&(_, j)) => {
                     let c: &mut Component = &mut out.components[j];

@@ -2,11 +2,12 @@
 //! by hashing its coordinates with the scene seed, so results do not depend on threads.
 
 use crate::mesh::mix64;
+use crate::rng::SplitMix64;
 
-/// A SplitMix64 stream.
+/// A SplitMix64 stream ([`crate::rng::SplitMix64`]) per pixel sample.
 #[derive(Debug, Clone)]
 pub struct Sampler {
-    state: u64,
+    stream: SplitMix64,
 }
 
 impl Sampler {
@@ -16,23 +17,21 @@ impl Sampler {
         for k in [image, pass, pixel, sample] {
             h = mix64(h ^ k);
         }
-        Sampler { state: h }
+        Sampler {
+            stream: SplitMix64(h),
+        }
     }
 
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.stream.next_u64()
     }
 
     /// Uniform in [0, 1).
     #[inline]
     #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+        self.stream.next_f64()
     }
 
     #[inline]
