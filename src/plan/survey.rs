@@ -33,7 +33,7 @@ pub struct Site {
 impl Site {
     pub fn new(model: &Model) -> Site {
         let seabed_z = -model.site.depth;
-        match Scene::build(model) {
+        match Scene::geometry(model) {
             Ok(s) if s.triangle_count() > 0 => Site {
                 scene: Some(s),
                 seabed_z,

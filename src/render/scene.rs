@@ -105,18 +105,10 @@ const LEAF_SIZE: usize = 4;
 const BINS: usize = 16;
 
 impl Scene {
-    /// Tessellate every object and target of the model and build the BVH. glTF paths are
-    /// resolved against the directory of `model.source`.
+    /// What the renderer needs: [`Scene::geometry`], plus the caustic volume when the model
+    /// asks for caustics.
     pub fn build(model: &Model) -> Result<Scene, String> {
-        let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
-        let mut meshes = Vec::new();
-        for (i, o) in model.objects.iter().enumerate() {
-            meshes.push((SurfaceId::Object(i as u32), object_mesh(o, base)?));
-        }
-        for (i, t) in model.targets.iter().enumerate() {
-            meshes.push((SurfaceId::Target(i as u32), target_mesh(t)));
-        }
-        let mut scene = Scene::from_meshes(meshes);
+        let mut scene = Scene::geometry(model)?;
         if model.needs.caustics {
             // Planes down to below the deepest geometry (or the nominal seabed).
             let lo = scene.bounds().map_or(-model.site.depth, |(lo, _)| lo.z);
@@ -125,6 +117,21 @@ impl Scene {
                 super::caustics::CausticVolume::for_model(model, z_bottom).map(std::sync::Arc::new);
         }
         Ok(scene)
+    }
+
+    /// Tessellate every object and target of the model and build the BVH (no lighting data:
+    /// what occlusion tests need). glTF paths are resolved against the directory of
+    /// `model.source`.
+    pub fn geometry(model: &Model) -> Result<Scene, String> {
+        let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
+        let mut meshes = Vec::new();
+        for (i, o) in model.objects.iter().enumerate() {
+            meshes.push((SurfaceId::Object(i as u32), object_mesh(o, base)?));
+        }
+        for (i, t) in model.targets.iter().enumerate() {
+            meshes.push((SurfaceId::Target(i as u32), target_mesh(t)));
+        }
+        Ok(Scene::from_meshes(meshes))
     }
 
     /// Build from world-frame meshes.

@@ -104,7 +104,11 @@ fn pose_json(p: &Pose) -> PoseJson {
 
 /// Compute the ground truth of every image (occlusion against the model's scene geometry).
 pub fn compute(model: &Model) -> Result<Truth, String> {
-    let scene = Scene::build(model)?;
+    compute_in(model, &Scene::geometry(model)?)
+}
+
+/// [`compute`] with the model's scene geometry already built.
+pub fn compute_in(model: &Model, scene: &Scene) -> Result<Truth, String> {
     compute_with(model, |a, b| scene.occluded(a, b))
 }
 
@@ -511,8 +515,16 @@ fn colmap(model: &Model, truth: &Truth) -> Vec<(String, Vec<u8>)> {
 /// Compute the ground truth of `model` and write it into `dir` (see the module table). Every
 /// file is written atomically; nothing is written if the computation fails.
 pub fn write(model: &Model, dir: &Path) -> Result<(), String> {
-    let truth = compute(model)?;
-    let files = files(model, &truth)?;
+    write_truth(model, &compute(model)?, dir)
+}
+
+/// [`write`] with the model's scene geometry already built (the native renderer's).
+pub fn write_in(model: &Model, scene: &Scene, dir: &Path) -> Result<(), String> {
+    write_truth(model, &compute_in(model, scene)?, dir)
+}
+
+fn write_truth(model: &Model, truth: &Truth, dir: &Path) -> Result<(), String> {
+    let files = files(model, truth)?;
     for (rel, bytes) in files {
         let path = dir.join(&rel);
         write_atomic(&path, &bytes).map_err(|e| format!("{}: {e}", path.display()))?;
