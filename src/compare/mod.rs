@@ -33,14 +33,19 @@ impl LinearImage {
     }
     /// Mean per channel.
     pub fn mean(&self) -> [f64; 3] {
-        let mut m = [0.0; 3];
-        for p in &self.rgb {
-            for c in 0..3 {
-                m[c] += p[c] as f64;
-            }
-        }
-        m.map(|v| v / self.rgb.len().max(1) as f64)
+        channel_means(self.rgb.as_flattened())
     }
+}
+
+/// Per-channel means of interleaved RGB values.
+pub fn channel_means(rgb: &[f32]) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for px in rgb.chunks_exact(3) {
+        for c in 0..3 {
+            m[c] += px[c] as f64;
+        }
+    }
+    m.map(|v| v / (rgb.len() / 3).max(1) as f64)
 }
 
 use crate::backend::{RenderOptions, RenderReport};

@@ -389,19 +389,16 @@ pub struct Row {
     pub failures: usize,
 }
 
-/// Errors against `refs` and one-core speed of `solve` over `pts` (monomorphised per solver:
-/// no dynamic dispatch in the timed loop).
-fn measure<F: Fn(DVec3) -> Result<[f64; 2], NoSolution>>(
-    pts: &[DVec3],
+/// (points with a reference, median error, max error, failures) of `results` against `refs`.
+fn error_stats(
+    results: impl Iterator<Item = Result<[f64; 2], NoSolution>>,
     refs: &[Option<[f64; 2]>],
-    min_time: f64,
-    solve: F,
-) -> (usize, f64, f64, f64, f64, usize) {
+) -> (usize, f64, f64, usize) {
     let mut errs = Vec::new();
     let mut failures = 0;
-    for (p, r) in pts.iter().zip(refs) {
+    for (x, r) in results.zip(refs) {
         let Some(r) = r else { continue };
-        match solve(*p) {
+        match x {
             Ok(x) if x[0].is_finite() && x[1].is_finite() => {
                 errs.push((x[0] - r[0]).hypot(x[1] - r[1]))
             }
@@ -411,19 +408,40 @@ fn measure<F: Fn(DVec3) -> Result<[f64; 2], NoSolution>>(
     errs.sort_by(f64::total_cmp);
     let median = errs.get(errs.len() / 2).copied().unwrap_or(f64::NAN);
     let max = errs.last().copied().unwrap_or(f64::NAN);
-    // Timing: whole passes over the set until `min_time` of thread CPU time has elapsed.
+    (errs.len(), median, max, failures)
+}
+
+/// Points per second (thread CPU time, wall) of `pass`, which solves `n` points: whole passes
+/// until `min_time` of thread CPU time has elapsed.
+fn time_passes(n: usize, min_time: f64, mut pass: impl FnMut()) -> (f64, f64) {
     let t0 = Instant::now();
     let c0 = thread_cpu_seconds();
     let mut count = 0usize;
     while thread_cpu_seconds() - c0 < min_time || count == 0 {
+        pass();
+        count += n;
+    }
+    (
+        count as f64 / (thread_cpu_seconds() - c0),
+        count as f64 / t0.elapsed().as_secs_f64(),
+    )
+}
+
+/// Errors against `refs` and one-core speed of `solve` over `pts` (monomorphised per solver:
+/// no dynamic dispatch in the timed loop).
+fn measure<F: Fn(DVec3) -> Result<[f64; 2], NoSolution>>(
+    pts: &[DVec3],
+    refs: &[Option<[f64; 2]>],
+    min_time: f64,
+    solve: F,
+) -> (usize, f64, f64, f64, f64, usize) {
+    let (n, median, max, failures) = error_stats(pts.iter().map(|p| solve(*p)), refs);
+    let (pps, pps_wall) = time_passes(pts.len(), min_time, || {
         for p in pts.iter() {
             std::hint::black_box(solve(std::hint::black_box(*p)).ok());
         }
-        count += pts.len();
-    }
-    let pps = count as f64 / (thread_cpu_seconds() - c0);
-    let pps_wall = count as f64 / t0.elapsed().as_secs_f64();
-    (errs.len(), pps, pps_wall, median, max, failures)
+    });
+    (n, pps, pps_wall, median, max, failures)
 }
 
 /// [`measure`] for the batch solver: errors per point, speed over whole passes.
@@ -437,24 +455,8 @@ fn measure_batch(
     let mut dirs = vec![Err(NoSolution::NoConvergence); pts.len()];
     let mut out = vec![Err(NoSolution::NoConvergence); pts.len()];
     poser_project_many(port, lens, pts, &mut dirs, &mut out);
-    let mut errs = Vec::new();
-    let mut failures = 0;
-    for (x, r) in out.iter().zip(refs) {
-        let Some(r) = r else { continue };
-        match x {
-            Ok(x) if x[0].is_finite() && x[1].is_finite() => {
-                errs.push((x[0] - r[0]).hypot(x[1] - r[1]))
-            }
-            _ => failures += 1,
-        }
-    }
-    errs.sort_by(f64::total_cmp);
-    let median = errs.get(errs.len() / 2).copied().unwrap_or(f64::NAN);
-    let max = errs.last().copied().unwrap_or(f64::NAN);
-    let t0 = Instant::now();
-    let c0 = thread_cpu_seconds();
-    let mut count = 0usize;
-    while thread_cpu_seconds() - c0 < min_time || count == 0 {
+    let (n, median, max, failures) = error_stats(out.iter().cloned(), refs);
+    let (pps, pps_wall) = time_passes(pts.len(), min_time, || {
         poser_project_many(
             port,
             lens,
@@ -462,11 +464,8 @@ fn measure_batch(
             &mut dirs,
             std::hint::black_box(&mut out),
         );
-        count += pts.len();
-    }
-    let pps = count as f64 / (thread_cpu_seconds() - c0);
-    let pps_wall = count as f64 / t0.elapsed().as_secs_f64();
-    (errs.len(), pps, pps_wall, median, max, failures)
+    });
+    (n, pps, pps_wall, median, max, failures)
 }
 
 /// Run the whole comparison. `quick`: fewer points and shorter timing. The environment

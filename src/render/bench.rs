@@ -170,18 +170,6 @@ pub fn bench_model(width: u32, height: u32) -> Model {
     }
 }
 
-/// Per-channel means of an RGB image.
-pub fn channel_means(img: &[f32]) -> [f64; 3] {
-    let mut m = [0.0; 3];
-    for px in img.chunks_exact(3) {
-        for c in 0..3 {
-            m[c] += px[c] as f64;
-        }
-    }
-    let n = (img.len() / 3).max(1) as f64;
-    m.map(|v| v / n)
-}
-
 fn mean_of(img: &[f32]) -> f64 {
     img.iter().map(|&v| v as f64).sum::<f64>() / img.len().max(1) as f64
 }
@@ -348,10 +336,8 @@ fn render_rgb(
     let report = crate::compare::render_with(backend, model, dir, &opts)?;
     let secs = t0.elapsed().as_secs_f64().max(report.seconds);
     let path = dir.join(format!("{}.exr", model.image_name(0, 0)));
-    let img = image::open(&path)
-        .map_err(|e| format!("{}: {e}", path.display()))?
-        .into_rgb32f();
-    Ok((img.into_raw(), secs))
+    let img = crate::compare::LinearImage::read(&path)?;
+    Ok((img.rgb.into_flattened(), secs))
 }
 
 fn curve(backend: &str, model: &Model, ref_spp: u32, max_spp: u32) -> Curve {
@@ -386,7 +372,7 @@ fn curve(backend: &str, model: &Model, ref_spp: u32, max_spp: u32) -> Curve {
         }
         let reference = Reference::new(&refs[0], &refs[1]);
         c.reference_residual = reference.residual();
-        c.reference_means = channel_means(&reference.image);
+        c.reference_means = crate::compare::channel_means(&reference.image);
         let mut spp = 1;
         while spp <= max_spp {
             let dir = tmp.path().join(format!("s{spp}"));

@@ -110,45 +110,63 @@ def test_arguments():
         pbuild.parse_args(["--bogus"])
 
 
-@pytest.mark.parametrize("lens", ["fisheye_equidistant", "fisheye_equisolid"])
-def test_fisheye_projects_like_the_lens_model(lens, tmp_path):
-    # Small black squares facing the camera on a white sky, at field angles up to 70 degrees,
-    # with an off-centre principal point; their centroids must land where the lens model
-    # (r = f theta or r = 2 f sin(theta/2)) puts them.
-    W, H, fx, cx, cy = 160, 120, 40.0, 86.3, 55.1
-    eye = np.eye(4).tolist()
+def _squares_facing_camera(angles_deg, size):
+    """Black squares 2 m from the camera at field angles (theta, phi) in degrees, facing it;
+    returns the objects and the angles in radians."""
     objs, dirs = [], []
-    for k, (th, ph) in enumerate([(0, 0), (30, 20), (55, 160), (70, -60), (45, -120)]):
+    for k, (th, ph) in enumerate(angles_deg):
         th, ph = math.radians(th), math.radians(ph)
         d = np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)])
         m = np.eye(4)
         m[:3, :3] = geo.frame_looking_along(d)
         m[:3, 3] = 2.0 * d
-        objs.append({"name": f"sq{k}", "shape": {"type": "plane", "width": 0.06, "height": 0.06},
+        objs.append({"name": f"sq{k}", "shape": {"type": "plane", "width": size, "height": size},
                      "scale": [1, 1, 1], "matrix": m.tolist(),
                      "material": {"albedo": [0, 0, 0], "pattern": None}})
         dirs.append((th, ph))
-    desc = {"format": "poser-blender/1", "name": "fisheye",
+    return objs, dirs
+
+
+def _white_sky_scene(name, camera, objs):
+    """A one-camera, one-pose description: `objs` in air under a white ambient sky."""
+    eye = np.eye(4).tolist()
+    camera = dict(camera, name="c", rig_from_camera=eye, port={"kind": "none"})
+    return {"format": "poser-blender/1", "name": name,
             "render": {"samples": 64, "seed": 1, "max_bounces": 2, "exposure": 1.0},
-            "cameras": [{"name": "c", "width": W, "height": H, "lens": lens, "fx": fx, "fy": fx,
-                         "cx": cx, "cy": cy, "rig_from_camera": eye, "port": {"kind": "none"}}],
+            "cameras": [camera],
             "poses": [{"name": "p", "world_from_rig": eye, "images": ["p"]}],
             "water": None, "surface": {"kind": "none"},
             "bounds": {"min": [-5] * 3, "max": [5] * 3}, "sun": None,
             "lights": [{"name": "sky", "mount": "world", "type": "ambient",
                         "radiance": [1, 1, 1]}],
             "objects": objs, "targets": []}
+
+
+def _dark_centroid(w, u, v):
+    """Darkness-weighted centroid (pixel centres at +0.5) in the 11x11 window about (u, v)."""
+    i0, j0 = int(u) - 5, int(v) - 5
+    jj, ii = np.mgrid[j0:j0 + 11, i0:i0 + 11]
+    win = w[j0:j0 + 11, i0:i0 + 11]
+    return (win * (ii + 0.5)).sum() / win.sum(), (win * (jj + 0.5)).sum() / win.sum()
+
+
+@pytest.mark.parametrize("lens", ["fisheye_equidistant", "fisheye_equisolid"])
+def test_fisheye_projects_like_the_lens_model(lens, tmp_path):
+    # Small black squares facing the camera on a white sky, at field angles up to 70 degrees,
+    # with an off-centre principal point; their centroids must land where the lens model
+    # (r = f theta or r = 2 f sin(theta/2)) puts them.
+    W, H, fx, cx, cy = 160, 120, 40.0, 86.3, 55.1
+    objs, dirs = _squares_facing_camera([(0, 0), (30, 20), (55, 160), (70, -60), (45, -120)],
+                                        0.06)
+    desc = _white_sky_scene("fisheye", {"width": W, "height": H, "lens": lens, "fx": fx,
+                                        "fy": fx, "cx": cx, "cy": cy}, objs)
     built = pbuild.build(desc, ".", _fresh())
     exr = pbuild.render(built, str(tmp_path), png=False)[0]
     w = np.clip(1.0 - pbuild._load_pixels(exr)[::-1, :, 1], 0.0, None)  # row 0 = top
     for th, ph in dirs:
         r = fx * th if lens == "fisheye_equidistant" else 2.0 * fx * math.sin(th / 2.0)
         u, v = cx + r * math.cos(ph), cy + r * math.sin(ph)
-        i0, j0 = int(u) - 5, int(v) - 5
-        jj, ii = np.mgrid[j0:j0 + 11, i0:i0 + 11]
-        win = w[j0:j0 + 11, i0:i0 + 11]
-        mu = (win * (ii + 0.5)).sum() / win.sum()
-        mv = (win * (jj + 0.5)).sum() / win.sum()
+        mu, mv = _dark_centroid(w, u, v)
         # Measured <= 0.06 px; the 1.5 px^2 blobs carry ~0.03 px of 64-spp coverage noise and
         # the square's own fisheye distortion, so 0.15 px.
         assert abs(mu - u) < 0.15 and abs(mv - v) < 0.15, (lens, th, mu - u, mv - v)
@@ -168,29 +186,11 @@ def test_custom_camera_projects_with_distortion(lens, tmp_path):
     # squares on a white sky must land where lens model + distortion put their centres.
     W, H, fx, fy, cx, cy = 160, 120, 110.0, 104.0, 86.3, 55.1
     dist = {"k1": -0.21, "k2": 0.05, "k3": -0.004, "p1": 0.0015, "p2": -0.001}
-    eye = np.eye(4).tolist()
-    objs, dirs = [], []
-    for k, (th, ph) in enumerate([(0, 0), (20, 20), (30, 160), (33, -30), (25, -120)]):
-        th, ph = math.radians(th), math.radians(ph)
-        d = np.array([math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)])
-        m = np.eye(4)
-        m[:3, :3] = geo.frame_looking_along(d)
-        m[:3, 3] = 2.0 * d
-        objs.append({"name": f"sq{k}", "shape": {"type": "plane", "width": 0.04, "height": 0.04},
-                     "scale": [1, 1, 1], "matrix": m.tolist(),
-                     "material": {"albedo": [0, 0, 0], "pattern": None}})
-        dirs.append((th, ph))
-    desc = {"format": "poser-blender/1", "name": "distorted",
-            "render": {"samples": 64, "seed": 1, "max_bounces": 2, "exposure": 1.0},
-            "cameras": [{"name": "c", "width": W, "height": H, "lens": lens, "fx": fx, "fy": fy,
-                         "cx": cx, "cy": cy, "distortion": dist, "r2_max": None,
-                         "rig_from_camera": eye, "port": {"kind": "none"}}],
-            "poses": [{"name": "p", "world_from_rig": eye, "images": ["p"]}],
-            "water": None, "surface": {"kind": "none"},
-            "bounds": {"min": [-5] * 3, "max": [5] * 3}, "sun": None,
-            "lights": [{"name": "sky", "mount": "world", "type": "ambient",
-                        "radiance": [1, 1, 1]}],
-            "objects": objs, "targets": []}
+    objs, dirs = _squares_facing_camera([(0, 0), (20, 20), (30, 160), (33, -30), (25, -120)],
+                                        0.04)
+    desc = _white_sky_scene("distorted", {"width": W, "height": H, "lens": lens, "fx": fx,
+                                          "fy": fy, "cx": cx, "cy": cy, "distortion": dist,
+                                          "r2_max": None}, objs)
     built = pbuild.build(desc, ".", _fresh())
     data = built.cameras[0].data
     assert data.type == "CUSTOM" and data.custom_mode == "INTERNAL"
@@ -205,11 +205,7 @@ def test_custom_camera_projects_with_distortion(lens, tmp_path):
         r = math.tan(th) if lens == "rectilinear" else th
         xd, yd = _distort(r * math.cos(ph), r * math.sin(ph), dist)
         u, v = fx * xd + cx, fy * yd + cy
-        i0, j0 = int(u) - 5, int(v) - 5
-        jj, ii = np.mgrid[j0:j0 + 11, i0:i0 + 11]
-        win = w[j0:j0 + 11, i0:i0 + 11]
-        mu = (win * (ii + 0.5)).sum() / win.sum()
-        mv = (win * (jj + 0.5)).sum() / win.sum()
+        mu, mv = _dark_centroid(w, u, v)
         errs.append((mu - u, mv - v))
     print(lens, "centroid errors (px):", errs)
     for eu, ev in errs:
