@@ -9,7 +9,7 @@ use poser::model::{Distortion, LensModel};
 use poser::optics::NoSolution;
 use poser::optics::bench::{bench_lens, cases, reference_pixel};
 use poser::optics::lens::Lens;
-use poser::optics::port::{CylinderPort, DomePort, FlatPort, LANES, PortSolver};
+use poser::optics::port::{CylinderPort, DomePort, FlatPort, LANES, PortSolver, Simd};
 use poser::rng::SplitMix64;
 
 /// The exactness target.
@@ -286,15 +286,24 @@ fn batch_solver_equals_the_scalar_solver_bit_for_bit_including_failures() {
                 pts.push(bad[(i / 3) % bad.len()]);
             }
         }
-        for len in [pts.len(), pts.len() - 1, LANES - 1, 1, 0] {
+        // Both builds of the SIMD kernels (the AVX2 one runs as the baseline where the CPU
+        // lacks AVX2), and the default one.
+        let runs = [Some(Simd::Baseline), Some(Simd::Avx2), None];
+        for (len, simd) in [pts.len(), pts.len() - 1, LANES + 1, LANES - 1, 1, 0]
+            .into_iter()
+            .flat_map(|len| runs.map(|s| (len, s)))
+        {
             let pts = &pts[..len];
             let mut out = vec![Err(NoSolution::NoConvergence); len];
-            port.forward_many(pts, &mut out);
+            match simd {
+                Some(simd) => port.forward_many_with(simd, pts, &mut out),
+                None => port.forward_many(pts, &mut out),
+            }
             for (i, (p, b)) in pts.iter().zip(&out).enumerate() {
                 let s = port.forward(*p);
                 assert!(
                     same(&s, b),
-                    "{name}: point {i} {p:?}: scalar {s:?}, batch {b:?}"
+                    "{name} ({simd:?}): point {i} {p:?}: scalar {s:?}, batch {b:?}"
                 );
                 if let Ok(d) = b {
                     assert!(d.is_finite(), "{name}: non-finite direction at {p:?}");

@@ -9,6 +9,7 @@
 //! | [`interface`] | vector Snell with explicit TIR, unpolarised Fresnel |
 //! | [`lens`] | rectilinear + Brown, equidistant and equisolid fisheye |
 //! | [`port`] | flat (multi-layer, tilted), dome (decentred), cylinder (on/off axis) |
+//! | [`lanes`] | f64 SIMD lanes for the batch port solvers (AVX2 picked at run time) |
 //! | [`project`] | [`project::Projector`]: camera + port + poses for one channel |
 //! | [`waves`] | seeded periodic random sea surface (Pierson–Moskowitz, Mitsuyasu spread) for caustics |
 //!
@@ -20,6 +21,7 @@
 pub mod bench;
 pub mod glass;
 pub mod interface;
+pub mod lanes;
 pub mod lens;
 pub mod phase;
 pub mod port;

@@ -700,14 +700,29 @@ impl DomePort {
             if !step.is_finite() {
                 return None;
             }
+            // u turned by atan(step), not yet unit.
             let v = u + u.perp() * step;
-            u = v * (1.0 / v.length());
             if step.abs() <= if halley { 5e-6 } else { 1e-8 } {
+                // Converged: v is the direction (|v| = 1 + O(step²) is irrelevant to it).
                 // Inside the guaranteed bracket, in front of the camera.
-                return (u.x > 0.0 && u.y.abs() <= self.bracket * u.x).then_some((u, evals));
+                return (v.x > 0.0 && v.y.abs() <= self.bracket * v.x).then_some((v, evals));
             }
+            u = v * Self::unit_scale(step, v);
         }
         None
+    }
+
+    /// 1/|v| for v = u + u⊥·step with |u| = 1, i.e. 1/√(1 + step²): by its series where
+    /// |step| ≤ 1e-3 (the next term, 5·step⁶/16 ≤ 3e-19, is below half an ulp), which keeps
+    /// a √ and a ÷ off the solver's critical path; else from v.
+    #[inline(always)]
+    fn unit_scale(step: f64, v: DVec2) -> f64 {
+        if step.abs() <= 1e-3 {
+            let s2 = step * step;
+            1.0 - s2 * (0.5 - 0.375 * s2)
+        } else {
+            1.0 / v.length()
+        }
     }
 
     fn solve_tau(&self, c: DVec2, l: f64) -> Result<f64, NoSolution> {
@@ -1157,333 +1172,8 @@ impl PortSolver {
     }
 }
 
-/// Points solved together by the batch solvers ([`PortSolver::forward_many`]): the lanes'
-/// Newton chains are independent, so the core overlaps their √ and ÷ latencies.
-pub const LANES: usize = 4;
-
-impl Slabs {
-    /// Whether [`Slabs::solve_ratio`] takes the plain concave path for (r², D) with r² > 0,
-    /// D > 0 (no bracket, no critical-angle exit): the lanes of the batch solver.
-    #[inline(always)]
-    fn lane_ok(&self, r2: f64, depth: f64) -> bool {
-        let asym = self.asym + depth * self.tw_inf;
-        self.concave && r2 > 0.0 && depth > 0.0 && !(self.gap == 0.0 && asym * asym <= r2)
-    }
-
-    /// [`Slabs::solve_ratio`] on [`LANES`] points at once (lanes with `active[l] == false`
-    /// are ignored). Returns t and whether each lane converged; an unconverged lane is
-    /// re-solved by the caller with the scalar solver. Same guess, iteration and stopping
-    /// rule as the scalar solver; only the lanes advance in lock step.
-    #[inline(always)]
-    fn solve_ratio_lanes<const N: usize>(
-        &self,
-        r2: [f64; LANES],
-        depth: [f64; LANES],
-        active: [bool; LANES],
-    ) -> ([f64; LANES], [bool; LANES]) {
-        let mut t = [1.0; LANES];
-        let mut done = [true; LANES];
-        for l in 0..LANES {
-            if !active[l] {
-                continue;
-            }
-            done[l] = false;
-            let big_a = depth[l] + self.water_units;
-            let lim = 0.9 * self.tw_inf * big_a;
-            t[l] = if r2[l] < lim * lim {
-                self.nw / (self.na * self.na * big_a * big_a - self.kw * r2[l]).sqrt()
-            } else {
-                let parax = 1.0 / (self.parax + depth[l] * self.na / self.nw);
-                if self.gap > 0.0 {
-                    let r = r2[l].sqrt();
-                    let asym = self.asym + depth[l] * self.tw_inf;
-                    parax.max((r - asym) / (self.gap * r))
-                } else {
-                    parax
-                }
-            };
-        }
-        #[inline(always)]
-        fn term(tna: f64, n2: f64, k: f64, t: f64, r2: f64) -> (f64, f64, f64) {
-            let kr2 = k * r2;
-            let g = n2 + kr2 * t * t;
-            let inv = 1.0 / g.sqrt();
-            let inv2 = inv * inv;
-            let dv = tna * n2 * inv2 * inv;
-            (tna * t * inv, dv, -3.0 * kr2 * t * dv * inv2)
-        }
-        for _ in 0..12 {
-            for l in 0..LANES {
-                let (dt, halley) = if N == 1 {
-                    self.step_one_layer(t[l], r2[l], depth[l])
-                } else {
-                    let (mut f, mut df, mut d2f) =
-                        term(depth[l] * self.na, self.nw2, self.kw, t[l], r2[l]);
-                    f += self.gap * t[l] - 1.0;
-                    df += self.gap;
-                    for i in 0..N {
-                        let (v, d, d2) = term(self.tna[i], self.n2[i], self.k[i], t[l], r2[l]);
-                        f += v;
-                        df += d;
-                        d2f += d2;
-                    }
-                    Self::halley_step(f, df, d2f)
-                };
-                let next = t[l] + dt;
-                let next = if next > 0.0 { next } else { 0.5 * t[l] };
-                let conv = dt.abs() <= if halley { 1e-5 } else { 1e-8 } * next;
-                if !done[l] {
-                    t[l] = next;
-                    done[l] = conv;
-                }
-            }
-            if done.iter().all(|&d| d) {
-                break;
-            }
-        }
-        for l in 0..LANES {
-            done[l] &= active[l] && t[l].is_finite();
-        }
-        (t, done)
-    }
-}
-
-impl FlatPort {
-    /// [`FlatPort::forward`] for many points (`out[i]` for `ps[i]`; equal lengths).
-    pub fn forward_many(&self, ps: &[DVec3], out: &mut [Result<DVec3, NoSolution>]) {
-        match self.slabs.n {
-            0 => self.forward_many_n::<0>(ps, out),
-            1 => self.forward_many_n::<1>(ps, out),
-            2 => self.forward_many_n::<2>(ps, out),
-            3 => self.forward_many_n::<3>(ps, out),
-            _ => self.forward_many_n::<MAX_LAYERS>(ps, out),
-        }
-    }
-
-    fn forward_many_n<const N: usize>(&self, ps: &[DVec3], out: &mut [Result<DVec3, NoSolution>]) {
-        assert_eq!(ps.len(), out.len(), "forward_many: one output per point");
-        let nrm = self.normal;
-        let mut chunks = ps.chunks_exact(LANES);
-        let mut outs = out.chunks_exact_mut(LANES);
-        for (pc, oc) in (&mut chunks).zip(&mut outs) {
-            let mut r2 = [1.0; LANES];
-            let mut depth = [1.0; LANES];
-            let mut perp = [DVec3::ZERO; LANES];
-            let mut active = [false; LANES];
-            for l in 0..LANES {
-                let p = pc[l];
-                let a = nrm.dot(p);
-                let d = a - self.distance - self.total_thickness;
-                let rr = nrm.cross(p).length_squared();
-                perp[l] = p - a * nrm;
-                active[l] = self.slabs.lane_ok(rr, d);
-                if active[l] {
-                    r2[l] = rr;
-                    depth[l] = d;
-                }
-            }
-            let (t, ok) = self.slabs.solve_ratio_lanes::<N>(r2, depth, active);
-            for l in 0..LANES {
-                oc[l] = if ok[l] {
-                    Ok(nrm + perp[l] * t[l])
-                } else {
-                    self.forward(pc[l])
-                };
-            }
-        }
-        for (p, o) in chunks.remainder().iter().zip(outs.into_remainder()) {
-            *o = self.forward(*p);
-        }
-    }
-}
-
-impl CylinderPort {
-    /// [`CylinderPort::forward`] for many points (lock-step lanes when the pupil is on the
-    /// axis; the skew solver point by point otherwise).
-    pub fn forward_many(&self, ps: &[DVec3], out: &mut [Result<DVec3, NoSolution>]) {
-        assert_eq!(ps.len(), out.len(), "forward_many: one output per point");
-        if !self.on_axis {
-            for (p, o) in ps.iter().zip(out.iter_mut()) {
-                *o = self.forward(*p);
-            }
-            return;
-        }
-        let a = self.axis;
-        let mut chunks = ps.chunks_exact(LANES);
-        let mut outs = out.chunks_exact_mut(LANES);
-        for (pc, oc) in (&mut chunks).zip(&mut outs) {
-            let mut r2 = [1.0; LANES];
-            let mut depth = [1.0; LANES];
-            let mut z = [0.0; LANES];
-            let mut e_rho = [DVec3::ZERO; LANES];
-            let mut active = [false; LANES];
-            for l in 0..LANES {
-                let rel = pc[l] - self.axis_point;
-                let zl = a.dot(pc[l]);
-                let rho_v = rel - rel.dot(a) * a;
-                let rho = a.cross(rel).length();
-                let d = rho - self.r2;
-                active[l] = d > 0.0 && self.slabs.lane_ok(zl * zl, d);
-                if active[l] {
-                    r2[l] = zl * zl;
-                    depth[l] = d;
-                    z[l] = zl;
-                    e_rho[l] = rho_v / rho;
-                }
-            }
-            let (t, ok) = self.slabs.solve_ratio_lanes::<1>(r2, depth, active);
-            for l in 0..LANES {
-                oc[l] = if ok[l] {
-                    Ok(e_rho[l] + a * (t[l] * z[l]))
-                } else {
-                    self.forward(pc[l])
-                };
-            }
-        }
-        for (p, o) in chunks.remainder().iter().zip(outs.into_remainder()) {
-            *o = self.forward(*p);
-        }
-    }
-}
-
-impl DomePort {
-    /// [`DomePort::forward`] for many points: the Halley iteration of `DomePort::halley` on
-    /// [`LANES`] points in lock step; any lane that leaves the fast path is re-solved by
-    /// the scalar solver.
-    pub fn forward_many(&self, ps: &[DVec3], out: &mut [Result<DVec3, NoSolution>]) {
-        assert_eq!(ps.len(), out.len(), "forward_many: one output per point");
-        if self.is_centred() {
-            for (p, o) in ps.iter().zip(out.iter_mut()) {
-                *o = self.forward(*p);
-            }
-            return;
-        }
-        let k = self.k;
-        let kw = self.kw;
-        let k0 = self.dtheta0;
-        let mut chunks = ps.chunks_exact(LANES);
-        let mut outs = out.chunks_exact_mut(LANES);
-        for (pc, oc) in (&mut chunks).zip(&mut outs) {
-            let mut e1 = [DVec3::X; LANES];
-            let mut e2 = [DVec3::Y; LANES];
-            let mut c = [DVec2::ZERO; LANES];
-            let mut pcv = [DVec2::X; LANES];
-            let mut u = [DVec2::X; LANES];
-            let mut done = [true; LANES];
-            for l in 0..LANES {
-                let p = pc[l];
-                let dc = (p - self.center).length();
-                let len = p.length();
-                let el = p / len;
-                let cperp = self.center - self.center.dot(el) * el;
-                let c2 = cperp.length();
-                let cl = DVec2::new(self.center.dot(el), c2);
-                let pcl = DVec2::new(len - cl.x, -cl.y);
-                let tau0 =
-                    -cl.y * (pcl.x * k0 + 1.0 - kw) / (pcl.x * (1.0 - k0 * cl.x) + kw * cl.x);
-                if dc > self.r2 && c2 > 1e-300 && tau0.abs() <= self.bracket {
-                    done[l] = false;
-                    e1[l] = el;
-                    e2[l] = cperp / c2;
-                    c[l] = cl;
-                    pcv[l] = pcl;
-                    u[l] = DVec2::new(1.0, tau0) * (1.0 / (1.0 + tau0 * tau0).sqrt());
-                }
-            }
-            let active = done.map(|d| !d);
-            let mut failed = [false; LANES];
-            for _ in 0..16 {
-                for l in 0..LANES {
-                    let (cl, pcl, ul) = (c[l], pcv[l], u[l]);
-                    let p = cl.y * ul.x - cl.x * ul.y;
-                    let s = [p * k[0], p * k[1], p * k[2], p * k[3]];
-                    let co2 = s.map(|x| 1.0 - x * x);
-                    if !(co2[0] > 0.0 && co2[1] > 0.0 && co2[2] > 0.0 && co2[3] > 0.0) {
-                        failed[l] |= !done[l];
-                        done[l] = true;
-                        continue;
-                    }
-                    let co = co2.map(f64::sqrt);
-                    let z1 = DVec2::new(co[0] * co[1] + s[0] * s[1], co[0] * s[1] - s[0] * co[1]);
-                    let z2 = DVec2::new(co[2] * co[3] + s[2] * s[3], co[2] * s[3] - s[2] * co[3]);
-                    let z = DVec2::new(z1.x * z2.x - z1.y * z2.y, z1.x * z2.y + z1.y * z2.x);
-                    let w = DVec2::new(z.x * ul.x - z.y * ul.y, z.x * ul.y + z.y * ul.x);
-                    let cr = pcl.perp_dot(w);
-                    let dt = pcl.dot(w);
-                    let m = cr - kw * p;
-                    let inv = co.map(|x| 1.0 / x);
-                    let th1 = -k[0] * inv[0] + k[1] * inv[1] - k[2] * inv[2] + k[3] * inv[3];
-                    let cube = |i: usize| k[i] * k[i] * k[i] * inv[i] * inv[i] * inv[i];
-                    let th2 = p * (-cube(0) + cube(1) - cube(2) + cube(3));
-                    let dp = -cl.dot(ul);
-                    let g = 1.0 + th1 * dp;
-                    let dm = dt * g - kw * dp;
-                    let d2m = -cr * g * g + dt * (th2 * dp * dp - th1 * p) + kw * p;
-                    let halley = (m * d2m).abs() < 0.5 * dm * dm;
-                    let step = if halley {
-                        -2.0 * m * dm / (2.0 * dm * dm - m * d2m)
-                    } else {
-                        -m / dm
-                    };
-                    let v = ul + ul.perp() * step;
-                    let next = v * (1.0 / v.length());
-                    let conv = step.abs() <= if halley { 5e-6 } else { 1e-8 };
-                    if !done[l] {
-                        u[l] = next;
-                        done[l] = conv || !step.is_finite();
-                        failed[l] |= !step.is_finite();
-                    }
-                }
-                if done.iter().all(|&d| d) {
-                    break;
-                }
-            }
-            for l in 0..LANES {
-                let ul = u[l];
-                let ok = active[l]
-                    && done[l]
-                    && !failed[l]
-                    && ul.x > 0.0
-                    && ul.y.abs() <= self.bracket * ul.x;
-                oc[l] = if ok {
-                    Ok(e1[l] * ul.x + e2[l] * ul.y)
-                } else {
-                    self.forward(pc[l])
-                };
-            }
-        }
-        for (p, o) in chunks.remainder().iter().zip(outs.into_remainder()) {
-            *o = self.forward(*p);
-        }
-    }
-}
-
-impl PortSolver {
-    /// [`PortSolver::forward`] for many points at once (`out[i]` for `ps[i]`; the slices
-    /// must have equal lengths). Bit-for-bit the same solution method as the scalar call
-    /// (same guess, iteration and stopping rule), but [`LANES`] points advance in lock step,
-    /// which hides the latency of √ and ÷; anything off the fast path falls back to
-    /// [`PortSolver::forward`].
-    pub fn forward_many(&self, ps: &[DVec3], out: &mut [Result<DVec3, NoSolution>]) {
-        assert_eq!(ps.len(), out.len(), "forward_many: one output per point");
-        match self {
-            PortSolver::Flat(f) => f.forward_many(ps, out),
-            PortSolver::Dome(d) => d.forward_many(ps, out),
-            PortSolver::Cylinder(c) => c.forward_many(ps, out),
-            PortSolver::None => {
-                for (p, o) in ps.iter().zip(out.iter_mut()) {
-                    *o = self.forward(*p);
-                }
-            }
-        }
-        // As in `forward`: a non-finite point has no solution.
-        for (p, o) in ps.iter().zip(out.iter_mut()) {
-            if !p.is_finite() {
-                *o = Err(NoSolution::NoConvergence);
-            }
-        }
-    }
-}
+mod batch;
+pub use batch::{LANES, Simd};
 
 #[cfg(test)]
 mod tests {

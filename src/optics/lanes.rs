@@ -1,0 +1,246 @@
+//! SIMD lanes for the batch port solvers: [`V`], [`W`] f64 values in lock step, and [`M`],
+//! a mask of lanes, with element-wise IEEE operations only (+ − × ÷ √, compare, select).
+//!
+//! | item | meaning |
+//! |---|---|
+//! | [`W`] = 8 | lanes per group: two AVX2 registers, or four SSE2 ones, whose independent √/÷ chains overlap |
+//! | [`V`] | `[f64; W]`; each operator is the scalar operator on every lane |
+//! | [`M`] | a lane mask (all ones or zeros per lane, like a vector compare); `select`, `any`, `all` |
+//! | [`simd_level`] | which instruction set the batch solvers run with on this CPU |
+//!
+//! Nothing here is approximate: an element-wise √ or ÷ in a vector register is the correctly
+//! rounded IEEE result, exactly as the scalar instruction, and Rust never fuses a multiply and
+//! an add on its own. So a kernel written with [`V`] gives, lane by lane, the same bits as the
+//! same formula on scalars. The kernels are `#[inline(always)]` generic code that each caller
+//! compiles twice: for the portable baseline (SSE2 on x86-64) and, in a wrapper marked
+//! `#[target_feature(enable = "avx2")]`, with AVX2, picked at run time by [`has_avx2`]. The
+//! compiler turns the fixed-size loops below into vector instructions; no intrinsics.
+
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+/// Lanes per group.
+pub const W: usize = 8;
+
+/// [`W`] f64 lanes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct V(pub [f64; W]);
+
+/// A mask: per lane all ones (set) or all zeros, like a vector compare's result, so masks
+/// stay in vector registers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct M(pub [u64; W]);
+
+macro_rules! binop {
+    ($tr:ident, $f:ident, $op:tt) => {
+        impl $tr for V {
+            type Output = V;
+            #[inline(always)]
+            fn $f(self, b: V) -> V {
+                let mut o = [0.0; W];
+                for i in 0..W {
+                    o[i] = self.0[i] $op b.0[i];
+                }
+                V(o)
+            }
+        }
+        impl $tr<f64> for V {
+            type Output = V;
+            #[inline(always)]
+            fn $f(self, b: f64) -> V {
+                let mut o = [0.0; W];
+                for i in 0..W {
+                    o[i] = self.0[i] $op b;
+                }
+                V(o)
+            }
+        }
+        impl $tr<V> for f64 {
+            type Output = V;
+            #[inline(always)]
+            fn $f(self, b: V) -> V {
+                let mut o = [0.0; W];
+                for i in 0..W {
+                    o[i] = self $op b.0[i];
+                }
+                V(o)
+            }
+        }
+    };
+}
+binop!(Add, add, +);
+binop!(Sub, sub, -);
+binop!(Mul, mul, *);
+binop!(Div, div, /);
+
+impl Neg for V {
+    type Output = V;
+    #[inline(always)]
+    fn neg(self) -> V {
+        let mut o = [0.0; W];
+        for i in 0..W {
+            o[i] = -self.0[i];
+        }
+        V(o)
+    }
+}
+
+macro_rules! cmp {
+    ($f:ident, $op:tt) => {
+        #[inline(always)]
+        pub fn $f(self, b: V) -> M {
+            let mut o = [0; W];
+            for i in 0..W {
+                o[i] = ((self.0[i] $op b.0[i]) as u64).wrapping_neg();
+            }
+            M(o)
+        }
+    };
+}
+
+impl V {
+    #[inline(always)]
+    pub fn splat(x: f64) -> V {
+        V([x; W])
+    }
+    #[inline(always)]
+    pub fn sqrt(self) -> V {
+        let mut o = [0.0; W];
+        for i in 0..W {
+            o[i] = self.0[i].sqrt();
+        }
+        V(o)
+    }
+    #[inline(always)]
+    pub fn abs(self) -> V {
+        let mut o = [0.0; W];
+        for i in 0..W {
+            o[i] = self.0[i].abs();
+        }
+        V(o)
+    }
+    /// `f64::max` on every lane (a NaN lane takes the other value).
+    #[inline(always)]
+    pub fn max(self, b: V) -> V {
+        let mut o = [0.0; W];
+        for i in 0..W {
+            o[i] = self.0[i].max(b.0[i]);
+        }
+        V(o)
+    }
+    /// Lanes whose value is finite.
+    #[inline(always)]
+    pub fn finite(self) -> M {
+        // |x| < ∞ is false for ±∞ and NaN.
+        self.abs().lt(V::splat(f64::INFINITY))
+    }
+    cmp!(lt, <);
+    cmp!(le, <=);
+    cmp!(gt, >);
+}
+
+impl M {
+    #[inline(always)]
+    pub fn splat(b: bool) -> M {
+        M([(b as u64).wrapping_neg(); W])
+    }
+    /// Whether lane `l` is set.
+    #[inline(always)]
+    pub fn get(self, l: usize) -> bool {
+        self.0[l] != 0
+    }
+    /// Lanes `0..n` set.
+    #[inline(always)]
+    pub fn first(n: usize) -> M {
+        let mut o = [0; W];
+        for (i, m) in o.iter_mut().enumerate() {
+            *m = ((i < n) as u64).wrapping_neg();
+        }
+        M(o)
+    }
+    /// `a` where the mask is set, else `b`.
+    #[inline(always)]
+    pub fn select(self, a: V, b: V) -> V {
+        let mut o = [0.0; W];
+        for i in 0..W {
+            let m = self.0[i];
+            o[i] = f64::from_bits((a.0[i].to_bits() & m) | (b.0[i].to_bits() & !m));
+        }
+        V(o)
+    }
+    #[inline(always)]
+    pub fn any(self) -> bool {
+        self.0.iter().fold(0, |a, &m| a | m) != 0
+    }
+    #[inline(always)]
+    pub fn all(self) -> bool {
+        self.0.iter().fold(u64::MAX, |a, &m| a & m) != 0
+    }
+    #[inline(always)]
+    pub fn and(self, b: M) -> M {
+        let mut o = [0; W];
+        for i in 0..W {
+            o[i] = self.0[i] & b.0[i];
+        }
+        M(o)
+    }
+    #[inline(always)]
+    pub fn or(self, b: M) -> M {
+        let mut o = [0; W];
+        for i in 0..W {
+            o[i] = self.0[i] | b.0[i];
+        }
+        M(o)
+    }
+    #[inline(always)]
+    pub fn not(self) -> M {
+        let mut o = [0; W];
+        for i in 0..W {
+            o[i] = !self.0[i];
+        }
+        M(o)
+    }
+}
+
+/// The instruction set the batch solvers use on this machine: `"avx2"` where the CPU has
+/// it (x86-64), else `"baseline"` (SSE2 on x86-64, the target's default elsewhere).
+pub fn simd_level() -> &'static str {
+    if has_avx2() { "avx2" } else { "baseline" }
+}
+
+/// Whether the AVX2 builds of the batch kernels can run here (detected once, then cached).
+#[inline]
+pub fn has_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lanes_are_the_scalar_operations_bit_for_bit() {
+        let a = V([1.0, -2.5, 3.0e-300, 7.0, f64::INFINITY, 0.3, 1e300, -0.0]);
+        let b = V([3.0, 0.1, 7.0, -0.0, 2.0, 0.7, 1e10, 5.0]);
+        for i in 0..W {
+            assert_eq!((a + b).0[i].to_bits(), (a.0[i] + b.0[i]).to_bits());
+            assert_eq!((a * b).0[i].to_bits(), (a.0[i] * b.0[i]).to_bits());
+            assert_eq!((a / b).0[i].to_bits(), (a.0[i] / b.0[i]).to_bits());
+            assert_eq!((a - 2.0).0[i].to_bits(), (a.0[i] - 2.0).to_bits());
+            assert_eq!(b.abs().sqrt().0[i].to_bits(), b.0[i].abs().sqrt().to_bits());
+        }
+        let m = a.lt(b);
+        let set: Vec<bool> = (0..W).map(|l| m.get(l)).collect();
+        assert_eq!(set, [true, true, true, false, false, true, false, true]);
+        assert_eq!((m.select(a, b).0[1], m.select(a, b).0[3]), (-2.5, -0.0));
+        assert!(m.any() && !m.all() && m.or(m.not()).all() && !m.and(m.not()).any());
+        assert!(!a.finite().get(4) && a.finite().get(3));
+        assert!(M::first(3).get(2) && !M::first(3).get(3));
+    }
+}

@@ -1,0 +1,465 @@
+//! The batch forward solvers ([`PortSolver::forward_many`]): the scalar solvers' fast paths
+//! on [`LANES`] points at once in SIMD lanes ([`crate::optics::lanes`]), AVX2 where the CPU
+//! has it.
+//!
+//! | port | in lanes | handed back to the scalar solver |
+//! |---|---|---|
+//! | flat, cylinder on its axis | setup, first guess, Halley/Newton on the q-equation (ratio form), stopping rule | a bracketed port (some index below the camera medium's), beyond the critical angle, non-finite steps, no convergence in 12 steps |
+//! | dome, decentred | setup, first-order guess, Halley/Newton on the moment equation, output direction | guess outside the bracket, total internal reflection, non-finite steps, no convergence in 16 steps |
+//! | dome centred, cylinder off its axis, no port | — | every point |
+//!
+//! Every formula is the scalar solver's, operation for operation, so each point gets the
+//! same bits as [`PortSolver::forward`] (tested), whichever instruction set runs it.
+
+use super::{CylinderPort, DomePort, FlatPort, NoSolution, PortSolver, Slabs};
+use crate::optics::lanes::{M, V, W, has_avx2};
+use glam::DVec3;
+
+/// Points solved together by the batch solvers.
+pub const LANES: usize = W;
+
+type Out = Result<DVec3, NoSolution>;
+
+/// The scalar solver for a lane that left the fast path, with [`PortSolver::forward`]'s
+/// rule that a non-finite point has no solution.
+#[inline(never)]
+fn fallback(p: DVec3, forward: impl Fn(DVec3) -> Out) -> Out {
+    if p.is_finite() {
+        forward(p)
+    } else {
+        Err(NoSolution::NoConvergence)
+    }
+}
+
+/// Which build of the batch kernels runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Simd {
+    /// The target's baseline instruction set (SSE2 on x86-64).
+    Baseline,
+    /// AVX2 (x86-64 only; falls back to the baseline where the CPU lacks it).
+    Avx2,
+}
+
+impl Simd {
+    /// The fastest build this CPU runs.
+    pub fn detect() -> Simd {
+        if has_avx2() {
+            Simd::Avx2
+        } else {
+            Simd::Baseline
+        }
+    }
+}
+
+/// The points of `ps` (≤ [`W`]) in structure-of-arrays form; missing lanes are (0, 0, 1).
+#[inline(always)]
+fn soa(ps: &[DVec3]) -> (V, V, V) {
+    let (mut x, mut y, mut z) = ([0.0; W], [0.0; W], [1.0; W]);
+    for (l, p) in ps.iter().enumerate() {
+        x[l] = p.x;
+        y[l] = p.y;
+        z[l] = p.z;
+    }
+    (V(x), V(y), V(z))
+}
+
+impl Slabs {
+    /// [`Slabs::solve_ratio`] on [`W`] lanes (inactive lanes are ignored; they must hold
+    /// finite r², D). Returns t and the lanes that converged on the fast path; the caller
+    /// re-solves the others with the scalar solver. `N`: the number of glass layers.
+    #[inline(always)]
+    fn solve_ratio_v<const N: usize>(&self, r2: V, depth: V, active: M) -> (V, M) {
+        // The plain concave path (no bracket, no critical-angle exit), as in solve_ratio.
+        let asym = self.asym + depth * self.tw_inf;
+        let zero = V::splat(0.0);
+        let beyond = M::splat(self.gap == 0.0).and((asym * asym).le(r2));
+        let active = active
+            .and(M::splat(self.concave))
+            .and(r2.gt(zero))
+            .and(depth.gt(zero))
+            .and(beyond.not());
+        // First guess (see solve_ratio_counted).
+        let big_a = depth + self.water_units;
+        let lim = 0.9 * self.tw_inf * big_a;
+        let ordinary = r2.lt(lim * lim);
+        let mut t = self.nw / (self.na * self.na * big_a * big_a - self.kw * r2).sqrt();
+        if !ordinary.or(active.not()).all() {
+            let parax = 1.0 / (self.parax + depth * self.na / self.nw);
+            let tg = if self.gap > 0.0 {
+                let r = r2.sqrt();
+                parax.max((r - asym) / (self.gap * r))
+            } else {
+                parax
+            };
+            t = ordinary.select(t, tg);
+        }
+        let mut done = active.not();
+        let mut failed = M::splat(false);
+        for _ in 0..12 {
+            let (num, den, halley) = if N == 1 {
+                self.step_one_layer_v(t, r2, depth)
+            } else {
+                let (mut f, mut df, mut d2f) = term_v(depth * self.na, self.nw2, self.kw, t, r2);
+                f = f + (self.gap * t - 1.0);
+                df = df + self.gap;
+                for i in 0..N {
+                    let (v, d, d2) = term_v(V::splat(self.tna[i]), self.n2[i], self.k[i], t, r2);
+                    f = f + v;
+                    df = df + d;
+                    d2f = d2f + d2;
+                }
+                let halley = (f * d2f).abs().lt(1.5 * df * df);
+                (
+                    halley.select(-2.0 * f * df, -f),
+                    halley.select(2.0 * df * df - f * d2f, df),
+                    halley,
+                )
+            };
+            let dt = num / den;
+            let next = t + dt;
+            let next = next.gt(zero).select(next, 0.5 * t);
+            let tol = halley.select(V::splat(1e-5), V::splat(1e-8));
+            let conv = dt.abs().le(tol * next);
+            let bad = dt.finite().not();
+            let live = done.not();
+            t = live.select(next, t);
+            failed = failed.or(live.and(bad));
+            done = done.or(conv).or(bad);
+            if done.all() {
+                break;
+            }
+        }
+        (t, active.and(done).and(failed.not()).and(t.finite()))
+    }
+
+    /// [`Slabs::step_one_layer`] in lanes, as (numerator, denominator, Halley?) of the step;
+    /// a lane whose step is not finite leaves the fast path (the scalar solver then takes
+    /// the per-term form).
+    #[inline(always)]
+    fn step_one_layer_v(&self, t: V, r2: V, depth: V) -> (V, V, M) {
+        let (ag, n2g, kg) = (self.tna[0], self.n2[0], self.k[0]);
+        let aw = depth * self.na;
+        let (n2w, kw) = (self.nw2, self.kw);
+        let tt = t * t;
+        let a = (n2g + kg * r2 * tt).sqrt();
+        let b = (n2w + kw * r2 * tt).sqrt();
+        let p = a * b;
+        let (a2, b2) = (a * a, b * b);
+        let (a3, b3) = (a2 * a, b2 * b);
+        let h0 = (self.gap * t - 1.0) * p + ag * t * b + aw * t * a;
+        let h1 = self.gap * p * p * p + ag * n2g * b3 + aw * n2w * a3;
+        let h2 = -3.0 * r2 * t * (ag * kg * n2g * b3 * b2 + aw * kw * n2w * a3 * a2);
+        let p2 = p * p;
+        let halley = (h0 * h2).abs().lt(1.5 * h1 * h1);
+        (
+            halley.select(-2.0 * h0 * h1 * p2, -h0 * p2),
+            halley.select(2.0 * h1 * h1 - h0 * h2, h1),
+            halley,
+        )
+    }
+}
+
+/// One term of G(t) in lanes, as `eval2_ratio`'s `term`.
+#[inline(always)]
+fn term_v(tna: V, n2: f64, k: f64, t: V, r2: V) -> (V, V, V) {
+    let kr2 = k * r2;
+    let g = n2 + kr2 * t * t;
+    let inv = 1.0 / g.sqrt();
+    let inv2 = inv * inv;
+    let dv = tna * n2 * inv2 * inv;
+    (tna * t * inv, dv, -3.0 * kr2 * t * dv * inv2)
+}
+
+/// The flat port's batch kernel (`N` glass layers).
+#[inline(always)]
+fn flat_kernel<const N: usize>(port: &FlatPort, ps: &[DVec3], out: &mut [Out]) {
+    let nrm = port.normal;
+    for (pc, oc) in ps.chunks(W).zip(out.chunks_mut(W)) {
+        let (x, y, z) = soa(pc);
+        // a = N·P, depth, r² = |N × P|² (as FlatPort::forward).
+        let a = x * nrm.x + y * nrm.y + z * nrm.z;
+        let depth = a - port.distance - port.total_thickness;
+        let cx = nrm.y * z - y * nrm.z;
+        let cy = nrm.z * x - z * nrm.x;
+        let cz = nrm.x * y - x * nrm.y;
+        let r2 = cx * cx + cy * cy + cz * cz;
+        let live = M::first(pc.len())
+            .and(x.finite())
+            .and(y.finite())
+            .and(z.finite());
+        // Inactive lanes get a harmless problem.
+        let ok_in = live.and(depth.gt(V::splat(0.0))).and(r2.gt(V::splat(0.0)));
+        let r2s = ok_in.select(r2, V::splat(1.0));
+        let ds = ok_in.select(depth, V::splat(1.0));
+        let (t, ok) = port.slabs.solve_ratio_v::<N>(r2s, ds, ok_in);
+        for (l, (p, o)) in pc.iter().zip(oc.iter_mut()).enumerate() {
+            *o = if ok.get(l) {
+                let perp = *p - a.0[l] * nrm;
+                Ok(nrm + perp * t.0[l])
+            } else {
+                fallback(*p, |p| port.forward(p))
+            };
+        }
+    }
+}
+
+/// The on-axis cylinder's batch kernel (the flat q-equation in the meridional plane).
+#[inline(always)]
+fn cylinder_kernel(port: &CylinderPort, ps: &[DVec3], out: &mut [Out]) {
+    let ax = port.axis;
+    for (pc, oc) in ps.chunks(W).zip(out.chunks_mut(W)) {
+        let mut r2 = [1.0; W];
+        let mut depth = [1.0; W];
+        let mut z = [0.0; W];
+        let mut e_rho = [DVec3::ZERO; W];
+        let mut active = [0u64; W];
+        for (l, p) in pc.iter().enumerate() {
+            let rel = *p - port.axis_point;
+            let zl = ax.dot(*p);
+            let rho_v = rel - rel.dot(ax) * ax;
+            let rho = ax.cross(rel).length();
+            let d = rho - port.r2;
+            let ok = d > 0.0 && zl * zl > 0.0 && d.is_finite() && zl.is_finite();
+            active[l] = (ok as u64).wrapping_neg();
+            if ok {
+                r2[l] = zl * zl;
+                depth[l] = d;
+                z[l] = zl;
+                e_rho[l] = rho_v / rho;
+            }
+        }
+        let (t, ok) = port.slabs.solve_ratio_v::<1>(V(r2), V(depth), M(active));
+        for (l, (p, o)) in pc.iter().zip(oc.iter_mut()).enumerate() {
+            *o = if ok.get(l) {
+                Ok(e_rho[l] + ax * (t.0[l] * z[l]))
+            } else {
+                fallback(*p, |p| port.forward(p))
+            };
+        }
+    }
+}
+
+/// The decentred dome's batch kernel: `DomePort::forward` with `DomePort::halley`, every
+/// step in lanes.
+#[inline(always)]
+fn dome_kernel(port: &DomePort, ps: &[DVec3], out: &mut [Out]) {
+    let k = port.k;
+    let kw = port.kw;
+    let k0 = port.dtheta0;
+    let c = port.center;
+    let zero = V::splat(0.0);
+    for (pc, oc) in ps.chunks(W).zip(out.chunks_mut(W)) {
+        let (x, y, z) = soa(pc);
+        let (dx, dy, dz) = (x - c.x, y - c.y, z - c.z);
+        let dc = (dx * dx + dy * dy + dz * dz).sqrt();
+        let len = (x * x + y * y + z * z).sqrt();
+        let (ex, ey, ez) = (x / len, y / len, z / len);
+        let cd = c.x * ex + c.y * ey + c.z * ez;
+        let (qx, qy, qz) = (c.x - cd * ex, c.y - cd * ey, c.z - cd * ez);
+        let c2 = (qx * qx + qy * qy + qz * qz).sqrt();
+        // The plane basis: C = (cl_x, cl_y), P − C = (pc_x, pc_y).
+        let (cl_x, cl_y) = (cd, c2);
+        let (pc_x, pc_y) = (len - cl_x, -cl_y);
+        let tau0 = -cl_y * (pc_x * k0 + 1.0 - kw) / (pc_x * (1.0 - k0 * cl_x) + kw * cl_x);
+        let active = M::first(pc.len())
+            .and(dc.gt(V::splat(port.r2)))
+            .and(c2.gt(V::splat(1e-300)))
+            .and(tau0.abs().le(V::splat(port.bracket)));
+        let s0 = 1.0 / (1.0 + tau0 * tau0).sqrt();
+        let (mut ux, mut uy) = (s0, tau0 * s0);
+        let mut done = active.not();
+        let mut failed = M::splat(false);
+        for _ in 0..16 {
+            let p = cl_y * ux - cl_x * uy;
+            let s = [p * k[0], p * k[1], p * k[2], p * k[3]];
+            let co2 = s.map(|x| 1.0 - x * x);
+            let tir = co2[0]
+                .gt(zero)
+                .and(co2[1].gt(zero))
+                .and(co2[2].gt(zero))
+                .and(co2[3].gt(zero))
+                .not();
+            let co = co2.map(V::sqrt);
+            let z1x = co[0] * co[1] + s[0] * s[1];
+            let z1y = co[0] * s[1] - s[0] * co[1];
+            let z2x = co[2] * co[3] + s[2] * s[3];
+            let z2y = co[2] * s[3] - s[2] * co[3];
+            let zx = z1x * z2x - z1y * z2y;
+            let zy = z1x * z2y + z1y * z2x;
+            let wx = zx * ux - zy * uy;
+            let wy = zx * uy + zy * ux;
+            let cr = pc_x * wy - pc_y * wx;
+            let dt = pc_x * wx + pc_y * wy;
+            let m = cr - kw * p;
+            let inv = co.map(|x| 1.0 / x);
+            let th1 = -k[0] * inv[0] + k[1] * inv[1] - k[2] * inv[2] + k[3] * inv[3];
+            let cube = |i: usize| k[i] * k[i] * k[i] * inv[i] * inv[i] * inv[i];
+            let th2 = p * (-cube(0) + cube(1) - cube(2) + cube(3));
+            let dp = -(cl_x * ux + cl_y * uy);
+            let g = 1.0 + th1 * dp;
+            let dm = dt * g - kw * dp;
+            let d2m = -cr * g * g + dt * (th2 * dp * dp - th1 * p) + kw * p;
+            let halley = (m * d2m).abs().lt(0.5 * dm * dm);
+            let step =
+                halley.select(-2.0 * m * dm, -m) / halley.select(2.0 * dm * dm - m * d2m, dm);
+            let vx = ux + -uy * step;
+            let vy = uy + ux * step;
+            let tol = halley.select(V::splat(5e-6), V::splat(1e-8));
+            let conv = step.abs().le(tol);
+            let bad = tir.or(step.finite().not());
+            let live = done.not();
+            // DomePort::unit_scale: the series where |step| ≤ 1e-3, else 1/|v|; a converged
+            // lane keeps v as it is.
+            let small = step.abs().le(V::splat(1e-3));
+            let s2 = step * step;
+            let mut scale = 1.0 - s2 * (0.5 - 0.375 * s2);
+            let renorm = live.and(conv.or(bad).not());
+            if !small.or(renorm.not()).all() {
+                scale = small.select(scale, 1.0 / (vx * vx + vy * vy).sqrt());
+            }
+            let scale = conv.select(V::splat(1.0), scale);
+            let take = live.and(bad.not());
+            ux = take.select(vx * scale, ux);
+            uy = take.select(vy * scale, uy);
+            failed = failed.or(live.and(bad));
+            done = done.or(conv).or(bad);
+            if done.all() {
+                break;
+            }
+        }
+        let ok = active
+            .and(done)
+            .and(failed.not())
+            .and(ux.gt(zero))
+            .and(uy.abs().le(port.bracket * ux));
+        // Output e₁·u₁ + e₂·u₂ with e₂ = C⊥/|C⊥|.
+        let (e2x, e2y, e2z) = (qx / c2, qy / c2, qz / c2);
+        let (ox, oy, oz) = (ex * ux + e2x * uy, ey * ux + e2y * uy, ez * ux + e2z * uy);
+        for (l, (p, o)) in pc.iter().zip(oc.iter_mut()).enumerate() {
+            *o = if ok.get(l) {
+                Ok(DVec3::new(ox.0[l], oy.0[l], oz.0[l]))
+            } else {
+                fallback(*p, |p| port.forward(p))
+            };
+        }
+    }
+}
+
+/// The AVX2 builds of the kernels (same code, wider vectors).
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::*;
+
+    #[target_feature(enable = "avx2")]
+    pub fn flat<const N: usize>(port: &FlatPort, ps: &[DVec3], out: &mut [Out]) {
+        flat_kernel::<N>(port, ps, out)
+    }
+    #[target_feature(enable = "avx2")]
+    pub fn cylinder(port: &CylinderPort, ps: &[DVec3], out: &mut [Out]) {
+        cylinder_kernel(port, ps, out)
+    }
+    #[target_feature(enable = "avx2")]
+    pub fn dome(port: &DomePort, ps: &[DVec3], out: &mut [Out]) {
+        dome_kernel(port, ps, out)
+    }
+}
+
+/// Whether the AVX2 build may run: asked for and supported by this CPU.
+#[inline]
+fn use_avx2(simd: Simd) -> bool {
+    simd == Simd::Avx2 && has_avx2()
+}
+
+impl FlatPort {
+    /// [`FlatPort::forward`] for many points (`out[i]` for `ps[i]`; equal lengths), with
+    /// [`PortSolver::forward`]'s rule for non-finite points.
+    pub(super) fn forward_many_with(&self, simd: Simd, ps: &[DVec3], out: &mut [Out]) {
+        assert_eq!(ps.len(), out.len(), "forward_many: one output per point");
+        macro_rules! run {
+            ($n:expr) => {{
+                #[cfg(target_arch = "x86_64")]
+                if use_avx2(simd) {
+                    // SAFETY: the CPU supports AVX2 (use_avx2 checked it).
+                    return unsafe { avx2::flat::<$n>(self, ps, out) };
+                }
+                let _ = simd;
+                flat_kernel::<$n>(self, ps, out)
+            }};
+        }
+        match self.slabs.n {
+            0 => run!(0),
+            1 => run!(1),
+            2 => run!(2),
+            3 => run!(3),
+            _ => run!(4),
+        }
+    }
+}
+
+impl CylinderPort {
+    /// [`CylinderPort::forward`] for many points (`out[i]` for `ps[i]`; equal lengths), with
+    /// [`PortSolver::forward`]'s rule for non-finite points.
+    pub(super) fn forward_many_with(&self, simd: Simd, ps: &[DVec3], out: &mut [Out]) {
+        assert_eq!(ps.len(), out.len(), "forward_many: one output per point");
+        if !self.on_axis {
+            for (p, o) in ps.iter().zip(out.iter_mut()) {
+                *o = fallback(*p, |p| self.forward(p));
+            }
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if use_avx2(simd) {
+            // SAFETY: the CPU supports AVX2 (use_avx2 checked it).
+            return unsafe { avx2::cylinder(self, ps, out) };
+        }
+        let _ = simd;
+        cylinder_kernel(self, ps, out)
+    }
+}
+
+impl DomePort {
+    /// [`DomePort::forward`] for many points (`out[i]` for `ps[i]`; equal lengths), with
+    /// [`PortSolver::forward`]'s rule for non-finite points.
+    pub(super) fn forward_many_with(&self, simd: Simd, ps: &[DVec3], out: &mut [Out]) {
+        assert_eq!(ps.len(), out.len(), "forward_many: one output per point");
+        if self.is_centred() {
+            for (p, o) in ps.iter().zip(out.iter_mut()) {
+                *o = fallback(*p, |p| self.forward(p));
+            }
+            return;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if use_avx2(simd) {
+            // SAFETY: the CPU supports AVX2 (use_avx2 checked it).
+            return unsafe { avx2::dome(self, ps, out) };
+        }
+        let _ = simd;
+        dome_kernel(self, ps, out)
+    }
+}
+
+impl PortSolver {
+    /// [`PortSolver::forward`] for many points at once (`out[i]` for `ps[i]`; the slices
+    /// must have equal lengths): the same guess, iteration and stopping rule as the scalar
+    /// call, bit for bit, on [`LANES`] points in SIMD lanes; anything off the fast path falls
+    /// back to [`PortSolver::forward`].
+    pub fn forward_many(&self, ps: &[DVec3], out: &mut [Out]) {
+        self.forward_many_with(Simd::detect(), ps, out)
+    }
+
+    /// [`PortSolver::forward_many`] with a chosen build of the kernels (tests check that
+    /// every build gives the scalar solver's bits).
+    pub fn forward_many_with(&self, simd: Simd, ps: &[DVec3], out: &mut [Out]) {
+        assert_eq!(ps.len(), out.len(), "forward_many: one output per point");
+        match self {
+            PortSolver::Flat(f) => f.forward_many_with(simd, ps, out),
+            PortSolver::Dome(d) => d.forward_many_with(simd, ps, out),
+            PortSolver::Cylinder(c) => c.forward_many_with(simd, ps, out),
+            PortSolver::None => {
+                for (p, o) in ps.iter().zip(out.iter_mut()) {
+                    *o = self.forward(*p);
+                }
+            }
+        }
+    }
+}
