@@ -111,10 +111,12 @@ fn pixel(lens: &Lens, d: DVec3) -> Option<[f64; 2]> {
 }
 
 /// How far the exact pixel moves when P moves by 8 ulp (8·2⁻⁵³·|P| along each axis): the
-/// error floor of any f64 algorithm whose input is P (backward error of a few ulp). Near
-/// grazing, with no camera-side gap (F′(q) → 0) or with deep points behind a tilted port,
-/// this exceeds 1e-9 px; there the tolerance is this floor. Estimated by central differences
-/// of the scalar solver with a step of 1e-6·|P| (the pixel is smooth on that scale).
+/// error of a plain f64 algorithm that is only backward stable (exact for an input a few
+/// ulp away). Near grazing, with no camera-side gap (F′(q) → 0) or with deep points behind a
+/// tilted port, this exceeds 1e-9 px; the flat solver refines those points in
+/// double-double, and the test counts them to show the strict bound was tested there.
+/// Estimated by central differences of the scalar solver with a step of 1e-6·|P| (the pixel
+/// is smooth on that scale).
 fn conditioning_px(port: &PortSolver, lens: &Lens, p: DVec3) -> f64 {
     let h = 1e-6 * p.length();
     let ulp8 = 8.0 * f64::EPSILON / 2.0 * p.length();
@@ -129,15 +131,11 @@ fn conditioning_px(port: &PortSolver, lens: &Lens, p: DVec3) -> f64 {
     sum.sqrt()
 }
 
-/// Checks every point of `pts` through the scalar and the batch solver against the reference;
-/// returns the largest error, px.
-fn check_against_reference(
-    name: &str,
-    port: &PortSolver,
-    pts: &[DVec3],
-    strict: bool,
-) -> (f64, usize) {
-    let mut beyond = 0;
+/// Checks every point of `pts` through the scalar and the batch solver against the reference
+/// (1e-9 px); returns the largest error, px, the points checked and the ill-conditioned
+/// ones among them (where a backward-stable f64 solver could miss 1e-9 px).
+fn check_against_reference(name: &str, port: &PortSolver, pts: &[DVec3]) -> (f64, usize, usize) {
+    let mut ill = 0;
     let lens = bench_lens();
     let mut dirs = vec![Err(NoSolution::NoConvergence); pts.len()];
     port.forward_many(pts, &mut dirs);
@@ -160,54 +158,54 @@ fn check_against_reference(
                 continue;
             };
             let err = (got[0] - want[0]).hypot(got[1] - want[1]);
-            let tol = if strict {
-                EXACT_PX
-            } else {
-                EXACT_PX.max(conditioning_px(port, &lens, *p))
-            };
             assert!(
-                err <= tol,
-                "{name} {how}: {err:e} px (tolerance {tol:e}) at {p:?} ({got:?} vs {want:?})"
+                err <= EXACT_PX,
+                "{name} {how}: {err:e} px at {p:?} ({got:?} vs {want:?})"
             );
-            if tol > EXACT_PX {
-                beyond += 1;
-            }
             worst = worst.max(err);
+        }
+        if conditioning_px(port, &lens, *p) > EXACT_PX {
+            ill += 1;
         }
         checked += 1;
     }
-    if beyond > 0 {
-        eprintln!("{name}: {beyond} checks where 8 ulp of the point move the pixel > 1e-9 px");
-    }
-    (worst, checked)
+    (worst, checked, ill)
 }
 
 /// A port, its ordinary and grazing points, and whether 1e-9 px holds strictly at grazing.
-type PortSets = (String, PortSolver, Vec<DVec3>, Vec<DVec3>, bool);
+type PortSets = (String, PortSolver, Vec<DVec3>, Vec<DVec3>);
 
 #[test]
 fn fast_solvers_match_the_reference_on_ordinary_and_grazing_points_for_every_port() {
-    // Tolerance: the 1e-9 px, against the double-double reference. Grazing pixels run
-    // to ≈ 1e5 px, where f64 rounding alone is ~1e-11 px.
-    // The benchmark's three ports (the sets) are held to 1e-9 px strictly; the other
-    // ports' grazing points to max(1e-9 px, the f64 conditioning floor of the point).
+    // Tolerance: the 1e-9 px, against the double-double reference, on every point
+    // of the three benchmark ports and six more, scalar and batch. Grazing pixels run to
+    // ≈ 1e5 px, where f64 rounding alone is ~1e-11 px.
     let mut all: Vec<PortSets> = cases(1500)
         .into_iter()
-        .map(|c| (c.name.to_string(), c.port, c.ordinary, c.grazing, true))
+        .map(|c| (c.name.to_string(), c.port, c.ordinary, c.grazing))
         .collect();
     for (i, (name, port, axis)) in more_ports().into_iter().enumerate() {
         let (o, g) = points(&port, axis, 1500, 77 + i as u64);
-        all.push((name.to_string(), port, o, g, false));
+        all.push((name.to_string(), port, o, g));
     }
-    for (name, port, ordinary, grazing, strict) in &all {
+    let mut ill_total = 0;
+    for (name, port, ordinary, grazing) in &all {
         for (set, pts) in [("ordinary", ordinary), ("grazing", grazing)] {
-            let strict = *strict || set == "ordinary";
-            let (worst, n) = check_against_reference(&format!("{name}/{set}"), port, pts, strict);
+            let (worst, n, ill) = check_against_reference(&format!("{name}/{set}"), port, pts);
             // Enough points must have had a reference (the sets are not empty by accident).
             assert!(n >= 500, "{name}/{set}: only {n} points checked");
-            eprintln!("{name}/{set}: {n} points, max error {worst:.1e} px");
+            eprintln!("{name}/{set}: {n} points ({ill} ill-conditioned), max error {worst:.1e} px");
+            ill_total += ill;
         }
     }
+    // The strict bound was tested where it is hard: points where 8 ulp of P move the pixel by
+    // more than 1e-9 px (seen: 1622, in every port's grazing set). Before the flat solver
+    // refined such points in double-double, 129 of them, on the gap-less thin port and the
+    // tilted port, missed 1e-9 px, by up to 1.2e-8 px.
+    assert!(
+        ill_total >= 100,
+        "only {ill_total} ill-conditioned points in the sets"
+    );
 }
 
 fn same(a: &Result<DVec3, NoSolution>, b: &Result<DVec3, NoSolution>) -> bool {

@@ -22,6 +22,11 @@ pub fn run(
                 );
             }
             let rows = crate::optics::bench::run(quick);
+            println!(
+                "batch solvers: {} lanes, {} build\n",
+                crate::optics::port::LANES,
+                crate::optics::lanes::simd_level()
+            );
             print!("{}", crate::optics::bench::table(&rows));
             if let Some(path) = json.as_deref() {
                 let text = serde_json::to_string_pretty(&rows)

@@ -16,7 +16,10 @@
 //! `#[target_feature(enable = "avx2")]`, with AVX2, picked at run time by [`has_avx2`]. The
 //! compiler turns the fixed-size loops below into vector instructions; no intrinsics.
 
-use std::ops::{Add, Div, Mul, Neg, Sub};
+// Index loops over the lanes are what the vectoriser turns into single instructions.
+#![allow(clippy::needless_range_loop)]
+
+use std::ops::{Add, Div, Mul, Neg, Not, Sub};
 
 /// Lanes per group.
 pub const W: usize = 8;
@@ -191,8 +194,12 @@ impl M {
         }
         M(o)
     }
+}
+
+impl Not for M {
+    type Output = M;
     #[inline(always)]
-    pub fn not(self) -> M {
+    fn not(self) -> M {
         let mut o = [0; W];
         for i in 0..W {
             o[i] = !self.0[i];

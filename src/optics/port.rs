@@ -7,8 +7,9 @@
 //! | [`DomePort`] | centre C (|C| < R₁), inner radius R₁, thickness t | Halley on the exact moment equation in the plane (O, C, P) from the first-order guess; bracketed secant/Illinois inside ±asin(|C|/R₁) as fallback; pinhole when centred |
 //! | [`CylinderPort`] | axis point, unit axis, inner radius, thickness | on its axis: the flat q-equation in the meridional plane; off it: 2-D Newton (skew rays) from two starts, then continuation in the decentring |
 //!
-//! [`PortSolver::forward_many`] solves many points with [`LANES`] in lock step (same results
-//! bit for bit as [`PortSolver::forward`], about twice the throughput).
+//! [`PortSolver::forward_many`] (in `port/batch.rs`) solves [`LANES`] points at a time in SIMD
+//! lanes, AVX2 where the CPU has it: the same results bit for bit as [`PortSolver::forward`],
+//! at 2.5–3.5 times its throughput.
 //!
 //! All ports share the conventions of Refractive COLMAP (`optics.md` §1.1). The backward
 //! transmittance is the product of the unpolarised Fresnel transmittances of every interface
@@ -20,6 +21,7 @@
 
 use super::NoSolution;
 use super::interface::{fresnel_transmittance, refract};
+use super::reference::{Dd, V3};
 use crate::model::Port;
 use glam::{DVec2, DVec3};
 
@@ -49,7 +51,28 @@ pub struct FlatPort {
     total_thickness: f64,
     /// The q-equation's per-port constants.
     slabs: Slabs,
+    /// The same in double-double, for refining ill-conditioned roots.
+    dd: FlatDd,
 }
+
+/// One Newton or Halley step of the q-equation in ratio form: the step, whether it is
+/// Halley's, and the slope G′(t) as a fraction (numerator, denominator > 0).
+#[derive(Debug, Clone, Copy)]
+struct Step {
+    dt: f64,
+    halley: bool,
+    slope: (f64, f64),
+}
+
+/// The flat port's answer N + t·P⊥ carries a relative error of about κ·c·ε in its slope,
+/// where κ = 1/(t·G′(t)) = r/(q·F′(q)) is the condition number of the root (the relative
+/// change of q per relative change of r, which amplifies f64 rounding in G) and
+/// c = (|N_z| + |t·P⊥_z|)/|N_z + t·P⊥_z| the cancellation in the direction's z (1 for an
+/// untilted port). A pixel at distance ρ from the principal point then moves by ≈ 2κ·c·ε·ρ
+/// (measured on the test ports), so where κ·c exceeds this bound (< 1e-9 px out to 1e5 px)
+/// the answer is refined in double-double ([`FlatPort::refine`]): near grazing with no
+/// camera-side gap, or deep behind a tilted port. κ·c ≈ 1 on ordinary points.
+const REFINE_AT: f64 = 16.0;
 
 /// Scalar q-equation for parallel layers (`optics.md` §1.3) with every per-port constant
 /// precomputed once: the camera-side gap (index `na`), up to [`MAX_LAYERS`] glass layers, and
@@ -176,16 +199,20 @@ impl Slabs {
     }
 
     /// The Halley step from G, G′, G″ while its denominator 2G′² − G·G″ stays above G′²/2
-    /// (then the step is at most 4 Newton steps), else the Newton step; and which one.
+    /// (then the step is at most 4 Newton steps), else the Newton step.
     #[inline(always)]
-    fn halley_step(f: f64, df: f64, d2f: f64) -> (f64, bool) {
+    fn halley_step(f: f64, df: f64, d2f: f64) -> Step {
         let halley = (f * d2f).abs() < 1.5 * df * df;
         let dt = if halley {
             -2.0 * f * df / (2.0 * df * df - f * d2f)
         } else {
             -f / df
         };
-        (dt, halley)
+        Step {
+            dt,
+            halley,
+            slope: (df, 1.0),
+        }
     }
 
     /// [`Slabs::halley_step`] for exactly one glass layer with a single division: with
@@ -193,7 +220,7 @@ impl Slabs {
     /// polynomials in s_g, s_w, and the Halley step is −2H₀H₁P²/(2H₁² − H₀H₂) (Newton:
     /// −H₀P²/H₁). Falls back to the per-term form if that overflows (q ≳ 1e25).
     #[inline(always)]
-    fn step_one_layer(&self, t: f64, r2: f64, depth: f64) -> (f64, bool) {
+    fn step_one_layer(&self, t: f64, r2: f64, depth: f64) -> Step {
         let (ag, n2g, kg) = (self.tna[0], self.n2[0], self.k[0]);
         let aw = depth * self.na;
         let (n2w, kw) = (self.nw2, self.kw);
@@ -214,7 +241,11 @@ impl Slabs {
             -h0 * p2 / h1
         };
         if dt.is_finite() {
-            (dt, halley)
+            Step {
+                dt,
+                halley,
+                slope: (h1, p2 * p),
+            }
         } else {
             let (f, df, d2f) = self.eval2_ratio(t, r2, depth);
             Self::halley_step(f, df, d2f)
@@ -226,16 +257,23 @@ impl Slabs {
     /// depth. Working with t needs no √ for r and keeps r → 0 exact (t → 1/F′(0)).
     #[inline]
     fn solve_ratio(&self, r2: f64, depth: f64) -> Result<f64, NoSolution> {
-        self.solve_ratio_counted(r2, depth).map(|(t, _)| t)
+        self.solve_ratio_counted(r2, depth).map(|(t, _, _)| t)
     }
 
-    /// [`Slabs::solve_ratio`] and the number of evaluations of F it took (0 off the fast
-    /// path).
+    /// [`Slabs::solve_ratio`], the number of evaluations of F it took (0 off the fast path),
+    /// and the slope G′ at the last evaluation as (numerator, denominator > 0) ((∞, 1) off
+    /// the fast path: the bracketed solver does not refine).
     #[inline(always)]
-    fn solve_ratio_counted(&self, r2: f64, depth: f64) -> Result<(f64, u32), NoSolution> {
+    fn solve_ratio_counted(
+        &self,
+        r2: f64,
+        depth: f64,
+    ) -> Result<(f64, u32, (f64, f64)), NoSolution> {
         if !self.concave {
             let r = r2.sqrt();
-            return self.solve_bracketed(r, depth).map(|q| (q / r, 0));
+            return self
+                .solve_bracketed(r, depth)
+                .map(|q| (q / r, 0, (f64::INFINITY, 1.0)));
         }
         // F is bounded by its asymptote gap·q + Σ tᵢ Tᵢ + D·T_w: with no camera-side gap no
         // ray reaches points beyond it.
@@ -267,7 +305,7 @@ impl Slabs {
         // the root), where a step ≤ 1e-8 leaves ≲ 1e-16·q.
         let mut t = t0;
         for evals in 1..=200 {
-            let (dt, halley) = if self.n == 1 {
+            let Step { dt, halley, slope } = if self.n == 1 {
                 self.step_one_layer(t, r2, depth)
             } else {
                 let (f, df, d2f) = self.eval2_ratio(t, r2, depth);
@@ -280,7 +318,7 @@ impl Slabs {
             t = if next > 0.0 { next } else { 0.5 * t };
             if dt.abs() <= if halley { 1e-5 } else { 1e-8 } * t {
                 return if t.is_finite() {
-                    Ok((t, evals))
+                    Ok((t, evals, slope))
                 } else {
                     Err(NoSolution::BeyondCriticalAngle)
                 };
@@ -368,6 +406,7 @@ impl FlatPort {
             n_water,
             total_thickness: total,
             slabs: Slabs::new(n_air, distance, layers, n_water),
+            dd: FlatDd::new(n, distance, layers, n_air, n_water),
         })
     }
 
@@ -428,8 +467,102 @@ impl FlatPort {
             return Ok(nrm);
         }
         let perp = p - a * nrm;
-        let t = self.slabs.solve_ratio(r2, depth)?;
-        Ok(nrm + perp * t)
+        let (t, _, slope) = self.slabs.solve_ratio_counted(r2, depth)?;
+        let d = nrm + perp * t;
+        // κ·c > REFINE_AT, without a division.
+        let c_num = nrm.z.abs() + (perp.z * t).abs();
+        if c_num * slope.1 > REFINE_AT * t * slope.0 * d.z.abs() {
+            return Ok(self.refine(p, t, slope));
+        }
+        Ok(d)
+    }
+
+    /// One Newton step on G(t) = F(r·t)/r evaluated in double-double from the exact inputs
+    /// (P, the normal normalised in double-double, thicknesses and indices), with the
+    /// solver's last slope G′; then N + t·P⊥ in double-double. For ill-conditioned roots
+    /// ([`REFINE_AT`]), where f64 rounding in G and in the direction is amplified; the step
+    /// leaves t to its own rounding (its error after the f64 solve, κ·ε, is squared).
+    #[cold]
+    #[inline(never)]
+    fn refine(&self, p: DVec3, t: f64, slope: (f64, f64)) -> DVec3 {
+        // Double-double products need a fused multiply-add: the instruction where the CPU
+        // has it (same results, 3× faster than the library's emulation).
+        #[cfg(target_arch = "x86_64")]
+        {
+            #[target_feature(enable = "fma")]
+            fn with_fma(port: &FlatPort, p: DVec3, t: f64, slope: (f64, f64)) -> DVec3 {
+                port.refine_in(p, t, slope)
+            }
+            if std::arch::is_x86_feature_detected!("fma") {
+                // SAFETY: the CPU has FMA (checked just above).
+                return unsafe { with_fma(self, p, t, slope) };
+            }
+        }
+        self.refine_in(p, t, slope)
+    }
+
+    #[inline(always)]
+    fn refine_in(&self, p: DVec3, t: f64, slope: (f64, f64)) -> DVec3 {
+        let k = &self.dd;
+        let pp = V3::from(p);
+        let a = k.normal.dot(pp);
+        let c = k.normal.cross(pp);
+        let rr = c.dot(c);
+        let td = Dd::new(t);
+        let tt = td * td * rr;
+        let mut g = k.gap * td - Dd::ONE
+            + (a - k.offset) * k.water.0 * td / (k.water.1 + k.water.2 * tt).sqrt();
+        for &(tna, n2, kk) in &k.layers[..self.n_layers] {
+            g = g + tna * td / (n2 + kk * tt).sqrt();
+        }
+        let step = g.to_f64() * slope.1 / slope.0;
+        let td = if step.is_finite() && t - step > 0.0 {
+            td - Dd::new(step)
+        } else {
+            td
+        };
+        let perp = pp.minus(k.normal.scale(a));
+        let d = k.normal.plus(perp.scale(td));
+        DVec3::new(d.x.to_f64(), d.y.to_f64(), d.z.to_f64())
+    }
+}
+
+/// A flat port's constants in double-double, for [`FlatPort::refine`].
+#[derive(Debug, Clone, Copy)]
+struct FlatDd {
+    /// The unit normal.
+    normal: V3,
+    gap: Dd,
+    /// Inner-face distance plus every layer's thickness: the water depth is N·P − offset.
+    offset: Dd,
+    /// Per glass layer: t·na, n², n² − na².
+    layers: [(Dd, Dd, Dd); MAX_LAYERS],
+    /// Water: na, nw², nw² − na².
+    water: (Dd, Dd, Dd),
+}
+
+impl FlatDd {
+    fn new(normal: DVec3, distance: f64, layers: &[(f64, f64)], na: f64, nw: f64) -> FlatDd {
+        let n0 = V3::from(normal);
+        let nad = Dd::new(na);
+        let na2 = nad * nad;
+        let mut out = FlatDd {
+            normal: n0.scale(Dd::ONE / n0.length()),
+            gap: Dd::new(distance),
+            offset: Dd::new(distance),
+            layers: [(Dd::ZERO, Dd::ONE, Dd::ZERO); MAX_LAYERS],
+            water: (
+                nad,
+                Dd::new(nw) * Dd::new(nw),
+                Dd::new(nw) * Dd::new(nw) - na2,
+            ),
+        };
+        for (slot, &(th, n)) in out.layers.iter_mut().zip(layers) {
+            let n2 = Dd::new(n) * Dd::new(n);
+            *slot = (Dd::new(th) * nad, n2, n2 - na2);
+            out.offset = out.offset + Dd::new(th);
+        }
+        out
     }
 }
 
@@ -614,20 +747,25 @@ impl DomePort {
         if self.is_centred() {
             return Ok(p);
         }
+        // The plane (O, C, P): e₁ = P/L, e₂ along C's component ⊥ P, C = (c.x, c.y) there.
+        // c.y = |C × P|/L needs no cancellation, and both √ run side by side.
         let l = p.length();
-        let e1 = p / l;
-        let cperp = self.center - self.center.dot(e1) * e1;
-        let c2 = cperp.length();
-        if !(c2 > 1e-300) {
+        let c = DVec2::new(self.center.dot(p) / l, self.center.cross(p).length() / l);
+        if !(c.y > 1e-300) {
             // P on the dome axis: normal incidence everywhere, undeviated.
             return Ok(p);
         }
-        let e2 = cperp / c2;
-        let c = DVec2::new(self.center.dot(e1), c2);
+        // The basis is needed only for the answer, off the solver's critical path.
+        let basis = || {
+            let e1 = p / l;
+            (e1, (self.center - e1 * c.x) / c.y)
+        };
         if let Some(u) = self.halley(c, l) {
+            let (e1, e2) = basis();
             return Ok(e1 * u.x + e2 * u.y);
         }
         let tau = self.solve_tau(c, l)?;
+        let (e1, e2) = basis();
         Ok(e1 + e2 * tau)
     }
 
@@ -653,12 +791,14 @@ impl DomePort {
         let kw = self.kw;
         let pc = DVec2::new(l - c.x, -c.y);
         // First-order guess: small angles and Θ ≈ Θ′(0)·p.
+        // The guess is the slope τ₀ = num/den; u = (den, num)/|(den, num)| needs no ÷ for τ₀.
         let k0 = self.dtheta0;
-        let tau0 = -c.y * (pc.x * k0 + 1.0 - kw) / (pc.x * (1.0 - k0 * c.x) + kw * c.x);
-        if !(tau0.abs() <= self.bracket) {
+        let num = -c.y * (pc.x * k0 + 1.0 - kw);
+        let den = pc.x * (1.0 - k0 * c.x) + kw * c.x;
+        if !(den > 0.0 && num.abs() <= self.bracket * den) {
             return None;
         }
-        let mut u = DVec2::new(1.0, tau0) * (1.0 / (1.0 + tau0 * tau0).sqrt());
+        let mut u = DVec2::new(den, num) * (1.0 / (den * den + num * num).sqrt());
         for evals in 1..=16 {
             let p = c.y * u.x - c.x * u.y;
             let s = [p * k[0], p * k[1], p * k[2], p * k[3]];

@@ -31,12 +31,15 @@ fn quick_two_sum(a: f64, b: f64) -> (f64, f64) {
 impl Dd {
     pub const ZERO: Dd = Dd { hi: 0.0, lo: 0.0 };
     pub const ONE: Dd = Dd { hi: 1.0, lo: 0.0 };
+    #[inline(always)]
     pub fn new(x: f64) -> Dd {
         Dd { hi: x, lo: 0.0 }
     }
+    #[inline(always)]
     pub fn to_f64(self) -> f64 {
         self.hi + self.lo
     }
+    #[inline(always)]
     pub fn plus(self, o: Dd) -> Dd {
         let (s, e) = two_sum(self.hi, o.hi);
         let (t, f) = two_sum(self.lo, o.lo);
@@ -44,15 +47,18 @@ impl Dd {
         let (hi, lo) = quick_two_sum(s, e + f);
         Dd { hi, lo }
     }
+    #[inline(always)]
     pub fn negate(self) -> Dd {
         Dd {
             hi: -self.hi,
             lo: -self.lo,
         }
     }
+    #[inline(always)]
     pub fn minus(self, o: Dd) -> Dd {
         self.plus(o.negate())
     }
+    #[inline(always)]
     pub fn times(self, o: Dd) -> Dd {
         let p = self.hi * o.hi;
         let e = self.hi.mul_add(o.hi, -p);
@@ -60,6 +66,7 @@ impl Dd {
         let (hi, lo) = quick_two_sum(p, e);
         Dd { hi, lo }
     }
+    #[inline(always)]
     pub fn over(self, o: Dd) -> Dd {
         let q1 = self.hi / o.hi;
         let r = self.minus(o.times(Dd::new(q1)));
@@ -69,6 +76,7 @@ impl Dd {
         let (hi, lo) = quick_two_sum(q1, q2);
         Dd { hi, lo }.plus(Dd::new(q3))
     }
+    #[inline(always)]
     pub fn sqrt(self) -> Dd {
         if self.hi <= 0.0 {
             return Dd::ZERO;
@@ -79,6 +87,7 @@ impl Dd {
         let diff = self.minus(ax.times(ax));
         ax.plus(Dd::new(diff.hi * x * 0.5))
     }
+    #[inline(always)]
     pub fn abs(self) -> Dd {
         if self.hi < 0.0 { self.negate() } else { self }
     }
@@ -86,24 +95,28 @@ impl Dd {
 
 impl std::ops::Add for Dd {
     type Output = Dd;
+    #[inline(always)]
     fn add(self, o: Dd) -> Dd {
         Dd::plus(self, o)
     }
 }
 impl std::ops::Sub for Dd {
     type Output = Dd;
+    #[inline(always)]
     fn sub(self, o: Dd) -> Dd {
         Dd::minus(self, o)
     }
 }
 impl std::ops::Mul for Dd {
     type Output = Dd;
+    #[inline(always)]
     fn mul(self, o: Dd) -> Dd {
         Dd::times(self, o)
     }
 }
 impl std::ops::Div for Dd {
     type Output = Dd;
+    #[inline(always)]
     fn div(self, o: Dd) -> Dd {
         Dd::over(self, o)
     }
@@ -118,6 +131,7 @@ pub struct V3 {
 }
 
 impl V3 {
+    #[inline(always)]
     pub fn from(v: DVec3) -> V3 {
         V3 {
             x: Dd::new(v.x),
@@ -125,9 +139,11 @@ impl V3 {
             z: Dd::new(v.z),
         }
     }
+    #[inline(always)]
     pub fn dot(self, o: V3) -> Dd {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
+    #[inline(always)]
     pub fn cross(self, o: V3) -> V3 {
         V3 {
             x: self.y * o.z - self.z * o.y,
@@ -135,6 +151,7 @@ impl V3 {
             z: self.x * o.y - self.y * o.x,
         }
     }
+    #[inline(always)]
     pub fn scale(self, s: Dd) -> V3 {
         V3 {
             x: self.x * s,
@@ -142,6 +159,7 @@ impl V3 {
             z: self.z * s,
         }
     }
+    #[inline(always)]
     pub fn plus(self, o: V3) -> V3 {
         V3 {
             x: self.x + o.x,
@@ -149,6 +167,7 @@ impl V3 {
             z: self.z + o.z,
         }
     }
+    #[inline(always)]
     pub fn minus(self, o: V3) -> V3 {
         V3 {
             x: self.x - o.x,
@@ -156,6 +175,7 @@ impl V3 {
             z: self.z - o.z,
         }
     }
+    #[inline(always)]
     pub fn length(self) -> Dd {
         self.dot(self).sqrt()
     }

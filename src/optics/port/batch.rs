@@ -11,9 +11,10 @@
 //! Every formula is the scalar solver's, operation for operation, so each point gets the
 //! same bits as [`PortSolver::forward`] (tested), whichever instruction set runs it.
 
-use super::{CylinderPort, DomePort, FlatPort, NoSolution, PortSolver, Slabs};
+use super::{CylinderPort, DomePort, FlatPort, NoSolution, PortSolver, REFINE_AT, Slabs};
 use crate::optics::lanes::{M, V, W, has_avx2};
 use glam::DVec3;
+use std::ops::Not;
 
 /// Points solved together by the batch solvers.
 pub const LANES: usize = W;
@@ -66,9 +67,10 @@ fn soa(ps: &[DVec3]) -> (V, V, V) {
 impl Slabs {
     /// [`Slabs::solve_ratio`] on [`W`] lanes (inactive lanes are ignored; they must hold
     /// finite r², D). Returns t and the lanes that converged on the fast path; the caller
-    /// re-solves the others with the scalar solver. `N`: the number of glass layers.
+    /// re-solves the others with the scalar solver. `N`: the number of glass layers. Also
+    /// returns each lane's last slope G′ as (numerator, denominator).
     #[inline(always)]
-    fn solve_ratio_v<const N: usize>(&self, r2: V, depth: V, active: M) -> (V, M) {
+    fn solve_ratio_v<const N: usize>(&self, r2: V, depth: V, active: M) -> (V, M, (V, V)) {
         // The plain concave path (no bracket, no critical-angle exit), as in solve_ratio.
         let asym = self.asym + depth * self.tw_inf;
         let zero = V::splat(0.0);
@@ -95,8 +97,9 @@ impl Slabs {
         }
         let mut done = active.not();
         let mut failed = M::splat(false);
+        let (mut slope_num, mut slope_den) = (V::splat(1.0), V::splat(1.0));
         for _ in 0..12 {
-            let (num, den, halley) = if N == 1 {
+            let (num, den, halley, slope) = if N == 1 {
                 self.step_one_layer_v(t, r2, depth)
             } else {
                 let (mut f, mut df, mut d2f) = term_v(depth * self.na, self.nw2, self.kw, t, r2);
@@ -113,8 +116,10 @@ impl Slabs {
                     halley.select(-2.0 * f * df, -f),
                     halley.select(2.0 * df * df - f * d2f, df),
                     halley,
+                    (df, V::splat(1.0)),
                 )
             };
+
             let dt = num / den;
             let next = t + dt;
             let next = next.gt(zero).select(next, 0.5 * t);
@@ -123,20 +128,23 @@ impl Slabs {
             let bad = dt.finite().not();
             let live = done.not();
             t = live.select(next, t);
+            slope_num = live.select(slope.0, slope_num);
+            slope_den = live.select(slope.1, slope_den);
             failed = failed.or(live.and(bad));
             done = done.or(conv).or(bad);
             if done.all() {
                 break;
             }
         }
-        (t, active.and(done).and(failed.not()).and(t.finite()))
+        let ok = active.and(done).and(failed.not()).and(t.finite());
+        (t, ok, (slope_num, slope_den))
     }
 
     /// [`Slabs::step_one_layer`] in lanes, as (numerator, denominator, Halley?) of the step;
     /// a lane whose step is not finite leaves the fast path (the scalar solver then takes
     /// the per-term form).
     #[inline(always)]
-    fn step_one_layer_v(&self, t: V, r2: V, depth: V) -> (V, V, M) {
+    fn step_one_layer_v(&self, t: V, r2: V, depth: V) -> (V, V, M, (V, V)) {
         let (ag, n2g, kg) = (self.tna[0], self.n2[0], self.k[0]);
         let aw = depth * self.na;
         let (n2w, kw) = (self.nw2, self.kw);
@@ -155,6 +163,7 @@ impl Slabs {
             halley.select(-2.0 * h0 * h1 * p2, -h0 * p2),
             halley.select(2.0 * h1 * h1 - h0 * h2, h1),
             halley,
+            (h1, p2 * p),
         )
     }
 }
@@ -191,11 +200,17 @@ fn flat_kernel<const N: usize>(port: &FlatPort, ps: &[DVec3], out: &mut [Out]) {
         let ok_in = live.and(depth.gt(V::splat(0.0))).and(r2.gt(V::splat(0.0)));
         let r2s = ok_in.select(r2, V::splat(1.0));
         let ds = ok_in.select(depth, V::splat(1.0));
-        let (t, ok) = port.slabs.solve_ratio_v::<N>(r2s, ds, ok_in);
+        let (t, ok, slope) = port.slabs.solve_ratio_v::<N>(r2s, ds, ok_in);
+        // FlatPort::forward's answer N + t·P⊥; lanes that need refining (κ·c > REFINE_AT)
+        // go to the scalar solver, which refines them.
+        let (px, py, pz) = (x - a * nrm.x, y - a * nrm.y, z - a * nrm.z);
+        let (dx, dy, dz) = (nrm.x + px * t, nrm.y + py * t, nrm.z + pz * t);
+        let c_num = nrm.z.abs() + (pz * t).abs();
+        let refine = (c_num * slope.1).gt(REFINE_AT * t * slope.0 * dz.abs());
+        let ok = ok.and(refine.not());
         for (l, (p, o)) in pc.iter().zip(oc.iter_mut()).enumerate() {
             *o = if ok.get(l) {
-                let perp = *p - a.0[l] * nrm;
-                Ok(nrm + perp * t.0[l])
+                Ok(DVec3::new(dx.0[l], dy.0[l], dz.0[l]))
             } else {
                 fallback(*p, |p| port.forward(p))
             };
@@ -228,7 +243,7 @@ fn cylinder_kernel(port: &CylinderPort, ps: &[DVec3], out: &mut [Out]) {
                 e_rho[l] = rho_v / rho;
             }
         }
-        let (t, ok) = port.slabs.solve_ratio_v::<1>(V(r2), V(depth), M(active));
+        let (t, ok, _) = port.slabs.solve_ratio_v::<1>(V(r2), V(depth), M(active));
         for (l, (p, o)) in pc.iter().zip(oc.iter_mut()).enumerate() {
             *o = if ok.get(l) {
                 Ok(e_rho[l] + ax * (t.0[l] * z[l]))
@@ -252,21 +267,22 @@ fn dome_kernel(port: &DomePort, ps: &[DVec3], out: &mut [Out]) {
         let (x, y, z) = soa(pc);
         let (dx, dy, dz) = (x - c.x, y - c.y, z - c.z);
         let dc = (dx * dx + dy * dy + dz * dz).sqrt();
+        // DomePort::forward: C = (C·P/L, |C × P|/L) in the plane basis.
         let len = (x * x + y * y + z * z).sqrt();
-        let (ex, ey, ez) = (x / len, y / len, z / len);
-        let cd = c.x * ex + c.y * ey + c.z * ez;
-        let (qx, qy, qz) = (c.x - cd * ex, c.y - cd * ey, c.z - cd * ez);
-        let c2 = (qx * qx + qy * qy + qz * qz).sqrt();
-        // The plane basis: C = (cl_x, cl_y), P − C = (pc_x, pc_y).
-        let (cl_x, cl_y) = (cd, c2);
+        let (qx, qy, qz) = (c.y * z - y * c.z, c.z * x - z * c.x, c.x * y - x * c.y);
+        let cl_x = (x * c.x + y * c.y + z * c.z) / len;
+        let cl_y = (qx * qx + qy * qy + qz * qz).sqrt() / len;
+        // P − C = (pc_x, pc_y); the guess (den, num) as in DomePort::halley_counted.
         let (pc_x, pc_y) = (len - cl_x, -cl_y);
-        let tau0 = -cl_y * (pc_x * k0 + 1.0 - kw) / (pc_x * (1.0 - k0 * cl_x) + kw * cl_x);
+        let num = -cl_y * (pc_x * k0 + 1.0 - kw);
+        let den = pc_x * (1.0 - k0 * cl_x) + kw * cl_x;
         let active = M::first(pc.len())
             .and(dc.gt(V::splat(port.r2)))
-            .and(c2.gt(V::splat(1e-300)))
-            .and(tau0.abs().le(V::splat(port.bracket)));
-        let s0 = 1.0 / (1.0 + tau0 * tau0).sqrt();
-        let (mut ux, mut uy) = (s0, tau0 * s0);
+            .and(cl_y.gt(V::splat(1e-300)))
+            .and(den.gt(zero))
+            .and(num.abs().le(port.bracket * den));
+        let s0 = 1.0 / (den * den + num * num).sqrt();
+        let (mut ux, mut uy) = (den * s0, num * s0);
         let mut done = active.not();
         let mut failed = M::splat(false);
         for _ in 0..16 {
@@ -332,8 +348,11 @@ fn dome_kernel(port: &DomePort, ps: &[DVec3], out: &mut [Out]) {
             .and(failed.not())
             .and(ux.gt(zero))
             .and(uy.abs().le(port.bracket * ux));
-        // Output e₁·u₁ + e₂·u₂ with e₂ = C⊥/|C⊥|.
-        let (e2x, e2y, e2z) = (qx / c2, qy / c2, qz / c2);
+        // Output e₁·u₁ + e₂·u₂ with e₁ = P/L, e₂ = (C − e₁·c.x)/c.y.
+        let (ex, ey, ez) = (x / len, y / len, z / len);
+        let e2x = (c.x - ex * cl_x) / cl_y;
+        let e2y = (c.y - ey * cl_x) / cl_y;
+        let e2z = (c.z - ez * cl_x) / cl_y;
         let (ox, oy, oz) = (ex * ux + e2x * uy, ey * ux + e2y * uy, ez * ux + e2z * uy);
         for (l, (p, o)) in pc.iter().zip(oc.iter_mut()).enumerate() {
             *o = if ok.get(l) {
