@@ -1,5 +1,6 @@
 //! Property tests: backward (pixel → water ray) then forward (point on that ray → pixel)
-//! returns the pixel to 1e-9 px over random cameras, ports and pixels, and nothing is NaN.
+//! returns the pixel to 1e-9 px over random cameras, ports and pixels (except within 0.002°
+//! of a fisheye's backward pole, see [`pole_floor_px`]), and nothing is NaN.
 //!
 //! The normal run uses 3000 cases (override with `PROPTEST_CASES`); the million-case run is
 //! `cargo test --release --test optics_proptest -- --ignored`.
@@ -158,16 +159,35 @@ fn check(c: &Case) -> Result<(), TestCaseError> {
             return Ok(());
         }
     }
+    let tol = EXACT_PX.max(pole_floor_px(&c.lens, d));
     prop_assert!(
-        err < EXACT_PX,
-        "error {} px at ({}, {}) for {:?}",
+        err < tol,
+        "error {} px (tolerance {}) at ({}, {}) for {:?}",
         err,
+        tol,
         c.u,
         c.v,
         c
     );
     let _ = (c.width, c.height);
     Ok(())
+}
+
+/// A fisheye pixel near θ = 180° (looking straight back) depends on the direction's
+/// azimuth, atan2(y, x) with x, y → 0, so it moves by f·θ/sin θ per unit of direction
+/// error: one ulp of a unit vector (1.1e-16) moves it by more than 1e-9 px within 0.002° of
+/// the pole. The round trip rounds the direction several times (the water ray, the point
+/// on it), so there the tolerance is 16 ulp of direction (seen once in about 30 million
+/// cases: 5.2e-9 px at θ = 179.9991°, f = 729 px, against a floor of 5.1e-7 px). Elsewhere
+/// the floor is far below 1e-9 px (4e-12 px at θ = 90°).
+fn pole_floor_px(lens: &Lens, d: DVec3) -> f64 {
+    if lens.model == LensModel::Rectilinear {
+        return 0.0;
+    }
+    let d = d.normalize();
+    let rho = d.x.hypot(d.y);
+    let theta = rho.atan2(d.z);
+    16.0 * f64::EPSILON / 2.0 * lens.fx.max(lens.fy) * theta / rho.max(1e-300)
 }
 
 fn cases_from_env(default: u32) -> u32 {

@@ -6,7 +6,7 @@
 //! | solver | what |
 //! |---|---|
 //! | `poser` | [`PortSolver::forward`], one call per point: flat and on-axis cylinder: Halley on the q-equation (ratio form) from the water-unit guess; dome: Halley on the exact moment equation from the first-order guess (bracketed secant/Illinois as fallback); off-axis cylinder: 2-D Newton |
-//! | `poser_batch` | [`PortSolver::forward_many`]: the same solvers with 4 points in lock step (same results bit for bit; hides √/÷ latency) |
+//! | `poser_batch` | [`PortSolver::forward_many`]: the same solvers on 8 points at a time in SIMD lanes, AVX2 where the CPU has it (same results bit for bit) |
 //! | `colmap_gn` | Refractive COLMAP's `IterativeProjection`: Gauss–Newton on the pixel, residual = point on the back-projected water ray at distance \|P\| minus P, central-difference Jacobian (step max(1e-6, 1e-9·\|x\|) px), stop at \|Δ\|² < 1e-10 px², ≤ 100 iterations, 2×2 normal equations |
 //! | `agrawal` (flat) | Agrawal et al. CVPR 2012: the 12th-degree polynomial in the radial hit x on the first interface (MERL `SolveForwardProjectionCase3`, K/L/M factoring of optics.md §1.3), all roots by Aberth–Ehrlich on x/u, physical root = real root in [0, u] with the smallest trace residual |
 //!
@@ -153,7 +153,7 @@ pub fn poser_project(port: &PortSolver, lens: &Lens, p: DVec3) -> Result<[f64; 2
     lens.project(port.forward(p)?)
 }
 
-/// poser's batch solver ([`PortSolver::forward_many`], lanes in lock step) then the lens.
+/// poser's batch solver ([`PortSolver::forward_many`], SIMD lanes) then the lens.
 pub fn poser_project_many(
     port: &PortSolver,
     lens: &Lens,

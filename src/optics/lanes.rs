@@ -214,17 +214,24 @@ pub fn simd_level() -> &'static str {
     if has_avx2() { "avx2" } else { "baseline" }
 }
 
-/// Whether the AVX2 builds of the batch kernels can run here (detected once, then cached).
+/// Whether the AVX2 builds of the batch kernels run here: the CPU has AVX2 (x86-64) and the
+/// environment variable `POSER_SIMD` is not `baseline` (read once, then cached; for
+/// measuring what the vectors gain, results are the same bits either way).
 #[inline]
 pub fn has_avx2() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    static AVX2: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *AVX2.get_or_init(|| {
+        let allowed = std::env::var("POSER_SIMD").map_or(true, |v| v != "baseline");
+        #[cfg(target_arch = "x86_64")]
+        {
+            allowed && std::arch::is_x86_feature_detected!("avx2")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = allowed;
+            false
+        }
+    })
 }
 
 #[cfg(test)]
