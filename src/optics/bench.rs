@@ -447,6 +447,24 @@ struct Measured {
     failures: usize,
 }
 
+impl Measured {
+    /// From [`error_stats`] and [`time_passes`].
+    fn new(
+        (n, median, max, failures): (usize, f64, f64, usize),
+        (pps, pps_best, pps_wall): (f64, f64, f64),
+    ) -> Measured {
+        Measured {
+            n,
+            pps,
+            pps_best,
+            pps_wall,
+            median,
+            max,
+            failures,
+        }
+    }
+}
+
 /// Errors against `refs` and one-core speed of `solve` over `pts` (monomorphised per solver:
 /// no dynamic dispatch in the timed loop).
 fn measure<F: Fn(DVec3) -> Result<[f64; 2], NoSolution>>(
@@ -455,21 +473,13 @@ fn measure<F: Fn(DVec3) -> Result<[f64; 2], NoSolution>>(
     min_time: f64,
     solve: F,
 ) -> Measured {
-    let (n, median, max, failures) = error_stats(pts.iter().map(|p| solve(*p)), refs);
-    let (pps, pps_best, pps_wall) = time_passes(pts.len(), min_time, || {
+    let errors = error_stats(pts.iter().map(|p| solve(*p)), refs);
+    let speed = time_passes(pts.len(), min_time, || {
         for p in pts.iter() {
             std::hint::black_box(solve(std::hint::black_box(*p)).ok());
         }
     });
-    Measured {
-        n,
-        pps,
-        pps_best,
-        pps_wall,
-        median,
-        max,
-        failures,
-    }
+    Measured::new(errors, speed)
 }
 
 /// [`measure`] for the batch solver: errors per point, speed over whole passes.
@@ -483,8 +493,8 @@ fn measure_batch(
     let mut dirs = vec![Err(NoSolution::NoConvergence); pts.len()];
     let mut out = vec![Err(NoSolution::NoConvergence); pts.len()];
     poser_project_many(port, lens, pts, &mut dirs, &mut out);
-    let (n, median, max, failures) = error_stats(out.iter().cloned(), refs);
-    let (pps, pps_best, pps_wall) = time_passes(pts.len(), min_time, || {
+    let errors = error_stats(out.iter().cloned(), refs);
+    let speed = time_passes(pts.len(), min_time, || {
         poser_project_many(
             port,
             lens,
@@ -493,15 +503,7 @@ fn measure_batch(
             std::hint::black_box(&mut out),
         );
     });
-    Measured {
-        n,
-        pps,
-        pps_best,
-        pps_wall,
-        median,
-        max,
-        failures,
-    }
+    Measured::new(errors, speed)
 }
 
 /// Run the whole comparison. `quick`: fewer points and shorter timing. The environment

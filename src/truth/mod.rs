@@ -17,6 +17,7 @@
 
 use crate::io::write_atomic;
 use crate::model::{Camera, LensModel, Model, Port, Pose};
+use crate::optics::NoSolution;
 use crate::optics::project::Projector;
 use crate::render::scene::Scene;
 use glam::{DMat3, DQuat, DVec3};
@@ -132,11 +133,33 @@ pub fn compute_with(
             let pr = &projectors[ci];
             let wfc = model.world_from_camera(pi, ci);
             let cfw = wfc.inverse();
+            // Every target point through each channel's batch solver (the same pixels as
+            // `project_world` point by point).
+            let in_camera: Vec<DVec3> = model
+                .targets
+                .iter()
+                .flat_map(|t| {
+                    t.points
+                        .iter()
+                        .map(|tp| pr[1].world_to_camera(pi, tp.world))
+                })
+                .collect();
+            let uv_all: Vec<Vec<Result<[f64; 2], NoSolution>>> = pr
+                .iter()
+                .map(|p| {
+                    let mut out = vec![Err(NoSolution::NoConvergence); in_camera.len()];
+                    p.project_camera_many(&in_camera, &mut out);
+                    out
+                })
+                .collect();
+            let mut k = 0;
             let mut points = Vec::new();
             for target in &model.targets {
                 let normal = target.pose.rotation.z_axis;
                 for tp in &target.points {
-                    let Ok(uv) = pr[1].project_world(pi, tp.world) else {
+                    let i = k;
+                    k += 1;
+                    let Ok(uv) = uv_all[1][i] else {
                         continue;
                     };
                     // The water path: from the point back to where its ray leaves the port.
@@ -149,7 +172,7 @@ pub fn compute_with(
                     if occluded(tp.world, exit) {
                         continue;
                     }
-                    let uv_rgb = [0, 1, 2].map(|ch| pr[ch].project_world(pi, tp.world).ok());
+                    let uv_rgb = [0, 1, 2].map(|ch| uv_all[ch][i].ok());
                     points.push(Observation {
                         target: target.name.clone(),
                         id: tp.id.clone(),
