@@ -1211,6 +1211,9 @@ impl CylinderPort {
 }
 
 /// The port of one camera for one channel, ready to trace.
+// A flat port carries its constants twice (f64 and double-double, ≈ 0.6 KiB): solvers are
+// built once per camera and channel and copied rarely, and boxing would cost `Copy`.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy)]
 pub enum PortSolver {
     /// No housing: the camera sits in the medium; rays are straight.
