@@ -6,6 +6,7 @@
 //! | [`W`] = 8 | lanes per group: two AVX2 registers, or four SSE2 ones, whose independent √/÷ chains overlap |
 //! | [`V`] | `[f64; W]`; each operator is the scalar operator on every lane |
 //! | [`M`] | a lane mask (all ones or zeros per lane, like a vector compare); `select`, `any`, `all` |
+//! | [`Lane`] | what a port solver's formula needs of a number: implemented by `f64` and [`V`], so one generic formula serves one point and the lanes |
 //! | [`simd_level`] | which instruction set the batch solvers run with on this CPU |
 //!
 //! Nothing here is approximate: an element-wise √ or ÷ in a vector register is the correctly
@@ -205,6 +206,79 @@ impl Not for M {
             o[i] = !self.0[i];
         }
         M(o)
+    }
+}
+
+/// What the port solvers' formulas need of a number, so that one generic formula serves
+/// a single point (`f64`) and the SIMD lanes ([`V`]) with the same operations in the same
+/// order, hence the same bits. Constants multiply on the right (`x * 2.0`, not `2.0 * x`:
+/// the product is the same).
+pub trait Lane:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + Add<f64, Output = Self>
+    + Sub<f64, Output = Self>
+    + Mul<f64, Output = Self>
+{
+    /// `bool` for one value, [`M`] for lanes.
+    type Mask: Copy;
+    fn splat(x: f64) -> Self;
+    fn sqrt(self) -> Self;
+    fn abs(self) -> Self;
+    fn lt(self, b: Self) -> Self::Mask;
+    /// `a` where `m` is set, else `b`.
+    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+}
+
+impl Lane for f64 {
+    type Mask = bool;
+    #[inline(always)]
+    fn splat(x: f64) -> f64 {
+        x
+    }
+    #[inline(always)]
+    fn sqrt(self) -> f64 {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> f64 {
+        f64::abs(self)
+    }
+    #[inline(always)]
+    fn lt(self, b: f64) -> bool {
+        self < b
+    }
+    #[inline(always)]
+    fn select(m: bool, a: f64, b: f64) -> f64 {
+        if m { a } else { b }
+    }
+}
+
+impl Lane for V {
+    type Mask = M;
+    #[inline(always)]
+    fn splat(x: f64) -> V {
+        V::splat(x)
+    }
+    #[inline(always)]
+    fn sqrt(self) -> V {
+        V::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> V {
+        V::abs(self)
+    }
+    #[inline(always)]
+    fn lt(self, b: V) -> M {
+        V::lt(self, b)
+    }
+    #[inline(always)]
+    fn select(m: M, a: V, b: V) -> V {
+        m.select(a, b)
     }
 }
 

@@ -21,6 +21,7 @@
 
 use super::NoSolution;
 use super::interface::{fresnel_transmittance, refract};
+use super::lanes::Lane;
 use super::reference::{Dd, V3};
 use crate::model::Port;
 use glam::{DVec2, DVec3};
@@ -174,78 +175,91 @@ impl Slabs {
         (f, df, d2f)
     }
 
-    /// G(t) = F(r·t)/r, G′ = F′(q) and G″ = r·F″(q) at the ratio t = q/r, from r² only.
+    /// G(t) = F(r·t)/r, G′ = F′(q) and G″ = r·F″(q) at the ratio t = q/r, from r² only; on
+    /// one value (`f64`) or on SIMD lanes ([`Lane`]), with the same operations either way.
     #[inline(always)]
-    fn eval2_ratio(&self, t: f64, r2: f64, depth: f64) -> (f64, f64, f64) {
+    fn eval2_ratio<T: Lane>(&self, t: T, r2: T, depth: T) -> (T, T, T) {
         #[inline(always)]
-        fn term(tna: f64, n2: f64, k: f64, t: f64, r2: f64) -> (f64, f64, f64) {
-            let kr2 = k * r2;
-            let g = n2 + kr2 * t * t;
-            let inv = 1.0 / g.sqrt();
+        fn term<T: Lane>(tna: T, n2: f64, k: f64, t: T, r2: T) -> (T, T, T) {
+            let kr2 = r2 * k;
+            let g = kr2 * t * t + n2;
+            let inv = T::splat(1.0) / g.sqrt();
             let inv2 = inv * inv;
             let dv = tna * n2 * inv2 * inv;
-            (tna * t * inv, dv, -3.0 * kr2 * t * dv * inv2)
+            (tna * t * inv, dv, kr2 * -3.0 * t * dv * inv2)
         }
         let (mut f, mut df, mut d2f) = term(depth * self.na, self.nw2, self.kw, t, r2);
-        f += self.gap * t - 1.0;
-        df += self.gap;
+        f = f + (t * self.gap - 1.0);
+        df = df + self.gap;
         for i in 0..self.n {
-            let (v, d, d2) = term(self.tna[i], self.n2[i], self.k[i], t, r2);
-            f += v;
-            df += d;
-            d2f += d2;
+            let (v, d, d2) = term(T::splat(self.tna[i]), self.n2[i], self.k[i], t, r2);
+            f = f + v;
+            df = df + d;
+            d2f = d2f + d2;
         }
         (f, df, d2f)
     }
 
     /// The Halley step from G, G′, G″ while its denominator 2G′² − G·G″ stays above G′²/2
-    /// (then the step is at most 4 Newton steps), else the Newton step.
+    /// (then the step is at most 4 Newton steps), else the Newton step, as (numerator,
+    /// denominator, Halley?).
+    #[inline(always)]
+    fn halley_parts<T: Lane>(f: T, df: T, d2f: T) -> (T, T, T::Mask) {
+        let halley = (f * d2f).abs().lt(df * 1.5 * df);
+        (
+            T::select(halley, f * -2.0 * df, -f),
+            T::select(halley, df * 2.0 * df - f * d2f, df),
+            halley,
+        )
+    }
+
+    /// [`Slabs::halley_parts`] as a [`Step`].
     #[inline(always)]
     fn halley_step(f: f64, df: f64, d2f: f64) -> Step {
-        let halley = (f * d2f).abs() < 1.5 * df * df;
-        let dt = if halley {
-            -2.0 * f * df / (2.0 * df * df - f * d2f)
-        } else {
-            -f / df
-        };
+        let (num, den, halley) = Self::halley_parts(f, df, d2f);
         Step {
-            dt,
+            dt: num / den,
             halley,
             slope: (df, 1.0),
         }
     }
 
-    /// [`Slabs::halley_step`] for exactly one glass layer with a single division: with
+    /// [`Slabs::halley_parts`] for exactly one glass layer with a single division: with
     /// s_g, s_w the two square roots and P = s_g·s_w, H₀ = G·P, H₁ = G′·P³ and H₂ = G″·P⁵ are
     /// polynomials in s_g, s_w, and the Halley step is −2H₀H₁P²/(2H₁² − H₀H₂) (Newton:
-    /// −H₀P²/H₁). Falls back to the per-term form if that overflows (q ≳ 1e25).
+    /// −H₀P²/H₁). Returns (numerator, denominator, Halley?, slope G′ = H₁/P³).
     #[inline(always)]
-    fn step_one_layer(&self, t: f64, r2: f64, depth: f64) -> Step {
+    fn one_layer_parts<T: Lane>(&self, t: T, r2: T, depth: T) -> (T, T, T::Mask, (T, T)) {
         let (ag, n2g, kg) = (self.tna[0], self.n2[0], self.k[0]);
         let aw = depth * self.na;
         let (n2w, kw) = (self.nw2, self.kw);
         let tt = t * t;
-        let a = (n2g + kg * r2 * tt).sqrt();
-        let b = (n2w + kw * r2 * tt).sqrt();
+        let a = (r2 * kg * tt + n2g).sqrt();
+        let b = (r2 * kw * tt + n2w).sqrt();
         let p = a * b;
         let (a2, b2) = (a * a, b * b);
         let (a3, b3) = (a2 * a, b2 * b);
-        let h0 = (self.gap * t - 1.0) * p + ag * t * b + aw * t * a;
-        let h1 = self.gap * p * p * p + ag * n2g * b3 + aw * n2w * a3;
-        let h2 = -3.0 * r2 * t * (ag * kg * n2g * b3 * b2 + aw * kw * n2w * a3 * a2);
+        let h0 = (t * self.gap - 1.0) * p + t * ag * b + aw * t * a;
+        let h1 = p * self.gap * p * p + b3 * (ag * n2g) + aw * n2w * a3;
+        let h2 = r2 * -3.0 * t * (b3 * (ag * kg * n2g) * b2 + aw * kw * n2w * a3 * a2);
         let p2 = p * p;
-        let halley = (h0 * h2).abs() < 1.5 * h1 * h1;
-        let dt = if halley {
-            -2.0 * h0 * h1 * p2 / (2.0 * h1 * h1 - h0 * h2)
-        } else {
-            -h0 * p2 / h1
-        };
+        let halley = (h0 * h2).abs().lt(h1 * 1.5 * h1);
+        (
+            T::select(halley, h0 * -2.0 * h1 * p2, -h0 * p2),
+            T::select(halley, h1 * 2.0 * h1 - h0 * h2, h1),
+            halley,
+            (h1, p2 * p),
+        )
+    }
+
+    /// [`Slabs::one_layer_parts`] as a [`Step`]; falls back to the per-term form if the
+    /// polynomial form overflows (q ≳ 1e25).
+    #[inline(always)]
+    fn step_one_layer(&self, t: f64, r2: f64, depth: f64) -> Step {
+        let (num, den, halley, slope) = self.one_layer_parts(t, r2, depth);
+        let dt = num / den;
         if dt.is_finite() {
-            Step {
-                dt,
-                halley,
-                slope: (h1, p2 * p),
-            }
+            Step { dt, halley, slope }
         } else {
             let (f, df, d2f) = self.eval2_ratio(t, r2, depth);
             Self::halley_step(f, df, d2f)

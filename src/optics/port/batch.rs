@@ -102,26 +102,12 @@ impl Slabs {
         let (mut slope_num, mut slope_den) = (V::splat(1.0), V::splat(1.0));
         for _ in 0..12 {
             let (num, den, halley, slope) = if N == 1 {
-                self.step_one_layer_v(t, r2, depth)
+                self.one_layer_parts(t, r2, depth)
             } else {
-                let (mut f, mut df, mut d2f) = term_v(depth * self.na, self.nw2, self.kw, t, r2);
-                f = f + (self.gap * t - 1.0);
-                df = df + self.gap;
-                for i in 0..N {
-                    let (v, d, d2) = term_v(V::splat(self.tna[i]), self.n2[i], self.k[i], t, r2);
-                    f = f + v;
-                    df = df + d;
-                    d2f = d2f + d2;
-                }
-                let halley = (f * d2f).abs().lt(1.5 * df * df);
-                (
-                    halley.select(-2.0 * f * df, -f),
-                    halley.select(2.0 * df * df - f * d2f, df),
-                    halley,
-                    (df, V::splat(1.0)),
-                )
+                let (f, df, d2f) = self.eval2_ratio(t, r2, depth);
+                let (num, den, halley) = Self::halley_parts(f, df, d2f);
+                (num, den, halley, (df, V::splat(1.0)))
             };
-
             let dt = num / den;
             let next = t + dt;
             let next = next.gt(zero).select(next, 0.5 * t);
@@ -141,44 +127,6 @@ impl Slabs {
         let ok = active.and(done).and(failed.not()).and(t.finite());
         (t, ok, (slope_num, slope_den))
     }
-
-    /// [`Slabs::step_one_layer`] in lanes, as (numerator, denominator, Halley?) of the step;
-    /// a lane whose step is not finite leaves the fast path (the scalar solver then takes
-    /// the per-term form).
-    #[inline(always)]
-    fn step_one_layer_v(&self, t: V, r2: V, depth: V) -> (V, V, M, (V, V)) {
-        let (ag, n2g, kg) = (self.tna[0], self.n2[0], self.k[0]);
-        let aw = depth * self.na;
-        let (n2w, kw) = (self.nw2, self.kw);
-        let tt = t * t;
-        let a = (n2g + kg * r2 * tt).sqrt();
-        let b = (n2w + kw * r2 * tt).sqrt();
-        let p = a * b;
-        let (a2, b2) = (a * a, b * b);
-        let (a3, b3) = (a2 * a, b2 * b);
-        let h0 = (self.gap * t - 1.0) * p + ag * t * b + aw * t * a;
-        let h1 = self.gap * p * p * p + ag * n2g * b3 + aw * n2w * a3;
-        let h2 = -3.0 * r2 * t * (ag * kg * n2g * b3 * b2 + aw * kw * n2w * a3 * a2);
-        let p2 = p * p;
-        let halley = (h0 * h2).abs().lt(1.5 * h1 * h1);
-        (
-            halley.select(-2.0 * h0 * h1 * p2, -h0 * p2),
-            halley.select(2.0 * h1 * h1 - h0 * h2, h1),
-            halley,
-            (h1, p2 * p),
-        )
-    }
-}
-
-/// One term of G(t) in lanes, as `eval2_ratio`'s `term`.
-#[inline(always)]
-fn term_v(tna: V, n2: f64, k: f64, t: V, r2: V) -> (V, V, V) {
-    let kr2 = k * r2;
-    let g = n2 + kr2 * t * t;
-    let inv = 1.0 / g.sqrt();
-    let inv2 = inv * inv;
-    let dv = tna * n2 * inv2 * inv;
-    (tna * t * inv, dv, -3.0 * kr2 * t * dv * inv2)
 }
 
 /// The flat port's batch kernel (`N` glass layers).
