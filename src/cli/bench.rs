@@ -25,7 +25,7 @@ pub fn run(
             println!(
                 "batch solvers: {} lanes, {} build\n",
                 crate::optics::port::LANES,
-                crate::optics::lanes::simd_level()
+                crate::optics::port::Simd::detect().name()
             );
             print!("{}", crate::optics::bench::table(&rows));
             if let Some(path) = json.as_deref() {

@@ -7,7 +7,7 @@
 //! | [`V`] | `[f64; W]`; each operator is the scalar operator on every lane |
 //! | [`M`] | a lane mask (all ones or zeros per lane, like a vector compare); `select`, `any`, `all` |
 //! | [`Lane`] | what a port solver's formula needs of a number: implemented by `f64` and [`V`], so one generic formula serves one point and the lanes |
-//! | [`simd_level`] | which instruction set the batch solvers run with on this CPU |
+//! | [`has_avx2`] | whether the AVX2 builds run on this CPU (`POSER_SIMD=baseline` turns them off) |
 //!
 //! Nothing here is approximate: an element-wise √ or ÷ in a vector register is the correctly
 //! rounded IEEE result, exactly as the scalar instruction, and Rust never fuses a multiply and
@@ -280,12 +280,6 @@ impl Lane for V {
     fn select(m: M, a: V, b: V) -> V {
         m.select(a, b)
     }
-}
-
-/// The instruction set the batch solvers use on this machine: `"avx2"` where the CPU has
-/// it (x86-64), else `"baseline"` (SSE2 on x86-64, the target's default elsewhere).
-pub fn simd_level() -> &'static str {
-    if has_avx2() { "avx2" } else { "baseline" }
 }
 
 /// Whether the AVX2 builds of the batch kernels run here: the CPU has AVX2 (x86-64) and the

@@ -52,6 +52,14 @@ impl Simd {
             Simd::Baseline
         }
     }
+
+    /// `"avx2"` or `"baseline"`, for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Simd::Baseline => "baseline",
+            Simd::Avx2 => "avx2",
+        }
+    }
 }
 
 /// The points of `ps` (≤ [`W`]) in structure-of-arrays form; missing lanes are (0, 0, 1).
