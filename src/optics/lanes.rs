@@ -225,7 +225,9 @@ pub trait Lane:
     + Mul<f64, Output = Self>
 {
     /// `bool` for one value, [`M`] for lanes.
-    type Mask: Copy;
+    type Mask: Copy + Not<Output = Self::Mask>;
+    /// Set where all four masks are.
+    fn all4(m: [Self::Mask; 4]) -> Self::Mask;
     fn splat(x: f64) -> Self;
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
@@ -236,6 +238,10 @@ pub trait Lane:
 
 impl Lane for f64 {
     type Mask = bool;
+    #[inline(always)]
+    fn all4(m: [bool; 4]) -> bool {
+        m[0] && m[1] && m[2] && m[3]
+    }
     #[inline(always)]
     fn splat(x: f64) -> f64 {
         x
@@ -260,6 +266,10 @@ impl Lane for f64 {
 
 impl Lane for V {
     type Mask = M;
+    #[inline(always)]
+    fn all4(m: [M; 4]) -> M {
+        m[0].and(m[1]).and(m[2]).and(m[3])
+    }
     #[inline(always)]
     fn splat(x: f64) -> V {
         V::splat(x)

@@ -602,6 +602,16 @@ pub struct DomePort {
     dtheta0: f64,
 }
 
+/// One step of [`DomePort::moment_step`].
+struct MomentStep<T: Lane> {
+    step: T,
+    halley: T::Mask,
+    /// A refraction angle has no cosine: total internal reflection, or grazing a sphere.
+    tir: T::Mask,
+    /// u turned by atan(step), not yet unit.
+    v: (T, T),
+}
+
 /// Outcome of tracing one 2-D dome ray.
 #[derive(Debug, Clone, Copy)]
 struct DomeTrace {
@@ -801,61 +811,20 @@ impl DomePort {
     /// [`DomePort::halley`] and the number of evaluations of m it took.
     #[inline(always)]
     fn halley_counted(&self, c: DVec2, l: f64) -> Option<(DVec2, u32)> {
-        let k = self.k;
-        let kw = self.kw;
         let pc = DVec2::new(l - c.x, -c.y);
-        // First-order guess: small angles and Θ ≈ Θ′(0)·p.
-        // The guess is the slope τ₀ = num/den; u = (den, num)/|(den, num)| needs no ÷ for τ₀.
-        let k0 = self.dtheta0;
-        let num = -c.y * (pc.x * k0 + 1.0 - kw);
-        let den = pc.x * (1.0 - k0 * c.x) + kw * c.x;
+        let (num, den) = self.guess((c.x, c.y), (pc.x, pc.y));
         if !(den > 0.0 && num.abs() <= self.bracket * den) {
             return None;
         }
         let mut u = DVec2::new(den, num) * (1.0 / (den * den + num * num).sqrt());
         for evals in 1..=16 {
-            let p = c.y * u.x - c.x * u.y;
-            let s = [p * k[0], p * k[1], p * k[2], p * k[3]];
-            let co2 = [
-                1.0 - s[0] * s[0],
-                1.0 - s[1] * s[1],
-                1.0 - s[2] * s[2],
-                1.0 - s[3] * s[3],
-            ];
-            if !(co2[0] > 0.0 && co2[1] > 0.0 && co2[2] > 0.0 && co2[3] > 0.0) {
+            let m = self.moment_step((c.x, c.y), (pc.x, pc.y), (u.x, u.y));
+            let (step, halley) = (m.step, m.halley);
+            if m.tir || !step.is_finite() {
                 return None; // total internal reflection (or grazing a sphere)
             }
-            let co = [co2[0].sqrt(), co2[1].sqrt(), co2[2].sqrt(), co2[3].sqrt()];
-            // Rotation by Θ: conj(A₁)·B₁·conj(A₂)·B₂ with A, B = (cos, sin) of each angle.
-            let z1 = DVec2::new(co[0] * co[1] + s[0] * s[1], co[0] * s[1] - s[0] * co[1]);
-            let z2 = DVec2::new(co[2] * co[3] + s[2] * s[3], co[2] * s[3] - s[2] * co[3]);
-            let z = DVec2::new(z1.x * z2.x - z1.y * z2.y, z1.x * z2.y + z1.y * z2.x);
-            let w = DVec2::new(z.x * u.x - z.y * u.y, z.x * u.y + z.y * u.x);
-            let cr = pc.perp_dot(w);
-            let dt = pc.dot(w);
-            let m = cr - kw * p;
-            // Θ′(p) = Σ ±kᵢ/cosᵢ and Θ″(p) = Σ ±kᵢ³ p/cosᵢ³.
-            let inv = [1.0 / co[0], 1.0 / co[1], 1.0 / co[2], 1.0 / co[3]];
-            let th1 = -k[0] * inv[0] + k[1] * inv[1] - k[2] * inv[2] + k[3] * inv[3];
-            let cube = |i: usize| k[i] * k[i] * k[i] * inv[i] * inv[i] * inv[i];
-            let th2 = p * (-cube(0) + cube(1) - cube(2) + cube(3));
-            let dp = -c.dot(u); // p′; p″ = −p
-            let g = 1.0 + th1 * dp;
-            let dm = dt * g - kw * dp;
-            let d2m = -cr * g * g + dt * (th2 * dp * dp - th1 * p) + kw * p;
-            // Halley (cubic, error constant ≈ 0.6 here: a step ≤ 5e-6 leaves ≲ 1e-16 rad);
-            // Newton (error constant ≈ 0.1: a step ≤ 1e-8 leaves ≲ 1e-17) when far.
-            let halley = (m * d2m).abs() < 0.5 * dm * dm;
-            let step = if halley {
-                -2.0 * m * dm / (2.0 * dm * dm - m * d2m)
-            } else {
-                -m / dm
-            };
-            if !step.is_finite() {
-                return None;
-            }
             // u turned by atan(step), not yet unit.
-            let v = u + u.perp() * step;
+            let v = DVec2::new(m.v.0, m.v.1);
             if step.abs() <= if halley { 5e-6 } else { 1e-8 } {
                 // Converged: v is the direction (|v| = 1 + O(step²) is irrelevant to it).
                 // Inside the guaranteed bracket, in front of the camera.
@@ -864,6 +833,69 @@ impl DomePort {
             u = v * Self::unit_scale(step, v);
         }
         None
+    }
+
+    /// The first-order guess (small angles, Θ ≈ Θ′(0)·p) as the slope num/den of the camera
+    /// ray in the plane, C = `c`, P − C = `pc` (u = (den, num)/|(den, num)| needs no ÷).
+    #[inline(always)]
+    fn guess<T: Lane>(&self, c: (T, T), pc: (T, T)) -> (T, T) {
+        let k0 = self.dtheta0;
+        (
+            -c.1 * (pc.0 * k0 + 1.0 - self.kw),
+            pc.0 * (T::splat(1.0) - c.0 * k0) + c.0 * self.kw,
+        )
+    }
+
+    /// One Halley (or Newton) step on the moment equation from the unit camera direction
+    /// `u`, on one value or on SIMD lanes ([`Lane`]) with the same operations.
+    #[inline(always)]
+    fn moment_step<T: Lane>(&self, c: (T, T), pc: (T, T), u: (T, T)) -> MomentStep<T> {
+        let (k, kw) = (self.k, self.kw);
+        let one = T::splat(1.0);
+        let p = c.1 * u.0 - c.0 * u.1;
+        let s = [p * k[0], p * k[1], p * k[2], p * k[3]];
+        let co2 = [
+            one - s[0] * s[0],
+            one - s[1] * s[1],
+            one - s[2] * s[2],
+            one - s[3] * s[3],
+        ];
+        let zero = T::splat(0.0);
+        let tir = !T::all4([
+            zero.lt(co2[0]),
+            zero.lt(co2[1]),
+            zero.lt(co2[2]),
+            zero.lt(co2[3]),
+        ]);
+        let co = [co2[0].sqrt(), co2[1].sqrt(), co2[2].sqrt(), co2[3].sqrt()];
+        // Rotation by Θ: conj(A₁)·B₁·conj(A₂)·B₂ with A, B = (cos, sin) of each angle.
+        let z1 = (co[0] * co[1] + s[0] * s[1], co[0] * s[1] - s[0] * co[1]);
+        let z2 = (co[2] * co[3] + s[2] * s[3], co[2] * s[3] - s[2] * co[3]);
+        let z = (z1.0 * z2.0 - z1.1 * z2.1, z1.0 * z2.1 + z1.1 * z2.0);
+        let w = (z.0 * u.0 - z.1 * u.1, z.0 * u.1 + z.1 * u.0);
+        let cr = pc.0 * w.1 - pc.1 * w.0;
+        let dt = pc.0 * w.0 + pc.1 * w.1;
+        let m = cr - p * kw;
+        // Θ′(p) = Σ ±kᵢ/cosᵢ and Θ″(p) = Σ ±kᵢ³ p/cosᵢ³.
+        let inv = [one / co[0], one / co[1], one / co[2], one / co[3]];
+        let th1 = inv[0] * -k[0] + inv[1] * k[1] - inv[2] * k[2] + inv[3] * k[3];
+        let cube = |i: usize| inv[i] * (k[i] * k[i] * k[i]) * inv[i] * inv[i];
+        let th2 = p * (-cube(0) + cube(1) - cube(2) + cube(3));
+        let dp = -(c.0 * u.0 + c.1 * u.1); // p′; p″ = −p
+        let g = th1 * dp + 1.0;
+        let dm = dt * g - dp * kw;
+        let d2m = -cr * g * g + dt * (th2 * dp * dp - th1 * p) + p * kw;
+        // Halley (cubic, error constant ≈ 0.6 here: a step ≤ 5e-6 leaves ≲ 1e-16 rad);
+        // Newton (error constant ≈ 0.1: a step ≤ 1e-8 leaves ≲ 1e-17) when far.
+        let halley = (m * d2m).abs().lt(dm * 0.5 * dm);
+        let step =
+            T::select(halley, m * -2.0 * dm, -m) / T::select(halley, dm * 2.0 * dm - m * d2m, dm);
+        MomentStep {
+            step,
+            halley,
+            tir,
+            v: (u.0 + -u.1 * step, u.1 + u.0 * step),
+        }
     }
 
     /// 1/|v| for v = u + u⊥·step with |u| = 1, i.e. 1/√(1 + step²): by its series where

@@ -8,8 +8,11 @@
 //! | dome, decentred | setup, first-order guess, Halley/Newton on the moment equation, output direction | guess outside the bracket, total internal reflection, non-finite steps, no convergence in 16 steps |
 //! | dome centred, cylinder off its axis, no port | — | every point |
 //!
-//! Every formula is the scalar solver's, operation for operation, so each point gets the
-//! same bits as [`PortSolver::forward`] (tested), whichever instruction set runs it.
+//! The steps themselves (`Slabs::eval2_ratio`, `halley_parts`, `one_layer_parts`,
+//! `DomePort::guess`, `moment_step`) are the scalar solver's own functions, generic over
+//! [`crate::optics::lanes::Lane`]; the setup and stopping rule here repeat the scalar ones
+//! operation for operation. So each point gets the same bits as [`PortSolver::forward`]
+//! (tested), whichever instruction set runs it.
 
 use super::{CylinderPort, DomePort, FlatPort, NoSolution, PortSolver, REFINE_AT, Slabs};
 use crate::optics::lanes::{M, V, W, has_avx2};
@@ -216,9 +219,6 @@ fn cylinder_kernel(port: &CylinderPort, ps: &[DVec3], out: &mut [Out]) {
 /// step in lanes.
 #[inline(always)]
 fn dome_kernel(port: &DomePort, ps: &[DVec3], out: &mut [Out]) {
-    let k = port.k;
-    let kw = port.kw;
-    let k0 = port.dtheta0;
     let c = port.center;
     let zero = V::splat(0.0);
     for (pc, oc) in ps.chunks(W).zip(out.chunks_mut(W)) {
@@ -232,8 +232,7 @@ fn dome_kernel(port: &DomePort, ps: &[DVec3], out: &mut [Out]) {
         let cl_y = (qx * qx + qy * qy + qz * qz).sqrt() / len;
         // P − C = (pc_x, pc_y); the guess (den, num) as in DomePort::halley_counted.
         let (pc_x, pc_y) = (len - cl_x, -cl_y);
-        let num = -cl_y * (pc_x * k0 + 1.0 - kw);
-        let den = pc_x * (1.0 - k0 * cl_x) + kw * cl_x;
+        let (num, den) = port.guess((cl_x, cl_y), (pc_x, pc_y));
         let active = M::first(pc.len())
             .and(dc.gt(V::splat(port.r2)))
             .and(cl_y.gt(V::splat(1e-300)))
@@ -244,43 +243,11 @@ fn dome_kernel(port: &DomePort, ps: &[DVec3], out: &mut [Out]) {
         let mut done = active.not();
         let mut failed = M::splat(false);
         for _ in 0..16 {
-            let p = cl_y * ux - cl_x * uy;
-            let s = [p * k[0], p * k[1], p * k[2], p * k[3]];
-            let co2 = s.map(|x| 1.0 - x * x);
-            let tir = co2[0]
-                .gt(zero)
-                .and(co2[1].gt(zero))
-                .and(co2[2].gt(zero))
-                .and(co2[3].gt(zero))
-                .not();
-            let co = co2.map(V::sqrt);
-            let z1x = co[0] * co[1] + s[0] * s[1];
-            let z1y = co[0] * s[1] - s[0] * co[1];
-            let z2x = co[2] * co[3] + s[2] * s[3];
-            let z2y = co[2] * s[3] - s[2] * co[3];
-            let zx = z1x * z2x - z1y * z2y;
-            let zy = z1x * z2y + z1y * z2x;
-            let wx = zx * ux - zy * uy;
-            let wy = zx * uy + zy * ux;
-            let cr = pc_x * wy - pc_y * wx;
-            let dt = pc_x * wx + pc_y * wy;
-            let m = cr - kw * p;
-            let inv = co.map(|x| 1.0 / x);
-            let th1 = -k[0] * inv[0] + k[1] * inv[1] - k[2] * inv[2] + k[3] * inv[3];
-            let cube = |i: usize| k[i] * k[i] * k[i] * inv[i] * inv[i] * inv[i];
-            let th2 = p * (-cube(0) + cube(1) - cube(2) + cube(3));
-            let dp = -(cl_x * ux + cl_y * uy);
-            let g = 1.0 + th1 * dp;
-            let dm = dt * g - kw * dp;
-            let d2m = -cr * g * g + dt * (th2 * dp * dp - th1 * p) + kw * p;
-            let halley = (m * d2m).abs().lt(0.5 * dm * dm);
-            let step =
-                halley.select(-2.0 * m * dm, -m) / halley.select(2.0 * dm * dm - m * d2m, dm);
-            let vx = ux + -uy * step;
-            let vy = uy + ux * step;
+            let m = port.moment_step((cl_x, cl_y), (pc_x, pc_y), (ux, uy));
+            let (step, halley, (vx, vy)) = (m.step, m.halley, m.v);
             let tol = halley.select(V::splat(5e-6), V::splat(1e-8));
             let conv = step.abs().le(tol);
-            let bad = tir.or(step.finite().not());
+            let bad = m.tir.or(step.finite().not());
             let live = done.not();
             // DomePort::unit_scale: the series where |step| ≤ 1e-3, else 1/|v|; a converged
             // lane keeps v as it is.
