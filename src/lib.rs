@@ -8,6 +8,7 @@
 pub mod backend;
 pub mod cli;
 pub mod compare;
+pub mod evaluate;
 pub mod io;
 pub mod mesh;
 pub mod model;

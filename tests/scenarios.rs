@@ -5,8 +5,9 @@ use std::path::Path;
 #[test]
 fn every_example_scene_validates() {
     let mut n = 0;
-    let mut entries: Vec<_> = std::fs::read_dir("scenarios")
-        .unwrap()
+    let mut entries: Vec<_> = ["scenarios", "scenarios/lessons"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(d).unwrap())
         .map(|e| e.unwrap().path())
         .collect();
     entries.sort();

@@ -12,6 +12,7 @@ mod common;
 mod compare;
 mod compile;
 mod dive;
+mod evaluate;
 mod explain;
 mod plan;
 mod project;
@@ -33,6 +34,7 @@ Examples:
   poser render scenarios/dome_orbit.toml --backend blender -o out/cycles
   poser compare scenarios/calibration_flat.toml --backends native,mitsuba -o out/cmp
   poser plan scenarios/paper_survey.toml
+  poser evaluate scenarios/lessons/flat_port_deformation.toml -o out/eval
   poser dive scenarios/paper_survey.toml -o dive.ssrf
   poser schema";
 
@@ -210,6 +212,8 @@ pub enum Command {
         #[arg(long)]
         plot: Option<PathBuf>,
     },
+    /// Process the simulated survey with COLMAP; errors against the truth, the bowl, a report.
+    Evaluate(evaluate::Args),
     /// Dive profile, decompression and gas verdict; export to Subsurface.
     Dive {
         #[command(flatten)]
@@ -297,6 +301,7 @@ pub fn main() -> ExitCode {
             backends,
             plot,
         } => bench::run(&what, json, quick, backends, plot),
+        Command::Evaluate(args) => evaluate::run(&args),
         Command::Dive {
             scene,
             out,

@@ -9,10 +9,46 @@
 //! | `sidelap` | fraction | 0.6 | overlap between neighbouring strips |
 //! | `trigger` | — | overlap | exposures by distance (m), time (s) or from `overlap` |
 //! | `tilt` | rad | 0 | oblique tilt forward from nadir |
+//! | `obliques` | rad | none | a second pass over the same strips, tilted forward by this angle |
 
 use crate::model::{NetworkSummary, Pose, RigPose};
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
+
+/// A hand-held camera's wobble about the planned poses (σ per axis, m; σ of a rotation about a
+/// random axis, rad), seeded.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Jitter {
+    pub position: f64,
+    pub rotation: f64,
+    pub seed: u64,
+}
+
+/// Apply `j` to every pose: pose `i` draws from its own stream seeded by `(seed, i)`, so a pose
+/// keeps its wobble when the network grows.
+pub fn jitter(poses: &mut [RigPose], j: &Jitter) {
+    if j.position == 0.0 && j.rotation == 0.0 {
+        return;
+    }
+    let gauss = |r: &mut crate::rng::SplitMix64| {
+        let u1 = 1.0 - r.next_f64();
+        let u2 = r.next_f64();
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    };
+    for (i, p) in poses.iter_mut().enumerate() {
+        let mut r = crate::rng::SplitMix64(
+            j.seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+        );
+        let d = DVec3::new(gauss(&mut r), gauss(&mut r), gauss(&mut r));
+        let axis = DVec3::new(gauss(&mut r), gauss(&mut r), gauss(&mut r));
+        let angle = j.rotation * gauss(&mut r);
+        p.world_from_rig.translation += j.position * d;
+        if axis.length() > 0.0 {
+            let q = glam::DQuat::from_axis_angle(axis.normalize(), angle);
+            p.world_from_rig.rotation = DMat3::from_quat(q) * p.world_from_rig.rotation;
+        }
+    }
+}
 
 /// When exposures are taken along a strip.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -65,6 +101,8 @@ pub enum NetworkSpec {
         strips: Option<u32>,
         cross_strips: bool,
         tilt: f64,
+        /// Tilt of a second, oblique pass over the same strips, rad (0: none).
+        obliques: f64,
         trigger: Trigger,
     },
     /// Archimedean spiral around `center` out to `radius`, nadir, turns `1 − sidelap`
@@ -180,6 +218,7 @@ pub fn expand(
             strips,
             cross_strips,
             tilt,
+            obliques,
             trigger,
         } => {
             summary.kind = if *cross_strips {
@@ -195,13 +234,17 @@ pub fn expand(
             let z = ctx.seabed_z + altitude;
             let (fp_across, fp_along) = ctx.footprint_at(*altitude);
             let along = along_spacing(trigger, *overlap, fp_along, ctx.speed)?;
-            let mut passes = vec![(*heading, *width, *length)];
+            let mut passes = vec![(*heading, *width, *length, *tilt)];
             if *cross_strips {
-                passes.push((heading + std::f64::consts::FRAC_PI_2, *length, *width));
+                passes.push((heading + std::f64::consts::FRAC_PI_2, *length, *width, *tilt));
+            }
+            if *obliques != 0.0 {
+                passes.push((*heading, *width, *length, *obliques));
+                summary.kind.push_str("+obliques");
             }
             let mut strip_no = 0u32;
             let mut strip_spacing_used = None;
-            for (h, w, l) in passes {
+            for (h, w, l, pass_tilt) in passes {
                 let a = DVec3::new(h.sin(), h.cos(), 0.0);
                 let c = DVec3::new(h.cos(), -h.sin(), 0.0);
                 let n_strips = match strips {
@@ -231,7 +274,7 @@ pub fn expand(
                     let off = -w / 2.0 + i as f64 * ss;
                     let dir = if i % 2 == 0 { a } else { -a };
                     let base = c0 + c * off;
-                    let rot = nadir_rotation(dir, *tilt);
+                    let rot = nadir_rotation(dir, pass_tilt);
                     for k in 0..per_strip {
                         let s = -span / 2.0 + k as f64 * along;
                         b.travel_to(base + dir * s);
@@ -514,6 +557,7 @@ mod tests {
             strips: None,
             cross_strips: false,
             tilt: 0.0,
+            obliques: 0.0,
             trigger: Trigger::Overlap,
         };
         let (poses, s) = expand(&spec, &ctx()).unwrap();
@@ -555,6 +599,7 @@ mod tests {
             strips: Some(4),
             cross_strips: cross,
             tilt: 0.0,
+            obliques: 0.0,
             trigger: Trigger::Distance(1.0),
         };
         let (a, _) = expand(&mk(false), &ctx()).unwrap();
@@ -577,6 +622,7 @@ mod tests {
             strips: None,
             cross_strips: false,
             tilt: 30f64.to_radians(),
+            obliques: 0.0,
             trigger: Trigger::Distance(1.0),
         };
         let (p, _) = expand(&spec, &ctx()).unwrap();
@@ -586,6 +632,93 @@ mod tests {
             "{z}"
         );
         assert!(is_rotation(p[0].world_from_rig.rotation));
+    }
+
+    #[test]
+    fn jitter_moves_and_turns_poses_by_the_given_spread() {
+        let spec = NetworkSpec::Lawnmower {
+            center: DVec3::ZERO,
+            width: 20.0,
+            length: 40.0,
+            heading: 0.0,
+            altitude: 2.0,
+            overlap: 0.8,
+            sidelap: 0.6,
+            strips: Some(20),
+            cross_strips: false,
+            tilt: 0.0,
+            obliques: 0.0,
+            trigger: Trigger::Distance(0.1),
+        };
+        let (plan, _) = expand(&spec, &ctx()).unwrap();
+        let mut wobbly = plan.clone();
+        let j = Jitter {
+            position: 0.03,
+            rotation: 2f64.to_radians(),
+            seed: 7,
+        };
+        jitter(&mut wobbly, &j);
+        let n = plan.len() as f64;
+        assert!(n > 5000.0);
+        let var = plan
+            .iter()
+            .zip(&wobbly)
+            .map(|(a, b)| (b.world_from_rig.translation - a.world_from_rig.translation).length_squared())
+            .sum::<f64>()
+            / (3.0 * n);
+        assert!((var.sqrt() / 0.03 - 1.0).abs() < 0.03, "{}", var.sqrt());
+        // Turned by |angle| about a random axis: the mean of angle² is σ².
+        let ang2 = plan
+            .iter()
+            .zip(&wobbly)
+            .map(|(a, b)| {
+                let r = b.world_from_rig.rotation * a.world_from_rig.rotation.transpose();
+                let c = ((r.x_axis.x + r.y_axis.y + r.z_axis.z - 1.0) / 2.0).clamp(-1.0, 1.0);
+                c.acos().powi(2)
+            })
+            .sum::<f64>()
+            / n;
+        assert!((ang2.sqrt() / 2f64.to_radians() - 1.0).abs() < 0.03);
+        assert!(wobbly.iter().all(|p| is_rotation(p.world_from_rig.rotation)));
+        let mut again = plan.clone();
+        jitter(&mut again, &j);
+        assert_eq!(
+            again.iter().map(|p| p.world_from_rig.translation).collect::<Vec<_>>(),
+            wobbly.iter().map(|p| p.world_from_rig.translation).collect::<Vec<_>>()
+        );
+    }
+
+    #[test]
+    fn obliques_add_a_tilted_pass_over_the_same_strips() {
+        let mk = |obliques: f64| NetworkSpec::Lawnmower {
+            center: DVec3::ZERO,
+            width: 2.0,
+            length: 4.0,
+            heading: 0.0,
+            altitude: 2.0,
+            overlap: 0.8,
+            sidelap: 0.6,
+            strips: Some(3),
+            cross_strips: false,
+            tilt: 0.0,
+            obliques,
+            trigger: Trigger::Distance(1.0),
+        };
+        let (nadir, s0) = expand(&mk(0.0), &ctx()).unwrap();
+        let (both, s1) = expand(&mk(30f64.to_radians()), &ctx()).unwrap();
+        assert_eq!(both.len(), 2 * nadir.len());
+        assert_eq!(s1.strips, 2 * s0.strips);
+        assert_eq!(s1.kind, "lawnmower+obliques");
+        let n = nadir.len();
+        for (a, b) in nadir.iter().zip(&both[n..]) {
+            // Same places, the axis tilted 30° from straight down.
+            assert!((a.world_from_rig.translation - b.world_from_rig.translation).length() < 1e-12);
+            let cos = -b.world_from_rig.rotation.z_axis.z;
+            assert!((cos - 30f64.to_radians().cos()).abs() < 1e-12, "{cos}");
+        }
+        // Alternate strips look both ways along y.
+        let ys: Vec<f64> = both[n..].iter().map(|p| p.world_from_rig.rotation.z_axis.y).collect();
+        assert!(ys.iter().any(|&y| y > 0.4) && ys.iter().any(|&y| y < -0.4));
     }
 
     #[test]
@@ -649,6 +782,7 @@ mod tests {
             strips: None,
             cross_strips: false,
             tilt: 0.0,
+            obliques: 0.0,
             trigger: Trigger::Distance(1e-3),
         };
         assert!(expand(&spec, &ctx()).unwrap_err().contains("more than"));
@@ -665,6 +799,7 @@ mod tests {
             strips: None,
             cross_strips: false,
             tilt: 0.0,
+            obliques: 0.0,
             trigger: Trigger::Overlap,
         };
         assert!(expand(&bad, &ctx()).is_err());

@@ -648,6 +648,21 @@ pub struct Network {
     pub cross_strips: Option<bool>,
     /// Lawnmower: oblique tilt forward from nadir. **Unit:** rad. **Default:** 0.
     pub tilt: Option<Angle>,
+    /// Lawnmower: fly every strip a second time with the camera tilted forward by this angle
+    /// (strips alternate direction, so the obliques look both ways along the strips); the
+    /// standard way to decorrelate a self-calibration from the network. **Unit:** rad.
+    /// **Default:** none.
+    pub obliques: Option<Angle>,
+    /// All networks: a hand-held camera's wobble. Every pose is moved by this σ per axis,
+    /// seeded by `jitter_seed`. A perfectly regular nadir network is degenerate for
+    /// self-calibration (focal length and depth trade off exactly); real surveys are not.
+    /// **Unit:** m. **Default:** 0.
+    pub jitter_position: Option<Length>,
+    /// All networks: every pose is turned by this σ about a random axis. **Unit:** rad.
+    /// **Default:** 0.
+    pub jitter_rotation: Option<Angle>,
+    /// All networks: seed of the jitter. **Default:** 1.
+    pub jitter_seed: Option<u64>,
     /// Lawnmower, spiral: `"overlap"` (spacing from `overlap`), a distance (`"0.5 m"`) or a
     /// time (`"2 s"`). **Default:** `"overlap"`.
     pub trigger: Option<String>,

@@ -1639,6 +1639,19 @@ fn network(
         .unwrap_or("explicit");
     let speed = t.f64(cx, "speed", Dim::Speed, speed_default);
     check::positive(cx, &t, "speed", speed, "m/s");
+    let jitter = network::Jitter {
+        position: t.f64(cx, "jitter_position", Dim::Length, 0.0),
+        rotation: t.f64(cx, "jitter_rotation", Dim::Angle, 0.0),
+        seed: t.opt_u64(cx, "jitter_seed").unwrap_or(1),
+    };
+    if !(jitter.position >= 0.0 && jitter.rotation >= 0.0 && jitter.rotation < 0.5) {
+        let sp = t.span_of("jitter_rotation");
+        cx.push(
+            Diagnostic::error("E0315", "jitter must be a small, non-negative spread")
+                .label(sp, "the σ of a hand-held camera's wobble")
+                .help("a diver holds a camera to a few centimetres and a few degrees, e.g. `jitter_position = \"3 cm\"`, `jitter_rotation = \"2 deg\"`"),
+        );
+    }
     let altitude = |cx: &mut Cx, t: &mut Tab, ctx: &NetworkContext| -> f64 {
         let a = t.opt_f64(cx, "altitude", Dim::Length);
         let g = t.opt_f64(cx, "gsd", Dim::Gsd);
@@ -1725,6 +1738,15 @@ fn network(
             }
             let cross_strips = t.bool(cx, "cross_strips", false);
             let tilt = t.f64(cx, "tilt", Dim::Angle, 0.0);
+            let obliques = t.f64(cx, "obliques", Dim::Angle, 0.0);
+            if obliques.abs() >= std::f64::consts::FRAC_PI_2 {
+                let sp = t.span_of("obliques");
+                cx.push(
+                    Diagnostic::error("E0314", "oblique tilt must be below 90°")
+                        .label(sp, format!("{:.1}°", obliques.to_degrees()))
+                        .help("obliques are usually tilted 20–45° forward from nadir"),
+                );
+            }
             let trigger = trigger(cx, &mut t);
             NetworkSpec::Lawnmower {
                 center,
@@ -1737,6 +1759,7 @@ fn network(
                 strips,
                 cross_strips,
                 tilt,
+                obliques,
                 trigger,
             }
         }
@@ -1887,7 +1910,8 @@ fn network(
         );
     }
     match network::expand(&spec, &ctx) {
-        Ok((poses, summary)) => {
+        Ok((mut poses, summary)) => {
+            network::jitter(&mut poses, &jitter);
             if poses.is_empty() {
                 cx.push(
                     Diagnostic::error("E0318", "the network has no poses")

@@ -1,0 +1,345 @@
+"""Process a simulated survey with COLMAP (pycolmap) for `poser evaluate`.
+
+Two jobs, both reading a JSON request written by the Rust side and writing a JSON result
+(atomically: temporary name, then rename). Pixel coordinates follow COLMAP's convention, pixel
+centres at +0.5, the same as poser's.
+
+``bundle`` (observations mode): a reconstruction is built from the request's cameras (initial
+intrinsics, e.g. the in-air focal length a practitioner reads from EXIF), images (initial,
+perturbed ``cam_from_world`` poses), 3D points (initial, perturbed positions) and their 2D
+observations; COLMAP's bundle adjuster then refines poses, points and the camera model's
+intrinsics (self-calibration). The gauge is fixed by two cameras (COLMAP's
+``TWO_CAMS_FROM_WORLD``); the result is compared with the truth by a similarity on the Rust side.
+
+``images`` (images mode): COLMAP's own pipeline on rendered images: SIFT extraction, matching
+(sequential or exhaustive) and incremental mapping, with the same camera model, shared by all
+images, initialised from the request's camera.
+
+Request (``bundle``)::
+
+    {"job": "bundle", "model": "simple_radial", "refine_principal_point": true,
+     "cameras": [{"id": 1, "width": W, "height": H, "fx": .., "fy": .., "cx": .., "cy": ..}],
+     "images": [{"id": 1, "name": "..", "camera": 1, "qvec": [w, x, y, z], "tvec": [..],
+                 "observations": [[u, v, point_id], ...]}],
+     "points": [{"id": 1, "xyz": [x, y, z]}]}
+
+Request (``images``)::
+
+    {"job": "images", "model": ..., "image_dir": "..", "work_dir": "..", "matcher":
+     "sequential" | "exhaustive", "cameras": [one camera as above], "images": [{"name": ..}]}
+
+Result (both)::
+
+    {"cameras": [{"id", "model", "params", "width", "height"}],
+     "images": [{"id", "name", "qvec", "tvec"}],          # registered images, cam_from_world
+     "points": [{"id", "xyz", "error", "track"}],          # track = number of observations
+     "summary": {...}}
+
+Usage: python evaluate.py REQUEST.json RESULT.json
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+MODELS = {
+    # poser name -> (COLMAP model, params from (fx, fy, cx, cy))
+    "pinhole": ("PINHOLE", lambda fx, fy, cx, cy: [fx, fy, cx, cy]),
+    "simple_radial": (
+        "SIMPLE_RADIAL",
+        lambda fx, fy, cx, cy: [0.5 * (fx + fy), cx, cy, 0.0],
+    ),
+    "radial": ("RADIAL", lambda fx, fy, cx, cy: [0.5 * (fx + fy), cx, cy, 0.0, 0.0]),
+    "opencv": ("OPENCV", lambda fx, fy, cx, cy: [fx, fy, cx, cy, 0.0, 0.0, 0.0, 0.0]),
+    "full_opencv": (
+        "FULL_OPENCV",
+        lambda fx, fy, cx, cy: [fx, fy, cx, cy] + [0.0] * 8,
+    ),
+}
+
+
+class EvaluateError(Exception):
+    """A request COLMAP cannot process; the message says what to change."""
+
+
+def make_camera(pycolmap, cam: dict, model: str):
+    """A COLMAP camera of `model` initialised from the request's intrinsics."""
+    if model not in MODELS:
+        raise EvaluateError(
+            f"unknown camera model {model!r}; use one of {sorted(MODELS)}"
+        )
+    name, params = MODELS[model]
+    return pycolmap.Camera(
+        camera_id=int(cam["id"]),
+        model=name,
+        width=int(cam["width"]),
+        height=int(cam["height"]),
+        params=params(
+            float(cam["fx"]), float(cam["fy"]), float(cam["cx"]), float(cam["cy"])
+        ),
+    )
+
+
+def rigid(pycolmap, qvec, tvec):
+    """``cam_from_world`` from a (w, x, y, z) quaternion and a translation."""
+    w, x, y, z = (float(a) for a in qvec)
+    return pycolmap.Rigid3d(
+        pycolmap.Rotation3d([x, y, z, w]), np.asarray(tvec, dtype=float)
+    )
+
+
+def qvec_of(rot) -> list[float]:
+    """(w, x, y, z), w >= 0, of a pycolmap Rotation3d (stored x, y, z, w)."""
+    x, y, z, w = (float(a) for a in rot.quat)
+    if w < 0:
+        w, x, y, z = -w, -x, -y, -z
+    return [w, x, y, z]
+
+
+def build_reconstruction(pycolmap, req: dict):
+    """A COLMAP reconstruction of the request's initial cameras, images, points and tracks,
+    and the map from COLMAP's point ids (it numbers them itself) to the request's."""
+    rec = pycolmap.Reconstruction()
+    ids: dict[int, int] = {}  # COLMAP's point id -> the request's
+    model = req["model"]
+    for cam in req["cameras"]:
+        rec.add_camera_with_trivial_rig(make_camera(pycolmap, cam, model))
+    # Observations per point: (image id, point2D index).
+    tracks: dict[int, list[tuple[int, int]]] = {}
+    for im in req["images"]:
+        obs = im["observations"]
+        xy = np.array([[o[0], o[1]] for o in obs], dtype=float).reshape(-1, 2)
+        image = pycolmap.Image(
+            name=im["name"],
+            keypoints=xy,
+            camera_id=int(im["camera"]),
+            image_id=int(im["id"]),
+        )
+        rec.add_image_with_trivial_frame(image, rigid(pycolmap, im["qvec"], im["tvec"]))
+        for k, o in enumerate(obs):
+            tracks.setdefault(int(o[2]), []).append((int(im["id"]), k))
+    for p in req["points"]:
+        elems = tracks.get(int(p["id"]), [])
+        if len(elems) < 2:
+            continue
+        track = pycolmap.Track()
+        for image_id, k in elems:
+            track.add_element(image_id, k)
+        pid = rec.add_point3D(np.asarray(p["xyz"], dtype=float), track)
+        ids[pid] = int(p["id"])
+    return rec, ids
+
+
+def ba_options(pycolmap, req: dict):
+    """Self-calibrating bundle adjustment: focal, principal point (if asked) and distortion."""
+    opts = pycolmap.BundleAdjustmentOptions()
+    opts.refine_focal_length = True
+    opts.refine_principal_point = bool(req.get("refine_principal_point", False))
+    opts.refine_extra_params = True
+    opts.print_summary = False
+    so = opts.ceres.solver_options
+    so.max_num_iterations = int(req.get("max_iterations", 200))
+    so.num_threads = int(req.get("threads", os.cpu_count() or 1))
+    so.function_tolerance = 1e-12
+    so.gradient_tolerance = 1e-12
+    so.parameter_tolerance = 1e-12
+    return opts
+
+
+def bundle(pycolmap, req: dict) -> dict:
+    """Observations mode: bundle-adjust the request from its perturbed initialisation."""
+    if len(req["images"]) < 3:
+        raise EvaluateError(
+            f"only {len(req['images'])} image(s) observe the tie points; bundle adjustment "
+            "needs at least 3 (help: widen the network or raise the tie-point density)"
+        )
+    rec, ids = build_reconstruction(pycolmap, req)
+    if rec.num_points3D() < 10:
+        raise EvaluateError(
+            f"only {rec.num_points3D()} tie point(s) are seen in two or more images "
+            "(help: raise --density or the overlap)"
+        )
+    rec.update_point_3d_errors()
+    initial_error = rec.compute_mean_reprojection_error()
+    opts = ba_options(pycolmap, req)
+    config = pycolmap.BundleAdjustmentConfig()
+    for image_id in sorted(rec.reg_image_ids()):
+        config.add_image(image_id)
+    config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
+    adjuster = pycolmap.create_default_bundle_adjuster(opts, config, rec)
+    summary = adjuster.solve()
+    # A second solve starting where the first stopped, as COLMAP's global BA iterates.
+    summary2 = pycolmap.create_default_bundle_adjuster(opts, config, rec).solve()
+    rec.update_point_3d_errors()
+    result = export(rec, ids)
+    result["summary"] = {
+        "initial_reprojection_error": initial_error,
+        "reprojection_error": rec.compute_mean_reprojection_error(),
+        "iterations": int(summary.num_iterations + summary2.num_iterations)
+        if hasattr(summary, "num_iterations")
+        else None,
+        "termination": str(getattr(summary2, "termination_type", "")),
+        "registered": rec.num_reg_images(),
+        "images": len(req["images"]),
+        "mean_track_length": rec.compute_mean_track_length(),
+        "observations": rec.compute_num_observations(),
+        "colmap": pycolmap.COLMAP_version,
+    }
+    return result
+
+
+def images(pycolmap, req: dict) -> dict:
+    """Images mode: SIFT features, matching and incremental mapping on rendered images."""
+    image_dir = Path(req["image_dir"])
+    work = Path(req["work_dir"])
+    work.mkdir(parents=True, exist_ok=True)
+    db = work / "database.db"
+    if db.exists():
+        db.unlink()
+    names = [im["name"] for im in req["images"]]
+    missing = [n for n in names if not (image_dir / n).is_file()]
+    if missing:
+        raise EvaluateError(
+            f"{len(missing)} image(s) missing in {image_dir}, e.g. {missing[0]}"
+        )
+    cam = req["cameras"][0]
+    model, params = MODELS[req["model"]]
+    p = params(float(cam["fx"]), float(cam["fy"]), float(cam["cx"]), float(cam["cy"]))
+    reader = pycolmap.ImageReaderOptions()
+    reader.camera_model = model
+    reader.camera_params = ",".join(repr(float(a)) for a in p)
+    extraction = pycolmap.FeatureExtractionOptions()
+    extraction.num_threads = int(req.get("threads", os.cpu_count() or 1))
+    extraction.sift.max_num_features = int(req.get("max_features", 8192))
+    pycolmap.set_random_seed(int(req.get("seed", 0)))
+    pycolmap.extract_features(
+        db,
+        image_dir,
+        image_names=names,
+        camera_mode=pycolmap.CameraMode.SINGLE,
+        reader_options=reader,
+        extraction_options=extraction,
+        device=pycolmap.Device.cpu,
+    )
+    matching = pycolmap.FeatureMatchingOptions()
+    matching.num_threads = extraction.num_threads
+    matching.use_gpu = False
+    if req.get("matcher", "exhaustive") == "sequential":
+        pairing = pycolmap.SequentialPairingOptions()
+        pairing.overlap = int(req.get("sequential_overlap", 10))
+        pycolmap.match_sequential(
+            db, matching_options=matching, pairing_options=pairing
+        )
+    else:
+        pycolmap.match_exhaustive(db, matching_options=matching)
+    mapper = pycolmap.IncrementalPipelineOptions()
+    mapper.num_threads = extraction.num_threads
+    mapper.multiple_models = False
+    mapper.ba_refine_principal_point = bool(req.get("refine_principal_point", False))
+    sparse = work / "sparse"
+    sparse.mkdir(exist_ok=True)
+    maps = pycolmap.incremental_mapping(db, image_dir, sparse, options=mapper)
+    if not maps:
+        raise EvaluateError(
+            "COLMAP registered no images: too few matches between them (help: check that the "
+            "scene is textured at the image's GSD, raise samples, or add overlap)"
+        )
+    rec = max(maps.values(), key=lambda r: r.num_reg_images())
+    result = export(rec)
+    keypoints = 0
+    with pycolmap.Database.open(db) as database:
+        for image in database.read_all_images():
+            keypoints += database.num_keypoints_for_image(image.image_id)
+    result["summary"] = {
+        "reprojection_error": rec.compute_mean_reprojection_error(),
+        "registered": rec.num_reg_images(),
+        "images": len(names),
+        "mean_track_length": rec.compute_mean_track_length(),
+        "observations": rec.compute_num_observations(),
+        "keypoints_per_image": keypoints / max(1, len(names)),
+        "colmap": pycolmap.COLMAP_version,
+    }
+    return result
+
+
+def export(rec, ids: dict[int, int] | None = None) -> dict:
+    """Cameras, registered images and points of a reconstruction as plain JSON data; point ids
+    are mapped through `ids` when given."""
+    cams = [
+        {
+            "id": int(cid),
+            "model": c.model.name,
+            "params": [float(a) for a in c.params],
+            "width": int(c.width),
+            "height": int(c.height),
+        }
+        for cid, c in sorted(rec.cameras.items())
+    ]
+    imgs = []
+    for iid in sorted(rec.reg_image_ids()):
+        im = rec.image(iid)
+        pose = im.cam_from_world()
+        imgs.append(
+            {
+                "id": int(iid),
+                "name": im.name,
+                "qvec": qvec_of(pose.rotation),
+                "tvec": [float(a) for a in pose.translation],
+            }
+        )
+    pts = [
+        {
+            "id": int(ids[pid]) if ids is not None else int(pid),
+            "xyz": [float(a) for a in p.xyz],
+            "error": float(p.error),
+            "track": int(p.track.length()),
+        }
+        for pid, p in sorted(rec.points3D.items())
+    ]
+    return {"cameras": cams, "images": imgs, "points": pts}
+
+
+def write_atomic(path: Path, data: dict) -> None:
+    """Write JSON to a temporary file beside `path`, then rename it onto `path`."""
+    fd, tmp = tempfile.mkstemp(prefix=".poser-", suffix=".json", dir=path.parent)
+    with os.fdopen(fd, "w", encoding="utf-8") as f:
+        json.dump(data, f)
+    os.replace(tmp, path)
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 3:
+        print(__doc__.strip().splitlines()[-1], file=sys.stderr)
+        return 2
+    request, result = Path(argv[1]), Path(argv[2])
+    with open(request, encoding="utf-8") as f:
+        req = json.load(f)
+    try:
+        import pycolmap
+    except (
+        ImportError
+    ) as e:  # the Rust side checks first; this is the last line of defence
+        print(f"error: pycolmap is not available ({e})", file=sys.stderr)
+        return 3
+    jobs = {"bundle": bundle, "images": images}
+    job = req.get("job")
+    if job not in jobs:
+        print(f"error: unknown job {job!r}", file=sys.stderr)
+        return 2
+    try:
+        out = jobs[job](pycolmap, req)
+    except EvaluateError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
+    write_atomic(result, out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

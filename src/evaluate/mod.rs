@@ -1,0 +1,694 @@
+//! `poser evaluate`: process the simulated survey with a real photogrammetry engine (COLMAP,
+//! through pycolmap) and measure what went wrong against the exact truth.
+//!
+//! | mode | what COLMAP gets | alignment to the truth |
+//! |---|---|---|
+//! | observations (default) | exact refractive projections of sampled tie points ([`observe`]) with seeded pixel noise; a perturbed initial network; self-calibrating bundle adjustment with a camera model that ignores the port | 7-parameter similarity from the targets as GCPs (`gcp`) or from all points |
+//! | images | rendered images: SIFT, matching, incremental mapping | similarity from the registered camera centres and axes |
+//!
+//! | item | meaning |
+//! |---|---|
+//! | [`Options`] | the knobs of one evaluation |
+//! | [`evaluate_observations`], [`evaluate_images`] | run one mode, return an [`Evaluation`] |
+//! | [`Evaluation`] | registered images, track length, reprojection error, recovered intrinsics against the in-water-equivalent truth, 3D errors, the fitted bowl |
+//! | [`report`] | `report.json`, `report.md`, `errors.csv`, `deformation.png`, `profile.svg` |
+//!
+//! The *in-water-equivalent* intrinsics are what a pinhole camera model would need to match the
+//! camera behind its port near the image centre: the paraxial focal length measured through
+//! the exact projection at the survey's median distance (behind a flat port, about
+//! `n_water × f` in air; behind a centred dome, `f`).
+
+pub mod align;
+pub mod colmap;
+pub mod observe;
+pub mod report;
+
+use crate::mesh::{TriMesh, object_mesh};
+use crate::model::Model;
+use crate::optics::project::Projector;
+use crate::render::scene::{Ray, Scene, SurfaceId, target_mesh};
+use crate::rng::SplitMix64;
+use align::{AxisStats, Bowl, Similarity};
+use colmap::{CameraModel, Reconstruction, Request, RequestCamera, RequestImage, RequestPoint};
+use glam::{DQuat, DVec3};
+use observe::{ImageObservations, PointKind, SurveyPoint, gauss};
+use serde::Serialize;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Which processing `poser evaluate` runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Mode {
+    /// Exact projections of tie points, bundle-adjusted (no rendering).
+    Observations,
+    /// COLMAP's full pipeline on rendered images.
+    Images,
+}
+
+/// The knobs of one evaluation.
+#[derive(Debug, Clone)]
+pub struct Options {
+    pub model: CameraModel,
+    /// Pixel noise added to every observation, px (observations mode).
+    pub noise: f64,
+    /// Tie points per m² of surface (observations mode).
+    pub density: f64,
+    /// Align on the targets' points (GCPs) instead of all points.
+    pub gcp: bool,
+    pub seed: u64,
+    /// Let the bundle adjustment refine the principal point (COLMAP's default: no).
+    pub refine_principal_point: bool,
+    /// Initial camera and point positions are off by this fraction of the median viewing
+    /// distance (σ per axis), and rotations by `perturb_rotation` (σ, rad).
+    pub perturb_position: f64,
+    pub perturb_rotation: f64,
+    pub progress: bool,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            model: CameraModel::Opencv,
+            noise: 0.3,
+            density: 20.0,
+            gcp: false,
+            seed: 1,
+            refine_principal_point: false,
+            perturb_position: 0.02,
+            perturb_rotation: 1f64.to_radians(),
+            progress: false,
+        }
+    }
+}
+
+/// A camera's intrinsics as recovered by COLMAP against the truth.
+#[derive(Debug, Clone, Serialize)]
+pub struct CameraEval {
+    pub name: String,
+    /// The camera's in-air focal length, px (what EXIF gives; COLMAP starts from it).
+    pub f_air: f64,
+    /// In-water-equivalent truth (fx, fy, cx, cy), px, at `distance` m.
+    pub truth: [f64; 4],
+    pub distance: f64,
+    /// Recovered (fx, fy, cx, cy), px, and the model's other parameters.
+    pub recovered: [f64; 4],
+    pub extra: Vec<(String, f64)>,
+    /// (recovered − truth) / truth of the mean focal length.
+    pub focal_error: f64,
+}
+
+/// One point's error after alignment (truth frame, m).
+#[derive(Debug, Clone, Serialize)]
+pub struct PointError {
+    pub id: u64,
+    pub label: String,
+    pub kind: &'static str,
+    pub truth: [f64; 3],
+    pub error: [f64; 3],
+    pub track: u32,
+}
+
+/// Everything `poser evaluate` measured.
+#[derive(Debug, Clone, Serialize)]
+pub struct Evaluation {
+    pub scene: String,
+    pub mode: Mode,
+    pub camera_model: CameraModel,
+    pub conventions: &'static str,
+    pub settings: serde_json::Value,
+    pub images: usize,
+    pub registered: usize,
+    pub points: usize,
+    pub observations: usize,
+    pub mean_track_length: f64,
+    /// Mean reprojection error after processing, px.
+    pub reprojection_error: f64,
+    pub cameras: Vec<CameraEval>,
+    /// `"gcp"`, `"all points"` or `"camera centres"`, and how many were used.
+    pub alignment: String,
+    pub alignment_count: usize,
+    pub similarity: Similarity,
+    /// Errors of the points used as ties (observations mode: 3D; images mode: height only).
+    pub tie_errors: AxisStats,
+    /// Errors of target points not used for the alignment (check points), if any.
+    pub check_errors: Option<AxisStats>,
+    /// Camera-centre errors after alignment.
+    pub camera_errors: AxisStats,
+    pub bowl: Option<Bowl>,
+    /// COLMAP's own summary (version, iterations, …).
+    pub colmap: serde_json::Value,
+    pub seconds: f64,
+    #[serde(skip)]
+    pub point_errors: Vec<PointError>,
+    /// True camera centres of the registered images (for the map).
+    #[serde(skip)]
+    pub centres: Vec<DVec3>,
+}
+
+/// World-frame meshes of every object and target, labelled, and the occlusion scene built
+/// from them.
+fn surfaces(model: &Model) -> Result<(Vec<(String, TriMesh)>, Scene), String> {
+    let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
+    let mut labelled = Vec::new();
+    let mut ids = Vec::new();
+    for (i, o) in model.objects.iter().enumerate() {
+        labelled.push((o.name.clone(), object_mesh(o, base)?));
+        ids.push(SurfaceId::Object(i as u32));
+    }
+    for (i, t) in model.targets.iter().enumerate() {
+        labelled.push((t.name.clone(), target_mesh(t)));
+        ids.push(SurfaceId::Target(i as u32));
+    }
+    let scene = Scene::from_meshes(
+        ids.into_iter()
+            .zip(labelled.iter().map(|(_, m)| m.clone()))
+            .collect(),
+    );
+    Ok((labelled, scene))
+}
+
+/// The paraxial in-water-equivalent (fx, fy, cx, cy) of camera `ci` at distance `d`.
+pub fn water_equivalent(model: &Model, ci: usize, d: f64) -> Result<[f64; 4], String> {
+    let cam = &model.cameras[ci];
+    let pr = Projector::for_camera(cam, 1, model.ambient_ior()[1])?;
+    let t = 1e-4;
+    let p = |x: f64, y: f64| {
+        pr.project_camera_unbounded(DVec3::new(x * d, y * d, d))
+            .map_err(|e| format!("camera `{}`: no projection near the axis ({e:?})", cam.name))
+    };
+    let c = p(0.0, 0.0)?;
+    let (px, mx) = (p(t, 0.0)?, p(-t, 0.0)?);
+    let (py, my) = (p(0.0, t)?, p(0.0, -t)?);
+    Ok([
+        (px[0] - mx[0]) / (2.0 * t),
+        (py[1] - my[1]) / (2.0 * t),
+        c[0],
+        c[1],
+    ])
+}
+
+fn random_rotation(rng: &mut SplitMix64, sigma: f64) -> DQuat {
+    let axis = DVec3::new(gauss(rng), gauss(rng), gauss(rng));
+    let axis = if axis.length() > 0.0 {
+        axis.normalize()
+    } else {
+        DVec3::Z
+    };
+    DQuat::from_axis_angle(axis, sigma * gauss(rng))
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn request_cameras(model: &Model) -> Vec<RequestCamera> {
+    model
+        .cameras
+        .iter()
+        .enumerate()
+        .map(|(i, c)| RequestCamera {
+            id: i as u32 + 1,
+            width: c.width,
+            height: c.height,
+            fx: c.fx,
+            fy: c.fy,
+            cx: c.cx,
+            cy: c.cy,
+        })
+        .collect()
+}
+
+fn camera_evals(
+    model: &Model,
+    rec: &Reconstruction,
+    distance: f64,
+) -> Result<Vec<CameraEval>, String> {
+    let mut out = Vec::new();
+    for (ci, cam) in model.cameras.iter().enumerate() {
+        let Some(rc) = rec.cameras.iter().find(|c| c.id == ci as u32 + 1) else {
+            continue;
+        };
+        let truth = water_equivalent(model, ci, distance)?;
+        let (recovered, extra) = rc.intrinsics();
+        let ft = 0.5 * (truth[0] + truth[1]);
+        let fr = 0.5 * (recovered[0] + recovered[1]);
+        out.push(CameraEval {
+            name: cam.name.clone(),
+            f_air: 0.5 * (cam.fx + cam.fy),
+            truth,
+            distance,
+            recovered,
+            extra: extra.into_iter().map(|(n, v)| (n.to_string(), v)).collect(),
+            focal_error: (fr - ft) / ft,
+        });
+    }
+    Ok(out)
+}
+
+fn summary_f64(rec: &Reconstruction, key: &str) -> f64 {
+    rec.summary
+        .get(key)
+        .and_then(|v| v.as_f64())
+        .unwrap_or(f64::NAN)
+}
+
+/// Observations mode: sample, observe, perturb, bundle-adjust with COLMAP, compare.
+pub fn evaluate_observations(
+    model: &Model,
+    opts: &Options,
+    progress: &(dyn Fn(&str, u64, u64) + Sync),
+) -> Result<Evaluation, String> {
+    let t0 = std::time::Instant::now();
+    if model.poses.is_empty() {
+        return Err("the scene's network has no poses: nothing to evaluate".into());
+    }
+    let (meshes, scene) = surfaces(model)?;
+    let points = observe::sample_points(model, &meshes, opts.density, opts.seed)?;
+    let n_images = (model.poses.len() * model.cameras.len()) as u64;
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let mut images = observe::observe(model, &scene, &points, &|| {
+        let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        progress("observing", k, n_images);
+    })?;
+    observe::add_noise(&mut images, opts.noise, opts.seed);
+
+    // Points seen at least twice; images with enough of them.
+    let mut seen = vec![0u32; points.len()];
+    for im in &images {
+        for (k, _) in &im.points {
+            seen[*k] += 1;
+        }
+    }
+    let used: Vec<&ImageObservations> = images
+        .iter()
+        .filter(|im| im.points.iter().filter(|(k, _)| seen[*k] >= 2).count() >= 8)
+        .collect();
+    let tie_count = seen.iter().filter(|&&s| s >= 2).count();
+    if used.len() < 3 || tie_count < 10 {
+        return Err(format!(
+            "only {} image(s) see enough tie points and {tie_count} point(s) are seen twice or \
+             more\n  help: the network must overlap on textured surfaces; raise --density, the \
+             overlap, or check that the cameras look at the scene",
+            used.len()
+        ));
+    }
+    // Median viewing distance, for the perturbation scale and the equivalent focal length.
+    let mut depths = Vec::new();
+    for im in used.iter().step_by((used.len() / 50).max(1)) {
+        let cfw = model.world_from_camera(im.pose, im.camera).inverse();
+        for (k, _) in im.points.iter().step_by(7) {
+            depths.push(cfw.transform_point(points[*k].world).z);
+        }
+    }
+    let distance = median(depths);
+    let sigma_pos = opts.perturb_position * distance;
+
+    let mut rng = SplitMix64(opts.seed ^ 0x1417_1A11_5EED);
+    let mut req_images = Vec::new();
+    for (n, im) in used.iter().enumerate() {
+        let wfc = model.world_from_camera(im.pose, im.camera);
+        let rot = random_rotation(&mut rng, opts.perturb_rotation)
+            * DQuat::from_mat3(&wfc.rotation).normalize();
+        let c = wfc.translation
+            + sigma_pos * DVec3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng));
+        let q = rot.inverse(); // cam_from_world rotation
+        let t = -(q * c);
+        req_images.push(RequestImage {
+            id: n as u32 + 1,
+            name: im.name.clone(),
+            camera: im.camera as u32 + 1,
+            qvec: Some([q.w, q.x, q.y, q.z]),
+            tvec: Some(t.to_array()),
+            observations: im
+                .points
+                .iter()
+                .filter(|(k, _)| seen[*k] >= 2)
+                .map(|(k, px)| [px[0], px[1], (*k + 1) as f64])
+                .collect(),
+        });
+    }
+    let req_points: Vec<RequestPoint> = points
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| seen[*k] >= 2)
+        .map(|(k, p)| {
+            let d = sigma_pos * DVec3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng));
+            RequestPoint {
+                id: k as u64 + 1,
+                xyz: (p.world + d).to_array(),
+            }
+        })
+        .collect();
+    let req = Request {
+        job: "bundle",
+        model: opts.model,
+        refine_principal_point: opts.refine_principal_point,
+        seed: opts.seed,
+        cameras: request_cameras(model),
+        images: req_images,
+        points: req_points,
+        image_dir: None,
+        work_dir: None,
+        matcher: None,
+        threads: rayon::current_num_threads(),
+    };
+    progress("bundle adjustment (COLMAP)", 0, 0);
+    let work = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
+    let rec = colmap::run(&req, work.path())?;
+
+    // Align and measure.
+    let by_id: HashMap<u64, &colmap::ResultPoint> = rec.points.iter().map(|p| (p.id, p)).collect();
+    let pairs: Vec<(usize, DVec3)> = rec
+        .points
+        .iter()
+        .map(|p| ((p.id - 1) as usize, DVec3::from_array(p.xyz)))
+        .collect();
+    let targets: Vec<&(usize, DVec3)> = pairs
+        .iter()
+        .filter(|(k, _)| points[*k].kind == PointKind::Target)
+        .collect();
+    let (alignment, fit_set): (&str, Vec<&(usize, DVec3)>) = if opts.gcp {
+        if targets.len() < 3 {
+            return Err(format!(
+                "--gcp: only {} target point(s) were reconstructed; at least 3 are needed\n  \
+                 help: add targets (coded targets, a points file) inside the surveyed area, or \
+                 drop --gcp to align on all points",
+                targets.len()
+            ));
+        }
+        ("gcp", targets.clone())
+    } else {
+        ("all points", pairs.iter().collect())
+    };
+    let from: Vec<DVec3> = fit_set.iter().map(|(_, x)| *x).collect();
+    let to: Vec<DVec3> = fit_set.iter().map(|(k, _)| points[*k].world).collect();
+    let sim = Similarity::estimate(&from, &to)
+        .ok_or("the reconstructed points are degenerate (collinear); no similarity to the truth")?;
+    let mut point_errors = Vec::new();
+    let mut tie = Vec::new();
+    let mut check = Vec::new();
+    let mut bowl_samples = Vec::new();
+    for (k, x) in &pairs {
+        let p: &SurveyPoint = &points[*k];
+        let e = sim.apply(*x) - p.world;
+        let kind = match (&p.kind, opts.gcp) {
+            (PointKind::Tie, _) => "tie",
+            (PointKind::Target, true) => "gcp",
+            (PointKind::Target, false) => "target",
+        };
+        match p.kind {
+            PointKind::Tie => {
+                tie.push(e);
+                bowl_samples.push((p.world.x, p.world.y, e.z));
+            }
+            PointKind::Target if !opts.gcp => check.push(e),
+            _ => {}
+        }
+        point_errors.push(PointError {
+            id: *k as u64 + 1,
+            label: p.label.clone(),
+            kind,
+            truth: p.world.to_array(),
+            error: e.to_array(),
+            track: by_id.get(&(*k as u64 + 1)).map_or(0, |r| r.track),
+        });
+    }
+    let (camera_errors, centres) = camera_centre_errors(model, &rec, &sim, &used_names(&used));
+    Ok(Evaluation {
+        scene: model.name.clone(),
+        mode: Mode::Observations,
+        camera_model: opts.model,
+        conventions: CONVENTIONS,
+        settings: serde_json::json!({
+            "noise_px": opts.noise,
+            "density_per_m2": opts.density,
+            "seed": opts.seed,
+            "refine_principal_point": opts.refine_principal_point,
+            "perturb_position_m": sigma_pos,
+            "perturb_rotation_deg": opts.perturb_rotation.to_degrees(),
+            "tie_points_sampled": points.len(),
+        }),
+        images: images.len(),
+        registered: rec.images.len(),
+        points: rec.points.len(),
+        observations: summary_f64(&rec, "observations") as usize,
+        mean_track_length: summary_f64(&rec, "mean_track_length"),
+        reprojection_error: summary_f64(&rec, "reprojection_error"),
+        cameras: camera_evals(model, &rec, distance)?,
+        alignment: alignment.into(),
+        alignment_count: fit_set.len(),
+        similarity: sim,
+        tie_errors: AxisStats::of(&tie),
+        check_errors: (!check.is_empty()).then(|| AxisStats::of(&check)),
+        camera_errors,
+        bowl: Bowl::fit(&bowl_samples),
+        colmap: rec.summary.clone(),
+        seconds: t0.elapsed().as_secs_f64(),
+        point_errors,
+        centres,
+    })
+}
+
+const CONVENTIONS: &str = "world z up, metres; errors = aligned reconstruction − truth; pixel \
+                           centres at +0.5 (COLMAP); intrinsics in pixels of the evaluated images";
+
+fn used_names(used: &[&ImageObservations]) -> HashMap<String, (usize, usize)> {
+    used.iter()
+        .map(|im| (im.name.clone(), (im.pose, im.camera)))
+        .collect()
+}
+
+/// Camera-centre errors of the registered images after `sim`, and their true centres.
+fn camera_centre_errors(
+    model: &Model,
+    rec: &Reconstruction,
+    sim: &Similarity,
+    names: &HashMap<String, (usize, usize)>,
+) -> (AxisStats, Vec<DVec3>) {
+    let mut errs = Vec::new();
+    let mut centres = Vec::new();
+    for im in &rec.images {
+        if let Some(&(pi, ci)) = names.get(&im.name) {
+            let truth = model.world_from_camera(pi, ci).translation;
+            errs.push(sim.apply(colmap::centre(im.qvec, im.tvec)) - truth);
+            centres.push(truth);
+        }
+    }
+    (AxisStats::of(&errs), centres)
+}
+
+/// The image files of a render directory, for each image of the model: `<name>.jpg` (a sensor
+/// stage's camera output) when present, else `<name>.png`.
+pub fn rendered_images(model: &Model, dir: &Path) -> Result<Vec<(String, usize, usize)>, String> {
+    let mut out = Vec::new();
+    for pi in 0..model.poses.len() {
+        for ci in 0..model.cameras.len() {
+            let name = model.image_name(pi, ci);
+            let file = ["jpg", "png"]
+                .iter()
+                .map(|e| format!("{name}.{e}"))
+                .find(|f| dir.join(f).is_file())
+                .ok_or_else(|| {
+                    format!(
+                        "{}: no rendered image `{name}.jpg` or `{name}.png`\n  help: render the \
+                         scene into this directory first (`poser render SCENE -o DIR`) or drop \
+                         --images to let evaluate render it",
+                        dir.display()
+                    )
+                })?;
+            out.push((file, pi, ci));
+        }
+    }
+    Ok(out)
+}
+
+/// Images mode: COLMAP's pipeline on the rendered images in `image_dir`.
+pub fn evaluate_images(
+    model: &Model,
+    image_dir: &Path,
+    opts: &Options,
+    progress: &(dyn Fn(&str, u64, u64) + Sync),
+) -> Result<Evaluation, String> {
+    let t0 = std::time::Instant::now();
+    let files = rendered_images(model, image_dir)?;
+    if files.len() < 3 {
+        return Err(format!(
+            "images mode needs at least 3 images; the network has {}",
+            files.len()
+        ));
+    }
+    let (_, scene) = surfaces(model)?;
+    let abs_dir: PathBuf = std::fs::canonicalize(image_dir)
+        .map_err(|e| format!("{}: {e}", image_dir.display()))?;
+    let work = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
+    let req = Request {
+        job: "images",
+        model: opts.model,
+        refine_principal_point: opts.refine_principal_point,
+        seed: opts.seed,
+        cameras: request_cameras(model).into_iter().take(1).collect(),
+        images: files
+            .iter()
+            .enumerate()
+            .map(|(n, (f, _, ci))| RequestImage {
+                id: n as u32 + 1,
+                name: f.clone(),
+                camera: *ci as u32 + 1,
+                qvec: None,
+                tvec: None,
+                observations: Vec::new(),
+            })
+            .collect(),
+        points: Vec::new(),
+        image_dir: Some(abs_dir.to_string_lossy().into_owned()),
+        work_dir: Some(work.path().to_string_lossy().into_owned()),
+        matcher: Some(if files.len() > 40 {
+            "sequential"
+        } else {
+            "exhaustive"
+        }),
+        threads: rayon::current_num_threads(),
+    };
+    progress("features, matching and mapping (COLMAP)", 0, 0);
+    let rec = colmap::run(&req, work.path())?;
+    let names: HashMap<String, (usize, usize)> =
+        files.iter().map(|(f, p, c)| (f.clone(), (*p, *c))).collect();
+    // Align on camera centres plus a point 1 unit along each camera's axes (the poses'
+    // orientation fixes the roll about a single strip's line).
+    let mut from = Vec::new();
+    let mut to = Vec::new();
+    let mut rec_centres = Vec::new();
+    let mut true_centres = Vec::new();
+    for im in &rec.images {
+        if let Some(&(pi, ci)) = names.get(&im.name) {
+            rec_centres.push(colmap::centre(im.qvec, im.tvec));
+            true_centres.push(model.world_from_camera(pi, ci).translation);
+        }
+    }
+    if rec_centres.len() < 3 {
+        return Err(format!(
+            "COLMAP registered only {} of {} images; at least 3 are needed to compare with the \
+             truth\n  help: texture the scene at the image's GSD, raise samples, or add overlap",
+            rec_centres.len(),
+            files.len()
+        ));
+    }
+    let spread = |v: &[DVec3]| {
+        let m = v.iter().copied().sum::<DVec3>() / v.len() as f64;
+        (v.iter().map(|p| (*p - m).length_squared()).sum::<f64>() / v.len() as f64).sqrt()
+    };
+    let s0 = spread(&true_centres) / spread(&rec_centres).max(1e-12);
+    let arm = {
+        let d = spread(&true_centres).max(0.1);
+        (d, d / s0)
+    };
+    for im in &rec.images {
+        if let Some(&(pi, ci)) = names.get(&im.name) {
+            let wfc = model.world_from_camera(pi, ci);
+            let q = DQuat::from_xyzw(im.qvec[1], im.qvec[2], im.qvec[3], im.qvec[0]).normalize();
+            let c_rec = colmap::centre(im.qvec, im.tvec);
+            from.push(c_rec);
+            to.push(wfc.translation);
+            for axis in [DVec3::X, DVec3::Z] {
+                from.push(c_rec + q.inverse() * axis * arm.1);
+                to.push(wfc.translation + wfc.rotation * axis * arm.0);
+            }
+        }
+    }
+    let sim = Similarity::estimate(&from, &to)
+        .ok_or("the registered cameras are degenerate; no similarity to the truth")?;
+    // Height error of each well-measured point against the true surface below or above it.
+    let mut point_errors = Vec::new();
+    let mut tie = Vec::new();
+    let mut bowl_samples = Vec::new();
+    for p in &rec.points {
+        if p.track < 3 || p.error > 2.0 {
+            continue;
+        }
+        let x = sim.apply(DVec3::from_array(p.xyz));
+        let top = Ray {
+            origin: DVec3::new(x.x, x.y, x.z + 50.0),
+            dir: -DVec3::Z,
+        };
+        let Some(hit) = scene.intersect(&top, 100.0) else {
+            continue;
+        };
+        let dz = x.z - hit.point.z;
+        let e = DVec3::new(0.0, 0.0, dz);
+        tie.push(e);
+        bowl_samples.push((x.x, x.y, dz));
+        point_errors.push(PointError {
+            id: p.id,
+            label: String::new(),
+            kind: "tie",
+            truth: hit.point.to_array(),
+            error: e.to_array(),
+            track: p.track,
+        });
+    }
+    let (camera_errors, centres) = camera_centre_errors(model, &rec, &sim, &names);
+    let distance = median(
+        true_centres
+            .iter()
+            .filter_map(|c| {
+                scene
+                    .intersect(
+                        &Ray {
+                            origin: *c,
+                            dir: -DVec3::Z,
+                        },
+                        1e3,
+                    )
+                    .map(|h| h.t)
+            })
+            .collect(),
+    );
+    let distance = if distance.is_finite() { distance } else { 2.0 };
+    Ok(Evaluation {
+        scene: model.name.clone(),
+        mode: Mode::Images,
+        camera_model: opts.model,
+        conventions: CONVENTIONS,
+        settings: serde_json::json!({
+            "image_dir": image_dir.display().to_string(),
+            "seed": opts.seed,
+            "refine_principal_point": opts.refine_principal_point,
+            "matcher": req.matcher,
+            "keypoints_per_image": rec.summary.get("keypoints_per_image"),
+        }),
+        images: files.len(),
+        registered: rec.images.len(),
+        points: rec.points.len(),
+        observations: summary_f64(&rec, "observations") as usize,
+        mean_track_length: summary_f64(&rec, "mean_track_length"),
+        reprojection_error: summary_f64(&rec, "reprojection_error"),
+        cameras: camera_evals(model, &rec, distance)?,
+        alignment: "camera centres".into(),
+        alignment_count: rec_centres.len(),
+        similarity: sim,
+        tie_errors: AxisStats::of(&tie),
+        check_errors: None,
+        camera_errors,
+        bowl: Bowl::fit(&bowl_samples),
+        colmap: rec.summary.clone(),
+        seconds: t0.elapsed().as_secs_f64(),
+        point_errors,
+        centres,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_values() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert!(median(vec![]).is_nan());
+    }
+}

@@ -1,0 +1,330 @@
+//! The files `poser evaluate` writes, each atomically (temporary file, then rename), and only
+//! after the whole evaluation succeeded, so a failed run leaves no partial report.
+//!
+//! | file | contents |
+//! |---|---|
+//! | `report.json` | the whole [`Evaluation`] (numbers, settings, COLMAP's summary) |
+//! | `report.md` | the same numbers as tables a person reads |
+//! | `errors.csv` | `id,kind,label,x,y,z,dx,dy,dz,track`: one row per reconstructed point (truth frame, m) |
+//! | `deformation.png` | top view of the plot, each point coloured by its height error (blue low, red high, white zero; the scale is ± the largest |dz| in `report.md`); black dots are the camera centres |
+//! | `profile.svg` | mean height error along and across the plot, in bins |
+
+use super::Evaluation;
+use crate::io::write_atomic;
+use glam::DVec3;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Write every report file into `dir`.
+pub fn write(ev: &Evaluation, dir: &Path) -> Result<(), String> {
+    let files = [
+        ("report.json", json(ev)?),
+        ("report.md", markdown(ev).into_bytes()),
+        ("errors.csv", csv(ev).into_bytes()),
+        ("deformation.png", deformation_png(ev)?),
+        ("profile.svg", profile_svg(ev)?.into_bytes()),
+    ];
+    for (name, bytes) in files {
+        let p = dir.join(name);
+        write_atomic(&p, &bytes).map_err(|e| format!("{}: {e}", p.display()))?;
+    }
+    Ok(())
+}
+
+fn json(ev: &Evaluation) -> Result<Vec<u8>, String> {
+    let mut v = serde_json::to_vec_pretty(ev).map_err(|e| e.to_string())?;
+    v.push(b'\n');
+    Ok(v)
+}
+
+fn mm(x: f64) -> String {
+    format!("{:.2}", x * 1e3)
+}
+
+/// The report as Markdown.
+pub fn markdown(ev: &Evaluation) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# poser evaluate: {}\n", ev.scene);
+    let _ = writeln!(
+        s,
+        "Mode **{:?}**, camera model **{}** (self-calibrated, the port ignored), aligned on \
+         **{}** ({} used). {}.\n",
+        ev.mode,
+        ev.camera_model.name(),
+        ev.alignment,
+        ev.alignment_count,
+        ev.conventions
+    );
+    let _ = writeln!(s, "| quantity | value |\n|---|---|");
+    let _ = writeln!(
+        s,
+        "| registered images | {} of {} ({:.1} %) |",
+        ev.registered,
+        ev.images,
+        100.0 * ev.registered as f64 / ev.images.max(1) as f64
+    );
+    let _ = writeln!(s, "| 3D points | {} |", ev.points);
+    let _ = writeln!(s, "| mean track length | {:.2} |", ev.mean_track_length);
+    let _ = writeln!(
+        s,
+        "| mean reprojection error | {:.3} px |",
+        ev.reprojection_error
+    );
+    let _ = writeln!(s, "| run time | {:.1} s |\n", ev.seconds);
+
+    let _ = writeln!(s, "## Intrinsics against the in-water-equivalent truth\n");
+    let _ = writeln!(
+        s,
+        "| camera | f in air | f truth (water-equiv.) | f recovered | focal error | cx, cy truth | cx, cy recovered | other |\n|---|---|---|---|---|---|---|---|"
+    );
+    for c in &ev.cameras {
+        let other: Vec<String> = c.extra.iter().map(|(n, v)| format!("{n} = {v:.4e}")).collect();
+        let _ = writeln!(
+            s,
+            "| {} | {:.1} px | {:.1} × {:.1} px (at {:.2} m) | {:.1} × {:.1} px | {:+.2} % | {:.1}, {:.1} | {:.1}, {:.1} | {} |",
+            c.name,
+            c.f_air,
+            c.truth[0],
+            c.truth[1],
+            c.distance,
+            c.recovered[0],
+            c.recovered[1],
+            100.0 * c.focal_error,
+            c.truth[2],
+            c.truth[3],
+            c.recovered[2],
+            c.recovered[3],
+            other.join(", ")
+        );
+    }
+    let _ = writeln!(s, "\n## 3D errors after alignment (mm)\n");
+    let _ = writeln!(
+        s,
+        "| points | count | RMS X | RMS Y | RMS Z | RMS 3D | max X | max Y | max Z |\n|---|---|---|---|---|---|---|---|---|"
+    );
+    let mut row = |name: &str, a: &super::AxisStats| {
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            a.count,
+            mm(a.rms[0]),
+            mm(a.rms[1]),
+            mm(a.rms[2]),
+            mm(a.rms_3d),
+            mm(a.max[0]),
+            mm(a.max[1]),
+            mm(a.max[2])
+        );
+    };
+    row("tie points", &ev.tie_errors);
+    if let Some(c) = &ev.check_errors {
+        row("targets (check points)", c);
+    }
+    row("camera centres", &ev.camera_errors);
+    let _ = writeln!(s, "\n## The systematic part (\"bowl\")\n");
+    match &ev.bowl {
+        Some(b) => {
+            let _ = writeln!(
+                s,
+                "A quadratic surface fitted to the height errors explains **{:.1} %** of their \
+                 variance: peak-to-peak **{} mm**, RMS {} mm; what is left has an RMS of {} mm.\n",
+                100.0 * b.explained,
+                mm(b.peak_to_peak),
+                mm(b.rms_fit),
+                mm(b.rms_residual)
+            );
+        }
+        None => {
+            let _ = writeln!(s, "Too few points to fit a surface.\n");
+        }
+    }
+    let _ = writeln!(
+        s,
+        "`deformation.png`: height error per point, blue −{m} mm … white 0 … red +{m} mm; black \
+         dots: camera centres. `profile.svg`: mean height error along and across the plot.",
+        m = mm(color_scale(ev))
+    );
+    s
+}
+
+fn csv(ev: &Evaluation) -> String {
+    let mut s = String::from("id,kind,label,x,y,z,dx,dy,dz,track\n");
+    for p in &ev.point_errors {
+        let _ = writeln!(
+            s,
+            "{},{},{},{:.6},{:.6},{:.6},{:.6e},{:.6e},{:.6e},{}",
+            p.id,
+            p.kind,
+            crate::truth::csv_field(&p.label),
+            p.truth[0],
+            p.truth[1],
+            p.truth[2],
+            p.error[0],
+            p.error[1],
+            p.error[2],
+            p.track
+        );
+    }
+    s
+}
+
+/// The colour scale of the map: the 99th percentile of |dz| (outliers saturate).
+fn color_scale(ev: &Evaluation) -> f64 {
+    let mut v: Vec<f64> = ev.point_errors.iter().map(|p| p.error[2].abs()).collect();
+    if v.is_empty() {
+        return 1e-3;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * 0.99) as usize].max(1e-6)
+}
+
+fn diverging(t: f64) -> [u8; 3] {
+    // Blue (−1) → white (0) → red (+1).
+    let t = t.clamp(-1.0, 1.0);
+    let (r, g, b) = if t < 0.0 {
+        let a = -t;
+        (1.0 - 0.8 * a, 1.0 - 0.6 * a, 1.0)
+    } else {
+        (1.0, 1.0 - 0.75 * t, 1.0 - 0.8 * t)
+    };
+    [r, g, b].map(|c| (c * 255.0).round() as u8)
+}
+
+/// Top view of the plot coloured by height error.
+pub fn deformation_png(ev: &Evaluation) -> Result<Vec<u8>, String> {
+    let pts: Vec<(DVec3, f64)> = ev
+        .point_errors
+        .iter()
+        .map(|p| (DVec3::from_array(p.truth), p.error[2]))
+        .collect();
+    let all = pts.iter().map(|p| p.0).chain(ev.centres.iter().copied());
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for p in all {
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let (w_px, h_px) = if lo.x.is_finite() && hi.x > lo.x && hi.y > lo.y {
+        let aspect = (hi.y - lo.y) / (hi.x - lo.x);
+        let w = 800u32;
+        (w, ((w as f64 * aspect).round() as u32).clamp(50, 2400))
+    } else {
+        (100, 100)
+    };
+    let bar = 30u32;
+    let mut img = image::RgbImage::from_pixel(w_px + bar, h_px, image::Rgb([96, 96, 96]));
+    let to_px = |p: DVec3| {
+        let x = (p.x - lo.x) / (hi.x - lo.x).max(1e-9) * (w_px - 1) as f64;
+        let y = (hi.y - p.y) / (hi.y - lo.y).max(1e-9) * (h_px - 1) as f64;
+        (x, y)
+    };
+    let scale = color_scale(ev);
+    let r = (2.0 + 800.0 / (pts.len() as f64).sqrt().max(1.0) * 0.3).min(6.0);
+    let dot = |img: &mut image::RgbImage, x: f64, y: f64, r: f64, c: [u8; 3]| {
+        let (x0, x1) = ((x - r).floor() as i64, (x + r).ceil() as i64);
+        let (y0, y1) = ((y - r).floor() as i64, (y + r).ceil() as i64);
+        for yy in y0..=y1 {
+            for xx in x0..=x1 {
+                if xx < 0 || yy < 0 || xx >= w_px as i64 || yy >= h_px as i64 {
+                    continue;
+                }
+                if ((xx as f64 - x).powi(2) + (yy as f64 - y).powi(2)) <= r * r {
+                    img.put_pixel(xx as u32, yy as u32, image::Rgb(c));
+                }
+            }
+        }
+    };
+    for (p, dz) in &pts {
+        let (x, y) = to_px(*p);
+        dot(&mut img, x, y, r, diverging(dz / scale));
+    }
+    for c in &ev.centres {
+        let (x, y) = to_px(*c);
+        dot(&mut img, x, y, 1.5, [0, 0, 0]);
+    }
+    for yy in 0..h_px {
+        let t = 1.0 - 2.0 * yy as f64 / (h_px - 1).max(1) as f64;
+        for xx in w_px + 8..w_px + bar - 4 {
+            img.put_pixel(xx, yy, image::Rgb(diverging(t)));
+        }
+    }
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .map_err(|e| e.to_string())?;
+    Ok(out.into_inner())
+}
+
+/// Binned means of the height error along x and along y, as an SVG chart.
+pub fn profile_svg(ev: &Evaluation) -> Result<String, String> {
+    use plotters::prelude::*;
+    let bins = 24usize;
+    let series = |axis: usize| -> Vec<(f64, f64)> {
+        let xs: Vec<(f64, f64)> = ev
+            .point_errors
+            .iter()
+            .map(|p| (p.truth[axis], p.error[2]))
+            .collect();
+        let (lo, hi) = xs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+            (a.0.min(p.0), a.1.max(p.0))
+        });
+        if !(hi > lo) {
+            return Vec::new();
+        }
+        let mut sum = vec![(0.0, 0usize); bins];
+        for (x, dz) in xs {
+            let b = (((x - lo) / (hi - lo)) * bins as f64).floor().min(bins as f64 - 1.0) as usize;
+            sum[b].0 += dz;
+            sum[b].1 += 1;
+        }
+        sum.iter()
+            .enumerate()
+            .filter(|(_, s)| s.1 > 0)
+            .map(|(i, s)| (lo + (i as f64 + 0.5) / bins as f64 * (hi - lo), 1e3 * s.0 / s.1 as f64))
+            .collect()
+    };
+    let along_x = series(0);
+    let along_y = series(1);
+    let all = along_x.iter().chain(&along_y);
+    let (x0, x1, y0, y1) = all.fold(
+        (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY),
+        |a, p| (a.0.min(p.0), a.1.max(p.0), a.2.min(p.1), a.3.max(p.1)),
+    );
+    let (x0, x1) = if x1 > x0 { (x0, x1) } else { (0.0, 1.0) };
+    let pad = ((y1 - y0) * 0.1).max(0.01);
+    let (y0, y1) = if y1 >= y0 { (y0 - pad, y1 + pad) } else { (-1.0, 1.0) };
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (720, 400)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption("Mean height error along the plot", ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("world x or y, m")
+            .y_desc("dz, mm")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(LineSeries::new(along_x.iter().copied(), &RED))
+            .map_err(|e| e.to_string())?
+            .label("along x")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED));
+        chart
+            .draw_series(LineSeries::new(along_y.iter().copied(), &BLUE))
+            .map_err(|e| e.to_string())?
+            .label("along y")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLUE));
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE)
+            .draw()
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}

@@ -1,0 +1,158 @@
+//! `poser evaluate` with the real COLMAP (pycolmap, pinned in `backends/`) on the quick forms
+//! of the deformation lessons: the numbers each lesson is about, and clear failures.
+use poser::evaluate::{self, Evaluation, Options};
+use std::path::Path;
+use std::process::Command;
+
+/// The quick form of a lesson: a 10 × 5 m corner of the plot.
+fn quick(lesson: &str, extra: &[&str]) -> poser::model::Model {
+    let mut sets: Vec<String> = vec!["network.length=10".into(), "network.width=5".into()];
+    sets.extend(extra.iter().map(|s| s.to_string()));
+    let path = format!("scenarios/lessons/{lesson}.toml");
+    match poser::scene::load(Path::new(&path), &sets) {
+        Ok(l) => l.model,
+        Err(f) => panic!("{path}:\n{}", f.render()),
+    }
+}
+
+fn run(lesson: &str, extra: &[&str], opts: &Options) -> Evaluation {
+    let model = quick(lesson, extra);
+    let ev = evaluate::evaluate_observations(&model, opts, &|_, _, _| {})
+        .unwrap_or_else(|e| panic!("{lesson}: {e}"));
+    eprintln!(
+        "{lesson}: registered {}/{}, reprojection {:.3} px, focal {:+.3} %, RMS Z {:.3} mm, bowl {:.2} mm ({:.0} %)",
+        ev.registered,
+        ev.images,
+        ev.reprojection_error,
+        100.0 * ev.cameras[0].focal_error,
+        1e3 * ev.tie_errors.rms[2],
+        1e3 * ev.bowl.map_or(f64::NAN, |b| b.peak_to_peak),
+        100.0 * ev.bowl.map_or(f64::NAN, |b| b.explained)
+    );
+    ev
+}
+
+#[test]
+fn in_air_the_error_is_at_the_noise_level_and_the_focal_length_is_recovered() {
+    let ev = run("in_air", &[], &Options::default());
+    assert_eq!(ev.registered, ev.images);
+    // 0.3 px of noise at a GSD of 0.4 mm.
+    assert!(ev.reprojection_error < 0.45, "{}", ev.reprojection_error);
+    assert!(ev.cameras[0].focal_error.abs() < 0.005);
+    assert!(ev.tie_errors.rms_3d < 1e-3, "{:?}", ev.tie_errors);
+    assert!(ev.bowl.unwrap().peak_to_peak < 2e-3);
+    assert!(ev.mean_track_length > 5.0);
+}
+
+#[test]
+fn a_flat_port_with_a_nadir_network_bends_the_plot_into_a_bowl() {
+    let flat = run("flat_port_deformation", &[], &Options::default());
+    let air = run("in_air", &[], &Options::default());
+    let bowl = flat.bowl.unwrap();
+    // The images are fitted well …
+    assert!(flat.reprojection_error < 1.0, "{}", flat.reprojection_error);
+    // … yet the heights are bent, systematically.
+    assert!(bowl.explained > 0.8, "{bowl:?}");
+    assert!(
+        flat.tie_errors.rms[2] > 20.0 * air.tie_errors.rms[2],
+        "flat {:?} air {:?}",
+        flat.tie_errors,
+        air.tie_errors
+    );
+    assert!(bowl.peak_to_peak > 0.02, "{bowl:?}");
+}
+
+#[test]
+fn obliques_and_a_centred_dome_shrink_the_bowl_several_times() {
+    let opts = Options::default();
+    let flat = run("flat_port_deformation", &["network.length=6"], &opts);
+    let obl = run("flat_port_deformation_obliques", &["network.length=6"], &opts);
+    let dome = run("flat_port_deformation_dome", &["network.length=6"], &opts);
+    let z = |e: &Evaluation| e.tie_errors.rms[2];
+    assert!(z(&obl) * 3.0 < z(&flat), "obliques {} flat {}", z(&obl), z(&flat));
+    assert!(z(&dome) * 10.0 < z(&flat), "dome {} flat {}", z(&dome), z(&flat));
+}
+
+#[test]
+fn the_error_grows_with_the_pupil_to_port_distance() {
+    let opts = Options::default();
+    let z = |l: &str| run(l, &["network.length=6"], &opts).tie_errors.rms[2];
+    let (near, mid, far) = (
+        z("flat_port_deformation_pupil_1mm"),
+        z("flat_port_deformation"),
+        z("flat_port_deformation_pupil_10cm"),
+    );
+    assert!(near < mid && mid < far, "{near} {mid} {far}");
+}
+
+#[test]
+fn gcps_align_on_the_targets_and_too_few_of_them_is_a_clear_error() {
+    let opts = Options {
+        gcp: true,
+        ..Options::default()
+    };
+    let ev = run("flat_port_deformation", &[], &opts);
+    assert_eq!(ev.alignment, "gcp");
+    assert!(ev.alignment_count >= 3);
+    assert!(ev.point_errors.iter().any(|p| p.kind == "gcp"));
+    // A corner of the plot holding fewer than three targets.
+    let model = quick(
+        "flat_port_deformation",
+        &["network.center=[2.0, 14.0]", "network.length=4"],
+    );
+    let err = evaluate::evaluate_observations(&model, &opts, &|_, _, _| {}).unwrap_err();
+    assert!(err.contains("--gcp") && err.contains("help:"), "{err}");
+}
+
+fn poser() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_poser"))
+}
+
+#[test]
+fn the_command_writes_its_report_and_refuses_bad_input_without_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("eval");
+    let ok = poser()
+        .args(["evaluate", "scenarios/lessons/flat_port_deformation.toml", "-o"])
+        .arg(&out)
+        .args(["--set", "network.length=6", "--set", "network.width=4", "--quiet"])
+        .output()
+        .unwrap();
+    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    for f in ["report.json", "report.md", "errors.csv", "deformation.png", "profile.svg"] {
+        let p = out.join(f);
+        assert!(p.metadata().map(|m| m.len() > 100).unwrap_or(false), "{f}");
+    }
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["registered"], report["images"]);
+    assert!(report["colmap"]["colmap"].as_str().unwrap().contains("COLMAP"));
+    let csv = std::fs::read_to_string(out.join("errors.csv")).unwrap();
+    assert!(csv.starts_with("id,kind,label,x,y,z,dx,dy,dz,track\n"));
+    assert!(csv.lines().count() > 100);
+
+    // A network that sees nothing twice: a clear message, nothing written.
+    let bad = dir.path().join("bad");
+    let r = poser()
+        .args(["evaluate", "scenarios/lessons/flat_port_deformation.toml", "-o"])
+        .arg(&bad)
+        .args(["--set", "network.length=0", "--set", "network.width=0", "--quiet"])
+        .output()
+        .unwrap();
+    assert_eq!(r.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("help:"), "{err}");
+    assert!(!bad.exists(), "a failed evaluation must not leave an output directory");
+
+    // No pycolmap: say how to get it.
+    let r = poser()
+        .env("POSER_PYTHON", "/usr/bin/python3")
+        .args(["evaluate", "scenarios/lessons/in_air.toml", "-o"])
+        .arg(dir.path().join("nopy"))
+        .args(["--set", "network.length=4", "--set", "network.width=3", "--quiet"])
+        .output()
+        .unwrap();
+    assert_eq!(r.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("pycolmap") && err.contains("backends/setup.sh"), "{err}");
+}
