@@ -1,0 +1,135 @@
+//! `poser sensor`: the camera's sensor stage on one linear EXR ([`crate::sensor`]), and the
+//! hook `poser render` calls after rendering when the scene has a `[sensor]` (or `--sensor`).
+use super::{CliError, SceneArgs, load_model};
+use crate::model::{Model, Sensor, SensorFormat};
+use std::path::Path;
+
+/// After `poser render`: the sensor stage on every image, a summary line, and a warning per
+/// image whose render noise exceeds the sensor's.
+pub fn after_render(
+    model: &Model,
+    sensor: &Sensor,
+    out: &Path,
+    poses: &[usize],
+    samples: u32,
+) -> Result<(), CliError> {
+    let done = crate::sensor::files::apply(model, sensor, out, poses, samples)?;
+    for d in &done {
+        if let Some(w) = &d.warning {
+            eprintln!("warning: {w}");
+        }
+    }
+    let worst = done
+        .iter()
+        .filter_map(|d| d.sidecar.render_noise.as_ref().map(|r| r.ratio_median))
+        .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))));
+    eprintln!(
+        "sensor: {} camera image(s) in {}{}",
+        done.len(),
+        out.join("camera").display(),
+        worst
+            .map(|r| format!("; render/sensor noise, worst median {r:.2}×"))
+            .unwrap_or_default()
+    );
+    Ok(())
+}
+
+pub fn run(
+    scene: &SceneArgs,
+    input: &Path,
+    out: &Path,
+    pose: usize,
+    camera: Option<&str>,
+    variance: Option<&Path>,
+    samples: Option<u32>,
+) -> Result<(), CliError> {
+    let model = load_model(scene)?;
+    let mut sensor = model.sensor.clone().unwrap_or_default();
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase());
+    sensor.format = match ext.as_deref() {
+        Some("png") => SensorFormat::Png,
+        Some("jpg" | "jpeg") => match sensor.format {
+            SensorFormat::Jpeg(q) => SensorFormat::Jpeg(q),
+            SensorFormat::Png => SensorFormat::Jpeg(95),
+        },
+        _ => {
+            return Err(CliError::Usage(format!(
+                "-o {}: expected a .jpg, .jpeg or .png file name",
+                out.display()
+            )));
+        }
+    };
+    let c = match camera {
+        None => 0,
+        Some(name) => model
+            .cameras
+            .iter()
+            .position(|c| c.name == name)
+            .ok_or_else(|| {
+                CliError::Usage(format!(
+                    "--camera {name}: the rig has {}",
+                    model
+                        .cameras
+                        .iter()
+                        .map(|c| c.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            })?,
+    };
+    let cam = model
+        .cameras
+        .get(c)
+        .ok_or_else(|| CliError::Failed("the scene has no camera".into()))?;
+    if pose >= model.poses.len().max(1) {
+        return Err(CliError::Usage(format!(
+            "--pose {pose}: the network has {} poses",
+            model.poses.len()
+        )));
+    }
+    let img = crate::sensor::files::read_exr(input)?;
+    let var = variance
+        .map(crate::sensor::files::read_exr)
+        .transpose()?;
+    let pitch = cam.pixel_pitch * cam.width as f64 / img.width.max(1) as f64;
+    let seed = crate::sensor::image_seed(model.render.seed, pose, c);
+    let dir = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "image".into());
+    // The file is written as `<stem>.jpg` (or `.png`); honour a `.jpeg` name too.
+    let done = crate::sensor::files::process(
+        &sensor,
+        &img,
+        input,
+        var.as_ref(),
+        samples,
+        pitch,
+        seed,
+        dir,
+        &stem,
+    )?;
+    if done.image != out {
+        std::fs::rename(&done.image, out)
+            .map_err(|e| CliError::Failed(format!("{}: {e}", out.display())))?;
+    }
+    if let Some(w) = &done.warning {
+        eprintln!("warning: {w}");
+    }
+    eprintln!(
+        "wrote {} (shutter {:.3} ms, f/{}, ISO {}, {:.2} % clipped)",
+        out.display(),
+        done.sidecar.exposure.shutter * 1e3,
+        done.sidecar.exposure.f_number,
+        done.sidecar.exposure.iso,
+        100.0 * done.sidecar.clipped_fraction
+    );
+    Ok(())
+}
