@@ -91,10 +91,8 @@ pub fn run(
         )));
     }
     let img = crate::sensor::files::read_exr(input)?;
-    let var = variance
-        .map(crate::sensor::files::read_exr)
-        .transpose()?;
-    let pitch = cam.pixel_pitch * cam.width as f64 / img.width.max(1) as f64;
+    let var = variance.map(crate::sensor::files::read_exr).transpose()?;
+    let pitch = crate::sensor::files::pixel_pitch(cam, img.width);
     let seed = crate::sensor::image_seed(model.render.seed, pose, c);
     let dir = match out.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,

@@ -94,10 +94,7 @@ pub fn process(
             None,
             Some("the variance image does not match the image size".to_string()),
         ),
-        (Some(v), n) => (
-            super::render_noise(sensor, &exposure, img, &v.rgb, n),
-            None,
-        ),
+        (Some(v), n) => (super::render_noise(sensor, &exposure, img, &v.rgb, n), None),
     };
     let warning = render_noise.as_ref().and_then(|r| {
         (r.ratio_median > 1.0).then(|| {
@@ -168,7 +165,7 @@ pub fn apply(
             } else {
                 None
             };
-            let pitch = cam.pixel_pitch * cam.width as f64 / img.width.max(1) as f64;
+            let pitch = pixel_pitch(cam, img.width);
             let seed = super::image_seed(model.render.seed, p, c);
             done.push(process(
                 sensor,
@@ -184,4 +181,16 @@ pub fn apply(
         }
     }
     Ok(done)
+}
+
+/// Pixel pitch of `cam` for an image `width` pixels wide (a `--scale` preview has larger
+/// pixels on the same sensor), computed as [`crate::model::Camera::with_resolution_scale`]
+/// does so that `poser sensor` and `poser render` agree to the bit.
+pub fn pixel_pitch(cam: &crate::model::Camera, width: u32) -> f64 {
+    if width == cam.width || cam.width == 0 {
+        cam.pixel_pitch
+    } else {
+        cam.with_resolution_scale(width as f64 / cam.width as f64)
+            .pixel_pitch
+    }
 }

@@ -176,7 +176,10 @@ pub fn expose(s: &Sensor, img: &Linear, pitch: f64) -> Exposure {
                 _ => (
                     "auto",
                     s.shutter,
-                    Some("the image is black where it was metered: the manual shutter was used".into()),
+                    Some(
+                        "the image is black where it was metered: the manual shutter was used"
+                            .into(),
+                    ),
                 ),
             }
         }
@@ -418,7 +421,11 @@ pub fn render_noise(
     for (px, var) in img.rgb.iter().zip(variance) {
         for c in 0..3 {
             let l = finite_radiance(px[c]);
-            let v = if var[c].is_finite() { var[c].max(0.0) as f64 } else { continue };
+            let v = if var[c].is_finite() {
+                var[c].max(0.0) as f64
+            } else {
+                continue;
+            };
             let k = e.electrons_per_radiance[c];
             let mu = k * l;
             if !(mu > 0.0) || mu >= s.full_well {
