@@ -29,7 +29,8 @@ pub fn sensor(
     camera_f_number: Option<f64>,
     fallback: Span,
 ) -> Option<Sensor> {
-    node?;
+    // Read even when absent (every getter then gives its default), so that the key record
+    // that keeps the reader and the schema in step sees every key.
     let mut t = Tab::open(cx, node, "sensor", fallback);
     let d = Sensor::default();
     let full_well = t.f64(cx, "full_well", Dim::Number, d.full_well);
@@ -42,7 +43,12 @@ pub fn sensor(
                 .help("read noise is an RMS value in electrons, e.g. `read_noise = 3`"),
         );
     }
-    let qe = t.rgb(cx, "quantum_efficiency", Dim::Fraction, d.quantum_efficiency);
+    let qe = t.rgb(
+        cx,
+        "quantum_efficiency",
+        Dim::Fraction,
+        d.quantum_efficiency,
+    );
     if qe.iter().any(|q| !(*q > 0.0 && *q <= 1.0)) {
         cx.push(
             Diagnostic::error("E0223", "`sensor.quantum_efficiency` must be in (0, 1]")
@@ -74,7 +80,9 @@ pub fn sensor(
     check::positive(cx, &t, "iso", iso, "");
     let base_iso = t.f64(cx, "base_iso", Dim::Number, d.base_iso);
     check::positive(cx, &t, "base_iso", base_iso, "");
-    let mode = t.choice(cx, "exposure", &["auto", "manual"]).unwrap_or("auto");
+    let mode = t
+        .choice(cx, "exposure", &["auto", "manual"])
+        .unwrap_or("auto");
     let shutter = t.f64(cx, "shutter", Dim::Time, d.shutter);
     check::positive(cx, &t, "shutter", shutter, "s");
     let f_number = t
@@ -132,6 +140,7 @@ pub fn sensor(
     };
     let noise = t.bool(cx, "noise", true);
     t.finish(cx);
+    node?;
     Some(Sensor {
         full_well,
         read_noise,
