@@ -4,8 +4,8 @@ use super::{CliError, SceneArgs, load_model};
 use crate::model::{Model, Sensor, SensorFormat};
 use std::path::Path;
 
-/// After `poser render`: the sensor stage on every image, a summary line, and a warning per
-/// image whose render noise exceeds the sensor's.
+/// After `poser render`: the sensor stage on every image, a summary line, and one warning line
+/// when the render noise of images exceeds the sensor's (naming the image when there is one).
 pub fn after_render(
     model: &Model,
     sensor: &Sensor,
@@ -14,21 +14,42 @@ pub fn after_render(
     samples: u32,
 ) -> Result<(), CliError> {
     let done = crate::sensor::files::apply(model, sensor, out, poses, samples)?;
-    for d in &done {
-        if let Some(w) = &d.warning {
-            eprintln!("warning: {w}");
+    let noisy: Vec<&crate::sensor::files::Done> =
+        done.iter().filter(|d| d.warning.is_some()).collect();
+    match noisy.as_slice() {
+        [] => {}
+        [one] => eprintln!("warning: {}", one.warning.as_deref().unwrap_or_default()),
+        many => {
+            let worst = many
+                .iter()
+                .filter_map(|d| d.sidecar.render_noise.as_ref())
+                .fold((0.0f64, 0u64), |(r, n), x| {
+                    (
+                        r.max(x.ratio_median.max(x.ratio_rms)),
+                        n.max(x.samples_needed.unwrap_or(0)),
+                    )
+                });
+            eprintln!(
+                "warning: render noise exceeds the sensor's noise in {} of {} images (ratio up \
+                 to {:.2}×; each image's numbers are in its .sensor.json); raise \
+                 render.samples to about {}",
+                many.len(),
+                done.len(),
+                worst.0,
+                worst.1
+            );
         }
     }
     let worst = done
         .iter()
-        .filter_map(|d| d.sidecar.render_noise.as_ref().map(|r| r.ratio_median))
+        .filter_map(|d| d.sidecar.render_noise.as_ref().map(|r| r.ratio_rms))
         .fold(None, |m: Option<f64>, r| Some(m.map_or(r, |m| m.max(r))));
     eprintln!(
         "sensor: {} camera image(s) in {}{}",
         done.len(),
         out.join("camera").display(),
         worst
-            .map(|r| format!("; render/sensor noise, worst median {r:.2}×"))
+            .map(|r| format!("; render/sensor noise (RMS ratio) up to {r:.2}×"))
             .unwrap_or_default()
     );
     Ok(())

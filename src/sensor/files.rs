@@ -97,12 +97,13 @@ pub fn process(
         (Some(v), n) => (super::render_noise(sensor, &exposure, img, &v.rgb, n), None),
     };
     let warning = render_noise.as_ref().and_then(|r| {
-        (r.ratio_median > 1.0).then(|| {
+        (r.ratio_median > 1.0 || r.ratio_rms > 1.0).then(|| {
             format!(
                 "render noise exceeds the sensor's noise in {stem}: median {:.2}× (95th \
-                 percentile {:.2}×), {:.1} % of the signal; raise render.samples{}",
+                 percentile {:.2}×, RMS {:.2}×), {:.1} % of the signal; raise render.samples{}",
                 r.ratio_median,
                 r.ratio_p95,
+                r.ratio_rms,
                 100.0 * r.relative_median,
                 r.samples_needed
                     .map(|n| format!(" to about {n}"))

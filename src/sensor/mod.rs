@@ -401,7 +401,11 @@ pub struct RenderNoise {
     /// Render noise / sensor noise per pixel and channel: median and 95th percentile.
     pub ratio_median: f64,
     pub ratio_p95: f64,
-    /// Samples per pixel for the median ratio to reach 1 (variance falls as 1/spp), when
+    /// `√(Σ render variance / Σ sensor variance)` in electrons over the same values: unbiased
+    /// where the median is not (with few samples, path-tracing noise is heavy-tailed and most
+    /// pixels have not yet met their rare bright paths, so the median ratio reads low).
+    pub ratio_rms: f64,
+    /// Samples per pixel for the larger of the median and RMS ratios to reach 1 (variance falls as 1/spp), when
     /// the samples used are known.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub samples_needed: Option<u64>,
@@ -418,6 +422,7 @@ pub fn render_noise(
 ) -> Option<RenderNoise> {
     let (mut rel, mut el, mut sen, mut senrel, mut ratio) =
         (vec![], vec![], vec![], vec![], vec![]);
+    let (mut sum_r, mut sum_s) = (0.0, 0.0);
     for (px, var) in img.rgb.iter().zip(variance) {
         for c in 0..3 {
             let l = finite_radiance(px[c]);
@@ -438,10 +443,14 @@ pub fn render_noise(
             sen.push(sigma_s);
             senrel.push(sigma_s / mu);
             ratio.push(sigma_r / sigma_s);
+            sum_r += sigma_r * sigma_r;
+            sum_s += sigma_s * sigma_s;
         }
     }
     let count = rel.len();
     let ratio_median = percentile(ratio.clone(), 0.5)?;
+    let ratio_rms = (sum_r / sum_s).sqrt();
+    let worst = ratio_median.max(ratio_rms);
     Some(RenderNoise {
         count,
         relative_median: percentile(rel.clone(), 0.5)?,
@@ -452,7 +461,7 @@ pub fn render_noise(
         sensor_relative_median: percentile(senrel, 0.5)?,
         ratio_median,
         ratio_p95: percentile(ratio, 0.95)?,
-        samples_needed: samples
-            .map(|n| (n as f64 * (ratio_median * ratio_median).max(1.0)).ceil() as u64),
+        ratio_rms,
+        samples_needed: samples.map(|n| (n as f64 * (worst * worst).max(1.0)).ceil() as u64),
     })
 }
