@@ -237,7 +237,7 @@ impl Noise {
 
     /// A Poisson count of mean `mu` (exact below [`POISSON_EXACT_BELOW`], Gaussian above).
     pub fn poisson(&mut self, mu: f64) -> f64 {
-        if !(mu > 0.0) {
+        if mu.is_nan() || mu <= 0.0 {
             return 0.0;
         }
         if mu < POISSON_EXACT_BELOW {
@@ -433,7 +433,7 @@ pub fn render_noise(
             };
             let k = e.electrons_per_radiance[c];
             let mu = k * l;
-            if !(mu > 0.0) || mu >= s.full_well {
+            if mu.is_nan() || mu <= 0.0 || mu >= s.full_well {
                 continue;
             }
             let sigma_s = (mu + s.read_noise * s.read_noise).sqrt();
