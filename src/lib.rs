@@ -17,6 +17,7 @@ pub mod plan;
 pub mod render;
 pub mod rng;
 pub mod scene;
+pub mod sensor;
 pub mod targets;
 pub mod truth;
 pub mod units;

@@ -96,6 +96,9 @@ pub struct Model {
     pub diver: Option<Diver>,
     /// Render settings.
     pub render: RenderSettings,
+    /// The camera's sensor stage after rendering (`None`: only the linear EXR and its preview).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensor: Option<Sensor>,
     /// What the scene needs modelled, with reasons.
     pub needs: Needs,
 }
@@ -700,5 +703,111 @@ impl Model {
             .map(|c| c.port.interfaces())
             .max()
             .unwrap_or(0)
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Sensor (the camera after the lens; applied by [`crate::sensor`])
+// ------------------------------------------------------------------------------------------
+
+/// A camera sensor and its image pipeline (see `docs/sensor.md`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Sensor {
+    /// Full-well capacity, e⁻.
+    pub full_well: f64,
+    /// Read noise, e⁻ RMS.
+    pub read_noise: f64,
+    /// Quantum efficiency per channel (e⁻ per photon).
+    pub quantum_efficiency: Rgb,
+    /// ADC bits (8..=16).
+    pub bits: u32,
+    /// Black level, DN.
+    pub black_level: u32,
+    /// ISO speed and the ISO at which the full well fills the ADC.
+    pub iso: f64,
+    pub base_iso: f64,
+    pub exposure: SensorExposure,
+    /// Exposure time, s (manual exposure; fallback of auto exposure).
+    pub shutter: f64,
+    /// Aperture f-number used for the exposure.
+    pub f_number: f64,
+    /// Lens and port transmittance to the sensor.
+    pub transmittance: f64,
+    pub white_balance: WhiteBalance,
+    pub tone: ToneCurve,
+    pub format: SensorFormat,
+    /// Shot and read noise on.
+    pub noise: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "mode")]
+pub enum SensorExposure {
+    /// `shutter` as given.
+    Manual,
+    /// Shutter chosen so that the metered value lands at `target` × full scale.
+    Auto {
+        meter: Meter,
+        percentile: f64,
+        target: f64,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Meter {
+    /// A percentile of the brightest white-balanced channel per pixel.
+    Highlights,
+    /// The mean luminance (Rec. 709 weights) of the white-balanced image.
+    Average,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "mode", content = "gains")]
+pub enum WhiteBalance {
+    None,
+    GreyWorld,
+    Fixed(Rgb),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "curve", content = "gamma")]
+pub enum ToneCurve {
+    Linear,
+    Srgb,
+    Gamma(f64),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "format", content = "quality")]
+pub enum SensorFormat {
+    Jpeg(u8),
+    Png,
+}
+
+impl Default for Sensor {
+    /// A typical 1/1.8" machine-vision/compact sensor at base ISO with auto exposure.
+    fn default() -> Sensor {
+        Sensor {
+            full_well: 15000.0,
+            read_noise: 3.0,
+            quantum_efficiency: [0.45, 0.55, 0.45],
+            bits: 12,
+            black_level: 64,
+            iso: 100.0,
+            base_iso: 100.0,
+            exposure: SensorExposure::Auto {
+                meter: Meter::Highlights,
+                percentile: 0.99,
+                target: 0.85,
+            },
+            shutter: 0.008,
+            f_number: 8.0,
+            transmittance: 0.9,
+            white_balance: WhiteBalance::GreyWorld,
+            tone: ToneCurve::Srgb,
+            format: SensorFormat::Jpeg(95),
+            noise: true,
+        }
     }
 }

@@ -18,6 +18,7 @@ mod plan;
 mod project;
 mod render;
 mod schema;
+mod sensor;
 mod truth;
 mod validate;
 
@@ -168,6 +169,34 @@ pub enum Command {
         /// Hide the progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Run the camera's sensor stage (docs/sensor.md) with the default sensor when the
+        /// scene has no `[sensor]`; writes `OUT/camera/<image>.jpg` and `.sensor.json`.
+        #[arg(long)]
+        sensor: bool,
+    },
+    /// Run the sensor stage on a linear EXR: exposure, shot and read noise, white balance, tone
+    /// curve, 8-bit JPEG/PNG (the scene's `[sensor]`, or the default sensor).
+    Sensor {
+        #[command(flatten)]
+        scene: SceneArgs,
+        /// The linear EXR rendered from this scene.
+        input: PathBuf,
+        /// The camera image to write (`.jpg`/`.jpeg` or `.png`); the sidecar
+        /// `<stem>.sensor.json` goes beside it.
+        #[arg(short, long)]
+        out: PathBuf,
+        /// Rig pose index of the image (seeds its noise).
+        #[arg(long, default_value_t = 0)]
+        pose: usize,
+        /// Camera of the rig (default: the first).
+        #[arg(long)]
+        camera: Option<String>,
+        /// Per-pixel variance of the render (`<image>.variance.exr`) for the noise report.
+        #[arg(long)]
+        variance: Option<PathBuf>,
+        /// Samples per pixel of the render (for the noise report's hint).
+        #[arg(long)]
+        samples: Option<u32>,
     },
     /// Survey plan: image count, path, time, GSD, footprint, overlaps achieved.
     Plan {
@@ -281,7 +310,25 @@ pub fn main() -> ExitCode {
             poses,
             scale,
             quiet,
-        } => render::run(&scene, backend, &out, samples, poses, scale, quiet),
+            sensor,
+        } => render::run(&scene, backend, &out, samples, poses, scale, quiet, sensor),
+        Command::Sensor {
+            scene,
+            input,
+            out,
+            pose,
+            camera,
+            variance,
+            samples,
+        } => sensor::run(
+            &scene,
+            &input,
+            &out,
+            pose,
+            camera.as_deref(),
+            variance.as_deref(),
+            samples,
+        ),
         Command::Plan {
             scene,
             json,

@@ -3,6 +3,7 @@ use super::{BackendArg, CliError, SceneArgs, load_model};
 use crate::backend::RenderOptions;
 use std::path::Path;
 
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     scene: &SceneArgs,
     backend: BackendArg,
@@ -11,6 +12,7 @@ pub fn run(
     poses: Option<Vec<usize>>,
     scale: Option<f64>,
     quiet: bool,
+    sensor: bool,
 ) -> Result<(), CliError> {
     let mut model = load_model(scene)?;
     if let Some(s) = scale {
@@ -30,6 +32,9 @@ pub fn run(
             model.poses.len()
         )));
     }
+    if sensor && model.sensor.is_none() {
+        model.sensor = Some(crate::model::Sensor::default());
+    }
     let opts = RenderOptions {
         samples,
         poses,
@@ -47,5 +52,10 @@ pub fn run(
         out.display(),
         report.seconds
     );
+    if let Some(s) = &model.sensor {
+        let spp = opts.samples.unwrap_or(model.render.samples).max(1);
+        let list = opts.pose_indices(model.poses.len());
+        super::sensor::after_render(&model, s, out, &list, spp)?;
+    }
     Ok(())
 }

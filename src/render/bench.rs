@@ -161,6 +161,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
             outputs: vec!["rgb".into()],
             exposure: 1.0,
         },
+        sensor: None,
         needs: Needs {
             medium: true,
             refraction: true,

@@ -7,6 +7,7 @@
 //! |---|---|
 //! | `OUT/<image>.exr` | linear RGB radiance (float32), Mitsuba's radiometric conventions |
 //! | `OUT/<image>.png` | sRGB preview of `render.exposure × radiance` |
+//! | `OUT/<image>.variance.exr` | variance of each pixel's Monte Carlo mean per channel (render noise, [`Image::variance`]); when the scene has a `[sensor]` |
 //! | `OUT/<image>.depth.exr` | camera-frame z of the first surface hit through each pixel centre, m (0: none); when `render.outputs` has `"depth"` |
 //! | `OUT/truth/…` | exact ground truth ([`crate::truth::write_in`], occlusion against the render's own BVH) |
 //!
@@ -38,6 +39,9 @@ pub struct Image {
     pub height: u32,
     pub rgb: Vec<[f32; 3]>,
     pub depth: Vec<f32>,
+    /// Variance of each pixel's Monte Carlo mean per channel (the sample variance of its
+    /// samples / their number; 0 with one sample): the render noise the sensor stage reports.
+    pub variance: Vec<[f32; 3]>,
 }
 
 /// Render one image (rig pose `pose`, camera `cam`) with `samples` per pixel.
@@ -69,16 +73,20 @@ pub fn render_image(
     let seed = model.render.seed;
     let spp = samples.max(1);
     let cam_from_world = model.world_from_camera(pose, cam).inverse();
-    let rows: Vec<(Vec<[f32; 3]>, Vec<f32>)> = (0..h)
+    type Row = (Vec<[f32; 3]>, Vec<f32>, Vec<[f32; 3]>);
+    let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|j| {
             let mut row = Vec::with_capacity(w as usize);
             let mut drow = Vec::with_capacity(w as usize);
+            let mut vrow = Vec::with_capacity(w as usize);
             for i in 0..w {
                 let pixel = j as u64 * w as u64 + i as u64;
                 let mut sum = DVec3::ZERO;
+                let mut var = DVec3::ZERO;
                 for (k, r) in rays.iter().enumerate() {
                     let mut acc = DVec3::ZERO;
+                    let mut acc2 = DVec3::ZERO;
                     for s in 0..spp {
                         let mut rng =
                             sampler::Sampler::new(seed, image_id, k as u64, pixel, s as u64);
@@ -87,17 +95,28 @@ pub fn render_image(
                             let v = integ.li(o, d, &mut rng) * wgt;
                             if v.is_finite() {
                                 acc += v;
+                                acc2 += v * v;
                             }
                         }
                     }
                     acc /= spp as f64;
+                    // Unbiased sample variance of the samples, over n: that of their mean.
+                    let n = spp as f64;
+                    let v_mean = if spp > 1 {
+                        ((acc2 / n - acc * acc) * (n / (n - 1.0)) / n).max(DVec3::ZERO)
+                    } else {
+                        DVec3::ZERO
+                    };
                     if passes.len() == 1 {
                         sum = acc;
+                        var = v_mean;
                     } else {
                         sum[passes[k]] = acc[passes[k]];
+                        var[passes[k]] = v_mean[passes[k]];
                     }
                 }
                 row.push([sum.x as f32, sum.y as f32, sum.z as f32]);
+                vrow.push([var.x as f32, var.y as f32, var.z as f32]);
                 // Depth through the pixel centre (green channel rays).
                 let r = &rays[if passes.len() == 1 { 0 } else { 1 }];
                 let z = r
@@ -111,20 +130,23 @@ pub fn render_image(
             if let Some(pb) = progress {
                 pb.inc(1);
             }
-            (row, drow)
+            (row, drow, vrow)
         })
         .collect();
     let mut rgb = Vec::with_capacity((w * h) as usize);
     let mut depth = Vec::with_capacity((w * h) as usize);
-    for (r, d) in rows {
+    let mut variance = Vec::with_capacity((w * h) as usize);
+    for (r, d, v) in rows {
         rgb.extend(r);
         depth.extend(d);
+        variance.extend(v);
     }
     Ok(Image {
         width: w,
         height: h,
         rgb,
         depth,
+        variance,
     })
 }
 
@@ -211,6 +233,14 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
                 &img,
                 model.render.exposure,
             )?;
+            if model.sensor.is_some() {
+                write_exr(
+                    &out.join(format!("{name}.variance.exr")),
+                    img.width,
+                    img.height,
+                    &img.variance,
+                )?;
+            }
             if want_depth {
                 let d: Vec<[f32; 3]> = img.depth.iter().map(|&z| [z, z, z]).collect();
                 write_exr(

@@ -74,6 +74,7 @@ quantity!(Temperature, "temperature", "°C", "18 °C");
 quantity!(Fraction, "fraction", "1", "60 %");
 quantity!(Gsd, "ground sampling distance", "m/px", "1 mm/px");
 quantity!(Number, "number", "", "1");
+quantity!(Duration, "time", "s", "8 ms");
 
 /// A 3-vector of a quantity: `[x, y, z]` (numbers or unit strings) or one string
 /// `"x, y, z unit"`.
@@ -165,6 +166,7 @@ pub struct Scene {
     pub network: Option<Network>,
     pub diver: Option<Diver>,
     pub render: Option<Render>,
+    pub sensor: Option<Sensor>,
 }
 
 /// `[site]` — where the survey happens. The sea surface is the plane z = 0 (z up).
@@ -767,6 +769,76 @@ pub struct Render {
     /// Exposure multiplier for the PNG preview (EXR stays linear). **Unit:** 1.
     /// **Default:** 1.
     pub exposure: Option<Number>,
+}
+
+/// `[sensor]` — the camera after the lens: exposure, photon shot noise, read noise, ADC, white
+/// balance, tone curve and the 8-bit file a camera writes (`OUT/camera/<image>.jpg|png` beside
+/// the linear EXR, with `<image>.sensor.json`). Optional: without it `poser render` writes only
+/// the linear EXR and its preview. Model, units and formulas: `docs/sensor.md`.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct Sensor {
+    /// Full-well capacity: electrons a pixel holds before it saturates. **Unit:** e⁻.
+    /// **Default:** 15000.
+    pub full_well: Option<Number>,
+    /// Read noise (temporal dark noise), RMS. **Unit:** e⁻. **Default:** 3.
+    pub read_noise: Option<Number>,
+    /// Quantum efficiency per channel (electrons per photon) at the channel wavelengths.
+    /// **Unit:** fraction. **Default:** [0.45, 0.55, 0.45].
+    pub quantum_efficiency: Option<PerChannel<Fraction>>,
+    /// Bits of the analogue-to-digital converter (8 to 16). **Default:** 12.
+    pub bits: Option<u32>,
+    /// Black level (offset added before the ADC so negative read noise is not clipped).
+    /// **Unit:** DN. **Default:** 2^bits / 64.
+    pub black_level: Option<u32>,
+    /// ISO speed (analogue gain): at `base_iso` the full well fills the ADC; ISO `s` needs
+    /// `base_iso / s` of it. **Default:** 100.
+    pub iso: Option<Number>,
+    /// ISO at which the full well just fills the ADC. **Default:** 100.
+    pub base_iso: Option<Number>,
+    /// `"auto"`: the shutter time is chosen on the image (`meter`, `percentile`, `target`);
+    /// `"manual"`: `shutter` is used as given. **Default:** `"auto"`.
+    pub exposure: Option<String>,
+    /// Exposure time (manual exposure; the fallback of auto exposure on a black image).
+    /// **Unit:** s. **Default:** 8 ms.
+    pub shutter: Option<Duration>,
+    /// Aperture f-number for the exposure. **Default:** the camera's `f_number`, else 8.
+    pub f_number: Option<Number>,
+    /// Transmittance of the lens and port glass to the sensor. **Unit:** fraction.
+    /// **Default:** 0.9.
+    pub transmittance: Option<Fraction>,
+    /// Auto-exposure metering: `"highlights"` puts the `percentile` of the brightest
+    /// white-balanced channel at `target` of full scale; `"average"` puts the mean luminance
+    /// at `target`. **Default:** `"highlights"`.
+    pub meter: Option<String>,
+    /// Percentile metered by `"highlights"`. **Unit:** fraction. **Default:** 99 %.
+    pub percentile: Option<Fraction>,
+    /// Metered level as a fraction of the ADC's full scale. **Unit:** fraction.
+    /// **Default:** 85 % (`"highlights"`), 18 % (`"average"`).
+    pub target: Option<Fraction>,
+    /// White balance: `"grey_world"` (channel means equalised on the image, gains at most 8),
+    /// `"none"`, or fixed gains `[r, g, b]`. **Default:** `"grey_world"`.
+    pub white_balance: Option<WhiteBalanceValue>,
+    /// Tone curve from linear to the file: `"srgb"` (IEC 61966-2-1), `"gamma"` (`gamma`) or
+    /// `"linear"`. **Default:** `"srgb"`.
+    pub tone: Option<String>,
+    /// Exponent of the `"gamma"` curve (`v = x^(1/gamma)`). **Default:** 2.2.
+    pub gamma: Option<Number>,
+    /// File written: `"jpeg"` or `"png"` (8 bits per channel). **Default:** `"jpeg"`.
+    pub format: Option<String>,
+    /// JPEG quality, 1 to 100. **Default:** 95.
+    pub quality: Option<u32>,
+    /// Photon shot noise and read noise on (`false`: a noiseless camera, for checks).
+    /// **Default:** true.
+    pub noise: Option<bool>,
+}
+
+/// A white balance: a mode name or fixed gains `[r, g, b]`.
+#[derive(JsonSchema)]
+#[serde(untagged)]
+pub enum WhiteBalanceValue {
+    Mode(String),
+    Gains([f64; 3]),
 }
 
 // ------------------------------------------------------------------------------------------

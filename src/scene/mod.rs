@@ -13,6 +13,7 @@ pub mod diag;
 pub mod format;
 pub mod reader;
 pub mod resolve;
+pub mod sensor;
 pub mod source;
 
 pub use diag::{Diagnostic, Severity, Span};

@@ -70,6 +70,8 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
     let sun = sun(cx, t.get("sun"), water.as_ref(), &site, top);
     let render = render(cx, t.get("render"), top);
     let cameras = cameras(cx, &mut t, water.is_some(), &mut spans, top);
+    let f_number = cameras.first().and_then(|c| c.f_number);
+    let sensor = super::sensor::sensor(cx, t.get("sensor"), f_number, top);
     let lights = lights(cx, &mut t, &mut spans);
     let objects = objects(
         cx,
@@ -114,6 +116,7 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
         network: summary,
         diver,
         render,
+        sensor,
         needs: Needs::default(),
     };
     model.needs = needs(&model);

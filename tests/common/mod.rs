@@ -151,6 +151,7 @@ pub fn model(
             outputs: vec!["rgb".into()],
             exposure: 1.0,
         },
+        sensor: None,
         needs: Needs::default(),
     }
 }

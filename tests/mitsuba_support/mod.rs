@@ -103,6 +103,7 @@ pub fn base(name: &str, cam: Camera, water: Option<Water>, world_from_rig: Pose)
         network: NetworkSummary::default(),
         diver: None,
         render: render_settings(16),
+        sensor: None,
         needs: Needs {
             medium,
             refraction,

@@ -81,6 +81,7 @@ pub fn nadir_model(h: f64) -> Model {
             outputs: vec!["rgb".into(), "depth".into()],
             exposure: 1.0,
         },
+        sensor: None,
         needs: Needs::default(),
     }
 }
