@@ -132,6 +132,13 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                         },
                     )
                     .map_err(CliError::Failed)?;
+                    if let Some(sensor) = &model.sensor {
+                        bar.set_message("sensor stage");
+                        let spp = args.samples.unwrap_or(model.render.samples).max(1);
+                        let poses: Vec<usize> = (0..model.poses.len()).collect();
+                        crate::sensor::files::apply(&model, sensor, &dir, &poses, spp)
+                            .map_err(CliError::Failed)?;
+                    }
                     dir
                 }
             };

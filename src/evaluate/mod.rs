@@ -482,29 +482,39 @@ fn camera_centre_errors(
     (AxisStats::of(&errs), centres)
 }
 
-/// The image files of a render directory, for each image of the model: `<name>.jpg` (a sensor
-/// stage's camera output) when present, else `<name>.png`.
-pub fn rendered_images(model: &Model, dir: &Path) -> Result<Vec<(String, usize, usize)>, String> {
-    let mut out = Vec::new();
-    for pi in 0..model.poses.len() {
-        for ci in 0..model.cameras.len() {
-            let name = model.image_name(pi, ci);
-            let file = ["jpg", "png"]
-                .iter()
-                .map(|e| format!("{name}.{e}"))
-                .find(|f| dir.join(f).is_file())
-                .ok_or_else(|| {
-                    format!(
-                        "{}: no rendered image `{name}.jpg` or `{name}.png`\n  help: render the \
-                         scene into this directory first (`poser render SCENE -o DIR`) or drop \
-                         --images to let evaluate render it",
-                        dir.display()
-                    )
-                })?;
-            out.push((file, pi, ci));
+/// The directory and file of every image of the model in a render directory: the sensor
+/// stage's camera images (`DIR/camera/<name>.jpg|png`) when they are all there, else the
+/// backend's previews (`DIR/<name>.png`).
+pub fn rendered_images(
+    model: &Model,
+    dir: &Path,
+) -> Result<(PathBuf, Vec<(String, usize, usize)>), String> {
+    let find = |d: &Path| -> Option<Vec<(String, usize, usize)>> {
+        let mut out = Vec::new();
+        for pi in 0..model.poses.len() {
+            for ci in 0..model.cameras.len() {
+                let name = model.image_name(pi, ci);
+                let file = ["jpg", "png"]
+                    .iter()
+                    .map(|e| format!("{name}.{e}"))
+                    .find(|f| d.join(f).is_file())?;
+                out.push((file, pi, ci));
+            }
         }
+        Some(out)
+    };
+    let camera = dir.join("camera");
+    if let Some(v) = find(&camera) {
+        return Ok((camera, v));
     }
-    Ok(out)
+    find(dir).map(|v| (dir.to_path_buf(), v)).ok_or_else(|| {
+        format!(
+            "{}: not every image of the network is there (`<image>.png`, or `camera/<image>.jpg` \
+             from a sensor stage)\n  help: render the scene into this directory first \
+             (`poser render SCENE -o DIR`) or drop --images to let evaluate render it",
+            dir.display()
+        )
+    })
 }
 
 /// Images mode: COLMAP's pipeline on the rendered images in `image_dir`.
@@ -515,7 +525,8 @@ pub fn evaluate_images(
     progress: &(dyn Fn(&str, u64, u64) + Sync),
 ) -> Result<Evaluation, String> {
     let t0 = std::time::Instant::now();
-    let files = rendered_images(model, image_dir)?;
+    let (image_dir, files) = rendered_images(model, image_dir)?;
+    let image_dir = image_dir.as_path();
     if files.len() < 3 {
         return Err(format!(
             "images mode needs at least 3 images; the network has {}",
