@@ -6,16 +6,15 @@
 //! [`truth`] and every back end are checked against, and [`plan`] for survey and dive planning.
 
 pub mod backend;
+pub mod bench;
 pub mod cli;
 pub mod compare;
+pub mod geometry;
 pub mod io;
-pub mod mesh;
 pub mod model;
 pub mod optics;
 pub mod plan;
-pub mod render;
 pub mod rng;
 pub mod scene;
-pub mod targets;
 pub mod truth;
 pub mod units;
