@@ -541,7 +541,7 @@ pub fn write(model: &Model, dir: &Path) -> Result<(), String> {
     write_truth(model, &compute(model)?, dir)
 }
 
-/// [`write`] with the model's scene geometry already built (the native renderer's).
+/// [`write`] with the model's geometry ([`Bvh::of_model`]) already built by the caller.
 pub fn write_in(model: &Model, scene: &Bvh, dir: &Path) -> Result<(), String> {
     write_truth(model, &compute_in(model, scene)?, dir)
 }
