@@ -15,6 +15,9 @@
 //! sensor, 0.3–30 m) and *grazing* (camera rays 75°–88° off the port axis, pixels up to
 //! ≈ 1e5 px).
 
+// `!(x > y)` is deliberate, as in the optics: it rejects NaN as well as the failing comparison.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::optics::NoSolution;
 use crate::optics::lens::Lens;
 use crate::optics::port::{CylinderPort, DomePort, FlatPort, PortSolver};
