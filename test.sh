@@ -10,4 +10,4 @@ if [ -d backends ] && ls backends/*/*.py >/dev/null 2>&1; then
   .venv/bin/ruff check backends
   .venv/bin/python -m pytest -q backends
 fi
-cargo test --release --locked
+cargo test --release --locked --features backends

@@ -2,10 +2,10 @@
 //! batched, vs Refractive COLMAP's Gauss–Newton vs Agrawal's polynomial). Errors:
 //! `poser bench projection`.
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use poser::optics::NoSolution;
-use poser::optics::bench::{
+use poser::bench::projection::{
     agrawal, bench_lens, cases, colmap_gn, poser_project, poser_project_many,
 };
+use poser::optics::NoSolution;
 use poser::optics::port::PortSolver;
 use std::hint::black_box;
 

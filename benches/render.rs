@@ -4,10 +4,9 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
-use poser::mesh;
-use poser::render::bench::bench_model;
-use poser::render::scene::{Ray, Scene, SurfaceId};
-use poser::render::{render_image, scene};
+use poser::backend::native::{render_image, scene};
+use poser::bench::render::bench_model;
+use poser::geometry::{Bvh, Ray, SurfaceId, mesh};
 use std::hint::black_box;
 
 fn image(c: &mut Criterion) {
@@ -39,9 +38,9 @@ fn bvh(c: &mut Criterion) {
     let mut g = c.benchmark_group("bvh");
     g.sample_size(10);
     g.bench_function("build_reef_185k_tris", |b| {
-        b.iter(|| Scene::from_meshes(black_box(meshes.clone())))
+        b.iter(|| Bvh::from_meshes(black_box(meshes.clone())))
     });
-    let sc = Scene::from_meshes(meshes);
+    let sc = Bvh::from_meshes(meshes);
     g.bench_function("intersect_10k_rays", |b| {
         b.iter(|| {
             let mut n = 0;

@@ -1,23 +1,24 @@
 //! poser — simulate underwater photogrammetry surveys.
 //!
 //! Structured like a compiler: a front end ([`scene`]: TOML scene format → diagnostics),
-//! one resolved [`model`], and several back ends ([`render`] native, [`backend::mitsuba`],
-//! [`backend::blender`]), with the optics core ([`optics`]) as the geometric truth that
-//! [`truth`] and every back end are checked against, and [`plan`] for survey and dive planning.
+//! one resolved [`model`], and peer back ends ([`backend`]: native, Mitsuba, Blender, behind
+//! one [`backend::Backend`]), with the optics core ([`optics`], pure math) as the geometric truth
+//! that [`truth`] and every back end are checked against, the [`geometry`] service (meshes,
+//! targets, BVH) shared by the truth, the planner and the native renderer, [`plan`] for survey
+//! and dive planning, and [`compare`] / [`bench`] driving the back ends from outside.
 
 pub mod backend;
+pub mod bench;
 pub mod cli;
 pub mod compare;
 pub mod evaluate;
+pub mod geometry;
 pub mod io;
-pub mod mesh;
 pub mod model;
 pub mod optics;
 pub mod plan;
-pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod sensor;
-pub mod targets;
 pub mod truth;
 pub mod units;

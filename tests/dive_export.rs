@@ -1,9 +1,10 @@
 //! Subsurface export and plot of a simulated dive: structure, units and values read back.
-mod common;
+mod support;
 use poser::plan::dive::plan_dive;
 use quick_xml::Reader;
 use quick_xml::events::Event;
 use std::collections::HashMap;
+use support::plan as common;
 
 fn parse_min(s: &str) -> f64 {
     // Subsurface's sampletime(): "m:ss min".

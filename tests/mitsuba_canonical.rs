@@ -2,18 +2,9 @@
 //! measured with `poser::compare` against the exact truth of `poser::optics` (disk-image
 //! centroids vs the centroid of the exactly projected disk outline).
 
+mod support;
 use poser::backend::RenderOptions;
-use poser::model::Model;
-use std::path::PathBuf;
-
-fn load(name: &str) -> Model {
-    let path =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("tests/canonical/{name}.toml"));
-    match poser::scene::load(&path, &[]) {
-        Ok(l) => l.model,
-        Err(f) => panic!("{name}: {}", f.render()),
-    }
-}
+use support::canonical::{analytic, load};
 
 /// RMS of measured − expected disk centroids (px) over the scene's disks.
 fn geometry_rms(name: &str) -> f64 {
@@ -115,43 +106,6 @@ fn cylinder_off_axis() {
     );
 }
 geometry_test!(dispersion, "dispersion");
-
-/// Analytic radiance through pixel (u, v): the scene's Lambertian patch lit by its one light
-/// (spot, or the sun refracted into the water), Beer–Lambert on both legs, inverse square,
-/// Fresnel through the port (`optics`), and the n² law at the port.
-fn analytic(model: &Model, u: f64, v: f64, c: usize) -> f64 {
-    use poser::model::{LightKind, Mount};
-    let proj = poser::optics::project::Projector::new(model, 0, c).unwrap();
-    let (o, d, t) = proj.pixel_ray_world(0, u, v).unwrap();
-    let obj = &model.objects[0];
-    let n = obj.pose.rotation.z_axis;
-    let s = (obj.pose.translation - o).dot(n) / d.dot(n);
-    let p = o + s * d;
-    let water = model.water.as_ref().unwrap();
-    let sa = water.absorption[c];
-    let e = if let Some(sun) = &model.sun {
-        let dz = -sun.direction_water.z;
-        sun.irradiance_water[c] * dz * (-sa * (-p.z) / dz).exp()
-    } else {
-        let l = &model.lights[0];
-        let LightKind::Spot {
-            position,
-            intensity,
-            ..
-        } = &l.kind
-        else {
-            panic!("unexpected light {l:?}")
-        };
-        let pos = match l.mount {
-            Mount::Rig => model.poses[0].world_from_rig.transform_point(*position),
-            Mount::World => *position,
-        };
-        let to_l = pos - p;
-        let dl = to_l.length();
-        intensity[c] * (to_l / dl).dot(n).max(0.0) / (dl * dl) * (-sa * dl).exp()
-    };
-    obj.material.albedo[c] / std::f64::consts::PI * e * (-sa * s).exp() * t / water.ior[c].powi(2)
-}
 
 /// Rendered/analytic over the central 40×30 window, per channel: (mean ratio, standard error
 /// of that mean from the per-pixel scatter).

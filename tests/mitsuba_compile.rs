@@ -1,10 +1,10 @@
 //! Mitsuba backend: compiled XML snapshots, byte stability, escaping and path safety, and the
 //! clear errors for what Mitsuba cannot express.
-mod mitsuba_support;
+mod support;
 use glam::DVec3;
-use mitsuba_support::*;
 use poser::backend::mitsuba;
 use poser::model::*;
+use support::mitsuba::*;
 
 fn text(c: &mitsuba::Compiled, file: &str) -> String {
     String::from_utf8(
@@ -288,7 +288,7 @@ fn only_what_the_scene_needs() {
 #[test]
 fn fournier_forand_table_keeps_the_backscatter_fraction() {
     for (n, mu) in [(1.1, 3.5), (1.05, 3.2), (1.15, 4.0)] {
-        let b_exact = 1.0 - mitsuba::emit::ff_cdf(n, mu, std::f64::consts::FRAC_PI_2);
+        let b_exact = 1.0 - poser::optics::phase::ff_cdf(n, mu, std::f64::consts::FRAC_PI_2);
         let table = mitsuba::emit::ff_table(n, mu, mitsuba::emit::TABPHASE_SAMPLES);
         let b_table = mitsuba::emit::table_backscatter(&table);
         // Cell-mean densities preserve each cell's mass; the piecewise-linear interpolation
@@ -299,8 +299,8 @@ fn fournier_forand_table_keeps_the_backscatter_fraction() {
         );
         assert!(table.iter().all(|v| v.is_finite() && *v >= 0.0));
         // CDF sanity: 0 at 0, 1 at π.
-        assert!(mitsuba::emit::ff_cdf(n, mu, 0.0).abs() < 1e-12);
-        assert!((mitsuba::emit::ff_cdf(n, mu, std::f64::consts::PI) - 1.0).abs() < 1e-12);
+        assert!(poser::optics::phase::ff_cdf(n, mu, 0.0).abs() < 1e-12);
+        assert!((poser::optics::phase::ff_cdf(n, mu, std::f64::consts::PI) - 1.0).abs() < 1e-12);
     }
 }
 

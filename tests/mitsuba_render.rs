@@ -6,12 +6,12 @@
 //! Each render is 160×120 at 16–32 spp (≈0.3–1 s). Tolerances are derived from the measured
 //! Monte Carlo noise of each image and written next to each check.
 
-mod mitsuba_support;
+mod support;
 use glam::{DMat3, DVec3};
-use mitsuba_support::*;
 use poser::backend::{RenderOptions, mitsuba};
 use poser::compare::LinearImage;
 use poser::compare::detect::polygon_centroid;
+use support::mitsuba::*;
 
 use poser::model::*;
 
@@ -440,16 +440,16 @@ fn target_texture_orientation_and_levels() {
     // sd ≈ 8 % at 8 spp); 5 % still separates black (0.05) from white (0.9) by far, which is
     // what this test is about.
     assert!(
-        (black - poser::targets::BLACK).abs() < 0.05 * poser::targets::WHITE,
+        (black - poser::geometry::targets::BLACK).abs() < 0.05 * poser::geometry::targets::WHITE,
         "cell (0,0) = {black}; {}",
         dir.display()
     );
     assert!(
-        (white / poser::targets::WHITE - 1.0).abs() < 0.05,
+        (white / poser::geometry::targets::WHITE - 1.0).abs() < 0.05,
         "cell (1,0) = {white}"
     );
     assert!(
-        (up / poser::targets::WHITE - 1.0).abs() < 0.05,
+        (up / poser::geometry::targets::WHITE - 1.0).abs() < 0.05,
         "cell (0,1) = {up}"
     );
     let _ = std::fs::remove_dir_all(dir);

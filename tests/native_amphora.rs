@@ -1,6 +1,6 @@
 //! The generator of `scenarios/assets/amphora.glb` (a lathe-turned amphora, 0.58 m tall, glTF
 //! Y-up, metres) and its checks: the committed file is byte-identical to what this generator
-//! writes, and it loads through `poser::mesh::load_gltf` standing upright along +z.
+//! writes, and it loads through `poser::geometry::mesh::load_gltf` standing upright along +z.
 //!
 //! Regenerate with `POSER_REGEN_ASSETS=1 cargo test --test native_amphora`.
 
@@ -142,7 +142,7 @@ fn committed_amphora_matches_generator() {
 
 #[test]
 fn amphora_loads_upright_and_closed() {
-    let m = poser::mesh::load_gltf(&asset_path()).unwrap();
+    let m = poser::geometry::mesh::load_gltf(&asset_path()).unwrap();
     let (lo, hi) = m.bounds().unwrap();
     // Y-up → Z-up: the lathe axis becomes +z; height 0.58 m, widest radius < 0.2 m.
     // Tolerance 1e-6 m: f32 storage of the vertices.

@@ -1,16 +1,16 @@
 //! Caustics under a wavy sea surface in the native renderer: energy conservation of the
 //! caustic volume, caustic contrast against depth, a rendered seabed, determinism.
 
-mod native_common;
+mod support;
 
 use glam::DVec3;
-use native_common::*;
+use poser::backend::native::caustics::{CausticVolume, PLANES};
+use poser::backend::native::{render_image, scene::Scene};
 use poser::model::*;
 use poser::optics::interface::{fresnel_transmittance, refract};
 use poser::optics::sun::{direction_from, refract_into_water};
 use poser::optics::waves::WaveField;
-use poser::render::caustics::{CausticVolume, PLANES};
-use poser::render::{render_image, scene::Scene};
+use support::native::*;
 
 const N_WATER: f64 = 1.34;
 

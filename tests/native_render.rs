@@ -1,12 +1,12 @@
 //! Native renderer against analytic radiometry, thread-count determinism and finiteness.
 
-mod native_common;
+mod support;
 
 use glam::DVec3;
-use native_common::*;
 use poser::backend::RenderOptions;
+use poser::backend::native::{render, render_image, scene::Scene};
 use poser::model::*;
-use poser::render::{render, render_image, scene::Scene};
+use support::native::*;
 
 fn read_exr(path: &std::path::Path) -> Vec<f32> {
     image::open(path).unwrap().into_rgb32f().into_raw()
@@ -224,7 +224,7 @@ fn target_centroids_match_refractive_projection() {
     };
     m.targets.push(Target {
         name: "grid".into(),
-        points: poser::targets::points("grid", &kind, &pose),
+        points: poser::geometry::targets::points("grid", &kind, &pose),
         kind,
         pose,
     });
@@ -234,7 +234,7 @@ fn target_centroids_match_refractive_projection() {
         width: 1.0,
         height: 1.0,
     };
-    m.objects[0].material.albedo = [poser::targets::WHITE; 3];
+    m.objects[0].material.albedo = [poser::geometry::targets::WHITE; 3];
     m.objects[0].pose = pose.compose(&Pose {
         rotation: glam::DMat3::IDENTITY,
         translation: DVec3::new(0.0, 0.0, -0.002),
@@ -261,7 +261,7 @@ fn target_centroids_match_refractive_projection() {
         .map(|(a, b)| [a.2[0] - b.2[0], a.2[1] - b.2[1]])
         .collect();
     // Noise of one render's centroids = RMS of the two-seed difference / √2. The error must be
-    // within 3σ of noise plus 0.01 px of systematic budget (render-conventions §1.4 measured
+    // within 3σ of noise plus 0.01 px of systematic budget (docs/render-conventions.md §1.1; measured
     // Mitsuba/Cycles at ≤ 0.015 px RMS).
     let noise = rms(&diff) / 2f64.sqrt();
     let tol = 3.0 * noise + 0.01;
@@ -310,7 +310,9 @@ fn resolution_scale_keeps_every_ray_in_place() {
 /// within the noise (5.05 vs 4.89 ± 0.27) and the variance falls 14× (94 vs 1317).
 #[test]
 fn aureole_sampling_is_unbiased_and_cuts_sunlit_seabed_noise() {
-    use poser::render::{integrator::Integrator, lights::Lights, medium::Medium, sampler::Sampler};
+    use poser::backend::native::{
+        integrator::Integrator, lights::Lights, medium::Medium, sampler::Sampler,
+    };
     let mut m = nadir_model(2.0);
     {
         let w = m.water.as_mut().unwrap();

@@ -5,9 +5,9 @@
 //! These fail if a speed-up breaks exactness: a wrong first guess, a stopping rule that stops
 //! one step too early, a lane mixed up with its neighbour, a fallback that is never taken.
 use glam::DVec3;
+use poser::bench::projection::{bench_lens, cases, reference_pixel};
 use poser::model::{Distortion, LensModel};
 use poser::optics::NoSolution;
-use poser::optics::bench::{bench_lens, cases, reference_pixel};
 use poser::optics::lens::Lens;
 use poser::optics::port::{CylinderPort, DomePort, FlatPort, LANES, PortSolver, Simd};
 use poser::rng::SplitMix64;

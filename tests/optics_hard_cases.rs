@@ -197,7 +197,7 @@ fn dome_decentred_by_1e9_m() {
             reference::dome_forward(c, 0.05, 0.057, 1.003, 1.473, 1.333, p).unwrap(),
         );
         assert!(dist(got, want) < EXACT_PX, "{p}: {got:?} vs {want:?}");
-        // Continuity with the centred dome: moves by O(e/R) only (optics.md: ~5e-6 px).
+        // Continuity with the centred dome: moves by O(e/R) only (docs/optics.md §1.4: ~5e-6 px).
         assert!(dist(got, l.project(p).unwrap()) < 1e-4);
     }
 }
@@ -267,7 +267,7 @@ fn tilted_flat_ports() {
     let n = DVec3::new(0.1, -0.05, 1.0);
     let (d, t) = (0.05, 0.007);
     let port = PortSolver::Flat(flat(n, d, t));
-    // On the port axis: undeviated, projects to pinhole(N) (optics.md T15: (740, 430) for f=1000).
+    // On the port axis: undeviated, projects to pinhole(N) (docs/optics.md §1.3; (740, 430) for f = 1000).
     let on_axis = n.normalize() * 2.0;
     let got = px(&port, on_axis).unwrap();
     assert!(dist(got, lens().project(n).unwrap()) < 1e-12);
@@ -337,7 +337,7 @@ fn cylinder_with_the_camera_off_its_axis() {
             assert!(dist(got, [u, v]) < EXACT_PX, "({u},{v}) s={s}: {got:?}");
         }
     }
-    // Consistency (optics.md §1.5): a point in the symmetry plane of a decentred cylinder
+    // Consistency (docs/optics.md §1.5): a point in the symmetry plane of a decentred cylinder
     // projects like a dome with the same offset.
     let off = DVec3::new(0.003, 0.0, 0.0);
     let cyl = PortSolver::Cylinder(

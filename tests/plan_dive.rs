@@ -1,7 +1,8 @@
 //! Dive planning on Rust-built models: the paper's survey, a short survey within the NDL.
-mod common;
+mod support;
 use poser::plan::deco::Environment;
 use poser::plan::dive::*;
+use support::plan as common;
 
 #[test]
 fn paper_survey_needs_deco_and_runs_out_of_gas() {

@@ -1,9 +1,10 @@
 //! Survey metrics on Rust-built models: GSD through the port, achieved overlap against the
 //! pinhole analytic value, coverage with occlusion.
-mod common;
+mod support;
 use glam::DVec3;
 use poser::model::*;
 use poser::plan::survey::{Site, coverage, survey};
+use support::plan as common;
 
 fn seabed(depth: f64) -> Object {
     Object {

@@ -19,8 +19,8 @@
 //!
 //! `render(model, out, opts)` compiles into `out/mitsuba/`, runs the driver (a progress bar on
 //! stderr), which writes `out/{image}.exr` (linear, float32) and `out/{image}.png` (sRGB
-//! preview × `render.exposure`), then writes the ground truth into `out/truth/` (when the
-//! scene's outputs ask for `truth`).
+//! preview × `render.exposure`). The ground truth beside them is the `render` command's
+//! ([`crate::backend`]).
 
 pub mod emit;
 pub mod xml;
@@ -115,7 +115,7 @@ fn seed_for(model: &Model, view_index: usize) -> u32 {
 }
 
 /// The object's BSDF: two-sided Lambertian; a checker on a plane becomes a `checkerboard`
-/// texture with the native renderer's parity (`pattern_factor` in `crate::mesh`). Patterns
+/// texture with the native renderer's parity (`pattern_factor` in `crate::geometry::mesh`). Patterns
 /// Mitsuba cannot express on a shape are reported and the plain albedo is used.
 fn diffuse(o: &Object, plane: Option<(f64, f64)>, warnings: &mut Vec<String>) -> El {
     let a = o.material.albedo;
@@ -165,7 +165,7 @@ fn diffuse(o: &Object, plane: Option<(f64, f64)>, warnings: &mut Vec<String>) ->
 }
 
 /// The Mitsuba shape(s) of one object: analytic plugins for planes, boxes, spheres and
-/// cylinders; PLY meshes (world frame, from `crate::mesh`) for the rest.
+/// cylinders; PLY meshes (world frame, from `crate::geometry::mesh`) for the rest.
 fn object_shapes(
     model: &Model,
     o: &Object,
@@ -234,14 +234,17 @@ fn object_shapes(
         }
         _ => {
             let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
-            let mesh = crate::mesh::object_mesh(o, base)?;
+            let mesh = crate::geometry::mesh::object_mesh(o, base)?;
             if mesh.triangles.is_empty() {
                 return Ok(vec![]);
             }
             let file = format!("meshes/{index:03}-{}.ply", slug(&o.name));
             files.insert(
                 file.clone(),
-                crate::mesh::ply_bytes(&mesh, crate::mesh::PlyFormat::BinaryLittleEndian),
+                crate::geometry::mesh::ply_bytes(
+                    &mesh,
+                    crate::geometry::mesh::PlyFormat::BinaryLittleEndian,
+                ),
             );
             Ok(vec![
                 El::typed("shape", "ply")
@@ -274,7 +277,7 @@ fn target_px_per_m(model: &Model, t: &Target) -> f64 {
         }
     }
     let n = model.ambient_ior().iter().cloned().fold(1.0, f64::max);
-    let (w, h) = crate::targets::extent(&t.kind);
+    let (w, h) = crate::geometry::targets::extent(&t.kind);
     let dmin = (dmin - 0.5 * w.hypot(h)).max(0.05);
     (TEXELS_PER_PIXEL * fx * n / dmin).clamp(500.0, 20_000.0)
 }
@@ -288,14 +291,14 @@ pub const CARD_OFFSET: f64 = 1e-5;
 
 /// The white card of a geometric target, `CARD_OFFSET` behind its printed face.
 fn white_card(t: &Target) -> El {
-    let (w, h) = crate::targets::extent(&t.kind);
+    let (w, h) = crate::geometry::targets::extent(&t.kind);
     El::typed("shape", "rectangle")
         .comment(format!("target `{}`: white card {w} m × {h} m", t.name))
         .to_world(
             t.pose.rotation * DMat3::from_diagonal(DVec3::new(0.5 * w, 0.5 * h, 1.0)),
             t.pose.transform_point(DVec3::new(0.0, 0.0, -CARD_OFFSET)),
         )
-        .child(lambert(crate::targets::WHITE))
+        .child(lambert(crate::geometry::targets::WHITE))
 }
 
 fn lambert(albedo: f64) -> El {
@@ -322,7 +325,7 @@ fn target_shapes(
         } => {
             let mut out = Vec::new();
             for k in 0..levels {
-                let (side, top) = crate::targets::test_object_step(size, levels, step, k);
+                let (side, top) = crate::geometry::targets::test_object_step(size, levels, step, k);
                 out.push(
                     El::typed("shape", "cube")
                         .comment(format!("target `{}`: step {k}", t.name))
@@ -335,10 +338,10 @@ fn target_shapes(
                             t.pose
                                 .transform_point(DVec3::new(0.0, 0.0, top - 0.5 * step)),
                         )
-                        .child(lambert(crate::targets::WHITE)),
+                        .child(lambert(crate::geometry::targets::WHITE)),
                 );
             }
-            for (id, p) in crate::targets::local_points(&t.kind) {
+            for (id, p) in crate::geometry::targets::local_points(&t.kind) {
                 let r = 0.5 * diameter;
                 out.push(
                     El::typed("shape", "disk")
@@ -347,7 +350,7 @@ fn target_shapes(
                             DMat3::from_cols(m.x_axis * r, m.y_axis * r, m.z_axis),
                             t.pose.transform_point(p + DVec3::new(0.0, 0.0, 1e-5)),
                         )
-                        .child(lambert(crate::targets::BLACK)),
+                        .child(lambert(crate::geometry::targets::BLACK)),
                 );
             }
             Ok(out)
@@ -357,7 +360,7 @@ fn target_shapes(
             // behind it, so disk edges are analytic (a texture's texels would bias centroids).
             let mut out = vec![white_card(t)];
             let r = 0.5 * diameter;
-            for (id, p) in crate::targets::local_points(&t.kind) {
+            for (id, p) in crate::geometry::targets::local_points(&t.kind) {
                 out.push(
                     El::typed("shape", "disk")
                         .comment(format!("target `{}`: disk {id}", t.name))
@@ -365,7 +368,7 @@ fn target_shapes(
                             DMat3::from_cols(m.x_axis * r, m.y_axis * r, m.z_axis),
                             t.pose.transform_point(p),
                         )
-                        .child(lambert(crate::targets::BLACK)),
+                        .child(lambert(crate::geometry::targets::BLACK)),
                 );
             }
             Ok(out)
@@ -394,16 +397,16 @@ fn target_shapes(
                             m * DMat3::from_diagonal(DVec3::new(0.5 * square, 0.5 * square, 1.0)),
                             t.pose.transform_point(c),
                         )
-                        .child(lambert(crate::targets::BLACK)),
+                        .child(lambert(crate::geometry::targets::BLACK)),
                     );
                 }
             }
             Ok(out)
         }
         _ => {
-            let (w, h) = crate::targets::extent(&t.kind);
+            let (w, h) = crate::geometry::targets::extent(&t.kind);
             let ppm = target_px_per_m(model, t);
-            let img = crate::targets::texture(&t.kind, ppm);
+            let img = crate::geometry::targets::texture(&t.kind, ppm);
             let mut png = Vec::new();
             img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
                 .map_err(|e| format!("target `{}`: cannot encode its texture: {e}", t.name))?;
@@ -682,10 +685,6 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     }
     // Images are listed by the driver as file names relative to `out`.
     let images: Vec<PathBuf> = images.into_iter().map(|p| out.join(p)).collect();
-    // Ground truth beside the images (same layout as the native renderer: `OUT/truth/`).
-    if model.render.outputs.iter().any(|o| o == "truth") {
-        crate::truth::write(&model, &out.join("truth"))?;
-    }
     Ok(RenderReport {
         images,
         seconds: t0.elapsed().as_secs_f64(),

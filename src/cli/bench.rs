@@ -6,7 +6,7 @@ pub fn run(
     what: &str,
     json: Option<PathBuf>,
     quick: bool,
-    backends: Vec<String>,
+    backends: Vec<crate::backend::Backend>,
     plot: Option<PathBuf>,
 ) -> Result<(), CliError> {
     if what != "render" && (!backends.is_empty() || plot.is_some()) {
@@ -21,13 +21,13 @@ pub fn run(
                     "warning: this is a debug build; speeds are not representative (use --release)"
                 );
             }
-            let rows = crate::optics::bench::run(quick);
+            let rows = crate::bench::projection::run(quick);
             println!(
                 "batch solvers: {} lanes, {} build\n",
                 crate::optics::port::LANES,
                 crate::optics::port::Simd::detect().name()
             );
-            print!("{}", crate::optics::bench::table(&rows));
+            print!("{}", crate::bench::projection::table(&rows));
             if let Some(path) = json.as_deref() {
                 let text = serde_json::to_string_pretty(&rows)
                     .map_err(|e| CliError::Failed(e.to_string()))?;
@@ -42,13 +42,13 @@ pub fn run(
                     "warning: this is a debug build; speeds are not representative (use --release)"
                 );
             }
-            let opts = crate::render::bench::BenchOptions {
+            let opts = crate::bench::render::BenchOptions {
                 quick,
                 backends,
                 json,
                 plot,
             };
-            crate::render::bench::run(&opts)
+            crate::bench::render::run(&opts)
                 .map(|_| ())
                 .map_err(CliError::Failed)
         }

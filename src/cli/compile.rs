@@ -1,14 +1,14 @@
 //! `poser compile`: write a scene for Mitsuba 3 (XML) or Blender (bpy script).
-use super::{BackendArg, CliError, SceneArgs, load_model};
+use super::{CliError, SceneArgs, load_model};
+use crate::backend::Backend;
 use std::path::Path;
 
-pub fn run(scene: &SceneArgs, backend: BackendArg, out: &Path) -> Result<(), CliError> {
+pub fn run(scene: &SceneArgs, backend: Backend, out: &Path) -> Result<(), CliError> {
     let model = load_model(scene)?;
-    match backend {
-        BackendArg::Native => Err(CliError::Usage(
+    if !backend.capabilities().compiles {
+        return Err(CliError::Usage(
             "the native backend renders directly; use `poser render` (compile targets: mitsuba, blender)".into(),
-        )),
-        BackendArg::Mitsuba => crate::backend::mitsuba::compile(&model, out).map_err(CliError::Failed),
-        BackendArg::Blender => crate::backend::blender::compile(&model, out).map_err(CliError::Failed),
+        ));
     }
+    backend.compile(&model, out).map_err(CliError::Failed)
 }

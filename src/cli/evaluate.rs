@@ -10,7 +10,7 @@
 //! | `--images DIR` | render | images mode: use the images already rendered in DIR (any backend) |
 //! | `--samples`, `--scale` | scene's | images mode: the native render's samples and resolution scale |
 use super::{CliError, SceneArgs, load_model};
-use crate::backend::RenderOptions;
+use crate::backend::{Backend, RenderOptions};
 use crate::evaluate::colmap::CameraModel;
 use crate::evaluate::{self, Mode, Options};
 use clap::Args as ClapArgs;
@@ -55,7 +55,10 @@ pub struct Args {
     /// Images mode: images already rendered into this directory (by any backend).
     #[arg(long)]
     pub images: Option<PathBuf>,
-    /// Images mode: samples per pixel of the native render.
+    /// Images mode: the backend that renders the images (when `--images` is not given).
+    #[arg(long, default_value = "native")]
+    pub backend: Backend,
+    /// Images mode: samples per pixel of the render.
     #[arg(long)]
     pub samples: Option<u32>,
     /// Images mode: render at this fraction of the cameras' resolution.
@@ -121,17 +124,18 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 Some(d) => d.clone(),
                 None => {
                     let dir = args.out.join("images");
-                    bar.set_message("rendering (native)");
-                    crate::render::render(
-                        &model,
-                        &dir,
-                        &RenderOptions {
-                            samples: args.samples,
-                            poses: None,
-                            progress: false,
-                        },
-                    )
-                    .map_err(CliError::Failed)?;
+                    bar.set_message(format!("rendering ({})", args.backend));
+                    args.backend
+                        .render(
+                            &model,
+                            &dir,
+                            &RenderOptions {
+                                samples: args.samples,
+                                poses: None,
+                                progress: false,
+                            },
+                        )
+                        .map_err(CliError::Failed)?;
                     if let Some(sensor) = &model.sensor {
                         bar.set_message("sensor stage");
                         let spp = args.samples.unwrap_or(model.render.samples).max(1);

@@ -3,6 +3,7 @@
 //!
 //! Exit codes: 0 success, 1 invalid scene or failed run, 2 usage error.
 
+use crate::backend::Backend;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -60,13 +61,6 @@ pub struct SceneArgs {
     /// `--set 'render.samples=64'`. Repeatable; applied after includes.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum BackendArg {
-    Native,
-    Mitsuba,
-    Blender,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -144,7 +138,7 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArgs,
         #[arg(long, value_enum)]
-        backend: BackendArg,
+        backend: Backend,
         #[arg(short, long)]
         out: PathBuf,
     },
@@ -153,7 +147,7 @@ pub enum Command {
         #[command(flatten)]
         scene: SceneArgs,
         #[arg(long, value_enum, default_value = "native")]
-        backend: BackendArg,
+        backend: Backend,
         #[arg(short, long)]
         out: PathBuf,
         /// Override samples per pixel.
@@ -214,7 +208,7 @@ pub enum Command {
         scene: SceneArgs,
         /// Backends to compare.
         #[arg(long, value_delimiter = ',', default_value = "native,mitsuba,blender")]
-        backends: Vec<BackendArg>,
+        backends: Vec<Backend>,
         #[arg(short, long)]
         out: PathBuf,
         /// Override samples per pixel.
@@ -235,8 +229,8 @@ pub enum Command {
         #[arg(long)]
         quick: bool,
         /// `render` only: the backends to compare (default: all three).
-        #[arg(long, value_delimiter = ',')]
-        backends: Vec<String>,
+        #[arg(long, value_enum, value_delimiter = ',')]
+        backends: Vec<Backend>,
         /// `render` only: write the speed-against-error curves as an SVG plot.
         #[arg(long)]
         plot: Option<PathBuf>,

@@ -1,12 +1,12 @@
 //! `poser render`: render every pose with the chosen backend (native by default).
-use super::{BackendArg, CliError, SceneArgs, load_model};
-use crate::backend::RenderOptions;
+use super::{CliError, SceneArgs, load_model};
+use crate::backend::{Backend, RenderOptions};
 use std::path::Path;
 
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     scene: &SceneArgs,
-    backend: BackendArg,
+    backend: Backend,
     out: &Path,
     samples: Option<u32>,
     poses: Option<Vec<usize>>,
@@ -40,12 +40,11 @@ pub fn run(
         poses,
         progress: !quiet,
     };
-    let report = match backend {
-        BackendArg::Native => crate::render::render(&model, out, &opts),
-        BackendArg::Mitsuba => crate::backend::mitsuba::render(&model, out, &opts),
-        BackendArg::Blender => crate::backend::blender::render(&model, out, &opts),
-    }
-    .map_err(CliError::Failed)?;
+    let report = backend
+        .render(&model, out, &opts)
+        .map_err(CliError::Failed)?;
+    // The ground truth beside the images, the same for every backend.
+    crate::truth::write(&model, &out.join("truth")).map_err(CliError::Failed)?;
     eprintln!(
         "rendered {} image(s) into {} in {:.2} s",
         report.images.len(),

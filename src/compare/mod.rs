@@ -48,15 +48,12 @@ pub fn channel_means(rgb: &[f32]) -> [f64; 3] {
     m.map(|v| v / (rgb.len() / 3).max(1) as f64)
 }
 
-use crate::backend::{RenderOptions, RenderReport};
+use crate::backend::{Backend, RenderOptions};
 use crate::model::{Model, TargetKind};
 use crate::optics::project::Projector;
 use glam::DVec3;
 use report::{BackendResult, PairResult, Report};
 use std::time::Instant;
-
-/// The backends `poser compare` knows.
-pub const BACKENDS: &[&str] = &["native", "mitsuba", "blender"];
 
 /// A printed dark disk whose image can be located: centre, normal (world), radius, and the
 /// radius around the centre that is guaranteed white (m).
@@ -160,24 +157,6 @@ pub fn expected_disk(proj: &Projector, pose: usize, d: &Disk) -> Option<([f64; 2
     Some((c, half))
 }
 
-/// Render `model` with one backend into `out`.
-pub fn render_with(
-    backend: &str,
-    model: &Model,
-    out: &Path,
-    opts: &RenderOptions,
-) -> Result<RenderReport, String> {
-    match backend {
-        "native" => crate::render::render(model, out, opts),
-        "mitsuba" => crate::backend::mitsuba::render(model, out, opts),
-        "blender" => crate::backend::blender::render(model, out, opts),
-        other => Err(format!(
-            "unknown backend `{other}` (known: {})",
-            BACKENDS.join(", ")
-        )),
-    }
-}
-
 /// Measure every visible disk in the rendered images of `dir`: returns
 /// (id, image name, measured − expected in px) for each disk found, and how many were expected.
 pub fn measure_targets(
@@ -185,7 +164,7 @@ pub fn measure_targets(
     dir: &Path,
 ) -> Result<(Vec<(String, String, [f64; 2])>, usize), String> {
     let disks = disks(model);
-    let dark = crate::targets::BLACK / crate::targets::WHITE;
+    let dark = crate::geometry::targets::BLACK / crate::geometry::targets::WHITE;
     let mut found = Vec::new();
     let mut expected = 0;
     for cam in 0..model.cameras.len() {
@@ -221,7 +200,7 @@ pub fn measure_targets(
 /// difference images into `out`.
 pub fn run(
     model: &Model,
-    backends: &[String],
+    backends: &[Backend],
     out: &Path,
     opts: &RenderOptions,
 ) -> Result<Report, String> {
@@ -231,13 +210,13 @@ pub fn run(
         ..Default::default()
     };
     for b in backends {
-        let dir = out.join(b);
+        let dir = out.join(b.name());
         let t0 = Instant::now();
         let mut r = BackendResult {
-            backend: b.clone(),
+            backend: b.name().to_string(),
             ..Default::default()
         };
-        match render_with(b, model, &dir, opts) {
+        match b.render(model, &dir, opts) {
             Err(e) => r.error = Some(e),
             Ok(rep) => {
                 r.seconds = t0.elapsed().as_secs_f64();

@@ -23,10 +23,11 @@ pub mod colmap;
 pub mod observe;
 pub mod report;
 
-use crate::mesh::{TriMesh, object_mesh};
+use crate::geometry::mesh::{TriMesh, object_mesh};
 use crate::model::Model;
 use crate::optics::project::Projector;
-use crate::render::scene::{Ray, Scene, SurfaceId, target_mesh};
+use crate::geometry::bvh::target_mesh;
+use crate::geometry::{Bvh as Scene, Ray, SurfaceId};
 use crate::rng::SplitMix64;
 use align::{AxisStats, Bowl, Similarity};
 use colmap::{CameraModel, Reconstruction, Request, RequestCamera, RequestImage, RequestPoint};

@@ -14,11 +14,11 @@
 //! the point to where its ray leaves the port. A feature seen at more than
 //! [`MAX_INCIDENCE_DEG`] from its surface normal is not matched by real software and is left out.
 
-use crate::mesh::TriMesh;
+use crate::geometry::mesh::TriMesh;
 use crate::model::Model;
 use crate::optics::NoSolution;
 use crate::optics::project::Projector;
-use crate::render::scene::Scene;
+use crate::geometry::Bvh as Scene;
 use crate::rng::SplitMix64;
 use glam::DVec3;
 use rayon::prelude::*;

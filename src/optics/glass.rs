@@ -59,7 +59,7 @@ mod tests {
 
     #[test]
     fn sellmeier_matches_reference_table() {
-        // optics.md §2.3 [verified]; printed to 1e-6.
+        // docs/optics.md §2.3; printed to 1e-6.
         let table = [
             ("N-BK7", [1.525320, 1.518522, 1.516798, 1.514520]),
             ("fused_silica", [1.465566, 1.459911, 1.458462, 1.456535]),

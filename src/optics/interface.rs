@@ -38,7 +38,7 @@ mod tests {
 
     #[test]
     fn fresnel_air_to_water_table() {
-        // optics.md §4.2 [verified], nw = 1.34: R at θair and θwater, printed to 1e-4 / 0.01°.
+        // docs/optics.md §4.2, nw = 1.34: R at θair and θwater, printed to 1e-4 / 0.01°.
         let nw = 1.34;
         for (ta, r, tw) in [
             (0.0, 0.0211, 0.0),

@@ -12,7 +12,7 @@
 //! outside the calibrated field) the result is [`NoSolution::OutsideLensField`].
 
 use super::NoSolution;
-use crate::model::{Camera, Distortion, LensModel};
+use super::types::{Camera, Distortion, LensModel};
 use glam::DVec3;
 
 /// The intrinsic part of a camera (everything before the port).

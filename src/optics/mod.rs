@@ -11,6 +11,7 @@
 //! | [`port`] | flat (multi-layer, tilted), dome (decentred), cylinder (on/off axis) |
 //! | [`lanes`] | f64 SIMD lanes for the batch port solvers (AVX2 picked at run time) |
 //! | [`project`] | [`project::Projector`]: camera + port + poses for one channel |
+//! | [`types`] | the value types: [`types::Camera`], [`types::Port`], [`types::Pose`], … (re-exported by the model) |
 //! | [`waves`] | seeded periodic random sea surface (Pierson–Moskowitz, Mitsuyasu spread) for caustics |
 //!
 //! "No solution" is always an explicit [`NoSolution`], never NaN.
@@ -18,7 +19,6 @@
 // `!(x > y)` is deliberate throughout: it rejects NaN as well as the failing comparison.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod bench;
 pub mod glass;
 pub mod interface;
 pub mod lanes;
@@ -28,11 +28,12 @@ pub mod port;
 pub mod project;
 pub mod reference;
 pub mod sun;
+pub mod types;
 pub mod water;
 pub mod waves;
 
-use crate::model::{Camera, Rgb};
 use serde::{Deserialize, Serialize};
+use types::{Camera, Port, Rgb};
 
 /// Why a point has no pixel (or a pixel has no ray).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -98,7 +99,7 @@ impl std::error::Error for NoSolution {}
 /// and B channels project the same water point (at 2 m along each corner pixel's G ray), over
 /// the four corners. 0 when there is no port or no water.
 pub fn lateral_color_px(camera: &Camera, water_ior: Rgb) -> f64 {
-    if matches!(camera.port, crate::model::Port::None) {
+    if matches!(camera.port, Port::None) {
         return 0.0;
     }
     let build = |ch: usize| project::Projector::for_camera(camera, ch, water_ior[ch]).ok();

@@ -3,7 +3,10 @@
 //! | function | parameters | notes |
 //! |---|---|---|
 //! | [`hg_eval`], [`hg_sample`], [`hg_backscatter`] | asymmetry g ∈ (−1, 1) | Henyey & Greenstein 1941; per steradian, ∫p dΩ = 1 |
-//! | [`ff_eval`], [`FfTable`], [`ff_backscatter`] | particle index n > 1 relative to water, Junge slope 3 < μ ≤ 5 | Mobley, Sundman & Boss, Appl. Opt. 41(6):1035 (2002) |
+//! | [`ff_eval`], [`ff_cdf`], [`ff_backscatter`] | particle index n > 1 relative to water, Junge slope 3 < μ ≤ 5 | Fournier & Forand 1994; closed forms of Mobley, Sundman & Boss, Appl. Opt. 41(6):1035 (2002) |
+//!
+//! This is the only implementation of the phase physics: the native medium and the Mitsuba
+//! emitter call these functions (and tabulate FF from [`ff_cdf`] in their own layouts).
 //!
 //! Angles are scattering angles θ from the forward direction; `cos θ` is returned by samplers.
 
@@ -17,7 +20,8 @@ pub fn hg_eval(g: f64, cos_theta: f64) -> f64 {
 
 /// Sample cos θ from Henyey–Greenstein with a uniform `u` ∈ [0, 1).
 pub fn hg_sample(g: f64, u: f64) -> f64 {
-    if g.abs() < 1e-6 {
+    // Below |g| = 1e-4 the closed form cancels badly; HG is isotropic to that accuracy.
+    if g.abs() < 1e-4 {
         return (1.0 - 2.0 * u).clamp(-1.0, 1.0);
     }
     let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
@@ -59,56 +63,25 @@ pub fn ff_backscatter(n: f64, mu: f64) -> f64 {
     1.0 - (1.0 - d90.powf(nu + 1.0) - 0.5 * (1.0 - d90.powf(nu))) / ((1.0 - d90) * d90.powf(nu))
 }
 
-/// Tabulated inverse CDF of Fournier–Forand for sampling (the θ → 0 peak is integrable but
-/// sharp, so the table is log-spaced in θ from 1e-6 rad to π).
-#[derive(Debug, Clone)]
-pub struct FfTable {
-    theta: Vec<f64>,
-    cdf: Vec<f64>,
-}
-
-impl FfTable {
-    const N: usize = 2048;
-    pub fn new(n: f64, mu: f64) -> FfTable {
-        let (lo, hi) = (1e-6f64.ln(), PI.ln());
-        let mut theta = vec![0.0];
-        theta
-            .extend((0..Self::N).map(|i| (lo + (hi - lo) * i as f64 / (Self::N - 1) as f64).exp()));
-        let mut cdf = vec![0.0; theta.len()];
-        // Below 1e-6 rad the integrand 2π p sinθ ~ θ^(1-μ+... ) is handled by the first
-        // trapezoid; trapezoid on a log grid elsewhere, renormalised to 1.
-        let f = |t: f64| {
-            if t <= 0.0 {
-                0.0
-            } else {
-                2.0 * PI * ff_eval(n, mu, t) * t.sin()
-            }
-        };
-        for i in 1..theta.len() {
-            let (a, b) = (theta[i - 1], theta[i]);
-            let m = 0.5 * (a + b);
-            cdf[i] = cdf[i - 1] + (b - a) * (f(a) + 4.0 * f(m) + f(b)) / 6.0;
-        }
-        let total = *cdf.last().unwrap();
-        for c in &mut cdf {
-            *c /= total;
-        }
-        FfTable { theta, cdf }
-    }
-    /// Sample cos θ with a uniform `u` ∈ [0, 1).
-    pub fn sample(&self, u: f64) -> f64 {
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .clamp(1, self.cdf.len() - 1);
-        let (c0, c1) = (self.cdf[i - 1], self.cdf[i]);
-        let w = if c1 > c0 {
-            ((u - c0) / (c1 - c0)).clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
-        (self.theta[i - 1] + w * (self.theta[i] - self.theta[i - 1])).cos()
-    }
+/// Fournier–Forand cumulative distribution: the fraction of the scattered light within angle
+/// θ of the forward direction (Fournier & Jonasz 1999; Mobley, Sundman & Boss 2002). The
+/// backends tabulate FF from it: the native medium ([`crate::backend::native::medium`]) and
+/// Mitsuba's `tabphase` ([`crate::backend::mitsuba::emit`]).
+pub fn ff_cdf(n: f64, mu: f64, theta: f64) -> f64 {
+    let nu = (3.0 - mu) / 2.0;
+    let k = 3.0 * (n - 1.0) * (n - 1.0);
+    let s2 = (theta / 2.0).sin().powi(2);
+    let d = 4.0 / k * s2;
+    let d180 = 4.0 / k;
+    let first = if d <= 0.0 {
+        0.0
+    } else {
+        (1.0 - d.powf(nu + 1.0) - (1.0 - d.powf(nu)) * s2) / ((1.0 - d) * d.powf(nu))
+    };
+    let second = (1.0 - d180.powf(nu)) / (8.0 * (d180 - 1.0) * d180.powf(nu))
+        * theta.cos()
+        * theta.sin().powi(2);
+    first + second
 }
 
 #[cfg(test)]
@@ -117,7 +90,7 @@ mod tests {
 
     #[test]
     fn hg_backscatter_values() {
-        // optics.md §3.4, printed to 1e-4.
+        // docs/optics.md §3.4, printed to 1e-4.
         for (g, b) in [(0.8, 0.0507), (0.85, 0.0361), (0.9, 0.0229), (0.95, 0.0109)] {
             assert!((hg_backscatter(g) - b).abs() < 1e-4, "g={g}");
         }
@@ -125,7 +98,7 @@ mod tests {
 
     #[test]
     fn ff_backscatter_values() {
-        // optics.md §3.4 [verified numerically], printed to 4 significant digits.
+        // docs/optics.md §3.4, printed to 4 significant digits.
         for (n, mu, b) in [
             (1.10, 3.5835, 0.018313),
             (1.05, 3.5, 0.00572),
@@ -154,14 +127,14 @@ mod tests {
     }
 
     #[test]
-    fn ff_table_integrates_to_one_and_backscatter_matches() {
-        // The CDF at 90° must equal 1 − B (table resolution: 1e-3).
-        let (n, mu) = (1.10, 3.5835);
-        let t = FfTable::new(n, mu);
-        let k = t.theta.partition_point(|&x| x < 0.5 * PI);
-        let back = 1.0 - t.cdf[k];
-        assert!((back - ff_backscatter(n, mu)).abs() < 1e-3, "{back}");
-        let c = t.sample(0.999_999);
-        assert!((-1.0..=1.0).contains(&c));
+    fn ff_cdf_reproduces_petzold_backscatter() {
+        // n = 1.10, μ = 3.5835 → B = 0.018313 (Mobley, Sundman & Boss 2002; docs/optics.md).
+        let b = 1.0 - ff_cdf(1.10, 3.5835, PI / 2.0);
+        assert!((b - 0.018313).abs() < 2e-6, "{b}");
+        assert!((b - ff_backscatter(1.10, 3.5835)).abs() < 1e-9, "{b}");
+        assert!(ff_cdf(1.10, 3.5835, 0.0).abs() < 1e-12);
+        assert!((ff_cdf(1.10, 3.5835, PI) - 1.0).abs() < 1e-12);
+        let b = 1.0 - ff_cdf(1.15, 3.7, PI / 2.0);
+        assert!((b - 0.0397).abs() < 1e-4, "{b}");
     }
 }

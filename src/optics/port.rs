@@ -11,9 +11,9 @@
 //! lanes, AVX2 where the CPU has it: the same results bit for bit as [`PortSolver::forward`],
 //! at 2.5–3.5 times its throughput.
 //!
-//! All ports share the conventions of Refractive COLMAP (`optics.md` §1.1). The backward
+//! All ports share the conventions of Refractive COLMAP (`docs/optics.md` §1.1). The backward
 //! transmittance is the product of the unpolarised Fresnel transmittances of every interface
-//! (no n² radiance factor; see render-conventions.md for that).
+//! (no n² radiance factor; see docs/render-conventions.md §3.4 for that).
 //!
 //! Failure is explicit ([`NoSolution`]), never NaN: a point inside the housing or glass, behind
 //! the camera, beyond the critical angle, a camera ray that misses the port or is totally
@@ -23,7 +23,7 @@ use super::NoSolution;
 use super::interface::{fresnel_transmittance, refract};
 use super::lanes::Lane;
 use super::reference::{Dd, V3};
-use crate::model::Port;
+use super::types::Port;
 use glam::{DVec2, DVec3};
 
 /// A ray leaving the port into the water (camera frame).
@@ -75,7 +75,7 @@ struct Step {
 /// camera-side gap, or deep behind a tilted port. κ·c ≈ 1 on ordinary points.
 const REFINE_AT: f64 = 16.0;
 
-/// Scalar q-equation for parallel layers (`optics.md` §1.3) with every per-port constant
+/// Scalar q-equation for parallel layers (`docs/optics.md` §1.3) with every per-port constant
 /// precomputed once: the camera-side gap (index `na`), up to [`MAX_LAYERS`] glass layers, and
 /// the water (index `nw`), whose depth D is the only per-point parameter besides r.
 ///
@@ -1367,7 +1367,7 @@ pub use batch::{LANES, Simd};
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::bench::cases;
+    use crate::bench::projection::cases;
 
     /// Evaluations of the fast solver per point of the benchmark's sets (`None`: the point
     /// left the fast path), for the flat port and the on-axis cylinder (q-equation) and the

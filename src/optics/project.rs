@@ -16,7 +16,7 @@
 use super::NoSolution;
 use super::lens::Lens;
 use super::port::{PortRay, PortSolver};
-use crate::model::{Camera, Model, Pose};
+use super::types::{Camera, Pose};
 use glam::DVec3;
 
 #[derive(Debug, Clone)]
@@ -32,27 +32,6 @@ pub struct Projector {
 }
 
 impl Projector {
-    /// The projector of camera `cam` of `model` for `channel` (0 = R, 1 = G, 2 = B).
-    pub fn new(model: &Model, cam: usize, channel: usize) -> Result<Projector, String> {
-        let camera = model.cameras.get(cam).ok_or_else(|| {
-            format!(
-                "camera index {cam} out of range ({} cameras)",
-                model.cameras.len()
-            )
-        })?;
-        if channel > 2 {
-            return Err(format!(
-                "channel {channel} out of range (0 = R, 1 = G, 2 = B)"
-            ));
-        }
-        let mut p = Projector::for_camera(camera, channel, model.ambient_ior()[channel])?;
-        p.world_from_camera = (0..model.poses.len())
-            .map(|i| model.world_from_camera(i, cam))
-            .collect();
-        p.camera_from_world = p.world_from_camera.iter().map(Pose::inverse).collect();
-        Ok(p)
-    }
-
     /// A projector for one camera alone (camera frame only; no poses), in a medium of index
     /// `n_water` (1 in air).
     pub fn for_camera(camera: &Camera, channel: usize, n_water: f64) -> Result<Projector, String> {
@@ -67,6 +46,14 @@ impl Projector {
             world_from_camera: Vec::new(),
             camera_from_world: Vec::new(),
         })
+    }
+
+    /// The same projector placed at rig poses: `world_from_camera` at each pose (the model
+    /// builds these: `Projector::new` in [`crate::model`]).
+    pub fn with_poses(mut self, world_from_camera: Vec<Pose>) -> Projector {
+        self.camera_from_world = world_from_camera.iter().map(Pose::inverse).collect();
+        self.world_from_camera = world_from_camera;
+        self
     }
 
     /// Number of rig poses known to this projector.

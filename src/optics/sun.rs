@@ -219,7 +219,7 @@ mod tests {
     #[test]
     fn spa_worked_example() {
         // Reda & Andreas 2004 example, 2003-10-17 19:30:30 UT (12:30:30 at −7 h),
-        // 39.742476 N, 105.1786 W. NOAA reference: z = 50.10864°, A = 194.34258° (optics.md
+        // 39.742476 N, 105.1786 W. NOAA reference: z = 50.10864°, A = 194.34258° (docs/optics.md
         // §4.1); tolerance 1e-3° for transcription of constants.
         let (el, az) = position(39.742476, -105.1786, "2003-10-17T12:30:30-07:00").unwrap();
         let z = 90.0 - el.to_degrees();
@@ -253,7 +253,7 @@ mod tests {
 
     #[test]
     fn refraction_into_water() {
-        // Sun at 30° elevation (θa = 60°) into nw = 1.34: θw = 40.26°, R = 0.0610 (optics.md §4.2).
+        // Sun at 30° elevation (θa = 60°) into nw = 1.34: θw = 40.26°, R = 0.0610 (docs/optics.md §4.2).
         let d = direction_from(30f64.to_radians(), 0.0);
         let (w, f) = refract_into_water(d, 1.34);
         let tw = (-w.z).acos().to_degrees();

@@ -11,7 +11,7 @@
 //! All indices are relative to air (as are the Schott glass indices), so Snell's law at the
 //! port only needs ratios and the camera-side medium is n = 1.
 
-use crate::model::Rgb;
+use super::types::Rgb;
 
 /// Quan–Fry (1995) index of sea water relative to air at atmospheric pressure.
 pub fn quan_fry(temperature: f64, salinity: f64, wavelength: f64) -> f64 {
@@ -120,7 +120,7 @@ mod tests {
 
     #[test]
     fn quan_fry_matches_reference_values() {
-        // optics.md §2.2 [verified]: 550 nm, S = 35; printed to 1e-6.
+        // docs/optics.md §2.2: 550 nm, S = 35; printed to 1e-6.
         for (t, want) in [
             (0.0, 1.342262),
             (10.0, 1.341671),
@@ -143,7 +143,7 @@ mod tests {
 
     #[test]
     fn millard_seaver_matches_reference_values() {
-        // optics.md §2.2 table, 550 nm, S = 35; printed to 1e-6.
+        // docs/optics.md §2.2 table, 550 nm, S = 35; printed to 1e-6.
         for (t, p, want) in [
             (0.0, 0.0, 1.342232),
             (0.0, 1000.0, 1.343800),
@@ -162,7 +162,7 @@ mod tests {
     #[test]
     fn pressure_adds_about_1_5e6_per_metre() {
         let d = seawater_ior(15.0, 35.0, 100.0, 550.0) - seawater_ior(15.0, 35.0, 0.0, 550.0);
-        // ≈ +1.46e-3 per 1000 dbar (optics.md §2.2); 100 m ≈ 100.5 dbar.
+        // ≈ +1.46e-3 per 1000 dbar (docs/optics.md §2.2); 100 m ≈ 100.5 dbar.
         assert!((d - 1.47e-4).abs() < 1e-5, "{d}");
     }
 

@@ -1,6 +1,6 @@
 //! Survey plan metrics measured on the actual site: GSD through the port (exact projection,
 //! [`crate::optics::project::Projector`]), footprint, forward overlap and side-lap achieved on
-//! the seabed/meshes (rays cast into the native renderer's [`crate::render::scene::Scene`]),
+//! the seabed/meshes (rays cast into the native renderer's [`crate::geometry::Bvh`]),
 //! the camera distance needed for a target GSD, and per-face coverage counts with occlusion.
 //!
 //! | metric | how |
@@ -14,17 +14,17 @@
 //! Metrics use the first camera of the rig and the green channel. Without geometry in the scene
 //! the nominal seabed plane z = −`site.depth` is the site.
 
-use crate::mesh::TriMesh;
+use crate::geometry::mesh::TriMesh;
+use crate::geometry::{Bvh, Ray};
 use crate::model::Model;
 use crate::optics::project::Projector;
-use crate::render::scene::{Ray, Scene};
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
 /// The site as something rays can hit.
 pub struct Site {
-    pub scene: Option<Scene>,
+    pub scene: Option<Bvh>,
     pub seabed_z: f64,
     /// Why the scene geometry is not used, if it is not.
     pub note: Option<String>,
@@ -33,7 +33,7 @@ pub struct Site {
 impl Site {
     pub fn new(model: &Model) -> Site {
         let seabed_z = -model.site.depth;
-        match Scene::geometry(model) {
+        match Bvh::of_model(model) {
             Ok(s) if s.triangle_count() > 0 => Site {
                 scene: Some(s),
                 seabed_z,
@@ -398,7 +398,7 @@ pub fn coverage(model: &Model, site: &Site) -> Result<Coverage, String> {
         .unwrap_or(std::path::Path::new("."));
     let mut mesh = TriMesh::default();
     for o in &model.objects {
-        if let Ok(m) = crate::mesh::object_mesh(o, base) {
+        if let Ok(m) = crate::geometry::mesh::object_mesh(o, base) {
             mesh.append(&m);
         }
     }

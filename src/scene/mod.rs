@@ -17,6 +17,9 @@ pub mod sensor;
 pub mod source;
 
 pub use diag::{Diagnostic, Severity, Span};
+/// The generated JSON Schema and Markdown reference of the format (`poser schema`); the raw
+/// format types themselves stay inside the front end.
+pub use format::{format_markdown, schema_json};
 
 use crate::model::Model;
 use std::path::Path;

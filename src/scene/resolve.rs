@@ -1547,7 +1547,7 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
         }
         spans.targets.push(g.span);
         g.finish_as(cx, Some(&format!("a {ty} target (`{path}`)")));
-        let points = crate::targets::points(&name, &kind, &pose);
+        let points = crate::geometry::targets::points(&name, &kind, &pose);
         out.push(Target {
             name,
             kind,

@@ -12,14 +12,14 @@
 //!
 //! A point is *in view* when its exact refractive projection (G channel) lands on the sensor,
 //! the camera is on the printed side of its target, and nothing in the scene (objects,
-//! targets; [`crate::render::scene::Scene::occluded`]) blocks the water path from the point to
+//! targets; [`crate::geometry::Bvh::occluded`]) blocks the water path from the point to
 //! where its ray leaves the port.
 
+use crate::geometry::Bvh;
 use crate::io::write_atomic;
 use crate::model::{Camera, LensModel, Model, Port, Pose};
 use crate::optics::NoSolution;
 use crate::optics::project::Projector;
-use crate::render::scene::Scene;
 use glam::{DMat3, DQuat, DVec3};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -105,11 +105,11 @@ fn pose_json(p: &Pose) -> PoseJson {
 
 /// Compute the ground truth of every image (occlusion against the model's scene geometry).
 pub fn compute(model: &Model) -> Result<Truth, String> {
-    compute_in(model, &Scene::geometry(model)?)
+    compute_in(model, &Bvh::of_model(model)?)
 }
 
 /// [`compute`] with the model's scene geometry already built.
-pub fn compute_in(model: &Model, scene: &Scene) -> Result<Truth, String> {
+pub fn compute_in(model: &Model, scene: &Bvh) -> Result<Truth, String> {
     compute_with(model, |a, b| scene.occluded(a, b))
 }
 
@@ -541,8 +541,8 @@ pub fn write(model: &Model, dir: &Path) -> Result<(), String> {
     write_truth(model, &compute(model)?, dir)
 }
 
-/// [`write`] with the model's scene geometry already built (the native renderer's).
-pub fn write_in(model: &Model, scene: &Scene, dir: &Path) -> Result<(), String> {
+/// [`write`] with the model's geometry ([`Bvh::of_model`]) already built by the caller.
+pub fn write_in(model: &Model, scene: &Bvh, dir: &Path) -> Result<(), String> {
     write_truth(model, &compute_in(model, scene)?, dir)
 }
 

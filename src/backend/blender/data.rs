@@ -185,10 +185,12 @@ pub fn describe(model: &Model) -> Result<Description, String> {
                 // Tessellated by the shared mesh module (same triangles as the native
                 // renderer), in the object frame; pose and scale stay in `matrix`.
                 let path = format!("assets/object_{i}.ply");
-                let mesh = crate::mesh::shape_mesh(&o.shape, &base_dir)
+                let mesh = crate::geometry::mesh::shape_mesh(&o.shape, &base_dir)
                     .map_err(|e| format!("object `{}`: {e}", o.name))?;
-                let bytes =
-                    crate::mesh::ply_bytes(&mesh, crate::mesh::PlyFormat::BinaryLittleEndian);
+                let bytes = crate::geometry::mesh::ply_bytes(
+                    &mesh,
+                    crate::geometry::mesh::PlyFormat::BinaryLittleEndian,
+                );
                 let smooth = matches!(o.shape, Shape::Sphere { .. });
                 assets.push(Asset {
                     path: path.clone(),
@@ -277,11 +279,11 @@ fn test_object(t: &crate::model::Target) -> Value {
     };
     let steps: Vec<Value> = (0..levels)
         .map(|k| {
-            let (side, top) = crate::targets::test_object_step(size, levels, step, k);
+            let (side, top) = crate::geometry::targets::test_object_step(size, levels, step, k);
             json!({"size": [side, side, step], "center": [0.0, 0.0, top - 0.5 * step]})
         })
         .collect();
-    let disks: Vec<Value> = crate::targets::local_points(&t.kind)
+    let disks: Vec<Value> = crate::geometry::targets::local_points(&t.kind)
         .into_iter()
         .map(
             |(id, p)| json!({"id": id, "center": [p.x, p.y, p.z + 1e-5], "radius": 0.5 * diameter}),
@@ -292,8 +294,8 @@ fn test_object(t: &crate::model::Target) -> Value {
         "kind": "test_object",
         "steps": steps,
         "disks": disks,
-        "white": crate::targets::WHITE,
-        "black": crate::targets::BLACK,
+        "white": crate::geometry::targets::WHITE,
+        "black": crate::geometry::targets::BLACK,
         "matrix": pose_rows(&t.pose),
     })
 }

@@ -15,8 +15,8 @@
 //! [`pyliteral::py_str`]); the code part of the script is poser's own.
 //!
 //! `render` compiles, checks that `bpy` imports, runs the script with the pinned interpreter
-//! ([`crate::backend::python::command`]), shows its progress lines as a bar, and writes the
-//! ground truth beside the images.
+//! ([`crate::backend::python::command`]) and shows its progress lines as a bar. The ground
+//! truth beside the images is the `render` command's ([`crate::backend`]).
 
 pub mod data;
 pub mod pyliteral;
@@ -200,7 +200,7 @@ fn compile_report(model: &Model, out: &Path) -> Result<Compiled, String> {
     })
 }
 
-/// Compile and render every requested pose with Cycles, then write the ground truth.
+/// Compile and render every requested pose with Cycles.
 pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderReport, String> {
     let t0 = std::time::Instant::now();
     crate::backend::python::require_module("bpy").map_err(|e| {
@@ -283,16 +283,10 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         }
         return Err(msg);
     }
-    write_truth(model, out)?;
     Ok(RenderReport {
         images,
         seconds: t0.elapsed().as_secs_f64(),
     })
-}
-
-/// Ground truth beside the images (`OUT/truth/`, the layout every backend shares).
-fn write_truth(model: &Model, out: &Path) -> Result<(), String> {
-    crate::truth::write(model, &out.join("truth"))
 }
 
 /// A target's printed face as a PNG texture, with its size and the offset of its lower-left
@@ -313,8 +307,8 @@ fn target_texture(t: &Target) -> Result<Option<TargetTexture>, String> {
         // A 3D staircase: its printed face alone would misplace the disks on the steps.
         return Ok(None);
     }
-    let (w, h) = crate::targets::extent(&t.kind);
-    let img = crate::targets::texture(&t.kind, TARGET_PX_PER_M);
+    let (w, h) = crate::geometry::targets::extent(&t.kind);
+    let img = crate::geometry::targets::texture(&t.kind, TARGET_PX_PER_M);
     let mut png = Vec::new();
     image::codecs::png::PngEncoder::new(&mut png)
         .write_image(

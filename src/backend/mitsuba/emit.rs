@@ -23,6 +23,7 @@
 
 use super::xml::El;
 use crate::model::*;
+use crate::optics::phase::ff_cdf;
 use glam::{DMat3, DVec3};
 
 /// Channel whose indices are used when the scene is rendered in one pass (G, 550 nm).
@@ -469,28 +470,9 @@ fn port_shapes(
     }
 }
 
-/// Fournier–Forand cumulative distribution: fraction of scattered light within angle θ of the
-/// forward direction (Fournier & Jonasz 1999; Mobley, Sundman & Boss 2002).
-pub fn ff_cdf(n: f64, mu: f64, theta: f64) -> f64 {
-    let nu = (3.0 - mu) / 2.0;
-    let k = 3.0 * (n - 1.0) * (n - 1.0);
-    let s2 = (theta / 2.0).sin().powi(2);
-    let d = 4.0 / k * s2;
-    let d180 = 4.0 / k;
-    let first = if d <= 0.0 {
-        0.0
-    } else {
-        (1.0 - d.powf(nu + 1.0) - (1.0 - d.powf(nu)) * s2) / ((1.0 - d) * d.powf(nu))
-    };
-    let second = (1.0 - d180.powf(nu)) / (8.0 * (d180 - 1.0) * d180.powf(nu))
-        * theta.cos()
-        * theta.sin().powi(2);
-    first + second
-}
-
 /// Fournier–Forand phase function tabulated for `tabphase`: values on a uniform grid of cos θ
 /// from -1 to 1 (θ the scattering angle, forward at cos θ = 1), each the exact mean density
-/// of the cells around it (from [`ff_cdf`]), so the forward peak keeps its mass.
+/// of the cells around it (from [`crate::optics::phase::ff_cdf`]), so the forward peak keeps its mass.
 pub fn ff_table(n: f64, mu: f64, samples: usize) -> Vec<f64> {
     let cells = samples - 1;
     let dmu = 2.0 / cells as f64;

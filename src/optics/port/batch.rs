@@ -411,7 +411,7 @@ impl PortSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::bench::cases;
+    use crate::bench::projection::cases;
     use std::cell::Cell;
 
     thread_local! {

@@ -4,7 +4,7 @@
 //! Rays come from the optics core ([`crate::optics::project::Projector`]): lens model and
 //! distortion, then exact refraction through every surface of the port, with the product of the
 //! Fresnel transmittances. The weight is that transmittance times the n² radiance law
-//! (render-conventions §3.4): a camera in air behind a port sees water radiance scaled by
+//! (docs/render-conventions.md §3.4): a camera in air behind a port sees water radiance scaled by
 //! `(n_air/n_water)²`; a camera without a port sits in the medium and sees it unscaled.
 
 use crate::model::{Model, Port, Pose};

@@ -8,18 +8,21 @@
 //! | `poser` | [`PortSolver::forward`], one call per point: flat and on-axis cylinder: Halley on the q-equation (ratio form) from the water-unit guess; dome: Halley on the exact moment equation from the first-order guess (bracketed secant/Illinois as fallback); off-axis cylinder: 2-D Newton |
 //! | `poser_batch` | [`PortSolver::forward_many`]: the same solvers on 8 points at a time in SIMD lanes, AVX2 where the CPU has it (same results bit for bit) |
 //! | `colmap_gn` | Refractive COLMAP's `IterativeProjection`: Gauss–Newton on the pixel, residual = point on the back-projected water ray at distance \|P\| minus P, central-difference Jacobian (step max(1e-6, 1e-9·\|x\|) px), stop at \|Δ\|² < 1e-10 px², ≤ 100 iterations, 2×2 normal equations |
-//! | `agrawal` (flat) | Agrawal et al. CVPR 2012: the 12th-degree polynomial in the radial hit x on the first interface (MERL `SolveForwardProjectionCase3`, K/L/M factoring of optics.md §1.3), all roots by Aberth–Ehrlich on x/u, physical root = real root in [0, u] with the smallest trace residual |
+//! | `agrawal` (flat) | Agrawal et al. CVPR 2012: the 12th-degree polynomial in the radial hit x on the first interface (MERL `SolveForwardProjectionCase3`, K/L/M factoring of docs/optics.md §1.3), all roots by Aberth–Ehrlich on x/u, physical root = real root in [0, u] with the smallest trace residual |
 //!
 //! Errors are measured against [`super::reference`] (double-double, ≈ 32 digits) in pixels;
 //! speed is points per second on one thread. Point sets: *ordinary* (pixels uniform over the
 //! sensor, 0.3–30 m) and *grazing* (camera rays 75°–88° off the port axis, pixels up to
 //! ≈ 1e5 px).
 
-use super::NoSolution;
-use super::lens::Lens;
-use super::port::{CylinderPort, DomePort, FlatPort, PortSolver};
-use super::reference;
-use crate::model::{Distortion, LensModel};
+// `!(x > y)` is deliberate, as in the optics: it rejects NaN as well as the failing comparison.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use crate::optics::NoSolution;
+use crate::optics::lens::Lens;
+use crate::optics::port::{CylinderPort, DomePort, FlatPort, PortSolver};
+use crate::optics::reference;
+use crate::optics::types::{Distortion, LensModel};
 use crate::rng::SplitMix64;
 use glam::{DVec2, DVec3};
 use serde::Serialize;

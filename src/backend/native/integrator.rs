@@ -96,7 +96,7 @@ impl<'a> Integrator<'a> {
                 match &o.material.pattern {
                     Some(p) => {
                         let q = self.object_from_world[i as usize].transform_point(h.point);
-                        a * crate::mesh::pattern_factor(p, q)
+                        a * crate::geometry::mesh::pattern_factor(p, q)
                     }
                     None => a,
                 }
@@ -104,7 +104,7 @@ impl<'a> Integrator<'a> {
             SurfaceId::Target(i) => {
                 let t = &self.model.targets[i as usize];
                 let q = self.target_from_world[i as usize].transform_point(h.point);
-                DVec3::splat(super::scene::target_reflectance(&t.kind, q.x, q.y))
+                DVec3::splat(crate::geometry::bvh::target_reflectance(&t.kind, q.x, q.y))
             }
         }
     }

@@ -1,7 +1,7 @@
 //! The water as the renderer sees it: a homogeneous medium per channel inside a convex region
 //! (below the sea surface, and inside the box around the camera when the scene asks for it),
 //! with its phase function (Henyey–Greenstein, or Fournier–Forand tabulated from its closed-form
-//! CDF).
+//! CDF; both from [`crate::optics::phase`]).
 //!
 //! | item | meaning |
 //! |---|---|
@@ -10,6 +10,7 @@
 //! | phase | `cos θ` between propagation directions; FF as a piecewise-constant table in cos θ ([`FF_BINS`] bins, log-spaced in θ) — evaluation and sampling use the same table, so sample weights are exact |
 
 use crate::model::{Model, Phase, SeaSurface, WaterExtent};
+use crate::optics::phase;
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -44,10 +45,7 @@ impl PhaseFn {
     /// Density per steradian at `cos θ`.
     pub fn eval(&self, cos: f64) -> f64 {
         match self {
-            PhaseFn::Hg { g } => {
-                let d = 1.0 + g * g - 2.0 * g * cos;
-                (1.0 - g * g) / (4.0 * PI * d * d.sqrt())
-            }
+            PhaseFn::Hg { g } => phase::hg_eval(*g, cos),
             PhaseFn::Tab { mu, dens, .. } => {
                 // mu is decreasing; find bin k with mu[k] >= cos >= mu[k+1].
                 let k = mu
@@ -62,14 +60,7 @@ impl PhaseFn {
     /// Sample `cos θ` from a uniform number.
     pub fn sample_cos(&self, u: f64) -> f64 {
         match self {
-            PhaseFn::Hg { g } => {
-                if g.abs() < 1e-4 {
-                    1.0 - 2.0 * u
-                } else {
-                    let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
-                    ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
-                }
-            }
+            PhaseFn::Hg { g } => phase::hg_sample(*g, u),
             PhaseFn::Tab { mu, cdf, .. } => {
                 let k = cdf
                     .partition_point(|&c| c <= u)
@@ -97,23 +88,6 @@ impl PhaseFn {
     }
 }
 
-/// Closed-form CDF of Fournier–Forand (Mobley–Sundman–Boss 2002) from 0 to θ.
-pub fn ff_cdf(n: f64, mu: f64, theta: f64) -> f64 {
-    let nu = (3.0 - mu) / 2.0;
-    let delta = |t: f64| 4.0 * (t / 2.0).sin().powi(2) / (3.0 * (n - 1.0).powi(2));
-    let d = delta(theta);
-    let d180 = delta(PI);
-    if theta <= 0.0 {
-        return 0.0;
-    }
-    let s2 = (theta / 2.0).sin().powi(2);
-    let a = (1.0 - d.powf(nu + 1.0) - (1.0 - d.powf(nu)) * s2) / ((1.0 - d) * d.powf(nu));
-    let b = (1.0 - d180.powf(nu)) / (8.0 * (d180 - 1.0) * d180.powf(nu))
-        * theta.cos()
-        * theta.sin().powi(2);
-    a + b
-}
-
 fn ff_table(n: f64, mu_slope: f64) -> PhaseFn {
     // θ edges: 0, then log-spaced from 1e-5 rad to π.
     let mut theta = vec![0.0];
@@ -123,7 +97,10 @@ fn ff_table(n: f64, mu_slope: f64) -> PhaseFn {
     }
     *theta.last_mut().unwrap() = PI;
     let mu: Vec<f64> = theta.iter().map(|t| t.cos()).collect();
-    let mut f: Vec<f64> = theta.iter().map(|&t| ff_cdf(n, mu_slope, t)).collect();
+    let mut f: Vec<f64> = theta
+        .iter()
+        .map(|&t| phase::ff_cdf(n, mu_slope, t))
+        .collect();
     // Monotone and normalised (F(π) = 1 analytically; guard rounding).
     for k in 1..f.len() {
         f[k] = f[k].max(f[k - 1]);
@@ -262,16 +239,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn ff_cdf_reproduces_petzold_backscatter() {
-        // optics.md §3.4: n = 1.10, μ = 3.5835 → B = 0.018313 (numerically checked there).
-        let b = 1.0 - ff_cdf(1.10, 3.5835, PI / 2.0);
-        assert!((b - 0.018313).abs() < 2e-6, "{b}");
-        assert!((ff_cdf(1.10, 3.5835, PI) - 1.0).abs() < 1e-12);
-        let b = 1.0 - ff_cdf(1.15, 3.7, PI / 2.0);
-        assert!((b - 0.0397).abs() < 1e-4, "{b}");
-    }
-
-    #[test]
     fn phase_tables_integrate_to_one_and_sample_consistently() {
         let hg = PhaseFn::Hg { g: 0.8 };
         // ∫ p dΩ for HG by a midpoint rule in μ (smooth enough at g = 0.8: error < 1e-3).
@@ -293,7 +260,7 @@ mod tests {
         // wide in θ there, so the bin average is within 1 % of the point value).
         for deg in [5.0f64, 30.0, 90.0, 150.0] {
             let th = deg.to_radians();
-            let a = crate::optics::phase::ff_eval(1.10, 3.5835, th);
+            let a = phase::ff_eval(1.10, 3.5835, th);
             let t = ff.eval(th.cos());
             assert!((t / a - 1.0).abs() < 1e-2, "{deg}°: table {t} vs {a}");
         }
@@ -305,7 +272,7 @@ mod tests {
                 .count();
             let bf = back as f64 / m as f64;
             let expect = match &p {
-                PhaseFn::Hg { g } => crate::optics::phase::hg_backscatter(*g),
+                PhaseFn::Hg { g } => phase::hg_backscatter(*g),
                 _ => 0.018313,
             };
             assert!((bf - expect).abs() < 5e-4, "{bf} vs {expect}");

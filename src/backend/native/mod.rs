@@ -9,13 +9,11 @@
 //! | `OUT/<image>.png` | sRGB preview of `render.exposure × radiance` |
 //! | `OUT/<image>.variance.exr` | variance of each pixel's Monte Carlo mean per channel (render noise, [`Image::variance`]); when the scene has a `[sensor]` |
 //! | `OUT/<image>.depth.exr` | camera-frame z of the first surface hit through each pixel centre, m (0: none); when `render.outputs` has `"depth"` |
-//! | `OUT/truth/…` | exact ground truth ([`crate::truth::write_in`], occlusion against the render's own BVH) |
 //!
 //! Parallel over image rows with rayon; every pixel sample has its own counter-based random
 //! stream ([`sampler::Sampler`]), so the bytes do not depend on the number of threads. With
 //! `needs.per_channel_passes`, each channel is rendered with its own camera rays (dispersion).
 
-pub mod bench;
 pub mod camera;
 pub mod caustics;
 pub mod integrator;
@@ -256,7 +254,6 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     if let Some(pb) = pb {
         pb.finish_and_clear();
     }
-    crate::truth::write_in(model, &scene, &out.join("truth"))?;
     report.seconds = start.elapsed().as_secs_f64();
     Ok(report)
 }

@@ -1,134 +1,34 @@
-//! Models built in Rust for the Mitsuba backend tests (independent of the scene front end).
+//! Presets of the Mitsuba backend tests, from the one builder ([`super::model`]).
 #![allow(dead_code)]
 
+use super::model::Sensor;
 use glam::{DMat3, DVec3};
 use poser::model::*;
 
-/// Camera looking along world -z (down) from `pos`: x_cam = +x world, y_cam = -y world.
-pub fn nadir(pos: DVec3) -> Pose {
-    Pose {
-        rotation: DMat3::from_cols(DVec3::X, -DVec3::Y, -DVec3::Z),
-        translation: pos,
-    }
-}
+#[allow(unused_imports)]
+pub use super::model::{glass, model as base, nadir, plane, render_settings};
 
-pub fn glass() -> Glass {
-    Glass {
-        name: "N-BK7".into(),
-        ior: [1.5145, 1.5185, 1.5253],
-    }
-}
+/// The Mitsuba tests' sensor: 160×120, fx 140, principal point off centre.
+pub const SENSOR: Sensor = Sensor {
+    width: 160,
+    height: 120,
+    fx: 140.0,
+    pitch: 5e-6,
+    cx: 83.7,
+    cy: 57.2,
+};
 
+/// An untilted flat N-BK7 port 12 mm thick at `distance`.
 pub fn flat_port(distance: f64) -> Port {
-    Port::Flat {
-        normal: DVec3::Z,
-        distance,
-        thickness: 0.012,
-        glass: glass(),
-    }
+    super::model::flat_port(distance, 0.012)
 }
 
 pub fn camera(name: &str, port: Port) -> Camera {
-    let (w, h, fx) = (160u32, 120u32, 140.0);
-    Camera {
-        name: name.into(),
-        width: w,
-        height: h,
-        pixel_pitch: 5e-6,
-        focal_length: fx * 5e-6,
-        fx,
-        fy: fx,
-        cx: 83.7,
-        cy: 57.2,
-        lens: LensModel::Rectilinear,
-        distortion: Distortion::default(),
-        focus_distance: None,
-        f_number: None,
-        port,
-        rig_from_camera: Pose::IDENTITY,
-    }
+    super::model::camera(name, SENSOR, port)
 }
 
 pub fn water(absorption: Rgb, scattering: Rgb, phase: Phase) -> Water {
-    Water {
-        ior: [1.3310, 1.3339, 1.3390],
-        ior_source: IorSource::Constant,
-        absorption,
-        scattering,
-        jerlov: None,
-        phase,
-        extent: WaterExtent::Everywhere,
-    }
-}
-
-pub fn render_settings(samples: u32) -> RenderSettings {
-    RenderSettings {
-        samples,
-        seed: 7,
-        max_bounces: 16,
-        dispersion: false,
-        outputs: vec!["rgb".into()],
-        exposure: 1.0,
-    }
-}
-
-/// A minimal model: one camera at `world_from_rig`, nothing else.
-pub fn base(name: &str, cam: Camera, water: Option<Water>, world_from_rig: Pose) -> Model {
-    let refraction = !matches!(cam.port, Port::None);
-    let medium = water
-        .as_ref()
-        .map(|w| w.extinction().iter().any(|&s| s > 0.0))
-        .unwrap_or(false);
-    Model {
-        name: name.into(),
-        description: String::new(),
-        source: format!("{name}.toml"),
-        water,
-        site: Site {
-            depth: 10.0,
-            surface: SeaSurface::None,
-            altitude: 0.0,
-        },
-        sun: None,
-        cameras: vec![cam],
-        lights: vec![],
-        objects: vec![],
-        targets: vec![],
-        poses: vec![RigPose {
-            name: "img_0000".into(),
-            world_from_rig,
-            time: 0.0,
-            strip: 0,
-        }],
-        network: NetworkSummary::default(),
-        diver: None,
-        render: render_settings(16),
-        sensor: None,
-        needs: Needs {
-            medium,
-            refraction,
-            ..Default::default()
-        },
-    }
-}
-
-pub fn plane(name: &str, z: f64, size: f64, albedo: Rgb) -> Object {
-    Object {
-        name: name.into(),
-        shape: Shape::Plane {
-            width: size,
-            height: size,
-        },
-        pose: Pose {
-            rotation: DMat3::IDENTITY,
-            translation: DVec3::new(0.0, 0.0, z),
-        },
-        scale: DVec3::ONE,
-        material: Material {
-            albedo,
-            pattern: None,
-        },
-    }
+    super::model::water([1.3310, 1.3339, 1.3390], absorption, scattering, phase)
 }
 
 /// A rich model touching every emitter and port kind (for snapshots and stability).
@@ -250,7 +150,7 @@ pub fn showcase() -> Model {
                 height: 1.0,
             },
             pose: Pose {
-                rotation: DMat3::from_rotation_x(1.5707963267948966),
+                rotation: DMat3::from_rotation_x(std::f64::consts::FRAC_PI_2),
                 translation: DVec3::new(0.0, -0.5, -9.9),
             },
             scale: DVec3::ONE,

@@ -1,17 +1,17 @@
-//! The native renderer's geometry: every triangle of the model's objects and targets in one
+//! The geometry service: every triangle of the model's objects and targets in one
 //! bounding-volume hierarchy (binned SAH, f64), with closest-hit and shadow (occlusion) queries.
+//! Used by the ground truth (occlusion), the survey planner (coverage) and the native renderer.
 //!
 //! | item | meaning |
 //! |---|---|
 //! | [`SurfaceId`] | which object or target a triangle belongs to (for its material) |
-//! | [`Scene::build`] | objects via [`crate::mesh::object_mesh`]; targets as planes of their printed extent |
-//! | [`Scene::intersect`] | closest hit with `t ∈ (RAY_EPSILON, tmax)` |
-//! | [`Scene::occluded`] | is the open segment between two points blocked? |
-//! | [`Scene::caustics`] | the sun's caustic volume under waves, precomputed once ([`super::caustics`]) |
+//! | [`Bvh::of_model`] | objects via [`super::mesh::object_mesh`]; targets as planes of their printed extent |
+//! | [`Bvh::intersect`] | closest hit with `t ∈ (RAY_EPSILON, tmax)` |
+//! | [`Bvh::occluded`] | is the open segment between two points blocked? |
 //!
-//! Queries are read-only, so one `Scene` is shared by every rendering thread.
+//! Queries are read-only, so one `Bvh` is shared by every thread.
 
-use crate::mesh::{TriMesh, object_mesh};
+use super::mesh::{TriMesh, object_mesh};
 use crate::model::Model;
 use glam::{DVec3, Vec3A};
 use std::path::Path;
@@ -92,37 +92,20 @@ impl FNode {
 
 /// All triangles of a model, with their BVH.
 #[derive(Debug, Clone, Default)]
-pub struct Scene {
+pub struct Bvh {
     tris: Vec<Tri>,
     surface: Vec<SurfaceId>,
     nodes: Vec<FNode>,
-    /// The sun's caustics under a wavy surface ([`super::caustics`]), built by [`Scene::build`]
-    /// when the model needs them.
-    pub caustics: Option<std::sync::Arc<super::caustics::CausticVolume>>,
 }
 
 const LEAF_SIZE: usize = 4;
 const BINS: usize = 16;
 
-impl Scene {
-    /// What the renderer needs: [`Scene::geometry`], plus the caustic volume when the model
-    /// asks for caustics.
-    pub fn build(model: &Model) -> Result<Scene, String> {
-        let mut scene = Scene::geometry(model)?;
-        if model.needs.caustics {
-            // Planes down to below the deepest geometry (or the nominal seabed).
-            let lo = scene.bounds().map_or(-model.site.depth, |(lo, _)| lo.z);
-            let z_bottom = lo.min(-model.site.depth) - 0.5;
-            scene.caustics =
-                super::caustics::CausticVolume::for_model(model, z_bottom).map(std::sync::Arc::new);
-        }
-        Ok(scene)
-    }
-
+impl Bvh {
     /// Tessellate every object and target of the model and build the BVH (no lighting data:
     /// what occlusion tests need). glTF paths are resolved against the directory of
     /// `model.source`.
-    pub fn geometry(model: &Model) -> Result<Scene, String> {
+    pub fn of_model(model: &Model) -> Result<Bvh, String> {
         let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
         let mut meshes = Vec::new();
         for (i, o) in model.objects.iter().enumerate() {
@@ -131,11 +114,11 @@ impl Scene {
         for (i, t) in model.targets.iter().enumerate() {
             meshes.push((SurfaceId::Target(i as u32), target_mesh(t)));
         }
-        Ok(Scene::from_meshes(meshes))
+        Ok(Bvh::from_meshes(meshes))
     }
 
     /// Build from world-frame meshes.
-    pub fn from_meshes(meshes: Vec<(SurfaceId, TriMesh)>) -> Scene {
+    pub fn from_meshes(meshes: Vec<(SurfaceId, TriMesh)>) -> Bvh {
         let mut tris = Vec::new();
         let mut surface = Vec::new();
         for (id, m) in &meshes {
@@ -150,11 +133,10 @@ impl Scene {
                 surface.push(*id);
             }
         }
-        let mut s = Scene {
+        let mut s = Bvh {
             tris,
             surface,
             nodes: Vec::new(),
-            caustics: None,
         };
         s.build_bvh();
         s
@@ -492,7 +474,7 @@ impl Scene {
 }
 
 /// A target's printed face as a plane mesh in the world frame (its extent from
-/// [`crate::targets`]).
+/// [`crate::geometry::targets`]).
 pub fn target_mesh(target: &crate::model::Target) -> TriMesh {
     if let crate::model::TargetKind::TestObject {
         size, levels, step, ..
@@ -501,8 +483,8 @@ pub fn target_mesh(target: &crate::model::Target) -> TriMesh {
         // Staircase pyramid: step k is a box of the step's top side from z = k·step up.
         let mut m = TriMesh::default();
         for k in 0..levels {
-            let (side, top) = crate::targets::test_object_step(size, levels, step, k);
-            let mut b = crate::mesh::cuboid(DVec3::new(side, side, step));
+            let (side, top) = crate::geometry::targets::test_object_step(size, levels, step, k);
+            let mut b = crate::geometry::mesh::cuboid(DVec3::new(side, side, step));
             for p in &mut b.positions {
                 p.z += top - 0.5 * step;
             }
@@ -511,23 +493,23 @@ pub fn target_mesh(target: &crate::model::Target) -> TriMesh {
         return m.transformed(&target.pose, DVec3::ONE);
     }
     let (w, h) = target_extent(target);
-    crate::mesh::plane(w, h).transformed(&target.pose, DVec3::ONE)
+    crate::geometry::mesh::plane(w, h).transformed(&target.pose, DVec3::ONE)
 }
 
 /// Printed reflectance at (x, y) of the target frame (grey, all channels).
 pub fn target_reflectance(kind: &crate::model::TargetKind, x: f64, y: f64) -> f64 {
-    crate::targets::reflectance(kind, x, y)
+    crate::geometry::targets::reflectance(kind, x, y)
 }
 
 /// Width and height (target x, y) of a target's printed face, m.
 pub fn target_extent(target: &crate::model::Target) -> (f64, f64) {
-    crate::targets::extent(&target.kind)
+    crate::geometry::targets::extent(&target.kind)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh;
+    use crate::geometry::mesh;
 
     fn brute(meshes: &[(SurfaceId, TriMesh)], ray: &Ray) -> Option<f64> {
         let mut best: Option<f64> = None;
@@ -539,7 +521,7 @@ mod tests {
                     e1: b - a,
                     e2: c - a,
                 };
-                if let Some(t) = Scene::hit_tri(&tri, ray.origin, ray.dir, f64::INFINITY)
+                if let Some(t) = Bvh::hit_tri(&tri, ray.origin, ray.dir, f64::INFINITY)
                     && best.is_none_or(|b| t < b)
                 {
                     best = Some(t);
@@ -558,10 +540,10 @@ mod tests {
                 mesh::seabed(6.0, 6.0, 0.1, 0.2, 2).unwrap(),
             ),
         ];
-        let scene = Scene::from_meshes(meshes.clone());
+        let scene = Bvh::from_meshes(meshes.clone());
         let mut h = 12345u64;
         let mut rnd = || {
-            h = crate::mesh::mix64(h);
+            h = crate::geometry::mesh::mix64(h);
             (h >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..400 {
@@ -584,7 +566,7 @@ mod tests {
 
     #[test]
     fn plane_hit_point_and_normal() {
-        let s = Scene::from_meshes(vec![(SurfaceId::Target(3), mesh::plane(2.0, 2.0))]);
+        let s = Bvh::from_meshes(vec![(SurfaceId::Target(3), mesh::plane(2.0, 2.0))]);
         let h = s
             .intersect(
                 &Ray {

@@ -1,5 +1,7 @@
-//! Models built in Rust for the planning tests (independent of the scene format).
+//! Presets of the planning tests (divers, lawnmower networks, the paper's survey), from the one
+//! builder ([`super::model`]).
 #![allow(dead_code)]
+use super::model::Sensor;
 use glam::{DMat3, DVec3};
 use poser::model::*;
 
@@ -82,78 +84,56 @@ pub fn lawnmower(
     (poses, summary)
 }
 
+/// A 4000×3000 camera, 16 mm lens, 4 µm pixels, behind a flat glass port.
 pub fn camera() -> Camera {
-    let (w, h, pitch, f) = (4000u32, 3000u32, 4e-6, 0.016);
-    Camera {
-        name: "cam".into(),
-        width: w,
-        height: h,
-        pixel_pitch: pitch,
-        focal_length: f,
+    let (pitch, f) = (4e-6, 0.016);
+    let sensor = Sensor {
+        width: 4000,
+        height: 3000,
         fx: f / pitch,
-        fy: f / pitch,
-        cx: w as f64 / 2.0,
-        cy: h as f64 / 2.0,
-        lens: LensModel::Rectilinear,
-        distortion: Distortion::default(),
-        focus_distance: None,
-        f_number: None,
-        port: Port::Flat {
-            normal: DVec3::Z,
-            distance: 0.02,
-            thickness: 0.01,
-            glass: Glass {
-                name: "N-BK7".into(),
-                ior: [1.514, 1.518, 1.527],
-            },
+        pitch,
+        cx: 2000.0,
+        cy: 1500.0,
+    };
+    let port = Port::Flat {
+        normal: DVec3::Z,
+        distance: 0.02,
+        thickness: 0.01,
+        glass: Glass {
+            name: "N-BK7".into(),
+            ior: [1.514, 1.518, 1.527],
         },
-        rig_from_camera: Pose::IDENTITY,
-    }
+    };
+    let mut c = super::model::camera("cam", sensor, port);
+    c.focal_length = f;
+    c
 }
 
+/// The survey model: `poses` over a site `site_depth` deep with a flat sea surface, in
+/// moderately turbid water.
 pub fn model(
     poses: Vec<RigPose>,
     network: NetworkSummary,
     diver: Option<Diver>,
     site_depth: f64,
 ) -> Model {
-    Model {
-        name: "test".into(),
-        description: String::new(),
-        source: "test.toml".into(),
-        water: Some(Water {
-            ior: [1.331, 1.334, 1.339],
-            ior_source: IorSource::Constant,
-            absorption: [0.3, 0.05, 0.02],
-            scattering: [0.1, 0.1, 0.1],
-            jerlov: None,
-            phase: Phase::HenyeyGreenstein { g: 0.9 },
-            extent: WaterExtent::Everywhere,
-        }),
-        site: Site {
-            depth: site_depth,
-            surface: SeaSurface::Flat,
-            altitude: 0.0,
-        },
-        sun: None,
-        cameras: vec![camera()],
-        lights: vec![],
-        objects: vec![],
-        targets: vec![],
-        poses,
-        network,
-        diver,
-        render: RenderSettings {
-            samples: 16,
-            seed: 1,
-            max_bounces: 4,
-            dispersion: false,
-            outputs: vec!["rgb".into()],
-            exposure: 1.0,
-        },
-        sensor: None,
-        needs: Needs::default(),
-    }
+    let water = super::model::water(
+        [1.331, 1.334, 1.339],
+        [0.3, 0.05, 0.02],
+        [0.1, 0.1, 0.1],
+        Phase::HenyeyGreenstein { g: 0.9 },
+    );
+    let mut m = super::model::model("test", camera(), Some(water), Pose::IDENTITY);
+    m.source = "test.toml".into();
+    m.site.depth = site_depth;
+    m.site.surface = SeaSurface::Flat;
+    m.poses = poses;
+    m.network = network;
+    m.diver = diver;
+    m.render.seed = 1;
+    m.render.max_bounces = 4;
+    m.needs = Needs::default();
+    m
 }
 
 /// The paper's survey: 20 strips of 52.6 m, 2 m apart (≈ 1090 m of path) at 15 m, 0.2 m/s.

@@ -20,11 +20,10 @@
 //! | `strobe_backscatter` | bounces = 1 (direct light and single scattering); camera in air behind a flat PMMA port, 160×120 (80×60 with `--quick`); scattering and absorbing water (σa = 0.40/0.10/0.05, σs = 0.08/0.10/0.12 1/m, HG g = 0.9); a rig strobe in the water; a diffuse back plane 3 m away and three boxes |
 //! | `clear_strobe` | the same without scattering (σs = 0) and with bounces = 4: absorption, interreflection and the port only |
 //!
-//! Mitsuba and Cycles run through [`crate::backend::mitsuba::render`] and
-//! [`crate::backend::blender::render`] when their Python modules are available; a backend that
-//! fails is reported as such and skipped.
+//! Every backend runs through [`crate::backend::Backend::render`]; Mitsuba and Cycles need
+//! their Python modules, and a backend that fails is reported as such and skipped.
 
-use crate::backend::RenderOptions;
+use crate::backend::{Backend, RenderOptions};
 use crate::model::*;
 use glam::{DMat3, DVec3};
 use std::path::Path;
@@ -323,7 +322,7 @@ pub struct Report {
 }
 
 fn render_rgb(
-    backend: &str,
+    backend: Backend,
     model: &Model,
     spp: u32,
     dir: &Path,
@@ -334,16 +333,16 @@ fn render_rgb(
         progress: false,
     };
     let t0 = std::time::Instant::now();
-    let report = crate::compare::render_with(backend, model, dir, &opts)?;
+    let report = backend.render(model, dir, &opts)?;
     let secs = t0.elapsed().as_secs_f64().max(report.seconds);
     let path = dir.join(format!("{}.exr", model.image_name(0, 0)));
     let img = crate::compare::LinearImage::read(&path)?;
     Ok((img.rgb.into_flattened(), secs))
 }
 
-fn curve(backend: &str, model: &Model, ref_spp: u32, max_spp: u32) -> Curve {
+fn curve(backend: Backend, model: &Model, ref_spp: u32, max_spp: u32) -> Curve {
     let mut c = Curve {
-        backend: backend.into(),
+        backend: backend.name().into(),
         error: None,
         reference_spp: ref_spp,
         reference_seconds: 0.0,
@@ -606,8 +605,8 @@ impl Report {
 #[derive(Debug, Clone, Default)]
 pub struct BenchOptions {
     pub quick: bool,
-    /// Backends to run (default: native, mitsuba, blender).
-    pub backends: Vec<String>,
+    /// Backends to run (default: all).
+    pub backends: Vec<Backend>,
     pub json: Option<std::path::PathBuf>,
     pub plot: Option<std::path::PathBuf>,
 }
@@ -616,19 +615,11 @@ pub struct BenchOptions {
 pub fn run(opts: &BenchOptions) -> Result<Report, String> {
     let (w, h) = if opts.quick { (80, 60) } else { (160, 120) };
     let ref_spp = if opts.quick { QUICK_REF_SPP } else { REF_SPP };
-    let backends: Vec<String> = if opts.backends.is_empty() {
-        ["native", "mitsuba", "blender"].map(String::from).to_vec()
+    let backends: Vec<Backend> = if opts.backends.is_empty() {
+        Backend::ALL.to_vec()
     } else {
         opts.backends.clone()
     };
-    for b in &backends {
-        if !crate::compare::BACKENDS.contains(&b.as_str()) {
-            return Err(format!(
-                "unknown backend `{b}` (known: {})",
-                crate::compare::BACKENDS.join(", ")
-            ));
-        }
-    }
     let mut scenes = Vec::new();
     for model in bench_models(w, h) {
         let mut curves = Vec::new();
@@ -637,7 +628,7 @@ pub fn run(opts: &BenchOptions) -> Result<Report, String> {
                 "bench render: {} with {b} (reference 2 × {ref_spp} spp)",
                 model.name
             );
-            curves.push(curve(b, &model, ref_spp, ref_spp / 4));
+            curves.push(curve(*b, &model, ref_spp, ref_spp / 4));
         }
         scenes.push(SceneReport {
             scene: model.name.clone(),

@@ -1,7 +1,7 @@
 //! Counter-based random numbers: every (image, pass, pixel, sample) has its own stream derived
 //! by hashing its coordinates with the scene seed, so results do not depend on threads.
 
-use crate::mesh::mix64;
+use crate::geometry::mesh::mix64;
 use crate::rng::SplitMix64;
 
 /// A SplitMix64 stream ([`crate::rng::SplitMix64`]) per pixel sample.

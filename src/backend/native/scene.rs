@@ -1,0 +1,53 @@
+//! What the native renderer traces against: the model's geometry ([`crate::geometry::Bvh`],
+//! shared with the truth and the planner) plus what only the renderer needs, the sun's caustic
+//! volume under waves ([`super::caustics`]), precomputed once.
+//!
+//! | item | meaning |
+//! |---|---|
+//! | [`Scene::build`] | the BVH of every object and target, and the caustic volume when the model needs caustics |
+//! | [`Scene::bvh`] | the geometry (also reached through `Deref`: `scene.intersect(…)`) |
+//! | [`Scene::caustics`] | the caustic volume, if any |
+//!
+//! Queries are read-only, so one `Scene` is shared by every rendering thread.
+
+use crate::geometry::Bvh;
+use crate::model::Model;
+use std::sync::Arc;
+
+pub use crate::geometry::{Hit, RAY_EPSILON, Ray, SurfaceId};
+
+/// The geometry and the caustics of one model.
+#[derive(Debug, Clone, Default)]
+pub struct Scene {
+    pub bvh: Bvh,
+    /// The sun's caustics under a wavy surface, when the model needs them.
+    pub caustics: Option<Arc<super::caustics::CausticVolume>>,
+}
+
+impl Scene {
+    /// What the renderer needs: the model's [`Bvh`], plus the caustic volume when the model asks
+    /// for caustics.
+    pub fn build(model: &Model) -> Result<Scene, String> {
+        Ok(Scene::with_bvh(model, Bvh::of_model(model)?))
+    }
+
+    /// The renderer's scene around an already built BVH of `model`.
+    pub fn with_bvh(model: &Model, bvh: Bvh) -> Scene {
+        let caustics = if model.needs.caustics {
+            // Planes down to below the deepest geometry (or the nominal seabed).
+            let lo = bvh.bounds().map_or(-model.site.depth, |(lo, _)| lo.z);
+            let z_bottom = lo.min(-model.site.depth) - 0.5;
+            super::caustics::CausticVolume::for_model(model, z_bottom).map(Arc::new)
+        } else {
+            None
+        };
+        Scene { bvh, caustics }
+    }
+}
+
+impl std::ops::Deref for Scene {
+    type Target = Bvh;
+    fn deref(&self) -> &Bvh {
+        &self.bvh
+    }
+}

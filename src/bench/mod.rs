@@ -1,0 +1,10 @@
+//! The benchmark harnesses behind `poser bench`: they drive the optics and the backends from
+//! outside, so that no backend calls another and the optics stays pure math.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`projection`] | `poser bench projection`: port solvers (scalar, batch) against the double-double reference |
+//! | [`render`] | `poser bench render`: speed against error of every render backend |
+
+pub mod projection;
+pub mod render;

@@ -1,0 +1,15 @@
+//! The geometry service shared by the ground truth, the planner and the native renderer: the
+//! model's shapes as triangle meshes, the targets' points and printed patterns, and the BVH that
+//! answers ray casts and occlusion queries. It knows nothing of rendering or lighting.
+//!
+//! | module | owns |
+//! |---|---|
+//! | [`mesh`] | triangle meshes of every scene shape (glTF, primitives, seabed, boulders), patterns, PLY |
+//! | [`targets`] | calibration targets: 3D points, printed reflectance, textures |
+//! | [`bvh`] | [`Bvh`]: every triangle of a model in one BVH; [`Ray`], [`Hit`], [`SurfaceId`] |
+
+pub mod bvh;
+pub mod mesh;
+pub mod targets;
+
+pub use bvh::{Bvh, Hit, RAY_EPSILON, Ray, SurfaceId};
