@@ -156,3 +156,34 @@ fn the_command_writes_its_report_and_refuses_bad_input_without_writing() {
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(err.contains("pycolmap") && err.contains("backends/setup.sh"), "{err}");
 }
+
+#[test]
+fn images_mode_registers_every_image_of_a_small_textured_survey() {
+    // 21 images of 420 × 280 px rendered by the native backend, then COLMAP's SIFT, matching
+    // and incremental mapping.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("img");
+    let r = poser()
+        .args(["evaluate", "scenarios/lessons/in_air.toml", "-o"])
+        .arg(&out)
+        .args(["--mode", "images", "--scale", "0.07", "--samples", "4", "--quiet"])
+        .args(["--set", "network.length=2", "--set", "network.width=1.5"])
+        .args([
+            "--set",
+            r#"objects.0.pattern={type="noise", size="0.015 m", amount=0.8, seed=4}"#,
+        ])
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+    eprintln!("{}", std::fs::read_to_string(out.join("report.md")).unwrap());
+    assert!(report["images"].as_u64().unwrap() >= 15);
+    assert_eq!(report["registered"], report["images"]);
+    assert!(report["reprojection_error"].as_f64().unwrap() < 1.0);
+    let focal = report["cameras"][0]["focal_error"].as_f64().unwrap();
+    assert!(focal.abs() < 0.05, "focal error {focal}");
+    // Camera centres within 2 mm after the similarity (the cameras are 1.2 m above the bed).
+    let rms = report["camera_errors"]["rms_3d"].as_f64().unwrap();
+    assert!(rms < 2e-3, "camera-centre RMS {rms} m");
+}

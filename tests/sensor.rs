@@ -503,11 +503,11 @@ fn the_native_variance_estimate_agrees_with_independent_renders() {
     let mut model = tiny_reef();
     let samples = 8;
     let k = 8;
-    let scene = poser::render::scene::Scene::build(&model).unwrap();
+    let scene = poser::backend::native::scene::Scene::build(&model).unwrap();
     let mut renders = Vec::new();
     for seed in 0..k {
         model.render.seed = 1000 + seed;
-        renders.push(poser::render::render_image(&model, &scene, 0, 0, samples, None).unwrap());
+        renders.push(poser::backend::native::render_image(&model, &scene, 0, 0, samples, None).unwrap());
     }
     let n = renders[0].rgb.len();
     let (mut empirical, mut estimated) = (0.0, 0.0);
