@@ -17,5 +17,6 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod targets;
+pub mod texture;
 pub mod truth;
 pub mod units;

@@ -4,7 +4,9 @@
 //! | item | meaning |
 //! |---|---|
 //! | [`SurfaceId`] | which object or target a triangle belongs to (for its material) |
-//! | [`Scene::build`] | objects via [`crate::mesh::object_mesh`]; targets as planes of their printed extent |
+//! | [`Scene::build`] | objects via [`crate::mesh::object_mesh`] (baked objects: their baked mesh with UVs and texture, [`crate::texture::bake`]); targets as planes of their printed extent |
+//! | [`Scene::geometry`] | the same triangles without textures (for occlusion) |
+//! | [`Scene::uv_at`] | texture coordinates at a hit |
 //! | [`Scene::intersect`] | closest hit with `t ∈ (RAY_EPSILON, tmax)` |
 //! | [`Scene::occluded`] | is the open segment between two points blocked? |
 //! | [`Scene::caustics`] | the sun's caustic volume under waves, precomputed once ([`super::caustics`]) |
@@ -95,6 +97,10 @@ impl FNode {
 pub struct Scene {
     tris: Vec<Tri>,
     surface: Vec<SurfaceId>,
+    /// Texture coordinates of each triangle's corners (empty when nothing is baked).
+    uv: Vec<[[f32; 2]; 3]>,
+    /// The baked texture of each object ([`crate::texture::bake`]), by object index.
+    pub textures: Vec<Option<std::sync::Arc<crate::texture::bake::Baked>>>,
     nodes: Vec<FNode>,
     /// The sun's caustics under a wavy surface ([`super::caustics`]), built by [`Scene::build`]
     /// when the model needs them.
@@ -108,7 +114,7 @@ impl Scene {
     /// What the renderer needs: [`Scene::geometry`], plus the caustic volume when the model
     /// asks for caustics.
     pub fn build(model: &Model) -> Result<Scene, String> {
-        let mut scene = Scene::geometry(model)?;
+        let mut scene = Scene::assemble(model, true)?;
         if model.needs.caustics {
             // Planes down to below the deepest geometry (or the nominal seabed).
             let lo = scene.bounds().map_or(-model.site.depth, |(lo, _)| lo.z);
@@ -123,22 +129,48 @@ impl Scene {
     /// what occlusion tests need). glTF paths are resolved against the directory of
     /// `model.source`.
     pub fn geometry(model: &Model) -> Result<Scene, String> {
+        Scene::assemble(model, false)
+    }
+
+    /// The geometry, with the baked textures ([`crate::texture::bake`]) when `textured`.
+    fn assemble(model: &Model, textured: bool) -> Result<Scene, String> {
         let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
         let mut meshes = Vec::new();
+        let mut textures = Vec::new();
         for (i, o) in model.objects.iter().enumerate() {
-            meshes.push((SurfaceId::Object(i as u32), object_mesh(o, base)?));
+            // Baked objects use the baked mesh (same triangles, vertices split at UV seams).
+            let baked = if textured {
+                crate::texture::bake::bake_object(model, i)?
+            } else {
+                None
+            };
+            let (mesh, uv) = match &baked {
+                Some(b) => (b.mesh.transformed(&o.pose, o.scale), Some(b.uv.clone())),
+                None => (object_mesh(o, base)?, None),
+            };
+            meshes.push((SurfaceId::Object(i as u32), mesh, uv));
+            textures.push(baked);
         }
         for (i, t) in model.targets.iter().enumerate() {
-            meshes.push((SurfaceId::Target(i as u32), target_mesh(t)));
+            meshes.push((SurfaceId::Target(i as u32), target_mesh(t), None));
         }
-        Ok(Scene::from_meshes(meshes))
+        let mut s = Scene::from_meshes_uv(meshes);
+        s.textures = textures;
+        Ok(s)
     }
 
     /// Build from world-frame meshes.
     pub fn from_meshes(meshes: Vec<(SurfaceId, TriMesh)>) -> Scene {
+        Scene::from_meshes_uv(meshes.into_iter().map(|(id, m)| (id, m, None)).collect())
+    }
+
+    /// Build from world-frame meshes, some with per-vertex texture coordinates.
+    pub fn from_meshes_uv(meshes: Vec<(SurfaceId, TriMesh, Option<Vec<[f32; 2]>>)>) -> Scene {
         let mut tris = Vec::new();
         let mut surface = Vec::new();
-        for (id, m) in &meshes {
+        let mut uvs = Vec::new();
+        let any_uv = meshes.iter().any(|m| m.2.is_some());
+        for (id, m, uv) in &meshes {
             for t in &m.triangles {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
                 let e1 = b - a;
@@ -148,16 +180,45 @@ impl Scene {
                 }
                 tris.push(Tri { v0: a, e1, e2 });
                 surface.push(*id);
+                if any_uv {
+                    uvs.push(match uv {
+                        Some(uv) => t.map(|i| uv[i as usize]),
+                        None => [[0.0; 2]; 3],
+                    });
+                }
             }
         }
         let mut s = Scene {
             tris,
             surface,
+            uv: uvs,
+            textures: Vec::new(),
             nodes: Vec::new(),
             caustics: None,
         };
         s.build_bvh();
         s
+    }
+
+    /// Texture coordinates at a hit (barycentric interpolation of the triangle's corner UVs);
+    /// `None` when the scene has none.
+    pub fn uv_at(&self, h: &Hit) -> Option<[f64; 2]> {
+        let uv = self.uv.get(h.triangle as usize)?;
+        let t = &self.tris[h.triangle as usize];
+        let d = h.point - t.v0;
+        let (d11, d12, d22) = (t.e1.dot(t.e1), t.e1.dot(t.e2), t.e2.dot(t.e2));
+        let (r1, r2) = (d.dot(t.e1), d.dot(t.e2));
+        let den = d11 * d22 - d12 * d12;
+        if !(den > 0.0) {
+            return Some(uv[0].map(f64::from));
+        }
+        let b1 = (d22 * r1 - d12 * r2) / den;
+        let b2 = (d11 * r2 - d12 * r1) / den;
+        let f = |k: usize| {
+            let (a, b, c) = (uv[0][k] as f64, uv[1][k] as f64, uv[2][k] as f64);
+            a + b1 * (b - a) + b2 * (c - a)
+        };
+        Some([f(0), f(1)])
     }
 
     /// Number of (non-degenerate) triangles.
@@ -350,6 +411,9 @@ impl Scene {
         }
         self.tris = order.iter().map(|&i| self.tris[i as usize]).collect();
         self.surface = order.iter().map(|&i| self.surface[i as usize]).collect();
+        if !self.uv.is_empty() {
+            self.uv = order.iter().map(|&i| self.uv[i as usize]).collect();
+        }
         self.nodes = nodes.iter().map(FNode::from_node).collect();
     }
 

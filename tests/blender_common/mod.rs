@@ -76,6 +76,8 @@ pub fn plane(name: &str, size: f64, z: f64, albedo: f64) -> Object {
         material: Material {
             albedo: [albedo; 3],
             pattern: None,
+            variation: 0.0,
+            texel: None,
         },
     }
 }

@@ -126,6 +126,8 @@ pub fn plane(name: &str, z: f64, size: f64, albedo: Rgb) -> Object {
         material: Material {
             albedo,
             pattern: None,
+            variation: 0.0,
+            texel: None,
         },
     }
 }
@@ -225,6 +227,8 @@ pub fn showcase() -> Model {
             material: Material {
                 albedo: [0.2, 0.2, 0.2],
                 pattern: None,
+                variation: 0.0,
+                texel: None,
             },
         },
         Object {
@@ -240,6 +244,8 @@ pub fn showcase() -> Model {
             material: Material {
                 albedo: [0.6, 0.5, 0.1],
                 pattern: None,
+                variation: 0.0,
+                texel: None,
             },
         },
         Object {
@@ -256,6 +262,8 @@ pub fn showcase() -> Model {
             material: Material {
                 albedo: [0.3, 0.3, 0.3],
                 pattern: None,
+                variation: 0.0,
+                texel: None,
             },
         },
     ];

@@ -59,6 +59,8 @@ pub fn nadir_model(h: f64) -> Model {
             material: Material {
                 albedo: [0.5; 3],
                 pattern: None,
+                variation: 0.0,
+                texel: None,
             },
         }],
         targets: vec![],
