@@ -199,13 +199,17 @@ def _diffuse_material(name, material, scale=(1.0, 1.0, 1.0)):
     return mat
 
 
-def _texture_material(name, path):
+def _texture_material(name, path, interpolation="Closest"):
+    """Diffuse BSDF whose colour is an image of linear values (Non-Color) at the mesh's UVs.
+    Baked object textures use "Linear" with "EXTEND": bilinear between texel centres, edges
+    repeated, as Mitsuba's bitmap (bilinear, clamp) and poser's native sampler."""
     mat = bpy.data.materials.new(name)
     nt, out = _nodes(mat)
     d = nt.nodes.new("ShaderNodeBsdfDiffuse")
     d.inputs["Roughness"].default_value = 0.0
     tex = nt.nodes.new("ShaderNodeTexImage")
-    tex.interpolation = "Closest"
+    tex.interpolation = interpolation
+    tex.extension = "EXTEND"
     img = bpy.data.images.load(path, check_existing=True)
     img.colorspace_settings.name = "Non-Color"
     tex.image = img
@@ -763,7 +767,11 @@ def _build_objects(built, coll, desc, base_dir):
                 raise ValueError(f"object {ob['name']!r}: shape {kind!r} has no Blender form")
             bm.to_mesh(me)
             bm.free()
-        me.materials.append(_diffuse_material(name, ob["material"], scale))
+        if shape.get("texture"):
+            path = os.path.join(base_dir, shape["texture"])
+            me.materials.append(_texture_material(name, path, "Linear"))
+        else:
+            me.materials.append(_diffuse_material(name, ob["material"], scale))
         obj = _new_object(coll, name, me)
         obj.matrix_world = _matrix(ob["matrix"])
 
