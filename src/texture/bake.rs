@@ -278,31 +278,19 @@ fn pack(charts: &mut [Chart], texel: f64) -> (u64, u64) {
     (used_w, y + shelf)
 }
 
-/// Bake an object whose local (object-frame, unscaled) mesh is `local`, at texel `wanted` (or
-/// coarser, to fit `max_side`).
-pub fn bake(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side: u32) -> Baked {
-    let t0 = std::time::Instant::now();
-    let scaled: Vec<DVec3> = local.positions.iter().map(|&p| p * o.scale).collect();
+/// Charts of every triangle, their packing, and the texel that fits `max_side`.
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
+fn layout(
+    o: &Object,
+    local: &TriMesh,
+    scaled: &[DVec3],
+    per_part: usize,
+    object_seed: u64,
+    wanted: f64,
+    max_side: u32,
+) -> (Vec<Chart>, Vec<usize>, f64, u32, u32) {
     let planar = matches!(o.shape, Shape::Plane { .. } | Shape::Seabed { .. });
     let ntri = local.triangles.len();
-    let per_part = match o.shape {
-        Shape::Boulders { count, .. } if count > 0 && ntri % count as usize == 0 => {
-            ntri / count as usize
-        }
-        _ => ntri.max(1),
-    };
-    let pattern_seed = match &o.material.pattern {
-        Some(
-            Pattern::Noise { seed, .. }
-            | Pattern::Fbm { seed, .. }
-            | Pattern::Sand { seed, .. }
-            | Pattern::Rock { seed, .. }
-            | Pattern::Coral { seed, .. },
-        ) => *seed,
-        _ => 0,
-    };
-    let object_seed = mix64(pattern_seed ^ name_hash(&o.name));
-
     // Charts and the new mesh (vertices duplicated per chart).
     let mut chart_of: HashMap<(u32, usize, bool), usize> = HashMap::new();
     let mut charts: Vec<Chart> = Vec::new();
@@ -367,6 +355,67 @@ pub fn bake(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side: 
         guard += 1;
     }
     let (w, h) = (w.max(1) as u32, h.max(1) as u32);
+
+    (charts, tri_chart, texel, w, h)
+}
+
+/// What baking object `index` would give (texture size, texel, coarsening), without baking:
+/// for `poser explain`. `None` when the object is not baked.
+pub fn plan(model: &Model, index: usize) -> Result<Option<String>, String> {
+    let o = &model.objects[index];
+    if !o.material.is_baked() {
+        return Ok(None);
+    }
+    let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
+    let local = crate::mesh::shape_mesh(&o.shape, base)
+        .map_err(|e| format!("object `{}`: {e}", o.name))?;
+    let (wanted, reason) = wanted_texel(model, o, local.bounds());
+    let scaled: Vec<DVec3> = local.positions.iter().map(|&p| p * o.scale).collect();
+    let (per_part, seed) = parts(o, local.triangles.len());
+    let (charts, _, texel, w, h) = layout(o, &local, &scaled, per_part, seed, wanted, MAX_SIDE);
+    let mut s = format!(
+        "{w}×{h} texels of {:.2} mm in {} chart(s); {reason}",
+        texel * 1e3,
+        charts.len()
+    );
+    if texel > wanted * 1.000_001 {
+        s.push_str(&format!(
+            "; COARSENED from {:.2} mm to fit {MAX_SIDE} texels a side",
+            wanted * 1e3
+        ));
+    }
+    Ok(Some(s))
+}
+
+/// Triangles per part (each rock of a boulder field is one) and the object's seed.
+fn parts(o: &Object, ntri: usize) -> (usize, u64) {
+    let per_part = match o.shape {
+        Shape::Boulders { count, .. } if count > 0 && ntri % count as usize == 0 => {
+            ntri / count as usize
+        }
+        _ => ntri.max(1),
+    };
+    let pattern_seed = match &o.material.pattern {
+        Some(
+            Pattern::Noise { seed, .. }
+            | Pattern::Fbm { seed, .. }
+            | Pattern::Sand { seed, .. }
+            | Pattern::Rock { seed, .. }
+            | Pattern::Coral { seed, .. },
+        ) => *seed,
+        _ => 0,
+    };
+    (per_part, mix64(pattern_seed ^ name_hash(&o.name)))
+}
+
+/// Bake an object whose local (object-frame, unscaled) mesh is `local`, at texel `wanted` (or
+/// coarser, to fit `max_side`).
+pub fn bake(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side: u32) -> Baked {
+    let t0 = std::time::Instant::now();
+    let scaled: Vec<DVec3> = local.positions.iter().map(|&p| p * o.scale).collect();
+    let (per_part, object_seed) = parts(o, local.triangles.len());
+
+    let (charts, tri_chart, texel, w, h) = layout(o, local, &scaled, per_part, object_seed, wanted, max_side);
 
     // Mesh with UVs.
     let mut mesh = TriMesh::default();

@@ -155,8 +155,10 @@ def _diffuse_material(name, material, scale=(1.0, 1.0, 1.0)):
     d.inputs["Roughness"].default_value = 0.0
     albedo = [float(a) for a in material["albedo"]]
     d.inputs["Color"].default_value = (*albedo, 1.0)
+    # Only the checker reaches here: every other pattern is baked by poser into an image
+    # texture (objects with `shape.texture`, see _texture_material).
     pattern = material.get("pattern")
-    if pattern:
+    if pattern and pattern["type"] == "checker":
         tc = nt.nodes.new("ShaderNodeTexCoord")
         mp = nt.nodes.new("ShaderNodeMapping")
         mp.inputs["Scale"].default_value = tuple(float(s) for s in scale)
@@ -172,29 +174,6 @@ def _diffuse_material(name, material, scale=(1.0, 1.0, 1.0)):
             ck.inputs["Color2"].default_value = (*albedo, 1.0)
             nt.links.new(mp.outputs[0], ck.inputs["Vector"])
             nt.links.new(ck.outputs["Color"], d.inputs["Color"])
-        elif pattern["type"] == "noise":
-            nz = nt.nodes.new("ShaderNodeTexNoise")
-            nz.noise_dimensions = "4D"
-            nz.inputs["Scale"].default_value = 1.0 / float(pattern["size"])
-            nz.inputs["W"].default_value = float(pattern.get("seed", 0) % 1000)
-            mix = nt.nodes.new("ShaderNodeMix")
-            mix.data_type = "RGBA"
-            amount = float(pattern["amount"])
-            mix.inputs["Factor"].default_value = 1.0
-            nt.links.new(mp.outputs[0], nz.inputs["Vector"])
-            # albedo * (1 - amount + 2 amount * noise): mean albedo, relative amplitude amount.
-            mul = nt.nodes.new("ShaderNodeMath")
-            mul.operation = "MULTIPLY_ADD"
-            mul.inputs[1].default_value = 2.0 * amount
-            mul.inputs[2].default_value = 1.0 - amount
-            nt.links.new(nz.outputs["Fac"], mul.inputs[0])
-            mix.blend_type = "MULTIPLY"
-            mix.inputs[6].default_value = (*albedo, 1.0)
-            comb = nt.nodes.new("ShaderNodeCombineColor")
-            for i in range(3):
-                nt.links.new(mul.outputs[0], comb.inputs[i])
-            nt.links.new(comb.outputs[0], mix.inputs[7])
-            nt.links.new(mix.outputs[2], d.inputs["Color"])
     nt.links.new(d.outputs[0], out.inputs["Surface"])
     return mat
 
