@@ -23,9 +23,11 @@ use std::path::{Path, PathBuf};
 
 /// The bound on image means.
 const MAX_MEAN_REL: f64 = 0.02;
-/// Bound on each octave band's power ratio to native's (see the measured values printed).
-const MAX_BAND_RATIO: f64 = 1.25;
-/// Bound on the correlation of the green channels with native's.
+/// Bound on each octave band's texture power ratio to native's. Measured (128 spp × 2 seeds):
+/// Mitsuba 0.977–1.012, Cycles 0.998–1.002.
+const MAX_BAND_RATIO: f64 = 1.10;
+/// Bound on the noise-corrected correlation of the green channels with native's. Measured
+/// uncorrected: Cycles 0.9997, Mitsuba 0.9456 (its port-glass noise).
 const MIN_CORRELATION: f64 = 0.95;
 
 fn load() -> Model {

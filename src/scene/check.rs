@@ -48,10 +48,19 @@ pub fn within(cx: &mut Cx, t: &Tab, key: &str, v: f64, lo: f64, hi: f64) {
         cx.push(
             Diagnostic::error(
                 "E0051",
-                format!("`{}` must be between {} and {}", t.full(key), num(lo), num(hi)),
+                format!(
+                    "`{}` must be between {} and {}",
+                    t.full(key),
+                    num(lo),
+                    num(hi)
+                ),
             )
             .label(t.span_of(key), format!("{} is outside", num(v)))
-            .help(format!("give `{key}` a value in [{}, {}]", num(lo), num(hi))),
+            .help(format!(
+                "give `{key}` a value in [{}, {}]",
+                num(lo),
+                num(hi)
+            )),
         );
     }
 }

@@ -1224,7 +1224,10 @@ mod tests {
                 "objects.0.shape=\"cylinder\"",
                 "objects.0.pattern={type = \"checker\"}",
             ],
-            &["objects.0.pattern={type = \"fbm\"}", "objects.1.pattern={type = \"noise\"}"],
+            &[
+                "objects.0.pattern={type = \"fbm\"}",
+                "objects.1.pattern={type = \"noise\"}",
+            ],
             &["objects.0.pattern={type = \"rock\"}"],
             &["objects.0.pattern={type = \"coral\", colors = [[0.5, 0.2, 0.3]]}"],
             &["targets.0.type=\"checkerboard\""],

@@ -1385,7 +1385,11 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
     let pattern = o.get("pattern").map(|n| {
         let mut p = Tab::open(cx, Some(n), &o.full("pattern"), n.span);
         let ty = p
-            .choice(cx, "type", &["checker", "noise", "fbm", "sand", "rock", "coral"])
+            .choice(
+                cx,
+                "type",
+                &["checker", "noise", "fbm", "sand", "rock", "coral"],
+            )
             .unwrap_or("noise");
         let seed = |cx: &mut Cx, p: &mut Tab| p.opt_u64(cx, "seed").unwrap_or(0);
         // A length ≥ 0 (0 switches the feature off).

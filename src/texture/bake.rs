@@ -146,7 +146,11 @@ impl Baked {
 }
 
 /// The texel wanted for an object: the material's, or half the finest ground sample distance.
-pub fn wanted_texel(model: &Model, o: &Object, local_bounds: Option<(DVec3, DVec3)>) -> (f64, String) {
+pub fn wanted_texel(
+    model: &Model,
+    o: &Object,
+    local_bounds: Option<(DVec3, DVec3)>,
+) -> (f64, String) {
     if let Some(t) = o.material.texel {
         return (t, "texel set by the scene".into());
     }
@@ -202,8 +206,8 @@ pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, St
         return Ok(None);
     }
     let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
-    let local = crate::mesh::shape_mesh(&o.shape, base)
-        .map_err(|e| format!("object `{}`: {e}", o.name))?;
+    let local =
+        crate::mesh::shape_mesh(&o.shape, base).map_err(|e| format!("object `{}`: {e}", o.name))?;
     let (wanted, reason) = wanted_texel(model, o, local.bounds());
     let json = serde_json::to_string(o).map_err(|e| e.to_string())?;
     let key = (
@@ -313,7 +317,8 @@ fn layout(
             (axis, n[axis] >= 0.0)
         };
         let id = *chart_of.entry((part, axis, positive)).or_insert_with(|| {
-            let seed = mix64(object_seed ^ ((part as u64) << 3 | (axis as u64) << 1 | positive as u64));
+            let seed =
+                mix64(object_seed ^ ((part as u64) << 3 | (axis as u64) << 1 | positive as u64));
             let offset = if axis == 2 && positive {
                 [0.0, 0.0]
             } else {
@@ -367,8 +372,8 @@ pub fn plan(model: &Model, index: usize) -> Result<Option<String>, String> {
         return Ok(None);
     }
     let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
-    let local = crate::mesh::shape_mesh(&o.shape, base)
-        .map_err(|e| format!("object `{}`: {e}", o.name))?;
+    let local =
+        crate::mesh::shape_mesh(&o.shape, base).map_err(|e| format!("object `{}`: {e}", o.name))?;
     let (wanted, reason) = wanted_texel(model, o, local.bounds());
     let scaled: Vec<DVec3> = local.positions.iter().map(|&p| p * o.scale).collect();
     let (per_part, seed) = parts(o, local.triangles.len());
@@ -415,7 +420,8 @@ pub fn bake(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side: 
     let scaled: Vec<DVec3> = local.positions.iter().map(|&p| p * o.scale).collect();
     let (per_part, object_seed) = parts(o, local.triangles.len());
 
-    let (charts, tri_chart, texel, w, h) = layout(o, local, &scaled, per_part, object_seed, wanted, max_side);
+    let (charts, tri_chart, texel, w, h) =
+        layout(o, local, &scaled, per_part, object_seed, wanted, max_side);
 
     // Mesh with UVs.
     let mut mesh = TriMesh::default();
@@ -600,19 +606,25 @@ mod tests {
 
     #[test]
     fn closed_meshes_get_triplanar_charts_and_the_cap_coarsens() {
-        let o = object(Shape::Boulders {
-            width: 2.0,
-            length: 2.0,
-            count: 3,
-            radius: 0.2,
-            seed: 4,
-        }, rock());
+        let o = object(
+            Shape::Boulders {
+                width: 2.0,
+                length: 2.0,
+                count: 3,
+                radius: 0.2,
+                seed: 4,
+            },
+            rock(),
+        );
         let local = crate::mesh::shape_mesh(&o.shape, Path::new(".")).unwrap();
         let b = bake(&o, &local, 0.002, "test".into(), MAX_SIDE);
         assert_eq!(b.charts, 18);
         assert_eq!(b.mesh.triangles.len(), local.triangles.len());
         assert!(b.mesh.positions.len() > local.positions.len());
-        assert!(b.uv.iter().all(|q| (0.0..=1.0).contains(&q[0]) && (0.0..=1.0).contains(&q[1])));
+        assert!(
+            b.uv.iter()
+                .all(|q| (0.0..=1.0).contains(&q[0]) && (0.0..=1.0).contains(&q[1]))
+        );
         let small = bake(&o, &local, 0.002, "test".into(), 256);
         assert!(small.coarsened());
         assert!(small.texture.width <= 256 && small.texture.height <= 256);

@@ -197,28 +197,28 @@ pub fn describe(model: &Model) -> Result<Description, String> {
                 json!({"type": "ply", "path": path, "smooth": false, "texture": texture})
             }
             (shape, None) => match shape {
-            Shape::Plane { .. } | Shape::Box { .. } => {
-                serde_json::to_value(&o.shape).map_err(|e| e.to_string())?
-            }
-            Shape::Sphere { .. }
-            | Shape::Cylinder { .. }
-            | Shape::Mesh { .. }
-            | Shape::Seabed { .. }
-            | Shape::Boulders { .. } => {
-                // Tessellated by the shared mesh module (same triangles as the native
-                // renderer), in the object frame; pose and scale stay in `matrix`.
-                let path = format!("assets/object_{i}.ply");
-                let mesh = crate::mesh::shape_mesh(&o.shape, &base_dir)
-                    .map_err(|e| format!("object `{}`: {e}", o.name))?;
-                let bytes =
-                    crate::mesh::ply_bytes(&mesh, crate::mesh::PlyFormat::BinaryLittleEndian);
-                let smooth = matches!(o.shape, Shape::Sphere { .. });
-                assets.push(Asset {
-                    path: path.clone(),
-                    bytes,
-                });
-                json!({"type": "ply", "path": path, "smooth": smooth})
-            }
+                Shape::Plane { .. } | Shape::Box { .. } => {
+                    serde_json::to_value(&o.shape).map_err(|e| e.to_string())?
+                }
+                Shape::Sphere { .. }
+                | Shape::Cylinder { .. }
+                | Shape::Mesh { .. }
+                | Shape::Seabed { .. }
+                | Shape::Boulders { .. } => {
+                    // Tessellated by the shared mesh module (same triangles as the native
+                    // renderer), in the object frame; pose and scale stay in `matrix`.
+                    let path = format!("assets/object_{i}.ply");
+                    let mesh = crate::mesh::shape_mesh(&o.shape, &base_dir)
+                        .map_err(|e| format!("object `{}`: {e}", o.name))?;
+                    let bytes =
+                        crate::mesh::ply_bytes(&mesh, crate::mesh::PlyFormat::BinaryLittleEndian);
+                    let smooth = matches!(o.shape, Shape::Sphere { .. });
+                    assets.push(Asset {
+                        path: path.clone(),
+                        bytes,
+                    });
+                    json!({"type": "ply", "path": path, "smooth": smooth})
+                }
             },
         };
         let m = pose_mat(&o.pose) * DMat4::from_scale(o.scale);
