@@ -429,20 +429,33 @@ mod tests {
 
     #[test]
     fn spectrum_has_energy_down_to_the_texel() {
-        // 512 texels of 1 mm along a line: the finest octave band (2–4 texels) must hold a
-        // sizeable share of the power of the coarse bands for every pattern (detail at the
-        // pixel), and no pattern may be white noise only.
+        // 512 texels of 1 mm along a line. Bands are octaves of the DFT index k < 256:
+        // b[7] holds wavelengths of 2–4 texels, b[6] 4–8 texels; b[0] (k = 1) is mostly the
+        // trend of features larger than the line and is left out of the reference.
+        // Detail at the texel: the two finest bands hold a share of the power of the coarse
+        // bands b[1..4] (16–256 texels) that is not negligible, and that share mostly
+        // disappears when the same pattern is band-limited for a texel 8 times coarser.
+        // Measured (fine share at 1 mm, at 8 mm): fbm (gain 0.7) 2.1 %, 0.44 %; sand 82 %,
+        // 0.7 %; rock 101 %, 7.5 %; coral 11.3 %, 6.2 % (colony borders stay sharp at 8 mm;
+        // the polyps go). fBm's share is small by design: each octave has gain² = 0.49 of the
+        // power of the one above, and the finest octave's lattice (3.9 texels here) puts most
+        // of its power at 4–8 texels. (The previous form of this test summed an empty band
+        // and included the trend b[0]; it failed for fbm and coral at these parameters.)
         let texel = 0.001;
         let base = [0.5; 3];
         for p in patterns() {
-            let line: Vec<f64> = (0..512)
-                .map(|i| albedo(&p, base, &at((i as f64 + 0.5) * texel, 0.2, texel))[1])
-                .collect();
-            let b = band_power(&line);
-            let fine = b[b.len() - 1] + b[b.len() - 2];
-            let coarse: f64 = b[..4].iter().sum();
-            assert!(fine > 0.02 * coarse, "{p:?}: bands {b:?}");
-            assert!(coarse > 0.0, "{p:?}");
+            let share = |t: f64| {
+                let line: Vec<f64> = (0..512)
+                    .map(|i| albedo(&p, base, &at((i as f64 + 0.5) * texel, 0.2, t))[1])
+                    .collect();
+                let b = band_power(&line);
+                let coarse: f64 = b[1..4].iter().sum();
+                assert!(coarse > 0.0, "{p:?}");
+                (b[6] + b[7]) / coarse
+            };
+            let (sharp, soft) = (share(texel), share(8.0 * texel));
+            assert!(sharp > 0.01, "{p:?}: fine share {sharp}");
+            assert!(sharp > 1.5 * soft, "{p:?}: fine share {sharp}, band-limited {soft}");
         }
     }
 
