@@ -11,6 +11,7 @@
 //! | charts | planes and seabeds: one planar chart (object x, y). Other shapes: every triangle goes to the chart of its dominant normal axis and sign (triplanar), per part (each rock of a boulder field is a part); vertices are duplicated where charts meet |
 //! | texel | the material's `texel`, else half the finest ground sample distance of any camera at any pose on the object's bounding box (`distance / (fx · n)`, n the largest ambient index: water magnifies through a flat port); [`FALLBACK_TEXEL`] without poses |
 //! | atlas | charts (plus a [`MARGIN`]-texel border baked from the same formula) shelf-packed; when a side would exceed [`MAX_SIDE`] the texel is coarsened until it fits, and the result says so |
+//! | budget | all baked textures of a scene together hold at most [`TEXEL_BUDGET`] texels: when they would hold more, every object whose texel the scene does not set is coarsened by one common factor ([`scene_plan`]), and the result says so and by how much |
 //! | texels | the pattern ([`super::albedo`]) × the part's colour variation at each texel centre, clamped to [0, 1], stored as linear 8-bit (value × 255, rounded) |
 //!
 //! Pattern coordinates are the chart's projected object-frame coordinates in metres (after
@@ -28,6 +29,9 @@ use std::sync::{Arc, Mutex, Weak};
 
 /// Largest side of a baked texture, texels.
 pub const MAX_SIDE: u32 = 8192;
+/// Most texels of all baked textures of one scene together (16 Mi = 4096², 48 MiB of 8-bit
+/// RGB): bakes in a few seconds and keeps compiled scenes small.
+pub const TEXEL_BUDGET: u64 = 1 << 24;
 /// Border of every chart, texels (bilinear filtering reads one).
 pub const MARGIN: u32 = 2;
 /// Texel size when no camera position is known, m.
@@ -110,10 +114,13 @@ pub struct Baked {
     pub texture: Texture,
     /// Texel size used, m.
     pub texel: f64,
-    /// Texel size wanted (before the [`MAX_SIDE`] cap), m, and how it was chosen.
+    /// Texel size wanted (before the scene budget and the [`MAX_SIDE`] cap), m, and how it
+    /// was chosen.
     pub wanted: f64,
     pub reason: String,
     pub charts: usize,
+    /// Why the texel is coarser than wanted ("" when it is not).
+    pub limit: String,
     /// Wall time of the bake, s (not part of the content).
     pub seconds: f64,
 }
@@ -135,14 +142,151 @@ impl Baked {
             self.reason
         );
         if self.coarsened() {
-            s.push_str(&format!(
-                "; COARSENED from {:.2} mm to fit {MAX_SIDE} texels: detail at the pixel is lost \
-                 (make the object smaller or set `pattern.texel`)",
-                self.wanted * 1e3
-            ));
+            s.push_str(&coarsened_note(self.wanted, self.texel, &self.limit));
         }
         s
     }
+}
+
+/// "; COARSENED ..." for a texel coarser than wanted.
+fn coarsened_note(wanted: f64, texel: f64, limit: &str) -> String {
+    format!(
+        "; COARSENED ×{:.2} from {:.2} mm {limit}: detail at the pixel is lost (make the \
+         object smaller or set `pattern.texel`)",
+        texel / wanted,
+        wanted * 1e3
+    )
+}
+
+/// Why a texel was coarsened: the scene budget (`factor` > 1) and/or the side cap.
+fn limit_text(factor: f64, texel: f64, start: f64) -> String {
+    let budget = format!(
+        "to fit the scene's budget of {:.1} M texels",
+        TEXEL_BUDGET as f64 / 1e6
+    );
+    let side = format!("to fit {MAX_SIDE} texels a side");
+    match (factor > 1.000_001, texel > start * 1.000_001) {
+        (true, true) => format!("{budget} and {side}"),
+        (true, false) => budget,
+        (false, true) => side,
+        (false, false) => String::new(),
+    }
+}
+
+/// The texel plan of one baked object within its scene.
+#[derive(Debug, Clone)]
+pub struct ObjectPlan {
+    /// Texel wanted, m, and how it was chosen.
+    pub wanted: f64,
+    pub reason: String,
+    /// Texel the layout starts from: `wanted`, times the scene's budget factor unless the
+    /// scene sets the texel.
+    pub start: f64,
+    /// Texel after the [`MAX_SIDE`] cap, m, atlas size and charts.
+    pub texel: f64,
+    pub width: u32,
+    pub height: u32,
+    pub charts: usize,
+    /// Why `texel` exceeds `wanted` ("" when it does not).
+    pub limit: String,
+}
+
+/// Texel plans of every object of the scene (`None` for objects that are not baked): each at
+/// its wanted texel, unless their textures together would exceed [`TEXEL_BUDGET`] texels; then
+/// the objects whose texel the scene does not set are all coarsened by one factor, the smallest
+/// (to 1 %) that fits what the others leave (at least a quarter of the budget). Deterministic:
+/// depends on the model only.
+pub fn scene_plan(model: &Model) -> Result<Vec<Option<ObjectPlan>>, String> {
+    let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
+    struct Item {
+        index: usize,
+        local: TriMesh,
+        scaled: Vec<DVec3>,
+        per_part: usize,
+        seed: u64,
+        wanted: f64,
+        reason: String,
+        fixed: bool,
+    }
+    let mut items = Vec::new();
+    for (index, o) in model.objects.iter().enumerate() {
+        if !o.material.is_baked() {
+            continue;
+        }
+        let local = crate::mesh::shape_mesh(&o.shape, base)
+            .map_err(|e| format!("object `{}`: {e}", o.name))?;
+        let (wanted, reason) = wanted_texel(model, o, local.bounds());
+        let scaled = local.positions.iter().map(|&p| p * o.scale).collect();
+        let (per_part, seed) = parts(o, local.triangles.len());
+        items.push(Item {
+            index,
+            local,
+            scaled,
+            per_part,
+            seed,
+            wanted,
+            reason,
+            fixed: o.material.texel.is_some(),
+        });
+    }
+    let sizes = |factor: f64| -> Vec<(f64, f64, u32, u32, usize)> {
+        items
+            .iter()
+            .map(|it| {
+                let start = if it.fixed {
+                    it.wanted
+                } else {
+                    it.wanted * factor
+                };
+                let o = &model.objects[it.index];
+                let (charts, _, texel, w, h) = layout(
+                    o,
+                    &it.local,
+                    &it.scaled,
+                    it.per_part,
+                    it.seed,
+                    start,
+                    MAX_SIDE,
+                );
+                (start, texel, w, h, charts.len())
+            })
+            .collect()
+    };
+    let count = |v: &[(f64, f64, u32, u32, usize)], fixed: bool| -> u64 {
+        v.iter()
+            .zip(&items)
+            .filter(|(_, it)| it.fixed == fixed)
+            .map(|(s, _)| s.2 as u64 * s.3 as u64)
+            .sum()
+    };
+    let mut factor = 1.0;
+    let mut sized = sizes(factor);
+    let room = TEXEL_BUDGET.saturating_sub(count(&sized, true)).max(TEXEL_BUDGET / 4);
+    let mut guard = 0;
+    while count(&sized, false) > room && guard < 100 {
+        // Texel count goes as 1 / texel²; margins make it fall a little slower.
+        let ratio = count(&sized, false) as f64 / room as f64;
+        factor *= ratio.sqrt().max(1.01);
+        // Round up to 1 % steps, so that small changes of a scene do not change the factor.
+        factor = (factor * 100.0).ceil() / 100.0;
+        sized = sizes(factor);
+        guard += 1;
+    }
+    let mut out = vec![None; model.objects.len()];
+    for (it, (start, texel, w, h, charts)) in items.iter().zip(sized) {
+        let f = if it.fixed { 1.0 } else { factor };
+        out[it.index] = Some(ObjectPlan {
+            wanted: it.wanted,
+            reason: it.reason.clone(),
+            start,
+            texel,
+            width: w,
+            height: h,
+            charts,
+            limit: limit_text(f, texel, start),
+        });
+    }
+    Ok(out)
 }
 
 /// The texel wanted for an object: the material's, or half the finest ground sample distance.
@@ -205,14 +349,14 @@ pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, St
     if !o.material.is_baked() {
         return Ok(None);
     }
+    let Some(plan) = scene_plan(model)?.swap_remove(index) else {
+        return Ok(None);
+    };
     let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
-    let local =
-        crate::mesh::shape_mesh(&o.shape, base).map_err(|e| format!("object `{}`: {e}", o.name))?;
-    let (wanted, reason) = wanted_texel(model, o, local.bounds());
     let json = serde_json::to_string(o).map_err(|e| e.to_string())?;
     let key = (
-        name_hash(&json) ^ mix64(name_hash(&model.source)),
-        wanted.to_bits(),
+        name_hash(&json) ^ mix64(name_hash(&model.source)) ^ mix64(plan.start.to_bits()),
+        plan.wanted.to_bits(),
     );
     {
         let mut g = CACHE.lock().unwrap_or_else(|e| e.into_inner());
@@ -222,7 +366,12 @@ pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, St
             return Ok(Some(b));
         }
     }
-    let b = Arc::new(bake(o, &local, wanted, reason, MAX_SIDE));
+    let local =
+        crate::mesh::shape_mesh(&o.shape, base).map_err(|e| format!("object `{}`: {e}", o.name))?;
+    let mut b = bake_from(o, &local, plan.start, plan.reason, MAX_SIDE);
+    b.wanted = plan.wanted;
+    b.limit = plan.limit;
+    let b = Arc::new(b);
     let mut g = CACHE.lock().unwrap_or_else(|e| e.into_inner());
     g.get_or_insert_with(HashMap::new)
         .insert(key, Arc::downgrade(&b));
@@ -367,27 +516,19 @@ fn layout(
 /// What baking object `index` would give (texture size, texel, coarsening), without baking:
 /// for `poser explain`. `None` when the object is not baked.
 pub fn plan(model: &Model, index: usize) -> Result<Option<String>, String> {
-    let o = &model.objects[index];
-    if !o.material.is_baked() {
+    let Some(p) = scene_plan(model)?.swap_remove(index) else {
         return Ok(None);
-    }
-    let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
-    let local =
-        crate::mesh::shape_mesh(&o.shape, base).map_err(|e| format!("object `{}`: {e}", o.name))?;
-    let (wanted, reason) = wanted_texel(model, o, local.bounds());
-    let scaled: Vec<DVec3> = local.positions.iter().map(|&p| p * o.scale).collect();
-    let (per_part, seed) = parts(o, local.triangles.len());
-    let (charts, _, texel, w, h) = layout(o, &local, &scaled, per_part, seed, wanted, MAX_SIDE);
+    };
     let mut s = format!(
-        "{w}×{h} texels of {:.2} mm in {} chart(s); {reason}",
-        texel * 1e3,
-        charts.len()
+        "{}×{} texels of {:.2} mm in {} chart(s); {}",
+        p.width,
+        p.height,
+        p.texel * 1e3,
+        p.charts,
+        p.reason
     );
-    if texel > wanted * 1.000_001 {
-        s.push_str(&format!(
-            "; COARSENED from {:.2} mm to fit {MAX_SIDE} texels a side",
-            wanted * 1e3
-        ));
+    if p.texel > p.wanted * 1.000_001 {
+        s.push_str(&coarsened_note(p.wanted, p.texel, &p.limit));
     }
     Ok(Some(s))
 }
@@ -416,6 +557,13 @@ fn parts(o: &Object, ntri: usize) -> (usize, u64) {
 /// Bake an object whose local (object-frame, unscaled) mesh is `local`, at texel `wanted` (or
 /// coarser, to fit `max_side`).
 pub fn bake(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side: u32) -> Baked {
+    let mut b = bake_from(o, local, wanted, reason, max_side);
+    b.limit = limit_text(1.0, b.texel, wanted);
+    b
+}
+
+/// [`bake`] without the `limit` text.
+fn bake_from(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side: u32) -> Baked {
     let t0 = std::time::Instant::now();
     let scaled: Vec<DVec3> = local.positions.iter().map(|&p| p * o.scale).collect();
     let (per_part, object_seed) = parts(o, local.triangles.len());
@@ -496,6 +644,7 @@ pub fn bake(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side: 
         wanted,
         reason,
         charts: charts.len(),
+        limit: String::new(),
         seconds: t0.elapsed().as_secs_f64(),
     }
 }
