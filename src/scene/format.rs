@@ -593,7 +593,8 @@ pub struct PatternTable {
     /// brightness and hue jitter, 0..1. **Unit:** 1. **Default:** 0.
     pub variation: Option<Number>,
     /// Texel size of the baked texture. **Unit:** m. **Default:** half the finest ground
-    /// sample distance of the scene's cameras on the object (capped at 8192 texels a side).
+    /// sample distance of the scene's cameras on the object (coarsened to keep every baked texture of the scene within 16 Mi texels together and
+    /// 8192 texels a side; `poser explain` says by how much).
     pub texel: Option<Length>,
 }
 

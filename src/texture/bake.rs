@@ -261,7 +261,9 @@ pub fn scene_plan(model: &Model) -> Result<Vec<Option<ObjectPlan>>, String> {
     };
     let mut factor = 1.0;
     let mut sized = sizes(factor);
-    let room = TEXEL_BUDGET.saturating_sub(count(&sized, true)).max(TEXEL_BUDGET / 4);
+    let room = TEXEL_BUDGET
+        .saturating_sub(count(&sized, true))
+        .max(TEXEL_BUDGET / 4);
     let mut guard = 0;
     while count(&sized, false) > room && guard < 100 {
         // Texel count goes as 1 / texel²; margins make it fall a little slower.

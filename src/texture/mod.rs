@@ -455,7 +455,10 @@ mod tests {
             };
             let (sharp, soft) = (share(texel), share(8.0 * texel));
             assert!(sharp > 0.01, "{p:?}: fine share {sharp}");
-            assert!(sharp > 1.5 * soft, "{p:?}: fine share {sharp}, band-limited {soft}");
+            assert!(
+                sharp > 1.5 * soft,
+                "{p:?}: fine share {sharp}, band-limited {soft}"
+            );
         }
     }
 
