@@ -110,6 +110,9 @@ pub struct Scene {
 const LEAF_SIZE: usize = 4;
 const BINS: usize = 16;
 
+/// A world-frame mesh of a surface, with per-vertex texture coordinates when it is textured.
+pub type UvMesh = (SurfaceId, TriMesh, Option<Vec<[f32; 2]>>);
+
 impl Scene {
     /// What the renderer needs: [`Scene::geometry`], plus the caustic volume when the model
     /// asks for caustics.
@@ -165,7 +168,7 @@ impl Scene {
     }
 
     /// Build from world-frame meshes, some with per-vertex texture coordinates.
-    pub fn from_meshes_uv(meshes: Vec<(SurfaceId, TriMesh, Option<Vec<[f32; 2]>>)>) -> Scene {
+    pub fn from_meshes_uv(meshes: Vec<UvMesh>) -> Scene {
         let mut tris = Vec::new();
         let mut surface = Vec::new();
         let mut uvs = Vec::new();
@@ -209,7 +212,7 @@ impl Scene {
         let (d11, d12, d22) = (t.e1.dot(t.e1), t.e1.dot(t.e2), t.e2.dot(t.e2));
         let (r1, r2) = (d.dot(t.e1), d.dot(t.e2));
         let den = d11 * d22 - d12 * d12;
-        if !(den > 0.0) {
+        if den.is_nan() || den <= 0.0 {
             return Some(uv[0].map(f64::from));
         }
         let b1 = (d22 * r1 - d12 * r2) / den;

@@ -492,9 +492,9 @@ fn layout(
         let c = &mut charts[id];
         for &i in t {
             let q = project(scaled[i as usize], axis);
-            for d in 0..2 {
-                c.lo[d] = c.lo[d].min(q[d]);
-                c.hi[d] = c.hi[d].max(q[d]);
+            for (d, &v) in q.iter().enumerate() {
+                c.lo[d] = c.lo[d].min(v);
+                c.hi[d] = c.hi[d].max(v);
             }
         }
         tri_chart.push(id);
@@ -538,7 +538,7 @@ pub fn plan(model: &Model, index: usize) -> Result<Option<String>, String> {
 /// Triangles per part (each rock of a boulder field is one) and the object's seed.
 fn parts(o: &Object, ntri: usize) -> (usize, u64) {
     let per_part = match o.shape {
-        Shape::Boulders { count, .. } if count > 0 && ntri % count as usize == 0 => {
+        Shape::Boulders { count, .. } if count > 0 && ntri.is_multiple_of(count as usize) => {
             ntri / count as usize
         }
         _ => ntri.max(1),

@@ -255,7 +255,7 @@ pub fn showcase() -> Model {
                 height: 1.0,
             },
             pose: Pose {
-                rotation: DMat3::from_rotation_x(1.5707963267948966),
+                rotation: DMat3::from_rotation_x(std::f64::consts::FRAC_PI_2),
                 translation: DVec3::new(0.0, -0.5, -9.9),
             },
             scale: DVec3::ONE,
