@@ -20,5 +20,6 @@ pub mod plan;
 pub mod rng;
 pub mod scene;
 pub mod sensor;
+pub mod texture;
 pub mod truth;
 pub mod units;

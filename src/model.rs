@@ -304,15 +304,78 @@ pub struct Material {
     pub albedo: Rgb,
     /// Optional procedural pattern modulating the albedo.
     pub pattern: Option<Pattern>,
+    /// Colour variation between objects (and between the rocks of a boulder field): each part's
+    /// albedo is multiplied by a brightness and hue jitter of this relative size, from the
+    /// pattern's seed (see [`crate::texture`]). 0 = none.
+    #[serde(default)]
+    pub variation: f64,
+    /// Texel size of the baked texture, m; `None`: half the finest ground sample distance of
+    /// the scene's cameras on this object (see [`crate::texture::bake`]).
+    #[serde(default)]
+    pub texel: Option<f64>,
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+impl Material {
+    /// Whether this material is baked into an image texture (every pattern but the checker,
+    /// which every backend draws exactly, or any colour variation).
+    pub fn is_baked(&self) -> bool {
+        self.variation > 0.0
+            || matches!(&self.pattern, Some(p) if !matches!(p, Pattern::Checker { .. }))
+    }
+}
+
+/// A procedural albedo pattern. Lengths in metres, measured in the object frame after scale;
+/// see `docs/textures.md` and [`crate::texture`] for the formulas.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum Pattern {
-    /// Checker of square `size` m between albedo and `albedo * contrast`.
+    /// Checker of square `size` m between albedo and `albedo * contrast` (drawn exactly, not
+    /// baked).
     Checker { size: f64, contrast: f64 },
-    /// Value noise of feature `size` m, amplitude `amount` (0..1) — texture for matching.
+    /// Two-octave value noise of feature `size` m, amplitude `amount` (0..1).
     Noise { size: f64, amount: f64, seed: u64 },
+    /// Fractal (fBm) albedo: gradient-noise octaves from `size` down to `smallest` (or to the
+    /// texel), each `gain` times the previous amplitude; relative amplitude `contrast`.
+    Fbm {
+        size: f64,
+        smallest: f64,
+        gain: f64,
+        contrast: f64,
+        seed: u64,
+    },
+    /// Sand: ripples of `wavelength` m with crests across `direction` (rad, from +x towards
+    /// +y), darker troughs of relative depth `ripple`; grains of `grain` m with relative
+    /// contrast `contrast`; fBm mottling.
+    Sand {
+        wavelength: f64,
+        direction: f64,
+        ripple: f64,
+        grain: f64,
+        contrast: f64,
+        seed: u64,
+    },
+    /// Rock: fBm mottling of feature `size` m, dark cracks of spacing `crack` m and width
+    /// `crack_width` m (Worley cell borders), mineral speckle of grain `speckle` m; relative
+    /// amplitude `contrast`.
+    Rock {
+        size: f64,
+        crack: f64,
+        crack_width: f64,
+        speckle: f64,
+        contrast: f64,
+        seed: u64,
+    },
+    /// Coral and encrusting growth: patches (colonies) of size `size` m covering a fraction
+    /// `cover` of the surface, each in one of `colors` (albedos), with polyps of `polyp` m;
+    /// bare substrate (the object's albedo) between them.
+    Coral {
+        size: f64,
+        cover: f64,
+        colors: Vec<Rgb>,
+        polyp: f64,
+        contrast: f64,
+        seed: u64,
+    },
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

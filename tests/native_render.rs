@@ -115,6 +115,8 @@ fn busy_model() -> Model {
                 amount: 0.5,
                 seed: 3,
             }),
+            variation: 0.0,
+            texel: None,
         },
     });
     m.lights.push(rig_spot(DVec3::new(0.25, 0.0, 0.0), 10.0));

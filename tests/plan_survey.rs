@@ -22,6 +22,8 @@ fn seabed(depth: f64) -> Object {
         material: Material {
             albedo: [0.5; 3],
             pattern: None,
+            variation: 0.0,
+            texel: None,
         },
     }
 }
@@ -101,6 +103,8 @@ fn coverage_sees_occlusion_under_a_box() {
         material: Material {
             albedo: [0.5; 3],
             pattern: None,
+            variation: 0.0,
+            texel: None,
         },
     });
     let site = Site::new(&m);

@@ -56,6 +56,8 @@ fn occluded_and_back_facing_points_are_left_out() {
         material: Material {
             albedo: [0.5; 3],
             pattern: None,
+            variation: 0.0,
+            texel: None,
         },
     });
     let cams: Vec<DVec3> = (0..model.poses.len())

@@ -60,6 +60,8 @@ pub fn bench_model(width: u32, height: u32) -> Model {
     let lambert = |a: [f64; 3]| Material {
         albedo: a,
         pattern: None,
+        variation: 0.0,
+        texel: None,
     };
     let boxed = |name: &str, at: DVec3, size: f64, a: [f64; 3]| Object {
         name: name.into(),

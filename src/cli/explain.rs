@@ -233,6 +233,17 @@ pub fn explain(m: &Model) -> String {
         m.objects.len(),
         m.lights.len()
     );
+    for i in 0..m.objects.len() {
+        match crate::texture::bake::plan(m, i) {
+            Ok(Some(t)) => {
+                let _ = writeln!(s, "texture of `{}`: {t}", m.objects[i].name);
+            }
+            Ok(None) => {}
+            Err(e) => {
+                let _ = writeln!(s, "texture of `{}`: {e}", m.objects[i].name);
+            }
+        }
+    }
     let _ = writeln!(
         s,
         "lateral colour (R–B) at the corners: {:.3} px",

@@ -6,6 +6,8 @@
 //! |---|---|
 //! | [`SurfaceId`] | which object or target a triangle belongs to (for its material) |
 //! | [`Bvh::of_model`] | objects via [`super::mesh::object_mesh`]; targets as planes of their printed extent |
+//! | [`Bvh::textured`] | the same, with baked objects as their baked mesh with UVs and texture ([`crate::texture::bake`]) |
+//! | [`Bvh::uv_at`] | texture coordinates at a hit |
 //! | [`Bvh::intersect`] | closest hit with `t ∈ (RAY_EPSILON, tmax)` |
 //! | [`Bvh::occluded`] | is the open segment between two points blocked? |
 //!
@@ -95,33 +97,70 @@ impl FNode {
 pub struct Bvh {
     tris: Vec<Tri>,
     surface: Vec<SurfaceId>,
+    /// Texture coordinates of each triangle's corners (empty when nothing is baked).
+    uv: Vec<[[f32; 2]; 3]>,
+    /// The baked texture of each object ([`crate::texture::bake`]), by object index.
+    pub textures: Vec<Option<std::sync::Arc<crate::texture::bake::Baked>>>,
     nodes: Vec<FNode>,
 }
 
 const LEAF_SIZE: usize = 4;
 const BINS: usize = 16;
 
+/// A world-frame mesh of a surface, with per-vertex texture coordinates when it is textured.
+pub type UvMesh = (SurfaceId, TriMesh, Option<Vec<[f32; 2]>>);
+
 impl Bvh {
-    /// Tessellate every object and target of the model and build the BVH (no lighting data:
-    /// what occlusion tests need). glTF paths are resolved against the directory of
-    /// `model.source`.
+    /// Tessellate every object and target of the model and build the BVH (no textures: what
+    /// occlusion tests need). glTF paths are resolved against the directory of `model.source`.
     pub fn of_model(model: &Model) -> Result<Bvh, String> {
+        Bvh::assemble(model, false)
+    }
+
+    /// [`Bvh::of_model`] with the baked textures ([`crate::texture::bake`]) and their UVs.
+    pub fn textured(model: &Model) -> Result<Bvh, String> {
+        Bvh::assemble(model, true)
+    }
+
+    /// The geometry, with the baked textures when `textured`.
+    fn assemble(model: &Model, textured: bool) -> Result<Bvh, String> {
         let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
         let mut meshes = Vec::new();
+        let mut textures = Vec::new();
         for (i, o) in model.objects.iter().enumerate() {
-            meshes.push((SurfaceId::Object(i as u32), object_mesh(o, base)?));
+            // Baked objects use the baked mesh (same triangles, vertices split at UV seams).
+            let baked = if textured {
+                crate::texture::bake::bake_object(model, i)?
+            } else {
+                None
+            };
+            let (mesh, uv) = match &baked {
+                Some(b) => (b.mesh.transformed(&o.pose, o.scale), Some(b.uv.clone())),
+                None => (object_mesh(o, base)?, None),
+            };
+            meshes.push((SurfaceId::Object(i as u32), mesh, uv));
+            textures.push(baked);
         }
         for (i, t) in model.targets.iter().enumerate() {
-            meshes.push((SurfaceId::Target(i as u32), target_mesh(t)));
+            meshes.push((SurfaceId::Target(i as u32), target_mesh(t), None));
         }
-        Ok(Bvh::from_meshes(meshes))
+        let mut s = Bvh::from_meshes_uv(meshes);
+        s.textures = textures;
+        Ok(s)
     }
 
     /// Build from world-frame meshes.
     pub fn from_meshes(meshes: Vec<(SurfaceId, TriMesh)>) -> Bvh {
+        Bvh::from_meshes_uv(meshes.into_iter().map(|(id, m)| (id, m, None)).collect())
+    }
+
+    /// Build from world-frame meshes, some with per-vertex texture coordinates.
+    pub fn from_meshes_uv(meshes: Vec<UvMesh>) -> Bvh {
         let mut tris = Vec::new();
         let mut surface = Vec::new();
-        for (id, m) in &meshes {
+        let mut uvs = Vec::new();
+        let any_uv = meshes.iter().any(|m| m.2.is_some());
+        for (id, m, uv) in &meshes {
             for t in &m.triangles {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
                 let e1 = b - a;
@@ -131,15 +170,44 @@ impl Bvh {
                 }
                 tris.push(Tri { v0: a, e1, e2 });
                 surface.push(*id);
+                if any_uv {
+                    uvs.push(match uv {
+                        Some(uv) => t.map(|i| uv[i as usize]),
+                        None => [[0.0; 2]; 3],
+                    });
+                }
             }
         }
         let mut s = Bvh {
             tris,
             surface,
+            uv: uvs,
+            textures: Vec::new(),
             nodes: Vec::new(),
         };
         s.build_bvh();
         s
+    }
+
+    /// Texture coordinates at a hit (barycentric interpolation of the triangle's corner UVs);
+    /// `None` when the scene has none.
+    pub fn uv_at(&self, h: &Hit) -> Option<[f64; 2]> {
+        let uv = self.uv.get(h.triangle as usize)?;
+        let t = &self.tris[h.triangle as usize];
+        let d = h.point - t.v0;
+        let (d11, d12, d22) = (t.e1.dot(t.e1), t.e1.dot(t.e2), t.e2.dot(t.e2));
+        let (r1, r2) = (d.dot(t.e1), d.dot(t.e2));
+        let den = d11 * d22 - d12 * d12;
+        if den.is_nan() || den <= 0.0 {
+            return Some(uv[0].map(f64::from));
+        }
+        let b1 = (d22 * r1 - d12 * r2) / den;
+        let b2 = (d11 * r2 - d12 * r1) / den;
+        let f = |k: usize| {
+            let (a, b, c) = (uv[0][k] as f64, uv[1][k] as f64, uv[2][k] as f64);
+            a + b1 * (b - a) + b2 * (c - a)
+        };
+        Some([f(0), f(1)])
     }
 
     /// Number of (non-degenerate) triangles.
@@ -332,6 +400,9 @@ impl Bvh {
         }
         self.tris = order.iter().map(|&i| self.tris[i as usize]).collect();
         self.surface = order.iter().map(|&i| self.surface[i as usize]).collect();
+        if !self.uv.is_empty() {
+            self.uv = order.iter().map(|&i| self.uv[i as usize]).collect();
+        }
         self.nodes = nodes.iter().map(FNode::from_node).collect();
     }
 

@@ -579,6 +579,8 @@ pub fn pattern_factor(pattern: &Pattern, p: DVec3) -> f64 {
             let n = 0.6 * value_noise3(seed, q) + 0.4 * value_noise3(mix64(seed), q * 2.7);
             (1.0 + amount * n).max(0.0)
         }
+        // The other patterns are baked into image textures (`crate::texture::bake`).
+        _ => 1.0,
     }
 }
 

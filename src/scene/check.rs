@@ -28,6 +28,43 @@ pub fn positive(cx: &mut Cx, t: &Tab, key: &str, v: f64, unit: &str) {
     }
 }
 
+/// A value ≥ 0 (0 switches a feature off).
+pub fn non_negative(cx: &mut Cx, t: &Tab, key: &str, v: f64, unit: &str) {
+    if !(v >= 0.0) || !v.is_finite() {
+        cx.push(
+            Diagnostic::error("E0048", format!("`{}` must not be negative", t.full(key)))
+                .label(
+                    t.span_of(key),
+                    format!("{v}{}{unit}", if unit.is_empty() { "" } else { " " }),
+                )
+                .help(format!("give `{key}` ≥ 0 (0 switches it off)")),
+        );
+    }
+}
+
+/// A value in [lo, hi].
+pub fn within(cx: &mut Cx, t: &Tab, key: &str, v: f64, lo: f64, hi: f64) {
+    if !(lo..=hi).contains(&v) {
+        cx.push(
+            Diagnostic::error(
+                "E0051",
+                format!(
+                    "`{}` must be between {} and {}",
+                    t.full(key),
+                    num(lo),
+                    num(hi)
+                ),
+            )
+            .label(t.span_of(key), format!("{} is outside", num(v)))
+            .help(format!(
+                "give `{key}` a value in [{}, {}]",
+                num(lo),
+                num(hi)
+            )),
+        );
+    }
+}
+
 pub fn at_least(cx: &mut Cx, t: &Tab, key: &str, v: u32, min: u32) {
     if v < min {
         cx.push(

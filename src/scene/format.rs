@@ -539,21 +539,65 @@ pub enum ShapeKind {
     Boulders,
 }
 
-/// `pattern = { … }` — procedural texture modulating an object's albedo.
+/// `pattern = { … }` — procedural texture modulating an object's albedo. Lengths are physical
+/// (object frame, after scale). Every pattern but `checker` is baked into an image texture
+/// whose texels are half the finest ground sample distance of the cameras on the object, so
+/// that texture exists down to the pixel; the same texture is used by every backend. See
+/// `docs/textures.md`.
 #[derive(JsonSchema)]
 #[schemars(deny_unknown_fields)]
 pub struct PatternTable {
-    /// Pattern kind: `"checker"` or `"noise"`. **Default:** `"noise"`.
+    /// Pattern kind: `"checker"`, `"noise"`, `"fbm"` (fractal albedo), `"sand"` (ripples and
+    /// grains), `"rock"` (mottling, cracks, speckle) or `"coral"` (patchy growth colours).
+    /// **Default:** `"noise"`.
     #[serde(rename = "type")]
     pub kind: Option<String>,
-    /// Checker square / noise feature size. **Unit:** m. **Default:** 0.1 m.
+    /// Checker square; noise feature; fbm largest feature; rock mottling; coral colony size.
+    /// **Unit:** m. **Default:** 0.1 m (checker, noise), 1 m (fbm), 0.5 m (rock), 0.3 m (coral).
     pub size: Option<Length>,
-    /// Checker: dark squares are albedo × contrast. **Unit:** 1. **Default:** 0.5.
+    /// Checker: dark squares are albedo × contrast (**Default:** 0.5). Other patterns: RMS
+    /// relative albedo variation, 0..1 (**Default:** 0.3 fbm, 0.2 sand, 0.25 rock, 0.2 coral).
+    /// **Unit:** 1.
     pub contrast: Option<Number>,
     /// Noise amplitude (0..1). **Unit:** 1. **Default:** 0.5.
     pub amount: Option<Number>,
-    /// Noise seed. **Default:** 0.
+    /// Random seed of the pattern. **Default:** 0.
     pub seed: Option<u64>,
+    /// Fbm: smallest feature (0: down to the texel). **Unit:** m. **Default:** 0.
+    pub smallest: Option<Length>,
+    /// Fbm: amplitude ratio of successive octaves, 0..1 (0.5: smooth, 0.8: rough).
+    /// **Unit:** 1. **Default:** 0.7.
+    pub gain: Option<Number>,
+    /// Sand: ripple wavelength (0: no ripples). **Unit:** m. **Default:** 0.1 m.
+    pub wavelength: Option<Length>,
+    /// Sand: direction of the ripples' wave vector (across the crests), from +x towards +y.
+    /// **Unit:** rad. **Default:** 0.
+    pub direction: Option<Angle>,
+    /// Sand: relative albedo swing between ripple troughs (darker) and crests, 0..1.
+    /// **Unit:** 1. **Default:** 0.15.
+    pub ripple: Option<Number>,
+    /// Sand: grain size. **Unit:** m. **Default:** 0.5 mm.
+    pub grain: Option<Length>,
+    /// Rock: crack spacing (0: no cracks). **Unit:** m. **Default:** 0.2 m.
+    pub crack: Option<Length>,
+    /// Rock: crack width. **Unit:** m. **Default:** 3 mm.
+    pub crack_width: Option<Length>,
+    /// Rock: mineral speckle grain size (0: none). **Unit:** m. **Default:** 2 mm.
+    pub speckle: Option<Length>,
+    /// Coral: fraction of the surface covered by growth, 0..1. **Unit:** 1. **Default:** 0.6.
+    pub cover: Option<Number>,
+    /// Coral: growth colours, a list of albedos `[r, g, b]`. **Default:** pink-purple, ochre,
+    /// olive and pale.
+    pub colors: Option<Vec<PerChannel<Number>>>,
+    /// Coral: polyp size (0: none). **Unit:** m. **Default:** 5 mm.
+    pub polyp: Option<Length>,
+    /// Colour variation between objects and between the rocks of a boulder field: relative
+    /// brightness and hue jitter, 0..1. **Unit:** 1. **Default:** 0.
+    pub variation: Option<Number>,
+    /// Texel size of the baked texture. **Unit:** m. **Default:** half the finest ground
+    /// sample distance of the scene's cameras on the object (coarsened to keep every baked texture of the scene within 16 Mi texels together and
+    /// 8192 texels a side; `poser explain` says by how much).
+    pub texel: Option<Length>,
 }
 
 /// `[[targets]]` — a calibration target, scale bar or GSD target with known 3D points (ids
@@ -1268,6 +1312,12 @@ mod tests {
                 "objects.0.shape=\"cylinder\"",
                 "objects.0.pattern={type = \"checker\"}",
             ],
+            &[
+                "objects.0.pattern={type = \"fbm\"}",
+                "objects.1.pattern={type = \"noise\"}",
+            ],
+            &["objects.0.pattern={type = \"rock\"}"],
+            &["objects.0.pattern={type = \"coral\", colors = [[0.5, 0.2, 0.3]]}"],
             &["targets.0.type=\"checkerboard\""],
             &["targets.0.type=\"circle_grid\""],
             &["targets.0.type=\"coded\""],

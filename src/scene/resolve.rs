@@ -1383,29 +1383,131 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
                 .help("albedo is the fraction of light reflected: 0.05 black ink, 0.9 white paper"),
         );
     }
+    let mut variation = 0.0;
+    let mut texel = None;
     let pattern = o.get("pattern").map(|n| {
         let mut p = Tab::open(cx, Some(n), &o.full("pattern"), n.span);
         let ty = p
-            .choice(cx, "type", &["checker", "noise"])
+            .choice(
+                cx,
+                "type",
+                &["checker", "noise", "fbm", "sand", "rock", "coral"],
+            )
             .unwrap_or("noise");
-        let size = p.f64(cx, "size", Dim::Length, 0.1);
-        check::positive(cx, &p, "size", size, "m");
-        let r = if ty == "checker" {
-            Pattern::Checker {
-                size,
-                contrast: p.f64(cx, "contrast", Dim::Number, 0.5),
-            }
-        } else {
-            Pattern::Noise {
-                size,
-                amount: p.f64(cx, "amount", Dim::Number, 0.5),
-                seed: p.opt_u64(cx, "seed").unwrap_or(0),
-            }
+        let seed = |cx: &mut Cx, p: &mut Tab| p.opt_u64(cx, "seed").unwrap_or(0);
+        // A length ≥ 0 (0 switches the feature off).
+        let len0 = |cx: &mut Cx, p: &mut Tab, key: &'static str, default: f64| {
+            let v = p.f64(cx, key, Dim::Length, default);
+            check::non_negative(cx, p, key, v, "m");
+            v
         };
+        let len = |cx: &mut Cx, p: &mut Tab, key: &'static str, default: f64| {
+            let v = p.f64(cx, key, Dim::Length, default);
+            check::positive(cx, p, key, v, "m");
+            v
+        };
+        let fraction = |cx: &mut Cx, p: &mut Tab, key: &'static str, default: f64| {
+            let v = p.f64(cx, key, Dim::Number, default);
+            check::within(cx, p, key, v, 0.0, 1.0);
+            v
+        };
+        let r = match ty {
+            "checker" => Pattern::Checker {
+                size: len(cx, &mut p, "size", 0.1),
+                contrast: p.f64(cx, "contrast", Dim::Number, 0.5),
+            },
+            "fbm" => Pattern::Fbm {
+                size: len(cx, &mut p, "size", 1.0),
+                smallest: len0(cx, &mut p, "smallest", 0.0),
+                gain: fraction(cx, &mut p, "gain", 0.7),
+                contrast: fraction(cx, &mut p, "contrast", 0.3),
+                seed: seed(cx, &mut p),
+            },
+            "sand" => Pattern::Sand {
+                wavelength: len0(cx, &mut p, "wavelength", 0.1),
+                direction: p.f64(cx, "direction", Dim::Angle, 0.0),
+                ripple: fraction(cx, &mut p, "ripple", 0.15),
+                grain: len0(cx, &mut p, "grain", 0.0005),
+                contrast: fraction(cx, &mut p, "contrast", 0.2),
+                seed: seed(cx, &mut p),
+            },
+            "rock" => Pattern::Rock {
+                size: len(cx, &mut p, "size", 0.5),
+                crack: len0(cx, &mut p, "crack", 0.2),
+                crack_width: len0(cx, &mut p, "crack_width", 0.003),
+                speckle: len0(cx, &mut p, "speckle", 0.002),
+                contrast: fraction(cx, &mut p, "contrast", 0.25),
+                seed: seed(cx, &mut p),
+            },
+            "coral" => {
+                let size = len(cx, &mut p, "size", 0.3);
+                let cover = fraction(cx, &mut p, "cover", 0.6);
+                let colors = coral_colors(cx, &mut p);
+                Pattern::Coral {
+                    size,
+                    cover,
+                    colors,
+                    polyp: len0(cx, &mut p, "polyp", 0.005),
+                    contrast: fraction(cx, &mut p, "contrast", 0.2),
+                    seed: seed(cx, &mut p),
+                }
+            }
+            _ => Pattern::Noise {
+                size: len(cx, &mut p, "size", 0.1),
+                amount: p.f64(cx, "amount", Dim::Number, 0.5),
+                seed: seed(cx, &mut p),
+            },
+        };
+        if ty != "checker" {
+            variation = fraction(cx, &mut p, "variation", 0.0);
+            texel = p.opt_f64(cx, "texel", Dim::Length);
+            if let Some(t) = texel {
+                check::positive(cx, &p, "texel", t, "m");
+            }
+        }
         p.finish_as(cx, Some(&format!("a {ty} pattern")));
         r
     });
-    Material { albedo, pattern }
+    Material {
+        albedo,
+        pattern,
+        variation,
+        texel,
+    }
+}
+
+/// `colors = [[r, g, b], …]` of a coral pattern: albedos in [0, 1]; empty = the default palette.
+fn coral_colors(cx: &mut Cx, p: &mut Tab) -> Vec<crate::model::Rgb> {
+    let full = p.full("colors");
+    let Some(n) = p.get("colors") else {
+        return vec![];
+    };
+    let Val::Array(items) = &n.val else {
+        cx.push(super::reader::type_error(
+            n,
+            &full,
+            "a list of [r, g, b] albedos",
+            &n.val,
+        ));
+        return vec![];
+    };
+    let mut out = Vec::new();
+    for (i, item) in items.iter().enumerate() {
+        let Some(v) = super::reader::vector(cx, item, Dim::Number, &format!("{full}.{i}"), Some(3))
+        else {
+            continue;
+        };
+        if v.iter().any(|a| !(0.0..=1.0).contains(a)) {
+            cx.push(
+                Diagnostic::error("E0290", "albedo must be between 0 and 1")
+                    .label(item.span, "outside [0, 1]")
+                    .help("each colour is an albedo `[r, g, b]` with values in [0, 1]"),
+            );
+            continue;
+        }
+        out.push([v[0], v[1], v[2]]);
+    }
+    out
 }
 
 fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {

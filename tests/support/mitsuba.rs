@@ -126,6 +126,8 @@ pub fn showcase() -> Model {
             material: Material {
                 albedo: [0.2, 0.2, 0.2],
                 pattern: None,
+                variation: 0.0,
+                texel: None,
             },
         },
         Object {
@@ -141,6 +143,8 @@ pub fn showcase() -> Model {
             material: Material {
                 albedo: [0.6, 0.5, 0.1],
                 pattern: None,
+                variation: 0.0,
+                texel: None,
             },
         },
         Object {
@@ -157,6 +161,8 @@ pub fn showcase() -> Model {
             material: Material {
                 albedo: [0.3, 0.3, 0.3],
                 pattern: None,
+                variation: 0.0,
+                texel: None,
             },
         },
     ];

@@ -108,6 +108,8 @@ pub fn plane(name: &str, z: f64, size: f64, albedo: Rgb) -> Object {
         material: Material {
             albedo,
             pattern: None,
+            variation: 0.0,
+            texel: None,
         },
     }
 }

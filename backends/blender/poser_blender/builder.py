@@ -155,8 +155,10 @@ def _diffuse_material(name, material, scale=(1.0, 1.0, 1.0)):
     d.inputs["Roughness"].default_value = 0.0
     albedo = [float(a) for a in material["albedo"]]
     d.inputs["Color"].default_value = (*albedo, 1.0)
+    # Only the checker reaches here: every other pattern is baked by poser into an image
+    # texture (objects with `shape.texture`, see _texture_material).
     pattern = material.get("pattern")
-    if pattern:
+    if pattern and pattern["type"] == "checker":
         tc = nt.nodes.new("ShaderNodeTexCoord")
         mp = nt.nodes.new("ShaderNodeMapping")
         mp.inputs["Scale"].default_value = tuple(float(s) for s in scale)
@@ -172,40 +174,21 @@ def _diffuse_material(name, material, scale=(1.0, 1.0, 1.0)):
             ck.inputs["Color2"].default_value = (*albedo, 1.0)
             nt.links.new(mp.outputs[0], ck.inputs["Vector"])
             nt.links.new(ck.outputs["Color"], d.inputs["Color"])
-        elif pattern["type"] == "noise":
-            nz = nt.nodes.new("ShaderNodeTexNoise")
-            nz.noise_dimensions = "4D"
-            nz.inputs["Scale"].default_value = 1.0 / float(pattern["size"])
-            nz.inputs["W"].default_value = float(pattern.get("seed", 0) % 1000)
-            mix = nt.nodes.new("ShaderNodeMix")
-            mix.data_type = "RGBA"
-            amount = float(pattern["amount"])
-            mix.inputs["Factor"].default_value = 1.0
-            nt.links.new(mp.outputs[0], nz.inputs["Vector"])
-            # albedo * (1 - amount + 2 amount * noise): mean albedo, relative amplitude amount.
-            mul = nt.nodes.new("ShaderNodeMath")
-            mul.operation = "MULTIPLY_ADD"
-            mul.inputs[1].default_value = 2.0 * amount
-            mul.inputs[2].default_value = 1.0 - amount
-            nt.links.new(nz.outputs["Fac"], mul.inputs[0])
-            mix.blend_type = "MULTIPLY"
-            mix.inputs[6].default_value = (*albedo, 1.0)
-            comb = nt.nodes.new("ShaderNodeCombineColor")
-            for i in range(3):
-                nt.links.new(mul.outputs[0], comb.inputs[i])
-            nt.links.new(comb.outputs[0], mix.inputs[7])
-            nt.links.new(mix.outputs[2], d.inputs["Color"])
     nt.links.new(d.outputs[0], out.inputs["Surface"])
     return mat
 
 
-def _texture_material(name, path):
+def _texture_material(name, path, interpolation="Closest"):
+    """Diffuse BSDF whose colour is an image of linear values (Non-Color) at the mesh's UVs.
+    Baked object textures use "Linear" with "EXTEND": bilinear between texel centres, edges
+    repeated, as Mitsuba's bitmap (bilinear, clamp) and poser's native sampler."""
     mat = bpy.data.materials.new(name)
     nt, out = _nodes(mat)
     d = nt.nodes.new("ShaderNodeBsdfDiffuse")
     d.inputs["Roughness"].default_value = 0.0
     tex = nt.nodes.new("ShaderNodeTexImage")
-    tex.interpolation = "Closest"
+    tex.interpolation = interpolation
+    tex.extension = "EXTEND"
     img = bpy.data.images.load(path, check_existing=True)
     img.colorspace_settings.name = "Non-Color"
     tex.image = img
@@ -763,7 +746,11 @@ def _build_objects(built, coll, desc, base_dir):
                 raise ValueError(f"object {ob['name']!r}: shape {kind!r} has no Blender form")
             bm.to_mesh(me)
             bm.free()
-        me.materials.append(_diffuse_material(name, ob["material"], scale))
+        if shape.get("texture"):
+            path = os.path.join(base_dir, shape["texture"])
+            me.materials.append(_texture_material(name, path, "Linear"))
+        else:
+            me.materials.append(_diffuse_material(name, ob["material"], scale))
         obj = _new_object(coll, name, me)
         obj.matrix_world = _matrix(ob["matrix"])
 

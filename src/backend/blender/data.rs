@@ -15,7 +15,7 @@
 //! | `bounds` | world box holding everything, with a margin: the extent of scene-filling water |
 //! | `sun` | `direction` (propagation), `irradiance` (W/m² normal to it), `in_water`, `angle`, `caustics` |
 //! | `lights[]` | `name`, `mount`, `type` + the model's parameters; poses as 4×4 |
-//! | `objects[]` | `name`, `shape` (primitive or `{type: ply, path}`), `scale`, `matrix` (world, scale included), `material` |
+//! | `objects[]` | `name`, `shape` (primitive or `{type: ply, path}`; baked objects: `{type: ply, path, texture}`, the PLY with `s`, `t` and the PNG of linear albedo), `scale`, `matrix` (world, scale included), `material` |
 //! | `targets[]` | printed targets: `name`, `texture` (PNG path), `width`, `height`, `origin`, `matrix`; 3D test objects: `name`, `kind` = `"test_object"`, `steps[]` (`size`, `center`: boxes in the target frame), `disks[]` (`id`, `center`, `radius`), `white`, `black` (reflectances), `matrix` |
 //!
 //! Matrices are row-major 4×4 nested arrays.
@@ -173,31 +173,56 @@ pub fn describe(model: &Model) -> Result<Description, String> {
 
     let mut objects = Vec::new();
     for (i, o) in model.objects.iter().enumerate() {
-        let shape = match &o.shape {
-            Shape::Plane { .. } | Shape::Box { .. } => {
-                serde_json::to_value(&o.shape).map_err(|e| e.to_string())?
-            }
-            Shape::Sphere { .. }
-            | Shape::Cylinder { .. }
-            | Shape::Mesh { .. }
-            | Shape::Seabed { .. }
-            | Shape::Boulders { .. } => {
-                // Tessellated by the shared mesh module (same triangles as the native
-                // renderer), in the object frame; pose and scale stay in `matrix`.
+        let baked = crate::texture::bake::bake_object(model, i)?;
+        let shape = match (&o.shape, baked) {
+            (_, Some(b)) => {
+                // Baked texture (crate::texture::bake): the object-frame mesh with `s`, `t`
+                // (t = 1 - v: Blender's image rows run bottom-up) and the linear 8-bit PNG.
+                if b.coarsened() {
+                    eprintln!("warning: object `{}`: texture {}", o.name, b.summary());
+                }
                 let path = format!("assets/object_{i}.ply");
-                let mesh = crate::geometry::mesh::shape_mesh(&o.shape, &base_dir)
-                    .map_err(|e| format!("object `{}`: {e}", o.name))?;
-                let bytes = crate::geometry::mesh::ply_bytes(
-                    &mesh,
-                    crate::geometry::mesh::PlyFormat::BinaryLittleEndian,
-                );
-                let smooth = matches!(o.shape, Shape::Sphere { .. });
+                let texture = format!("assets/object_{i}.png");
                 assets.push(Asset {
                     path: path.clone(),
-                    bytes,
+                    bytes: crate::texture::bake::ply_bytes(&b.mesh, &b.uv, true),
                 });
-                json!({"type": "ply", "path": path, "smooth": smooth})
+                assets.push(Asset {
+                    path: texture.clone(),
+                    bytes: b
+                        .texture
+                        .png()
+                        .map_err(|e| format!("object `{}`: {e}", o.name))?,
+                });
+                json!({"type": "ply", "path": path, "smooth": false, "texture": texture})
             }
+            (shape, None) => match shape {
+                Shape::Plane { .. } | Shape::Box { .. } => {
+                    serde_json::to_value(&o.shape).map_err(|e| e.to_string())?
+                }
+                Shape::Sphere { .. }
+                | Shape::Cylinder { .. }
+                | Shape::Mesh { .. }
+                | Shape::Seabed { .. }
+                | Shape::Boulders { .. } => {
+                    // Tessellated by the shared mesh module (same triangles as the native
+                    // renderer), in the object frame; pose and scale stay in `matrix`.
+                    let path = format!("assets/object_{i}.ply");
+                    let mesh = crate::geometry::mesh::shape_mesh(&o.shape, &base_dir)
+                        .map_err(|e| format!("object `{}`: {e}", o.name))?;
+                    let bytes =
+                        crate::geometry::mesh::ply_bytes(
+                        &mesh,
+                        crate::geometry::mesh::PlyFormat::BinaryLittleEndian,
+                    );
+                    let smooth = matches!(o.shape, Shape::Sphere { .. });
+                    assets.push(Asset {
+                        path: path.clone(),
+                        bytes,
+                    });
+                    json!({"type": "ply", "path": path, "smooth": smooth})
+                }
+            },
         };
         let m = pose_mat(&o.pose) * DMat4::from_scale(o.scale);
         objects.push(json!({

@@ -92,6 +92,11 @@ impl<'a> Integrator<'a> {
         match h.surface {
             SurfaceId::Object(i) => {
                 let o = &self.model.objects[i as usize];
+                if let Some(Some(b)) = self.scene.textures.get(i as usize)
+                    && let Some([u, v]) = self.scene.uv_at(h)
+                {
+                    return DVec3::from_array(b.texture.sample(u, v));
+                }
                 let a = DVec3::from_array(o.material.albedo);
                 match &o.material.pattern {
                     Some(p) => {

@@ -28,7 +28,7 @@ impl Scene {
     /// What the renderer needs: the model's [`Bvh`], plus the caustic volume when the model asks
     /// for caustics.
     pub fn build(model: &Model) -> Result<Scene, String> {
-        Ok(Scene::with_bvh(model, Bvh::of_model(model)?))
+        Ok(Scene::with_bvh(model, Bvh::textured(model)?))
     }
 
     /// The renderer's scene around an already built BVH of `model`.
