@@ -69,8 +69,18 @@ fn obliques_and_a_centred_dome_shrink_the_bowl_several_times() {
     let obl = run("flat_port_deformation_obliques", &[], &opts);
     let dome = run("flat_port_deformation_dome", &[], &opts);
     let z = |e: &Evaluation| e.tie_errors.rms[2];
-    assert!(z(&obl) * 3.0 < z(&flat), "obliques {} flat {}", z(&obl), z(&flat));
-    assert!(z(&dome) * 10.0 < z(&flat), "dome {} flat {}", z(&dome), z(&flat));
+    assert!(
+        z(&obl) * 3.0 < z(&flat),
+        "obliques {} flat {}",
+        z(&obl),
+        z(&flat)
+    );
+    assert!(
+        z(&dome) * 10.0 < z(&flat),
+        "dome {} flat {}",
+        z(&dome),
+        z(&flat)
+    );
 }
 
 #[test]
@@ -113,20 +123,45 @@ fn the_command_writes_its_report_and_refuses_bad_input_without_writing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("eval");
     let ok = poser()
-        .args(["evaluate", "scenarios/lessons/flat_port_deformation.toml", "-o"])
+        .args([
+            "evaluate",
+            "scenarios/lessons/flat_port_deformation.toml",
+            "-o",
+        ])
         .arg(&out)
-        .args(["--set", "network.length=6", "--set", "network.width=4", "--quiet"])
+        .args([
+            "--set",
+            "network.length=6",
+            "--set",
+            "network.width=4",
+            "--quiet",
+        ])
         .output()
         .unwrap();
-    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
-    for f in ["report.json", "report.md", "errors.csv", "deformation.png", "profile.svg"] {
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    for f in [
+        "report.json",
+        "report.md",
+        "errors.csv",
+        "deformation.png",
+        "profile.svg",
+    ] {
         let p = out.join(f);
         assert!(p.metadata().map(|m| m.len() > 100).unwrap_or(false), "{f}");
     }
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["registered"], report["images"]);
-    assert!(report["colmap"]["colmap"].as_str().unwrap().contains("COLMAP"));
+    assert!(
+        report["colmap"]["colmap"]
+            .as_str()
+            .unwrap()
+            .contains("COLMAP")
+    );
     let csv = std::fs::read_to_string(out.join("errors.csv")).unwrap();
     assert!(csv.starts_with("id,kind,label,x,y,z,dx,dy,dz,track\n"));
     assert!(csv.lines().count() > 100);
@@ -134,27 +169,49 @@ fn the_command_writes_its_report_and_refuses_bad_input_without_writing() {
     // A network that sees nothing twice: a clear message, nothing written.
     let bad = dir.path().join("bad");
     let r = poser()
-        .args(["evaluate", "scenarios/lessons/flat_port_deformation.toml", "-o"])
+        .args([
+            "evaluate",
+            "scenarios/lessons/flat_port_deformation.toml",
+            "-o",
+        ])
         .arg(&bad)
-        .args(["--set", "network.length=0", "--set", "network.width=0", "--quiet"])
+        .args([
+            "--set",
+            "network.length=0",
+            "--set",
+            "network.width=0",
+            "--quiet",
+        ])
         .output()
         .unwrap();
     assert_eq!(r.status.code(), Some(1));
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(err.contains("help:"), "{err}");
-    assert!(!bad.exists(), "a failed evaluation must not leave an output directory");
+    assert!(
+        !bad.exists(),
+        "a failed evaluation must not leave an output directory"
+    );
 
     // No pycolmap: say how to get it.
     let r = poser()
         .env("POSER_PYTHON", "/usr/bin/python3")
         .args(["evaluate", "scenarios/lessons/in_air.toml", "-o"])
         .arg(dir.path().join("nopy"))
-        .args(["--set", "network.length=4", "--set", "network.width=3", "--quiet"])
+        .args([
+            "--set",
+            "network.length=4",
+            "--set",
+            "network.width=3",
+            "--quiet",
+        ])
         .output()
         .unwrap();
     assert_eq!(r.status.code(), Some(1));
     let err = String::from_utf8_lossy(&r.stderr);
-    assert!(err.contains("pycolmap") && err.contains("backends/setup.sh"), "{err}");
+    assert!(
+        err.contains("pycolmap") && err.contains("backends/setup.sh"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -166,7 +223,15 @@ fn images_mode_registers_every_image_of_a_small_textured_survey() {
     let r = poser()
         .args(["evaluate", "scenarios/lessons/in_air.toml", "-o"])
         .arg(&out)
-        .args(["--mode", "images", "--scale", "0.07", "--samples", "4", "--quiet"])
+        .args([
+            "--mode",
+            "images",
+            "--scale",
+            "0.07",
+            "--samples",
+            "4",
+            "--quiet",
+        ])
         .args(["--set", "network.length=2", "--set", "network.width=1.5"])
         .args([
             "--set",
@@ -177,7 +242,10 @@ fn images_mode_registers_every_image_of_a_small_textured_survey() {
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
-    eprintln!("{}", std::fs::read_to_string(out.join("report.md")).unwrap());
+    eprintln!(
+        "{}",
+        std::fs::read_to_string(out.join("report.md")).unwrap()
+    );
     assert!(report["images"].as_u64().unwrap() >= 15);
     assert_eq!(report["registered"], report["images"]);
     assert!(report["reprojection_error"].as_f64().unwrap() < 1.0);

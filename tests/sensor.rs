@@ -507,7 +507,9 @@ fn the_native_variance_estimate_agrees_with_independent_renders() {
     let mut renders = Vec::new();
     for seed in 0..k {
         model.render.seed = 1000 + seed;
-        renders.push(poser::backend::native::render_image(&model, &scene, 0, 0, samples, None).unwrap());
+        renders.push(
+            poser::backend::native::render_image(&model, &scene, 0, 0, samples, None).unwrap(),
+        );
     }
     let n = renders[0].rgb.len();
     let (mut empirical, mut estimated) = (0.0, 0.0);

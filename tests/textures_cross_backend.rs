@@ -44,7 +44,8 @@ fn render(backend: &str, model: &Model, dir: &Path, samples: u32) -> LinearImage
         poses: None,
         progress: false,
     };
-    poser::compare::render_with(backend, model, dir, &opts)
+    poser::backend::Backend::parse(backend)
+        .and_then(|b| b.render(model, dir, &opts))
         .unwrap_or_else(|e| panic!("{backend}: {e}"));
     LinearImage::read(&dir.join(format!("{}.exr", model.image_name(0, 0)))).unwrap()
 }

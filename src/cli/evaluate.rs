@@ -161,8 +161,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         ev.points,
         ev.mean_track_length,
         ev.reprojection_error,
-        cam.map(|c| format!(", focal {:+.2} % against the water-equivalent truth", 100.0 * c.focal_error))
-            .unwrap_or_default()
+        cam.map(|c| format!(
+            ", focal {:+.2} % against the water-equivalent truth",
+            100.0 * c.focal_error
+        ))
+        .unwrap_or_default()
     );
     eprintln!(
         "tie-point RMS error X/Y/Z {:.2}/{:.2}/{:.2} mm{}; report in {}",

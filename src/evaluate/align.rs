@@ -151,9 +151,7 @@ impl Bowl {
         let x0 = samples.iter().map(|s| s.0).sum::<f64>() / n as f64;
         let y0 = samples.iter().map(|s| s.1).sum::<f64>() / n as f64;
         let terms = |x: f64, y: f64| [1.0, x, y, x * x, x * y, y * y];
-        let a = DMatrix::from_fn(n, 6, |i, j| {
-            terms(samples[i].0 - x0, samples[i].1 - y0)[j]
-        });
+        let a = DMatrix::from_fn(n, 6, |i, j| terms(samples[i].0 - x0, samples[i].1 - y0)[j]);
         let b = DVector::from_fn(n, |i, _| samples[i].2);
         let sol = a.clone().svd(true, true).solve(&b, 1e-12).ok()?;
         let fitted = &a * &sol;

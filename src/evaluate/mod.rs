@@ -23,11 +23,11 @@ pub mod colmap;
 pub mod observe;
 pub mod report;
 
+use crate::geometry::bvh::target_mesh;
 use crate::geometry::mesh::{TriMesh, object_mesh};
+use crate::geometry::{Bvh as Scene, Ray, SurfaceId};
 use crate::model::Model;
 use crate::optics::project::Projector;
-use crate::geometry::bvh::target_mesh;
-use crate::geometry::{Bvh as Scene, Ray, SurfaceId};
 use crate::rng::SplitMix64;
 use align::{AxisStats, Bowl, Similarity};
 use colmap::{CameraModel, Reconstruction, Request, RequestCamera, RequestImage, RequestPoint};
@@ -535,8 +535,8 @@ pub fn evaluate_images(
         ));
     }
     let (_, scene) = surfaces(model)?;
-    let abs_dir: PathBuf = std::fs::canonicalize(image_dir)
-        .map_err(|e| format!("{}: {e}", image_dir.display()))?;
+    let abs_dir: PathBuf =
+        std::fs::canonicalize(image_dir).map_err(|e| format!("{}: {e}", image_dir.display()))?;
     let work = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
     let req = Request {
         job: "images",
@@ -568,8 +568,10 @@ pub fn evaluate_images(
     };
     progress("features, matching and mapping (COLMAP)", 0, 0);
     let rec = colmap::run(&req, work.path())?;
-    let names: HashMap<String, (usize, usize)> =
-        files.iter().map(|(f, p, c)| (f.clone(), (*p, *c))).collect();
+    let names: HashMap<String, (usize, usize)> = files
+        .iter()
+        .map(|(f, p, c)| (f.clone(), (*p, *c)))
+        .collect();
     // Align on camera centres plus a point 1 unit along each camera's axes (the poses'
     // orientation fixes the roll about a single strip's line).
     let mut from = Vec::new();

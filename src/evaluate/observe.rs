@@ -14,11 +14,11 @@
 //! the point to where its ray leaves the port. A feature seen at more than
 //! [`MAX_INCIDENCE_DEG`] from its surface normal is not matched by real software and is left out.
 
+use crate::geometry::Bvh as Scene;
 use crate::geometry::mesh::TriMesh;
 use crate::model::Model;
 use crate::optics::NoSolution;
 use crate::optics::project::Projector;
-use crate::geometry::Bvh as Scene;
 use crate::rng::SplitMix64;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -158,8 +158,7 @@ pub fn observe(
             // Cheap cull: in front of the camera, inside a cone wider than any port's field.
             let cam = &model.cameras[ci];
             let half_diag =
-                ((cam.width as f64 / cam.fx).powi(2) + (cam.height as f64 / cam.fy).powi(2))
-                    .sqrt()
+                ((cam.width as f64 / cam.fx).powi(2) + (cam.height as f64 / cam.fy).powi(2)).sqrt()
                     * 0.5;
             let cone = (half_diag.atan() * 1.2 + 0.05).min(std::f64::consts::PI);
             let cos_cone = cone.cos();

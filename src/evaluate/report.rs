@@ -78,7 +78,11 @@ pub fn markdown(ev: &Evaluation) -> String {
         "| camera | f in air | f truth (water-equiv.) | f recovered | focal error | cx, cy truth | cx, cy recovered | other |\n|---|---|---|---|---|---|---|---|"
     );
     for c in &ev.cameras {
-        let other: Vec<String> = c.extra.iter().map(|(n, v)| format!("{n} = {v:.4e}")).collect();
+        let other: Vec<String> = c
+            .extra
+            .iter()
+            .map(|(n, v)| format!("{n} = {v:.4e}"))
+            .collect();
         let _ = writeln!(
             s,
             "| {} | {:.1} px | {:.1} × {:.1} px (at {:.2} m) | {:.1} × {:.1} px | {:+.2} % | {:.1}, {:.1} | {:.1}, {:.1} | {} |",
@@ -271,26 +275,42 @@ pub fn profile_svg(ev: &Evaluation) -> Result<String, String> {
         }
         let mut sum = vec![(0.0, 0usize); bins];
         for (x, dz) in xs {
-            let b = (((x - lo) / (hi - lo)) * bins as f64).floor().min(bins as f64 - 1.0) as usize;
+            let b = (((x - lo) / (hi - lo)) * bins as f64)
+                .floor()
+                .min(bins as f64 - 1.0) as usize;
             sum[b].0 += dz;
             sum[b].1 += 1;
         }
         sum.iter()
             .enumerate()
             .filter(|(_, s)| s.1 > 0)
-            .map(|(i, s)| (lo + (i as f64 + 0.5) / bins as f64 * (hi - lo), 1e3 * s.0 / s.1 as f64))
+            .map(|(i, s)| {
+                (
+                    lo + (i as f64 + 0.5) / bins as f64 * (hi - lo),
+                    1e3 * s.0 / s.1 as f64,
+                )
+            })
             .collect()
     };
     let along_x = series(0);
     let along_y = series(1);
     let all = along_x.iter().chain(&along_y);
     let (x0, x1, y0, y1) = all.fold(
-        (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY),
+        (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ),
         |a, p| (a.0.min(p.0), a.1.max(p.0), a.2.min(p.1), a.3.max(p.1)),
     );
     let (x0, x1) = if x1 > x0 { (x0, x1) } else { (0.0, 1.0) };
     let pad = ((y1 - y0) * 0.1).max(0.01);
-    let (y0, y1) = if y1 >= y0 { (y0 - pad, y1 + pad) } else { (-1.0, 1.0) };
+    let (y0, y1) = if y1 >= y0 {
+        (y0 - pad, y1 + pad)
+    } else {
+        (-1.0, 1.0)
+    };
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (720, 400)).into_drawing_area();

@@ -37,7 +37,8 @@ pub fn jitter(poses: &mut [RigPose], j: &Jitter) {
     };
     for (i, p) in poses.iter_mut().enumerate() {
         let mut r = crate::rng::SplitMix64(
-            j.seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+            j.seed.wrapping_mul(0x2545_F491_4F6C_DD1D)
+                ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
         );
         let d = DVec3::new(gauss(&mut r), gauss(&mut r), gauss(&mut r));
         let axis = DVec3::new(gauss(&mut r), gauss(&mut r), gauss(&mut r));
@@ -236,7 +237,12 @@ pub fn expand(
             let along = along_spacing(trigger, *overlap, fp_along, ctx.speed)?;
             let mut passes = vec![(*heading, *width, *length, *tilt)];
             if *cross_strips {
-                passes.push((heading + std::f64::consts::FRAC_PI_2, *length, *width, *tilt));
+                passes.push((
+                    heading + std::f64::consts::FRAC_PI_2,
+                    *length,
+                    *width,
+                    *tilt,
+                ));
             }
             if *obliques != 0.0 {
                 passes.push((*heading, *width, *length, *obliques));
@@ -663,7 +669,9 @@ mod tests {
         let var = plan
             .iter()
             .zip(&wobbly)
-            .map(|(a, b)| (b.world_from_rig.translation - a.world_from_rig.translation).length_squared())
+            .map(|(a, b)| {
+                (b.world_from_rig.translation - a.world_from_rig.translation).length_squared()
+            })
             .sum::<f64>()
             / (3.0 * n);
         assert!((var.sqrt() / 0.03 - 1.0).abs() < 0.03, "{}", var.sqrt());
@@ -679,12 +687,22 @@ mod tests {
             .sum::<f64>()
             / n;
         assert!((ang2.sqrt() / 2f64.to_radians() - 1.0).abs() < 0.03);
-        assert!(wobbly.iter().all(|p| is_rotation(p.world_from_rig.rotation)));
+        assert!(
+            wobbly
+                .iter()
+                .all(|p| is_rotation(p.world_from_rig.rotation))
+        );
         let mut again = plan.clone();
         jitter(&mut again, &j);
         assert_eq!(
-            again.iter().map(|p| p.world_from_rig.translation).collect::<Vec<_>>(),
-            wobbly.iter().map(|p| p.world_from_rig.translation).collect::<Vec<_>>()
+            again
+                .iter()
+                .map(|p| p.world_from_rig.translation)
+                .collect::<Vec<_>>(),
+            wobbly
+                .iter()
+                .map(|p| p.world_from_rig.translation)
+                .collect::<Vec<_>>()
         );
     }
 
@@ -717,7 +735,10 @@ mod tests {
             assert!((cos - 30f64.to_radians().cos()).abs() < 1e-12, "{cos}");
         }
         // Alternate strips look both ways along y.
-        let ys: Vec<f64> = both[n..].iter().map(|p| p.world_from_rig.rotation.z_axis.y).collect();
+        let ys: Vec<f64> = both[n..]
+            .iter()
+            .map(|p| p.world_from_rig.rotation.z_axis.y)
+            .collect();
         assert!(ys.iter().any(|&y| y > 0.4) && ys.iter().any(|&y| y < -0.4));
     }
 

@@ -368,8 +368,8 @@ pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, St
             return Ok(Some(b));
         }
     }
-    let local =
-        crate::geometry::mesh::shape_mesh(&o.shape, base).map_err(|e| format!("object `{}`: {e}", o.name))?;
+    let local = crate::geometry::mesh::shape_mesh(&o.shape, base)
+        .map_err(|e| format!("object `{}`: {e}", o.name))?;
     let mut b = bake_from(o, &local, plan.start, plan.reason, MAX_SIDE);
     b.wanted = plan.wanted;
     b.limit = plan.limit;

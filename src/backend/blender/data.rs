@@ -210,8 +210,7 @@ pub fn describe(model: &Model) -> Result<Description, String> {
                     let path = format!("assets/object_{i}.ply");
                     let mesh = crate::geometry::mesh::shape_mesh(&o.shape, &base_dir)
                         .map_err(|e| format!("object `{}`: {e}", o.name))?;
-                    let bytes =
-                        crate::geometry::mesh::ply_bytes(
+                    let bytes = crate::geometry::mesh::ply_bytes(
                         &mesh,
                         crate::geometry::mesh::PlyFormat::BinaryLittleEndian,
                     );
