@@ -3,8 +3,10 @@
 //!
 //! | module | what |
 //! |---|---|
+//! | [`evaluate`] | `poser bench evaluate`: CPU time and results of `poser evaluate` on the deformation lessons |
 //! | [`projection`] | `poser bench projection`: port solvers (scalar, batch) against the double-double reference |
 //! | [`render`] | `poser bench render`: speed against error of every render backend |
 
+pub mod evaluate;
 pub mod projection;
 pub mod render;

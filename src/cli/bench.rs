@@ -52,8 +52,20 @@ pub fn run(
                 .map(|_| ())
                 .map_err(CliError::Failed)
         }
+        "evaluate" => {
+            let lessons = crate::backend::python::repo_root().join("scenarios/lessons");
+            let rows = crate::bench::evaluate::run(&lessons, quick).map_err(CliError::Failed)?;
+            print!("{}", crate::bench::evaluate::table(&rows));
+            if let Some(path) = json.as_deref() {
+                let text = serde_json::to_string_pretty(&rows)
+                    .map_err(|e| CliError::Failed(e.to_string()))?;
+                crate::io::write_atomic(path, text.as_bytes())
+                    .map_err(|e| CliError::Failed(format!("{}: {e}", path.display())))?;
+            }
+            Ok(())
+        }
         other => Err(CliError::Usage(format!(
-            "bench `{other}`: expected `projection` or `render`"
+            "bench `{other}`: expected `projection`, `render` or `evaluate`"
         ))),
     }
 }

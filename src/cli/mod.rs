@@ -220,7 +220,7 @@ pub enum Command {
     },
     /// Speed-against-error reports: `projection` (port solvers) or `render` (backends).
     Bench {
-        /// What to benchmark: `projection` or `render`.
+        /// What to benchmark: `projection`, `render` or `evaluate`.
         what: String,
         /// Write the report as JSON too.
         #[arg(long)]

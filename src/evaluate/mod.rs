@@ -483,14 +483,14 @@ fn camera_centre_errors(
     (AxisStats::of(&errs), centres)
 }
 
+/// An image file of a render directory: (file name, pose index, camera index).
+pub type ImageFile = (String, usize, usize);
+
 /// The directory and file of every image of the model in a render directory: the sensor
 /// stage's camera images (`DIR/camera/<name>.jpg|png`) when they are all there, else the
 /// backend's previews (`DIR/<name>.png`).
-pub fn rendered_images(
-    model: &Model,
-    dir: &Path,
-) -> Result<(PathBuf, Vec<(String, usize, usize)>), String> {
-    let find = |d: &Path| -> Option<Vec<(String, usize, usize)>> {
+pub fn rendered_images(model: &Model, dir: &Path) -> Result<(PathBuf, Vec<ImageFile>), String> {
+    let find = |d: &Path| -> Option<Vec<ImageFile>> {
         let mut out = Vec::new();
         for pi in 0..model.poses.len() {
             for ci in 0..model.cameras.len() {

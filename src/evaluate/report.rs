@@ -270,7 +270,7 @@ pub fn profile_svg(ev: &Evaluation) -> Result<String, String> {
         let (lo, hi) = xs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
             (a.0.min(p.0), a.1.max(p.0))
         });
-        if !(hi > lo) {
+        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
             return Vec::new();
         }
         let mut sum = vec![(0.0, 0usize); bins];
