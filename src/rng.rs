@@ -22,6 +22,22 @@ impl SplitMix64 {
     pub fn next_f64(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
+
+    /// Two independent standard normal deviates from two uniforms (Box–Muller).
+    #[inline]
+    pub fn normal_pair(&mut self) -> (f64, f64) {
+        let u1 = 1.0 - self.next_f64(); // (0, 1]: the logarithm stays finite
+        let u2 = self.next_f64();
+        let r = (-2.0 * u1.ln()).sqrt();
+        let a = std::f64::consts::TAU * u2;
+        (r * a.cos(), r * a.sin())
+    }
+
+    /// One standard normal deviate (the first of [`SplitMix64::normal_pair`]).
+    #[inline]
+    pub fn normal(&mut self) -> f64 {
+        self.normal_pair().0
+    }
 }
 
 #[cfg(test)]

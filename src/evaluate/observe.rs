@@ -60,11 +60,9 @@ pub struct ImageObservations {
     pub points: Vec<(usize, [f64; 2])>,
 }
 
-/// A standard normal deviate (Box–Muller; one of the pair).
+/// A standard normal deviate ([`SplitMix64::normal`]).
 pub fn gauss(rng: &mut SplitMix64) -> f64 {
-    let u1 = 1.0 - rng.next_f64(); // (0, 1]
-    let u2 = rng.next_f64();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    rng.normal()
 }
 
 /// Tie points sampled uniformly by area over `meshes` (`(label, world mesh)`), about `density`

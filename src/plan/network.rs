@@ -30,11 +30,7 @@ pub fn jitter(poses: &mut [RigPose], j: &Jitter) {
     if j.position == 0.0 && j.rotation == 0.0 {
         return;
     }
-    let gauss = |r: &mut crate::rng::SplitMix64| {
-        let u1 = 1.0 - r.next_f64();
-        let u2 = r.next_f64();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    };
+    let gauss = crate::rng::SplitMix64::normal;
     for (i, p) in poses.iter_mut().enumerate() {
         let mut r = crate::rng::SplitMix64(
             j.seed.wrapping_mul(0x2545_F491_4F6C_DD1D)

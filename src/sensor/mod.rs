@@ -227,12 +227,9 @@ impl Noise {
         if let Some(z) = self.spare.take() {
             return z;
         }
-        let u1 = 1.0 - self.stream.next_f64(); // (0, 1]
-        let u2 = self.stream.next_f64();
-        let r = (-2.0 * u1.ln()).sqrt();
-        let a = 2.0 * std::f64::consts::PI * u2;
-        self.spare = Some(r * a.sin());
-        r * a.cos()
+        let (z, spare) = self.stream.normal_pair();
+        self.spare = Some(spare);
+        z
     }
 
     /// A Poisson count of mean `mu` (exact below [`POISSON_EXACT_BELOW`], Gaussian above).
