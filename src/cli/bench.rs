@@ -28,13 +28,7 @@ pub fn run(
                 crate::optics::port::Simd::detect().name()
             );
             print!("{}", crate::bench::projection::table(&rows));
-            if let Some(path) = json.as_deref() {
-                let text = serde_json::to_string_pretty(&rows)
-                    .map_err(|e| CliError::Failed(e.to_string()))?;
-                crate::io::write_atomic(path, text.as_bytes())
-                    .map_err(|e| CliError::Failed(format!("{}: {e}", path.display())))?;
-            }
-            Ok(())
+            write_json(json.as_deref(), &rows)
         }
         "render" => {
             if cfg!(debug_assertions) {
@@ -56,16 +50,21 @@ pub fn run(
             let lessons = crate::backend::python::repo_root().join("scenarios/lessons");
             let rows = crate::bench::evaluate::run(&lessons, quick).map_err(CliError::Failed)?;
             print!("{}", crate::bench::evaluate::table(&rows));
-            if let Some(path) = json.as_deref() {
-                let text = serde_json::to_string_pretty(&rows)
-                    .map_err(|e| CliError::Failed(e.to_string()))?;
-                crate::io::write_atomic(path, text.as_bytes())
-                    .map_err(|e| CliError::Failed(format!("{}: {e}", path.display())))?;
-            }
-            Ok(())
+            write_json(json.as_deref(), &rows)
         }
         other => Err(CliError::Usage(format!(
             "bench `{other}`: expected `projection`, `render` or `evaluate`"
         ))),
     }
+}
+
+/// Write a bench's rows as JSON when `--json` was given (atomically).
+fn write_json(
+    path: Option<&std::path::Path>,
+    rows: &impl serde::Serialize,
+) -> Result<(), CliError> {
+    let Some(path) = path else { return Ok(()) };
+    let text = serde_json::to_string_pretty(rows).map_err(|e| CliError::Failed(e.to_string()))?;
+    crate::io::write_atomic(path, text.as_bytes())
+        .map_err(|e| CliError::Failed(format!("{}: {e}", path.display())))
 }

@@ -283,23 +283,7 @@ impl Bvh {
             if ext[axis] <= 0.0 {
                 // All centroids coincide: split in the middle of the list.
                 let mid = s + count / 2;
-                let l = nodes.len();
-                nodes.push(Node {
-                    lo,
-                    hi,
-                    start: 0,
-                    count: 0,
-                });
-                nodes.push(Node {
-                    lo,
-                    hi,
-                    start: 0,
-                    count: 0,
-                });
-                nodes[ni].start = l as u32;
-                nodes[ni].count = 0;
-                stack.push((l + 1, mid, e));
-                stack.push((l, s, mid));
+                split(&mut nodes, &mut stack, ni, (lo, hi), (s, mid, e));
                 continue;
             }
             let bin_of = |c: DVec3| {
@@ -354,23 +338,7 @@ impl Bvh {
                         .then(a.cmp(&b))
                 });
                 let mid = s + count / 2;
-                let l = nodes.len();
-                nodes.push(Node {
-                    lo,
-                    hi,
-                    start: 0,
-                    count: 0,
-                });
-                nodes.push(Node {
-                    lo,
-                    hi,
-                    start: 0,
-                    count: 0,
-                });
-                nodes[ni].start = l as u32;
-                nodes[ni].count = 0;
-                stack.push((l + 1, mid, e));
-                stack.push((l, s, mid));
+                split(&mut nodes, &mut stack, ni, (lo, hi), (s, mid, e));
                 continue;
             }
             // Partition (stable, deterministic).
@@ -380,23 +348,7 @@ impl Bvh {
             let mid = s + left.len();
             order[s..mid].copy_from_slice(&left);
             order[mid..e].copy_from_slice(&right);
-            let l = nodes.len();
-            nodes.push(Node {
-                lo,
-                hi,
-                start: 0,
-                count: 0,
-            });
-            nodes.push(Node {
-                lo,
-                hi,
-                start: 0,
-                count: 0,
-            });
-            nodes[ni].start = l as u32;
-            nodes[ni].count = 0;
-            stack.push((l + 1, mid, e));
-            stack.push((l, s, mid));
+            split(&mut nodes, &mut stack, ni, (lo, hi), (s, mid, e));
         }
         self.tris = order.iter().map(|&i| self.tris[i as usize]).collect();
         self.surface = order.iter().map(|&i| self.surface[i as usize]).collect();
@@ -542,6 +494,30 @@ impl Bvh {
         self.traverse(&Ray { origin: o, dir: d }, 1.0 - 2.0 * margin, true)
             .is_some()
     }
+}
+
+/// Turn node `ni` (bounds `lo`, `hi`) into an inner node whose two new children cover
+/// `order[s..mid]` and `order[mid..e]`, and queue them (left first).
+fn split(
+    nodes: &mut Vec<Node>,
+    stack: &mut Vec<(usize, usize, usize)>,
+    ni: usize,
+    (lo, hi): (DVec3, DVec3),
+    (s, mid, e): (usize, usize, usize),
+) {
+    let l = nodes.len();
+    for _ in 0..2 {
+        nodes.push(Node {
+            lo,
+            hi,
+            start: 0,
+            count: 0,
+        });
+    }
+    nodes[ni].start = l as u32;
+    nodes[ni].count = 0;
+    stack.push((l + 1, mid, e));
+    stack.push((l, s, mid));
 }
 
 /// A target's printed face as a plane mesh in the world frame (its extent from
