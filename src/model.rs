@@ -489,10 +489,36 @@ pub struct Diver {
     /// Bühlmann gradient factors, fractions (e.g. 0.3, 0.7 → GF 30/70).
     pub gf_low: f64,
     pub gf_high: f64,
-    /// Gas that must remain at the surface, Pa (e.g. 50 bar).
+    /// Gas that must remain in every cylinder at the surface, Pa (e.g. 50 bar).
     pub reserve: f64,
-    /// Water is salt (density 1025 kg/m³) or fresh (1000).
+    /// Water is salt (density 1030 kg/m³, Subsurface's default) or fresh (1000).
     pub salt_water: bool,
+    /// Highest pO₂ allowed for bottom and stage gases, and for deco gases, bar (Subsurface:
+    /// 1.4 / 1.6).
+    #[serde(default = "po2_bottom_default")]
+    pub po2_bottom: f64,
+    #[serde(default = "po2_deco_default")]
+    pub po2_deco: f64,
+}
+
+fn po2_bottom_default() -> f64 {
+    1.4
+}
+fn po2_deco_default() -> f64 {
+    1.6
+}
+
+/// What a cylinder is breathed for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum CylinderRole {
+    /// Back gas: breathed from the surface, on the bottom and on the ascent.
+    #[default]
+    Bottom,
+    /// Carried bottom gas, breathed before the back gas down to its reserve.
+    Stage,
+    /// Breathed only on the ascent, from its switch depth up.
+    Deco,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -505,6 +531,12 @@ pub struct Cylinder {
     /// O₂ and He fractions (the rest is N₂).
     pub o2: f64,
     pub he: f64,
+    #[serde(default)]
+    pub role: CylinderRole,
+    /// Deco gas: depth (m) from which it is breathed on the ascent; `None` = its MOD at the
+    /// diver's deco pO₂.
+    #[serde(default)]
+    pub switch_depth: Option<f64>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -22,17 +22,18 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
     if c.defaulted {
         let _ = writeln!(
             o,
-            "  (the scene has no [diver]: Subsurface's defaults are used — 12 l air at 200 bar, \
-             SAC 20 l/min, GF 30/75, 50 bar reserve)"
+            "  (the scene has no [diver]: a 12 l air cylinder at 200 bar with poser's 50 bar \
+             reserve; SAC 20 l/min, GF 30/75 and pO₂ 1.4/1.6 bar are Subsurface's planner defaults)"
         );
     }
     let _ = writeln!(
         o,
-        "  survey      {} poses, {} strips, {:.0} m of path at {:.2} m/s",
+        "  survey      {} poses, {} strips, {:.0} m of path at {:.3} m/s → {} at depth",
         model.poses.len(),
         model.network.strips.max(1),
         model.network.path_length,
-        c.speed
+        c.speed,
+        mmss(d.bottom_time)
     );
     let _ = writeln!(
         o,
@@ -61,7 +62,7 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
         Some(t) => {
             let _ = writeln!(
                 o,
-                "              NDL runs out at {} runtime; deepest ceiling {:.1} m",
+                "              NDL runs out at {} runtime (the ceiling leaves the surface); deepest ceiling {:.1} m",
                 mmss(t),
                 d.max_ceiling
             );
@@ -94,9 +95,48 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
     let g = &d.gas;
     let _ = writeln!(
         o,
-        "  gas         {} = {:.0} l; SAC {:.0} l/min → {:.0} l needed; end {:.0} bar (reserve {:.0} bar)",
-        c.supply.description, g.start, c.sac_lpm, g.used, g.end_pressure, g.reserve_bar
+        "  gas         SAC {:.0} l/min; {:.0} bar reserve in every cylinder; pO₂ limits {:.1} bar bottom, {:.1} bar deco",
+        c.sac_lpm, g.reserve_bar, c.po2_bottom, c.po2_deco
     );
+    for (t, u) in c.tanks.iter().zip(&g.cylinders) {
+        let role = match t.role {
+            crate::model::CylinderRole::Bottom => "bottom".to_string(),
+            crate::model::CylinderRole::Stage => "stage".to_string(),
+            crate::model::CylinderRole::Deco => {
+                format!("deco from {:.0} m", t.switch_depth.unwrap_or(0.0))
+            }
+        };
+        let mut flags = Vec::new();
+        if !u.po2_ok {
+            flags.push("pO₂ TOO HIGH");
+        }
+        if u.hypoxic {
+            flags.push("HYPOXIC");
+        }
+        if !u.reserve_ok {
+            flags.push("RESERVE BROKEN");
+        }
+        let _ = writeln!(
+            o,
+            "    '{}' {} ({role}, MOD {:.0} m): {:.1} l at {:.0} bar = {:.0} l, {:.0} l breathed, end {:.0} bar; max pO₂ {} → {}",
+            u.name,
+            u.gas,
+            u.mod_depth.max(0.0),
+            t.volume,
+            t.fill,
+            u.start,
+            u.used,
+            u.end_pressure,
+            u.max_po2
+                .map(|p| format!("{p:.2} bar"))
+                .unwrap_or_else(|| "— (not breathed)".into()),
+            if flags.is_empty() {
+                "OK".to_string()
+            } else {
+                flags.join(", ")
+            }
+        );
+    }
     let _ = writeln!(
         o,
         "              reserve {} · rule of thirds {} · Subsurface minimum gas {}",
@@ -104,20 +144,40 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
         if g.thirds_ok { "kept" } else { "BROKEN" },
         if g.min_gas_ok { "kept" } else { "not kept" }
     );
-    let ok = v.problems.is_empty();
     let _ = writeln!(
         o,
-        "\nVerdict: {} — {}, {}",
-        if ok { "OK" } else { "NOT SAFE AS PLANNED" },
+        "\nVerdict: {} — {}, {}, {}",
+        if v.ok { "OK" } else { "NOT SAFE AS PLANNED" },
         if v.within_ndl {
             "within the NDL"
         } else {
             "decompression required"
         },
-        if v.gas_ok {
-            "enough gas"
+        if v.gases_ok {
+            "every gas breathable where breathed".to_string()
         } else {
-            "not enough gas"
+            let bad: Vec<String> = g
+                .cylinders
+                .iter()
+                .filter(|u| !u.po2_ok || u.hypoxic)
+                .map(|u| format!("'{}' ({})", u.name, u.gas))
+                .collect();
+            format!("gas unfit to breathe in {}", bad.join(", "))
+        },
+        if v.gas_ok {
+            "enough gas".to_string()
+        } else {
+            let short: Vec<String> = g
+                .cylinders
+                .iter()
+                .filter(|u| !u.reserve_ok)
+                .map(|u| format!("'{}' ({})", u.name, u.gas))
+                .collect();
+            if short.is_empty() {
+                "not enough gas (rule of thirds)".to_string()
+            } else {
+                format!("not enough gas in {}", short.join(", "))
+            }
         }
     );
     for p in &v.problems {
@@ -147,9 +207,9 @@ pub fn run(
             .and_then(|e| e.to_str())
             .unwrap_or("")
             .to_ascii_lowercase();
-        if ext != "svg" {
+        if ext != "svg" && ext != "png" {
             return Err(CliError::Usage(format!(
-                "--plot {}: only SVG plots are written (use a .svg name)",
+                "--plot {}: the plot is written as SVG or PNG (use a .svg or .png name)",
                 path.display()
             )));
         }
@@ -162,9 +222,18 @@ pub fn run(
             .map_err(|e| CliError::Failed(format!("{}: {e}", path.display())))?;
     }
     if let Some(path) = plot {
-        let svg = crate::plan::plot::svg(&report, &format!("{} — dive profile", model.name))
-            .map_err(CliError::Failed)?;
-        crate::io::write_atomic(path, svg.as_bytes())
+        let title = format!("{} — dive profile", model.name);
+        let png = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        let bytes = if png {
+            crate::plan::plot::png(&report, &title)
+        } else {
+            crate::plan::plot::svg(&report, &title).map(String::into_bytes)
+        }
+        .map_err(CliError::Failed)?;
+        crate::io::write_atomic(path, &bytes)
             .map_err(|e| CliError::Failed(format!("{}: {e}", path.display())))?;
     }
     if json {

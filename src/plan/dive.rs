@@ -7,9 +7,18 @@
 //! | `descent_rate` / `ascent_rate` | m/s | 18 / 9 m/min (Subsurface) |
 //! | `sac` | m³/s (shown l/min) | 20 l/min |
 //! | `cylinders` | — | one 12 l air cylinder at 200 bar |
-//! | `gf_low` / `gf_high` | fraction | 0.30 / 0.75 |
-//! | `reserve` | Pa (shown bar) | 50 bar |
+//! | `gf_low` / `gf_high` | fraction | 0.30 / 0.75 (Subsurface's default) |
+//! | `reserve` | Pa (shown bar) | 50 bar in every cylinder (poser's rule) |
+//! | `po2_bottom` / `po2_deco` | bar | 1.4 / 1.6 (Subsurface) |
 //! | `salt_water` | — | true (1030 kg/m³ as Subsurface) |
+//!
+//! Gases as Subsurface's planner handles them: every cylinder keeps its own gas and contents.
+//! Stage cylinders are breathed first on the bottom, each down to its reserve, then the back
+//! gas; deco cylinders from their switch depth on the ascent (the richest allowed, a 1 min
+//! hold at a switch except to O₂), and the ascent's stops are computed on the gas breathed.
+//! Every gas is checked where it is breathed: pO₂ against its role's limit, and not hypoxic
+//! at the surface. "In decompression" has one meaning everywhere (report, verdict, `.ssrf`):
+//! the ceiling is below the surface.
 //!
 //! The profile: descent from the surface to the first pose at the descent rate, then the rig
 //! poses in time order (depth = −z of the rig; linear between poses, which follows the terrain
@@ -17,9 +26,11 @@
 //! none are needed and the dive went deeper than 10 m — the recommended 3 min safety stop at
 //! 5 m.
 
-use super::deco::{Environment, Gas, GradientFactors, Ndl, Stop, Tissues};
-use super::gas::{self, GasCheck, PROBLEM_SOLVING, SAC_FACTOR, Supply};
-use crate::model::Model;
+use super::deco::{AscentPlan, Environment, Gas, GradientFactors, Ndl, Stop, Tissues};
+use super::gas::{
+    self, CylinderUse, GasCheck, HYPOXIC, PROBLEM_SOLVING, SAC_FACTOR, Supply, Tank, gas_label,
+};
+use crate::model::{CylinderRole, Model};
 use serde::Serialize;
 
 /// Everything the simulation needs about the diver and the water.
@@ -34,9 +45,15 @@ pub struct DiveConfig {
     pub speed: f64,
     /// Surface air consumption, l/min.
     pub sac_lpm: f64,
+    /// Every cylinder with its own gas.
+    pub tanks: Vec<Tank>,
+    /// The bottom cylinders (back gas and stages) pooled, for the gas rules and remedies.
     pub supply: Supply,
-    /// Reserve at the surface, bar.
+    /// Reserve at the surface in every cylinder, bar.
     pub reserve_bar: f64,
+    /// pO₂ limits of bottom/stage and of deco gases, bar.
+    pub po2_bottom: f64,
+    pub po2_deco: f64,
     /// Surface interval between split dives, s.
     pub surface_interval: f64,
     /// Whether defaults were used because the scene has no diver.
@@ -44,31 +61,18 @@ pub struct DiveConfig {
 }
 
 impl DiveConfig {
-    /// From the model's diver (or Subsurface's defaults when the scene has none).
+    /// From the model's diver (or the defaults when the scene has none).
     pub fn from_model(model: &Model) -> Result<DiveConfig, String> {
         let env_of = |salt: bool| Environment::new(salt, model.site.altitude);
         match &model.diver {
             Some(d) => {
-                let cyl: Vec<(String, f64, f64, Gas)> = d
-                    .cylinders
-                    .iter()
-                    .map(|c| {
-                        (
-                            c.name.clone(),
-                            c.volume * 1e3,
-                            c.pressure / 1e5,
-                            Gas { o2: c.o2, he: c.he },
-                        )
-                    })
-                    .collect();
-                let supply = Supply::new(&cyl, d.reserve / 1e5).ok_or_else(|| {
-                    "the diver has no cylinder: add one to plan the gas".to_string()
-                })?;
                 for (name, v) in [
                     ("diver.speed", d.speed),
                     ("diver.descent_rate", d.descent_rate),
                     ("diver.ascent_rate", d.ascent_rate),
                     ("diver.sac", d.sac),
+                    ("diver.po2_bottom", d.po2_bottom),
+                    ("diver.po2_deco", d.po2_deco),
                 ] {
                     if !(v.is_finite() && v > 0.0) {
                         return Err(format!("{name} must be a positive number (got {v})"));
@@ -80,8 +84,32 @@ impl DiveConfig {
                         d.gf_low, d.gf_high
                     ));
                 }
+                let env = env_of(d.salt_water);
+                let mut tanks = Vec::new();
+                for c in &d.cylinders {
+                    let gas = Gas { o2: c.o2, he: c.he };
+                    if !(c.o2 > 0.0 && c.he >= 0.0 && c.o2 + c.he <= 1.0 + 1e-9) {
+                        return Err(format!("cylinder '{}': impossible gas mix", c.name));
+                    }
+                    let sw = (c.role == CylinderRole::Deco).then(|| {
+                        c.switch_depth
+                            .unwrap_or_else(|| gas.mod_depth(&env, d.po2_deco).floor().max(0.0))
+                    });
+                    tanks.push(Tank::new(
+                        &c.name,
+                        c.volume * 1e3,
+                        c.pressure / 1e5,
+                        gas,
+                        c.role,
+                        sw,
+                        d.reserve / 1e5,
+                    ));
+                }
+                let supply = pooled(&tanks, d.reserve / 1e5).ok_or_else(|| {
+                    "the diver has no bottom cylinder: add one to plan the gas".to_string()
+                })?;
                 Ok(DiveConfig {
-                    env: env_of(d.salt_water),
+                    env,
                     gf: GradientFactors {
                         low: d.gf_low,
                         high: d.gf_high,
@@ -90,14 +118,25 @@ impl DiveConfig {
                     ascent_rate: d.ascent_rate,
                     speed: d.speed,
                     sac_lpm: d.sac * 60_000.0,
+                    tanks,
                     supply,
                     reserve_bar: d.reserve / 1e5,
+                    po2_bottom: d.po2_bottom,
+                    po2_deco: d.po2_deco,
                     surface_interval: 3600.0,
                     defaulted: false,
                 })
             }
             None => {
-                let cyl = vec![("12 l".to_string(), 12.0, 200.0, Gas::AIR)];
+                let tanks = vec![Tank::new(
+                    "12 l",
+                    12.0,
+                    200.0,
+                    Gas::AIR,
+                    CylinderRole::Bottom,
+                    None,
+                    DEFAULT_RESERVE_BAR,
+                )];
                 Ok(DiveConfig {
                     env: env_of(true),
                     gf: GradientFactors::SUBSURFACE,
@@ -109,8 +148,11 @@ impl DiveConfig {
                         0.2
                     },
                     sac_lpm: 20.0,
-                    supply: Supply::new(&cyl, 50.0).expect("one cylinder"),
-                    reserve_bar: 50.0,
+                    supply: pooled(&tanks, DEFAULT_RESERVE_BAR).expect("one cylinder"),
+                    tanks,
+                    reserve_bar: DEFAULT_RESERVE_BAR,
+                    po2_bottom: 1.4,
+                    po2_deco: 1.6,
                     surface_interval: 3600.0,
                     defaulted: true,
                 })
@@ -118,9 +160,72 @@ impl DiveConfig {
         }
     }
 
+    /// The gas breathed first (the first stage, else the first back-gas cylinder).
     pub fn gas(&self) -> Gas {
-        self.supply.gas
+        self.tanks[self.bottom_order()[0]].gas
     }
+
+    /// Bottom cylinders in the order they are breathed: stages, then back gas.
+    pub fn bottom_order(&self) -> Vec<usize> {
+        let mut v: Vec<usize> = (0..self.tanks.len())
+            .filter(|&i| self.tanks[i].role == CylinderRole::Stage)
+            .collect();
+        v.extend((0..self.tanks.len()).filter(|&i| self.tanks[i].role == CylinderRole::Bottom));
+        v
+    }
+
+    /// pO₂ limit of a cylinder's role, bar.
+    pub fn po2_limit(&self, tank: &Tank) -> f64 {
+        if tank.role == CylinderRole::Deco {
+            self.po2_deco
+        } else {
+            self.po2_bottom
+        }
+    }
+
+    /// How the ascent is flown: one rate, 3 m stops, the deco cylinders' gases.
+    pub fn ascent_plan(&self) -> AscentPlan {
+        let mut plan = AscentPlan::simple(self.ascent_rate);
+        plan.deco_gases = self
+            .tanks
+            .iter()
+            .filter_map(|t| t.switch_depth.map(|d| (t.gas, d)))
+            .collect();
+        plan
+    }
+
+    /// The same diver with every bottom cylinder filled with `mix`.
+    pub fn with_bottom_gas(&self, mix: Gas) -> DiveConfig {
+        let mut c = self.clone();
+        for t in &mut c.tanks {
+            if t.bottom_phase() {
+                *t = Tank::new(
+                    &t.name,
+                    t.volume,
+                    t.fill,
+                    mix,
+                    t.role,
+                    None,
+                    self.reserve_bar,
+                );
+            }
+        }
+        c.supply = pooled(&c.tanks, self.reserve_bar).expect("bottom cylinder");
+        c
+    }
+}
+
+/// The reserve poser keeps in every cylinder when the scene has no diver, bar (poser's own
+/// rule; Subsurface's planner keeps none outside its recreational mode).
+pub const DEFAULT_RESERVE_BAR: f64 = 50.0;
+
+fn pooled(tanks: &[Tank], reserve_bar: f64) -> Option<Supply> {
+    let cyl: Vec<(String, f64, f64, Gas)> = tanks
+        .iter()
+        .filter(|t| t.bottom_phase())
+        .map(|t| (t.name.clone(), t.volume, t.fill, t.gas))
+        .collect();
+    Supply::new(&cyl, reserve_bar)
 }
 
 /// The survey part of a dive: (time s, depth m, strip) from the first pose.
@@ -213,15 +318,19 @@ pub struct Sample {
     pub depth: f64,
     /// Smooth ceiling, m.
     pub ceiling: f64,
-    /// No-decompression limit at this depth (only on the bottom part).
+    /// No-decompression limit at this depth on the gas breathed.
     pub ndl: Option<Ndl>,
     /// Time to surface, s, and the first stop depth (m) if in deco.
     pub tts: f64,
     pub stop_depth: Option<f64>,
     /// Duration of that first stop, s.
     pub stop_time: Option<f64>,
+    /// The ceiling is below the surface.
     pub in_deco: bool,
-    /// Cylinder pressure, bar.
+    /// Index of the cylinder breathed, and the pressure of every cylinder, bar.
+    pub cylinder: usize,
+    pub pressures: Vec<f64>,
+    /// Pressure of the cylinder breathed, bar.
     pub pressure: f64,
 }
 
@@ -232,6 +341,16 @@ pub enum Phase {
     Descent,
     Bottom,
     Ascent,
+}
+
+/// A change of the cylinder breathed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Switch {
+    /// Runtime, s, and depth, m.
+    pub time: f64,
+    pub depth: f64,
+    /// Index into the configuration's cylinders.
+    pub cylinder: usize,
 }
 
 /// A simulated dive.
@@ -247,27 +366,108 @@ pub struct DiveResult {
     pub runtime: f64,
     pub max_depth: f64,
     pub mean_depth: f64,
-    /// Mandatory stops (empty within the NDL).
+    /// Mandatory stops (empty when the ascent itself clears the ceiling).
     pub stops: Vec<Stop>,
     pub safety_stop: Option<Stop>,
-    /// Smallest NDL seen on the bottom while not in deco, s.
+    /// Smallest NDL seen while not in deco, s.
     pub min_ndl: Option<f64>,
-    /// Runtime at which the ceiling first leaves the surface, s.
+    /// Runtime at which the ceiling first leaves the surface before the ascent, s: the end of
+    /// the no-decompression time.
     pub deco_from: Option<f64>,
-    /// Deepest ceiling of the dive, m.
+    /// Deepest ceiling of the dive, m, and the ceiling when the bottom time ends, m.
     pub max_ceiling: f64,
+    pub ceiling_at_end: f64,
     /// Time to surface at the end of the bottom time, s.
     pub tts_at_end: f64,
+    /// Cylinder changes (the first entry is the cylinder breathed from the start).
+    pub switches: Vec<Switch>,
     pub gas: GasCheck,
 }
 
 impl DiveResult {
+    /// Decompression dive: the ceiling left the surface before the ascent began (whether or
+    /// not the ascent needs a stop to clear it).
     pub fn deco_required(&self) -> bool {
-        !self.stops.is_empty()
+        self.deco_from.is_some() || !self.stops.is_empty()
     }
-    /// Within the NDL and the gas rules.
+    /// Within the NDL, the gas rules, and every gas breathable where it is breathed.
     pub fn ok(&self) -> bool {
-        !self.deco_required() && self.gas.ok()
+        !self.deco_required() && self.gas.ok() && self.gas.breathable()
+    }
+}
+
+/// Per-cylinder bookkeeping of a simulation.
+struct Breathing<'a> {
+    cfg: &'a DiveConfig,
+    used: Vec<f64>,
+    current: usize,
+    max_po2: Vec<Option<(f64, f64)>>,
+    min_po2: Vec<Option<f64>>,
+    switches: Vec<Switch>,
+    reserve_reached_at: Option<f64>,
+    empty_at: Option<f64>,
+}
+
+impl Breathing<'_> {
+    fn left(&self, i: usize) -> f64 {
+        self.cfg.tanks[i].start - self.used[i]
+    }
+    fn gas(&self) -> Gas {
+        self.cfg.tanks[self.current].gas
+    }
+    fn switch_to(&mut self, i: usize, t: f64, depth: f64) {
+        if i != self.current {
+            self.current = i;
+            self.switches.push(Switch {
+                time: t,
+                depth,
+                cylinder: i,
+            });
+            self.note_po2(depth);
+        }
+    }
+    fn note_po2(&mut self, depth: f64) {
+        let i = self.current;
+        let p = self.cfg.env.pressure(depth) * self.cfg.tanks[i].gas.o2;
+        if self.max_po2[i].is_none_or(|m| p > m.0) {
+            self.max_po2[i] = Some((p, depth));
+        }
+        if self.min_po2[i].is_none_or(|m| p < m) {
+            self.min_po2[i] = Some(p);
+        }
+    }
+    /// On the bottom: before breathing `need` litres, move on from a cylinder that would drop
+    /// below its reserve to the next bottom cylinder that keeps it.
+    fn pick_bottom(&mut self, need: f64, t: f64, depth: f64) {
+        let c = self.current;
+        if self.cfg.tanks[c].role == CylinderRole::Deco
+            || self.left(c) - need >= self.cfg.tanks[c].reserve
+        {
+            return;
+        }
+        let order = self.cfg.bottom_order();
+        if let Some(&next) = order
+            .iter()
+            .find(|&&i| i != c && self.left(i) - need * 1.0001 >= self.cfg.tanks[i].reserve)
+        {
+            self.switch_to(next, t, depth);
+        }
+    }
+    fn breathe(&mut self, litres: f64, t: f64, depth: f64) {
+        let i = self.current;
+        self.used[i] += litres;
+        self.note_po2(depth);
+        if self.reserve_reached_at.is_none() && self.left(i) < self.cfg.tanks[i].reserve {
+            self.reserve_reached_at = Some(t);
+        }
+        if self.empty_at.is_none() && self.left(i) <= 0.0 {
+            self.empty_at = Some(t);
+        }
+    }
+    fn pressures(&self) -> Vec<f64> {
+        (0..self.used.len())
+            .map(|i| self.cfg.tanks[i].pressure_after(self.used[i]))
+            .collect()
     }
 }
 
@@ -280,8 +480,9 @@ pub fn simulate(
     tissues: &mut Tissues,
     sample_every: Option<f64>,
 ) -> DiveResult {
-    let gas_mix = cfg.gas();
     let env = cfg.env;
+    let plan = cfg.ascent_plan();
+    let direct = AscentPlan::simple(cfg.ascent_rate);
     // Descent and bottom vertices.
     let d0 = track.points.first().map(|p| p.1).unwrap_or(0.0);
     let descent_time = d0 / cfg.descent_rate;
@@ -295,59 +496,71 @@ pub fn simulate(
         profile.push((bottom_end, last_depth));
     }
 
-    // Integrate the bottom part in ≤ 1 s steps.
-    let mut used = 0.0;
-    let mut min_ndl: Option<f64> = None;
+    let first = cfg.bottom_order()[0];
+    let n_tanks = cfg.tanks.len();
+    let mut b = Breathing {
+        cfg,
+        used: vec![0.0; n_tanks],
+        current: first,
+        max_po2: vec![None; n_tanks],
+        min_po2: vec![None; n_tanks],
+        switches: vec![Switch {
+            time: 0.0,
+            depth: 0.0,
+            cylinder: first,
+        }],
+        reserve_reached_at: None,
+        empty_at: None,
+    };
+    b.note_po2(0.0);
     let mut deco_from: Option<f64> = None;
     let mut max_ceiling: f64 = 0.0;
     let mut samples = Vec::new();
     let mut next_sample = 0.0;
-    let mut reserve_reached_at = None;
-    let mut empty_at = None;
-    let reserve_l = cfg.supply.reserve;
-    let mut track_gas = |used: f64, t: f64| {
-        if reserve_reached_at.is_none() && cfg.supply.start - used < reserve_l {
-            reserve_reached_at = Some(t);
+    let mut record = |t: f64, depth: f64, tissues: &Tissues, b: &Breathing, next: &mut f64| {
+        let Some(every) = sample_every else { return };
+        if t + 1e-9 < *next {
+            return;
         }
-        if empty_at.is_none() && cfg.supply.start - used <= 0.0 {
-            empty_at = Some(t);
-        }
+        *next += every;
+        let in_deco = tissues.in_deco();
+        let mut probe = tissues.clone();
+        let asc = probe.ascend_with(depth, b.gas(), if in_deco { &plan } else { &direct }, t);
+        let stop = asc.stops.first().copied();
+        let pressures = b.pressures();
+        samples.push(Sample {
+            time: t,
+            depth,
+            ceiling: tissues.ceiling(),
+            ndl: Some(tissues.ndl(depth, b.gas())),
+            tts: asc.tts,
+            // The first planned stop; in deco without one (the ascent itself clears the
+            // ceiling), the ceiling rounded up to the 3 m level.
+            stop_depth: stop
+                .map(|s| s.depth)
+                .or_else(|| in_deco.then(|| ((tissues.ceiling() / 3.0).ceil() * 3.0).max(3.0))),
+            stop_time: stop.map(|s| s.duration),
+            in_deco,
+            cylinder: b.current,
+            pressure: pressures[b.current],
+            pressures,
+        });
     };
-    let mut record =
-        |t: f64, depth: f64, tissues: &Tissues, used: f64, phase: Phase, next: &mut f64| {
-            let Some(every) = sample_every else { return };
-            if t + 1e-9 < *next {
-                return;
-            }
-            *next += every;
-            let in_deco = tissues.in_deco();
-            let (tts, stop) = tissues.tts(depth, cfg.ascent_rate, gas_mix, t);
-            let _ = phase;
-            let ndl = Some(tissues.ndl(depth, gas_mix));
-            samples.push(Sample {
-                time: t,
-                depth,
-                ceiling: tissues.ceiling(),
-                ndl,
-                tts,
-                // The first planned stop; in deco without one (the ascent itself clears the
-                // ceiling), the ceiling rounded up to the 3 m level.
-                stop_depth: stop
-                    .map(|s| s.depth)
-                    .or_else(|| in_deco.then(|| ((tissues.ceiling() / 3.0).ceil() * 3.0).max(3.0))),
-                stop_time: stop.map(|s| s.duration),
-                in_deco,
-                pressure: cfg.supply.pressure_after(used),
-            });
-        };
 
-    let integrate = |tissues: &mut Tissues,
-                     used: &mut f64,
-                     vertices: &[(f64, f64)],
-                     phase_of: &dyn Fn(f64) -> Phase,
-                     on_step: &mut dyn FnMut(f64, f64, &Tissues, f64, Phase)| {
+    // Integrate in ≤ 1 s steps; `gas_at(t_mid)` picks the deco cylinder on the ascent.
+    #[allow(clippy::too_many_arguments)]
+    fn integrate(
+        env: &Environment,
+        sac: f64,
+        tissues: &mut Tissues,
+        b: &mut Breathing,
+        vertices: &[(f64, f64)],
+        bottom: bool,
+        ascent_switch: &dyn Fn(f64) -> Option<usize>,
+        on_step: &mut dyn FnMut(f64, f64, &Tissues, &Breathing),
+    ) {
         for w in vertices.windows(2) {
-            let ((t0, a), (t1, b)) = (w[0], w[1]);
+            let ((t0, a), (t1, d1)) = (w[0], w[1]);
             let dt = t1 - t0;
             if dt <= 0.0 {
                 continue;
@@ -356,49 +569,72 @@ pub fn simulate(
             let h = dt / n as f64;
             for i in 0..n {
                 let f = (i as f64 + 0.5) / n as f64;
-                let d = a + (b - a) * f;
+                let d = a + (d1 - a) * f;
                 let p = env.pressure(d);
-                tissues.expose_pressure(p, gas_mix, h);
-                *used += gas::consumption(cfg.sac_lpm, p, h);
-                let t = t0 + (i + 1) as f64 * h;
-                let de = a + (b - a) * (i + 1) as f64 / n as f64;
-                on_step(t, de, tissues, *used, phase_of(t));
+                let ts = t0 + i as f64 * h;
+                let need = gas::consumption(sac, p, h);
+                let ds = a + (d1 - a) * i as f64 / n as f64;
+                if bottom {
+                    b.pick_bottom(need, ts, ds);
+                } else if let Some(c) = ascent_switch(ts + 0.5 * h) {
+                    b.switch_to(c, ts, ds);
+                }
+                tissues.expose_pressure(p, b.gas(), h);
+                let t = ts + h;
+                let de = a + (d1 - a) * (i + 1) as f64 / n as f64;
+                b.breathe(need, t, d.max(de));
+                on_step(t, de, tissues, b);
             }
         }
-    };
+    }
 
-    record(0.0, 0.0, tissues, 0.0, Phase::Descent, &mut next_sample);
-    let phase_of = |t: f64| {
-        if t <= descent_time + 1e-9 {
-            Phase::Descent
-        } else {
-            Phase::Bottom
-        }
-    };
+    record(0.0, 0.0, tissues, &b, &mut next_sample);
     integrate(
+        &env,
+        cfg.sac_lpm,
         tissues,
-        &mut used,
+        &mut b,
         &profile,
-        &phase_of,
-        &mut |t, d, ts, u, ph| {
-            track_gas(u, t);
+        true,
+        &|_| None,
+        &mut |t, d, ts, b| {
             let c = ts.ceiling();
             max_ceiling = max_ceiling.max(c);
-            if ph == Phase::Bottom && c > 0.0 && deco_from.is_none() {
+            if c > 0.0 && deco_from.is_none() {
                 deco_from = Some(t);
             }
-            record(t, d, ts, u, ph, &mut next_sample);
+            record(t, d, ts, b, &mut next_sample);
         },
     );
-    let used_bottom = used;
+    let used_bottom: f64 = (0..n_tanks)
+        .filter(|&i| cfg.tanks[i].bottom_phase())
+        .map(|i| b.used[i])
+        .sum();
+    let ceiling_at_end = tissues.ceiling();
 
     // The ascent the model requires, planned on a copy, then flown on the real state.
-    let mut plan = tissues.clone();
-    let ascent = plan.ascend(last_depth, cfg.ascent_rate, gas_mix, bottom_end);
+    // Within the NDL the ascent is direct (with a safety stop): deco gases are for
+    // decompression, and a switch's hold is no decompression stop.
+    let mut planned = tissues.clone();
+    let ascent = if deco_from.is_some() {
+        planned.ascend_with(last_depth, b.gas(), &plan, bottom_end)
+    } else {
+        planned.ascend_with(last_depth, b.gas(), &direct, bottom_end)
+    };
     let mut asc: Vec<(f64, f64)> = ascent
         .path
         .iter()
         .map(|&(t, d)| (bottom_end + t, d))
+        .collect();
+    let mut gas_changes: Vec<(f64, usize)> = ascent
+        .switches
+        .iter()
+        .filter_map(|&(t, _, g)| {
+            cfg.tanks
+                .iter()
+                .position(|k| k.role == CylinderRole::Deco && k.gas == g)
+                .map(|i| (bottom_end + t, i))
+        })
         .collect();
     let max_depth = profile.iter().map(|p| p.1).fold(0.0, f64::max);
     let mut safety_stop = None;
@@ -410,32 +646,43 @@ pub fn simulate(
             (t5 + 180.0, 5.0),
             (t5 + 180.0 + 5.0 / cfg.ascent_rate, 0.0),
         ];
+        gas_changes.clear();
         safety_stop = Some(Stop {
             depth: 5.0,
             duration: 180.0,
         });
     }
     let tts_at_end = asc.last().unwrap().0 - bottom_end;
+    let switch_at = |t: f64| {
+        gas_changes
+            .iter()
+            .rev()
+            .find(|c| c.0 <= t + 1e-9)
+            .map(|c| c.1)
+    };
     integrate(
+        &env,
+        cfg.sac_lpm,
         tissues,
-        &mut used,
+        &mut b,
         &asc,
-        &|_| Phase::Ascent,
-        &mut |t, d, ts, u, ph| {
-            track_gas(u, t);
+        false,
+        &switch_at,
+        &mut |t, d, ts, b| {
             max_ceiling = max_ceiling.max(ts.ceiling());
-            record(t, d, ts, u, ph, &mut next_sample);
+            record(t, d, ts, b, &mut next_sample);
         },
     );
     profile.extend(asc.into_iter().skip(1));
     let runtime = profile.last().unwrap().0;
 
-    // NDL minimum from the samples when they were taken.
-    for s in &samples {
-        if let Some(Ndl::Limit(n)) = s.ndl {
-            min_ndl = Some(min_ndl.map_or(n, |m: f64| m.min(n)));
-        }
-    }
+    let min_ndl = samples
+        .iter()
+        .filter_map(|s| match s.ndl {
+            Some(Ndl::Limit(n)) => Some(n),
+            _ => None,
+        })
+        .reduce(f64::min);
     let mean_depth = {
         let mut area = 0.0;
         for w in profile.windows(2) {
@@ -444,27 +691,7 @@ pub fn simulate(
         if runtime > 0.0 { area / runtime } else { 0.0 }
     };
 
-    let ascent_gas = used - used_bottom;
-    let min_gas = SAC_FACTOR
-        * (gas::consumption(cfg.sac_lpm, env.pressure(max_depth), PROBLEM_SOLVING) + ascent_gas);
-    let at_end_of_bottom = cfg.supply.start - used_bottom;
-    let gas = GasCheck {
-        used,
-        start: cfg.supply.start,
-        end_pressure: if cfg.supply.start - used > 0.0 {
-            cfg.supply.pressure_after(used)
-        } else {
-            0.0
-        },
-        reserve_bar: cfg.reserve_bar,
-        reserve_ok: cfg.supply.start - used >= cfg.supply.reserve,
-        thirds_ok: used <= cfg.supply.start * 2.0 / 3.0,
-        min_gas,
-        min_gas_ok: at_end_of_bottom >= min_gas,
-        at_end_of_bottom,
-        reserve_reached_at,
-        empty_at,
-    };
+    let gas = gas_check(cfg, &b, used_bottom, max_depth);
     DiveResult {
         profile,
         samples,
@@ -478,8 +705,78 @@ pub fn simulate(
         min_ndl,
         deco_from,
         max_ceiling,
+        ceiling_at_end,
         tts_at_end,
+        switches: b.switches.clone(),
         gas,
+    }
+}
+
+fn gas_check(cfg: &DiveConfig, b: &Breathing, used_bottom: f64, max_depth: f64) -> GasCheck {
+    let env = cfg.env;
+    let bottom_idx: Vec<usize> = (0..cfg.tanks.len())
+        .filter(|&i| cfg.tanks[i].bottom_phase())
+        .collect();
+    let used_phase: f64 = bottom_idx.iter().map(|&i| b.used[i]).sum();
+    let used_ascent_bottom = used_phase - used_bottom;
+    let start = cfg.supply.start;
+    let min_gas = SAC_FACTOR
+        * (gas::consumption(cfg.sac_lpm, env.pressure(max_depth), PROBLEM_SOLVING)
+            + used_ascent_bottom);
+    let at_end_of_bottom = start - used_bottom;
+    // Hypoxic limit: 0.16 bar, or air's own pO₂ at an altitude site's surface.
+    let hypoxic_limit = HYPOXIC.min(Gas::AIR.o2 * env.surface_pressure - 1e-6);
+    let cylinders: Vec<CylinderUse> = cfg
+        .tanks
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let limit = cfg.po2_limit(t);
+            let max = b.max_po2[i];
+            let left = t.start - b.used[i];
+            CylinderUse {
+                name: t.name.clone(),
+                gas: gas_label(t.gas),
+                role: t.role,
+                start: t.start,
+                used: b.used[i],
+                end_pressure: if left > 0.0 {
+                    t.pressure_after(b.used[i])
+                } else {
+                    0.0
+                },
+                reserve_ok: left >= t.reserve - 1e-9,
+                max_po2: max.map(|m| m.0),
+                max_po2_depth: max.map(|m| m.1).unwrap_or(0.0),
+                min_po2: b.min_po2[i],
+                po2_limit: limit,
+                mod_depth: t.gas.mod_depth(&env, limit),
+                po2_ok: max.is_none_or(|m| m.0 <= limit + 1e-9),
+                hypoxic: b.min_po2[i].is_some() && t.gas.o2 * env.surface_pressure < hypoxic_limit,
+            }
+        })
+        .collect();
+    // The back gas breathed last tells the end pressure of the bottom supply.
+    let last_bottom = b
+        .switches
+        .iter()
+        .rev()
+        .map(|s| s.cylinder)
+        .find(|&i| cfg.tanks[i].bottom_phase())
+        .unwrap_or(bottom_idx[0]);
+    GasCheck {
+        end_pressure: cylinders[last_bottom].end_pressure,
+        reserve_ok: cylinders.iter().all(|c| c.reserve_ok),
+        cylinders,
+        used: used_phase,
+        start,
+        reserve_bar: cfg.reserve_bar,
+        thirds_ok: used_phase <= start * 2.0 / 3.0,
+        min_gas,
+        min_gas_ok: at_end_of_bottom >= min_gas,
+        at_end_of_bottom,
+        reserve_reached_at: b.reserve_reached_at,
+        empty_at: b.empty_at,
     }
 }
 
@@ -502,9 +799,13 @@ pub struct Suggestion {
 /// The verdict on a survey dive.
 #[derive(Debug, Clone, Serialize)]
 pub struct Verdict {
+    /// No problem at all: the plan may be dived as it is.
+    pub ok: bool,
     pub within_ndl: bool,
     pub deco_required: bool,
     pub gas_ok: bool,
+    /// Every gas within its pO₂ limit where it is breathed and none hypoxic at the surface.
+    pub gases_ok: bool,
     pub problems: Vec<String>,
     /// Not failing the plan, but worth knowing (Subsurface's minimum gas, a thin NDL margin).
     pub advice: Vec<String>,
@@ -523,6 +824,14 @@ const CYLINDERS: [(f64, &str); 8] = [
     (36.0, "twin 18 l"),
 ];
 
+fn role_name(r: CylinderRole) -> &'static str {
+    match r {
+        CylinderRole::Bottom => "bottom",
+        CylinderRole::Stage => "stage",
+        CylinderRole::Deco => "deco",
+    }
+}
+
 fn mmss(s: f64) -> String {
     let s = s.max(0.0).round() as u64;
     format!("{}:{:02}", s / 60, s % 60)
@@ -533,7 +842,52 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
     let mut problems = Vec::new();
     let mut advice = Vec::new();
     let deco = dive.deco_required();
-    if deco {
+    // Gases first: a gas that poisons or starves the diver outweighs everything else.
+    for (i, c) in dive.gas.cylinders.iter().enumerate() {
+        let role = role_name(cfg.tanks[i].role);
+        if !c.po2_ok
+            && let Some(p) = c.max_po2
+        {
+            problems.push(format!(
+                "cylinder '{}' ({}, {role}): pO₂ {p:.2} bar at {:.1} m, above the {:.1} bar limit \
+                 of a {role} gas (MOD {:.1} m){}",
+                c.name,
+                c.gas,
+                c.max_po2_depth,
+                c.po2_limit,
+                c.mod_depth.max(0.0),
+                if cfg.tanks[i].role == CylinderRole::Deco {
+                    format!(
+                        "; its switch depth is {:.0} m",
+                        cfg.tanks[i].switch_depth.unwrap_or(0.0)
+                    )
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        if c.hypoxic {
+            problems.push(format!(
+                "cylinder '{}' ({}, {role}): hypoxic at the surface — pO₂ {:.2} bar, below {HYPOXIC:.2} bar",
+                c.name,
+                c.gas,
+                cfg.tanks[i].gas.o2 * cfg.env.surface_pressure
+            ));
+        }
+    }
+    if deco && dive.stops.is_empty() {
+        problems.push(format!(
+            "decompression dive: the ceiling leaves the surface at {} runtime ({} into the \
+             survey; ceiling {:.1} m at the end of the bottom time) at GF {:.0}/{:.0}; the ascent \
+             itself clears it without a stop, but the no-decompression limit is exceeded",
+            mmss(dive.deco_from.unwrap_or(0.0)),
+            mmss(dive.deco_from.unwrap_or(0.0) - dive.descent_time),
+            dive.ceiling_at_end,
+            cfg.gf.low * 100.0,
+            cfg.gf.high * 100.0
+        ));
+    }
+    if deco && !dive.stops.is_empty() {
         let total: f64 = dive.stops.iter().map(|s| s.duration).sum();
         let stops = dive
             .stops
@@ -555,14 +909,30 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
     let bar = |l: f64| cfg.supply.pressure_after(cfg.supply.start - l);
     if !g.reserve_ok {
         let when = match (g.empty_at, g.reserve_reached_at) {
-            (Some(e), _) => format!("the cylinders are empty at {} runtime", mmss(e)),
-            (None, Some(r)) => format!("the reserve is reached at {} runtime", mmss(r)),
+            (Some(e), _) => format!("; a cylinder is empty at {} runtime", mmss(e)),
+            (None, Some(r)) => format!("; the reserve is reached at {} runtime", mmss(r)),
             _ => String::new(),
         };
-        problems.push(format!(
-            "not enough gas: the dive needs {:.0} l but {} hold {:.0} l ({:.0} l above the {:.0} bar reserve); {when}",
-            g.used, cfg.supply.description, g.start, g.start - cfg.supply.reserve, cfg.reserve_bar
-        ));
+        for (i, c) in g
+            .cylinders
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| !c.reserve_ok)
+        {
+            let t = &cfg.tanks[i];
+            problems.push(format!(
+                "not enough gas in cylinder '{}' ({}, {}): {:.0} l breathed from it, it holds \
+                 {:.0} l ({:.0} l above the {:.0} bar reserve), {:.0} bar left at the end{when}",
+                c.name,
+                c.gas,
+                role_name(t.role),
+                c.used,
+                c.start,
+                c.start - t.reserve,
+                cfg.reserve_bar,
+                c.end_pressure
+            ));
+        }
     } else {
         if !g.thirds_ok {
             problems.push(format!(
@@ -584,7 +954,27 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
         }
     }
     let mut suggestions = Vec::new();
-    if !problems.is_empty() {
+    if !g.breathable() {
+        // Every other remedy is moot while a gas is unfit: name the gas that would do.
+        let p = cfg.env.pressure(dive.max_depth);
+        let o2 = ((cfg.po2_bottom / p) * 100.0).floor().min(40.0) / 100.0;
+        suggestions.push(Suggestion {
+            kind: "gas".into(),
+            text: format!(
+                "breathable gases: at {:.1} m a bottom gas may hold at most {:.0} % O₂ \
+                 (pO₂ {:.1} bar), e.g. {}; deco gases only from their switch depth; no gas \
+                 below {HYPOXIC:.2} bar pO₂ at the surface",
+                dive.max_depth,
+                o2 * 100.0,
+                cfg.po2_bottom,
+                gas_label(Gas {
+                    o2: o2.max(0.21),
+                    he: 0.0
+                })
+            ),
+            fixes_all: false,
+        });
+    } else if !problems.is_empty() {
         suggestions = remedies(cfg, track, dive);
     }
     if let Some(n) = dive.min_ndl
@@ -596,10 +986,15 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
             mmss(n)
         ));
     }
+    if !dive.ok() && problems.is_empty() {
+        problems.push("the plan breaks a rule of the dive".into());
+    }
     Verdict {
+        ok: dive.ok() && problems.is_empty(),
         within_ndl: !deco,
         deco_required: deco,
         gas_ok: g.ok(),
+        gases_ok: g.breathable(),
         problems,
         advice,
         suggestions,
@@ -727,8 +1122,7 @@ fn remedies(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Vec<Suggestio
             if mod_m < dive.max_depth {
                 continue;
             }
-            let mut c = cfg.clone();
-            c.supply.gas = mix;
+            let c = cfg.with_bottom_gas(mix);
             let r = simulate_fresh(&c, track, None);
             if !r.deco_required() {
                 out.push(Suggestion {

@@ -10,6 +10,7 @@
 //! | `sac` | l/min at 1 atm | consumption at depth = SAC·P_amb/1.01325 |
 
 use super::deco::{ATM, Gas};
+use crate::model::CylinderRole;
 use serde::Serialize;
 
 /// Cubic "virial minus one" coefficients of Z(p) (p in bar) for O₂, N₂ and He at ≈ 300 K:
@@ -104,24 +105,120 @@ impl Supply {
     }
 }
 
+/// One cylinder as the planner breathes it: its own gas, role and contents.
+#[derive(Debug, Clone, Serialize)]
+pub struct Tank {
+    pub name: String,
+    /// Water volume, l.
+    pub volume: f64,
+    /// Fill pressure, bar.
+    pub fill: f64,
+    pub gas: Gas,
+    pub role: CylinderRole,
+    /// Deco gas: the depth (m) from which the ascent breathes it.
+    pub switch_depth: Option<f64>,
+    /// Free gas at fill, l.
+    pub start: f64,
+    /// Free gas left at the reserve pressure, l.
+    pub reserve: f64,
+}
+
+impl Tank {
+    pub fn new(
+        name: &str,
+        volume_l: f64,
+        fill_bar: f64,
+        gas: Gas,
+        role: CylinderRole,
+        switch_depth: Option<f64>,
+        reserve_bar: f64,
+    ) -> Tank {
+        Tank {
+            name: name.to_string(),
+            volume: volume_l,
+            fill: fill_bar,
+            gas,
+            role,
+            switch_depth,
+            start: contents(gas, volume_l, fill_bar),
+            reserve: contents(gas, volume_l, reserve_bar.min(fill_bar)),
+        }
+    }
+    /// Pressure (bar) after breathing `used` litres.
+    pub fn pressure_after(&self, used: f64) -> f64 {
+        pressure_for(self.gas, self.volume, (self.start - used).max(0.0))
+    }
+    /// Whether the tank is breathed on the bottom (back gas or stage).
+    pub fn bottom_phase(&self) -> bool {
+        self.role != CylinderRole::Deco
+    }
+}
+
+/// The name of a mix as divers write it: `air`, `EAN32`, `O₂`, `TX18/45`.
+pub fn gas_label(g: Gas) -> String {
+    let o = (g.o2 * 100.0).round();
+    let h = (g.he * 100.0).round();
+    if h > 0.0 {
+        format!("TX{o:.0}/{h:.0}")
+    } else if (20.5..=21.5).contains(&(g.o2 * 100.0)) {
+        "air".into()
+    } else if o >= 100.0 {
+        "O₂".into()
+    } else {
+        format!("EAN{o:.0}")
+    }
+}
+
 /// Gas breathed in `dt` s at ambient `p_amb` bar with SAC `sac_lpm` l/min.
 pub fn consumption(sac_lpm: f64, p_amb: f64, dt: f64) -> f64 {
     sac_lpm * (p_amb / ATM) * dt / 60.0
 }
 
+/// How one cylinder was breathed, and whether its gas was safe to breathe there.
+#[derive(Debug, Clone, Serialize)]
+pub struct CylinderUse {
+    pub name: String,
+    /// `air`, `EAN50`, `O₂`, `TX18/45`.
+    pub gas: String,
+    pub role: CylinderRole,
+    /// Free gas at the start and breathed from it, l; pressure at the end, bar.
+    pub start: f64,
+    pub used: f64,
+    pub end_pressure: f64,
+    /// The reserve is still in it at the end.
+    pub reserve_ok: bool,
+    /// Highest and lowest pO₂ breathed from it, bar (None: never breathed), the depth of the
+    /// highest, and the limit that applies to its role.
+    pub max_po2: Option<f64>,
+    pub max_po2_depth: f64,
+    pub min_po2: Option<f64>,
+    pub po2_limit: f64,
+    /// The gas's MOD at that limit, m.
+    pub mod_depth: f64,
+    pub po2_ok: bool,
+    /// Breathed at the surface with a pO₂ below [`HYPOXIC`] bar.
+    pub hypoxic: bool,
+}
+
+/// Lowest pO₂ fit to breathe at the surface, bar (the customary 0.16 bar hypoxic limit; at
+/// altitude the limit drops to air's own pO₂ so that air is never called hypoxic).
+pub const HYPOXIC: f64 = 0.16;
+
 /// The three gas rules and what each allows.
 #[derive(Debug, Clone, Serialize)]
 pub struct GasCheck {
-    /// Free gas breathed over the whole dive, l.
+    /// Every cylinder on its own.
+    pub cylinders: Vec<CylinderUse>,
+    /// Free gas breathed from the bottom cylinders (back gas and stages), l.
     pub used: f64,
-    /// Gas in the cylinders at the start, l.
+    /// Gas in the bottom cylinders at the start, l.
     pub start: f64,
-    /// Pressure at the end of the dive, bar (≤ 0 → ran out).
+    /// Pressure of the last back-gas cylinder breathed at the end of the dive, bar (0: ran out).
     pub end_pressure: f64,
-    /// Reserve pressure asked for, bar, and whether it is kept.
+    /// Reserve pressure asked for, bar, and whether every cylinder keeps it.
     pub reserve_bar: f64,
     pub reserve_ok: bool,
-    /// Rule of thirds: at most two thirds of the start gas used.
+    /// Rule of thirds: at most two thirds of the bottom cylinders' gas used.
     pub thirds_ok: bool,
     /// Subsurface's minimum gas at the end of the bottom time (SAC×4, 4 min problem solving at
     /// the deepest depth + ascent gas ×4), l, and whether the gas left there covers it.
@@ -140,6 +237,10 @@ impl GasCheck {
     /// gas is reported as advice: its ×4 factor assumes sharing gas with a stressed buddy.)
     pub fn ok(&self) -> bool {
         self.reserve_ok && self.thirds_ok
+    }
+    /// Every breathed gas within its pO₂ limit and none hypoxic at the surface.
+    pub fn breathable(&self) -> bool {
+        self.cylinders.iter().all(|c| c.po2_ok && !c.hypoxic)
     }
 }
 
@@ -161,5 +262,13 @@ mod tests {
         // Inverse.
         let p = pressure_for(Gas::AIR, 12.0, 2287.0);
         assert!((p - 200.0).abs() < 0.05, "{p}");
+    }
+
+    #[test]
+    fn gas_labels() {
+        assert_eq!(gas_label(Gas::AIR), "air");
+        assert_eq!(gas_label(Gas { o2: 0.5, he: 0.0 }), "EAN50");
+        assert_eq!(gas_label(Gas { o2: 1.0, he: 0.0 }), "O₂");
+        assert_eq!(gas_label(Gas { o2: 0.18, he: 0.45 }), "TX18/45");
     }
 }

@@ -1,19 +1,67 @@
-//! SVG plot of a simulated dive: depth and ceiling (m, down) and NDL (min, right axis) over
-//! runtime, with the stops and the safety stop visible in the depth line.
+//! Plot of a simulated dive, as SVG or PNG: depth and ceiling (m, down) and NDL (min, right
+//! axis) over runtime, with the stops and the safety stop visible in the depth line.
+//!
+//! | output | backend | text |
+//! |---|---|---|
+//! | SVG | plotters' SVG backend | `<text>` elements (the viewer's sans-serif) |
+//! | PNG 960×540 | plotters' bitmap backend, encoded by `image` | DejaVu Sans, embedded (`assets/fonts`, its licence beside it) |
 
 use super::deco::{NDL_CAP, Ndl};
 use super::dive::DiveReport;
 use plotters::prelude::*;
 
+const SIZE: (u32, u32) = (960, 540);
+
+/// Text is laid out (both outputs) and drawn (PNG) with one embedded font, so the plot looks
+/// the same on every machine.
+fn fonts() -> Result<(), String> {
+    static ONCE: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    ONCE.get_or_init(|| {
+        let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
+            .map_err(|_| "the embedded plot font is unreadable".to_string())
+    })
+    .clone()
+}
+
 /// Render the dive as an SVG document.
 pub fn svg(report: &DiveReport, title: &str) -> Result<String, String> {
+    fonts()?;
+    let mut buf = String::new();
+    draw(
+        SVGBackend::with_string(&mut buf, SIZE).into_drawing_area(),
+        report,
+        title,
+    )?;
+    Ok(buf)
+}
+
+/// Render the dive as a PNG file's bytes.
+pub fn png(report: &DiveReport, title: &str) -> Result<Vec<u8>, String> {
+    fonts()?;
+    let mut rgb = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
+    draw(
+        BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(),
+        report,
+        title,
+    )?;
+    let img = image::RgbImage::from_raw(SIZE.0, SIZE.1, rgb).ok_or("plot buffer size")?;
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .map_err(|e| e.to_string())?;
+    Ok(out.into_inner())
+}
+
+fn draw<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    report: &DiveReport,
+    title: &str,
+) -> Result<(), String> {
     let dive = &report.dive;
     let tmax = (dive.runtime / 60.0).max(1.0);
     let dmax = (dive.max_depth * 1.15).max(5.0);
     let ndl_max = NDL_CAP / 60.0;
-    let mut buf = String::new();
     {
-        let root = SVGBackend::with_string(&mut buf, (960, 540)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 20))
@@ -81,5 +129,5 @@ pub fn svg(report: &DiveReport, title: &str) -> Result<String, String> {
             .map_err(|e| e.to_string())?;
         root.present().map_err(|e| e.to_string())?;
     }
-    Ok(buf)
+    Ok(())
 }

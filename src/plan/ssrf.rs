@@ -103,36 +103,32 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
         .map_err(|e| e.to_string())?;
     end(&mut w, "notes")?;
 
-    // Cylinders: gas drawn from them in proportion to their contents (one pooled supply).
-    let frac_left = if dive.gas.start > 0.0 {
-        ((dive.gas.start - dive.gas.used) / dive.gas.start).max(0.0)
-    } else {
-        0.0
-    };
-    let cyls: Vec<(String, f64, f64, f64, f64)> = match &model.diver {
-        Some(d) => d
-            .cylinders
-            .iter()
-            .map(|c| (c.name.clone(), c.volume * 1e3, c.pressure / 1e5, c.o2, c.he))
-            .collect(),
-        None => vec![("12 l".into(), 12.0, 200.0, cfg.supply.gas.o2, 0.0)],
-    };
-    for (name, vol, fill, o2, he) in &cyls {
-        let gas = super::deco::Gas { o2: *o2, he: *he };
-        let left = super::gas::contents(gas, *vol, *fill) * frac_left;
-        let end_bar = super::gas::pressure_for(gas, *vol, left);
+    // Cylinders: each with its own gas and the pressure the simulation left in it.
+    for (t, u) in cfg.tanks.iter().zip(&dive.gas.cylinders) {
         let mut attrs = vec![
-            ("size", format!("{} l", milli(*vol))),
-            ("workpressure", format!("{} bar", milli(*fill))),
-            ("description", name.clone()),
-            ("o2", pct(*o2)),
+            ("size", format!("{} l", milli(t.volume))),
+            ("workpressure", format!("{} bar", milli(t.fill))),
+            ("description", t.name.clone()),
+            ("o2", pct(t.gas.o2)),
         ];
-        if *he > 0.0 {
-            attrs.push(("he", pct(*he)));
+        if t.gas.he > 0.0 {
+            attrs.push(("he", pct(t.gas.he)));
         }
-        attrs.push(("start", format!("{} bar", milli(*fill))));
+        if t.role == crate::model::CylinderRole::Deco {
+            attrs.push(("use", "OC-gas".into()));
+            if let Some(d) = t.switch_depth {
+                attrs.push(("depth", format!("{} m", milli(d))));
+            }
+        }
+        attrs.push(("start", format!("{} bar", milli(t.fill))));
         // Subsurface ignores a pressure of 0; an empty cylinder is written as 1 bar.
-        attrs.push(("end", format!("{} bar", milli(end_bar.max(1.0)))));
+        attrs.push((
+            "end",
+            format!(
+                "{} bar",
+                milli(((u.end_pressure * 1000.0).round() / 1000.0).max(1.0))
+            ),
+        ));
         empty(&mut w, "cylinder", &attrs)?;
     }
     start(
@@ -154,6 +150,26 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
         )],
     )?;
     empty(&mut w, "water", &[("salinity", salinity.into())])?;
+    // Gas changes (Subsurface's `gaschange` events: type 11 O₂ %, type 25 O₂ % + He % << 16).
+    for sw in &dive.switches {
+        if sw.time <= 0.0 && sw.cylinder == 0 {
+            continue;
+        }
+        let g = cfg.tanks[sw.cylinder].gas;
+        let o2 = (g.o2 * 100.0).round() as u32;
+        let he = (g.he * 100.0).round() as u32;
+        empty(
+            &mut w,
+            "event",
+            &[
+                ("time", min_sec(sw.time.round())),
+                ("type", if he > 0 { "25" } else { "11" }.into()),
+                ("value", (o2 + (he << 16)).to_string()),
+                ("name", "gaschange".into()),
+                ("cylinder", sw.cylinder.to_string()),
+            ],
+        )?;
+    }
     for s in &dive.samples {
         let mut a = vec![
             ("time", min_sec(s.time)),
@@ -162,14 +178,21 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
                 format!("{} m", milli((s.depth * 100.0).round() / 100.0)),
             ),
         ];
-        // Subsurface reads a pressure of 0 as "no value": write the floor 1 bar when empty.
-        a.push((
-            "pressure",
-            format!(
-                "{} bar",
-                milli(((s.pressure * 10.0).round() / 10.0).max(1.0))
-            ),
-        ));
+        // One pressure per cylinder (`pressure`, `pressure1`…`pressure4`). Subsurface reads a
+        // pressure of 0 as "no value": write the floor 1 bar when empty.
+        for (i, p) in s.pressures.iter().enumerate().take(5) {
+            let key = [
+                "pressure",
+                "pressure1",
+                "pressure2",
+                "pressure3",
+                "pressure4",
+            ][i];
+            a.push((
+                key,
+                format!("{} bar", milli(((p * 10.0).round() / 10.0).max(1.0))),
+            ));
+        }
         match s.ndl {
             Some(Ndl::Limit(n)) => a.push(("ndl", min_sec((n / 60.0).floor() * 60.0))),
             Some(Ndl::Unlimited) => a.push(("ndl", min_sec(super::deco::NDL_CAP))),

@@ -765,12 +765,20 @@ pub struct Diver {
     pub sac: Option<Flow>,
     /// Bühlmann gradient factor low. **Unit:** fraction (`0.3` or `"30 %"`). **Default:** 0.3.
     pub gf_low: Option<Fraction>,
-    /// Bühlmann gradient factor high. **Unit:** fraction. **Default:** 0.7.
+    /// Bühlmann gradient factor high. **Unit:** fraction. **Default:** 0.75 (with `gf_low`
+    /// 0.3: Subsurface's default GF 30/75).
     pub gf_high: Option<Fraction>,
-    /// Gas that must remain at the surface. **Unit:** Pa (write `"50 bar"`). **Default:**
-    /// 50 bar.
+    /// Gas that must remain in every cylinder at the surface. **Unit:** Pa (write
+    /// `"50 bar"`). **Default:** 50 bar.
     pub reserve: Option<Pressure>,
-    /// `"salt"` (1025 kg/m³) or `"fresh"` (1000 kg/m³). **Default:** `"salt"`.
+    /// Highest pO₂ of bottom and stage gases (sets their MOD). **Unit:** Pa (write
+    /// `"1.4 bar"`). **Default:** 1.4 bar (Subsurface).
+    pub po2_bottom: Option<Pressure>,
+    /// Highest pO₂ of deco gases (sets their default switch depth). **Unit:** Pa (write
+    /// `"1.6 bar"`). **Default:** 1.6 bar (Subsurface).
+    pub po2_deco: Option<Pressure>,
+    /// `"salt"` (1030 kg/m³, Subsurface's sea water) or `"fresh"` (1000 kg/m³).
+    /// **Default:** `"salt"`.
     pub water: Option<String>,
     /// Cylinders carried: `[[diver.cylinders]]`. **Default:** one 12 l, 200 bar of air.
     pub cylinders: Option<Vec<CylinderTable>>,
@@ -793,6 +801,14 @@ pub struct CylinderTable {
     pub o2: Option<Fraction>,
     /// He fraction (overrides `gas`). **Unit:** fraction.
     pub he: Option<Fraction>,
+    /// `"bottom"` (back gas, breathed from the surface), `"stage"` (bottom gas breathed
+    /// first, down to the reserve) or `"deco"` (breathed on the ascent from `switch_depth`).
+    /// **Default:** `"bottom"` for the first cylinder; later ones `"deco"` when richer in O₂
+    /// than the first, else `"bottom"`.
+    pub role: Option<String>,
+    /// Deco gas: depth from which it is breathed on the ascent. **Unit:** m. **Default:** its
+    /// MOD at `diver.po2_deco`, rounded down to whole metres.
+    pub switch_depth: Option<Length>,
 }
 
 /// `[render]` — render settings shared by every backend (image size is on `[camera]`).

@@ -2060,7 +2060,8 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
         check::positive(cx, &d, k, v, u);
     }
     let gf_low = d.f64(cx, "gf_low", Dim::Fraction, 0.3);
-    let gf_high = d.f64(cx, "gf_high", Dim::Fraction, 0.7);
+    // Subsurface's default gradient factors, 30/75 (its `core/pref.cpp`), as without [diver].
+    let gf_high = d.f64(cx, "gf_high", Dim::Fraction, 0.75);
     for (k, v) in [("gf_low", gf_low), ("gf_high", gf_high)] {
         if !(v > 0.0 && v <= 1.0) {
             let sp = d.span_of(k);
@@ -2082,8 +2083,23 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
         );
     }
     let reserve = d.f64(cx, "reserve", Dim::Pressure, 50e5);
+    let po2_bottom = d.f64(cx, "po2_bottom", Dim::Pressure, 1.4e5) / 1e5;
+    let po2_deco = d.f64(cx, "po2_deco", Dim::Pressure, 1.6e5) / 1e5;
+    for (k, v) in [("po2_bottom", po2_bottom), ("po2_deco", po2_deco)] {
+        if !(v.is_finite() && (0.16..=2.0).contains(&v)) {
+            let sp = d.span_of(k);
+            cx.push(
+                Diagnostic::error("E0324", format!("`{k}` must be a pO₂ limit in 0.16…2 bar"))
+                    .label(sp, format!("{} bar", num(v)))
+                    .help(format!(
+                        "Subsurface's limits are 1.4 bar on the bottom and 1.6 bar for deco gases: `{k} = \"{}\"`",
+                        if k == "po2_deco" { "1.6 bar" } else { "1.4 bar" }
+                    )),
+            );
+        }
+    }
     let salt_water = !matches!(d.choice(cx, "water", &["salt", "fresh"]), Some("fresh"));
-    let mut cylinders = Vec::new();
+    let mut cylinders: Vec<Cylinder> = Vec::new();
     for (i, n) in d.tables(cx, "cylinders").into_iter().enumerate() {
         let mut c = Tab::open(cx, Some(n), &format!("diver.cylinders[{i}]"), n.span);
         let name = c
@@ -2114,13 +2130,68 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
         if let Some(x) = c.opt_f64(cx, "he", Dim::Fraction) {
             he = x;
         }
-        if !(o2 > 0.0 && he >= 0.0 && o2 + he <= 1.0 + 1e-12) {
-            let sp = c.span_of(if c.has("o2") { "o2" } else { "gas" });
+        let mut mix_ok = true;
+        for (k, v, lo) in [("o2", o2, 0.0), ("he", he, -1e-12)] {
+            if !(v > lo && v <= 1.0 + 1e-12) {
+                mix_ok = false;
+                let sp = c.span_of(if c.has(k) { k } else { "gas" });
+                cx.push(
+                    Diagnostic::error("E0322", format!("`{k}` fraction out of range"))
+                        .label(
+                            sp,
+                            format!(
+                                "{} is not a fraction in {}",
+                                num(v),
+                                if k == "o2" { "(0, 1]" } else { "[0, 1]" }
+                            ),
+                        )
+                        .help(format!(
+                            "gas fractions are parts of one: `{k} = 0.32` or `{k} = \"32 %\"`"
+                        )),
+                );
+            }
+        }
+        if mix_ok && o2 + he > 1.0 + 1e-12 {
+            let sp = c.span_of(if c.has("he") {
+                "he"
+            } else if c.has("o2") {
+                "o2"
+            } else {
+                "gas"
+            });
             cx.push(
-                Diagnostic::error("E0322", "impossible gas mix")
-                    .label(sp, format!("O₂ {}, He {}", num(o2), num(he)))
-                    .help("fractions must be ≥ 0, O₂ > 0, and O₂ + He ≤ 1"),
+                Diagnostic::error("E0322", "impossible gas mix: O₂ + He exceed the whole")
+                    .label(sp, format!("O₂ {} + He {} = {} > 1", num(o2), num(he), num(o2 + he)))
+                    .help("the fractions of O₂ and He must add up to at most 1 (the rest is N₂), e.g. TX18/45: `o2 = 0.18`, `he = 0.45`"),
             );
+        }
+        let role_given = c.choice(cx, "role", &["bottom", "stage", "deco"]);
+        let role = match role_given {
+            Some("stage") => CylinderRole::Stage,
+            Some("deco") => CylinderRole::Deco,
+            Some(_) => CylinderRole::Bottom,
+            // Unsaid: the first cylinder is the back gas; a later richer gas is for deco.
+            None => match cylinders.first() {
+                Some(first) if o2 > first.o2 + 1e-9 => CylinderRole::Deco,
+                _ => CylinderRole::Bottom,
+            },
+        };
+        let sw_span = c.span_of("switch_depth");
+        let switch_depth = c.opt_f64(cx, "switch_depth", Dim::Length);
+        if let Some(sw) = switch_depth {
+            if !(sw.is_finite() && sw >= 0.0) {
+                cx.push(
+                    Diagnostic::error("E0325", "`switch_depth` must be a depth ≥ 0")
+                        .label(sw_span, format!("{} m", num(sw)))
+                        .help("the depth from which the deco gas is breathed, e.g. `switch_depth = \"21 m\"` for EAN50"),
+                );
+            } else if role != CylinderRole::Deco {
+                cx.push(
+                    Diagnostic::error("E0325", "`switch_depth` is only for deco cylinders")
+                        .label(sw_span, "this cylinder is not a deco gas")
+                        .help("add `role = \"deco\"` or remove `switch_depth`"),
+                );
+            }
         }
         c.finish(cx);
         cylinders.push(Cylinder {
@@ -2129,6 +2200,8 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
             pressure,
             o2,
             he,
+            role,
+            switch_depth,
         });
     }
     if cylinders.is_empty() {
@@ -2138,7 +2211,17 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
             pressure: 200e5,
             o2: 0.21,
             he: 0.0,
+            role: CylinderRole::Bottom,
+            switch_depth: None,
         });
+    }
+    if !cylinders.iter().any(|c| c.role != CylinderRole::Deco) {
+        let sp = d.span_of("cylinders");
+        cx.push(
+            Diagnostic::error("E0326", "no bottom gas: every cylinder is a deco gas")
+                .label(sp, "no cylinder with role \"bottom\" or \"stage\"")
+                .help("mark the back gas `role = \"bottom\"`"),
+        );
     }
     d.finish(cx);
     Some(Diver {
@@ -2151,6 +2234,8 @@ fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
         gf_high,
         reserve,
         salt_water,
+        po2_bottom,
+        po2_deco,
     })
 }
 

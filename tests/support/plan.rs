@@ -17,11 +17,15 @@ pub fn diver(cyl_l: f64, fill_bar: f64) -> Diver {
             pressure: fill_bar * 1e5,
             o2: 0.21,
             he: 0.0,
+            role: CylinderRole::Bottom,
+            switch_depth: None,
         }],
         gf_low: 0.3,
         gf_high: 0.75,
         reserve: 50e5,
         salt_water: true,
+        po2_bottom: 1.4,
+        po2_deco: 1.6,
     }
 }
 
