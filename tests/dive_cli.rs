@@ -47,8 +47,14 @@ fn oxygen_stage_is_not_pooled_with_the_back_gas() {
     let two = "diver.cylinders=[{name = \"12 l air\", volume = \"12 l\", pressure = \"200 bar\", \
                gas = \"air\"}, {name = \"O2 deco\", volume = \"11 l\", pressure = \"200 bar\", \
                gas = \"O2\"}]";
-    let (text, out) = dive("paper_survey", &[two]);
+    // Ten strips (51:50 at 15 m, ≈ 2760 l): more than the back gas holds above its reserve, less
+    // than both cylinders pooled — the pooled check called this "enough gas".
+    let (text, out) = dive(
+        "paper_survey",
+        &[two, "network.strips=10", "network.width=\"18 m\""],
+    );
     assert!(out.status.success(), "{text}");
+    assert!(text.contains("Verdict: NOT SAFE AS PLANNED"), "{text}");
     assert!(
         text.contains("not enough gas in '12 l air' (air)"),
         "the verdict names the cylinder: {text}"
@@ -132,4 +138,21 @@ fn closed_pipe_exits_quietly() {
             out.status
         );
     }
+}
+
+#[test]
+fn readme_two_gas_example_is_the_tools_output() {
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let cmd = "$ poser dive scenarios/two_gas_dive.toml\n";
+    let start = readme.find(cmd).expect("README shows the two-gas command") + cmd.len();
+    let shown = &readme[start..start + readme[start..].find("```").unwrap()];
+    let (text, out) = dive("two_gas_dive", &[]);
+    assert!(out.status.success());
+    assert_eq!(
+        shown, text,
+        "README's dive example is stale: paste the output again"
+    );
+    // Per-cylinder verdict on both gases.
+    assert!(text.contains("'back' air (bottom") && text.contains("'deco' EAN50 (deco from 21 m"));
 }

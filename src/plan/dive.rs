@@ -1093,7 +1093,7 @@ fn remedies(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Vec<Suggestio
         out.push(Suggestion {
             kind: "faster_swim".into(),
             text: format!(
-                "faster swim: {v:.2} m/s instead of {:.2} m/s (×{hi:.2}, survey {} instead of {}) fits \
+                "faster swim: {v:.2} m/s instead of {:.3} m/s (×{hi:.2}, survey {} instead of {}) fits \
                  one dive{}",
                 cfg.speed,
                 mmss(track.duration() / hi),
