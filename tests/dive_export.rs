@@ -142,3 +142,86 @@ fn exports_are_deterministic() {
         poser::plan::plot::svg(&b, "t").unwrap()
     );
 }
+
+/// Every element `name` of the document with its attributes.
+fn elements(xml: &[u8], name: &str) -> Vec<HashMap<String, String>> {
+    let mut reader = Reader::from_reader(xml);
+    let mut out = Vec::new();
+    let mut buf = Vec::new();
+    loop {
+        match reader.read_event_into(&mut buf).expect("well-formed XML") {
+            Event::Start(e) | Event::Empty(e) if e.name().into_inner() == name => {
+                out.push(
+                    e.attributes()
+                        .map(|a| {
+                            let a = a.unwrap();
+                            (
+                                a.key.into_inner().to_string(),
+                                a.normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                                    .unwrap()
+                                    .into_owned(),
+                            )
+                        })
+                        .collect(),
+                );
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+        buf.clear();
+    }
+    out
+}
+
+#[test]
+fn ssrf_two_gases_per_cylinder() {
+    // 30 m for 35 min on air with an EAN50 deco cylinder: two <cylinder>s with their own gas
+    // and end pressure, a gaschange event at the switch, a pressure per cylinder in the samples.
+    let mut d = common::diver(24.0, 232.0);
+    d.cylinders.push(poser::model::Cylinder {
+        name: "deco".into(),
+        volume: 0.007,
+        pressure: 200e5,
+        o2: 0.5,
+        he: 0.0,
+        role: poser::model::CylinderRole::Deco,
+        switch_depth: None,
+    });
+    let length = 35.0 * 60.0 * 0.2;
+    let (poses, net) = common::lawnmower(1, length, 2.0, 30.0, 0.2, length / 20.0);
+    let m = common::model(poses, net, Some(d), 32.0);
+    let r = plan_dive(&m, 10.0).unwrap();
+    let xml = poser::plan::ssrf::to_ssrf(&m, &r).unwrap();
+    let cyl = elements(&xml, "cylinder");
+    assert_eq!(cyl.len(), 2);
+    assert_eq!(lead(&cyl[0]["o2"]), 21.0);
+    assert_eq!(lead(&cyl[1]["o2"]), 50.0);
+    assert_eq!(lead(&cyl[1]["depth"]), 21.0);
+    for (c, u) in cyl.iter().zip(&r.dive.gas.cylinders) {
+        assert!((lead(&c["end"]) - u.end_pressure).abs() < 0.01, "{c:?}");
+    }
+    assert!(lead(&cyl[1]["end"]) < 200.0, "the deco gas was breathed");
+    let ev = elements(&xml, "event");
+    let gc: Vec<_> = ev.iter().filter(|e| e["name"] == "gaschange").collect();
+    assert_eq!(gc.len(), 1, "{ev:?}");
+    assert_eq!(
+        (gc[0]["cylinder"].as_str(), gc[0]["value"].as_str()),
+        ("1", "50")
+    );
+    let sw = r.dive.switches.iter().find(|s| s.cylinder == 1).unwrap();
+    assert!((parse_min(&gc[0]["time"]) - sw.time).abs() <= 1.0);
+    let samples = elements(&xml, "sample");
+    assert!(
+        samples
+            .iter()
+            .all(|s| s.contains_key("pressure") && s.contains_key("pressure1"))
+    );
+    // The deco cylinder's pressure only falls after the switch.
+    let before: Vec<f64> = samples
+        .iter()
+        .filter(|s| parse_min(&s["time"]) < sw.time - 1.0)
+        .map(|s| lead(&s["pressure1"]))
+        .collect();
+    assert!(before.iter().all(|&p| p == 200.0));
+    assert!(lead(&samples.last().unwrap()["pressure1"]) < 200.0);
+}

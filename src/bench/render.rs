@@ -520,6 +520,7 @@ impl Report {
 
     /// Log-log plot of error against wall-clock time, one panel per scene.
     pub fn plot_svg(&self) -> Result<String, String> {
+        crate::plan::plot::register_font()?;
         use plotters::prelude::*;
         let mut buf = String::new();
         {

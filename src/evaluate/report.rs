@@ -259,6 +259,7 @@ pub fn deformation_png(ev: &Evaluation) -> Result<Vec<u8>, String> {
 
 /// Binned means of the height error along x and along y, as an SVG chart.
 pub fn profile_svg(ev: &Evaluation) -> Result<String, String> {
+    crate::plan::plot::register_font()?;
     use plotters::prelude::*;
     let bins = 24usize;
     let series = |axis: usize| -> Vec<(f64, f64)> {

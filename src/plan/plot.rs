@@ -12,9 +12,10 @@ use plotters::prelude::*;
 
 const SIZE: (u32, u32) = (960, 540);
 
-/// Text is laid out (both outputs) and drawn (PNG) with one embedded font, so the plot looks
-/// the same on every machine.
-fn fonts() -> Result<(), String> {
+/// Text is laid out (SVG and PNG) and drawn (PNG) with one embedded font, so a plot looks the
+/// same on every machine. plotters needs the font registered before any chart with text is
+/// drawn, on any backend: every plot of poser calls this first.
+pub fn register_font() -> Result<(), String> {
     static ONCE: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
     ONCE.get_or_init(|| {
         let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
@@ -26,7 +27,7 @@ fn fonts() -> Result<(), String> {
 
 /// Render the dive as an SVG document.
 pub fn svg(report: &DiveReport, title: &str) -> Result<String, String> {
-    fonts()?;
+    register_font()?;
     let mut buf = String::new();
     draw(
         SVGBackend::with_string(&mut buf, SIZE).into_drawing_area(),
@@ -38,7 +39,7 @@ pub fn svg(report: &DiveReport, title: &str) -> Result<String, String> {
 
 /// Render the dive as a PNG file's bytes.
 pub fn png(report: &DiveReport, title: &str) -> Result<Vec<u8>, String> {
-    fonts()?;
+    register_font()?;
     let mut rgb = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
     draw(
         BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(),
