@@ -1,5 +1,5 @@
 //! Decompression: Bühlmann ZHL-16C with gradient factors, as Subsurface computes it
-//! (`core/deco.cpp`, `core/planner.cpp`; see `shared/reference/dive-and-subsurface.md` §2).
+//! (`core/deco.cpp`, `core/planner.cpp`; Bühlmann, *Tauchmedizin*; Baker, "Clearing up the confusion about deep stops" for the gradient factors).
 //! Owns the tissue state, ceilings, no-decompression limits, and the ascent with stops.
 //!
 //! | parameter | unit | default | meaning |
