@@ -77,7 +77,10 @@ fn xml_illegal_characters_in_names_never_reach_the_documents() {
         if let Some(bad) = s.chars().find(|&ch| !is_xml_char(ch)) {
             panic!("{f}: XML-illegal character {:?}", bad);
         }
-        assert!(s.contains('\u{FFFD}'), "{f}: the names were not written at all");
+        assert!(
+            s.contains('\u{FFFD}'),
+            "{f}: the names were not written at all"
+        );
     }
     assert!(docs >= 2);
 }

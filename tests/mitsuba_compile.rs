@@ -410,7 +410,10 @@ fn every_shipped_scene_compiles_or_says_why() {
 fn sun_and_port_housing_warn_about_the_housing_shadow() {
     let m = showcase();
     let w = mitsuba::housing_shadow_warning(&m).expect("sun + ports: a warning");
-    assert!(!w.contains('\n') && w.contains("`left`") && w.contains("shadow"), "{w}");
+    assert!(
+        !w.contains('\n') && w.contains("`left`") && w.contains("shadow"),
+        "{w}"
+    );
     let c = mitsuba::build(&m).unwrap();
     assert!(c.warnings.iter().any(|x| x == &w), "{:?}", c.warnings);
     let mut no_sun = showcase();
