@@ -746,3 +746,15 @@ impl Default for Sensor {
         }
     }
 }
+
+/// Whether a name may become part of a file name (camera names form image names in a rig):
+/// letters and digits (any script), `_`, `-`, `.`; not empty, not starting with `.`, at most
+/// 100 characters. So no separator, no `..`, no control or XML-illegal character. The front
+/// end checks every such name with this rule (`scene::resolve`, error E0234).
+pub fn is_safe_file_name(s: &str) -> bool {
+    !s.is_empty()
+        && s.chars().count() <= 100
+        && !s.starts_with('.')
+        && s.chars()
+            .all(|c| c.is_alphanumeric() || matches!(c, '_' | '-' | '.'))
+}

@@ -402,3 +402,24 @@ fn every_shipped_scene_compiles_or_says_why() {
         }
     }
 }
+
+/// The housing policy (docs/render-conventions.md §5: the housing casts no shadow) cannot be
+/// expressed in Mitsuba 3 (no shadow-ray visibility), so a scene with a sun and a port housing
+/// gets one warning line naming the camera; without a sun, or without a port, none.
+#[test]
+fn sun_and_port_housing_warn_about_the_housing_shadow() {
+    let m = showcase();
+    let w = mitsuba::housing_shadow_warning(&m).expect("sun + ports: a warning");
+    assert!(
+        !w.contains('\n') && w.contains("`left`") && w.contains("shadow"),
+        "{w}"
+    );
+    let c = mitsuba::build(&m).unwrap();
+    assert!(c.warnings.iter().any(|x| x == &w), "{:?}", c.warnings);
+    let mut no_sun = showcase();
+    no_sun.sun = None;
+    assert_eq!(mitsuba::housing_shadow_warning(&no_sun), None);
+    let mut no_port = base("np", camera("cam", Port::None), None, nadir(DVec3::ZERO));
+    no_port.sun = showcase().sun;
+    assert_eq!(mitsuba::housing_shadow_warning(&no_port), None);
+}

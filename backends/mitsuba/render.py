@@ -6,6 +6,12 @@ its pass(es) with variant ``scalar_rgb`` and writes ``{image}.exr`` (linear RGB,
 A view with three passes (dispersion) takes channel c of pass c and combines them into one RGB
 image. Files are written atomically (temporary name, then rename).
 
+When the manifest has ``"depth": true``, also writes ``{image}.depth.exr``: the camera-frame z
+(m) of the first surface hit through each pixel centre, 0 where nothing is hit (the native
+backend's definition). The pixel-centre ray is traced exactly through the port: dielectric
+surfaces are crossed by their refracted (transmitted) direction, `null` surfaces (the water's
+bounds, area lights) passed through.
+
 Machine-readable lines on stdout (the Rust side turns them into a progress bar):
 
     progress <passes done> <passes total> <image>
@@ -91,6 +97,48 @@ def render_pass(mi, xml: Path, seed: int, spp: int) -> np.ndarray:
     return np.array(img, dtype=np.float32)
 
 
+def depth_image(mi, xml: Path) -> np.ndarray:
+    """Camera-frame z of the first opaque surface through each pixel centre (H×W, 0: none)."""
+    scene = mi.load_file(str(xml))
+    sensor = scene.sensors()[0]
+    width, height = sensor.film().crop_size()
+    cam_from_world = sensor.world_transform().inverse()
+    ctx = mi.BSDFContext()
+    out = np.zeros((height, width), dtype=np.float32)
+    for j in range(height):
+        for i in range(width):
+            pos = mi.Point2f((i + 0.5) / width, (j + 0.5) / height)
+            ray, _ = sensor.sample_ray(0.0, 0.5, pos, mi.Point2f(0.5, 0.5))
+            for _ in range(64):
+                si = scene.ray_intersect(ray)
+                if not si.is_valid():
+                    break
+                bsdf = si.bsdf(ray)
+                flags = bsdf.flags()
+                if mi.has_flag(flags, mi.BSDFFlags.Null):
+                    ray = si.spawn_ray(ray.d)
+                    continue
+                if mi.has_flag(flags, mi.BSDFFlags.DeltaTransmission):
+                    # sample1 above the Fresnel reflectance selects the transmitted direction.
+                    bs, _ = bsdf.sample(ctx, si, 0.999999, mi.Point2f(0.5, 0.5))
+                    if not mi.has_flag(bs.sampled_type, mi.BSDFFlags.DeltaTransmission):
+                        break  # total internal reflection: no surface seen
+                    ray = si.spawn_ray(si.to_world(bs.wo))
+                    continue
+                out[j, i] = (cam_from_world @ si.p)[2]
+                break
+    return out
+
+
+def write_depth(mi, depth: np.ndarray, out: Path, image: str) -> Path:
+    """``{image}.depth.exr``: z in all three channels, as the native backend writes it."""
+    path = out / f"{image}.depth.exr"
+    rgb = np.repeat(depth[:, :, None], 3, axis=2)
+    bmp = mi.Bitmap(np.ascontiguousarray(rgb, dtype=np.float32), mi.Bitmap.PixelFormat.RGB)
+    _atomic(path, bmp.write)
+    return path
+
+
 def run(scene_dir: Path, out: Path, poses: list[int] | None, spp: int | None, log=print) -> list[Path]:
     """Render the selected views; returns the EXR paths written."""
     import mitsuba as mi
@@ -111,6 +159,9 @@ def run(scene_dir: Path, out: Path, poses: list[int] | None, spp: int | None, lo
         rgb = combine_passes(images, channels)
         exr = write_images(mi, rgb, out, v["image"], float(manifest.get("exposure", 1.0)))
         written.append(exr)
+        if manifest.get("depth"):
+            # Geometry only: the first pass's document (indices of its channel).
+            write_depth(mi, depth_image(mi, scene_dir / v["passes"][0]["xml"]), out, v["image"])
         log(f"image {exr.name}", flush=True)
     return written
 

@@ -19,7 +19,10 @@
 //!
 //! `render(model, out, opts)` compiles into `out/mitsuba/`, runs the driver (a progress bar on
 //! stderr), which writes `out/{image}.exr` (linear, float32) and `out/{image}.png` (sRGB
-//! preview × `render.exposure`). The ground truth beside them is the `render` command's
+//! preview × `render.exposure`), and `out/{image}.depth.exr` when `render.outputs` has
+//! `"depth"` (camera-frame z of the first surface through each pixel centre, as the native
+//! backend). The driver is embedded in the binary ([`DRIVER_SOURCE`]) and written to
+//! `out/mitsuba/render.py`. The ground truth beside them is the `render` command's
 //! ([`crate::backend`]).
 
 pub mod emit;
@@ -50,6 +53,9 @@ pub struct Manifest {
     pub variant: &'static str,
     /// Multiplier for the PNG previews (EXR stays linear).
     pub exposure: f64,
+    /// Write `{image}.depth.exr` (camera-frame z through each pixel centre) too.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub depth: bool,
     pub views: Vec<ViewJob>,
 }
 
@@ -84,14 +90,16 @@ pub struct Compiled {
     pub warnings: Vec<String>,
 }
 
-/// Whether `s` may be used as a file stem: ASCII letters, digits, `_`, `-`, `.`; not starting
-/// with `.`; at most 200 characters.
+/// Whether `s` may be used as a file stem: the front end's rule for names that become file
+/// names ([`crate::model::is_safe_file_name`], checked with a located diagnostic when a scene
+/// is read), applied again here only for models built in code; at most 200 characters since
+/// an image name joins a camera and a pose name.
 pub fn is_safe_stem(s: &str) -> bool {
     !s.is_empty()
-        && s.len() <= 200
+        && s.chars().count() <= 200
         && !s.starts_with('.')
         && s.chars()
-            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+            .all(|c| c.is_alphanumeric() || matches!(c, '_' | '-' | '.'))
 }
 
 /// A file-name fragment derived from a scene name (anything else becomes `_`).
@@ -505,6 +513,24 @@ fn target_shapes(
     }
 }
 
+/// The one difference from poser's housing policy that Mitsuba cannot avoid
+/// (docs/render-conventions.md, "The housing casts no shadow"): its port glass and housing
+/// walls are ordinary surfaces, so they shadow the sun. `Some(one line)` when the scene has a
+/// sun and a rendered port housing.
+pub fn housing_shadow_warning(model: &Model) -> Option<String> {
+    let cam = model
+        .cameras
+        .iter()
+        .find(|c| !matches!(c.port, Port::None))?;
+    (model.sun.is_some() && model.needs.refraction).then(|| {
+        format!(
+            "the housing of camera `{}` casts a sun shadow in Mitsuba (Mitsuba 3 has no \
+             shadow-ray visibility; native and Blender cast none): see docs/backends.md",
+            cam.name
+        )
+    })
+}
+
 /// Compile the model to documents and assets, in memory.
 pub fn build(model: &Model) -> Result<Compiled, String> {
     if model.cameras.is_empty() {
@@ -514,11 +540,12 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
         .render
         .outputs
         .iter()
-        .position(|o| o != "rgb" && o != "truth")
+        .position(|o| o != "rgb" && o != "truth" && o != "depth")
     {
         // Only warn: the images and the truth are still right.
         eprintln!(
-            "warning: output `{}` is not produced by the Mitsuba backend (only rgb and truth)",
+            "warning: output `{}` is not produced by the Mitsuba backend (only rgb, depth and \
+             truth)",
             model.render.outputs[i]
         );
     }
@@ -533,6 +560,9 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
     }
     for (i, t) in model.targets.iter().enumerate() {
         shapes.extend(target_shapes(model, t, &mut files, i)?);
+    }
+    if let Some(w) = housing_shadow_warning(model) {
+        warnings.push(w);
     }
     for w in &warnings {
         eprintln!("warning: {w}");
@@ -619,6 +649,7 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
         scene: model.name.clone(),
         variant: "scalar_rgb",
         exposure: model.render.exposure,
+        depth: model.render.outputs.iter().any(|o| o == "depth"),
         views,
     };
     let mut json = serde_json::to_vec_pretty(&manifest).map_err(|e| e.to_string())?;
@@ -648,9 +679,19 @@ pub fn compile(model: &Model, out: &Path) -> Result<(), String> {
     write(&c, out)
 }
 
-/// The Python render driver.
-pub fn driver_script() -> PathBuf {
-    python::backends_dir().join("mitsuba").join("render.py")
+/// The Python render driver's source (`backends/mitsuba/render.py`), embedded in the binary so
+/// that an installed `poser` does not need the source tree.
+pub const DRIVER_SOURCE: &str = include_str!("../../backends/mitsuba/render.py");
+
+/// File name of the driver written beside the compiled scene by `render`.
+pub const DRIVER_FILE: &str = "render.py";
+
+/// Write the embedded render driver into the compiled directory; returns its path.
+pub fn write_driver(scene_dir: &Path) -> Result<PathBuf, String> {
+    let p = scene_dir.join(DRIVER_FILE);
+    crate::io::write_atomic(&p, DRIVER_SOURCE.as_bytes())
+        .map_err(|e| format!("{}: {e}", p.display()))?;
+    Ok(p)
 }
 
 /// `poser render --backend mitsuba`.
@@ -673,7 +714,8 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         .collect();
     let total: usize = selected.iter().map(|v| v.passes.len()).sum();
 
-    let mut cmd = python::command(&driver_script());
+    let driver = write_driver(&scene_dir)?;
+    let mut cmd = python::command(&driver);
     cmd.arg("--scene-dir").arg(&scene_dir).arg("--out").arg(out);
     cmd.arg("--poses").arg(
         poses

@@ -605,6 +605,26 @@ fn camera(
     let name = c
         .opt_str(cx, "name")
         .unwrap_or_else(|| default_name.to_string());
+    if !crate::model::is_safe_file_name(&name) {
+        // Camera names become file names (`{camera}_{pose}.exr` in a rig): checked once here
+        // for every backend.
+        let sp = if c.has("name") {
+            c.span_of("name")
+        } else {
+            node.span
+        };
+        cx.push(
+            Diagnostic::error(
+                "E0234",
+                format!(
+                    "camera name `{}` cannot be part of a file name",
+                    name.escape_debug()
+                ),
+            )
+            .label(sp, "images are named after the camera")
+            .help("use letters, digits, `_`, `-` and `.` only (not first), at most 100 characters"),
+        );
+    }
     let position = c.opt_vec3(cx, "position", Dim::Length);
     let rotation = c.opt_vec3(cx, "rotation", Dim::Angle);
     let rig_from_camera = match (position, rotation) {

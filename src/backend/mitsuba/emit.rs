@@ -7,14 +7,14 @@
 //! | camera with focus distance and f-number | `thinlens`, `aperture_radius = f/(2N)` | only with a centred principal point (thinlens has no offset) |
 //! | fisheye lens, Brown distortion, fx ≠ fy | — | error naming the camera |
 //! | film | `hdrfilm`, rgb, float32, `box` rfilter; `independent` sampler | |
-//! | flat port | closed slab: 6 `rectangle`s, `dielectric` | inner face air→glass, other faces glass→water |
+//! | flat port | closed slab: 6 `rectangle`s, `dielectric`; housing: 5 black `rectangle`s behind it | inner face air→glass, other faces glass→water; the walls absorb light reflected back into the housing |
 //! | dome port | two `sphere`s: inner air→glass, outer glass→water | full spheres (their back halves stand in for the housing) |
 //! | cylinder port | two `cylinder`s closed by `disk` caps | length covers the field of view with margin |
-//! | water | `homogeneous` medium `water`: σt, albedo (rgb), `hg` or `tabphase` (Fournier–Forand) | bounded by a `null` cube: the sea below z = 0, or a box around the camera |
+//! | water | `homogeneous` medium `water`: σt (`constvolume`, unbounded), albedo (rgb), `hg` or `tabphase` (Fournier–Forand) | bounded by a `null` cube: the sea below z = 0, or a box around the camera |
 //! | camera without port in water | `<ref name="medium" id="water"/>` in the sensor | |
 //! | sun | `directional`, refracted direction and irradiance in water | |
 //! | point / spot | `point` / `spot` (W/sr; `cutoff_angle` = half angle, sharp edge) | |
-//! | area | `rectangle` + `area` emitter (one-sided, +z) | |
+//! | area | `rectangle` + `area` emitter (one-sided, +z) + `null` BSDF | casts no shadow, reflects nothing |
 //! | ambient | `constant` | |
 //! | integrator | `volpath`, `max_depth = max_bounces + 1 + port interfaces` | Mitsuba counts every vertex, glass faces included |
 //!
@@ -339,6 +339,37 @@ fn port_shapes(
                         .child(dielectric(n_g, n_out)),
                 ));
             }
+            // The housing behind the port: five black walls (back and four sides, from the
+            // inner face back to `d + t` behind the pupil) close the air pocket, so rays
+            // reflected by the glass back into the housing end there instead of escaping to
+            // the ambient light (a real housing is dark inside).
+            let back = d + t;
+            let black = El::typed("bsdf", "twosided")
+                .child(El::typed("bsdf", "diffuse").rgb("reflectance", [0.0; 3]));
+            shapes.push(
+                rect_to_world(
+                    El::typed("shape", "rectangle")
+                        .comment(format!("housing of `{name}`: black walls behind the port")),
+                    wp(-n * back),
+                    we1,
+                    we2,
+                    -wn,
+                    half,
+                    half,
+                )
+                .child(black.clone()),
+            );
+            let wall_mid = wp(n * (0.5 * (d - back)));
+            for (axis, other) in [(we1, we2), (-we1, -we2), (we2, -we1), (-we2, we1)] {
+                shapes.push(
+                    El::typed("shape", "rectangle")
+                        .to_world(
+                            DMat3::from_cols(other * half, wn * (0.5 * (d + back)), axis),
+                            wall_mid + axis * half,
+                        )
+                        .child(black.clone()),
+                );
+            }
             let extent = ((d + t).powi(2) + 2.0 * half * half).sqrt();
             Ok(Some(PortShapes {
                 shapes,
@@ -544,7 +575,13 @@ fn water_medium(water: &Water) -> El {
                 .map(|j| format!(" (Jerlov {j})"))
                 .unwrap_or_default()
         ))
-        .rgb("sigma_t", water.extinction())
+        .child(
+            // A bare `<rgb>` here is a reflectance spectrum limited to [0, 1] (turbid water has
+            // σt > 1/m); inside a `constvolume` it is unbounded.
+            El::typed("volume", "constvolume")
+                .attr("name", "sigma_t")
+                .rgb("value", water.extinction()),
+        )
         .rgb("albedo", water.albedo())
         .float("scale", 1.0)
         .child(phase)
@@ -644,6 +681,12 @@ fn light(l: &Light, world_from_mount: &Pose) -> El {
                     ),
                     f.translation,
                 )
+                .comment(
+                    "null BSDF: the panel neither reflects nor blocks light (no shadow), like \
+                     native and Blender lights; volpath passes through null surfaces on shadow \
+                     rays too",
+                )
+                .child(El::typed("bsdf", "null"))
                 .child(El::typed("emitter", "area").rgb("radiance", *radiance))
         }
         LightKind::Ambient { radiance } => El::typed("emitter", "constant")

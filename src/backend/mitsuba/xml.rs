@@ -127,7 +127,7 @@ impl El {
 fn write_el(w: &mut Writer<Vec<u8>>, e: &El) {
     let mut start = BytesStart::new(e.name);
     for (k, v) in &e.attrs {
-        start.push_attribute((*k, v.as_str()));
+        start.push_attribute((*k, xml_chars(v).as_str()));
     }
     if e.children.is_empty() {
         let _ = w.write_event(Event::Empty(start));
@@ -152,11 +152,26 @@ pub fn comment_text(t: &str) -> String {
         .chars()
         .map(|c| if c.is_control() { ' ' } else { c })
         .collect::<String>();
+    let cleaned = xml_chars(&cleaned);
     let mut s = quick_xml::escape::partial_escape(cleaned.as_str()).into_owned();
     while s.contains("--") {
         s = s.replace("--", "- -");
     }
     format!(" {s} ")
+}
+
+/// Whether XML 1.0 allows `c` in a document (`Char` production: tab, LF, CR, U+0020–U+D7FF,
+/// U+E000–U+FFFD, U+10000 and up; Rust `char`s are never surrogates).
+pub fn is_xml_char(c: char) -> bool {
+    matches!(c, '\t' | '\n' | '\r' | ' '..='\u{D7FF}' | '\u{E000}'..='\u{FFFD}' | '\u{10000}'..)
+}
+
+/// `t` with every character XML 1.0 forbids (C0 controls but tab/LF/CR, U+FFFE, U+FFFF)
+/// replaced by U+FFFD, so any text can be written into a well-formed document.
+pub fn xml_chars(t: &str) -> String {
+    t.chars()
+        .map(|c| if is_xml_char(c) { c } else { '\u{FFFD}' })
+        .collect()
 }
 
 /// Deterministic short decimal for a float: 10 significant digits, `-0` printed as `0`.
@@ -243,6 +258,18 @@ mod tests {
             .to_document();
         let s = String::from_utf8(doc).unwrap();
         assert!(!s.contains("<shape"), "{s}");
+    }
+
+    #[test]
+    fn xml_illegal_characters_are_replaced() {
+        let hostile = "a\u{FFFE}b\u{FFFF}c\u{1}d\u{1F}e\u{7}";
+        let doc = El::new("scene")
+            .comment(hostile)
+            .string("s", hostile)
+            .to_document();
+        let s = String::from_utf8(doc).unwrap();
+        assert!(s.chars().all(is_xml_char), "{s:?}");
+        assert!(s.contains("a\u{FFFD}b\u{FFFD}c"), "{s:?}");
     }
 
     #[test]
