@@ -100,8 +100,11 @@ pub fn geometry(backend: &str) {
             if channel != 1 {
                 let shift = dispersion_shift(&model, channel);
                 eprintln!("{name}: channel {channel} disks lie {shift:.3} px (RMS) from G's");
+                // A backend ignoring dispersion puts this channel's disks at G's places: its
+                // RMS error is then at least `shift`, which must exceed the bound (measured:
+                // R 0.084 px, B ≥ that; bounds 0.05 px, Mitsuba 0.06 px).
                 assert!(
-                    shift > 4.0 * MAX_RMS_PX,
+                    shift > if backend == "mitsuba" { 0.06 } else { MAX_RMS_PX },
                     "{name}: channel {channel} is only {shift} px from G: the check could not fail"
                 );
             }
