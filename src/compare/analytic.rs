@@ -71,7 +71,7 @@ pub fn radiance(model: &Model, u: f64, v: f64, c: usize) -> Result<f64, String> 
     let obj = &model.objects[0];
     let n = obj.pose.rotation.z_axis;
     let s = (obj.pose.translation - o).dot(n) / d.dot(n);
-    if !(s > 0.0) {
+    if s.is_nan() || s <= 0.0 {
         return Err("the patch is behind the camera".into());
     }
     let p = o + s * d;

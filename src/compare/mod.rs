@@ -158,12 +158,15 @@ pub fn expected_disk(proj: &Projector, pose: usize, d: &Disk) -> Option<([f64; 2
     Some((c, half))
 }
 
+/// Measured disks: (id, image name, measured − expected in px), and how many were expected.
+pub type Measured = (Vec<(String, String, [f64; 2])>, usize);
+
 /// Measure every visible disk in the rendered images of `dir` in the G channel: returns
 /// (id, image name, measured − expected in px) for each disk found, and how many were expected.
 pub fn measure_targets(
     model: &Model,
     dir: &Path,
-) -> Result<(Vec<(String, String, [f64; 2])>, usize), String> {
+) -> Result<Measured, String> {
     measure_targets_in_channel(model, dir, 1)
 }
 
@@ -173,7 +176,7 @@ pub fn measure_targets_in_channel(
     model: &Model,
     dir: &Path,
     channel: usize,
-) -> Result<(Vec<(String, String, [f64; 2])>, usize), String> {
+) -> Result<Measured, String> {
     let disks = disks(model);
     let dark = crate::geometry::targets::BLACK / crate::geometry::targets::WHITE;
     let mut found = Vec::new();

@@ -104,7 +104,12 @@ pub fn geometry(backend: &str) {
                 // RMS error is then at least `shift`, which must exceed the bound (measured:
                 // R 0.084 px, B ≥ that; bounds 0.05 px, Mitsuba 0.06 px).
                 assert!(
-                    shift > if backend == "mitsuba" { 0.06 } else { MAX_RMS_PX },
+                    shift
+                        > if backend == "mitsuba" {
+                            0.06
+                        } else {
+                            MAX_RMS_PX
+                        },
                     "{name}: channel {channel} is only {shift} px from G: the check could not fail"
                 );
             }
