@@ -19,8 +19,23 @@ pub fn run(
     let report = crate::compare::run(&model, backends, out, &opts).map_err(CliError::Failed)?;
     print!("{}", report.to_markdown());
     eprintln!("report: {}", out.join("report.md").display());
-    if report.backends.iter().all(|b| b.error.is_some()) {
-        return Err(CliError::Failed("no backend rendered".into()));
+    // Every requested backend must render: one that fails makes the command fail (exit 1),
+    // after the report (which shows it as failed) is written.
+    let failed: Vec<String> = report
+        .backends
+        .iter()
+        .filter_map(|b| {
+            b.error.as_ref().map(|e| {
+                format!(
+                    "backend `{}` failed: {}",
+                    b.backend,
+                    e.lines().next().unwrap_or("")
+                )
+            })
+        })
+        .collect();
+    if !failed.is_empty() {
+        return Err(CliError::Failed(failed.join("\n")));
     }
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! Cross-backend agreement: locate targets in rendered images, compare them with the exact
 //! ground truth and with each other, and write the `poser compare` report.
 
+pub mod analytic;
 pub mod detect;
 pub mod report;
 
@@ -157,18 +158,31 @@ pub fn expected_disk(proj: &Projector, pose: usize, d: &Disk) -> Option<([f64; 2
     Some((c, half))
 }
 
-/// Measure every visible disk in the rendered images of `dir`: returns
+/// Measured disks: (id, image name, measured − expected in px), and how many were expected.
+pub type Measured = (Vec<(String, String, [f64; 2])>, usize);
+
+/// Measure every visible disk in the rendered images of `dir` in the G channel: returns
 /// (id, image name, measured − expected in px) for each disk found, and how many were expected.
 pub fn measure_targets(
     model: &Model,
     dir: &Path,
-) -> Result<(Vec<(String, String, [f64; 2])>, usize), String> {
+) -> Result<Measured, String> {
+    measure_targets_in_channel(model, dir, 1)
+}
+
+/// [`measure_targets`] in channel `channel` (0 = R, 1 = G, 2 = B) against that channel's
+/// exact projection (with dispersion, each channel's indices place the disks differently).
+pub fn measure_targets_in_channel(
+    model: &Model,
+    dir: &Path,
+    channel: usize,
+) -> Result<Measured, String> {
     let disks = disks(model);
     let dark = crate::geometry::targets::BLACK / crate::geometry::targets::WHITE;
     let mut found = Vec::new();
     let mut expected = 0;
     for cam in 0..model.cameras.len() {
-        let proj = Projector::new(model, cam, 1)?;
+        let proj = Projector::new(model, cam, channel)?;
         for pose in 0..model.poses.len() {
             let name = model.image_name(pose, cam);
             let path = dir.join(format!("{name}.exr"));
@@ -176,7 +190,7 @@ pub fn measure_targets(
                 continue;
             }
             let img = LinearImage::read(&path)?;
-            let g = img.channel(1);
+            let g = img.channel(channel);
             let gray = detect::Gray {
                 width: img.width,
                 height: img.height,
@@ -196,17 +210,24 @@ pub fn measure_targets(
     Ok((found, expected))
 }
 
-/// Render with each backend and compare; writes `report.md`, `report.json`, `report.png` and
-/// difference images into `out`.
+/// Render with each backend and compare; writes `report.md`, `report.json`, `report.svg` (the
+/// chart) and difference images into `out`. A backend that fails is reported as failed (its
+/// error in the report); the caller decides the exit status.
 pub fn run(
     model: &Model,
     backends: &[Backend],
     out: &Path,
     opts: &RenderOptions,
 ) -> Result<Report, String> {
+    let analytic_ok = analytic::applies(model);
     let mut report = Report {
         scene: model.source.clone(),
         samples: opts.samples.unwrap_or(model.render.samples),
+        analytic: Some(analytic_ok.clone().map(|_| {
+            "the first image's central window (a quarter of its width and height) against \
+             the closed-form radiance of the lit Lambertian patch"
+                .to_string()
+        })),
         ..Default::default()
     };
     for b in backends {
@@ -243,6 +264,11 @@ pub fn run(
                     n += 1;
                 }
                 r.mean_rgb = sum.map(|s| s / n.max(1) as f64);
+                let first = dir.join(format!("{}.exr", model.image_name(0, 0)));
+                if analytic_ok.is_ok() && first.exists() {
+                    r.analytic_rel =
+                        Some(analytic::window_error(model, &LinearImage::read(&first)?)?);
+                }
             }
         }
         report.backends.push(r);
@@ -269,10 +295,8 @@ pub fn run(
     let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
     crate::io::write_atomic(&out.join("report.json"), json.as_bytes())
         .map_err(|e| e.to_string())?;
-    let png = report.plot_png();
-    crate::io::write_atomic_with(&out.join("report.png"), |p| {
-        png.save(p).map_err(|e| e.to_string())
-    })?;
+    let svg = report.plot_svg()?;
+    crate::io::write_atomic(&out.join("report.svg"), svg.as_bytes()).map_err(|e| e.to_string())?;
     Ok(report)
 }
 

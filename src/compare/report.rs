@@ -1,5 +1,7 @@
 //! The `poser compare` report: per backend, time, target-position error and radiometry; per
-//! pair of backends, radiometric differences. Written as Markdown, JSON and a PNG bar chart.
+//! pair of backends, radiometric differences; the error against analytic radiometry where the
+//! scene has a closed form ([`super::analytic`]). Written as Markdown, JSON and an SVG chart
+//! with labelled axes, where a failed backend is marked "failed", never drawn as a bar.
 
 use serde::Serialize;
 
@@ -20,6 +22,9 @@ pub struct BackendResult {
     pub target_max_px: Option<f64>,
     /// Mean linear value per channel over all pixels of all images.
     pub mean_rgb: [f64; 3],
+    /// Rendered / analytic radiance − 1 per channel over the central window of the first image
+    /// (pose 0, camera 0), when the scene has analytic radiometry ([`Report::analytic`]).
+    pub analytic_rel: Option<[f64; 3]>,
 }
 
 /// Radiometric comparison of two backends over the same images.
@@ -41,6 +46,8 @@ pub struct Report {
     pub samples: u32,
     pub backends: Vec<BackendResult>,
     pub pairs: Vec<PairResult>,
+    /// Analytic radiometry: `Ok` with what is compared, or why the scene has none.
+    pub analytic: Option<Result<String, String>>,
 }
 
 fn opt(v: Option<f64>, prec: usize) -> String {
@@ -54,8 +61,18 @@ impl Report {
             "# poser compare: {}\n\nSamples per pixel: {}\n\n",
             self.scene, self.samples
         );
-        s.push_str("| backend | status | time (s) | images | targets | RMS (px) | max (px) | mean R | mean G | mean B |\n");
-        s.push_str("|---|---|---|---|---|---|---|---|---|---|\n");
+        s.push_str(
+            "Targets: measured disk centroids against the exact truth (RMS and max, px). \
+             Mean R/G/B: linear radiance over all pixels of all images. vs analytic: \
+             rendered / analytic radiance − 1 per channel.\n\n",
+        );
+        match &self.analytic {
+            Some(Ok(what)) => s.push_str(&format!("Analytic radiometry: {what}.\n\n")),
+            Some(Err(why)) => s.push_str(&format!("Analytic radiometry: none ({why}).\n\n")),
+            None => {}
+        }
+        s.push_str("| backend | status | time (s) | images | targets | RMS (px) | max (px) | mean R | mean G | mean B | vs analytic R, G, B |\n");
+        s.push_str("|---|---|---|---|---|---|---|---|---|---|---|\n");
         for b in &self.backends {
             let status = match &b.error {
                 None => "ok".to_string(),
@@ -64,8 +81,26 @@ impl Report {
                     e.lines().next().unwrap_or("").replace('|', "/")
                 ),
             };
+            let analytic = b
+                .analytic_rel
+                .map(|r| {
+                    format!(
+                        "{:+.2} %, {:+.2} %, {:+.2} %",
+                        100.0 * r[0],
+                        100.0 * r[1],
+                        100.0 * r[2]
+                    )
+                })
+                .unwrap_or_else(|| "–".into());
+            if b.error.is_some() {
+                s.push_str(&format!(
+                    "| {} | {} | – | – | – | – | – | – | – | – | – |\n",
+                    b.backend, status
+                ));
+                continue;
+            }
             s.push_str(&format!(
-                "| {} | {} | {:.2} | {} | {}/{} | {} | {} | {:.5} | {:.5} | {:.5} |\n",
+                "| {} | {} | {:.2} | {} | {}/{} | {} | {} | {:.5} | {:.5} | {:.5} | {} |\n",
                 b.backend,
                 status,
                 b.seconds,
@@ -76,7 +111,8 @@ impl Report {
                 opt(b.target_max_px, 4),
                 b.mean_rgb[0],
                 b.mean_rgb[1],
-                b.mean_rgb[2]
+                b.mean_rgb[2],
+                analytic
             ));
         }
         if !self.pairs.is_empty() {
@@ -96,58 +132,201 @@ impl Report {
         s
     }
 
-    /// A bar chart (no text; the Markdown carries the numbers): for each backend, target RMS
-    /// error (px, left group, full height = 0.25 px) and G-channel mean relative to the first
-    /// backend (right group, full height = ±10 %).
-    pub fn plot_png(&self) -> image::RgbImage {
-        let (w, h) = (60 + 60 * self.backends.len() as u32 * 2, 200u32);
-        let mut img = image::RgbImage::from_pixel(w, h, image::Rgb([255, 255, 255]));
-        let colors = [
-            [31u8, 119, 180],
-            [255, 127, 14],
-            [44, 160, 44],
-            [214, 39, 40],
-        ];
-        let mid = h / 2;
-        for x in 0..w {
-            img.put_pixel(x, h - 10, image::Rgb([0, 0, 0]));
-        }
-        let base = self.backends.first().map(|b| b.mean_rgb[1]).unwrap_or(0.0);
-        let n = self.backends.len() as u32;
-        for (i, b) in self.backends.iter().enumerate() {
-            let c = image::Rgb(colors[i % colors.len()]);
-            let x0 = 20 + 50 * i as u32;
-            let v = b.target_rms_px.unwrap_or(0.0).min(0.25) / 0.25;
-            let top = (h - 10) - ((h - 20) as f64 * v) as u32;
-            for x in x0..x0 + 40 {
-                for y in top..h - 10 {
-                    img.put_pixel(x, y, c);
-                }
+    /// The chart (SVG): left, each backend's target position error (RMS, px); right, its
+    /// radiometric error per channel (%), against the analytic radiance when the scene has one,
+    /// otherwise against the first backend that rendered. Axes and backends are labelled; a
+    /// failed backend is written "failed" where its bars would be.
+    pub fn plot_svg(&self) -> Result<String, String> {
+        use plotters::prelude::*;
+        let n = self.backends.len().max(1);
+        let base = self
+            .backends
+            .iter()
+            .find(|b| b.error.is_none())
+            .map(|b| (b.backend.clone(), b.mean_rgb));
+        let analytic = self.analytic.as_ref().is_some_and(|a| a.is_ok());
+        let rel = |b: &BackendResult| -> Option<[f64; 3]> {
+            if b.error.is_some() {
+                return None;
             }
-            let x1 = 40 + 50 * (n + i as u32);
-            if base > 0.0 {
-                let r = ((b.mean_rgb[1] - base) / base).clamp(-0.1, 0.1) / 0.1;
-                let y_end = (mid as f64 - r * (mid as f64 - 10.0)) as u32;
-                let (ya, yb) = if y_end < mid {
-                    (y_end, mid)
+            if analytic {
+                return b.analytic_rel;
+            }
+            let (_, m) = base.as_ref()?;
+            Some([0, 1, 2].map(|c| {
+                if m[c] > 0.0 {
+                    b.mean_rgb[c] / m[c] - 1.0
                 } else {
-                    (mid, y_end.max(mid + 1))
+                    0.0
+                }
+            }))
+        };
+        let rms_max = self
+            .backends
+            .iter()
+            .filter_map(|b| b.target_rms_px)
+            .fold(0.05f64, f64::max)
+            * 1.25;
+        let pct_max = self
+            .backends
+            .iter()
+            .filter_map(rel)
+            .flat_map(|r| r.map(|x| 100.0 * x.abs()))
+            .fold(1.0f64, f64::max)
+            * 1.25;
+        let right_title = if analytic {
+            "radiance vs analytic".to_string()
+        } else {
+            match &base {
+                Some((name, _)) => format!("mean radiance vs {name}"),
+                None => "mean radiance".into(),
+            }
+        };
+        let colours = [
+            RGBColor(200, 40, 40),
+            RGBColor(40, 150, 40),
+            RGBColor(30, 80, 200),
+        ];
+        let mut svg = String::new();
+        {
+            let root =
+                SVGBackend::with_string(&mut svg, (420 + 160 * n as u32, 380)).into_drawing_area();
+            root.fill(&WHITE).map_err(|e| e.to_string())?;
+            let (left, right) = root.split_horizontally((210 + 80 * n) as u32);
+            let x_range = -0.5..n as f64 - 0.5;
+            let mut chart = ChartBuilder::on(&left)
+                .caption("target position vs exact truth", ("sans-serif", 16))
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(56)
+                .build_cartesian_2d(x_range.clone(), 0.0..rms_max)
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .disable_x_mesh()
+                .x_labels(0)
+                .x_desc("backend")
+                .y_desc("RMS error (px)")
+                .draw()
+                .map_err(|e| e.to_string())?;
+            for (i, b) in self.backends.iter().enumerate() {
+                let x = i as f64;
+                let label = if b.error.is_some() {
+                    format!("{} (failed)", b.backend)
+                } else {
+                    b.backend.clone()
                 };
-                for x in x1..x1 + 40 {
-                    for y in ya..yb {
-                        img.put_pixel(x, y, c);
+                chart
+                    .draw_series(std::iter::once(Text::new(
+                        label,
+                        (x - 0.4, rms_max * 0.04),
+                        ("sans-serif", 13),
+                    )))
+                    .map_err(|e| e.to_string())?;
+                match (&b.error, b.target_rms_px) {
+                    (Some(_), _) => chart
+                        .draw_series(std::iter::once(Text::new(
+                            "failed",
+                            (x - 0.25, rms_max * 0.5),
+                            ("sans-serif", 16).into_font().color(&RED),
+                        )))
+                        .map(|_| ()),
+                    (None, Some(v)) => chart
+                        .draw_series(std::iter::once(Rectangle::new(
+                            [(x - 0.3, 0.0), (x + 0.3, v)],
+                            RGBColor(90, 90, 90).filled(),
+                        )))
+                        .map(|_| ()),
+                    (None, None) => chart
+                        .draw_series(std::iter::once(Text::new(
+                            "no targets",
+                            (x - 0.3, rms_max * 0.5),
+                            ("sans-serif", 13),
+                        )))
+                        .map(|_| ()),
+                }
+                .map_err(|e| e.to_string())?;
+            }
+            let mut chart = ChartBuilder::on(&right)
+                .caption(right_title, ("sans-serif", 16))
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(56)
+                .build_cartesian_2d(x_range, -pct_max..pct_max)
+                .map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .disable_x_mesh()
+                .x_labels(0)
+                .x_desc("backend (bars: R, G, B)")
+                .y_desc("relative error (%)")
+                .draw()
+                .map_err(|e| e.to_string())?;
+            chart
+                .draw_series(LineSeries::new(
+                    [(-0.5, 0.0), (n as f64 - 0.5, 0.0)],
+                    BLACK.mix(0.5),
+                ))
+                .map_err(|e| e.to_string())?;
+            for (i, b) in self.backends.iter().enumerate() {
+                let x = i as f64;
+                chart
+                    .draw_series(std::iter::once(Text::new(
+                        b.backend.clone(),
+                        (x - 0.4, -pct_max * 0.92),
+                        ("sans-serif", 13),
+                    )))
+                    .map_err(|e| e.to_string())?;
+                match rel(b) {
+                    Some(r) => {
+                        for (c, col) in colours.iter().enumerate() {
+                            let x0 = x - 0.3 + 0.2 * c as f64;
+                            chart
+                                .draw_series(std::iter::once(Rectangle::new(
+                                    [(x0, 0.0), (x0 + 0.18, 100.0 * r[c])],
+                                    col.filled(),
+                                )))
+                                .map_err(|e| e.to_string())?;
+                        }
                     }
-                    img.put_pixel(x, mid, image::Rgb([0, 0, 0]));
+                    None => {
+                        let text = if b.error.is_some() {
+                            "failed"
+                        } else {
+                            "no value"
+                        };
+                        chart
+                            .draw_series(std::iter::once(Text::new(
+                                text,
+                                (x - 0.25, pct_max * 0.5),
+                                ("sans-serif", 16).into_font().color(&RED),
+                            )))
+                            .map_err(|e| e.to_string())?;
+                    }
                 }
             }
+            root.present().map_err(|e| e.to_string())?;
         }
-        img
+        Ok(svg)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rectangles of an empty chart (background fills), to count only the bars.
+    fn blank_rects() -> usize {
+        let r = Report {
+            backends: vec![BackendResult {
+                backend: "x".into(),
+                error: Some("e".into()),
+                ..Default::default()
+            }],
+            ..Default::default()
+        };
+        r.plot_svg().unwrap().matches("<rect").count()
+    }
 
     #[test]
     fn markdown_lists_every_backend_and_pair() {
@@ -167,6 +346,7 @@ mod tests {
                     ..Default::default()
                 },
             ],
+            analytic: None,
             pairs: vec![PairResult {
                 a: "native".into(),
                 b: "mitsuba".into(),
@@ -179,7 +359,19 @@ mod tests {
         assert!(md.contains("0.0123"));
         assert!(md.contains("failed: no module |"));
         assert!(md.contains("mitsuba vs native | +1.00 % | -2.00 %"));
-        let png = r.plot_png();
-        assert_eq!(png.height(), 200);
+        let svg = r.plot_svg().unwrap();
+        // Labelled axes and backends; the failed backend is marked, not drawn as a bar.
+        for label in [
+            "RMS error (px)",
+            "relative error (%)",
+            "native",
+            "mitsuba (failed)",
+        ] {
+            assert!(svg.contains(label), "{label} missing");
+        }
+        let failed = svg.lines().filter(|l| l.trim() == "failed").count();
+        assert_eq!(failed, 2, "{svg}");
+        // Bars: one (target RMS) + three (R, G, B vs native itself) for native only.
+        assert_eq!(svg.matches("<rect").count() - blank_rects(), 4, "{svg}");
     }
 }

@@ -13,10 +13,16 @@ The description (format `poser-blender/1`) is written by `poser compile --backen
 | lights | point/spot (P = 4 pi I, radius 0, blend 0), sun (angle 0), area (P = L pi A), ambient = world |
 | objects | Blender primitives (plane/box/sphere/cylinder) or imported PLY assets; Diffuse BSDF |
 | targets | planes with the target's PNG texture; 3D test objects as white boxes + black disks |
+| sea waves | the native backend's periodic height field (`wave_field`): one period as a smooth glass mesh, instanced; caustics by MNEE (surface = caster, objects and targets = receivers, sun = caustics light) |
+| seed | one Cycles seed per image (`poses[].seeds`, derived by poser from the scene seed) |
 | depth (`render.outputs` has "depth") | a second 1-sample render per image: glass -> Refraction BSDF, water off, surfaces emit their camera-frame z; `<image>.depth.exr` |
 
 Emitters in water are scaled by (n_cam/n_water)^2 per camera before each render (the n^2
 convention, render-conventions §3.4).
+
+SAVED_AS_RENDERED: `build` ends by setting everything a render sets per image for the first
+image (strengths with the n^2 factor, seed, camera, resolution), so a .blend saved with
+`--save-blend`, or a scene imported by the add-on, renders what `poser render` renders.
 """
 
 import json
@@ -300,8 +306,48 @@ def build(desc, base_dir=".", scene=None):
     _build_targets(built, coll, desc, base_dir)
     if desc.get("surface", {}).get("kind") == "waves":
         _build_waves(built, coll, desc, n_w, ref)
-    scene.frame_set(0)
+    # Everything a render sets per image is set here too, for the first image (pose 0, camera
+    # 0): light and world strengths with the n^2 factor, the seed. A saved .blend, or a scene
+    # imported by the add-on, then renders what `poser render` renders (SAVED_AS_RENDERED).
+    prepare_image(built, 0, 0)
     return built
+
+
+def image_seed(desc, pose_index, cam_index):
+    """The Cycles seed of one image: poser derives one per (pose, camera) from the scene seed
+    (src/backend/blender/data.rs `cycles_seed`); descriptions without them use the scene's."""
+    seeds = desc["poses"][pose_index].get("seeds")
+    if seeds:
+        return int(seeds[cam_index]) % (2**31)
+    return int(desc["render"]["seed"]) % (2**31)
+
+
+def _emitter_scale(desc, cam, per_channel):
+    """The n^2 factor of emitters in water for renders through camera `cam`: the reference
+    channel's for a single RGB pass, each channel's for per-channel passes."""
+    water = desc.get("water")
+    if not water:
+        return [1.0] * 3
+    n_cam = _n_cam(desc, cam)
+    if per_channel:
+        return geo.emitter_scale(n_cam, water["ior"])
+    ref = int(desc.get("reference_channel", 1))
+    return geo.emitter_scale([n_cam[ref]] * 3, [water["ior"][ref]] * 3)
+
+
+def prepare_image(built, pose_index, cam_index):
+    """Pose, camera, resolution, seed and emitter strengths of image (pose, camera), as the
+    single-pass render uses them (a scene with per-channel passes gets every channel's n^2
+    factor in the light colours, its passes set each channel's own)."""
+    desc = built.desc
+    scene = built.scene
+    cam = desc["cameras"][cam_index]
+    scene.frame_set(pose_index)
+    scene.camera = built.cameras[cam_index]
+    scene.render.resolution_x = int(cam["width"])
+    scene.render.resolution_y = int(cam["height"])
+    scene.cycles.seed = image_seed(desc, pose_index, cam_index)
+    _apply_emitters(built, _emitter_scale(desc, cam, bool(desc.get("per_channel_passes"))))
 
 
 def _constant_interpolation(obj):
@@ -536,12 +582,39 @@ def _water_box(desc, pose_index):
     lo = np.asarray(b["min"], dtype=float)
     hi = np.asarray(b["max"], dtype=float)
     if desc.get("surface", {}).get("kind") in ("flat", "waves"):
-        top = 0.0 if desc["surface"]["kind"] == "flat" else -0.5 * desc["surface"]["height"]
+        top = 0.0 if desc["surface"]["kind"] == "flat" else wave_water_top(desc)
         hi = hi.copy()
         hi[2] = top
         lo = lo.copy()
         lo[2] = min(lo[2], top - 1.0)
     return lo, hi
+
+
+def wave_water_top(desc):
+    """Top of the water volume under a wavy surface: 1 mm below its lowest possible trough, so
+    that the glass surface never dips into the volume (the layer between them is clear; the sun
+    is dimmed by its extinction instead, `_sun_layer_factor`)."""
+    field = desc.get("wave_field") or {}
+    depth = field.get("max_abs_height", 0.5 * float(desc["surface"].get("height", 0.0)))
+    return -float(depth) - 1e-3
+
+
+def _sun_layer_factor(desc, sun):
+    """Per-channel transmittance of the water between z = 0 and the water volume's top under a
+    wavy surface, along the sun's refracted (flat-surface) direction: the native backend
+    attenuates the sun from z = 0."""
+    water = desc.get("water")
+    if water is None or desc.get("surface", {}).get("kind") != "waves" or sun.get("in_water"):
+        return [1.0, 1.0, 1.0]
+    d = np.asarray(sun["direction"], dtype=float)
+    d /= np.linalg.norm(d)
+    out = []
+    for c in range(3):
+        sin_w = math.sqrt(max(0.0, 1.0 - d[2] ** 2)) / float(water["ior"][c])
+        cos_w = math.sqrt(max(1e-12, 1.0 - sin_w ** 2))
+        sigma = float(water["absorption"][c]) + float(water["scattering"][c])
+        out.append(math.exp(-sigma * -wave_water_top(desc) / cos_w))
+    return out
 
 
 def _water_mesh(desc, pose_index, shells):
@@ -680,7 +753,9 @@ def _build_lights(built, coll, desc):
                                                [0.0, 0.0, 10.0]))
         if sun.get("caustics"):
             data.cycles.is_caustics_light = True
-        built.lights.append({"data": data, "values": sun["irradiance"], "factor": 1.0,
+        layer = _sun_layer_factor(desc, sun)
+        values = [float(e) * t for e, t in zip(sun["irradiance"], layer)]
+        built.lights.append({"data": data, "values": values, "factor": 1.0,
                              "in_water": bool(sun.get("in_water"))})
     if built.world_bg is None:
         _world(built, [0.0, 0.0, 0.0], in_water)
@@ -753,6 +828,14 @@ def _build_objects(built, coll, desc, base_dir):
             me.materials.append(_diffuse_material(name, ob["material"], scale))
         obj = _new_object(coll, name, me)
         obj.matrix_world = _matrix(ob["matrix"])
+        _caustics_receiver(obj, desc)
+
+
+def _caustics_receiver(obj, desc):
+    """Under a wavy surface every object and target receives the sun's caustics (MNEE: Cycles
+    finds the refracted sun paths through the caster only at receivers)."""
+    if desc.get("caustics"):
+        obj.cycles.is_caustics_receiver = True
 
 
 def _import_ply(path, name):
@@ -774,7 +857,7 @@ def _build_targets(built, coll, desc, base_dir):
     for t in desc.get("targets", []):
         name = f"target:{t['name']}"
         if t.get("kind") == "test_object":
-            _build_test_object(coll, t, name)
+            _caustics_receiver(_build_test_object(coll, t, name), desc)
             continue
         me = bpy.data.meshes.new(name)
         bm = bmesh.new()
@@ -791,6 +874,7 @@ def _build_targets(built, coll, desc, base_dir):
         me.materials.append(_texture_material(name, os.path.join(base_dir, t["texture"])))
         obj = _new_object(coll, name, me)
         obj.matrix_world = _matrix(t["matrix"])
+        _caustics_receiver(obj, desc)
 
 
 # Segments of the polygon standing for each disk of a 3D test object: its centroid is the
@@ -838,29 +922,81 @@ def _build_test_object(coll, t, name):
     return obj
 
 
+# Most tiles of the periodic sea surface per side; beyond, the tiles cover the scene's centre.
+MAX_WAVE_TILES = 48
+# Most grid cells per side of one wave tile; the grid samples the shortest component with at
+# least WAVE_CELLS_PER_WAVELENGTH cells when this allows it.
+MAX_WAVE_CELLS = 384
+WAVE_CELLS_PER_WAVELENGTH = 8
+
+
+def wave_surface(field):
+    """One period of the sea surface as a mesh: the native backend's height field
+    h(x, y) = sum a cos(kx x + ky y + phi) (src/optics/waves.rs, exactly periodic with period P)
+    sampled on a regular grid over [0, P]^2, with its analytic normals (smooth shading)."""
+    period = float(field["period"])
+    comps = np.asarray(field["components"], dtype=float).reshape(-1, 4)
+    kmax = float(np.max(np.hypot(comps[:, 0], comps[:, 1]))) if len(comps) else 1.0
+    n = int(math.ceil(period * kmax / (2.0 * math.pi) * WAVE_CELLS_PER_WAVELENGTH))
+    n = max(16, min(n, MAX_WAVE_CELLS))
+    t = np.linspace(0.0, period, n + 1)
+    x, y = np.meshgrid(t, t, indexing="xy")
+    x, y = x.ravel(), y.ravel()
+    arg = np.outer(x, comps[:, 0]) + np.outer(y, comps[:, 1]) + comps[:, 3]
+    h = np.cos(arg) @ comps[:, 2]
+    s = np.sin(arg)
+    hx = -(s @ (comps[:, 2] * comps[:, 0]))
+    hy = -(s @ (comps[:, 2] * comps[:, 1]))
+    nrm = np.column_stack([-hx, -hy, np.ones_like(hx)])
+    nrm /= np.linalg.norm(nrm, axis=1)[:, None]
+    verts = np.column_stack([x, y, h])
+    i = np.arange(n)
+    a = (i[None, :] + (n + 1) * i[:, None]).ravel()  # lower-left corner of each cell
+    # Counter-clockwise seen from above: the normals point up, into the air.
+    faces = np.column_stack([a, a + 1, a + n + 2, a + n + 1])
+    return {"verts": verts, "faces": faces, "normals": nrm, "cells": n}
+
+
+def significant_height(verts):
+    """4 x the standard deviation of the vertex heights (the grid samples one period evenly)."""
+    return 4.0 * float(np.std(np.asarray(verts, dtype=float)[:, 2]))
+
+
 def _build_waves(built, coll, desc, n_w, ref):
-    s = desc["surface"]
+    """The wavy sea surface: the native backend's periodic height field (`wave_field`), one
+    period as a smooth glass mesh (index n_w, normals up) instanced over the water's extent.
+    It is the caustics caster; the objects and targets are the receivers and the sun the
+    caustics light (MNEE)."""
+    field = desc.get("wave_field")
+    if not field:
+        raise ValueError("a wavy surface needs the description's wave_field (poser >= this one)")
+    surf = wave_surface(field)
     me = bpy.data.meshes.new("sea surface")
-    obj = _new_object(coll, "sea surface", me)
-    mod = obj.modifiers.new("ocean", "OCEAN")
-    mod.geometry_mode = "GENERATE"
-    b = desc["bounds"]
-    extent = max(b["max"][0] - b["min"][0], b["max"][1] - b["min"][1], 10.0)
-    size = max(10.0 * float(s["wavelength"]), 10.0)
-    mod.spatial_size = int(min(size, 1000))
-    mod.repeat_x = mod.repeat_y = max(1, int(math.ceil(extent / mod.spatial_size)))
-    mod.resolution = 16
-    mod.wind_velocity = float(s["wind_speed"])
-    mod.wave_scale = 1.0
-    mod.choppiness = 0.0
-    mod.random_seed = int(desc["render"]["seed"]) % (2**31)
-    mod.use_normals = True
-    obj.location = (0.5 * (b["min"][0] + b["max"][0]) - 0.5 * extent,
-                    0.5 * (b["min"][1] + b["max"][1]) - 0.5 * extent, 0.0)
+    me.from_pydata([tuple(v) for v in surf["verts"]], [], [tuple(f) for f in surf["faces"]])
+    me.polygons.foreach_set("use_smooth", [True] * len(me.polygons))
+    me.normals_split_custom_set_from_vertices([tuple(v) for v in surf["normals"]])
+    me.update()
     mat, node = _glass_material("sea surface", n_w[ref])
     built.glass_nodes.append((node, lambda c: n_w[c]))
     me.materials.append(mat)
-    obj.cycles.is_caustics_caster = True
+    period = float(field["period"])
+    b = desc["bounds"]
+    lo, hi = np.asarray(b["min"], dtype=float), np.asarray(b["max"], dtype=float)
+    centre = 0.5 * (lo + hi)
+    counts = [min(MAX_WAVE_TILES, max(1, int(math.ceil((hi[k] - lo[k]) / period))))
+              for k in (0, 1)]
+    # Tiles on the field's own lattice (multiples of P from the origin), so that the surface
+    # is the native one at every (x, y), not a shifted copy.
+    start = [math.floor((centre[k] - 0.5 * counts[k] * period) / period) * period for k in (0, 1)]
+    built.wave_tiles = []
+    for j in range(counts[1]):
+        for i in range(counts[0]):
+            obj = _new_object(coll, f"sea surface {i},{j}", me)
+            obj.location = (start[0] + i * period, start[1] + j * period, 0.0)
+            obj.cycles.is_caustics_caster = True
+            obj.visible_shadow = True
+            built.wave_tiles.append(obj)
+    built.wave_mesh = me
 
 
 # ------------------------------------------------------------------------------------------
@@ -922,7 +1058,6 @@ def render(built, out_dir, samples=None, poses=None, progress=None, png=True):
         scene.cycles.samples = int(samples)
     os.makedirs(out_dir, exist_ok=True)
     pose_ids = list(range(len(desc["poses"]))) if poses is None else list(poses)
-    water = desc.get("water")
     ref = int(desc.get("reference_channel", 1))
     passes = [0, 1, 2] if desc.get("per_channel_passes") else [None]
     total = len(pose_ids) * len(desc["cameras"])
@@ -931,25 +1066,17 @@ def render(built, out_dir, samples=None, poses=None, progress=None, png=True):
     exposure = float(desc["render"].get("exposure", 1.0))
     for pi in pose_ids:
         pose = desc["poses"][pi]
-        scene.frame_set(pi)
         for ci, cam in enumerate(desc["cameras"]):
-            scene.camera = built.cameras[ci]
-            scene.render.resolution_x = int(cam["width"])
-            scene.render.resolution_y = int(cam["height"])
+            prepare_image(built, pi, ci)
             image = pose["images"][ci]
             exr = os.path.join(out_dir, image + ".exr")
             tmp = os.path.join(out_dir, f".poser-tmp-{ci}.exr")
-            n_cam = _n_cam(desc, cam)
             if passes == [None]:
                 # One pass with the reference channel's indices: the n^2 factor uses them too.
-                scale = [1.0] * 3
-                if water:
-                    scale = geo.emitter_scale([n_cam[ref]] * 3, [water["ior"][ref]] * 3)
-                _apply_emitters(built, scale)
                 _render_to(scene, tmp)
             else:
                 combined = None
-                scale = geo.emitter_scale(n_cam, water["ior"]) if water else [1.0] * 3
+                scale = _emitter_scale(desc, cam, True)
                 for c in passes:
                     _apply_emitters(built, scale, channel=c)
                     for node, ior in built.glass_nodes:

@@ -231,6 +231,10 @@ def test_every_feature_builds_and_renders(scene_desc, tmp_path):
     d["water"]["extent"] = {"kind": "box_around_camera", "half_size": [3.0, 3.0, 3.0]}
     d["water"]["scattering"] = [0.05, 0.05, 0.05]
     d["surface"] = {"kind": "waves", "height": 0.5, "wavelength": 4.0, "wind_speed": 5.0}
+    # Two lattice waves of period 16 m (as poser's WaveField writes them): Hs = 4 sqrt(sum a^2/2).
+    k = 2.0 * np.pi / 16.0
+    d["wave_field"] = {"period": 16.0, "significant_height": 0.5, "max_abs_height": 0.25,
+                       "components": [[4 * k, 0.0, 0.125, 0.3], [3 * k, 2 * k, 0.125, 1.1]]}
     d["caustics"] = True
     d["per_channel_passes"] = True
     d["sun"] = {"direction": [0.3, 0.1, -0.95], "irradiance": [900, 950, 1000],
@@ -244,7 +248,15 @@ def test_every_feature_builds_and_renders(scene_desc, tmp_path):
     d["render"]["samples"] = 2
     scene = _fresh()
     built = pbuild.build(d, ".", scene)
-    assert bpy.data.objects["sea surface"].modifiers["ocean"].type == "OCEAN"
+    # The sea surface: the given field, tiled on its lattice, the caustics caster; objects are
+    # receivers.
+    z = np.array([v.co.z for v in built.wave_mesh.vertices])
+    assert abs(pbuild.significant_height([(0, 0, h) for h in z]) - 0.5) < 0.01
+    assert len(built.wave_tiles) >= 1
+    assert all(o.cycles.is_caustics_caster for o in built.wave_tiles)
+    assert all(abs(o.location.x / 16.0 - round(o.location.x / 16.0)) < 1e-9
+               for o in built.wave_tiles)
+    assert bpy.data.objects["object:floor"].cycles.is_caustics_receiver
     assert bpy.data.lights["light:panel"].type == "AREA"
     written = pbuild.render(built, str(tmp_path), poses=[1])
     assert [os.path.basename(p) for p in written] == ["left_p1.exr", "right_p1.exr"]
@@ -349,3 +361,21 @@ def test_depth_of_field_is_the_physical_thin_lens(camera, tmp_path):
     assert var == pytest.approx(want, rel=0.10)
     assert sw == pytest.approx(s * s, rel=0.05)
     assert mu == pytest.approx(cx, abs=0.2) and mv == pytest.approx(cy, abs=0.2)
+
+
+def test_build_sets_what_the_first_render_sets(scene_desc):
+    # A saved .blend renders what poser renders: strengths (with the n^2 factor) and the seed
+    # of image (pose 0, camera 0) are set by the build, not only by the render step.
+    d = scene_desc
+    d["poses"][0]["seeds"] = [1234]
+    d["poses"][1]["seeds"] = [5678]
+    scene = _fresh()
+    built = pbuild.build(d, ".", scene)
+    strobe = bpy.data.lights["light:strobe"]
+    n = d["water"]["ior"][1]  # camera behind a port: n_cam = 1
+    assert abs(strobe.energy - 4.0 * np.pi * 2.0 / n**2) < 1e-4
+    bg = built.world_bg["node"].inputs["Strength"].default_value
+    assert abs(bg - 0.2 / n**2) < 1e-6
+    assert scene.cycles.seed == 1234
+    pbuild.prepare_image(built, 1, 0)
+    assert scene.cycles.seed == 5678

@@ -9,9 +9,10 @@
 //! | `reference_channel` | channel whose indices a single RGB pass uses (1 = G, 550 nm) |
 //! | `per_channel_passes` | one pass per channel with that channel's indices (dispersion) |
 //! | `cameras[]` | `name`, `width`, `height`, `lens`, `fx`, `fy`, `cx`, `cy`, `focus_distance`, `f_number`, `focal_length` (m; thin-lens aperture radius = focal_length / 2N), `distortion` (`k1`, `k2`, `k3`, `p1`, `p2`), `r2_max` (lens field, `null`: unbounded), `rig_from_camera` (4×4), `port` (camera frame, as in the model) |
-//! | `poses[]` | `name`, `world_from_rig` (4×4), `images` (one name per camera), `time` |
+//! | `poses[]` | `name`, `world_from_rig` (4×4), `images` (one name per camera), `time`, `seeds` (one Cycles seed per camera, [`cycles_seed`]) |
 //! | `water` | the model's water (indices, σa, σs per channel, phase, extent) or `null` |
 //! | `surface` | the sea surface (`none`, `flat`, `waves`) |
+//! | `wave_field` | with `waves`: the native backend's height field ([`crate::optics::waves::WaveField`], same seed): `period`, `significant_height`, `components[]` = `[kx, ky, amplitude, phase]`; `null` otherwise |
 //! | `bounds` | world box holding everything, with a margin: the extent of scene-filling water |
 //! | `sun` | `direction` (propagation), `irradiance` (W/m² normal to it), `in_water`, `angle`, `caustics` |
 //! | `lights[]` | `name`, `mount`, `type` + the model's parameters; poses as 4×4 |
@@ -29,6 +30,18 @@ pub const FORMAT: &str = "poser-blender/1";
 
 /// Angular diameter of the sun, rad (used only when the sun shines through a wavy surface).
 const SUN_ANGLE: f64 = 0.00935;
+
+/// The Cycles seed of image (`pose`, `camera`): a SplitMix64 hash of the scene seed and the
+/// image's indices, in Cycles' range [0, 2³¹). Every image gets its own noise pattern (one seed
+/// for all poses would repeat the same pattern in every image, correlated noise that feature
+/// matching can lock onto); the same scene gives the same seeds.
+pub fn cycles_seed(scene_seed: u64, pose: usize, camera: usize) -> u32 {
+    use crate::rng::SplitMix64;
+    let mut h = SplitMix64(scene_seed ^ 0xC1C1_E5EE_D000_0000).next_u64();
+    h = SplitMix64(h ^ pose as u64).next_u64();
+    h = SplitMix64(h ^ ((camera as u64) << 32)).next_u64();
+    (h >> 33) as u32
+}
 
 /// Row-major 4×4 of a pose.
 pub fn pose_rows(p: &Pose) -> Value {
@@ -111,16 +124,32 @@ pub fn describe(model: &Model) -> Result<Description, String> {
             let images: Vec<String> = (0..model.cameras.len())
                 .map(|c| model.image_name(i, c))
                 .collect();
+            let seeds: Vec<u32> = (0..model.cameras.len())
+                .map(|c| cycles_seed(model.render.seed, i, c))
+                .collect();
             json!({
                 "name": p.name,
                 "world_from_rig": pose_rows(&p.world_from_rig),
                 "images": images,
                 "time": p.time,
+                "seeds": seeds,
             })
         })
         .collect();
 
     let caustics = model.needs.caustics && matches!(model.site.surface, SeaSurface::Waves { .. });
+    if caustics && model.sun.is_some() {
+        // CAUSTICS_REFUSED (docs/backends.md): the sun reaches the seabed only through the
+        // wavy glass surface, i.e. only by Cycles' MNEE; with the native wave field as the
+        // caster, the seabed as the receiver and the sun as the caustics light, MNEE found
+        // almost no paths (caustics_shallow at 80×60, 16 spp: 98 % of the pixels black, image
+        // mean 0.0 against the native 38).
+        return Err(
+            "the sun through a wavy sea surface (caustics) cannot be rendered by the Blender              backend: Cycles reaches the seabed through the wavy glass only by its manifold              next-event estimation, which finds almost none of these paths (the seabed renders              black with fireflies)
+  help: use `surface = \"flat\"` or render with the              native backend"
+                .into(),
+        );
+    }
     let sun = model.sun.as_ref().map(|s| {
         if caustics {
             json!({"direction": s.direction_air, "irradiance": s.irradiance, "in_water": false,
@@ -233,6 +262,32 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         }));
     }
 
+    // The native backend's wave field (same parameters and seed), so that Cycles refracts the
+    // sun through the very surface the native caustics are computed from.
+    let wave_field = match model.site.surface {
+        SeaSurface::Waves {
+            height,
+            wavelength,
+            wind_speed,
+        } => {
+            let f = crate::optics::waves::WaveField::new(
+                height,
+                wavelength,
+                wind_speed,
+                crate::optics::waves::WIND_DIRECTION,
+                model.render.seed,
+            );
+            let comps: Vec<[f64; 4]> = f
+                .components
+                .iter()
+                .map(|c| [c.kx, c.ky, c.amplitude, c.phase])
+                .collect();
+            json!({"period": f.period, "significant_height": f.significant_height,
+                   "max_abs_height": f.max_abs_height(), "components": comps})
+        }
+        _ => Value::Null,
+    };
+
     let mut targets = Vec::new();
     for (i, t) in model.targets.iter().enumerate() {
         match super::target_texture(t)? {
@@ -274,6 +329,7 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         "poses": poses,
         "water": model.water,
         "surface": model.site.surface,
+        "wave_field": wave_field,
         "bounds": bounds(model),
         "sun": sun,
         "lights": lights,
@@ -395,4 +451,59 @@ fn bounds(model: &Model) -> Value {
         })
         .unwrap_or(5.0);
     json!({"min": lo - DVec3::splat(margin), "max": hi + DVec3::splat(margin)})
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn load(path: &str) -> Model {
+        crate::scene::load(std::path::Path::new(path), &[])
+            .unwrap_or_else(|f| panic!("{}", f.render()))
+            .model
+    }
+
+    #[test]
+    fn every_image_gets_its_own_deterministic_cycles_seed() {
+        let m = load("scenarios/calibration_flat.toml");
+        assert!(m.poses.len() >= 2);
+        let seeds = |m: &Model| -> Vec<u64> {
+            let d = describe(m).unwrap().json;
+            d["poses"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .flat_map(|p| p["seeds"].as_array().unwrap().clone())
+                .map(|s| s.as_u64().unwrap())
+                .collect()
+        };
+        let a = seeds(&m);
+        assert_eq!(a.len(), m.poses.len() * m.cameras.len());
+        // Two poses get different seeds; all are distinct here; all in Cycles' range.
+        assert_ne!(a[0], a[1]);
+        let mut u = a.clone();
+        u.sort();
+        u.dedup();
+        assert_eq!(u.len(), a.len(), "repeated seeds: {a:?}");
+        assert!(a.iter().all(|&s| s < 1 << 31));
+        // The same scene gives the same seeds; another scene seed gives others.
+        assert_eq!(seeds(&load("scenarios/calibration_flat.toml")), a);
+        let mut other = m.clone();
+        other.render.seed += 1;
+        assert_ne!(seeds(&other)[0], a[0]);
+    }
+
+    #[test]
+    fn sun_caustics_are_refused_with_a_hint() {
+        let m = load("scenarios/caustics_shallow.toml");
+        let e = describe(&m).err().expect("refused");
+        assert!(e.contains("caustics") && e.contains("help:"), "{e}");
+        // Without the sun the wavy surface is described with the native wave field.
+        let mut m = m;
+        m.sun = None;
+        let d = describe(&m).unwrap().json;
+        let f = &d["wave_field"];
+        assert_eq!(f["significant_height"].as_f64(), Some(0.25));
+        assert!(f["components"].as_array().unwrap().len() > 10);
+    }
 }
