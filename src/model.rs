@@ -9,7 +9,8 @@
 //! * World frame: right-handed, metres, **z up**, x east, y north. The sea surface (if any) is
 //!   the plane z = 0; the nominal seabed of the site is z = -`site.depth`.
 //! * Camera frame: OpenCV — x right, y down, z forward; origin at the entrance pupil.
-//! * Pixel (i, j) covers [i, i+1]×[j, j+1]; its centre is (i+0.5, j+0.5) (OpenCV/COLMAP).
+//! * Pixel (i, j) covers [i, i+1]×[j, j+1]; its centre is (i+0.5, j+0.5): COLMAP's
+//!   convention. OpenCV's pixel centres are at integers (subtract 0.5).
 //! * Rotations are stored as `DMat3` whose columns are the child axes in the parent frame
 //!   (`parent_from_child`), so `p_parent = R * p_child + t`.
 //! * Colour channels are always `[R, G, B]` at [`CHANNEL_WAVELENGTHS_NM`].
