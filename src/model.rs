@@ -468,9 +468,14 @@ pub struct NetworkSummary {
     pub duration: f64,
     /// Nominal camera altitude above the seabed, m (if the network defines one).
     pub altitude: Option<f64>,
-    /// Nominal forward overlap and side-lap (fractions), if the network defines them.
+    /// Forward overlap and side-lap (fractions) the poses give over a flat seabed, through
+    /// the exact port, if the network defines them.
     pub overlap: Option<f64>,
     pub sidelap: Option<f64>,
+    /// What the scene asked for (`overlap`, `sidelap`): differs from the above when `strips`
+    /// or a distance/time trigger fixes the spacing.
+    pub overlap_requested: Option<f64>,
+    pub sidelap_requested: Option<f64>,
     /// Distance between exposures along a strip, m, and between strips, m.
     pub spacing: Option<f64>,
     pub strip_spacing: Option<f64>,
