@@ -39,6 +39,7 @@ pub fn write_atomic_with(
         .map_err(|e| format!("{}: {e}", dir.display()))?;
     let tmp_path = tmp.into_temp_path();
     f(&tmp_path)?;
+    readable(&tmp_path).map_err(|e| format!("{}: {e}", path.display()))?;
     tmp_path
         .persist(path)
         .map_err(|e| format!("{}: {e}", path.display()))?;
@@ -75,5 +76,24 @@ mod tests {
             let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
             assert_eq!(mode, 0o644);
         }
+    }
+
+    /// Images go through the path-taking writer: they must be as readable as the truth files
+    /// (they were 0600, the temporary file's mode).
+    #[test]
+    fn path_writer_outputs_are_shareable() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("img.png");
+        write_atomic_with(&p, |tmp| {
+            std::fs::write(tmp, b"x").map_err(|e| e.to_string())
+        })
+        .unwrap();
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, 0o644);
+        }
+        assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 1);
     }
 }

@@ -9,7 +9,8 @@
 //! * World frame: right-handed, metres, **z up**, x east, y north. The sea surface (if any) is
 //!   the plane z = 0; the nominal seabed of the site is z = -`site.depth`.
 //! * Camera frame: OpenCV — x right, y down, z forward; origin at the entrance pupil.
-//! * Pixel (i, j) covers [i, i+1]×[j, j+1]; its centre is (i+0.5, j+0.5) (OpenCV/COLMAP).
+//! * Pixel (i, j) covers [i, i+1]×[j, j+1]; its centre is (i+0.5, j+0.5): COLMAP's
+//!   convention. OpenCV's pixel centres are at integers (subtract 0.5).
 //! * Rotations are stored as `DMat3` whose columns are the child axes in the parent frame
 //!   (`parent_from_child`), so `p_parent = R * p_child + t`.
 //! * Colour channels are always `[R, G, B]` at [`CHANNEL_WAVELENGTHS_NM`].
@@ -467,9 +468,14 @@ pub struct NetworkSummary {
     pub duration: f64,
     /// Nominal camera altitude above the seabed, m (if the network defines one).
     pub altitude: Option<f64>,
-    /// Nominal forward overlap and side-lap (fractions), if the network defines them.
+    /// Forward overlap and side-lap (fractions) the poses give over a flat seabed, through
+    /// the exact port, if the network defines them.
     pub overlap: Option<f64>,
     pub sidelap: Option<f64>,
+    /// What the scene asked for (`overlap`, `sidelap`): differs from the above when `strips`
+    /// or a distance/time trigger fixes the spacing.
+    pub overlap_requested: Option<f64>,
+    pub sidelap_requested: Option<f64>,
     /// Distance between exposures along a strip, m, and between strips, m.
     pub spacing: Option<f64>,
     pub strip_spacing: Option<f64>,

@@ -20,6 +20,11 @@
 //! | temperature | °C | `C`, `°C`, `degC`, `K`, `F`, `°F` |
 //! | fraction | 1 | `%` |
 //! | GSD | m/px | `m/px`, `cm/px`, `mm/px` |
+//!
+//! Units are case-exact, as SI writes them: `mW` is a milliwatt and `MW` would be a megawatt,
+//! so `"50 MW"` is an error, never 50 mW. Only spellings without an SI prefix, where case
+//! cannot change the meaning (`Bar`, `PSI`, `Deg`, `FT`, `Min`, …; see [`CASE_FREE`]), are
+//! also accepted in another case.
 
 /// A physical dimension a scene value can have.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -178,6 +183,14 @@ impl Dim {
     }
 }
 
+/// Canonical spellings that are accepted in any letter case: none carries an SI prefix, so
+/// case cannot change their meaning (`"Bar"`, `"PSI"`, `"DEG"`). Every other unit is
+/// case-exact (`m`/`M`, `k`, `G`, `T`, `P` are different prefixes).
+pub const CASE_FREE: &[&str] = &[
+    "bar", "psi", "atm", "deg", "rad", "ft", "in", "cuft", "cuft/min", "ft/min", "kn", "min",
+    "degC", "°C", "°F",
+];
+
 /// Why a quantity string could not be read.
 #[derive(Debug, Clone, PartialEq)]
 pub enum UnitError {
@@ -189,6 +202,9 @@ pub enum UnitError {
         dim: Dim,
         suggestion: Option<String>,
         other_dim: Option<Dim>,
+        /// A known unit of this dimension that differs only in letter case, refused because
+        /// case changes an SI prefix (`MW` for `mW`).
+        case_of: Option<String>,
     },
     /// The result is NaN or infinite.
     NotFinite,
@@ -202,9 +218,16 @@ impl std::fmt::Display for UnitError {
                 unit,
                 dim,
                 other_dim,
+                case_of,
                 ..
             } => {
-                if let Some(o) = other_dim {
+                if let Some(c) = case_of {
+                    write!(
+                        f,
+                        "unknown unit `{unit}` for a {}: units are case-sensitive (`{c}` is a different unit)",
+                        dim.name()
+                    )
+                } else if let Some(o) = other_dim {
                     write!(
                         f,
                         "`{unit}` is a unit of {}, but a {} is expected",
@@ -299,15 +322,16 @@ fn unit_factor(unit: &str, dim: Dim) -> Result<(f64, f64), UnitError> {
     if let Some(&(_, f, o)) = dim.units().iter().find(|x| x.0 == u) {
         return Ok((f, o));
     }
-    // Case-insensitive second chance (e.g. "MM", "Bar"), unless ambiguous.
+    // Another letter case: accepted only for prefix-free spellings ("Bar", "PSI").
     let ci: Vec<_> = dim
         .units()
         .iter()
         .filter(|x| x.0.eq_ignore_ascii_case(&u))
         .collect();
-    if ci.len() == 1 && !u.is_empty() {
+    if ci.len() == 1 && !u.is_empty() && CASE_FREE.contains(&ci[0].0) {
         return Ok((ci[0].1, ci[0].2));
     }
+    let case_of = ci.first().map(|x| x.0.to_string());
     let other_dim = ALL_DIMS
         .iter()
         .copied()
@@ -322,8 +346,9 @@ fn unit_factor(unit: &str, dim: Dim) -> Result<(f64, f64), UnitError> {
     Err(UnitError::BadUnit {
         unit: u,
         dim,
-        suggestion,
+        suggestion: case_of.clone().or(suggestion),
         other_dim,
+        case_of,
     })
 }
 
@@ -344,6 +369,7 @@ pub fn parse_quantity(s: &str, dim: Dim) -> Result<f64, UnitError> {
             dim,
             suggestion: None,
             other_dim: None,
+            case_of: None,
         });
     }
     let (f, o) = unit_factor(unit, dim)?;
@@ -455,6 +481,46 @@ mod tests {
         ));
         assert!(parse_quantity("1e400 m", Dim::Length).is_err());
         assert!(parse_quantity("3 m", Dim::Number).is_err());
+    }
+
+    /// SI prefixes are case-exact: `"50 MW"` is not 50 mW (a factor of 10⁹), `"1 mPa"` is not
+    /// 1 MPa, `"3 MM"` is not 3 mm; prefix-free spellings still accept any case.
+    #[test]
+    fn units_are_case_exact_where_si_says_so() {
+        for (s, d, hint) in [
+            ("50 MW", Dim::Power, "mW"),
+            ("1 mpa", Dim::Pressure, "MPa"),
+            ("3 MM", Dim::Length, "mm"),
+            ("2 KM", Dim::Length, "km"),
+            ("5 Kw", Dim::Power, "kW"),
+            ("1 M", Dim::Length, "m"),
+        ] {
+            match parse_quantity(s, d) {
+                Err(e @ UnitError::BadUnit { .. }) => {
+                    let UnitError::BadUnit {
+                        case_of,
+                        suggestion,
+                        ..
+                    } = &e
+                    else {
+                        unreachable!()
+                    };
+                    assert_eq!(case_of.as_deref(), Some(hint), "{s}");
+                    assert_eq!(suggestion.as_deref(), Some(hint), "{s}");
+                    assert!(e.to_string().contains("case-sensitive"), "{e}");
+                }
+                r => panic!("{s}: expected a unit error, got {r:?}"),
+            }
+        }
+        assert!(parse_vector("1, 2, 3 MM", Dim::Length).is_err());
+        // Prefix-free spellings: any case.
+        assert_eq!(q("232 Bar", Dim::Pressure), 232e5);
+        assert_eq!(q("1 ATM", Dim::Pressure), 101325.0);
+        assert_eq!(q("10 FT", Dim::Length), 3.048);
+        assert_eq!(q("2 Min", Dim::Time), 120.0);
+        assert!((q("90 DEG", Dim::Angle) - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        // Both spellings of litre are listed, so both stay exact.
+        assert_eq!(q("12 L", Dim::Volume), q("12 l", Dim::Volume));
     }
 
     #[test]

@@ -1,5 +1,6 @@
 //! Every example scene under `scenarios/` loads with no errors and no warnings, and resolves
-//! to a model with cameras and poses.
+//! to a model with cameras and poses. A scenario whose lesson is a warning declares it in a
+//! header line `# expect-warnings: W0300 …`: then exactly those warnings must appear.
 use std::path::Path;
 
 #[test]
@@ -16,10 +17,21 @@ fn every_example_scene_validates() {
             continue;
         }
         n += 1;
+        let text = std::fs::read_to_string(&p).unwrap();
+        let mut expected: Vec<String> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("# expect-warnings:"))
+            .flat_map(|l| l.split_whitespace().map(str::to_string))
+            .take_while(|w| !w.starts_with('—') && !w.starts_with('-'))
+            .collect();
+        expected.sort();
         match poser::scene::load(&p, &[]) {
             Ok(l) => {
-                assert!(
-                    l.warnings.is_empty(),
+                let mut got: Vec<String> = l.warnings.iter().map(|d| d.code.to_string()).collect();
+                got.sort();
+                assert_eq!(
+                    got,
+                    expected,
                     "{}: warnings:\n{}",
                     p.display(),
                     l.render_warnings()

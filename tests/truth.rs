@@ -154,3 +154,275 @@ fn without_a_port_colmap_pinhole_reprojects_the_truth() {
     }
     assert!(n > 0);
 }
+
+/// A camera-frame ray traced the way Refractive COLMAP's `FlatPort::CamFromImg` and
+/// `DomePort::CamFromImg` do (She et al., IROS 2024; pinhole camera): the test's own
+/// implementation of the format's meaning, to read back what poser wrote.
+fn refractive_colmap_ray(k: &[f64], model: &str, rp: &[f64], x: f64, y: f64) -> (DVec3, DVec3) {
+    let refract = |n: DVec3, n1: f64, n2: f64, d: DVec3| {
+        // Vector Snell with n along the transmission side.
+        let n = if n.dot(d) < 0.0 { -n } else { n };
+        let eta = n1 / n2;
+        let c = n.dot(d);
+        let s2 = eta * eta * (1.0 - c * c);
+        eta * d + ((1.0 - s2).sqrt() - eta * c) * n
+    };
+    let mut dir = DVec3::new((x - k[2]) / k[0], (y - k[3]) / k[1], 1.0).normalize();
+    let (na, ng, nw) = (rp[5], rp[6], rp[7]);
+    match model {
+        "FLATPORT" => {
+            let n = DVec3::new(rp[0], rp[1], rp[2]);
+            let o1 = dir * (rp[3] / n.dot(dir));
+            dir = refract(n, na, ng, dir);
+            let o2 = o1 + dir * ((rp[3] + rp[4] - n.dot(o1)) / n.dot(dir));
+            (o2, refract(n, ng, nw, dir))
+        }
+        "DOMEPORT" => {
+            let c = DVec3::new(rp[0], rp[1], rp[2]);
+            let far = |o: DVec3, d: DVec3, r: f64| {
+                let b = d.dot(o - c);
+                let c0 = (o - c).length_squared() - r * r;
+                o + d * (-b + (b * b - c0).sqrt())
+            };
+            let o1 = far(DVec3::ZERO, dir, rp[3]);
+            dir = refract((o1 - c).normalize(), na, ng, dir);
+            let o2 = far(o1, dir, rp[3] + rp[4]);
+            (o2, refract((o2 - c).normalize(), ng, nw, dir))
+        }
+        m => panic!("unknown refractive model {m}"),
+    }
+}
+
+/// Read a written COLMAP text model: cameras (model, params, refractive part), images
+/// (camera_from_world, camera id, observations) and points.
+#[allow(clippy::type_complexity)]
+fn read_colmap(
+    dir: &Path,
+) -> (
+    Vec<(String, Vec<f64>, Option<(String, Vec<f64>)>)>,
+    Vec<(glam::DQuat, DVec3, usize, Vec<(f64, f64, usize)>)>,
+    std::collections::HashMap<usize, DVec3>,
+) {
+    let data = |f: &str| -> Vec<String> {
+        std::fs::read_to_string(dir.join(f))
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('#'))
+            .map(String::from)
+            .collect()
+    };
+    let cams = data("cameras.txt")
+        .iter()
+        .map(|l| {
+            let w: Vec<&str> = l.split(' ').collect();
+            let refrac = w.iter().position(|x| *x == "REFRAC");
+            let end = refrac.unwrap_or(w.len());
+            let params = w[4..end].iter().map(|x| x.parse().unwrap()).collect();
+            let r = refrac.map(|i| {
+                (
+                    w[i + 1].to_string(),
+                    w[i + 2..].iter().map(|x| x.parse().unwrap()).collect(),
+                )
+            });
+            (w[1].to_string(), params, r)
+        })
+        .collect();
+    let lines = data("images.txt");
+    let images = lines
+        .chunks(2)
+        .map(|pair| {
+            let f: Vec<&str> = pair[0].split(' ').collect();
+            let n: Vec<f64> = f[1..8].iter().map(|x| x.parse().unwrap()).collect();
+            let obs = pair[1]
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .chunks(3)
+                .map(|o| {
+                    (
+                        o[0].parse().unwrap(),
+                        o[1].parse().unwrap(),
+                        o[2].parse().unwrap(),
+                    )
+                })
+                .collect();
+            (
+                glam::DQuat::from_xyzw(n[1], n[2], n[3], n[0]),
+                DVec3::new(n[4], n[5], n[6]),
+                f[8].parse().unwrap(),
+                obs,
+            )
+        })
+        .collect();
+    let points = data("points3D.txt")
+        .iter()
+        .map(|l| {
+            let f: Vec<&str> = l.split(' ').collect();
+            let v: Vec<f64> = f[1..4].iter().map(|x| x.parse().unwrap()).collect();
+            (f[0].parse().unwrap(), DVec3::new(v[0], v[1], v[2]))
+        })
+        .collect();
+    (cams, images, points)
+}
+
+/// `colmap_refractive/` is Refractive COLMAP's format: every observation, traced back through
+/// the written camera and port by that format's own ray model, passes through its 3-D point;
+/// for a flat and a decentred dome port. `colmap/` (upstream COLMAP) has no `REFRAC` token,
+/// and its port-less camera misses the same observations by pixels.
+#[test]
+fn refractive_colmap_model_reprojects_every_observation() {
+    for port in ["flat", "dome"] {
+        let mut model = load("calibration_flat.toml");
+        if port == "dome" {
+            let glass = model.cameras[0].port.glass().unwrap().clone();
+            model.cameras[0].port = poser::model::Port::Dome {
+                center: DVec3::new(0.003, -0.002, 0.004),
+                inner_radius: 0.06,
+                thickness: 0.008,
+                glass,
+            };
+        }
+        let d = tempfile::tempdir().unwrap();
+        poser::truth::write(&model, d.path()).unwrap();
+        let (cams, images, points) = read_colmap(&d.path().join("colmap_refractive"));
+        let (up_cams, _, _) = read_colmap(&d.path().join("colmap"));
+        assert!(
+            up_cams.iter().all(|c| c.2.is_none()),
+            "upstream model has REFRAC"
+        );
+        let (name, k, refrac) = &cams[0];
+        assert_eq!(name, "PINHOLE");
+        let (rmodel, rp) = refrac.as_ref().expect("refractive camera");
+        assert_eq!(
+            rmodel,
+            if port == "flat" {
+                "FLATPORT"
+            } else {
+                "DOMEPORT"
+            }
+        );
+        let mut n = 0;
+        let mut upstream_px = 0.0f64;
+        for (q, t, cam, obs) in &images {
+            assert_eq!(*cam, 1);
+            for &(x, y, pid) in obs {
+                let pc = *q * points[&pid] + *t;
+                let (o, dir) = refractive_colmap_ray(k, rmodel, rp, x, y);
+                let miss = (pc - o).cross(dir).length();
+                assert!(
+                    miss < 1e-9,
+                    "{port}: observation misses its point by {miss} m"
+                );
+                // Upstream pinhole reprojection of the same point.
+                let (u, v) = (k[0] * pc.x / pc.z + k[2], k[1] * pc.y / pc.z + k[3]);
+                upstream_px = upstream_px.max((u - x).hypot(v - y));
+                n += 1;
+            }
+        }
+        assert!(n > 50, "{port}: only {n} observations");
+        if port == "flat" {
+            assert!(
+                upstream_px > 10.0,
+                "flat port without its port: {upstream_px} px"
+            );
+        }
+    }
+}
+
+/// The equisolid fisheye is exported as OPENCV_FISHEYE with fitted coefficients (it was
+/// written with zeros, up to 5.7 px off): the exported model reprojects every observation to
+/// within 0.01 px, in the COLMAP and the OpenCV files alike.
+#[test]
+fn equisolid_fisheye_export_reprojects_within_a_hundredth_of_a_pixel() {
+    let mut model = load("calibration_flat.toml");
+    model.water = None;
+    for c in &mut model.cameras {
+        c.port = poser::model::Port::None;
+        c.lens = poser::model::LensModel::FisheyeEquisolid;
+        // A 1.2 mm focal length on this sensor: ≈ 150° across the diagonal.
+        c.fx *= 0.15;
+        c.fy *= 0.15;
+    }
+    let d = tempfile::tempdir().unwrap();
+    poser::truth::write(&model, d.path()).unwrap();
+    let (cams, images, points) = read_colmap(&d.path().join("colmap"));
+    let (name, p, _) = &cams[0];
+    assert_eq!(name, "OPENCV_FISHEYE");
+    assert!(p[4] != 0.0, "coefficients were not fitted: {p:?}");
+    let fisheye = |pc: DVec3| {
+        let r = pc.x.hypot(pc.y);
+        let th = r.atan2(pc.z);
+        let t2 = th * th;
+        let td = th * (1.0 + t2 * (p[4] + t2 * (p[5] + t2 * (p[6] + t2 * p[7]))));
+        (p[0] * td * pc.x / r + p[2], p[1] * td * pc.y / r + p[3])
+    };
+    let (mut n, mut worst, mut widest) = (0, 0.0f64, 0.0f64);
+    for (q, t, _, obs) in &images {
+        for &(x, y, pid) in obs {
+            let pc = *q * points[&pid] + *t;
+            let (u, v) = fisheye(pc);
+            worst = worst.max((u - x).hypot(v - y));
+            widest = widest.max(pc.x.hypot(pc.y).atan2(pc.z));
+            n += 1;
+        }
+    }
+    assert!(n > 50, "only {n} observations");
+    assert!(
+        widest > 0.5,
+        "observations only near the centre ({widest} rad)"
+    );
+    assert!(worst < 0.01, "OPENCV_FISHEYE export is {worst} px off");
+    // The OpenCV file carries the same coefficients.
+    let yml = std::fs::read_to_string(d.path().join("opencv/camera_1.yml")).unwrap();
+    assert!(yml.contains("distortion_model: \"fisheye\""), "{yml}");
+    assert!(yml.contains(&format!("{:?}", p[4])), "{yml}");
+}
+
+/// `opencv/` uses OpenCV's pixel convention (centres at integers): every pixel and the
+/// principal point are poser's − 0.5; poser's own files keep +0.5.
+#[test]
+fn opencv_files_use_opencv_pixel_convention() {
+    let model = load("calibration_flat.toml");
+    let truth = poser::truth::compute(&model).unwrap();
+    let d = tempfile::tempdir().unwrap();
+    poser::truth::write(&model, d.path()).unwrap();
+    let yml = std::fs::read_to_string(d.path().join("opencv/camera_1.yml")).unwrap();
+    assert!(yml.starts_with("%YAML:1.0\n"), "{yml}");
+    let c = &model.cameras[0];
+    let k = format!(
+        "data: [ {:?}, 0.0, {:?}, 0.0, {:?}, {:?}, 0.0, 0.0, 1.0 ]",
+        c.fx,
+        c.cx - 0.5,
+        c.fy,
+        c.cy - 0.5
+    );
+    assert!(yml.contains(&k), "{yml}\nwants {k}");
+    let csv = std::fs::read_to_string(d.path().join("opencv/points.csv")).unwrap();
+    let rows: Vec<Vec<String>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    let obs: Vec<_> = truth
+        .images
+        .iter()
+        .flat_map(|im| im.points.iter())
+        .collect();
+    assert_eq!(rows.len(), obs.len());
+    for (r, o) in rows.iter().zip(obs) {
+        let (u, v): (f64, f64) = (r[4].parse().unwrap(), r[5].parse().unwrap());
+        assert_eq!((u, v), (o.u - 0.5, o.v - 0.5));
+    }
+    let points_csv = std::fs::read_to_string(d.path().join("points.csv")).unwrap();
+    let first = points_csv.lines().nth(1).unwrap();
+    let u: f64 = first.split(',').nth(5).unwrap().parse().unwrap();
+    assert_eq!(
+        u,
+        truth
+            .images
+            .iter()
+            .flat_map(|i| &i.points)
+            .next()
+            .unwrap()
+            .u
+    );
+}

@@ -3,6 +3,7 @@
 //! (`--json`: the whole resolved model).
 use super::{CliError, SceneArgs};
 use crate::model::{IorSource, LensModel, Model, Phase, Port, SeaSurface};
+use crate::optics::project::Projector;
 use std::fmt::Write;
 
 pub fn run(scene: &SceneArgs, json: bool) -> Result<(), CliError> {
@@ -207,13 +208,19 @@ pub fn explain(m: &Model) -> String {
         let _ = writeln!(s, "  port: {port}");
         if let Some(h) = dist {
             let g = gsd(m, i, h);
+            // The footprint through the exact port (the paraxial g·width overstates it for a
+            // wide lens behind a flat port); the paraxial value where no ray reaches the bed.
+            let (fw, fh) = Projector::for_camera(c, 1, m.ambient_ior()[1])
+                .ok()
+                .and_then(|pr| crate::plan::network::footprint_exact(&pr, h))
+                .unwrap_or((g * c.width as f64, g * c.height as f64));
             let _ = writeln!(
                 s,
-                "  at {:.2} m: GSD {:.2} mm/px, footprint {:.2} × {:.2} m",
+                "  at {:.2} m: GSD {:.2} mm/px at the centre, footprint {:.2} × {:.2} m",
                 h,
                 g * 1e3,
-                g * c.width as f64,
-                g * c.height as f64
+                fw,
+                fh
             );
         }
     }

@@ -16,7 +16,7 @@ mod dive;
 mod evaluate;
 mod explain;
 mod plan;
-mod project;
+pub mod project;
 mod render;
 mod schema;
 mod sensor;

@@ -2,7 +2,8 @@
 //!
 //! Reads `id,x,y,z` (header required, metres; camera or world frame), writes `id,u,v,status`
 //! with status `ok` or the reason there is no pixel (`behind_camera`, `inside_glass`, …; for
-//! `off_sensor` the pixel is still written). Pixel centres at +0.5 as in OpenCV.
+//! `off_sensor` the pixel is still written). Pixel centres at +0.5 (COLMAP's
+//! convention; OpenCV's = this − 0.5).
 use super::{CliError, FrameArg, SceneArgs, load_model};
 use crate::optics::project::Projector;
 use crate::truth::csv_field;

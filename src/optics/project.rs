@@ -10,7 +10,11 @@
 //! | [`Projector::camera_ray`] | pixel → ray in water (camera frame) with Fresnel transmittance | |
 //! | [`Projector::pixel_ray_world`] | pixel → (origin, unit direction, transmittance) in the world | |
 //!
-//! Pixel coordinates follow OpenCV: pixel (i, j) covers [i, i+1]×[j, j+1], centre at +0.5.
+//! Pixel coordinates follow COLMAP's convention: pixel (i, j) covers [i, i+1]×[j, j+1], its
+//! centre is at (i + 0.5, j + 0.5). OpenCV puts pixel centres at integers: subtract 0.5.
+//! Points farther than [`FAR`] are first scaled towards the pupil by an exact power of two
+//! (same ray, no overflow in the port solvers; the pixel of a point that far is its
+//! direction's limit to far below 1e-50 px).
 //! Nothing allocates after construction; `Projector` is `Send + Sync` and cheap to share.
 
 use super::NoSolution;
@@ -18,6 +22,23 @@ use super::lens::Lens;
 use super::port::{PortRay, PortSolver};
 use super::types::{Camera, Pose};
 use glam::DVec3;
+
+/// Largest coordinate (m) handed to the port solvers as is; farther points are scaled by a
+/// power of two to below it. Squares of coordinates stay far from f64's overflow at 1.3e154.
+pub const FAR: f64 = 1e100;
+
+/// `p` scaled by an exact power of two so that its largest coordinate is at most [`FAR`]: the
+/// same direction from the entrance pupil, bit for bit.
+#[inline]
+fn tame(p: DVec3) -> DVec3 {
+    let m = p.abs().max_element();
+    if m <= FAR {
+        return p;
+    }
+    // 2^-e with 2^e ≥ m / FAR; exact, since it only changes the exponents.
+    let e = (m / FAR).log2().ceil() as i32;
+    p * 2f64.powi(-e)
+}
 
 #[derive(Debug, Clone)]
 pub struct Projector {
@@ -78,7 +99,7 @@ impl Projector {
         if !p.is_finite() {
             return Err(NoSolution::NoConvergence);
         }
-        let d = self.port.forward(p)?;
+        let d = self.port.forward(tame(p))?;
         self.lens.project(d)
     }
 
@@ -104,9 +125,17 @@ impl Projector {
         assert_eq!(ps.len(), out.len(), "one output per point");
         const CHUNK: usize = 64;
         let mut dirs = [Err(NoSolution::NoConvergence); CHUNK];
+        let mut tamed = [DVec3::ZERO; CHUNK];
         for (pc, oc) in ps.chunks(CHUNK).zip(out.chunks_mut(CHUNK)) {
             let dirs = &mut dirs[..pc.len()];
-            self.port.forward_many(pc, dirs);
+            if pc.iter().any(|p| p.abs().max_element() > FAR) {
+                for (t, p) in tamed.iter_mut().zip(pc) {
+                    *t = tame(*p);
+                }
+                self.port.forward_many(&tamed[..pc.len()], dirs);
+            } else {
+                self.port.forward_many(pc, dirs);
+            }
             for ((p, d), o) in pc.iter().zip(dirs.iter()).zip(oc.iter_mut()) {
                 *o = if p.is_finite() {
                     d.and_then(|d| self.lens.project(d))
@@ -174,5 +203,109 @@ impl Projector {
             w.transform_vector(r.dir),
             r.transmittance,
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optics::types::{Distortion, Glass, LensModel, Port};
+
+    fn camera(port: Port) -> Camera {
+        Camera {
+            name: "c".into(),
+            width: 1200,
+            height: 800,
+            pixel_pitch: 4e-6,
+            focal_length: 4e-3,
+            fx: 1000.0,
+            fy: 1000.0,
+            cx: 600.0,
+            cy: 400.0,
+            lens: LensModel::Rectilinear,
+            distortion: Distortion::default(),
+            focus_distance: None,
+            f_number: None,
+            port,
+            rig_from_camera: Pose::IDENTITY,
+        }
+    }
+
+    fn glass() -> Glass {
+        Glass {
+            name: "custom".into(),
+            ior: [1.5; 3],
+        }
+    }
+
+    /// Points beyond 1e154 m overflowed the squares in the port solvers and came back as a
+    /// garbage pixel marked `off_sensor`. Far points now land on their direction's limit, for
+    /// every port, through the single and the batch paths alike.
+    #[test]
+    fn far_points_project_to_their_directions_limit() {
+        let ports = [
+            Port::None,
+            Port::Flat {
+                normal: DVec3::new(0.05, -0.02, 1.0).normalize(),
+                distance: 0.03,
+                thickness: 0.015,
+                glass: glass(),
+            },
+            Port::Dome {
+                center: DVec3::new(0.004, 0.002, 0.01),
+                inner_radius: 0.1,
+                thickness: 0.01,
+                glass: glass(),
+            },
+            Port::Cylinder {
+                axis_point: DVec3::new(0.0, 0.0, 0.02),
+                axis: DVec3::Y,
+                inner_radius: 0.05,
+                thickness: 0.01,
+                glass: glass(),
+            },
+        ];
+        let dirs = [
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(0.2, -0.1, 1.0),
+            DVec3::new(-0.3, 0.2, 1.0),
+        ];
+        for port in ports {
+            let pr = Projector::for_camera(&camera(port.clone()), 1, 1.34).unwrap();
+            for d in dirs {
+                // The limit: the same direction at 1e12 m (the port's offsets are centimetres,
+                // so the ray to it differs from the limit by ~1e-14 rad, 1e-11 px).
+                let near = pr.project_camera(d * 1e12).unwrap();
+                for scale in [1e150, 1e155, 1e200, 1e300, f64::MAX / 4.0] {
+                    let p = d * scale;
+                    let one = pr.project_camera(p);
+                    let mut many = [Err(NoSolution::NoConvergence)];
+                    pr.project_camera_many(&[p], &mut many);
+                    for got in [one, many[0]] {
+                        let px = got.unwrap_or_else(|e| {
+                            panic!("{} port, {d:?}·{scale:e}: {e:?}", port.kind_name())
+                        });
+                        let err = (px[0] - near[0]).hypot(px[1] - near[1]);
+                        assert!(
+                            err < 1e-6,
+                            "{} port, {d:?}·{scale:e}: {px:?} vs {near:?}",
+                            port.kind_name()
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn taming_is_exact_scaling() {
+        let p = DVec3::new(3e200, -1e199, 7e201);
+        let t = tame(p);
+        assert!(t.abs().max_element() <= FAR);
+        let s = p.x / t.x;
+        assert_eq!(s.log2().fract(), 0.0, "a power of two");
+        assert_eq!(t * s, p);
+        let q = DVec3::new(1.0, 2.0, 3.0);
+        assert_eq!(tame(q), q);
     }
 }

@@ -70,7 +70,8 @@ pub struct Camera {
     /// Focal lengths in pixels.
     pub fx: f64,
     pub fy: f64,
-    /// Principal point in pixels (OpenCV convention: the image centre is (w/2, h/2)).
+    /// Principal point in pixels, pixel centres at +0.5 (COLMAP's convention; the image centre
+    /// is (w/2, h/2)). OpenCV's principal point is this − 0.5.
     pub cx: f64,
     pub cy: f64,
     pub lens: LensModel,

@@ -12,6 +12,7 @@
 //! | `obliques` | rad | none | a second pass over the same strips, tilted forward by this angle |
 
 use crate::model::{NetworkSummary, Pose, RigPose};
+use crate::optics::project::Projector;
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
@@ -123,7 +124,7 @@ pub enum NetworkSpec {
 }
 
 /// What the expansion needs to know about the camera and the site.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct NetworkContext {
     /// Image size, px, and focal length, px, of the (first) camera.
     pub width: u32,
@@ -135,9 +136,131 @@ pub struct NetworkContext {
     pub seabed_z: f64,
     /// Swim speed, m/s.
     pub speed: f64,
+    /// The first camera's exact projection through its port into the water (camera frame, G
+    /// channel). With it, footprints and spacings come from exact refraction; without it
+    /// (`None`), from the paraxial `magnification`.
+    pub exact: Option<std::sync::Arc<Projector>>,
 }
 
+/// Image axis a spacing is along: `Along` = image v (the swim direction of a lawnmower strip),
+/// `Across` = image u (between strips).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Axis {
+    Along,
+    Across,
+}
+
+/// Lines across the image on which [`NetworkContext::overlap_for`] measures the shared part.
+const LINES: usize = 32;
+
 impl NetworkContext {
+    /// Where pixel (u, v) of a nadir camera at altitude `h` meets a flat seabed, in the camera
+    /// frame (x along u, y along v), through the exact port.
+    fn ground(pr: &Projector, h: f64, u: f64, v: f64) -> Option<DVec3> {
+        let ray = pr.camera_ray(u, v).ok()?;
+        let (o, d) = (ray.origin, ray.dir);
+        if !(d.z > 1e-12) {
+            return None;
+        }
+        let t = (h - o.z) / d.z;
+        (t > 0.0).then(|| o + d * t)
+    }
+
+    /// Exact shared share of the image for a neighbour displaced by `s` along `axis`: on each
+    /// of [`LINES`] pixel lines parallel to the axis, the part of the line whose ground points
+    /// the neighbour also sees on its sensor (an interval, found by bisection on the pixel
+    /// coordinate, so the result is continuous in `s`), averaged over the lines.
+    fn shared(pr: &Projector, h: f64, s: f64, axis: Axis) -> f64 {
+        let (len, other) = match axis {
+            Axis::Along => (pr.height, pr.width),
+            Axis::Across => (pr.width, pr.height),
+        };
+        let shift = match axis {
+            Axis::Along => DVec3::new(0.0, s, 0.0),
+            Axis::Across => DVec3::new(s, 0.0, 0.0),
+        };
+        let pixel = |line: f64, t: f64| match axis {
+            Axis::Along => (line, t),
+            Axis::Across => (t, line),
+        };
+        // Seen by the neighbour: the ground point, moved back by the shift, is on its sensor.
+        let seen = |line: f64, t: f64| {
+            let (u, v) = pixel(line, t);
+            Self::ground(pr, h, u, v).is_some_and(|g| pr.project_camera(g - shift).is_ok())
+        };
+        let mut total = 0.0;
+        let mut lines = 0usize;
+        for i in 0..LINES {
+            let line = (i as f64 + 0.5) / LINES as f64 * other;
+            lines += 1;
+            if !seen(line, len) {
+                continue; // the far end is not shared: nothing on this line is
+            }
+            if seen(line, 0.0) {
+                total += 1.0;
+                continue;
+            }
+            let (mut lo, mut hi) = (0.0, len);
+            for _ in 0..48 {
+                let mid = 0.5 * (lo + hi);
+                if seen(line, mid) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            total += (len - hi) / len;
+        }
+        if lines == 0 {
+            0.0
+        } else {
+            total / lines as f64
+        }
+    }
+
+    /// Overlap (the share of one image's pixels whose ground point the neighbour also sees)
+    /// between two nadir images `s` metres apart along `axis`, at altitude `h`, over a flat
+    /// seabed: exact through the port when [`NetworkContext::exact`] is set, else paraxial.
+    pub fn overlap_for(&self, h: f64, s: f64, axis: Axis) -> f64 {
+        match &self.exact {
+            Some(pr) => Self::shared(pr, h, s, axis),
+            None => {
+                let (across, along) = self.paraxial_footprint(h);
+                let l = if axis == Axis::Along { along } else { across };
+                (1.0 - s / l).clamp(0.0, 1.0)
+            }
+        }
+    }
+
+    /// Spacing between nadir images along `axis` that gives overlap `o` at altitude `h`; the
+    /// inverse of [`NetworkContext::overlap_for`] (bisection on the exact overlap, to 1e-6 of
+    /// the footprint).
+    pub fn spacing_for(&self, h: f64, o: f64, axis: Axis) -> f64 {
+        let (across, along) = self.footprint_at(h);
+        let l = if axis == Axis::Along { along } else { across };
+        let Some(pr) = &self.exact else {
+            return (1.0 - o) * l;
+        };
+        let (mut lo, mut hi) = (0.0, 2.0 * l.max(1e-9));
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if Self::shared(pr, h, mid, axis) >= o {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+            if hi - lo < 1e-6 * l {
+                break;
+            }
+        }
+        lo
+    }
+
+    fn paraxial_footprint(&self, h: f64) -> (f64, f64) {
+        let g = self.gsd_at(h);
+        (self.width as f64 * g, self.height as f64 * g)
+    }
+
     /// Nadir GSD at altitude `h`, m/px.
     pub fn gsd_at(&self, h: f64) -> f64 {
         h / (self.focal_px * self.magnification)
@@ -146,11 +269,29 @@ impl NetworkContext {
     pub fn altitude_for_gsd(&self, gsd: f64) -> f64 {
         gsd * self.focal_px * self.magnification
     }
-    /// Footprint (across-track, along-track) at altitude `h`, m.
+    /// Footprint (across-track, along-track) at altitude `h`, m: [`footprint_exact`]
+    /// through the port when [`NetworkContext::exact`] is set
+    /// (a flat port narrows the edges of a wide lens's view; the paraxial footprint
+    /// overstates it), else paraxial.
     pub fn footprint_at(&self, h: f64) -> (f64, f64) {
-        let g = self.gsd_at(h);
-        (self.width as f64 * g, self.height as f64 * g)
+        match self.exact.as_deref().and_then(|pr| footprint_exact(pr, h)) {
+            Some(f) => f,
+            None => self.paraxial_footprint(h),
+        }
     }
+}
+
+/// Exact footprint (across = image u, along = image v) of a nadir camera at distance `h`
+/// above a flat seabed, m: the mean lengths of the edges between the corner pixels' ground
+/// points through the port (the survey's definition, [`crate::plan::survey`]). `None` where a
+/// corner's ray never reaches the seabed.
+pub fn footprint_exact(pr: &Projector, h: f64) -> Option<(f64, f64)> {
+    let (w, hh) = (pr.width, pr.height);
+    let g = |u, v| NetworkContext::ground(pr, h, u, v);
+    let (a, b, c, d) = (g(0.0, 0.0)?, g(w, 0.0)?, g(w, hh)?, g(0.0, hh)?);
+    let across = 0.5 * ((b - a).length() + (c - d).length());
+    let along = 0.5 * ((d - a).length() + (c - b).length());
+    Some((across, along))
 }
 
 /// Rotation `world_from_rig` for a camera looking along `forward` with image-up near `up`.
@@ -229,8 +370,12 @@ pub fn expand(
             fraction(*overlap, "overlap")?;
             fraction(*sidelap, "sidelap")?;
             let z = ctx.seabed_z + altitude;
-            let (fp_across, fp_along) = ctx.footprint_at(*altitude);
-            let along = along_spacing(trigger, *overlap, fp_along, ctx.speed)?;
+            let along = along_spacing(
+                trigger,
+                ctx.spacing_for(*altitude, *overlap, Axis::Along),
+                ctx.speed,
+            )?;
+            let strip_gap = ctx.spacing_for(*altitude, *sidelap, Axis::Across);
             let mut passes = vec![(*heading, *width, *length, *tilt)];
             if *cross_strips {
                 passes.push((
@@ -253,7 +398,7 @@ pub fn expand(
                     Some(n) if *n >= 1 => *n as usize,
                     Some(_) => return Err("`strips` must be at least 1".into()),
                     None => {
-                        let s = (1.0 - sidelap) * fp_across;
+                        let s = strip_gap;
                         if w <= 0.0 {
                             1
                         } else {
@@ -288,10 +433,12 @@ pub fn expand(
             summary.altitude = Some(*altitude);
             summary.spacing = Some(along);
             summary.strip_spacing = strip_spacing_used;
-            summary.overlap = Some(1.0 - along / fp_along);
+            summary.overlap = Some(ctx.overlap_for(*altitude, along, Axis::Along));
             summary.sidelap = strip_spacing_used
                 .filter(|&s| s > 0.0)
-                .map(|s| 1.0 - s / fp_across);
+                .map(|s| ctx.overlap_for(*altitude, s, Axis::Across));
+            summary.overlap_requested = Some(*overlap);
+            summary.sidelap_requested = Some(*sidelap);
             summary.strips = strip_no;
         }
         NetworkSpec::Spiral {
@@ -307,9 +454,12 @@ pub fn expand(
             positive(*radius, "spiral radius")?;
             fraction(*overlap, "overlap")?;
             fraction(*sidelap, "sidelap")?;
-            let (fp_across, fp_along) = ctx.footprint_at(*altitude);
-            let along = along_spacing(trigger, *overlap, fp_along, ctx.speed)?;
-            let turn = (1.0 - sidelap) * fp_across;
+            let along = along_spacing(
+                trigger,
+                ctx.spacing_for(*altitude, *overlap, Axis::Along),
+                ctx.speed,
+            )?;
+            let turn = ctx.spacing_for(*altitude, *sidelap, Axis::Across);
             let bcoef = turn / std::f64::consts::TAU;
             let theta_end = radius / bcoef;
             let s_end = spiral_arc(bcoef, theta_end);
@@ -338,8 +488,10 @@ pub fn expand(
             summary.altitude = Some(*altitude);
             summary.spacing = Some(along);
             summary.strip_spacing = Some(turn);
-            summary.overlap = Some(1.0 - along / fp_along);
-            summary.sidelap = Some(*sidelap);
+            summary.overlap = Some(ctx.overlap_for(*altitude, along, Axis::Along));
+            summary.sidelap = Some(ctx.overlap_for(*altitude, turn, Axis::Across));
+            summary.overlap_requested = Some(*overlap);
+            summary.sidelap_requested = Some(*sidelap);
             summary.strips = (theta_end / std::f64::consts::TAU).ceil() as u32;
         }
         NetworkSpec::Orbit {
@@ -444,14 +596,11 @@ fn nadir_rotation(dir: DVec3, tilt: f64) -> DMat3 {
     DMat3::from_cols(x, y2, z2)
 }
 
-fn along_spacing(
-    trigger: &Trigger,
-    overlap: f64,
-    fp_along: f64,
-    speed: f64,
-) -> Result<f64, String> {
+/// Spacing between exposures along a strip: `for_overlap` (from the requested overlap) unless
+/// the trigger is a distance or a time.
+fn along_spacing(trigger: &Trigger, for_overlap: f64, speed: f64) -> Result<f64, String> {
     let s = match trigger {
-        Trigger::Overlap => (1.0 - overlap) * fp_along,
+        Trigger::Overlap => for_overlap,
         Trigger::Distance(d) => *d,
         Trigger::Time(t) => t * speed,
     };
@@ -534,6 +683,7 @@ mod tests {
             magnification: 1.0,
             seabed_z: -15.0,
             speed: 0.2,
+            exact: None,
         }
     }
 

@@ -259,6 +259,38 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
             ),
         );
     }
+    // What the network delivers against what was asked (exact footprint over a flat seabed).
+    for (what, got, want, sp) in [
+        (
+            "forward overlap",
+            m.network.overlap,
+            m.network.overlap_requested,
+            spans.overlap_asked,
+        ),
+        (
+            "side-lap",
+            m.network.sidelap,
+            m.network.sidelap_requested,
+            spans.sidelap_asked,
+        ),
+    ] {
+        if let (Some(got), Some(want), Some(sp)) = (got, want, sp)
+            && got < want - 0.02
+        {
+            cx.push(
+                Diagnostic::warning(
+                    "W0301",
+                    format!(
+                        "the network gives {:.0} % {what}, not the {:.0} % asked",
+                        got * 100.0,
+                        want * 100.0
+                    ),
+                )
+                .label(sp, "asked here")
+                .help("`strips`, or a `trigger` by distance or time, fixes the spacing; remove it to space the images for the requested overlap"),
+            );
+        }
+    }
     // Strobes close to the optical axis and port: backscatter dominates.
     if let Some(w) = &m.water {
         let scatter = w.scattering.iter().cloned().fold(0.0, f64::max);

@@ -1120,7 +1120,10 @@ const UNITS_TABLE: &str = "## Units\n\n\
 | irradiance | W/m² | W/m2 |\n\
 | temperature | °C | °C, C, degC, K, F |\n\
 | fraction | 1 | % |\n\
-| ground sampling distance | m/px | m/px, cm/px, mm/px |\n";
+| ground sampling distance | m/px | m/px, cm/px, mm/px |\n\n\
+Units are case-exact, as SI writes them: `mW` is a milliwatt and `MW` a megawatt, so `\"50 MW\"` \
+is an error (with a hint), never 50 mW. Spellings without an SI prefix (bar, psi, atm, deg, rad, \
+ft, in, min, kn, cuft, degC) are also accepted in any case (`\"232 Bar\"`).\n";
 
 fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")

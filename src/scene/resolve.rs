@@ -24,6 +24,9 @@ pub struct Spans {
     pub lights: Vec<(Span, Span)>,
     pub network: Span,
     pub sidelap: Option<Span>,
+    /// `overlap` / `sidelap` as written in the scene (absent when defaulted).
+    pub overlap_asked: Option<Span>,
+    pub sidelap_asked: Option<Span>,
     pub water: Span,
     /// The stereo baseline, when given.
     pub baseline: Option<Span>,
@@ -1824,6 +1827,11 @@ fn network(
         magnification,
         seabed_z: -site.depth,
         speed: if speed > 0.0 { speed } else { 0.2 },
+        // Footprints and spacings through the exact port (a flat port narrows a wide lens's
+        // view at the edges: the paraxial spacing misses the requested overlap).
+        exact: cam
+            .and_then(|c| optics::project::Projector::for_camera(c, 1, ior[1]).ok())
+            .map(std::sync::Arc::new),
     };
     let fraction = |cx: &mut Cx, t: &mut Tab, key: &'static str, d: f64| -> f64 {
         let v = t.f64(cx, key, Dim::Fraction, d);
@@ -1852,6 +1860,8 @@ fn network(
             let overlap = fraction(cx, &mut t, "overlap", 0.8);
             let sidelap = fraction(cx, &mut t, "sidelap", 0.6);
             spans.sidelap = Some(t.span_of("sidelap"));
+            spans.overlap_asked = t.has("overlap").then(|| t.span_of("overlap"));
+            spans.sidelap_asked = t.has("sidelap").then(|| t.span_of("sidelap"));
             let strips = t.opt_u32(cx, "strips");
             if strips == Some(0) {
                 let sp = t.span_of("strips");
@@ -1898,6 +1908,8 @@ fn network(
             let overlap = fraction(cx, &mut t, "overlap", 0.8);
             let sidelap = fraction(cx, &mut t, "sidelap", 0.6);
             spans.sidelap = Some(t.span_of("sidelap"));
+            spans.overlap_asked = t.has("overlap").then(|| t.span_of("overlap"));
+            spans.sidelap_asked = t.has("sidelap").then(|| t.span_of("sidelap"));
             let trigger = trigger(cx, &mut t);
             NetworkSpec::Spiral {
                 center,

@@ -5,15 +5,22 @@
 //! | file | contents |
 //! |---|---|
 //! | `truth.json` | everything below in one document: cameras (intrinsics, lens, distortion, port with per-channel indices), images (pose, `world_from_camera` and `camera_from_world`), and per image the target points in view |
-//! | `points.csv` | `image,camera,pose,target,id,u,v,u_r,v_r,u_b,v_b,x,y,z,x_cam,y_cam,z_cam` — one row per visible target point; (u, v) is the G channel, pixel centres at +0.5 (OpenCV/COLMAP) |
+//! | `points.csv` | `image,camera,pose,target,id,u,v,u_r,v_r,u_b,v_b,x,y,z,x_cam,y_cam,z_cam` — one row per visible target point; (u, v) is the G channel, pixel centres at +0.5 (COLMAP's convention; OpenCV's is this − 0.5, see `opencv/`) |
 //! | `cameras.csv` | one row per camera: intrinsics, lens, distortion, port |
 //! | `images.csv` | one row per image: `world_from_camera` as quaternion (w, x, y, z) + translation |
-//! | `colmap/cameras.txt`, `colmap/images.txt`, `colmap/points3D.txt` | a COLMAP text model of the true poses and the visible target points (no port: COLMAP's text format has none; the port is recorded in a comment in Refractive COLMAP's parameter order) |
+//! | `colmap/…`, `colmap_refractive/…` | COLMAP text models of the true poses and the visible target points, without and with the port ([`colmap`]) |
+//! | `opencv/…` | `cv::FileStorage` calibration files and the observations in OpenCV's pixel convention ([`opencv`]) |
+//!
+//! Pixel convention: poser's, which is COLMAP's — the top-left pixel's centre is at (0.5,
+//! 0.5). OpenCV's pixel centres are at integers; only the files under `opencv/` use it.
 //!
 //! A point is *in view* when its exact refractive projection (G channel) lands on the sensor,
 //! the camera is on the printed side of its target, and nothing in the scene (objects,
 //! targets; [`crate::geometry::Bvh::occluded`]) blocks the water path from the point to
 //! where its ray leaves the port.
+
+pub mod colmap;
+pub mod opencv;
 
 use crate::geometry::Bvh;
 use crate::io::write_atomic;
@@ -197,7 +204,7 @@ pub fn compute_with(
     }
     Ok(Truth {
         scene: model.name.clone(),
-        conventions: "world z up, metres; camera frame OpenCV (x right, y down, z forward), origin at the entrance pupil; pixel centres at +0.5; (u, v) = G channel (550 nm)",
+        conventions: "world z up, metres; camera frame x right, y down, z forward (OpenCV's and COLMAP's), origin at the entrance pupil; pixel centres at +0.5 (COLMAP's convention; OpenCV's = this - 0.5); (u, v) = G channel (550 nm)",
         cameras,
         images,
     })
@@ -337,7 +344,8 @@ pub fn files(model: &Model, truth: &Truth) -> Result<Vec<(String, Vec<u8>)>, Str
     }
     out.push(("images.csv".into(), ims.into_bytes()));
 
-    out.extend(colmap(model, truth));
+    out.extend(colmap::files(model, truth));
+    out.extend(opencv::files(truth));
     Ok(out)
 }
 
@@ -386,153 +394,6 @@ fn port_params(p: &Port) -> Vec<f64> {
             *thickness,
         ],
     }
-}
-
-/// COLMAP text model of the true poses. Camera models: PINHOLE (no distortion), OPENCV
-/// (k3 = 0) or FULL_OPENCV; fisheyes as OPENCV_FISHEYE (exact for the equidistant model
-/// without distortion; otherwise approximate, said in a comment).
-fn colmap(model: &Model, truth: &Truth) -> Vec<(String, Vec<u8>)> {
-    let mut cams = String::from(
-        "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n",
-    );
-    let _ = writeln!(cams, "# Number of cameras: {}", truth.cameras.len());
-    for (i, c) in truth.cameras.iter().enumerate() {
-        let d = c.distortion;
-        let (name, params): (&str, Vec<f64>) = match c.lens {
-            LensModel::Rectilinear if d.is_zero() => ("PINHOLE", vec![c.fx, c.fy, c.cx, c.cy]),
-            LensModel::Rectilinear if d.k3 == 0.0 => (
-                "OPENCV",
-                vec![c.fx, c.fy, c.cx, c.cy, d.k1, d.k2, d.p1, d.p2],
-            ),
-            LensModel::Rectilinear => (
-                "FULL_OPENCV",
-                vec![
-                    c.fx, c.fy, c.cx, c.cy, d.k1, d.k2, d.p1, d.p2, d.k3, 0.0, 0.0, 0.0,
-                ],
-            ),
-            _ => {
-                if c.lens != LensModel::FisheyeEquidistant || !d.is_zero() {
-                    let _ = writeln!(
-                        cams,
-                        "# camera {}: {} lens with Brown distortion has no exact COLMAP model; OPENCV_FISHEYE below is approximate",
-                        i + 1,
-                        lens_name(c.lens)
-                    );
-                }
-                (
-                    "OPENCV_FISHEYE",
-                    vec![c.fx, c.fy, c.cx, c.cy, 0.0, 0.0, 0.0, 0.0],
-                )
-            }
-        };
-        if !matches!(c.port, Port::None) {
-            let g = c.ior_glass.unwrap_or([1.0; 3]);
-            let mut pp = port_params(&c.port);
-            pp.extend([1.0, g[1], c.ior_water[1]]);
-            let _ = writeln!(
-                cams,
-                "# camera {} `{}` port {} (Refractive COLMAP order, G channel): {}",
-                i + 1,
-                c.name.replace('\n', " "),
-                c.port.kind_name(),
-                pp.iter()
-                    .map(|x| x.to_string())
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            );
-        }
-        let _ = writeln!(
-            cams,
-            "{} {} {} {} {}",
-            i + 1,
-            name,
-            c.width,
-            c.height,
-            params
-                .iter()
-                .map(|x| x.to_string())
-                .collect::<Vec<_>>()
-                .join(" ")
-        );
-    }
-
-    // Point ids: every observed target point, in model order.
-    let mut ids: std::collections::HashMap<(&str, &str), usize> = std::collections::HashMap::new();
-    let mut point_list: Vec<(String, String, DVec3)> = Vec::new();
-    for t in &model.targets {
-        for p in &t.points {
-            let seen = truth
-                .images
-                .iter()
-                .any(|im| im.points.iter().any(|o| o.target == t.name && o.id == p.id));
-            if seen && !ids.contains_key(&(t.name.as_str(), p.id.as_str())) {
-                ids.insert((t.name.as_str(), p.id.as_str()), point_list.len() + 1);
-                point_list.push((t.name.clone(), p.id.clone(), p.world));
-            }
-        }
-    }
-    let mut tracks: Vec<Vec<(usize, usize)>> = vec![Vec::new(); point_list.len()];
-
-    let mut ims = String::from(
-        "# Image list with two lines of data per image:\n#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n#   POINTS2D[] as (X, Y, POINT3D_ID)\n",
-    );
-    let _ = writeln!(ims, "# Number of images: {}", truth.images.len());
-    for (k, im) in truth.images.iter().enumerate() {
-        let p = &im.camera_from_world;
-        let _ = writeln!(
-            ims,
-            "{} {} {} {} {} {} {} {} {} {}.png",
-            k + 1,
-            p.quaternion[0],
-            p.quaternion[1],
-            p.quaternion[2],
-            p.quaternion[3],
-            p.translation[0],
-            p.translation[1],
-            p.translation[2],
-            im.camera_index + 1,
-            im.name
-        );
-        let mut line = Vec::new();
-        for (j, o) in im.points.iter().enumerate() {
-            let pid = ids[&(o.target.as_str(), o.id.as_str())];
-            tracks[pid - 1].push((k + 1, j));
-            line.push(format!("{} {} {}", o.u, o.v, pid));
-        }
-        let _ = writeln!(ims, "{}", line.join(" "));
-    }
-
-    let mut p3 = String::from(
-        "# 3D point list with one line of data per point:\n#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n",
-    );
-    let _ = writeln!(p3, "# Number of points: {}", point_list.len());
-    for (i, (t, id, w)) in point_list.iter().enumerate() {
-        let _ = writeln!(
-            p3,
-            "# {} = {}/{}",
-            i + 1,
-            t.replace('\n', " "),
-            id.replace('\n', " ")
-        );
-        let tr: Vec<String> = tracks[i]
-            .iter()
-            .map(|(im, j)| format!("{im} {j}"))
-            .collect();
-        let _ = writeln!(
-            p3,
-            "{} {} {} {} 255 255 255 0 {}",
-            i + 1,
-            w.x,
-            w.y,
-            w.z,
-            tr.join(" ")
-        );
-    }
-    vec![
-        ("colmap/cameras.txt".into(), cams.into_bytes()),
-        ("colmap/images.txt".into(), ims.into_bytes()),
-        ("colmap/points3D.txt".into(), p3.into_bytes()),
-    ]
 }
 
 /// Compute the ground truth of `model` and write it into `dir` (see the module table). Every

@@ -81,6 +81,8 @@ pub fn lawnmower(
         altitude: Some(2.0),
         overlap: Some(0.8),
         sidelap: Some(0.6),
+        overlap_requested: Some(0.8),
+        sidelap_requested: Some(0.6),
         spacing: Some(step),
         strip_spacing: Some(spacing),
         strips,

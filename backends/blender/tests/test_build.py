@@ -31,7 +31,7 @@ def test_camera_projects_like_opencv(scene_desc):
         ndc = world_to_camera_view(scene, built.cameras[0], Vector(world))
         u = ndc.x * cam["width"]
         v = (1.0 - ndc.y) * cam["height"]
-        # OpenCV: u = fx X/Z + cx (pixel centres at +0.5 are part of the convention).
+        # u = fx X/Z + cx with pixel centres at +0.5 (COLMAP's convention; OpenCV's is -0.5).
         assert u == pytest.approx(cam["fx"] * p_cam[0] / p_cam[2] + cam["cx"], abs=1e-4)
         assert v == pytest.approx(cam["fy"] * p_cam[1] / p_cam[2] + cam["cy"], abs=1e-4)
 

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Fuzz every poser target with libFuzzer (cargo-fuzz on a nightly toolchain).
+#   fuzz/run.sh [SECONDS_PER_TARGET] [TARGET...]     default: 60 s, every target
+# The seed corpus is the committed scenes (tests/invalid, scenarios) and fuzz/corpus/<target>;
+# new inputs go to a scratch corpus under target/fuzz-corpus, crashes to fuzz/artifacts/.
+# Without a nightly (none installed and none installable) it says so and exits 0: the stable
+# replay of the corpus (`cargo test --test fuzz_replay`) still runs everywhere.
+set -euo pipefail
+cd "$(dirname "$0")"
+secs="${1:-60}"
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(scene compile project_csv)
+
+if ! cargo +nightly --version >/dev/null 2>&1; then
+  if ! rustup toolchain install nightly --profile minimal >/dev/null 2>&1; then
+    echo "fuzz: no nightly toolchain and none installable; skipped (stable replay still runs)"
+    exit 0
+  fi
+fi
+if ! cargo fuzz --version >/dev/null 2>&1; then
+  cargo install cargo-fuzz --locked --quiet
+fi
+
+cargo +nightly fuzz build --release
+for t in "${targets[@]}"; do
+  scratch="../target/fuzz-corpus/$t"
+  mkdir -p "$scratch" "corpus/$t"
+  seeds=("corpus/$t")
+  case "$t" in
+    scene) seeds+=(../tests/invalid ../scenarios ../scenarios/lessons) ;;
+    compile) seeds+=(../tests/invalid) ;;
+  esac
+  echo "fuzz: $t for ${secs}s"
+  cargo +nightly fuzz run --release "$t" "$scratch" "${seeds[@]}" -- \
+    -max_total_time="$secs" -seed=1 -timeout=30 -rss_limit_mb=4096 -print_final_stats=1 \
+    2>&1 | grep -E "^(stat::|==|SUMMARY|Done|INFO: -max_total_time)|panicked|Test unit written" || true
+  if ls artifacts/"$t"/crash-* artifacts/"$t"/timeout-* artifacts/"$t"/oom-* >/dev/null 2>&1; then
+    echo "fuzz: $t found failures: fuzz/artifacts/$t/"
+    exit 1
+  fi
+done
