@@ -272,3 +272,52 @@ mod tests {
         );
     }
 }
+
+#[cfg(test)]
+mod page_tests {
+    use super::super::{Next, Report, Results, deformation::Row};
+    use super::page;
+
+    #[test]
+    fn the_page_is_self_contained_and_shows_every_number_in_its_cell() {
+        let r = Report {
+            scene: "s.toml".into(),
+            title: "T <1>".into(),
+            question: "Q?".into(),
+            setup: "S".into(),
+            form: "quick",
+            command: "poser lesson s.toml -o o".into(),
+            results: Results::Deformation {
+                rows: vec![Row {
+                    label: "flat, pupil 3 cm".into(),
+                    command: "poser evaluate s.toml -o out/flat".into(),
+                    images: 336,
+                    registered: 336,
+                    points: 1432,
+                    reprojection_px: 0.5,
+                    focal_error_percent: 1.12,
+                    rms_z_mm: 30.46,
+                    bowl_mm: 115.9,
+                    bowl_share: 0.998,
+                    seconds: 6.0,
+                    map_png: vec![0x89, b'P', b'N', b'G'],
+                    profile_svg: "<?xml version=\"1.0\"?><svg></svg>".into(),
+                }],
+            },
+            try_next: vec![Next {
+                text: "Fly higher".into(),
+                command: "poser lesson s.toml -o o_next --set 'network.altitude=\"2 m\"'".into(),
+            }],
+            seconds: 7.0,
+        };
+        let p = page(&r);
+        assert!(p.contains("<h1>T &lt;1&gt;</h1>"));
+        assert!(p.contains("data-key=\"flat_pupil_3_cm.rms_z_mm\">30.5<"));
+        assert!(p.contains("data-key=\"flat_pupil_3_cm.focal_error_percent\">+1.12<"));
+        assert!(p.contains("data-key=\"flat_pupil_3_cm.bowl_share\">100<"));
+        assert!(p.contains("src=\"data:image/png;base64,iVBORw==\""));
+        assert!(p.contains("<svg></svg>") && !p.contains("<?xml"));
+        assert!(p.contains("--set &#39;network.altitude=&quot;2 m&quot;&#39;"));
+        assert!(!p.contains("<script") && !p.contains("src=\"http"));
+    }
+}

@@ -132,3 +132,45 @@ pub fn lesson(
         try_next,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::model::LessonKind;
+    use std::path::Path;
+
+    fn load(sets: &[&str]) -> Result<crate::model::Model, String> {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        crate::scene::load(Path::new("scenarios/reef_strip.toml"), &sets)
+            .map(|l| l.model)
+            .map_err(|f| f.render())
+    }
+
+    #[test]
+    fn a_lesson_table_resolves_with_its_defaults() {
+        let m = load(&["lesson={question = \"Why?\", kind = \"calibration\"}"]).unwrap();
+        let l = m.lesson.unwrap();
+        assert_eq!(l.kind, LessonKind::Calibration);
+        assert_eq!(l.title, m.name);
+        assert_eq!(l.setup, m.description);
+        assert!(l.variants.is_empty() && l.try_next.is_empty());
+        assert!(load(&[]).unwrap().lesson.is_none());
+    }
+
+    #[test]
+    fn bad_lesson_tables_are_located_errors_with_help() {
+        let e = load(&["lesson={kind = \"deformation\"}"]).unwrap_err();
+        assert!(
+            e.contains("E0500") && e.contains("lesson.question") && e.contains("help"),
+            "{e}"
+        );
+        let e = load(&["lesson={question = \"q\", kind = \"calibrate\"}"]).unwrap_err();
+        assert!(e.contains("did you mean `calibration`"), "{e}");
+        let e =
+            load(&["lesson={question = \"q\", variants = [{scene = \"nope.toml\"}]}"]).unwrap_err();
+        assert!(e.contains("E0501") && e.contains("nope.toml"), "{e}");
+        let e = load(&["lesson={question = \"q\", try_next = [{text = \"t\"}]}"]).unwrap_err();
+        assert!(e.contains("lesson.try_next[0].set"), "{e}");
+        let e = load(&["lesson={question = \"q\", quick = \"a=1\"}"]).unwrap_err();
+        assert!(e.contains("lesson.quick"), "{e}");
+    }
+}
