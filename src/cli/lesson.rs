@@ -33,7 +33,6 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let opts = Options {
         full: args.full,
         sets: args.scene.sets.clone(),
-        progress: !args.quiet,
     };
     let quiet = args.quiet;
     let progress = move |what: &str| {

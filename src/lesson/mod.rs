@@ -3,7 +3,7 @@
 //!
 //! | item | meaning |
 //! |---|---|
-//! | [`Options`] | quick or full form, extra `--set` overrides, progress |
+//! | [`Options`] | quick or full form, extra `--set` overrides |
 //! | [`run`] | load every variant, run the lesson's kind, return a [`Report`] |
 //! | [`deformation`] | kind `deformation`: `poser evaluate` (observations mode) per variant: RMS Z, the bowl |
 //! | [`calibration`] | kind `calibration`: native renders of the board, OpenCV calibration per variant |
@@ -27,7 +27,6 @@ pub struct Options {
     pub full: bool,
     /// Command-line `--set` overrides, applied to every variant last.
     pub sets: Vec<String>,
-    pub progress: bool,
 }
 
 /// One compared case, loaded.
