@@ -6,6 +6,17 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 venv="$root/.venv"
 req="$root/backends/requirements.txt"
 stamp="$venv/.poser-requirements.sha256"
+# Headless Chromium opens the `poser lesson` pages in the tests (Debian's `chromium`).
+if ! command -v chromium >/dev/null 2>&1; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y chromium
+  else
+    echo "error: chromium is missing (the lesson tests screenshot their pages with it)" >&2
+    echo "  help: run \`sudo apt-get update && sudo apt-get install -y chromium\`," >&2
+    echo "        or run backends/setup.sh as root" >&2
+    exit 1
+  fi
+fi
 want="$(sha256sum "$req" | cut -d' ' -f1)"
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
   exit 0

@@ -14,6 +14,7 @@ pub mod compare;
 pub mod evaluate;
 pub mod geometry;
 pub mod io;
+pub mod lesson;
 pub mod model;
 pub mod optics;
 pub mod plan;

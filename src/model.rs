@@ -62,6 +62,50 @@ pub struct Model {
     pub sensor: Option<Sensor>,
     /// What the scene needs modelled, with reasons.
     pub needs: Needs,
+    /// The lesson this scene teaches (`poser lesson`), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lesson: Option<Lesson>,
+}
+
+/// A lesson (`[lesson]`): what `poser lesson` runs and how its page reads (`docs/lessons.md`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Lesson {
+    pub title: String,
+    pub question: String,
+    pub setup: String,
+    pub kind: LessonKind,
+    /// `--set` overrides of the quick form (the default) and of the full form (`--full`).
+    pub quick: Vec<String>,
+    pub full: Vec<String>,
+    /// What the page compares; empty: the scene itself.
+    pub variants: Vec<LessonVariant>,
+    pub try_next: Vec<TryNext>,
+}
+
+/// What a lesson measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LessonKind {
+    /// `poser evaluate` (observations mode) on each variant: the bowl.
+    Deformation,
+    /// Native renders of a board, corners detected and calibrated with OpenCV, per variant.
+    Calibration,
+}
+
+/// One compared case: a scene file (absolute; `None`: the lesson's own scene) with `--set`
+/// overrides.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct LessonVariant {
+    pub label: String,
+    pub scene: Option<String>,
+    pub set: Vec<String>,
+}
+
+/// A "try next" line of the page: the text and the one `--set` that changes one thing.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct TryNext {
+    pub text: String,
+    pub set: String,
 }
 
 // ------------------------------------------------------------------------------------------

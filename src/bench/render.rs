@@ -163,6 +163,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
             exposure: 1.0,
         },
         sensor: None,
+        lesson: None,
         needs: Needs {
             medium: true,
             refraction: true,

@@ -15,6 +15,7 @@ mod compile;
 mod dive;
 mod evaluate;
 mod explain;
+mod lesson;
 mod plan;
 pub mod project;
 mod render;
@@ -37,6 +38,7 @@ Examples:
   poser compare scenarios/calibration_flat.toml --backends native,mitsuba -o out/cmp
   poser plan scenarios/paper_survey.toml
   poser evaluate scenarios/lessons/flat_port_deformation.toml -o out/eval
+  poser lesson scenarios/lessons/calibration_by_port.toml -o out/lesson
   poser dive scenarios/paper_survey.toml -o dive.ssrf
   poser schema";
 
@@ -237,6 +239,8 @@ pub enum Command {
     },
     /// Process the simulated survey with COLMAP; errors against the truth, the bowl, a report.
     Evaluate(evaluate::Args),
+    /// Run a lesson scene and write its self-contained HTML page.
+    Lesson(lesson::Args),
     /// Dive profile, decompression and gas verdict; export to Subsurface.
     Dive {
         #[command(flatten)]
@@ -343,6 +347,7 @@ pub fn main() -> ExitCode {
             plot,
         } => bench::run(&what, json, quick, backends, plot),
         Command::Evaluate(args) => evaluate::run(&args),
+        Command::Lesson(args) => lesson::run(&args),
         Command::Dive {
             scene,
             out,

@@ -167,6 +167,7 @@ pub struct Scene {
     pub diver: Option<Diver>,
     pub render: Option<Render>,
     pub sensor: Option<Sensor>,
+    pub lesson: Option<LessonTable>,
 }
 
 /// `[site]` — where the survey happens. The sea surface is the plane z = 0 (z up).
@@ -893,6 +894,62 @@ pub struct Sensor {
     pub noise: Option<bool>,
 }
 
+/// `[lesson]` — makes the scene a lesson that `poser lesson` runs into one HTML page
+/// (`docs/lessons.md`). Ignored by every other command.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct LessonTable {
+    /// Title of the page. **Default:** the scene name.
+    pub title: Option<String>,
+    /// The question the lesson answers (required).
+    pub question: Option<String>,
+    /// The set-up in a sentence or two. **Default:** the scene description.
+    pub setup: Option<String>,
+    /// What is measured: `"deformation"` (`poser evaluate` on each variant: the bowl) or
+    /// `"calibration"` (native renders of a board, OpenCV calibration per variant).
+    /// **Default:** `"deformation"`.
+    pub kind: Option<LessonKindValue>,
+    /// `--set` overrides of the quick form, applied by default (e.g.
+    /// `["network.length=10"]`). **Default:** none.
+    pub quick: Option<Vec<String>>,
+    /// `--set` overrides of the full form (`poser lesson --full`). **Default:** none.
+    pub full: Option<Vec<String>>,
+    /// The cases compared on the page: `[[lesson.variants]]`. **Default:** the scene itself.
+    pub variants: Option<Vec<LessonVariantTable>>,
+    /// "Try next" lines: `[[lesson.try_next]]`. **Default:** none.
+    pub try_next: Option<Vec<TryNextTable>>,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum LessonKindValue {
+    Deformation,
+    Calibration,
+}
+
+/// `[[lesson.variants]]` — one compared case.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct LessonVariantTable {
+    /// Label on the page. **Default:** `"variant <i>"`.
+    pub label: Option<String>,
+    /// Scene file of this case, relative to the file that names it. **Default:** the lesson's
+    /// own scene.
+    pub scene: Option<String>,
+    /// `--set` overrides applied to that scene. **Default:** none.
+    pub set: Option<Vec<String>>,
+}
+
+/// `[[lesson.try_next]]` — a suggestion: a sentence and the one override that does it.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct TryNextTable {
+    /// What to try (required).
+    pub text: Option<String>,
+    /// The `--set KEY=VALUE` that changes that one thing (required).
+    pub set: Option<String>,
+}
+
 /// A white balance: a mode name or fixed gains `[r, g, b]`.
 #[derive(JsonSchema)]
 #[serde(untagged)]
@@ -1350,6 +1407,9 @@ mod tests {
             ],
             &["diver.cylinders.0.o2=0.32"],
             &["sun.elevation=0.5"],
+            &[
+                "lesson={question = \"q\", quick = [], full = [], variants = [{label = \"a\", set = []}], try_next = [{text = \"t\", set = \"a=1\"}]}",
+            ],
         ];
         let mut known: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
         for v in variants {

@@ -11,6 +11,7 @@
 pub mod check;
 pub mod diag;
 pub mod format;
+pub mod lesson;
 pub mod reader;
 pub mod resolve;
 pub mod sensor;

@@ -87,6 +87,7 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
     );
     let targets = targets(cx, &mut t, &mut spans);
     let diver = diver(cx, t.get("diver"), top);
+    let lesson = super::lesson::lesson(cx, t.get("lesson"), sources, &name, &description, top);
     let speed_default = diver.as_ref().map(|d| d.speed).unwrap_or(0.2);
     let (poses, summary) = network(
         cx,
@@ -121,6 +122,7 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
         render,
         sensor,
         needs: Needs::default(),
+        lesson,
     };
     model.needs = needs(&model);
     (model, spans)

@@ -163,6 +163,7 @@ pub fn model(name: &str, cam: Camera, water: Option<Water>, world_from_rig: Pose
         diver: None,
         render: render_settings(16),
         sensor: None,
+        lesson: None,
         needs: Needs {
             medium,
             refraction,

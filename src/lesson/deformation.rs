@@ -1,0 +1,75 @@
+//! Lesson kind `deformation`: `poser evaluate` in observations mode (its defaults: `opencv`
+//! model, 0.3 px noise, seed 1, aligned on all points) on each variant; each variant's full
+//! evaluation report goes to `OUT/<variant>/`, the page gets the numbers and the plots.
+//!
+//! | column | from |
+//! |---|---|
+//! | images, points, reprojection | COLMAP's bundle adjustment |
+//! | focal error | recovered focal length against the in-water-equivalent truth |
+//! | RMS Z | tie-point height error after the similarity |
+//! | bowl, bowl share | the quadratic surface fitted to the height errors |
+
+use super::Case;
+use crate::evaluate::{self, Options};
+use serde::Serialize;
+use std::path::Path;
+
+/// One variant's numbers and plots.
+#[derive(Debug, Clone, Serialize)]
+pub struct Row {
+    pub label: String,
+    pub command: String,
+    pub images: usize,
+    pub registered: usize,
+    pub points: usize,
+    pub reprojection_px: f64,
+    pub focal_error_percent: f64,
+    pub rms_z_mm: f64,
+    pub bowl_mm: f64,
+    pub bowl_share: f64,
+    pub seconds: f64,
+    /// `deformation.png` of `poser evaluate`.
+    #[serde(skip)]
+    pub map_png: Vec<u8>,
+    /// `profile.svg` of `poser evaluate`.
+    #[serde(skip)]
+    pub profile_svg: String,
+}
+
+/// Evaluate every case.
+pub fn run(
+    cases: &[Case],
+    out: &Path,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Vec<Row>, String> {
+    let mut rows = Vec::new();
+    for c in cases {
+        progress(&format!(
+            "evaluating `{}` ({} images)",
+            c.label,
+            c.model.poses.len()
+        ));
+        let ev = evaluate::evaluate_observations(&c.model, &Options::default(), &|_, _, _| {})
+            .map_err(|e| format!("variant `{}`: {e}", c.label))?;
+        evaluate::report::write(&ev, &out.join(&c.slug))?;
+        rows.push(Row {
+            label: c.label.clone(),
+            command: c.command("evaluate"),
+            images: ev.images,
+            registered: ev.registered,
+            points: ev.points,
+            reprojection_px: ev.reprojection_error,
+            focal_error_percent: ev
+                .cameras
+                .first()
+                .map_or(f64::NAN, |c| 100.0 * c.focal_error),
+            rms_z_mm: 1e3 * ev.tie_errors.rms[2],
+            bowl_mm: ev.bowl.map_or(f64::NAN, |b| 1e3 * b.peak_to_peak),
+            bowl_share: ev.bowl.map_or(f64::NAN, |b| b.explained),
+            seconds: ev.seconds,
+            map_png: evaluate::report::deformation_png(&ev)?,
+            profile_svg: evaluate::report::profile_svg(&ev)?,
+        });
+    }
+    Ok(rows)
+}

@@ -1,0 +1,323 @@
+//! The lesson page: `OUT/index.html`, one self-contained file that works offline (CSS
+//! inline, images as `data:` URIs, plots as inline SVG, no script), and `OUT/lesson.json` with
+//! the same numbers. Both are written atomically.
+//!
+//! | section | contents |
+//! |---|---|
+//! | header | title, the question, the set-up, the form (quick or full) and the command |
+//! | numbers | one table row per variant; every number measured by this run |
+//! | figures | per variant: deformation map and height profile, or a rendered view and the residual vectors |
+//! | try next | each suggestion with the `poser lesson … --set` that changes one thing |
+//!
+//! Every number cell carries `data-key="<variant slug>.<quantity>"` so tools (and the tests)
+//! can find it.
+
+use super::{Report, Results, slug};
+use crate::io::write_atomic;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Text for HTML element content and attribute values.
+pub fn escape(s: &str) -> String {
+    let mut o = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => o.push_str("&amp;"),
+            '<' => o.push_str("&lt;"),
+            '>' => o.push_str("&gt;"),
+            '"' => o.push_str("&quot;"),
+            '\'' => o.push_str("&#39;"),
+            c => o.push(c),
+        }
+    }
+    o
+}
+
+/// Standard base64 (RFC 4648) with padding.
+pub fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut o = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for ch in bytes.chunks(3) {
+        let b = [ch[0], *ch.get(1).unwrap_or(&0), *ch.get(2).unwrap_or(&0)];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for (i, shift) in [18, 12, 6, 0].into_iter().enumerate() {
+            if i <= ch.len() {
+                o.push(A[((n >> shift) & 63) as usize] as char);
+            } else {
+                o.push('=');
+            }
+        }
+    }
+    o
+}
+
+fn png(bytes: &[u8], alt: &str) -> String {
+    format!(
+        "<img alt=\"{}\" src=\"data:image/png;base64,{}\">",
+        escape(alt),
+        base64(bytes)
+    )
+}
+
+/// An SVG from plotters, inline (its XML declaration, if any, dropped).
+fn svg(s: &str) -> String {
+    match s.find("<svg") {
+        Some(i) => s[i..].to_string(),
+        None => String::new(),
+    }
+}
+
+fn num(key: &str, text: String) -> String {
+    format!("<td class=\"num\" data-key=\"{}\">{text}</td>", escape(key))
+}
+
+const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;\
+color:#1b2a33;background:#fbfdfe}h1{color:#0b4f6c}.q{font-size:1.3em;font-style:italic}\
+table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #b9c9d3;padding:.3em .6em}\
+th{background:#dcebf3}td.num{text-align:right;font-variant-numeric:tabular-nums}\
+code{background:#eef3f6;padding:.1em .3em}figure{display:inline-block;margin:.5em;vertical-align:top}\
+figure img,figure svg{max-width:520px;height:auto;border:1px solid #ccd}.small{color:#567;font-size:.9em}";
+
+/// The page as a string.
+pub fn page(r: &Report) -> String {
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\
+         <style>{STYLE}</style></head><body>\n<h1>{t}</h1>\n<p class=\"q\">{q}</p>\n\
+         <h2>Set-up</h2><p>{setup}</p>\n<p class=\"small\">Form: <b>{form}</b>. Scene \
+         <code>{scene}</code>; run with <code>{cmd}</code> ({secs:.0} s).</p>\n",
+        t = escape(&r.title),
+        q = escape(&r.question),
+        setup = escape(&r.setup),
+        form = r.form,
+        scene = escape(&r.scene),
+        cmd = escape(&r.command),
+        secs = r.seconds,
+    );
+    match &r.results {
+        Results::Deformation { rows } => {
+            s.push_str(
+                "<h2>The numbers</h2>\n<p>Each case is processed by COLMAP (self-calibrating \
+                 bundle adjustment of exact refractive observations with 0.3 px noise, an \
+                 OpenCV camera model that ignores the port) and compared with the truth.</p>\n\
+                 <table><tr><th>case</th><th>images</th><th>reprojection, px</th>\
+                 <th>focal error, %</th><th>RMS Z, mm</th><th>bowl peak-to-peak, mm</th>\
+                 <th>bowl share, %</th></tr>\n",
+            );
+            for row in rows {
+                let k = slug(&row.label);
+                let _ = writeln!(
+                    s,
+                    "<tr><th>{}</th>{}{}{}{}{}{}</tr>",
+                    escape(&row.label),
+                    num(&format!("{k}.images"), row.images.to_string()),
+                    num(
+                        &format!("{k}.reprojection_px"),
+                        format!("{:.2}", row.reprojection_px)
+                    ),
+                    num(
+                        &format!("{k}.focal_error_percent"),
+                        format!("{:+.2}", row.focal_error_percent)
+                    ),
+                    num(&format!("{k}.rms_z_mm"), format!("{:.1}", row.rms_z_mm)),
+                    num(&format!("{k}.bowl_mm"), format!("{:.1}", row.bowl_mm)),
+                    num(
+                        &format!("{k}.bowl_share"),
+                        format!("{:.0}", 100.0 * row.bowl_share)
+                    ),
+                );
+            }
+            s.push_str(
+                "</table>\n<p class=\"small\">Bowl: a quadratic surface fitted to the height \
+                 errors; its share is the part of their variance it explains.</p>\n\
+                 <h2>Where the error is</h2>\n",
+            );
+            for row in rows {
+                let _ = write!(
+                    s,
+                    "<h3>{l}</h3>\n<figure>{img}<figcaption>Height error per tie point (blue \
+                     low, red high); black dots: cameras.</figcaption></figure>\n<figure>{svg}\
+                     <figcaption>Mean height error along and across the plot.</figcaption>\
+                     </figure>\n<p class=\"small\">Alone: <code>{cmd}</code></p>\n",
+                    l = escape(&row.label),
+                    img = png(&row.map_png, &format!("deformation map, {}", row.label)),
+                    svg = svg(&row.profile_svg),
+                    cmd = escape(&row.command),
+                );
+            }
+        }
+        Results::Calibration { rows } => {
+            s.push_str(
+                "<h2>The numbers</h2>\n<p>OpenCV detects the board's inner corners in the \
+                 rendered images and calibrates a pinhole camera with k1, k2, p1, p2, k3; the \
+                 colour channels are also calibrated one by one. Pixel convention: OpenCV's, \
+                 pixel centres at integers (poser's and COLMAP's are at +0.5, so cx<sub>poser\
+                 </sub> = cx<sub>OpenCV</sub> + 0.5).</p>\n<table><tr><th>port</th>\
+                 <th>views</th><th>RMS, px</th><th>f<sub>x</sub>/f<sub>air</sub></th>\
+                 <th>f<sub>y</sub>/f<sub>air</sub></th><th>c<sub>x</sub>, c<sub>y</sub> \
+                 (OpenCV), px</th><th>k1</th><th>k2</th><th>p1</th><th>p2</th><th>k3</th>\
+                 <th>lateral colour R−B at the corners, px (calibrated; detected)</th></tr>\n",
+            );
+            for row in rows {
+                let k = slug(&row.label);
+                let c = &row.calibration;
+                let d = &c.grey.dist;
+                let _ = writeln!(
+                    s,
+                    "<tr><th>{}</th>{}{}{}{}{}{}{}{}{}{}{}</tr>",
+                    escape(&row.label),
+                    num(&format!("{k}.views"), c.views.len().to_string()),
+                    num(&format!("{k}.rms"), format!("{:.3}", c.grey.rms)),
+                    num(&format!("{k}.fx_ratio"), format!("{:.3}", row.fx_ratio)),
+                    num(&format!("{k}.fy_ratio"), format!("{:.3}", row.fy_ratio)),
+                    num(
+                        &format!("{k}.principal_point"),
+                        format!("{:.1}, {:.1}", c.grey.cx, c.grey.cy)
+                    ),
+                    num(&format!("{k}.k1"), format!("{:.3}", d.k1)),
+                    num(&format!("{k}.k2"), format!("{:.3}", d.k2)),
+                    num(&format!("{k}.p1"), format!("{:.4}", d.p1)),
+                    num(&format!("{k}.p2"), format!("{:.4}", d.p2)),
+                    num(&format!("{k}.k3"), format!("{:.3}", d.k3)),
+                    num(
+                        &format!("{k}.lateral_colour"),
+                        c.lateral_colour.as_ref().map_or("–".into(), |l| format!(
+                            "{:.2}; {:.2}",
+                            l.r_minus_b_px, l.detected_r_minus_b_px
+                        ))
+                    ),
+                );
+            }
+            let f_air = rows.first().map_or(f64::NAN, |r| r.f_air);
+            let _ = write!(
+                s,
+                "</table>\n<p class=\"small\">f<sub>air</sub> = {f_air:.1} px: the lens's focal \
+                 length over the pixel pitch. A flat port multiplies the focal length by about \
+                 the water's index; a centred dome leaves it nearly unchanged. Lateral colour: \
+                 the distance between the red and the blue image of the same point, at the \
+                 board corners seen nearest to the image corners, through the per-channel \
+                 calibrations and directly between the corners detected in each channel.</p>\n\
+                 <h2>Views and residuals</h2>\n"
+            );
+            for row in rows {
+                let _ = write!(
+                    s,
+                    "<h3>{l}</h3>\n<figure>{img}<figcaption>View 1 as rendered.</figcaption>\
+                     </figure>\n<figure>{svg}<figcaption>Corners (dots) and their residual \
+                     vectors after calibration.</figcaption></figure>\n<p class=\"small\">\
+                     Render alone: <code>{cmd}</code></p>\n",
+                    l = escape(&row.label),
+                    img = png(&row.view_png, &format!("rendered view, {}", row.label)),
+                    svg = svg(&row.residuals_svg),
+                    cmd = escape(&row.command),
+                );
+            }
+        }
+    }
+    if !r.try_next.is_empty() {
+        s.push_str("<h2>Try next</h2>\n<ul>\n");
+        for t in &r.try_next {
+            let _ = writeln!(
+                s,
+                "<li>{}: <code>{}</code></li>",
+                escape(&t.text),
+                escape(&t.command)
+            );
+        }
+        s.push_str("</ul>\n");
+    }
+    s.push_str(
+        "<p class=\"small\">Made by poser; every number on this page was measured by this \
+         run.</p>\n</body></html>\n",
+    );
+    s
+}
+
+/// Write `index.html` and `lesson.json` into `dir`.
+pub fn write(r: &Report, dir: &Path) -> Result<(), String> {
+    let mut json = serde_json::to_vec_pretty(r).map_err(|e| e.to_string())?;
+    json.push(b'\n');
+    for (name, bytes) in [("lesson.json", json), ("index.html", page(r).into_bytes())] {
+        let p = dir.join(name);
+        write_atomic(&p, &bytes).map_err(|e| format!("{}: {e}", p.display()))?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_matches_rfc_4648_vectors() {
+        for (i, o) in [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ] {
+            assert_eq!(base64(i.as_bytes()), o);
+        }
+    }
+
+    #[test]
+    fn text_is_escaped() {
+        assert_eq!(
+            escape("<a href='x'>&\""),
+            "&lt;a href=&#39;x&#39;&gt;&amp;&quot;"
+        );
+    }
+}
+
+#[cfg(test)]
+mod page_tests {
+    use super::super::{Next, Report, Results, deformation::Row};
+    use super::page;
+
+    #[test]
+    fn the_page_is_self_contained_and_shows_every_number_in_its_cell() {
+        let r = Report {
+            scene: "s.toml".into(),
+            title: "T <1>".into(),
+            question: "Q?".into(),
+            setup: "S".into(),
+            form: "quick",
+            command: "poser lesson s.toml -o o".into(),
+            results: Results::Deformation {
+                rows: vec![Row {
+                    label: "flat, pupil 3 cm".into(),
+                    command: "poser evaluate s.toml -o out/flat".into(),
+                    images: 336,
+                    registered: 336,
+                    points: 1432,
+                    reprojection_px: 0.5,
+                    focal_error_percent: 1.12,
+                    rms_z_mm: 30.46,
+                    bowl_mm: 115.9,
+                    bowl_share: 0.998,
+                    seconds: 6.0,
+                    map_png: vec![0x89, b'P', b'N', b'G'],
+                    profile_svg: "<?xml version=\"1.0\"?><svg></svg>".into(),
+                }],
+            },
+            try_next: vec![Next {
+                text: "Fly higher".into(),
+                command: "poser lesson s.toml -o o_next --set 'network.altitude=\"2 m\"'".into(),
+            }],
+            seconds: 7.0,
+        };
+        let p = page(&r);
+        assert!(p.contains("<h1>T &lt;1&gt;</h1>"));
+        assert!(p.contains("data-key=\"flat_pupil_3_cm.rms_z_mm\">30.5<"));
+        assert!(p.contains("data-key=\"flat_pupil_3_cm.focal_error_percent\">+1.12<"));
+        assert!(p.contains("data-key=\"flat_pupil_3_cm.bowl_share\">100<"));
+        assert!(p.contains("src=\"data:image/png;base64,iVBORw==\""));
+        assert!(p.contains("<svg></svg>") && !p.contains("<?xml"));
+        assert!(p.contains("--set &#39;network.altitude=&quot;2 m&quot;&#39;"));
+        assert!(!p.contains("<script") && !p.contains("src=\"http"));
+    }
+}

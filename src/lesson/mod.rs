@@ -1,0 +1,254 @@
+//! `poser lesson`: runs what a lesson scene's `[lesson]` table asks for, on each of its
+//! variants, and measures the lesson's numbers for one self-contained HTML page.
+//!
+//! | item | meaning |
+//! |---|---|
+//! | [`Options`] | quick or full form, extra `--set` overrides |
+//! | [`run`] | load every variant, run the lesson's kind, return a [`Report`] |
+//! | [`deformation`] | kind `deformation`: `poser evaluate` (observations mode) per variant: RMS Z, the bowl |
+//! | [`calibration`] | kind `calibration`: native renders of the board, OpenCV calibration per variant |
+//! | [`html`] | `index.html` (images inline, works offline) and `lesson.json` |
+//!
+//! Overrides are applied in this order, the later winning: the form's (`lesson.quick`, or
+//! `lesson.full` with `--full`), the variant's `set`, the command line's `--set`.
+
+pub mod calibration;
+pub mod deformation;
+pub mod html;
+
+use crate::model::{Lesson, LessonKind, Model};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// The knobs of one `poser lesson` run.
+#[derive(Debug, Clone, Default)]
+pub struct Options {
+    /// Run the full form instead of the quick one.
+    pub full: bool,
+    /// Command-line `--set` overrides, applied to every variant last.
+    pub sets: Vec<String>,
+}
+
+/// One compared case, loaded.
+#[derive(Debug, Clone)]
+pub struct Case {
+    pub label: String,
+    /// Directory-name-safe label.
+    pub slug: String,
+    pub scene: PathBuf,
+    pub sets: Vec<String>,
+    pub model: Model,
+}
+
+impl Case {
+    /// The `poser evaluate` / `poser render` command line a user types to run this case alone.
+    pub fn command(&self, verb: &str) -> String {
+        let mut s = format!("poser {verb} {}", self.scene.display());
+        s.push_str(&format!(" -o out/{}", self.slug));
+        for set in &self.sets {
+            s.push_str(&format!(" --set '{set}'"));
+        }
+        s
+    }
+}
+
+/// What the lesson measured, per kind.
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Results {
+    Deformation { rows: Vec<deformation::Row> },
+    Calibration { rows: Vec<calibration::Row> },
+}
+
+/// A "try next" line with the command that does it.
+#[derive(Debug, Clone, Serialize)]
+pub struct Next {
+    pub text: String,
+    pub command: String,
+}
+
+/// Everything the page shows.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    pub scene: String,
+    pub title: String,
+    pub question: String,
+    pub setup: String,
+    /// `"quick"` or `"full"`.
+    pub form: &'static str,
+    pub command: String,
+    pub results: Results,
+    pub try_next: Vec<Next>,
+    pub seconds: f64,
+}
+
+/// A label as a file name: lowercase ASCII letters, digits and `_` only.
+pub fn slug(label: &str) -> String {
+    let mut s = String::new();
+    for c in label.chars() {
+        if c.is_ascii_alphanumeric() {
+            s.push(c.to_ascii_lowercase());
+        } else if !s.ends_with('_') {
+            s.push('_');
+        }
+    }
+    let s = s.trim_matches('_').to_string();
+    if s.is_empty() { "variant".into() } else { s }
+}
+
+fn load(path: &Path, sets: &[String]) -> Result<Model, String> {
+    crate::scene::load(path, sets)
+        .map(|l| l.model)
+        .map_err(|f| f.render())
+}
+
+/// Load the lesson scene and every variant with its overrides.
+pub fn cases(scene: &Path, opts: &Options) -> Result<(Lesson, Vec<Case>), String> {
+    let base = load(scene, &opts.sets)?;
+    let Some(lesson) = base.lesson.clone() else {
+        return Err(format!(
+            "{} has no [lesson] table\n  help: `poser lesson` runs the scenes of \
+             scenarios/lessons/ (see docs/lessons.md); use `poser evaluate` or `poser render` \
+             for other scenes",
+            scene.display()
+        ));
+    };
+    let form = if opts.full {
+        &lesson.full
+    } else {
+        &lesson.quick
+    };
+    let variants = if lesson.variants.is_empty() {
+        vec![crate::model::LessonVariant {
+            label: base.name.clone(),
+            scene: None,
+            set: vec![],
+        }]
+    } else {
+        lesson.variants.clone()
+    };
+    let mut out: Vec<Case> = Vec::new();
+    for v in variants {
+        let path = v
+            .scene
+            .as_ref()
+            .map(PathBuf::from)
+            .unwrap_or_else(|| scene.to_path_buf());
+        let sets: Vec<String> = form
+            .iter()
+            .chain(&v.set)
+            .chain(&opts.sets)
+            .cloned()
+            .collect();
+        let model = load(&path, &sets).map_err(|e| format!("variant `{}`:\n{e}", v.label))?;
+        let mut slug = slug(&v.label);
+        while out.iter().any(|c| c.slug == slug) {
+            slug.push('_');
+        }
+        out.push(Case {
+            label: v.label,
+            slug,
+            scene: path,
+            sets,
+            model,
+        });
+    }
+    Ok((lesson, out))
+}
+
+/// Run the lesson of `scene`, writing each variant's own outputs under `out`, and return
+/// the report (the caller writes the page with [`html::write`]).
+pub fn run(
+    scene: &Path,
+    out: &Path,
+    opts: &Options,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Report, String> {
+    let t0 = std::time::Instant::now();
+    let (lesson, cases) = cases(scene, opts)?;
+    let results = match lesson.kind {
+        LessonKind::Deformation => Results::Deformation {
+            rows: deformation::run(&cases, out, progress)?,
+        },
+        LessonKind::Calibration => Results::Calibration {
+            rows: calibration::run(&cases, out, progress)?,
+        },
+    };
+    let mut command = format!("poser lesson {} -o {}", scene.display(), out.display());
+    if opts.full {
+        command.push_str(" --full");
+    }
+    for s in &opts.sets {
+        command.push_str(&format!(" --set '{s}'"));
+    }
+    let try_next = lesson
+        .try_next
+        .iter()
+        .map(|t| Next {
+            text: t.text.clone(),
+            command: format!(
+                "poser lesson {} -o {}_next{} --set '{}'",
+                scene.display(),
+                out.display(),
+                if opts.full { " --full" } else { "" },
+                t.set
+            ),
+        })
+        .collect();
+    Ok(Report {
+        scene: scene.display().to_string(),
+        title: lesson.title,
+        question: lesson.question,
+        setup: lesson.setup,
+        form: if opts.full { "full" } else { "quick" },
+        command,
+        results,
+        try_next,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slugs_are_file_names() {
+        assert_eq!(slug("flat, pupil 3 cm"), "flat_pupil_3_cm");
+        assert_eq!(slug("../../etc"), "etc");
+        assert_eq!(slug("—"), "variant");
+    }
+
+    #[test]
+    fn the_deformation_lesson_loads_its_variants_with_the_quick_form() {
+        let (lesson, cases) = cases(
+            Path::new("scenarios/lessons/flat_port_deformation.toml"),
+            &Options::default(),
+        )
+        .unwrap();
+        assert_eq!(lesson.kind, LessonKind::Deformation);
+        assert!(cases.len() >= 3);
+        for c in &cases {
+            assert!(
+                c.sets.iter().any(|s| s == "network.length=10"),
+                "{:?}",
+                c.sets
+            );
+            assert!(
+                c.model.poses.len() < 1000,
+                "{}: {} poses",
+                c.label,
+                c.model.poses.len()
+            );
+        }
+    }
+
+    #[test]
+    fn a_scene_without_a_lesson_is_refused_with_a_hint() {
+        let e = cases(Path::new("scenarios/reef_strip.toml"), &Options::default()).unwrap_err();
+        assert!(
+            e.contains("no [lesson] table") && e.contains("help:"),
+            "{e}"
+        );
+    }
+}

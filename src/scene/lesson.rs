@@ -1,0 +1,176 @@
+//! Resolution of the optional `[lesson]` table into [`crate::model::Lesson`] (documented in
+//! [`super::format::LessonTable`]; what `poser lesson` does with it is in `docs/lessons.md`).
+//!
+//! | key | resolved to | check |
+//! |---|---|---|
+//! | `title`, `question`, `setup` | text of the page | `question` required |
+//! | `kind` | [`LessonKind`] | `deformation` or `calibration` |
+//! | `quick`, `full` | `--set` overrides of the quick and full forms | strings |
+//! | `[[lesson.variants]]` `label`, `scene`, `set` | [`LessonVariant`]; `scene` made absolute, relative to the file that names it | the file exists |
+//! | `[[lesson.try_next]]` `text`, `set` | [`TryNext`] | both given |
+
+use super::diag::{Diagnostic, Span};
+use super::reader::{Cx, Tab, type_error};
+use super::source::{Node, Sources, Val};
+use crate::model::{Lesson, LessonKind, LessonVariant, TryNext};
+
+/// A list of strings (`set = ["a=1", "b=2"]`); a bad entry is reported and skipped.
+fn strings(cx: &mut Cx, t: &mut Tab, key: &'static str) -> Vec<String> {
+    let full = t.full(key);
+    let Some(n) = t.get(key) else {
+        return vec![];
+    };
+    match &n.val {
+        Val::Array(a) => a
+            .iter()
+            .filter_map(|x| match &x.val {
+                Val::Str(s) => Some(s.clone()),
+                v => {
+                    cx.push(type_error(x, &full, "a string", v));
+                    None
+                }
+            })
+            .collect(),
+        v => {
+            cx.push(type_error(n, &full, "a list of strings", v));
+            vec![]
+        }
+    }
+}
+
+fn required(cx: &mut Cx, t: &mut Tab, key: &'static str, example: &str) -> String {
+    match t.opt_str(cx, key) {
+        Some(s) if !s.trim().is_empty() => s,
+        _ => {
+            cx.push(
+                Diagnostic::error("E0500", format!("`{}` is required", t.full(key)))
+                    .label(t.span_of(key), "missing or empty")
+                    .help(format!("write e.g. `{key} = {example}`")),
+            );
+            String::new()
+        }
+    }
+}
+
+/// `[lesson]`, or `None` when the table is absent. `name` and `description` are the scene's
+/// (the defaults of `title` and `setup`).
+pub fn lesson(
+    cx: &mut Cx,
+    node: Option<&Node>,
+    sources: &Sources,
+    name: &str,
+    description: &str,
+    fallback: Span,
+) -> Option<Lesson> {
+    // Read even when absent, so that the key record that keeps reader and schema in step
+    // sees every key.
+    let present = node.is_some();
+    let mut t = Tab::open(cx, node, "lesson", fallback);
+    let title = t.opt_str(cx, "title").unwrap_or_else(|| name.to_string());
+    let question = if present {
+        required(
+            cx,
+            &mut t,
+            "question",
+            "\"Why does the reef come out bent?\"",
+        )
+    } else {
+        t.opt_str(cx, "question").unwrap_or_default()
+    };
+    let setup = t
+        .opt_str(cx, "setup")
+        .unwrap_or_else(|| description.to_string());
+    let kind = match t.choice(cx, "kind", &["deformation", "calibration"]) {
+        Some("calibration") => LessonKind::Calibration,
+        _ => LessonKind::Deformation,
+    };
+    let quick = strings(cx, &mut t, "quick");
+    let full = strings(cx, &mut t, "full");
+    let mut variants = Vec::new();
+    for (i, n) in t.tables(cx, "variants").into_iter().enumerate() {
+        let mut v = Tab::open(cx, Some(n), &format!("lesson.variants[{i}]"), n.span);
+        let label = v
+            .opt_str(cx, "label")
+            .unwrap_or_else(|| format!("variant {i}"));
+        let scene = v.opt_str(cx, "scene").map(|rel| {
+            let span = v.span_of("scene");
+            let dir = sources.dir_of(span.file).unwrap_or_default();
+            let p = dir.join(&rel);
+            if !p.is_file() {
+                cx.push(
+                    Diagnostic::error(
+                        "E0501",
+                        format!("lesson variant scene `{}` not found", p.display()),
+                    )
+                    .label(span, "no such file")
+                    .help("variant scenes are relative to the file that names them"),
+                );
+            }
+            p.to_string_lossy().to_string()
+        });
+        let set = strings(cx, &mut v, "set");
+        v.finish(cx);
+        variants.push(LessonVariant { label, scene, set });
+    }
+    let mut try_next = Vec::new();
+    for (i, n) in t.tables(cx, "try_next").into_iter().enumerate() {
+        let mut v = Tab::open(cx, Some(n), &format!("lesson.try_next[{i}]"), n.span);
+        let text = required(cx, &mut v, "text", "\"Fly higher\"");
+        let set = required(cx, &mut v, "set", "\"network.altitude=\\\"2 m\\\"\"");
+        v.finish(cx);
+        try_next.push(TryNext { text, set });
+    }
+    t.finish(cx);
+    present.then_some(Lesson {
+        title,
+        question,
+        setup,
+        kind,
+        quick,
+        full,
+        variants,
+        try_next,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::model::LessonKind;
+    use std::path::Path;
+
+    fn load(sets: &[&str]) -> Result<crate::model::Model, String> {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        crate::scene::load(Path::new("scenarios/reef_strip.toml"), &sets)
+            .map(|l| l.model)
+            .map_err(|f| f.render())
+    }
+
+    #[test]
+    fn a_lesson_table_resolves_with_its_defaults() {
+        let m = load(&["lesson={question = \"Why?\", kind = \"calibration\"}"]).unwrap();
+        let l = m.lesson.unwrap();
+        assert_eq!(l.kind, LessonKind::Calibration);
+        assert_eq!(l.title, m.name);
+        assert_eq!(l.setup, m.description);
+        assert!(l.variants.is_empty() && l.try_next.is_empty());
+        assert!(load(&[]).unwrap().lesson.is_none());
+    }
+
+    #[test]
+    fn bad_lesson_tables_are_located_errors_with_help() {
+        let e = load(&["lesson={kind = \"deformation\"}"]).unwrap_err();
+        assert!(
+            e.contains("E0500") && e.contains("lesson.question") && e.contains("help"),
+            "{e}"
+        );
+        let e = load(&["lesson={question = \"q\", kind = \"calibrate\"}"]).unwrap_err();
+        assert!(e.contains("did you mean `calibration`"), "{e}");
+        let e =
+            load(&["lesson={question = \"q\", variants = [{scene = \"nope.toml\"}]}"]).unwrap_err();
+        assert!(e.contains("E0501") && e.contains("nope.toml"), "{e}");
+        let e = load(&["lesson={question = \"q\", try_next = [{text = \"t\"}]}"]).unwrap_err();
+        assert!(e.contains("lesson.try_next[0].set"), "{e}");
+        let e = load(&["lesson={question = \"q\", quick = \"a=1\"}"]).unwrap_err();
+        assert!(e.contains("lesson.quick"), "{e}");
+    }
+}

@@ -1,0 +1,286 @@
+//! `poser lesson` end to end, on the quick forms, with the real COLMAP and OpenCV (pinned in
+//! backends/requirements.txt) and the page opened in real headless Chromium (Debian's
+//! `chromium`, installed by backends/setup.sh when run as root).
+//!
+//! Each lesson's numbers must fall in the band physics predicts, and the page must show them:
+//! every number of `lesson.json` is found, formatted as the page formats it, in its
+//! `data-key` cell of the DOM Chromium builds; the images and plots are there; and the
+//! screenshot is not blank.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn poser(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_poser"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("run poser")
+}
+
+fn chromium() -> PathBuf {
+    for name in ["chromium", "chromium-browser"] {
+        if let Ok(o) = Command::new("which").arg(name).output()
+            && o.status.success()
+        {
+            return PathBuf::from(String::from_utf8_lossy(&o.stdout).trim());
+        }
+    }
+    panic!(
+        "headless Chromium is missing\n  help: run backends/setup.sh as root (it runs \
+         `apt-get install -y chromium`), or install Debian's `chromium` package"
+    );
+}
+
+fn chromium_args(out: &Path) -> Vec<String> {
+    vec![
+        "--headless".into(),
+        "--no-sandbox".into(),
+        "--disable-gpu".into(),
+        "--hide-scrollbars".into(),
+        format!("--user-data-dir={}", out.join("chromium-profile").display()),
+    ]
+}
+
+/// The DOM as Chromium built it.
+fn dump_dom(page: &Path, out: &Path) -> String {
+    let o = Command::new(chromium())
+        .args(chromium_args(out))
+        .arg("--dump-dom")
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("run chromium");
+    assert!(
+        o.status.success(),
+        "chromium --dump-dom failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// A screenshot of the page; returns the variance of its grey levels (0..255).
+fn screenshot_variance(page: &Path, out: &Path) -> f64 {
+    let shot = out.join("screenshot.png");
+    let o = Command::new(chromium())
+        .args(chromium_args(out))
+        .arg(format!("--screenshot={}", shot.display()))
+        .arg("--window-size=1200,1600")
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .expect("run chromium");
+    assert!(
+        o.status.success() && shot.exists(),
+        "chromium --screenshot failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let img = image::open(&shot).expect("read the screenshot").to_luma8();
+    let n = img.pixels().len() as f64;
+    let mean = img.pixels().map(|p| p[0] as f64).sum::<f64>() / n;
+    img.pixels()
+        .map(|p| (p[0] as f64 - mean).powi(2))
+        .sum::<f64>()
+        / n
+}
+
+/// The text of the `data-key` cell `key` in the DOM.
+fn cell<'a>(dom: &'a str, key: &str) -> &'a str {
+    let tag = format!("data-key=\"{key}\">");
+    let i = dom
+        .find(&tag)
+        .unwrap_or_else(|| panic!("no cell `{key}` in the page"))
+        + tag.len();
+    let j = dom[i..].find('<').unwrap() + i;
+    &dom[i..j]
+}
+
+fn run_lesson(scene: &str, name: &str) -> (tempfile::TempDir, PathBuf, serde_json::Value) {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join(name);
+    let o = poser(&["lesson", scene, "-o", out.to_str().unwrap(), "--quiet"]);
+    assert!(
+        o.status.success(),
+        "poser lesson {scene} failed:\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("lesson.json")).unwrap()).unwrap();
+    (tmp, out, json)
+}
+
+fn rows(json: &serde_json::Value) -> &Vec<serde_json::Value> {
+    json["results"]["rows"].as_array().unwrap()
+}
+
+fn row<'a>(json: &'a serde_json::Value, label: &str) -> &'a serde_json::Value {
+    rows(json)
+        .iter()
+        .find(|r| r["label"] == label)
+        .unwrap_or_else(|| panic!("no row `{label}`"))
+}
+
+fn f(v: &serde_json::Value) -> f64 {
+    v.as_f64().unwrap_or(f64::NAN)
+}
+
+fn slug(label: &str) -> String {
+    poser::lesson::slug(label)
+}
+
+/// The page is self-contained and shows its images, plots, and try-next lines.
+fn check_page(out: &Path, json: &serde_json::Value) -> String {
+    let page = out.join("index.html");
+    let html = std::fs::read_to_string(&page).unwrap();
+    for bad in [
+        "src=\"http",
+        "href=\"http",
+        "url(",
+        "<script",
+        "src=\"/",
+        "src=\"file:",
+    ] {
+        assert!(
+            !html.contains(bad),
+            "the page is not self-contained: `{bad}`"
+        );
+    }
+    let dom = dump_dom(&page, out);
+    let n = rows(json).len();
+    assert!(
+        dom.matches("src=\"data:image/png;base64,").count() >= n,
+        "images missing"
+    );
+    assert!(dom.matches("<svg").count() >= n, "plots missing");
+    for t in json["try_next"].as_array().unwrap() {
+        let cmd = t["command"].as_str().unwrap();
+        assert!(cmd.contains("--set"), "{cmd}");
+    }
+    assert!(dom.contains("Try next"));
+    let var = screenshot_variance(&page, out);
+    assert!(
+        var > 200.0,
+        "the screenshot looks blank (grey-level variance {var:.1})"
+    );
+    dom
+}
+
+#[test]
+fn deformation_lesson_quick_form_bends_behind_a_flat_port_and_shows_it() {
+    let (_tmp, out, json) = run_lesson(
+        "scenarios/lessons/flat_port_deformation.toml",
+        "deformation",
+    );
+    assert_eq!(json["results"]["kind"], "deformation");
+    assert_eq!(json["form"], "quick");
+    let flat = row(&json, "flat, pupil 3 cm");
+    let dome = row(&json, "centred dome");
+    let air = row(&json, "in air");
+    let oblique = row(&json, "flat, pupil 3 cm, + obliques");
+    let (p1, p10) = (
+        row(&json, "flat, pupil 1 mm"),
+        row(&json, "flat, pupil 10 cm"),
+    );
+    // A centred dome bends no ray through the pupil: the survey is the one in air, at the
+    // noise level (0.3 px of 6000 at 1.2 m: well under 2 mm).
+    for r in [air, dome] {
+        assert!(f(&r["rms_z_mm"]) < 2.0, "{r}");
+    }
+    // Behind a flat port the block bends by centimetres, a systematic bowl, growing with the
+    // pupil-to-port distance; a second, oblique pass cuts it.
+    assert!(
+        f(&flat["bowl_mm"]) > 10.0 * f(&dome["bowl_mm"]),
+        "{flat} {dome}"
+    );
+    assert!(f(&flat["rms_z_mm"]) > 10.0, "{flat}");
+    assert!(f(&flat["bowl_share"]) > 0.9, "{flat}");
+    assert!(f(&p1["bowl_mm"]) < f(&flat["bowl_mm"]) && f(&flat["bowl_mm"]) < f(&p10["bowl_mm"]));
+    assert!(
+        f(&oblique["rms_z_mm"]) < 0.5 * f(&flat["rms_z_mm"]),
+        "{oblique}"
+    );
+    // Every image is fitted to about half a pixel: the processing looks fine.
+    for r in rows(&json) {
+        assert!(f(&r["reprojection_px"]) < 1.0, "{r}");
+        assert_eq!(r["registered"], r["images"]);
+    }
+    let dom = check_page(&out, &json);
+    for r in rows(&json) {
+        let k = slug(r["label"].as_str().unwrap());
+        assert_eq!(
+            cell(&dom, &format!("{k}.rms_z_mm")),
+            format!("{:.1}", f(&r["rms_z_mm"]))
+        );
+        assert_eq!(
+            cell(&dom, &format!("{k}.bowl_mm")),
+            format!("{:.1}", f(&r["bowl_mm"]))
+        );
+        assert_eq!(
+            cell(&dom, &format!("{k}.focal_error_percent")),
+            format!("{:+.2}", f(&r["focal_error_percent"]))
+        );
+        // Each variant's own evaluation report is there too.
+        assert!(out.join(&k).join("report.md").exists());
+    }
+}
+
+#[test]
+fn calibration_lesson_quick_form_measures_each_port_and_shows_it() {
+    let (_tmp, out, json) = run_lesson("scenarios/lessons/calibration_by_port.toml", "calibration");
+    assert_eq!(json["results"]["kind"], "calibration");
+    let air = row(&json, "in air");
+    let flat = row(&json, "flat port");
+    let dome = row(&json, "centred dome");
+    let off = row(&json, "decentred dome");
+    let cyl = row(&json, "cylinder");
+    for r in rows(&json) {
+        let c = &r["calibration"];
+        assert!(c["views"].as_array().unwrap().len() >= 10, "{}", r["label"]);
+        assert!(f(&c["rms"]) < 1.0, "{}: RMS {}", r["label"], c["rms"]);
+    }
+    // In air the calibration finds the lens: f/f_air = 1.
+    assert!((f(&air["fx_ratio"]) - 1.0).abs() < 0.02, "{air}");
+    // A flat port multiplies the paraxial focal length by the water's index (fresh water
+    // 1.333 at 550 nm; the calibrated value also absorbs part of the port's pincushion).
+    for k in ["fx_ratio", "fy_ratio"] {
+        let v = f(&flat[k]);
+        assert!((1.30..1.38).contains(&v), "flat port {k} = {v}");
+    }
+    // and its pincushion shows as a positive k1.
+    assert!(f(&flat["calibration"]["dist"]["k1"]) > 0.1, "{flat}");
+    // A centred dome leaves the focal length alone; a decentred one changes it.
+    assert!((f(&dome["fx_ratio"]) - 1.0).abs() < 0.03, "{dome}");
+    assert!(
+        (f(&off["fx_ratio"]) - f(&dome["fx_ratio"])).abs() > 0.02,
+        "{off}"
+    );
+    // A cylinder with a vertical axis is a flat port along its axis (y) and dome-like across
+    // it (x).
+    assert!((1.28..1.38).contains(&f(&cyl["fy_ratio"])), "{cyl}");
+    assert!(f(&cyl["fx_ratio"]) < f(&cyl["fy_ratio"]) - 0.1, "{cyl}");
+    // Colour: none in air; a flat port separates red and blue more than a centred dome.
+    let lc = |r: &serde_json::Value, k: &str| f(&r["calibration"]["lateral_colour"][k]);
+    assert!(lc(air, "r_minus_b_px") < 0.05 && lc(air, "detected_r_minus_b_px") < 0.05);
+    assert!(
+        lc(flat, "detected_r_minus_b_px") > lc(dome, "detected_r_minus_b_px"),
+        "{flat} {dome}"
+    );
+    let dom = check_page(&out, &json);
+    assert!(
+        dom.contains("pixel centres at integers"),
+        "the pixel convention is not stated"
+    );
+    for r in rows(&json) {
+        let k = slug(r["label"].as_str().unwrap());
+        assert_eq!(
+            cell(&dom, &format!("{k}.fx_ratio")),
+            format!("{:.3}", f(&r["fx_ratio"]))
+        );
+        assert_eq!(
+            cell(&dom, &format!("{k}.rms")),
+            format!("{:.3}", f(&r["calibration"]["rms"]))
+        );
+        assert_eq!(
+            cell(&dom, &format!("{k}.k1")),
+            format!("{:.3}", f(&r["calibration"]["dist"]["k1"]))
+        );
+    }
+}
