@@ -138,6 +138,7 @@ impl Report {
     /// failed backend is written "failed" where its bars would be.
     pub fn plot_svg(&self) -> Result<String, String> {
         use plotters::prelude::*;
+        crate::plan::plot::register_font()?;
         let n = self.backends.len().max(1);
         let base = self
             .backends

@@ -210,6 +210,7 @@ pub fn run(
 /// the image width.
 pub fn residual_svg(cal: &Calibrated) -> Result<String, String> {
     use plotters::prelude::*;
+    crate::plan::plot::register_font()?;
     let (w, h) = (cal.width as f64, cal.height as f64);
     let max = cal
         .residuals
