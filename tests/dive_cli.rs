@@ -82,7 +82,7 @@ fn paper_scene_states_what_it_models() {
     let (text, out) = dive("paper_survey", &[]);
     assert!(out.status.success());
     assert!(
-        text.contains("1097 m of path at 0.176 m/s → 103:51 at depth"),
+        text.contains("1093 m of path at 0.176 m/s → 103:32 at depth"),
         "{text}"
     );
 }

@@ -19,7 +19,7 @@ fn paper_scenario_verdict() {
     assert!((m.network.speed - 0.176).abs() < 1e-12);
     let r = plan_dive(&m, 10.0).unwrap();
     assert!((r.dive.max_depth - 15.0).abs() < 1e-6);
-    // Survey: the paper's ≈ 104 min (1097 m / 0.176 m/s = 103:51).
+    // Survey: the paper's ≈ 104 min (1093 m / 0.176 m/s = 103:32).
     assert!(
         (r.dive.bottom_time / 60.0 - 104.0).abs() < 1.0,
         "{}",

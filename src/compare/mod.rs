@@ -163,10 +163,7 @@ pub type Measured = (Vec<(String, String, [f64; 2])>, usize);
 
 /// Measure every visible disk in the rendered images of `dir` in the G channel: returns
 /// (id, image name, measured − expected in px) for each disk found, and how many were expected.
-pub fn measure_targets(
-    model: &Model,
-    dir: &Path,
-) -> Result<Measured, String> {
+pub fn measure_targets(model: &Model, dir: &Path) -> Result<Measured, String> {
     measure_targets_in_channel(model, dir, 1)
 }
 

@@ -234,8 +234,11 @@ mod tests {
                 "{:?}",
                 c.sets
             );
+            // The quick form stays small (observations mode costs ≈ 25 ms per image). With the
+            // images spaced by the exact footprint through the flat port (more images than the
+            // paraxial spacing gave), the obliques case has 1232 poses.
             assert!(
-                c.model.poses.len() < 1000,
+                c.model.poses.len() < 2000,
                 "{}: {} poses",
                 c.label,
                 c.model.poses.len()

@@ -163,6 +163,33 @@ pub fn index(cx: &mut Cx, t: &Tab, key: &str, v: Rgb) {
 
 /// Whole-scene checks on the resolved model.
 pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
+    // A camera above the sea surface would be modelled as if in water (its port, the medium):
+    // refuse it. (A view from the air through the surface is not modelled yet.)
+    if m.water.is_some() {
+        let above = (0..m.poses.len())
+            .flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
+            .find(|&(pi, ci)| m.world_from_camera(pi, ci).translation.z >= 0.0);
+        if let Some((pi, ci)) = above {
+            let z = m.world_from_camera(pi, ci).translation.z;
+            let n = (0..m.poses.len())
+                .flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
+                .filter(|&(pi, ci)| m.world_from_camera(pi, ci).translation.z >= 0.0)
+                .count();
+            cx.push(
+                Diagnostic::error(
+                    "E0402",
+                    format!(
+                        "camera `{}` is {z:.2} m above the sea surface at pose {} ({n} image{} in all)",
+                        m.cameras[ci].name,
+                        m.poses[pi].name,
+                        if n == 1 { "" } else { "s" }
+                    ),
+                )
+                .label(spans.network, "puts cameras above the water")
+                .help("cameras are in the water (z < 0, the surface is z = 0): lower the altitude or raise `site.depth`; for a survey in air, remove [water]"),
+            );
+        }
+    }
     // Target or object point inside the port glass (or between the pupil and the port).
     for (pi, _) in m.poses.iter().enumerate().take(2000) {
         for (ci, cam) in m.cameras.iter().enumerate() {
@@ -190,7 +217,8 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
         for j in 0..i {
             let (a, b) = (&m.cameras[i], &m.cameras[j]);
             let d = (a.rig_from_camera.translation - b.rig_from_camera.translation).length();
-            let (ra, rb) = (port_radius(&a.port), port_radius(&b.port));
+            let n = m.ambient_ior()[1];
+            let (ra, rb) = (port_radius(a, n), port_radius(b, n));
             if ra > 0.0 && rb > 0.0 && d < ra + rb {
                 let sp = spans
                     .baseline
@@ -357,9 +385,25 @@ fn inside_housing(port: &Port, p: glam::DVec3) -> bool {
 }
 
 /// A rough outer radius of a port around the pupil, m (0 for no port).
-fn port_radius(port: &Port) -> f64 {
-    match port {
-        Port::None | Port::Flat { .. } => 0.0,
+/// Radius (m, across the optical axis) that camera `cam`'s port occupies. A dome or cylinder:
+/// its outer surface about the pupil. A flat port: the glass must pass the whole field of
+/// view, so its aperture reaches at least as far from the axis as the sensor corners' rays
+/// where they leave the glass (exact refraction).
+fn port_radius(cam: &crate::model::Camera, n_water: f64) -> f64 {
+    match &cam.port {
+        Port::None => 0.0,
+        Port::Flat { normal, .. } => {
+            let Ok(pr) = crate::optics::project::Projector::for_camera(cam, 1, n_water) else {
+                return 0.0;
+            };
+            let (w, h) = (cam.width as f64, cam.height as f64);
+            let aperture = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
+                .iter()
+                .filter_map(|&(u, v)| pr.camera_ray(u, v).ok())
+                .map(|r| (r.origin - *normal * normal.dot(r.origin)).length())
+                .fold(0.0, f64::max);
+            aperture
+        }
         Port::Dome {
             center,
             inner_radius,

@@ -471,10 +471,37 @@ fn set_path(node: &mut Node, segs: &[(String, Span)], value: Node, diags: &mut V
     match &mut node.val {
         Val::Table(t) => {
             if segs.len() == 1 {
+                // A new `type` changes what the table is: its other keys belonged to the old
+                // kind, so the table is replaced by one holding only the new type.
+                let retyped = key == "type"
+                    && matches!(
+                        (t.get(key).map(|e| &e.node.val), &value.val),
+                        (Some(Val::Str(old)), Val::Str(new)) if old != new
+                    );
+                if retyped {
+                    let dropped: Vec<String> = t
+                        .entries
+                        .iter()
+                        .filter(|e| e.key != "type")
+                        .map(|e| e.key.clone())
+                        .collect();
+                    t.entries.retain(|e| e.key == "type");
+                    replaced(diags, *kspan, "a new `type` replaces its table", &dropped);
+                }
                 match t.get_mut(key) {
                     Some(e) => {
                         e.key_span = *kspan;
-                        merge_or_replace(&mut e.node, value);
+                        // A table replaces a table (it is not merged into it).
+                        if let (Val::Table(old), Val::Table(new)) = (&e.node.val, &value.val) {
+                            let dropped: Vec<String> = old
+                                .entries
+                                .iter()
+                                .filter(|o| !new.entries.iter().any(|n| n.key == o.key))
+                                .map(|o| o.key.clone())
+                                .collect();
+                            replaced(diags, *kspan, "a table replaces the table", &dropped);
+                        }
+                        e.node = value;
                     }
                     None => t.entries.push(Entry {
                         key: key.clone(),
@@ -528,10 +555,22 @@ fn set_path(node: &mut Node, segs: &[(String, Span)], value: Node, diags: &mut V
     }
 }
 
-fn merge_or_replace(base: &mut Node, value: Node) {
-    if matches!((&base.val, &value.val), (Val::Table(_), Val::Table(_))) {
-        merge(base, value)
-    } else {
-        *base = value;
+/// Say which keys a `--set` that replaced a table dropped (nothing when none were).
+fn replaced(diags: &mut Vec<Diagnostic>, span: Span, what: &str, dropped: &[String]) {
+    if dropped.is_empty() {
+        return;
     }
+    let list = dropped
+        .iter()
+        .map(|k| format!("`{k}`"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    diags.push(
+        Diagnostic::warning(
+            "W0032",
+            format!("this override replaces the table: {list} dropped"),
+        )
+        .label(span, what.to_string())
+        .help("set the keys the new table needs with further `--set KEY=VALUE` after this one"),
+    );
 }
