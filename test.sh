@@ -11,3 +11,6 @@ if [ -d backends ] && ls backends/*/*.py >/dev/null 2>&1; then
   .venv/bin/python -m pytest -q backends
 fi
 cargo test --release --locked --features backends
+# Each fuzz target for a minute, when a nightly toolchain is available (fuzz/run.sh says so and
+# skips otherwise; the stable replay of the corpus ran above as `fuzz_replay`).
+fuzz/run.sh 60
