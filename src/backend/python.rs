@@ -55,3 +55,11 @@ pub fn require_module(module: &str) -> Result<(), String> {
         ))
     }
 }
+
+/// Write an embedded Python script (its source compiled into the binary, so an installed
+/// `poser` needs no source tree) into the scratch directory `work`; returns its path.
+pub fn embedded_script(work: &Path, name: &str, source: &str) -> Result<PathBuf, String> {
+    let p = work.join(name);
+    crate::io::write_atomic(&p, source.as_bytes()).map_err(|e| format!("{}: {e}", p.display()))?;
+    Ok(p)
+}

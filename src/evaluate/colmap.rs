@@ -160,10 +160,8 @@ pub fn centre(qvec: [f64; 4], tvec: [f64; 3]) -> glam::DVec3 {
     -(q.inverse() * glam::DVec3::from_array(tvec))
 }
 
-/// The script `poser evaluate` runs.
-pub fn script() -> std::path::PathBuf {
-    python::backends_dir().join("colmap").join("evaluate.py")
-}
+/// The script `poser evaluate` runs (`backends/colmap/evaluate.py`), embedded in the binary.
+pub const SCRIPT_SOURCE: &str = include_str!("../../backends/colmap/evaluate.py");
 
 /// Run one request in the pinned Python environment; `work` is a scratch directory.
 pub fn run(req: &Request, work: &Path) -> Result<Reconstruction, String> {
@@ -173,7 +171,8 @@ pub fn run(req: &Request, work: &Path) -> Result<Reconstruction, String> {
     let bytes = serde_json::to_vec(req).map_err(|e| e.to_string())?;
     crate::io::write_atomic(&req_path, &bytes)
         .map_err(|e| format!("{}: {e}", req_path.display()))?;
-    let out = python::command(&script())
+    let script = python::embedded_script(work, "evaluate.py", SCRIPT_SOURCE)?;
+    let out = python::command(&script)
         .arg(&req_path)
         .arg(&res_path)
         .output()

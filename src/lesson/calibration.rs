@@ -92,9 +92,8 @@ pub struct Row {
     pub residuals_svg: String,
 }
 
-fn script() -> PathBuf {
-    python::backends_dir().join("opencv").join("calibrate.py")
-}
+/// `backends/opencv/calibrate.py`, embedded in the binary (an installed `poser` runs it).
+const SCRIPT_SOURCE: &str = include_str!("../../backends/opencv/calibrate.py");
 
 /// Run the OpenCV calibration on `images`.
 pub fn calibrate(
@@ -114,7 +113,8 @@ pub fn calibrate(
     let res_path = work.join("calibrate_result.json");
     crate::io::write_atomic(&req_path, req.to_string().as_bytes())
         .map_err(|e| format!("{}: {e}", req_path.display()))?;
-    let out = python::command(&script())
+    let script = python::embedded_script(work, "calibrate.py", SCRIPT_SOURCE)?;
+    let out = python::command(&script)
         .arg(&req_path)
         .arg(&res_path)
         .output()
