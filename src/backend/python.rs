@@ -63,3 +63,54 @@ pub fn embedded_script(work: &Path, name: &str, source: &str) -> Result<PathBuf,
     crate::io::write_atomic(&p, source.as_bytes()).map_err(|e| format!("{}: {e}", p.display()))?;
     Ok(p)
 }
+
+/// Paths of the request and the result a [`run_json`] call for script `name` uses in `work`.
+pub fn json_paths(work: &Path, name: &str) -> (PathBuf, PathBuf) {
+    let stem = name.trim_end_matches(".py");
+    (
+        work.join(format!("{stem}.request.json")),
+        work.join(format!("{stem}.result.json")),
+    )
+}
+
+/// Run an embedded JSON-in, JSON-out script (`script.py REQUEST RESULT`) in the pinned
+/// environment: write `req`, run, read the result. A failure is reported as `what failed: …`
+/// with the script's last `error: ` line, or the tail of its stderr.
+pub fn run_json<T: serde::de::DeserializeOwned>(
+    work: &Path,
+    name: &str,
+    source: &str,
+    req: &impl serde::Serialize,
+    what: &str,
+) -> Result<T, String> {
+    let (req_path, res_path) = json_paths(work, name);
+    let bytes = serde_json::to_vec(req).map_err(|e| e.to_string())?;
+    crate::io::write_atomic(&req_path, &bytes)
+        .map_err(|e| format!("{}: {e}", req_path.display()))?;
+    let script = embedded_script(work, name, source)?;
+    let out = command(&script)
+        .arg(&req_path)
+        .arg(&res_path)
+        .output()
+        .map_err(|e| {
+            format!(
+                "cannot run {}: {e}\n  help: run `backends/setup.sh` or set POSER_PYTHON",
+                interpreter().display()
+            )
+        })?;
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        let msg = err
+            .lines()
+            .rev()
+            .find(|l| l.starts_with("error: "))
+            .map(|l| l.trim_start_matches("error: ").to_string())
+            .unwrap_or_else(|| {
+                let tail: Vec<&str> = err.lines().rev().take(12).collect();
+                tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+            });
+        return Err(format!("{what} failed: {msg}"));
+    }
+    let text = std::fs::read(&res_path).map_err(|e| format!("{}: {e}", res_path.display()))?;
+    serde_json::from_slice(&text).map_err(|e| format!("{}: {e}", res_path.display()))
+}

@@ -166,44 +166,18 @@ pub const SCRIPT_SOURCE: &str = include_str!("../../backends/colmap/evaluate.py"
 /// Run one request in the pinned Python environment; `work` is a scratch directory.
 pub fn run(req: &Request, work: &Path) -> Result<Reconstruction, String> {
     python::require_module("pycolmap")?;
-    let req_path = work.join("request.json");
-    let res_path = work.join("result.json");
-    let bytes = serde_json::to_vec(req).map_err(|e| e.to_string())?;
-    crate::io::write_atomic(&req_path, &bytes)
-        .map_err(|e| format!("{}: {e}", req_path.display()))?;
-    let script = python::embedded_script(work, "evaluate.py", SCRIPT_SOURCE)?;
-    let out = python::command(&script)
-        .arg(&req_path)
-        .arg(&res_path)
-        .output()
-        .map_err(|e| {
-            format!(
-                "cannot run {}: {e}\n  help: run `backends/setup.sh` or set POSER_PYTHON",
-                python::interpreter().display()
-            )
-        })?;
-    if !out.status.success() {
-        let err = String::from_utf8_lossy(&out.stderr);
-        let msg = err
-            .lines()
-            .rev()
-            .find(|l| l.starts_with("error: "))
-            .map(|l| l.trim_start_matches("error: ").to_string())
-            .unwrap_or_else(|| {
-                let tail: Vec<&str> = err.lines().rev().take(12).collect();
-                tail.into_iter().rev().collect::<Vec<_>>().join("\n")
-            });
-        return Err(format!("COLMAP failed: {msg}"));
-    }
-    if let Some(keep) = std::env::var_os("POSER_EVALUATE_KEEP") {
+    let result = python::run_json(work, "evaluate.py", SCRIPT_SOURCE, req, "COLMAP");
+    if result.is_ok()
+        && let Some(keep) = std::env::var_os("POSER_EVALUATE_KEEP")
+    {
         // Debugging aid: keep a copy of the request and the result.
         let keep = std::path::PathBuf::from(keep);
+        let (req_path, res_path) = python::json_paths(work, "evaluate.py");
         let _ = std::fs::create_dir_all(&keep);
         let _ = std::fs::copy(&req_path, keep.join("request.json"));
         let _ = std::fs::copy(&res_path, keep.join("result.json"));
     }
-    let text = std::fs::read(&res_path).map_err(|e| format!("{}: {e}", res_path.display()))?;
-    serde_json::from_slice(&text).map_err(|e| format!("{}: {e}", res_path.display()))
+    result
 }
 
 #[cfg(test)]

@@ -109,33 +109,13 @@ pub fn calibrate(
         "square": square,
         "per_channel": true,
     });
-    let req_path = work.join("calibrate_request.json");
-    let res_path = work.join("calibrate_result.json");
-    crate::io::write_atomic(&req_path, req.to_string().as_bytes())
-        .map_err(|e| format!("{}: {e}", req_path.display()))?;
-    let script = python::embedded_script(work, "calibrate.py", SCRIPT_SOURCE)?;
-    let out = python::command(&script)
-        .arg(&req_path)
-        .arg(&res_path)
-        .output()
-        .map_err(|e| {
-            format!(
-                "cannot run {}: {e}\n  help: run `backends/setup.sh` or set POSER_PYTHON",
-                python::interpreter().display()
-            )
-        })?;
-    if !out.status.success() {
-        let err = String::from_utf8_lossy(&out.stderr);
-        let msg = err
-            .lines()
-            .rev()
-            .find(|l| l.starts_with("error: "))
-            .map(|l| l.trim_start_matches("error: ").to_string())
-            .unwrap_or_else(|| err.lines().rev().take(12).collect::<Vec<_>>().join("\n"));
-        return Err(format!("OpenCV calibration failed: {msg}"));
-    }
-    let text = std::fs::read(&res_path).map_err(|e| format!("{}: {e}", res_path.display()))?;
-    serde_json::from_slice(&text).map_err(|e| format!("{}: {e}", res_path.display()))
+    python::run_json(
+        work,
+        "calibrate.py",
+        SCRIPT_SOURCE,
+        &req,
+        "OpenCV calibration",
+    )
 }
 
 /// Render, detect and calibrate every case.
