@@ -121,6 +121,7 @@ pub fn project_csv(data: &[u8]) {
                     name: "custom".into(),
                     ior: [1.51, 1.52, 1.53],
                 },
+                outer_layers: vec![],
             },
             rig_from_camera: poser::optics::types::Pose::IDENTITY,
         };

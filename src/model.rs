@@ -238,7 +238,7 @@ pub struct SunTime {
 // here so the model reads as one structure.
 // ------------------------------------------------------------------------------------------
 
-pub use crate::optics::types::{Camera, Distortion, Glass, LensModel, Port};
+pub use crate::optics::types::{Camera, Distortion, Glass, GlassLayer, LensModel, Port};
 
 // ------------------------------------------------------------------------------------------
 // Lights

@@ -129,6 +129,7 @@ fn patch_through(m: &Model, u: f64, v: f64, z_plane: f64) -> Patch {
             distance,
             thickness,
             glass,
+            ..
         } => {
             // The scene is rendered with the reference (G) channel's indices.
             let (ng, nw) = (glass.ior[1], m.water.as_ref().unwrap().ior[1]);

@@ -176,6 +176,7 @@ fn flat_port_target_centroids_match_exact_projection() {
             distance: 0.02,
             thickness: 0.012,
             glass: glass(),
+            outer_layers: vec![],
         },
     );
     let pose = look(DVec3::new(0.1, -0.2, -5.0), DVec3::new(0.15, 0.1, -1.0));
@@ -309,6 +310,7 @@ fn patch_ratio(name: &str, sigma_a: Rgb, h: f64, samples: u32) -> [(f64, f64); 3
             distance: d,
             thickness: t,
             glass: glass(),
+            outer_layers: vec![],
         },
     );
     let pose = nadir(DVec3::new(0.0, 0.0, -5.0));
@@ -755,6 +757,7 @@ fn depth_output_matches_native_through_a_flat_port() {
         distance: 0.02,
         thickness: 0.012,
         glass: glass(),
+        outer_layers: vec![],
     };
     let mut m = base(
         "depth",

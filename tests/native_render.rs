@@ -205,6 +205,7 @@ fn target_centroids_match_refractive_projection() {
             name: "PMMA".into(),
             ior: [1.49; 3],
         },
+        outer_layers: vec![],
     };
     m.lights.push(Light {
         name: "sky".into(),

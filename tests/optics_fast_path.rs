@@ -344,6 +344,7 @@ fn batch_projection_of_the_projector_equals_point_by_point() {
                 name: "custom".into(),
                 ior: [1.49; 3],
             },
+            outer_layers: vec![],
         },
         rig_from_camera: Pose::IDENTITY,
     };

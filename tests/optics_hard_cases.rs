@@ -99,6 +99,7 @@ fn got_offsensor() -> bool {
                 name: "custom".into(),
                 ior: [1.473; 3],
             },
+            outer_layers: vec![],
         },
         rig_from_camera: Pose::IDENTITY,
     };
@@ -523,6 +524,7 @@ fn lateral_colour_at_the_corners() {
                 name: "N-BK7".into(),
                 ior: [1.51452, 1.518522, 1.52532],
             },
+            outer_layers: vec![],
         },
         rig_from_camera: Pose::IDENTITY,
     };

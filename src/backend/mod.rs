@@ -76,8 +76,33 @@ impl Backend {
         }
     }
 
+    /// What this backend cannot express in `model`, as the message a user reads; `Ok` when
+    /// it can render the scene as modelled. (Refusals that need the backend's own geometry,
+    /// such as Blender's caustics, stay in the backend.)
+    pub fn refuse(self, model: &Model) -> Result<(), String> {
+        if self == Backend::Native {
+            return Ok(());
+        }
+        for c in &model.cameras {
+            if let crate::model::Port::Flat { outer_layers, .. } = &c.port
+                && !outer_layers.is_empty()
+            {
+                return Err(format!(
+                    "camera `{}`: the {} backend does not model multi-layer flat ports yet \
+                     ({} glass layers); render it with `--backend native`, whose camera rays \
+                     and ground truth refract through every layer",
+                    c.name,
+                    self.name(),
+                    1 + outer_layers.len()
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Write the scene for the outside renderer into `out` (`poser compile`).
     pub fn compile(self, model: &Model, out: &Path) -> Result<(), String> {
+        self.refuse(model)?;
         match self {
             Backend::Native => Err(
                 "the native backend renders directly; use `poser render` (compile targets: mitsuba, blender)"
@@ -95,6 +120,7 @@ impl Backend {
         out: &Path,
         opts: &RenderOptions,
     ) -> Result<RenderReport, String> {
+        self.refuse(model)?;
         match self {
             Backend::Native => native::render(model, out, opts),
             Backend::Mitsuba => mitsuba::render(model, out, opts),

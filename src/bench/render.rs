@@ -116,6 +116,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
                     name: "PMMA".into(),
                     ior: [1.49; 3],
                 },
+                outer_layers: vec![],
             },
             rig_from_camera: Pose::IDENTITY,
         }],

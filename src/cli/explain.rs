@@ -165,16 +165,30 @@ pub fn explain(m: &Model) -> String {
                 thickness,
                 glass,
                 normal,
-            } => format!(
-                "flat {} {:.1} mm thick, {:.1} mm from the pupil, tilt {:.2}°, n = [{:.4}, {:.4}, {:.4}]",
-                glass.name,
-                thickness * 1e3,
-                distance * 1e3,
-                normal.z.clamp(-1.0, 1.0).acos().to_degrees(),
-                glass.ior[0],
-                glass.ior[1],
-                glass.ior[2]
-            ),
+                outer_layers,
+            } => {
+                let mut s = format!(
+                    "flat {} {:.1} mm thick, {:.1} mm from the pupil, tilt {:.2}°, n = [{:.4}, {:.4}, {:.4}]",
+                    glass.name,
+                    thickness * 1e3,
+                    distance * 1e3,
+                    normal.z.clamp(-1.0, 1.0).acos().to_degrees(),
+                    glass.ior[0],
+                    glass.ior[1],
+                    glass.ior[2]
+                );
+                for l in outer_layers {
+                    s.push_str(&format!(
+                        "; then {} {:.1} mm, n = [{:.4}, {:.4}, {:.4}]",
+                        l.glass.name,
+                        l.thickness * 1e3,
+                        l.glass.ior[0],
+                        l.glass.ior[1],
+                        l.glass.ior[2]
+                    ));
+                }
+                s
+            }
             Port::Dome {
                 center,
                 inner_radius,

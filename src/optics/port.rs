@@ -1282,14 +1282,11 @@ impl PortSolver {
         Ok(match port {
             Port::None => PortSolver::None,
             Port::Flat {
-                normal,
-                distance,
-                thickness,
-                glass,
+                normal, distance, ..
             } => PortSolver::Flat(FlatPort::new(
                 *normal,
                 *distance,
-                &[(*thickness, glass.ior[ch])],
+                &port.flat_layers(ch),
                 n_air,
                 n_water,
             )?),

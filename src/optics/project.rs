@@ -250,6 +250,7 @@ mod tests {
                 distance: 0.03,
                 thickness: 0.015,
                 glass: glass(),
+                outer_layers: vec![],
             },
             Port::Dome {
                 center: DVec3::new(0.004, 0.002, 0.01),

@@ -144,19 +144,31 @@ pub struct Glass {
     pub ior: Rgb,
 }
 
+/// A further glass layer of a flat port, outward of the first (a laminate, a protective
+/// window): its thickness, m, and its glass.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct GlassLayer {
+    pub thickness: f64,
+    pub glass: Glass,
+}
+
 /// A housing port, in the **camera frame** (OpenCV axes, origin at the entrance pupil).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Port {
     /// No housing: the camera sits directly in the medium (air survey, or an idealised camera).
     None,
-    /// Flat port. Inner face `{x : normal·x = distance}`, outer face at `distance + thickness`.
-    /// `normal` is a unit vector pointing from the camera into the water (untilted: +z).
+    /// Flat port. Inner face `{x : normal·x = distance}`; the first glass layer (`thickness`,
+    /// `glass`) ends at `distance + thickness`, and each of `outer_layers` follows it outwards
+    /// (empty for the usual single slab). `normal` is a unit vector pointing from the camera
+    /// into the water (untilted: +z).
     Flat {
         normal: DVec3,
         distance: f64,
         thickness: f64,
         glass: Glass,
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        outer_layers: Vec<GlassLayer>,
     },
     /// Dome port: spheres about `center` with radii `inner_radius` and
     /// `inner_radius + thickness`. `center` = 0 is a perfectly centred dome.
@@ -186,13 +198,45 @@ impl Port {
             }
         }
     }
+    /// Total glass thickness, m (0 without a port): a flat port's layers summed.
+    pub fn total_thickness(&self) -> f64 {
+        match self {
+            Port::None => 0.0,
+            Port::Flat {
+                thickness,
+                outer_layers,
+                ..
+            } => thickness + outer_layers.iter().map(|l| l.thickness).sum::<f64>(),
+            Port::Dome { thickness, .. } | Port::Cylinder { thickness, .. } => *thickness,
+        }
+    }
+    /// A flat port's glass layers from the camera outwards: (thickness m, index in `channel`).
+    /// Empty for other ports.
+    pub fn flat_layers(&self, channel: usize) -> Vec<(f64, f64)> {
+        match self {
+            Port::Flat {
+                thickness,
+                glass,
+                outer_layers,
+                ..
+            } => std::iter::once((*thickness, glass.ior[channel.min(2)]))
+                .chain(
+                    outer_layers
+                        .iter()
+                        .map(|l| (l.thickness, l.glass.ior[channel.min(2)])),
+                )
+                .collect(),
+            _ => vec![],
+        }
+    }
     /// Refractive surfaces a camera ray crosses on its way out (inner and outer glass faces).
     /// Mitsuba and Cycles count each as a path vertex, so their bounce budgets add these to
     /// the model's `max_bounces` (which, like the native tracer, counts scattering only).
     pub fn interfaces(&self) -> u32 {
         match self {
             Port::None => 0,
-            Port::Flat { .. } | Port::Dome { .. } | Port::Cylinder { .. } => 2,
+            Port::Flat { outer_layers, .. } => 2 + outer_layers.len() as u32,
+            Port::Dome { .. } | Port::Cylinder { .. } => 2,
         }
     }
     pub fn kind_name(&self) -> &'static str {

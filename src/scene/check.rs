@@ -352,15 +352,12 @@ fn inside_housing(port: &Port, p: glam::DVec3) -> bool {
     match port {
         Port::None => false,
         Port::Flat {
-            normal,
-            distance,
-            thickness,
-            ..
+            normal, distance, ..
         } => {
             let d = normal.dot(p);
             // Within the housing's cross-section (a generous 20 cm radius) only.
             let lateral = (p - *normal * d).length();
-            d <= distance + thickness && d > -0.05 && lateral < 0.2
+            d <= distance + port.total_thickness() && d > -0.05 && lateral < 0.2
         }
         Port::Dome {
             center,

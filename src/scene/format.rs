@@ -382,6 +382,24 @@ pub struct PortTable {
     /// Cylinder: a point of the axis relative to the entrance pupil. **Unit:** m.
     /// **Default:** `[0, 0, 0]`.
     pub offset: Option<Vec3<Length>>,
+    /// Flat: two to four parallel glass layers, from the camera outwards, each with its
+    /// `thickness` and `material` or `ior` (a laminated or coated window, a protective
+    /// cover). Replaces the port's own `thickness`, `material` and `ior`. Only the native
+    /// renderer and the ground truth model more than one layer; Mitsuba and Blender refuse.
+    /// **Default:** one layer, from `thickness` and `material`.
+    pub layers: Option<Vec<PortLayer>>,
+}
+
+/// `[[camera.port.layers]]` — one glass layer of a multi-layer flat port.
+#[derive(JsonSchema)]
+#[schemars(deny_unknown_fields)]
+pub struct PortLayer {
+    /// Layer thickness. **Unit:** m. Required.
+    pub thickness: Length,
+    /// Catalogue material, as the port's `material`. **Default:** `N-BK7`.
+    pub material: Option<String>,
+    /// Custom index instead of `material` (one value or `[r, g, b]`). **Unit:** 1.
+    pub ior: Option<PerChannel<Number>>,
 }
 
 #[derive(JsonSchema)]
@@ -389,7 +407,7 @@ pub struct PortTable {
 pub enum PortKind {
     /// No housing (air survey or an idealised camera).
     None,
-    /// Flat port: `thickness`, `pupil_distance`, `tilt`, `tilt_direction`.
+    /// Flat port: `thickness`, `pupil_distance`, `tilt`, `tilt_direction`, `layers`.
     Flat,
     /// Dome port: `inner_radius`, `thickness`, `decentering`.
     Dome,
@@ -1407,6 +1425,9 @@ mod tests {
             ],
             &["diver.cylinders.0.o2=0.32"],
             &["sun.elevation=0.5"],
+            &[
+                "camera.port={type = \"flat\", layers = [{thickness = \"6 mm\", material = \"PMMA\"}, {thickness = \"2 mm\", ior = 1.77}]}",
+            ],
             &[
                 "lesson={question = \"q\", quick = [], full = [], variants = [{label = \"a\", set = []}], try_next = [{text = \"t\", set = \"a=1\"}]}",
             ],

@@ -825,6 +825,85 @@ fn glass(cx: &mut Cx, p: &mut Tab, default: &str, cs: &mut CameraSpans) -> Glass
     }
 }
 
+/// `layers = [{ thickness, material | ior }, …]` of a flat port: the first layer, and the
+/// ones outward of it. The port's own `thickness`, `material` and `ior` must then be absent.
+fn flat_layers(
+    cx: &mut Cx,
+    p: &mut Tab,
+    path: &str,
+    cs: &mut CameraSpans,
+) -> (f64, Glass, Vec<GlassLayer>) {
+    let lspan = p.span_of("layers");
+    for key in ["thickness", "material", "ior"] {
+        if p.has(key) {
+            let sp = p.key_span(key);
+            cx.push(
+                Diagnostic::error(
+                    "E0242",
+                    format!("`{path}.{key}` and `{path}.layers` both given"),
+                )
+                .label(sp, "remove this")
+                .help(
+                    "with `layers`, each layer gives its own `thickness` and `material` or `ior`",
+                ),
+            );
+        }
+    }
+    // Mark the port-level keys read (they were reported above when present).
+    let _ = (p.get("thickness"), p.get("material"), p.get("ior"));
+    cs.thickness = lspan;
+    cs.material = lspan;
+    let nodes = p.tables(cx, "layers");
+    let max = crate::optics::port::MAX_LAYERS;
+    if nodes.is_empty() || nodes.len() > max {
+        cx.push(
+            Diagnostic::error(
+                "E0243",
+                format!("a flat port has 1 to {max} glass layers, not {}", nodes.len()),
+            )
+            .label(lspan, "here")
+            .help("e.g. `layers = [{ thickness = \"6 mm\", material = \"N-BK7\" }, { thickness = \"2 mm\", material = \"sapphire\" }]`"),
+        );
+    }
+    let mut layers = Vec::new();
+    for (i, n) in nodes.into_iter().take(max).enumerate() {
+        let lpath = format!("{path}.layers[{i}]");
+        let mut t = Tab::open(cx, Some(n), &lpath, lspan);
+        let thickness = match t.opt_f64(cx, "thickness", Dim::Length) {
+            Some(v) => {
+                check::positive(cx, &t, "thickness", v, "m");
+                v
+            }
+            None => {
+                cx.push(
+                    Diagnostic::error("E0243", format!("`{lpath}.thickness` is required"))
+                        .label(n.span, "this layer has no thickness")
+                        .help("write e.g. `thickness = \"6 mm\"`"),
+                );
+                0.01
+            }
+        };
+        let mut spans = CameraSpans::default();
+        let g = glass(cx, &mut t, "N-BK7", &mut spans);
+        t.finish(cx);
+        layers.push(GlassLayer {
+            thickness,
+            glass: g,
+        });
+    }
+    if layers.is_empty() {
+        layers.push(GlassLayer {
+            thickness: 0.01,
+            glass: Glass {
+                name: "N-BK7".into(),
+                ior: [1.5168; 3],
+            },
+        });
+    }
+    let first = layers.remove(0);
+    (first.thickness, first.glass, layers)
+}
+
 fn port(
     cx: &mut Cx,
     node: Option<&Node>,
@@ -841,13 +920,18 @@ fn port(
     let port = match kind {
         "none" => Port::None,
         "flat" => {
-            let thickness = p.f64(cx, "thickness", Dim::Length, 0.01);
             let distance = p.f64(cx, "pupil_distance", Dim::Length, 0.01);
             cs.distance = p.span_of("pupil_distance");
             let tilt = p.f64(cx, "tilt", Dim::Angle, 0.0);
             let tilt_dir = p.f64(cx, "tilt_direction", Dim::Angle, 0.0);
-            let glass = glass(cx, &mut p, "N-BK7", cs);
-            check::positive(cx, &p, "thickness", thickness, "m");
+            let (thickness, glass, outer_layers) = if p.has("layers") {
+                flat_layers(cx, &mut p, path, cs)
+            } else {
+                let thickness = p.f64(cx, "thickness", Dim::Length, 0.01);
+                let glass = glass(cx, &mut p, "N-BK7", cs);
+                check::positive(cx, &p, "thickness", thickness, "m");
+                (thickness, glass, vec![])
+            };
             if !(distance > 0.0) {
                 let sp = p.span_of("pupil_distance");
                 cx.push(
@@ -872,6 +956,7 @@ fn port(
                 distance,
                 thickness,
                 glass,
+                outer_layers,
             }
         }
         "dome" => {

@@ -124,8 +124,14 @@ pub fn fisheye_fit(c: &CameraTruth) -> ([f64; 4], f64) {
 /// Refractive COLMAP's port model and parameters (G channel), or `None` with the reason.
 pub fn refractive_port(c: &CameraTruth) -> Result<Option<(&'static str, Vec<f64>)>, String> {
     let g = c.ior_glass.unwrap_or([1.0; 3]);
-    let name = match c.port {
+    let name = match &c.port {
         Port::None => return Ok(None),
+        Port::Flat { outer_layers, .. } if !outer_layers.is_empty() => {
+            return Err(format!(
+                "Refractive COLMAP's FLATPORT has one glass layer; this port has {}",
+                1 + outer_layers.len()
+            ));
+        }
         Port::Flat { .. } => "FLATPORT",
         Port::Dome { .. } => "DOMEPORT",
         Port::Cylinder { .. } => {

@@ -138,6 +138,18 @@ pub(super) fn files(truth: &Truth) -> Vec<(String, Vec<u8>)> {
                 &c.ior_glass.unwrap_or([1.0; 3]),
             ));
             y.push_str(&matrix("port_ior_water_rgb", 1, 3, &c.ior_water));
+            if let crate::model::Port::Flat { outer_layers, .. } = &c.port
+                && !outer_layers.is_empty()
+            {
+                // Rows: thickness (m), then the glass index in R, G, B; outward of the first
+                // layer, whose thickness and index are above.
+                let rows: Vec<f64> = outer_layers
+                    .iter()
+                    .flat_map(|l| [l.thickness, l.glass.ior[0], l.glass.ior[1], l.glass.ior[2]])
+                    .collect();
+                y.push_str(&matrix("port_outer_layers", outer_layers.len(), 4, &rows));
+                y.push_str("port_outer_layers_order: \"thickness (m), ior r g b; from the first layer outwards\"\n");
+            }
         }
         out.push((format!("opencv/camera_{}.yml", i + 1), y.into_bytes()));
     }

@@ -76,6 +76,7 @@ pub fn flat_port(distance: f64, thickness: f64) -> Port {
         distance,
         thickness,
         glass: glass(),
+        outer_layers: vec![],
     }
 }
 

@@ -109,6 +109,7 @@ pub fn camera() -> Camera {
             name: "N-BK7".into(),
             ior: [1.514, 1.518, 1.527],
         },
+        outer_layers: vec![],
     };
     let mut c = super::model::camera("cam", sensor, port);
     c.focal_length = f;

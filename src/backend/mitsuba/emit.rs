@@ -273,6 +273,7 @@ fn port_shapes(
             distance,
             thickness,
             glass,
+            ..
         } => {
             let n_g = glass.ior[channel];
             let n = normal.normalize();
