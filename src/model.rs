@@ -470,6 +470,9 @@ pub enum TargetKind {
     /// Siemens star GSD/resolution target of `diameter` m with `spokes` black sectors; its
     /// point is the centre.
     SiemensStar { diameter: f64, spokes: u32 },
+    /// One black disk of `diameter` m on a white plate twice as wide (a GCP or test-field
+    /// marker, from a points file); its point is the centre, with the target's name as id.
+    Disk { diameter: f64 },
     /// 3D test object: a staircase pyramid of `levels` steps of `step` height and `size` base
     /// width, with a disk target on every corner.
     TestObject {

@@ -81,6 +81,7 @@ pub fn disks(model: &Model) -> Vec<Disk> {
                 spacing, diameter, ..
             } => (diameter / 2.0, spacing / 2.0),
             TargetKind::Coded { diameter, .. } => (diameter / 2.0, 0.8 * diameter),
+            TargetKind::Disk { diameter } => (diameter / 2.0, diameter),
             TargetKind::ScaleBar {
                 width, diameter, ..
             } => (diameter / 2.0, width / 2.0),

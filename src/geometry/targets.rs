@@ -15,6 +15,7 @@
 //! | scale_bar | the two disk centres at x = ∓length/2 | `(length + 2·diameter) × width` |
 //! | siemens_star | the centre | `diameter × diameter` |
 //! | test_object | disks at the 4 corners of every step's top face (z = step top) | `size × size` |
+//! | disk | the centre; its id is the target's name | `2·diameter × 2·diameter` |
 
 use crate::model::{Pose, TargetKind, TargetPoint};
 use glam::DVec3;
@@ -53,6 +54,7 @@ pub fn extent(kind: &TargetKind) -> (f64, f64) {
             diameter,
         } => (length + 2.0 * diameter, width),
         TargetKind::SiemensStar { diameter, .. } => (diameter, diameter),
+        TargetKind::Disk { diameter } => (2.0 * diameter, 2.0 * diameter),
         TargetKind::TestObject { size, .. } => (size, size),
     }
 }
@@ -111,6 +113,8 @@ pub fn local_points(kind: &TargetKind) -> Vec<(String, DVec3)> {
             out.push(("1".into(), DVec3::new(length / 2.0, 0.0, 0.0)));
         }
         TargetKind::SiemensStar { .. } => out.push(("0".into(), DVec3::ZERO)),
+        // The id is the target's own name (see [`points`]).
+        TargetKind::Disk { .. } => out.push((String::new(), DVec3::ZERO)),
         TargetKind::TestObject {
             size,
             levels,
@@ -142,12 +146,16 @@ fn grid(cols: u32, rows: u32, spacing: f64) -> Vec<(u32, u32, DVec3)> {
     v
 }
 
-/// The target's points in the world: ids `"{name}/{id}"`.
+/// The target's points in the world: ids `"{name}/{id}"` (a disk's: `"{name}"`).
 pub fn points(name: &str, kind: &TargetKind, world_from_target: &Pose) -> Vec<TargetPoint> {
     local_points(kind)
         .into_iter()
         .map(|(id, p)| TargetPoint {
-            id: format!("{name}/{id}"),
+            id: if id.is_empty() {
+                name.to_string()
+            } else {
+                format!("{name}/{id}")
+            },
             world: world_from_target.transform_point(p),
         })
         .collect()
@@ -217,6 +225,7 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
                 sector.is_multiple_of(2)
             }
         }
+        TargetKind::Disk { diameter } => x.hypot(y) <= diameter / 2.0,
         TargetKind::TestObject { .. } => local_points(kind)
             .iter()
             .any(|(_, p)| (x - p.x).hypot(y - p.y) <= test_object_diameter(kind) / 2.0),

@@ -638,9 +638,19 @@ pub struct Target {
     pub square: Option<Length>,
     /// Circle grid, coded: centre spacing. **Unit:** m. **Default:** 50 mm / 100 mm.
     pub spacing: Option<Length>,
-    /// Disk diameter (circle grid, coded, scale bar, test object) or star diameter.
-    /// **Unit:** m. **Default:** 20 mm (200 mm for a Siemens star).
+    /// Disk diameter (circle grid, coded, scale bar, test object, points file) or star
+    /// diameter. **Unit:** m. **Default:** 20 mm (200 mm for a Siemens star, 100 mm for a
+    /// points file).
     pub diameter: Option<Length>,
+    /// Points file: the list of `id x y z` (metres; spaces, tabs or commas; `#` comments;
+    /// an optional header line), relative to this scene file. Each point becomes a disk
+    /// target named `name/id` whose point id is `name/id`. Required for `points_file`.
+    pub file: Option<String>,
+    /// Points file: where the disks are printed. `"given"`: at the file's coordinates in the
+    /// target's frame (`position`, `rotation`), facing its +z. `"seabed"`: each point dropped
+    /// straight down onto the scene's objects, facing the surface it lands on, 1 mm above it
+    /// (the nominal seabed where there is no object). **Default:** `"given"`.
+    pub surface: Option<PointsSurface>,
     /// Coded: number of targets. **Default:** 12.
     pub count: Option<u32>,
     /// Coded: code number of the first target. **Default:** 1.
@@ -675,6 +685,15 @@ pub enum TargetKindName {
     ScaleBar,
     SiemensStar,
     TestObject,
+    /// A laboratory's test field or GCP layout from a file: `file`, `diameter`, `surface`.
+    PointsFile,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum PointsSurface {
+    Given,
+    Seabed,
 }
 
 /// `[network]` — where the images are taken. Which keys apply depends on `type`.
@@ -1425,6 +1444,9 @@ mod tests {
             ],
             &["diver.cylinders.0.o2=0.32"],
             &["sun.elevation=0.5"],
+            &[
+                "targets=[{type = \"points_file\", file = \"none.txt\", surface = \"seabed\", diameter = 0.1}]",
+            ],
             &[
                 "camera.port={type = \"flat\", layers = [{thickness = \"6 mm\", material = \"PMMA\"}, {thickness = \"2 mm\", ior = 1.77}]}",
             ],

@@ -12,6 +12,7 @@ pub mod check;
 pub mod diag;
 pub mod format;
 pub mod lesson;
+pub mod points_file;
 pub mod reader;
 pub mod resolve;
 pub mod sensor;

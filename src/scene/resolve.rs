@@ -85,7 +85,7 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
         &mut spans,
         render.seed,
     );
-    let targets = targets(cx, &mut t, &mut spans);
+    let targets = targets(cx, &mut t, &mut spans, &objects, &site, sources, scene_path);
     let diver = diver(cx, t.get("diver"), top);
     let lesson = super::lesson::lesson(cx, t.get("lesson"), sources, &name, &description, top);
     let speed_default = diver.as_ref().map(|d| d.speed).unwrap_or(0.2);
@@ -1620,7 +1620,15 @@ fn coral_colors(cx: &mut Cx, p: &mut Tab) -> Vec<crate::model::Rgb> {
     out
 }
 
-fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
+fn targets(
+    cx: &mut Cx,
+    t: &mut Tab,
+    spans: &mut Spans,
+    objects: &[Object],
+    site: &Site,
+    sources: &Sources,
+    scene: &Path,
+) -> Vec<Target> {
     let mut out: Vec<Target> = Vec::new();
     for (i, n) in t.tables(cx, "targets").into_iter().enumerate() {
         let path = format!("targets[{i}]");
@@ -1639,9 +1647,27 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
                     "scale_bar",
                     "siemens_star",
                     "test_object",
+                    "points_file",
                 ],
             )
             .unwrap_or("checkerboard");
+        if ty == "points_file" {
+            let disks = points_file(cx, &mut g, &name, objects, site, sources, scene);
+            for d in &disks {
+                if out.iter().any(|o| o.name == d.name) {
+                    cx.push(
+                        Diagnostic::error("E0291", format!("two targets are named `{}`", d.name))
+                            .label(g.span_of("name"), "a point of this file has a taken name")
+                            .help("a points file's disks are named `name/id`; give this target another `name`"),
+                    );
+                    break;
+                }
+            }
+            spans.targets.extend(disks.iter().map(|_| g.span));
+            g.finish_as(cx, Some(&format!("a points_file target (`{path}`)")));
+            out.extend(disks);
+            continue;
+        }
         let kind = match ty {
             "checkerboard" => {
                 let cols = g.u32(cx, "cols", 9);
@@ -1768,6 +1794,73 @@ fn targets(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> Vec<Target> {
         });
     }
     out
+}
+
+/// `type = "points_file"` (see [`super::points_file`]): one disk target per line of `file`.
+fn points_file(
+    cx: &mut Cx,
+    g: &mut Tab,
+    name: &str,
+    objects: &[Object],
+    site: &Site,
+    sources: &Sources,
+    scene: &Path,
+) -> Vec<Target> {
+    let diameter = g.f64(cx, "diameter", Dim::Length, 0.1);
+    check::positive(cx, g, "diameter", diameter, "m");
+    let surface = g
+        .choice(cx, "surface", &["given", "seabed"])
+        .unwrap_or("given");
+    let frame = placement(cx, g, DVec3::ZERO);
+    let fspan = g.span_of("file");
+    let Some(rel) = g.opt_str(cx, "file") else {
+        cx.push(
+            Diagnostic::error("E0293", format!("`{}` needs a `file`", g.path))
+                .label(g.span, "no `file`")
+                .help("give the list of `id x y z` relative to this scene file: `file = \"gcps.txt\"`"),
+        );
+        return vec![];
+    };
+    let dir = sources
+        .dir_of(fspan.file)
+        .unwrap_or_else(|| scene.parent().map(Path::to_path_buf).unwrap_or_default());
+    let file = dir.join(&rel);
+    let pts = super::points_file::read(cx, &file, fspan);
+    if pts.is_empty() || !(diameter > 0.0) {
+        return vec![];
+    }
+    if surface == "given" {
+        return super::points_file::given(name, diameter, &frame, &pts);
+    }
+    match super::points_file::dropped(name, diameter, &frame, &pts, objects, -site.depth) {
+        Ok((disks, missed)) => {
+            if !missed.is_empty() {
+                cx.push(
+                    Diagnostic::warning(
+                        "W0292",
+                        format!(
+                            "{} of {} points are above no object and lie on the nominal seabed",
+                            missed.len(),
+                            pts.len()
+                        ),
+                    )
+                    .label(g.span_of("surface"), format!("e.g. `{}`", missed[0]))
+                    .help(
+                        "add a seabed object under them, or use `surface = \"given\"` with their z",
+                    ),
+                );
+            }
+            disks
+        }
+        Err(e) => {
+            cx.push(
+                Diagnostic::error("E0294", "cannot drop the points onto the scene's objects")
+                    .label(g.span_of("surface"), e)
+                    .help("fix the objects' meshes, or use `surface = \"given\"`"),
+            );
+            vec![]
+        }
+    }
 }
 
 // ------------------------------------------------------------------------------------------
