@@ -123,6 +123,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             let dir = match &args.images {
                 Some(d) => d.clone(),
                 None => {
+                    // Refuse an untextured scene before spending the render on it.
+                    evaluate::check_images_texture(&model).map_err(CliError::Failed)?;
                     let dir = args.out.join("images");
                     bar.set_message(format!("rendering ({})", args.backend));
                     args.backend

@@ -169,6 +169,83 @@ fn surfaces(model: &Model) -> Result<(Vec<(String, TriMesh)>, Scene), String> {
     Ok((labelled, scene))
 }
 
+/// Below this share of textured pixels, images mode refuses before running COLMAP.
+pub const MIN_TEXTURED_SHARE: f64 = 0.2;
+
+/// What the cameras see, as shares of a grid of sampled pixels over the network's images.
+#[derive(Debug, Clone, Copy)]
+pub struct TextureSeen {
+    /// Pixels whose ray hits any surface.
+    pub surface: f64,
+    /// Pixels whose ray hits a textured surface: an object with a pattern or colour variation,
+    /// or a printed target.
+    pub textured: f64,
+}
+
+/// Images mode's pre-check (before rendering): the images must see enough texture for SIFT.
+pub fn check_images_texture(model: &Model) -> Result<TextureSeen, String> {
+    let (_, scene) = surfaces(model)?;
+    check_texture_seen(texture_seen(model, &scene))
+}
+
+fn check_texture_seen(seen: TextureSeen) -> Result<TextureSeen, String> {
+    if seen.textured < MIN_TEXTURED_SHARE {
+        return Err(format!(
+            "the images see almost no texture: {:.0} % of the sampled pixels land on a \
+             textured surface ({:.0} % on any surface); SIFT finds no features on uniform \
+             albedo or open water, so COLMAP cannot match the images\n  help: give the seabed \
+             and objects a pattern at the images' GSD (e.g. `pattern = {{ type = \"fbm\" }}`, \
+             see docs/textures.md), or point the cameras at them",
+            100.0 * seen.textured,
+            100.0 * seen.surface
+        ));
+    }
+    Ok(seen)
+}
+
+/// Cast a 16 × 12 grid of exact camera rays through up to 64 evenly spread images of the
+/// network (every camera of the rig) and classify what each ray hits first.
+pub fn texture_seen(model: &Model, scene: &Scene) -> TextureSeen {
+    let n_poses = model.poses.len();
+    let step = n_poses.div_ceil(64).max(1);
+    let (mut rays, mut hit, mut textured) = (0usize, 0usize, 0usize);
+    for (ci, cam) in model.cameras.iter().enumerate() {
+        let Ok(pr) = Projector::new(model, ci, 1) else {
+            continue;
+        };
+        for pi in (0..n_poses).step_by(step) {
+            for j in 0..12 {
+                for i in 0..16 {
+                    let u = (i as f64 + 0.5) / 16.0 * cam.width as f64;
+                    let v = (j as f64 + 0.5) / 12.0 * cam.height as f64;
+                    rays += 1;
+                    let Ok((o, d, _)) = pr.pixel_ray_world(pi, u, v) else {
+                        continue;
+                    };
+                    let Some(h) = scene.intersect(&Ray { origin: o, dir: d }, f64::INFINITY) else {
+                        continue;
+                    };
+                    hit += 1;
+                    let tex = match h.surface {
+                        SurfaceId::Object(k) => model.objects.get(k as usize).is_some_and(|o| {
+                            o.material.pattern.is_some() || o.material.variation > 0.0
+                        }),
+                        SurfaceId::Target(_) => true,
+                        #[allow(unreachable_patterns)]
+                        _ => false,
+                    };
+                    textured += tex as usize;
+                }
+            }
+        }
+    }
+    let r = rays.max(1) as f64;
+    TextureSeen {
+        surface: hit as f64 / r,
+        textured: textured as f64 / r,
+    }
+}
+
 /// The paraxial in-water-equivalent (fx, fy, cx, cy) of camera `ci` at distance `d`.
 pub fn water_equivalent(model: &Model, ci: usize, d: f64) -> Result<[f64; 4], String> {
     let cam = &model.cameras[ci];
@@ -535,6 +612,7 @@ pub fn evaluate_images(
         ));
     }
     let (_, scene) = surfaces(model)?;
+    check_texture_seen(texture_seen(model, &scene))?;
     let abs_dir: PathBuf =
         std::fs::canonicalize(image_dir).map_err(|e| format!("{}: {e}", image_dir.display()))?;
     let work = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
