@@ -1,0 +1,36 @@
+//! The README's deformation table is the bench's measurement, not typed in: each row must
+//! match `docs/bench/evaluate.json` (written by `poser bench evaluate --quick --json …`).
+
+#[test]
+fn readme_deformation_table_matches_the_bench_report() {
+    let readme = std::fs::read_to_string("README.md").unwrap();
+    let bench: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("docs/bench/evaluate.json").unwrap())
+            .unwrap();
+    let rows = [
+        ("| in air |", "in_air"),
+        ("| flat port, pupil 1 mm from the glass |", "flat_port_deformation_pupil_1mm"),
+        ("| flat port, pupil 3 cm |", "flat_port_deformation"),
+        ("| flat port, pupil 10 cm |", "flat_port_deformation_pupil_10cm"),
+        ("| flat port, pupil 3 cm, with an oblique pass |", "flat_port_deformation_obliques"),
+        ("| centred dome |", "flat_port_deformation_dome"),
+    ];
+    for (prefix, scene) in rows {
+        let line = readme
+            .lines()
+            .find(|l| l.starts_with(prefix))
+            .unwrap_or_else(|| panic!("README has no row `{prefix}`"));
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        let r = bench
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["scene"] == scene && r["form"] == "quick")
+            .unwrap_or_else(|| panic!("no quick row for {scene}"));
+        assert_eq!(cells[2], r["images"].to_string(), "{line}");
+        let bowl = format!("{:.1} mm", r["bowl_mm"].as_f64().unwrap());
+        assert_eq!(cells[4], bowl, "{line}");
+        let share = format!("{} %", (100.0 * r["bowl_share"].as_f64().unwrap()).round());
+        assert_eq!(cells[5], share, "{line}");
+    }
+}
