@@ -41,14 +41,26 @@ fn contrast_lesson_quick_form_loses_contrast_with_distance_and_shows_it() {
     assert!(f(&far["r_over_g"]) < f(&near["r_over_g"]));
     // Strobes far from the port light less of the water in front of it.
     let (bp, ba) = (f(&port["backscatter"][1]), f(&apart["backscatter"][1]));
-    assert!(ba > 0.0 && ba < bp, "backscatter apart {ba} at the port {bp}");
+    assert!(
+        ba > 0.0 && ba < bp,
+        "backscatter apart {ba} at the port {bp}"
+    );
     assert!(f(&apart["veiling_share"]) < f(&port["veiling_share"]));
     let dom = check_page(&out, &json);
     for r in rows(&json) {
         let k = slug(r["label"].as_str().unwrap());
-        assert_eq!(cell(&dom, &format!("{k}.contrast")), format!("{:.3}", f(&r["contrast"])));
-        assert_eq!(cell(&dom, &format!("{k}.r_over_g")), format!("{:.3}", f(&r["r_over_g"])));
-        assert_eq!(cell(&dom, &format!("{k}.b_over_g")), format!("{:.3}", f(&r["b_over_g"])));
+        assert_eq!(
+            cell(&dom, &format!("{k}.contrast")),
+            format!("{:.3}", f(&r["contrast"]))
+        );
+        assert_eq!(
+            cell(&dom, &format!("{k}.r_over_g")),
+            format!("{:.3}", f(&r["r_over_g"]))
+        );
+        assert_eq!(
+            cell(&dom, &format!("{k}.b_over_g")),
+            format!("{:.3}", f(&r["b_over_g"]))
+        );
         assert_eq!(
             cell(&dom, &format!("{k}.backscatter")),
             format!("{:.3e}", f(&r["backscatter"][1]))
@@ -82,7 +94,10 @@ fn gsd_lesson_quick_form_plans_heights_and_resolves_about_a_gsd() {
         }
         // The camera was placed where the GSD is the planned one.
         let g = f(&r["gsd_at_star_mm"]) / f(&r["gsd_mm"]);
-        assert!((0.99..1.01).contains(&g), "{label}: GSD at the star / planned {g}");
+        assert!(
+            (0.99..1.01).contains(&g),
+            "{label}: GSD at the star / planned {g}"
+        );
         let q = f(&r["resolved_over_gsd"]);
         assert!((1.0..3.0).contains(&q), "{label}: resolved / GSD {q}");
         let px = f(&r["smallest_resolved_px"]);

@@ -20,7 +20,7 @@
 //! with the kind `gsd`.
 
 use super::Case;
-use super::html::{escape, num, png};
+use super::html::{escape, num, png, svg};
 use crate::backend::native;
 use crate::geometry::targets;
 use crate::model::{LightKind, Model, TargetKind};
@@ -142,6 +142,9 @@ pub struct Row {
     pub view_png: Vec<u8>,
     #[serde(skip)]
     pub backscatter_png: Vec<u8>,
+    /// Green radiance along a row of squares, with and without the board (SVG).
+    #[serde(skip)]
+    pub profile_svg: String,
 }
 
 /// A sample point of the target: pixel and whether its print is light.
@@ -246,6 +249,7 @@ pub fn run(
             })
             .collect();
         let dir = out.join(&c.slug);
+        let profile_svg = profile(&m, &img, &bs, &c.label)?;
         rows.push(Row {
             label: c.label.clone(),
             command: c.command("render"),
@@ -270,9 +274,68 @@ pub fn run(
             seconds: t0.elapsed().as_secs_f64(),
             view_png: view_png(&img, &dir.join("view.png"))?,
             backscatter_png: view_png(&bs, &dir.join("backscatter.png"))?,
+            profile_svg,
         });
     }
     Ok(rows)
+}
+
+/// Green radiance along the board's row of squares just above its centre line (exact
+/// projection of 400 points), in the view and in the view without the board.
+fn profile(
+    model: &Model,
+    img: &native::Image,
+    bs: &native::Image,
+    label: &str,
+) -> Result<String, String> {
+    use plotters::prelude::*;
+    let t = &model.targets[0];
+    let (w, _) = targets::extent(&t.kind);
+    let y = match t.kind {
+        TargetKind::Checkerboard { square, .. } => 0.5 * square,
+        _ => 0.0,
+    };
+    let pr = Projector::new(model, 0, 1)?;
+    let mut a = Vec::new();
+    let mut b = Vec::new();
+    for k in 0..400 {
+        let x = -w / 2.0 + w * (k as f64 + 0.5) / 400.0;
+        let Ok([u, v]) = pr.project_world(0, t.pose.transform_point(DVec3::new(x, y, 0.0))) else {
+            continue;
+        };
+        if let (Some(p), Some(q)) = (bilinear(img, u, v, 1), bilinear(bs, u, v, 1)) {
+            a.push((x * 1e3, p));
+            b.push((x * 1e3, q));
+        }
+    }
+    let ymax = a.iter().chain(&b).map(|p| p.1).fold(1e-12, f64::max) * 1.05;
+    crate::plan::plot::register_font()?;
+    let mut s = String::new();
+    {
+        let root = SVGBackend::with_string(&mut s, (480, 300)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(format!("Across the board, {label}"), ("sans-serif", 14))
+            .margin(8)
+            .x_label_area_size(30)
+            .y_label_area_size(50)
+            .build_cartesian_2d(-w / 2.0 * 1e3..w / 2.0 * 1e3, 0.0..ymax)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("x on the board, mm")
+            .y_desc("green radiance")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(LineSeries::new(a, BLUE))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(LineSeries::new(b, RED))
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(s)
 }
 
 /// The page's numbers and figures.
@@ -294,7 +357,10 @@ pub fn html(rows: &[Row]) -> String {
             s,
             "<tr><th>{}</th>{}{}{}{}{}{}{}{}{}{}</tr>",
             escape(&r.label),
-            num(&format!("{k}.focal_length_mm"), format!("{:.0}", r.focal_length_mm)),
+            num(
+                &format!("{k}.focal_length_mm"),
+                format!("{:.0}", r.focal_length_mm)
+            ),
             num(&format!("{k}.gsd_mm"), format!("{:.2}", r.gsd_mm)),
             num(&format!("{k}.distance_m"), format!("{:.3}", r.distance_m)),
             num(
@@ -308,7 +374,10 @@ pub fn html(rows: &[Row]) -> String {
             ),
             num(&format!("{k}.r_over_g"), format!("{:.3}", r.r_over_g)),
             num(&format!("{k}.b_over_g"), format!("{:.3}", r.b_over_g)),
-            num(&format!("{k}.backscatter"), format!("{:.3e}", r.backscatter[1])),
+            num(
+                &format!("{k}.backscatter"),
+                format!("{:.3e}", r.backscatter[1])
+            ),
             num(
                 &format!("{k}.veiling_share"),
                 format!("{:.1}", 100.0 * r.veiling_share)
@@ -325,12 +394,34 @@ pub fn html(rows: &[Row]) -> String {
             s,
             "<h3>{l}</h3>\n<figure>{a}<figcaption>The view.</figcaption></figure>\n<figure>{b}\
              <figcaption>The same view without the board: backscatter only.</figcaption>\
-             </figure>\n<p class=\"small\">This case's scene (the lesson moves its camera to the distance above): <code>{cmd}</code></p>\n",
+             </figure>\n<figure>{p}<figcaption>Green radiance along a row of squares (blue) \
+             and the backscatter at the same pixels (red).</figcaption></figure>\n<p class=\"small\">This case's scene (the lesson moves its camera to the distance above): <code>{cmd}</code></p>\n",
             l = escape(&r.label),
             a = png(&r.view_png, &format!("view, {}", r.label)),
             b = png(&r.backscatter_png, &format!("backscatter, {}", r.label)),
+            p = svg(&r.profile_svg),
             cmd = escape(&r.command),
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bilinear_reads_pixel_centres_at_half_integers() {
+        let img = native::Image {
+            width: 2,
+            height: 1,
+            rgb: vec![[1.0, 2.0, 3.0], [3.0, 4.0, 5.0]],
+            depth: vec![0.0; 2],
+            variance: vec![[0.0; 3]; 2],
+        };
+        assert_eq!(bilinear(&img, 0.5, 0.5, 1), Some(2.0));
+        assert_eq!(bilinear(&img, 1.5, 0.5, 0), Some(3.0));
+        assert_eq!(bilinear(&img, 1.0, 0.5, 2), Some(4.0));
+        assert_eq!(bilinear(&img, 0.2, 0.5, 0), None);
+    }
 }

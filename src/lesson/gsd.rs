@@ -323,8 +323,14 @@ pub fn html(rows: &[Row]) -> String {
             escape(&r.port),
             num(&format!("{k}.gsd_mm"), format!("{:.2}", r.gsd_mm)),
             num(&format!("{k}.height_m"), format!("{:.3}", r.height_m)),
-            num(&format!("{k}.height_air_m"), format!("{:.3}", r.height_air_m)),
-            num(&format!("{k}.gsd_at_star_mm"), format!("{:.3}", r.gsd_at_star_mm)),
+            num(
+                &format!("{k}.height_air_m"),
+                format!("{:.3}", r.height_air_m)
+            ),
+            num(
+                &format!("{k}.gsd_at_star_mm"),
+                format!("{:.3}", r.gsd_at_star_mm)
+            ),
             num(
                 &format!("{k}.smallest_resolved_mm"),
                 format!("{:.2}", r.smallest_resolved_mm)

@@ -169,6 +169,16 @@ mod tests {
     }
 
     #[test]
+    fn a_lesson_gsd_is_read_in_m_per_px_and_must_be_positive() {
+        let m = load(&["lesson={question = \"q\", kind = \"gsd\", gsd = \"3 mm/px\"}"]).unwrap();
+        let l = m.lesson.unwrap();
+        assert_eq!(l.kind, LessonKind::Gsd);
+        assert!((l.gsd.unwrap() - 3e-3).abs() < 1e-15);
+        let e = load(&["lesson={question = \"q\", kind = \"contrast\", gsd = -1}"]).unwrap_err();
+        assert!(e.contains("lesson.gsd") || e.contains("gsd"), "{e}");
+    }
+
+    #[test]
     fn bad_lesson_tables_are_located_errors_with_help() {
         let e = load(&["lesson={kind = \"deformation\"}"]).unwrap_err();
         assert!(

@@ -164,4 +164,3 @@ pub fn check_page(out: &Path, json: &serde_json::Value) -> String {
     );
     dom
 }
-
