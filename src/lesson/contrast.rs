@@ -61,6 +61,15 @@ pub fn place(model: &mut Model, gsd: f64, label: &str) -> Result<f64, String> {
     let axis = wfc.rotation * DVec3::Z;
     let shift = centre - d * axis - wfc.translation;
     model.poses[0].world_from_rig.translation += shift;
+    let z = model.world_from_camera(0, 0).translation.z;
+    if model.water.is_some() && z > 0.0 {
+        return Err(format!(
+            "variant `{label}`: for {:.2} mm/px the camera would be {d:.2} m from the target, \
+             {z:.2} m above the sea surface (z = 0)\n  help: put the target deeper \
+             (`site.depth` and the target's `position`) or ask for a finer `lesson.gsd`",
+            gsd * 1e3
+        ));
+    }
     Ok(d)
 }
 
