@@ -74,6 +74,8 @@ pub struct Lesson {
     pub question: String,
     pub setup: String,
     pub kind: LessonKind,
+    /// Kinds `contrast` and `gsd`: the GSD (m/px) at the first target the camera is placed for.
+    pub gsd: Option<f64>,
     /// `--set` overrides of the quick form (the default) and of the full form (`--full`).
     pub quick: Vec<String>,
     pub full: Vec<String>,
@@ -90,6 +92,10 @@ pub enum LessonKind {
     Deformation,
     /// Native renders of a board, corners detected and calibrated with OpenCV, per variant.
     Calibration,
+    /// Native renders of a target at a GSD: Michelson contrast, colour cast, backscatter.
+    Contrast,
+    /// Camera height for a GSD through the port; smallest resolved Siemens-star element.
+    Gsd,
 }
 
 /// One compared case: a scene file (absolute; `None`: the lesson's own scene) with `--set`

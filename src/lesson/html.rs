@@ -6,7 +6,7 @@
 //! |---|---|
 //! | header | title, the question, the set-up, the form (quick or full) and the command |
 //! | numbers | one table row per variant; every number measured by this run |
-//! | figures | per variant: deformation map and height profile, or a rendered view and the residual vectors |
+//! | figures | per variant: deformation map and height profile, or a rendered view and the residual vectors (kinds `contrast` and `gsd` write their own sections: [`super::contrast::html`], [`super::gsd::html`]) |
 //! | try next | each suggestion with the `poser lesson … --set` that changes one thing |
 //!
 //! Every number cell carries `data-key="<variant slug>.<quantity>"` so tools (and the tests)
@@ -51,7 +51,7 @@ pub fn base64(bytes: &[u8]) -> String {
     o
 }
 
-fn png(bytes: &[u8], alt: &str) -> String {
+pub(crate) fn png(bytes: &[u8], alt: &str) -> String {
     format!(
         "<img alt=\"{}\" src=\"data:image/png;base64,{}\">",
         escape(alt),
@@ -60,14 +60,14 @@ fn png(bytes: &[u8], alt: &str) -> String {
 }
 
 /// An SVG from plotters, inline (its XML declaration, if any, dropped).
-fn svg(s: &str) -> String {
+pub(crate) fn svg(s: &str) -> String {
     match s.find("<svg") {
         Some(i) => s[i..].to_string(),
         None => String::new(),
     }
 }
 
-fn num(key: &str, text: String) -> String {
+pub(crate) fn num(key: &str, text: String) -> String {
     format!("<td class=\"num\" data-key=\"{}\">{text}</td>", escape(key))
 }
 
@@ -147,6 +147,8 @@ pub fn page(r: &Report) -> String {
                 );
             }
         }
+        Results::Contrast { rows } => s.push_str(&super::contrast::html(rows)),
+        Results::Gsd { rows } => s.push_str(&super::gsd::html(rows)),
         Results::Calibration { rows } => {
             s.push_str(
                 "<h2>The numbers</h2>\n<p>OpenCV detects the board's inner corners in the \

@@ -7,13 +7,17 @@
 //! | [`run`] | load every variant, run the lesson's kind, return a [`Report`] |
 //! | [`deformation`] | kind `deformation`: `poser evaluate` (observations mode) per variant: RMS Z, the bowl |
 //! | [`calibration`] | kind `calibration`: native renders of the board, OpenCV calibration per variant |
+//! | [`contrast`] | kind `contrast`: native renders of a target at a GSD: Michelson contrast, colour cast, backscatter |
+//! | [`gsd`] | kind `gsd`: camera height for a GSD through the port, smallest resolved Siemens-star element |
 //! | [`html`] | `index.html` (images inline, works offline) and `lesson.json` |
 //!
 //! Overrides are applied in this order, the later winning: the form's (`lesson.quick`, or
 //! `lesson.full` with `--full`), the variant's `set`, the command line's `--set`.
 
 pub mod calibration;
+pub mod contrast;
 pub mod deformation;
+pub mod gsd;
 pub mod html;
 
 use crate::model::{Lesson, LessonKind, Model};
@@ -58,6 +62,8 @@ impl Case {
 pub enum Results {
     Deformation { rows: Vec<deformation::Row> },
     Calibration { rows: Vec<calibration::Row> },
+    Contrast { rows: Vec<contrast::Row> },
+    Gsd { rows: Vec<gsd::Row> },
 }
 
 /// A "try next" line with the command that does it.
@@ -172,6 +178,12 @@ pub fn run(
         },
         LessonKind::Calibration => Results::Calibration {
             rows: calibration::run(&cases, out, progress)?,
+        },
+        LessonKind::Contrast => Results::Contrast {
+            rows: contrast::run(&cases, out, progress)?,
+        },
+        LessonKind::Gsd => Results::Gsd {
+            rows: gsd::run(&cases, out, progress)?,
         },
     };
     let mut command = format!("poser lesson {} -o {}", scene.display(), out.display());

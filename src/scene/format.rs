@@ -943,9 +943,14 @@ pub struct LessonTable {
     /// The set-up in a sentence or two. **Default:** the scene description.
     pub setup: Option<String>,
     /// What is measured: `"deformation"` (`poser evaluate` on each variant: the bowl) or
-    /// `"calibration"` (native renders of a board, OpenCV calibration per variant).
-    /// **Default:** `"deformation"`.
+    /// `"calibration"` (native renders of a board, OpenCV calibration per variant),
+    /// `"contrast"` (native renders of the first target at `gsd`: contrast, colour cast,
+    /// backscatter) or `"gsd"` (the camera height for `gsd` through the exact port, and the
+    /// smallest resolved Siemens-star element). **Default:** `"deformation"`.
     pub kind: Option<LessonKindValue>,
+    /// Kinds `contrast` and `gsd`: the ground sampling distance at the first target's centre
+    /// for which the camera is placed (exact projection through the port). **Unit:** m/px.
+    pub gsd: Option<Gsd>,
     /// `--set` overrides of the quick form, applied by default (e.g.
     /// `["network.length=10"]`). **Default:** none.
     pub quick: Option<Vec<String>>,
@@ -962,6 +967,8 @@ pub struct LessonTable {
 pub enum LessonKindValue {
     Deformation,
     Calibration,
+    Contrast,
+    Gsd,
 }
 
 /// `[[lesson.variants]]` — one compared case.

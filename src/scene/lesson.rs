@@ -4,7 +4,8 @@
 //! | key | resolved to | check |
 //! |---|---|---|
 //! | `title`, `question`, `setup` | text of the page | `question` required |
-//! | `kind` | [`LessonKind`] | `deformation` or `calibration` |
+//! | `kind` | [`LessonKind`] | `deformation`, `calibration`, `contrast` or `gsd` |
+//! | `gsd` | m/px (kinds `contrast`, `gsd`) | positive |
 //! | `quick`, `full` | `--set` overrides of the quick and full forms | strings |
 //! | `[[lesson.variants]]` `label`, `scene`, `set` | [`LessonVariant`]; `scene` made absolute, relative to the file that names it | the file exists |
 //! | `[[lesson.try_next]]` `text`, `set` | [`TryNext`] | both given |
@@ -80,10 +81,20 @@ pub fn lesson(
     let setup = t
         .opt_str(cx, "setup")
         .unwrap_or_else(|| description.to_string());
-    let kind = match t.choice(cx, "kind", &["deformation", "calibration"]) {
+    let kind = match t.choice(
+        cx,
+        "kind",
+        &["deformation", "calibration", "contrast", "gsd"],
+    ) {
         Some("calibration") => LessonKind::Calibration,
+        Some("contrast") => LessonKind::Contrast,
+        Some("gsd") => LessonKind::Gsd,
         _ => LessonKind::Deformation,
     };
+    let gsd = t.opt_f64(cx, "gsd", crate::units::Dim::Gsd);
+    if let Some(g) = gsd {
+        super::check::positive(cx, &t, "gsd", g, "m/px");
+    }
     let quick = strings(cx, &mut t, "quick");
     let full = strings(cx, &mut t, "full");
     let mut variants = Vec::new();
@@ -126,6 +137,7 @@ pub fn lesson(
         question,
         setup,
         kind,
+        gsd,
         quick,
         full,
         variants,
@@ -154,6 +166,16 @@ mod tests {
         assert_eq!(l.setup, m.description);
         assert!(l.variants.is_empty() && l.try_next.is_empty());
         assert!(load(&[]).unwrap().lesson.is_none());
+    }
+
+    #[test]
+    fn a_lesson_gsd_is_read_in_m_per_px_and_must_be_positive() {
+        let m = load(&["lesson={question = \"q\", kind = \"gsd\", gsd = \"3 mm/px\"}"]).unwrap();
+        let l = m.lesson.unwrap();
+        assert_eq!(l.kind, LessonKind::Gsd);
+        assert!((l.gsd.unwrap() - 3e-3).abs() < 1e-15);
+        let e = load(&["lesson={question = \"q\", kind = \"contrast\", gsd = -1}"]).unwrap_err();
+        assert!(e.contains("lesson.gsd") || e.contains("gsd"), "{e}");
     }
 
     #[test]
