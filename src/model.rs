@@ -90,6 +90,10 @@ pub enum LessonKind {
     Deformation,
     /// Native renders of a board, corners detected and calibrated with OpenCV, per variant.
     Calibration,
+    /// `poser plan` and `poser dive` per variant: deco, gas, verdict, dives needed.
+    Dive,
+    /// As `Dive`, plus `poser evaluate` (observations mode, GCPs): the expected accuracy.
+    Survey,
 }
 
 /// One compared case: a scene file (absolute; `None`: the lesson's own scene) with `--set`

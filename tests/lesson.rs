@@ -7,8 +7,11 @@
 //! `data-key` cell of the DOM Chromium builds; the images and plots are there; and the
 //! screenshot is not blank.
 
+mod support;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use support::page::{cell, dump_dom, screenshot_variance};
 
 fn poser(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_poser"))
@@ -16,81 +19,6 @@ fn poser(args: &[&str]) -> std::process::Output {
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .expect("run poser")
-}
-
-fn chromium() -> PathBuf {
-    for name in ["chromium", "chromium-browser"] {
-        if let Ok(o) = Command::new("which").arg(name).output()
-            && o.status.success()
-        {
-            return PathBuf::from(String::from_utf8_lossy(&o.stdout).trim());
-        }
-    }
-    panic!(
-        "headless Chromium is missing\n  help: run backends/setup.sh as root (it runs \
-         `apt-get install -y chromium`), or install Debian's `chromium` package"
-    );
-}
-
-fn chromium_args(out: &Path) -> Vec<String> {
-    vec![
-        "--headless".into(),
-        "--no-sandbox".into(),
-        "--disable-gpu".into(),
-        "--hide-scrollbars".into(),
-        format!("--user-data-dir={}", out.join("chromium-profile").display()),
-    ]
-}
-
-/// The DOM as Chromium built it.
-fn dump_dom(page: &Path, out: &Path) -> String {
-    let o = Command::new(chromium())
-        .args(chromium_args(out))
-        .arg("--dump-dom")
-        .arg(format!("file://{}", page.display()))
-        .output()
-        .expect("run chromium");
-    assert!(
-        o.status.success(),
-        "chromium --dump-dom failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-/// A screenshot of the page; returns the variance of its grey levels (0..255).
-fn screenshot_variance(page: &Path, out: &Path) -> f64 {
-    let shot = out.join("screenshot.png");
-    let o = Command::new(chromium())
-        .args(chromium_args(out))
-        .arg(format!("--screenshot={}", shot.display()))
-        .arg("--window-size=1200,1600")
-        .arg(format!("file://{}", page.display()))
-        .output()
-        .expect("run chromium");
-    assert!(
-        o.status.success() && shot.exists(),
-        "chromium --screenshot failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let img = image::open(&shot).expect("read the screenshot").to_luma8();
-    let n = img.pixels().len() as f64;
-    let mean = img.pixels().map(|p| p[0] as f64).sum::<f64>() / n;
-    img.pixels()
-        .map(|p| (p[0] as f64 - mean).powi(2))
-        .sum::<f64>()
-        / n
-}
-
-/// The text of the `data-key` cell `key` in the DOM.
-fn cell<'a>(dom: &'a str, key: &str) -> &'a str {
-    let tag = format!("data-key=\"{key}\">");
-    let i = dom
-        .find(&tag)
-        .unwrap_or_else(|| panic!("no cell `{key}` in the page"))
-        + tag.len();
-    let j = dom[i..].find('<').unwrap() + i;
-    &dom[i..j]
 }
 
 fn run_lesson(scene: &str, name: &str) -> (tempfile::TempDir, PathBuf, serde_json::Value) {

@@ -6,7 +6,7 @@
 //! |---|---|
 //! | header | title, the question, the set-up, the form (quick or full) and the command |
 //! | numbers | one table row per variant; every number measured by this run |
-//! | figures | per variant: deformation map and height profile, or a rendered view and the residual vectors |
+//! | figures | per variant: deformation map and height profile, a rendered view and the residual vectors, or the dive profile |
 //! | try next | each suggestion with the `poser lesson … --set` that changes one thing |
 //!
 //! Every number cell carries `data-key="<variant slug>.<quantity>"` so tools (and the tests)
@@ -60,14 +60,14 @@ fn png(bytes: &[u8], alt: &str) -> String {
 }
 
 /// An SVG from plotters, inline (its XML declaration, if any, dropped).
-fn svg(s: &str) -> String {
+pub(crate) fn svg(s: &str) -> String {
     match s.find("<svg") {
         Some(i) => s[i..].to_string(),
         None => String::new(),
     }
 }
 
-fn num(key: &str, text: String) -> String {
+pub(crate) fn num(key: &str, text: String) -> String {
     format!("<td class=\"num\" data-key=\"{}\">{text}</td>", escape(key))
 }
 
@@ -214,6 +214,8 @@ pub fn page(r: &Report) -> String {
                 );
             }
         }
+        Results::Dive(res) => s.push_str(&super::dive::html(res, false)),
+        Results::Survey(res) => s.push_str(&super::dive::html(res, true)),
     }
     if !r.try_next.is_empty() {
         s.push_str("<h2>Try next</h2>\n<ul>\n");

@@ -7,6 +7,7 @@
 //! | [`run`] | load every variant, run the lesson's kind, return a [`Report`] |
 //! | [`deformation`] | kind `deformation`: `poser evaluate` (observations mode) per variant: RMS Z, the bowl |
 //! | [`calibration`] | kind `calibration`: native renders of the board, OpenCV calibration per variant |
+//! | [`dive`] | kinds `dive` and `survey`: survey and dive planner per variant (deco, gas, verdict, dives needed), `survey` adds `poser evaluate` with GCPs |
 //! | [`html`] | `index.html` (images inline, works offline) and `lesson.json` |
 //!
 //! Overrides are applied in this order, the later winning: the form's (`lesson.quick`, or
@@ -14,6 +15,7 @@
 
 pub mod calibration;
 pub mod deformation;
+pub mod dive;
 pub mod html;
 
 use crate::model::{Lesson, LessonKind, Model};
@@ -58,6 +60,8 @@ impl Case {
 pub enum Results {
     Deformation { rows: Vec<deformation::Row> },
     Calibration { rows: Vec<calibration::Row> },
+    Dive(dive::Results),
+    Survey(dive::Results),
 }
 
 /// A "try next" line with the command that does it.
@@ -173,6 +177,8 @@ pub fn run(
         LessonKind::Calibration => Results::Calibration {
             rows: calibration::run(&cases, out, progress)?,
         },
+        LessonKind::Dive => Results::Dive(dive::run(&cases, out, false, progress)?),
+        LessonKind::Survey => Results::Survey(dive::run(&cases, out, true, progress)?),
     };
     let mut command = format!("poser lesson {} -o {}", scene.display(), out.display());
     if opts.full {

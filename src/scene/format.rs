@@ -905,8 +905,10 @@ pub struct LessonTable {
     pub question: Option<String>,
     /// The set-up in a sentence or two. **Default:** the scene description.
     pub setup: Option<String>,
-    /// What is measured: `"deformation"` (`poser evaluate` on each variant: the bowl) or
-    /// `"calibration"` (native renders of a board, OpenCV calibration per variant).
+    /// What is measured: `"deformation"` (`poser evaluate` on each variant: the bowl),
+    /// `"calibration"` (native renders of a board, OpenCV calibration per variant), `"dive"`
+    /// (`poser plan` and `poser dive` per variant: deco, gas, verdict, dives needed) or
+    /// `"survey"` (as `"dive"`, plus `poser evaluate` with the targets as GCPs).
     /// **Default:** `"deformation"`.
     pub kind: Option<LessonKindValue>,
     /// `--set` overrides of the quick form, applied by default (e.g.
@@ -925,6 +927,8 @@ pub struct LessonTable {
 pub enum LessonKindValue {
     Deformation,
     Calibration,
+    Dive,
+    Survey,
 }
 
 /// `[[lesson.variants]]` — one compared case.

@@ -4,7 +4,7 @@
 //! | key | resolved to | check |
 //! |---|---|---|
 //! | `title`, `question`, `setup` | text of the page | `question` required |
-//! | `kind` | [`LessonKind`] | `deformation` or `calibration` |
+//! | `kind` | [`LessonKind`] | `deformation`, `calibration`, `dive` or `survey` |
 //! | `quick`, `full` | `--set` overrides of the quick and full forms | strings |
 //! | `[[lesson.variants]]` `label`, `scene`, `set` | [`LessonVariant`]; `scene` made absolute, relative to the file that names it | the file exists |
 //! | `[[lesson.try_next]]` `text`, `set` | [`TryNext`] | both given |
@@ -80,8 +80,14 @@ pub fn lesson(
     let setup = t
         .opt_str(cx, "setup")
         .unwrap_or_else(|| description.to_string());
-    let kind = match t.choice(cx, "kind", &["deformation", "calibration"]) {
+    let kind = match t.choice(
+        cx,
+        "kind",
+        &["deformation", "calibration", "dive", "survey"],
+    ) {
         Some("calibration") => LessonKind::Calibration,
+        Some("dive") => LessonKind::Dive,
+        Some("survey") => LessonKind::Survey,
         _ => LessonKind::Deformation,
     };
     let quick = strings(cx, &mut t, "quick");

@@ -5,6 +5,7 @@
 //! | [`model`] | the one model builder: cameras, ports, water, planes, lights, a minimal model |
 //! | [`canonical`] | the canonical scenes of `tests/canonical/`, the analytic radiance oracle, and the geometry / radiometry checks every backend runs |
 //! | [`mitsuba`], [`blender`], [`native`], [`plan`] | each suite's preset models, built with [`model`] |
+//! | [`page`] | headless Chromium for the lesson pages: DOM, screenshot, `data-key` cells |
 #![allow(dead_code)]
 
 pub mod blender;
@@ -12,4 +13,5 @@ pub mod canonical;
 pub mod mitsuba;
 pub mod model;
 pub mod native;
+pub mod page;
 pub mod plan;
