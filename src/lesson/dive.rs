@@ -9,7 +9,7 @@
 //! | NDL run-out, stops, deco time, TTS, runtime, gas per cylinder, verdict, problems, remedies | [`crate::plan::dive::plan_dive`] (`poser dive`): the planner's own verdict, never re-derived here |
 //! | dives needed | 1 when the planner's verdict is OK; else the planner's split ([`crate::plan::dive::max_strips`], [`crate::plan::dive::split`]): the fewest dives, a full cylinder each, repetitive tissues across its surface interval, every dive OK |
 //! | contrast left | `exp(−c·r)` in green: the share of a target's contrast that survives the water path `r` (the plan's mean camera distance) at the water's extinction `c = a + b` (Duntley's contrast reduction) |
-//! | view, view contrast (`survey`) | the native renderer's image from the pose nearest the site's centre, at a tenth of the camera's resolution (the camera's 8-bit file when the scene has a `[sensor]`, else the preview); 8 samples per pixel; the RMS contrast (standard deviation over mean) of its grey levels averaged in 10 × 10 px blocks |
+//! | view (`survey`) | the native renderer's image from the pose nearest the site's centre, at a twentieth of the camera's resolution and 32 samples per pixel (the camera's 8-bit file when the scene has a `[sensor]`, else the preview): a picture, not a number |
 //! | accuracy (`survey`) | `poser evaluate` observations mode, its defaults but aligned on the target points (`--gcp`): RMS error of the tie points, 3D and per axis |
 //! | rule of thumb | the first case's first bottom cylinder and SAC: minutes to empty and to the reserve at 15 m, 40 m and each case's depth, with poser's gas model, beside the ideal-gas rule `V·P / (SAC·(1 + d/10))` |
 
@@ -113,8 +113,6 @@ pub struct Row {
     pub split: Vec<SplitRow>,
     pub surface_interval_min: f64,
     pub accuracy: Option<Accuracy>,
-    /// RMS contrast of the rendered view's grey levels (`survey`).
-    pub view_contrast: Option<f64>,
     pub seconds: f64,
     /// The rendered view (PNG, `survey`).
     #[serde(skip)]
@@ -209,7 +207,11 @@ pub fn run(
         let t0 = std::time::Instant::now();
         let m = &c.model;
         let err = |e: String| format!("variant `{}`: {e}", c.label);
-        progress(&format!("planning `{}` ({} images)", c.label, m.poses.len()));
+        progress(&format!(
+            "planning `{}` ({} images)",
+            c.label,
+            m.poses.len()
+        ));
         let plan = survey::survey(m, &Site::new(m)).map_err(err)?;
         let report: DiveReport = dive::plan_dive(m, SAMPLE_EVERY).map_err(err)?;
         let (cfg, d, v) = (&report.config, &report.dive, &report.verdict);
@@ -264,12 +266,11 @@ pub fn run(
         } else {
             None
         };
-        let (view_png, view_contrast) = if evaluate {
+        let view_png = if evaluate {
             progress(&format!("rendering a view of `{}`", c.label));
-            let (png, contrast) = view(m, &out.join(&c.slug).join("view")).map_err(err)?;
-            (png, Some(contrast))
+            view(m, &out.join(&c.slug).join("view")).map_err(err)?
         } else {
-            (Vec::new(), None)
+            Vec::new()
         };
         let title = format!("{} — dive profile", c.label);
         let profile_svg = crate::plan::plot::svg(&report, &title)?;
@@ -282,7 +283,7 @@ pub fn run(
             .iter()
             .map(|t| {
                 format!(
-                    "{} {} ({:.0} l, {:.0} bar)",
+                    "{}: {}, {:.0} l at {:.0} bar",
                     t.name,
                     gas_label(t.gas),
                     t.volume,
@@ -352,7 +353,6 @@ pub fn run(
                 .collect(),
             surface_interval_min: minutes(cfg.surface_interval),
             accuracy,
-            view_contrast,
             seconds: t0.elapsed().as_secs_f64(),
             view_png,
             profile_svg,
@@ -372,12 +372,12 @@ pub fn run(
 }
 
 /// Scale of the rendered view against the camera's resolution, and its samples per pixel.
-pub const VIEW_SCALE: f64 = 0.1;
-pub const VIEW_SAMPLES: u32 = 8;
+pub const VIEW_SCALE: f64 = 0.05;
+pub const VIEW_SAMPLES: u32 = 32;
 
 /// Render the pose nearest the site's centre (xy) with the native renderer at
-/// [`VIEW_SCALE`] into `dir`; return the PNG and the RMS contrast of its grey levels.
-pub fn view(model: &crate::model::Model, dir: &Path) -> Result<(Vec<u8>, f64), String> {
+/// [`VIEW_SCALE`] into `dir` (through the scene's sensor, if any); return the PNG.
+pub fn view(model: &crate::model::Model, dir: &Path) -> Result<Vec<u8>, String> {
     use crate::backend::{Backend, RenderOptions};
     let centre = model
         .poses
@@ -418,36 +418,7 @@ pub fn view(model: &crate::model::Model, dir: &Path) -> Result<(Vec<u8>, f64), S
     let png = png_in(&dir.join("camera"))
         .or_else(|| png_in(dir))
         .ok_or_else(|| format!("{}: the renderer wrote no PNG", dir.display()))?;
-    let bytes = std::fs::read(&png).map_err(|e| format!("{}: {e}", png.display()))?;
-    let grey = image::load_from_memory(&bytes)
-        .map_err(|e| format!("{}: {e}", png.display()))?
-        .to_luma8();
-    Ok((bytes, block_contrast(&grey, VIEW_BLOCK)))
-}
-
-/// Side of the blocks averaged before the view's contrast is measured, px: the scene's
-/// structure (grid squares, amphorae) is larger, the Monte Carlo and sensor noise averages out.
-pub const VIEW_BLOCK: u32 = 10;
-
-/// RMS contrast (standard deviation over mean) of the means of `block` × `block` pixel blocks.
-pub fn block_contrast(grey: &image::GrayImage, block: u32) -> f64 {
-    let (w, h) = (grey.width() / block, grey.height() / block);
-    let mut means = Vec::with_capacity((w * h) as usize);
-    for by in 0..h {
-        for bx in 0..w {
-            let mut sum = 0.0;
-            for y in 0..block {
-                for x in 0..block {
-                    sum += f64::from(grey.get_pixel(bx * block + x, by * block + y)[0]);
-                }
-            }
-            means.push(sum / f64::from(block * block));
-        }
-    }
-    let n = means.len().max(1) as f64;
-    let mean = means.iter().sum::<f64>() / n;
-    let var = means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / n;
-    if mean > 0.0 { var.sqrt() / mean } else { 0.0 }
+    std::fs::read(&png).map_err(|e| format!("{}: {e}", png.display()))
 }
 
 /// `m:ss` of minutes.
@@ -458,11 +429,7 @@ pub fn mmss(min: f64) -> String {
 
 /// The verdict as the page shows it: the planner's words.
 pub fn verdict_text(r: &Row) -> &'static str {
-    if r.ok {
-        "OK"
-    } else {
-        "NOT SAFE AS PLANNED"
-    }
+    if r.ok { "OK" } else { "NOT SAFE AS PLANNED" }
 }
 
 /// The lesson's section of the page (numbers, rule of thumb, per-case plots and the planner's
@@ -482,7 +449,7 @@ pub fn html(res: &Results, survey: bool) -> String {
          <th>path, m</th><th>survey, min</th><th>depth, m</th>",
     );
     if survey {
-        s.push_str("<th>GSD, mm/px</th><th>contrast left</th><th>view contrast</th>");
+        s.push_str("<th>GSD, mm/px</th><th>contrast left</th>");
     }
     s.push_str(
         "<th>NDL runs out, min into the survey</th><th>stops</th><th>deco, min</th>\
@@ -528,10 +495,6 @@ pub fn html(res: &Results, survey: bool) -> String {
                         .map_or("–".into(), |c| format!("{:.0} %", 100.0 * c))
                 ),
             );
-            s.push_str(&num(
-                &format!("{k}.view_contrast"),
-                r.view_contrast.map_or("–".into(), |c| format!("{c:.2}")),
-            ));
         }
         let cyl = |f: &dyn Fn(&CylinderRow) -> String| {
             r.cylinders.iter().map(f).collect::<Vec<_>>().join(" + ")
@@ -548,10 +511,7 @@ pub fn html(res: &Results, survey: bool) -> String {
             num(&format!("{k}.deco_min"), format!("{:.1}", r.deco_min)),
             num(&format!("{k}.tts_min"), format!("{:.1}", r.tts_min)),
             escape(&r.gases),
-            num(
-                &format!("{k}.used_l"),
-                cyl(&|c| format!("{:.0}", c.used_l))
-            ),
+            num(&format!("{k}.used_l"), cyl(&|c| format!("{:.0}", c.used_l))),
             num(
                 &format!("{k}.end_bar"),
                 cyl(&|c| format!("{:.0}", c.end_bar))
@@ -594,10 +554,7 @@ pub fn html(res: &Results, survey: bool) -> String {
             s.push_str(
                 " <i>Contrast left</i>: e<sup>−c·r</sup> in green, the share of a target's \
                  contrast that survives the water path r from the camera (the plan's mean \
-                 distance) at the water's extinction c. <i>View contrast</i>: the standard \
-                 deviation over the mean of the grey levels of the view rendered below (a tenth \
-                 of the camera's resolution, the camera's file), averaged in 10 × 10 px blocks \
-                 so that the noise does not count. \
+                 distance) at the water's extinction c. \
                  <i>Accuracy</i>: <code>poser \
                  evaluate</code> in observations mode (exact refractive projections with 0.3 px \
                  noise, COLMAP's self-calibrating bundle adjustment with a camera model that \
@@ -635,7 +592,10 @@ pub fn html(res: &Results, survey: bool) -> String {
             num(&format!("{k}.depth_m"), format!("{:.0}", r.depth_m)),
             num(&format!("{k}.ambient_bar"), format!("{:.2}", r.ambient_bar)),
             num(&format!("{k}.rule_min"), format!("{:.1}", r.rule_min)),
-            num(&format!("{k}.to_empty_min"), format!("{:.1}", r.to_empty_min)),
+            num(
+                &format!("{k}.to_empty_min"),
+                format!("{:.1}", r.to_empty_min)
+            ),
             num(
                 &format!("{k}.to_reserve_min"),
                 format!("{:.1}", r.to_reserve_min)
@@ -650,7 +610,7 @@ pub fn html(res: &Results, survey: bool) -> String {
                 s,
                 "<figure><img alt=\"rendered view, {}\" src=\"data:image/png;base64,{}\">\
                  <figcaption>The view from the pose nearest the centre (native renderer, a \
-                 tenth of the resolution).</figcaption></figure>\n",
+                 twentieth of the resolution, 32 samples per pixel).</figcaption></figure>\n",
                 escape(&r.label),
                 super::html::base64(&r.view_png)
             );
@@ -741,18 +701,6 @@ mod tests {
     }
 
     #[test]
-    fn block_contrast_sees_structure_not_noise() {
-        let flat = image::GrayImage::from_pixel(40, 20, image::Luma([100]));
-        assert_eq!(block_contrast(&flat, 10), 0.0);
-        // Two halves, 50 and 150: σ/μ = 50/100.
-        let halves = image::GrayImage::from_fn(40, 20, |x, _| image::Luma([if x < 20 { 50 } else { 150 }]));
-        assert!((block_contrast(&halves, 10) - 0.5).abs() < 1e-12);
-        // Pixel-scale alternation averages out inside a block.
-        let noise = image::GrayImage::from_fn(40, 20, |x, y| image::Luma([if (x + y) % 2 == 0 { 50 } else { 150 }]));
-        assert!(block_contrast(&noise, 10) < 1e-12);
-    }
-
-    #[test]
     fn the_scuba_survey_lesson_finds_the_deco_the_gas_and_the_fixes() {
         let (lesson, cs) = cases(
             Path::new("scenarios/lessons/scuba_survey.toml"),
@@ -773,7 +721,9 @@ mod tests {
         // EAN32 lengthens the NDL.
         let nitrox = row("EAN32");
         assert!(
-            nitrox.ndl_runs_out_min.is_none_or(|t| t > planned.ndl_runs_out_min.unwrap() + 5.0),
+            nitrox
+                .ndl_runs_out_min
+                .is_none_or(|t| t > planned.ndl_runs_out_min.unwrap() + 5.0),
             "{:?} vs {:?}",
             nitrox.ndl_runs_out_min,
             planned.ndl_runs_out_min
@@ -781,7 +731,12 @@ mod tests {
         // Every split dive the planner proposes is itself within the rules.
         for r in &res.rows {
             assert_eq!(r.dives.is_some_and(|n| n > 1), !r.split.is_empty());
-            assert!(r.ok == (r.problems.is_empty()), "{}: {:?}", r.label, r.problems);
+            assert!(
+                r.ok == (r.problems.is_empty()),
+                "{}: {:?}",
+                r.label,
+                r.problems
+            );
             assert!(r.profile_svg.contains("<svg"));
         }
         let html = html(&res, false);
