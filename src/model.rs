@@ -96,6 +96,10 @@ pub enum LessonKind {
     Contrast,
     /// Camera height for a GSD through the port; smallest resolved Siemens-star element.
     Gsd,
+    /// `poser plan` and `poser dive` per variant: deco, gas, verdict, dives needed.
+    Dive,
+    /// As `Dive`, plus `poser evaluate` (observations mode, GCPs): the expected accuracy.
+    Survey,
 }
 
 /// One compared case: a scene file (absolute; `None`: the lesson's own scene) with `--set`

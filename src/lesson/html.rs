@@ -6,7 +6,7 @@
 //! |---|---|
 //! | header | title, the question, the set-up, the form (quick or full) and the command |
 //! | numbers | one table row per variant; every number measured by this run |
-//! | figures | per variant: deformation map and height profile, or a rendered view and the residual vectors (kinds `contrast` and `gsd` write their own sections: [`super::contrast::html`], [`super::gsd::html`]) |
+//! | figures | per variant: deformation map and height profile, a rendered view and the residual vectors, or the dive profile (kinds `contrast` and `gsd` write their own sections: [`super::contrast::html`], [`super::gsd::html`]) |
 //! | try next | each suggestion with the `poser lesson … --set` that changes one thing |
 //!
 //! Every number cell carries `data-key="<variant slug>.<quantity>"` so tools (and the tests)
@@ -216,6 +216,8 @@ pub fn page(r: &Report) -> String {
                 );
             }
         }
+        Results::Dive(res) => s.push_str(&super::dive::html(res, false)),
+        Results::Survey(res) => s.push_str(&super::dive::html(res, true)),
     }
     if !r.try_next.is_empty() {
         s.push_str("<h2>Try next</h2>\n<ul>\n");

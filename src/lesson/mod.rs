@@ -9,6 +9,7 @@
 //! | [`calibration`] | kind `calibration`: native renders of the board, OpenCV calibration per variant |
 //! | [`contrast`] | kind `contrast`: native renders of a target at a GSD: Michelson contrast, colour cast, backscatter |
 //! | [`gsd`] | kind `gsd`: camera height for a GSD through the port, smallest resolved Siemens-star element |
+//! | [`dive`] | kinds `dive` and `survey`: survey and dive planner per variant (deco, gas, verdict, dives needed), `survey` adds `poser evaluate` with GCPs |
 //! | [`html`] | `index.html` (images inline, works offline) and `lesson.json` |
 //!
 //! Overrides are applied in this order, the later winning: the form's (`lesson.quick`, or
@@ -18,6 +19,7 @@ pub mod calibration;
 pub mod contrast;
 pub mod deformation;
 pub mod gsd;
+pub mod dive;
 pub mod html;
 
 use crate::model::{Lesson, LessonKind, Model};
@@ -64,6 +66,8 @@ pub enum Results {
     Calibration { rows: Vec<calibration::Row> },
     Contrast { rows: Vec<contrast::Row> },
     Gsd { rows: Vec<gsd::Row> },
+    Dive(dive::Results),
+    Survey(dive::Results),
 }
 
 /// A "try next" line with the command that does it.
@@ -185,6 +189,8 @@ pub fn run(
         LessonKind::Gsd => Results::Gsd {
             rows: gsd::run(&cases, out, progress)?,
         },
+        LessonKind::Dive => Results::Dive(dive::run(&cases, out, false, progress)?),
+        LessonKind::Survey => Results::Survey(dive::run(&cases, out, true, progress)?),
     };
     let mut command = format!("poser lesson {} -o {}", scene.display(), out.display());
     if opts.full {

@@ -1046,14 +1046,7 @@ fn remedies(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Vec<Suggestio
     let n = strips.len();
     // 2. Max strips in one dive that fit the NDL and the gas.
     if n > 1 {
-        let fits = |k: usize| simulate_fresh(cfg, &track.strip_range(0, k), None).ok();
-        let mut best = 0;
-        for k in (1..=n).rev() {
-            if fits(k) {
-                best = k;
-                break;
-            }
-        }
+        let best = max_strips(cfg, track);
         if best > 0 && best < n {
             let r = simulate_fresh(cfg, &track.strip_range(0, best), None);
             out.push(Suggestion {
@@ -1142,49 +1135,92 @@ fn remedies(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Vec<Suggestio
     out
 }
 
-/// Split the strips into the fewest dives (≤ `max_per_dive` strips, repetitive tissues across
-/// surface intervals) where every dive fits.
-fn split_plan(cfg: &DiveConfig, track: &Track, max_per_dive: usize) -> Option<Suggestion> {
+/// The largest number of strips, from the first, that one dive from clean tissues carries
+/// within the NDL and the gas rules (0: not even one strip).
+pub fn max_strips(cfg: &DiveConfig, track: &Track) -> usize {
     let n = track.strips().len();
+    let fits = |k: usize| simulate_fresh(cfg, &track.strip_range(0, k), None).ok();
+    (1..=n).rev().find(|&k| fits(k)).unwrap_or(0)
+}
+
+/// One dive of a split survey: strips `first..=last` (1-based) and the simulated dive.
+#[derive(Debug, Clone, Serialize)]
+pub struct SplitDive {
+    pub first_strip: usize,
+    pub last_strip: usize,
+    pub dive: DiveResult,
+}
+
+/// Split the strips into the fewest dives (≤ `max_per_dive` strips each, as even as possible;
+/// a full cylinder each; repetitive tissues across `cfg.surface_interval`) where every dive
+/// is [`DiveResult::ok`]. `None` when no split of up to six more dives fits. `sample_every`
+/// as in [`simulate`].
+pub fn split(
+    cfg: &DiveConfig,
+    track: &Track,
+    max_per_dive: usize,
+    sample_every: Option<f64>,
+) -> Option<Vec<SplitDive>> {
+    let n = track.strips().len();
+    if max_per_dive == 0 || n == 0 {
+        return None;
+    }
     let first = n.div_ceil(max_per_dive);
-    for dives in first..=(first + 6).min(n) {
+    'count: for dives in first..=(first + 6).min(n) {
         let mut tissues = Tissues::surface(cfg.env, cfg.gf);
-        let mut ok = true;
         let mut parts = Vec::new();
         let mut start = 0;
         for i in 0..dives {
             let end = (n * (i + 1)).div_ceil(dives);
-            let r = simulate(cfg, &track.strip_range(start, end), &mut tissues, None);
+            let r = simulate(
+                cfg,
+                &track.strip_range(start, end),
+                &mut tissues,
+                sample_every,
+            );
             if !r.ok() {
-                ok = false;
-                break;
+                continue 'count;
             }
-            parts.push(format!(
-                "strips {}–{} ({} survey, {:.0} bar left)",
-                start + 1,
-                end,
-                mmss(r.bottom_time),
-                r.gas.end_pressure
-            ));
+            parts.push(SplitDive {
+                first_strip: start + 1,
+                last_strip: end,
+                dive: r,
+            });
             tissues.expose(0.0, Gas::AIR, cfg.surface_interval);
             // New dive: a fresh GF-low anchor, as Subsurface starts each dive.
             tissues.gf_low_anchor = cfg.env.surface_pressure + 1.0;
             start = end;
         }
-        if ok {
-            return Some(Suggestion {
-                kind: "split_dives".into(),
-                text: format!(
-                    "two or more dives: {dives} dives with {} surface intervals and a full cylinder \
-                     each: {}",
-                    mmss(cfg.surface_interval),
-                    parts.join("; ")
-                ),
-                fixes_all: true,
-            });
-        }
+        return Some(parts);
     }
     None
+}
+
+/// The split of [`split`] as a remedy.
+fn split_plan(cfg: &DiveConfig, track: &Track, max_per_dive: usize) -> Option<Suggestion> {
+    let parts = split(cfg, track, max_per_dive, None)?;
+    let text: Vec<String> = parts
+        .iter()
+        .map(|p| {
+            format!(
+                "strips {}–{} ({} survey, {:.0} bar left)",
+                p.first_strip,
+                p.last_strip,
+                mmss(p.dive.bottom_time),
+                p.dive.gas.end_pressure
+            )
+        })
+        .collect();
+    Some(Suggestion {
+        kind: "split_dives".into(),
+        text: format!(
+            "two or more dives: {} dives with {} surface intervals and a full cylinder each: {}",
+            parts.len(),
+            mmss(cfg.surface_interval),
+            text.join("; ")
+        ),
+        fixes_all: true,
+    })
 }
 
 /// Everything `poser dive` reports.

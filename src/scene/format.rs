@@ -942,11 +942,13 @@ pub struct LessonTable {
     pub question: Option<String>,
     /// The set-up in a sentence or two. **Default:** the scene description.
     pub setup: Option<String>,
-    /// What is measured: `"deformation"` (`poser evaluate` on each variant: the bowl) or
+    /// What is measured: `"deformation"` (`poser evaluate` on each variant: the bowl),
     /// `"calibration"` (native renders of a board, OpenCV calibration per variant),
     /// `"contrast"` (native renders of the first target at `gsd`: contrast, colour cast,
-    /// backscatter) or `"gsd"` (the camera height for `gsd` through the exact port, and the
-    /// smallest resolved Siemens-star element). **Default:** `"deformation"`.
+    /// backscatter), `"gsd"` (the camera height for `gsd` through the exact port, and the
+    /// smallest resolved Siemens-star element), `"dive"` (`poser plan` and `poser dive` per
+    /// variant: deco, gas, verdict, dives needed) or `"survey"` (as `"dive"`, plus `poser
+    /// evaluate` with the targets as GCPs). **Default:** `"deformation"`.
     pub kind: Option<LessonKindValue>,
     /// Kinds `contrast` and `gsd`: the ground sampling distance at the first target's centre
     /// for which the camera is placed (exact projection through the port). **Unit:** m/px.
@@ -969,6 +971,8 @@ pub enum LessonKindValue {
     Calibration,
     Contrast,
     Gsd,
+    Dive,
+    Survey,
 }
 
 /// `[[lesson.variants]]` — one compared case.

@@ -164,3 +164,18 @@ pub fn check_page(out: &Path, json: &serde_json::Value) -> String {
     );
     dom
 }
+pub fn assert_self_contained(html: &str) {
+    for bad in [
+        "src=\"http",
+        "href=\"http",
+        "url(",
+        "<script",
+        "src=\"/",
+        "src=\"file:",
+    ] {
+        assert!(
+            !html.contains(bad),
+            "the page is not self-contained: `{bad}`"
+        );
+    }
+}
