@@ -1470,6 +1470,7 @@ mod tests {
             ],
             &["diver.cylinders.0.o2=0.32"],
             &["sun.elevation=0.5"],
+            &["objects.0.shape=\"coral\"", "objects.0.growth=\"massive\""],
             &[
                 "targets=[{type = \"points_file\", file = \"none.txt\", surface = \"seabed\", diameter = 0.1}]",
             ],
