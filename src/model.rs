@@ -100,6 +100,9 @@ pub enum LessonKind {
     Dive,
     /// As `Dive`, plus `poser evaluate` (observations mode, GCPs): the expected accuracy.
     Survey,
+    /// Surface coverage: the share of the corals' surface seen by enough images, near enough
+    /// to its normal ([`crate::lesson::completeness`]).
+    Completeness,
 }
 
 /// One compared case: a scene file (absolute; `None`: the lesson's own scene) with `--set`
@@ -351,6 +354,23 @@ pub enum Shape {
         radius: f64,
         seed: u64,
     },
+    /// Procedural coral colony standing on the object's xy plane (base buried below z = 0):
+    /// `growth` form, colony `radius`, from `seed` ([`crate::geometry::coral`]).
+    Coral {
+        growth: CoralGrowth,
+        radius: f64,
+        seed: u64,
+    },
+}
+
+/// The growth form of a [`Shape::Coral`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CoralGrowth {
+    /// Staghorn-like: branches of branches.
+    Branching,
+    /// Brain-like: a lumpy, grooved dome.
+    Massive,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -12,6 +12,7 @@
 //! | `Cylinder` | `radius`, `height` along z, centred, capped | [`CYLINDER_SEGMENTS`] sides |
 //! | `Seabed` | `width` (x) × `length` (y) heightfield, cell `resolution`, relief RMS `roughness`, `seed` | grid of ⌈width/resolution⌉ × ⌈length/resolution⌉ cells, ≤ [`MAX_SEABED_CELLS`] |
 //! | `Boulders` | `count` rocks of mean radius `radius` in `width` × `length`, `seed` | subdivided icosahedra, radii 0.6–1.4 × `radius`, squashed, half buried at z = 0 |
+//! | `Coral` | `growth` (branching or massive), colony `radius`, `seed` | a signed distance field polygonised by marching tetrahedra ([`super::coral`]) |
 //!
 //! Normals are geometric (flat per triangle, from the winding: counter-clockwise seen from the
 //! outside). The object transform is `world = pose · (scale ⊙ local)`; a mirroring scale flips
@@ -166,6 +167,18 @@ pub fn shape_mesh(shape: &Shape, base_dir: &Path) -> Result<TriMesh, String> {
             positive("boulder field length", length)?;
             positive("boulder radius", radius)?;
             Ok(boulders(width, length, count, radius, seed))
+        }
+        Shape::Coral {
+            growth,
+            radius,
+            seed,
+        } => {
+            positive("coral radius", radius)?;
+            let growth = match growth {
+                crate::model::CoralGrowth::Branching => super::coral::Growth::Branching,
+                crate::model::CoralGrowth::Massive => super::coral::Growth::Massive,
+            };
+            Ok(super::coral::coral(growth, radius, seed))
         }
     }
 }

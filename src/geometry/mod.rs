@@ -5,10 +5,12 @@
 //! | module | owns |
 //! |---|---|
 //! | [`mesh`] | triangle meshes of every scene shape (glTF, primitives, seabed, boulders), patterns, PLY |
+//! | [`coral`] | procedural coral colonies (branching, massive) as closed meshes |
 //! | [`targets`] | calibration targets: 3D points, printed reflectance, textures |
 //! | [`bvh`] | [`Bvh`]: every triangle of a model in one BVH; [`Ray`], [`Hit`], [`SurfaceId`] |
 
 pub mod bvh;
+pub mod coral;
 pub mod mesh;
 pub mod targets;
 

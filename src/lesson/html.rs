@@ -6,7 +6,7 @@
 //! |---|---|
 //! | header | title, the question, the set-up, the form (quick or full) and the command |
 //! | numbers | one table row per variant; every number measured by this run |
-//! | figures | per variant: deformation map and height profile, a rendered view and the residual vectors, or the dive profile (kinds `contrast` and `gsd` write their own sections: [`super::contrast::html`], [`super::gsd::html`]) |
+//! | figures | per variant: deformation map and height profile, a rendered view and the residual vectors, the dive profile, or the seen/unseen surface maps (kinds `contrast`, `gsd` and `completeness` write their own sections: [`super::contrast::html`], [`super::gsd::html`], [`super::completeness::section`]) |
 //! | try next | each suggestion with the `poser lesson … --set` that changes one thing |
 //!
 //! Every number cell carries `data-key="<variant slug>.<quantity>"` so tools (and the tests)
@@ -33,22 +33,10 @@ pub fn escape(s: &str) -> String {
     o
 }
 
-/// Standard base64 (RFC 4648) with padding.
+/// Standard base64 (RFC 4648) with padding, for `data:` URIs.
 pub fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut o = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for ch in bytes.chunks(3) {
-        let b = [ch[0], *ch.get(1).unwrap_or(&0), *ch.get(2).unwrap_or(&0)];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for (i, shift) in [18, 12, 6, 0].into_iter().enumerate() {
-            if i <= ch.len() {
-                o.push(A[((n >> shift) & 63) as usize] as char);
-            } else {
-                o.push('=');
-            }
-        }
-    }
-    o
+    use base64::Engine as _;
+    base64::engine::general_purpose::STANDARD.encode(bytes)
 }
 
 pub(crate) fn png(bytes: &[u8], alt: &str) -> String {
@@ -218,6 +206,7 @@ pub fn page(r: &Report) -> String {
         }
         Results::Dive(res) => s.push_str(&super::dive::html(res, false)),
         Results::Survey(res) => s.push_str(&super::dive::html(res, true)),
+        Results::Completeness { rows } => s.push_str(&super::completeness::section(rows)),
     }
     if !r.try_next.is_empty() {
         s.push_str("<h2>Try next</h2>\n<ul>\n");

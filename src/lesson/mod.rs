@@ -10,6 +10,7 @@
 //! | [`contrast`] | kind `contrast`: native renders of a target at a GSD: Michelson contrast, colour cast, backscatter |
 //! | [`gsd`] | kind `gsd`: camera height for a GSD through the port, smallest resolved Siemens-star element |
 //! | [`dive`] | kinds `dive` and `survey`: survey and dive planner per variant (deco, gas, verdict, dives needed), `survey` adds `poser evaluate` with GCPs |
+//! | [`completeness`] | kind `completeness`: share of the corals' surface seen by ≥ 3 images within 60° of its normal |
 //! | [`html`] | `index.html` (images inline, works offline) and `lesson.json` |
 //!
 //! Overrides are applied in this order, the later winning: the form's (`lesson.quick`, or
@@ -17,6 +18,7 @@
 
 pub mod calibration;
 pub mod contrast;
+pub mod completeness;
 pub mod deformation;
 pub mod gsd;
 pub mod dive;
@@ -68,6 +70,7 @@ pub enum Results {
     Gsd { rows: Vec<gsd::Row> },
     Dive(dive::Results),
     Survey(dive::Results),
+    Completeness { rows: Vec<completeness::Row> },
 }
 
 /// A "try next" line with the command that does it.
@@ -191,6 +194,9 @@ pub fn run(
         },
         LessonKind::Dive => Results::Dive(dive::run(&cases, out, false, progress)?),
         LessonKind::Survey => Results::Survey(dive::run(&cases, out, true, progress)?),
+        LessonKind::Completeness => Results::Completeness {
+            rows: completeness::run(&cases, opts.full, progress)?,
+        },
     };
     let mut command = format!("poser lesson {} -o {}", scene.display(), out.display());
     if opts.full {

@@ -520,8 +520,8 @@ pub struct Object {
     pub length: Option<Length>,
     /// Box: side lengths `[x, y, z]`. **Unit:** m. **Default:** `[1, 1, 1]`.
     pub size: Option<Vec3<Length>>,
-    /// Sphere, cylinder radius; boulders: mean radius. **Unit:** m. **Default:** 0.5 m
-    /// (0.3 m for boulders).
+    /// Sphere, cylinder radius; boulders: mean radius; coral: colony radius (at most 10 m).
+    /// **Unit:** m. **Default:** 0.5 m (0.3 m for boulders and corals).
     pub radius: Option<Length>,
     /// Seabed: RMS relief. **Unit:** m. **Default:** 0.1 m.
     pub roughness: Option<Length>,
@@ -529,7 +529,11 @@ pub struct Object {
     pub resolution: Option<Length>,
     /// Boulders: how many. **Default:** 30.
     pub count: Option<u32>,
-    /// Seabed, boulders: random seed. **Default:** render seed + object index.
+    /// Coral: growth form, `"branching"` (staghorn-like branches of branches) or `"massive"`
+    /// (a lumpy, grooved dome, brain-like). The colony stands on the object's xy plane, its
+    /// base buried below it. **Default:** `"branching"`.
+    pub growth: Option<CoralGrowthKind>,
+    /// Seabed, boulders, coral: random seed. **Default:** render seed + object index.
     pub seed: Option<u64>,
     /// Position of the object's origin (world). **Unit:** m. **Default:** `[0, 0, 0]`;
     /// seabed and boulders: `[0, 0, -site.depth]`.
@@ -556,6 +560,15 @@ pub enum ShapeKind {
     Cylinder,
     Seabed,
     Boulders,
+    /// A procedural coral colony (see `growth`, `radius`, `seed`).
+    Coral,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum CoralGrowthKind {
+    Branching,
+    Massive,
 }
 
 /// `pattern = { … }` — procedural texture modulating an object's albedo. Lengths are physical
@@ -947,8 +960,9 @@ pub struct LessonTable {
     /// `"contrast"` (native renders of the first target at `gsd`: contrast, colour cast,
     /// backscatter), `"gsd"` (the camera height for `gsd` through the exact port, and the
     /// smallest resolved Siemens-star element), `"dive"` (`poser plan` and `poser dive` per
-    /// variant: deco, gas, verdict, dives needed) or `"survey"` (as `"dive"`, plus `poser
-    /// evaluate` with the targets as GCPs). **Default:** `"deformation"`.
+    /// variant: deco, gas, verdict, dives needed), `"survey"` (as `"dive"`, plus `poser
+    /// evaluate` with the targets as GCPs) or `"completeness"` (the share of the corals'
+    /// surface seen by at least 3 images within 60° of its normal). **Default:** `"deformation"`.
     pub kind: Option<LessonKindValue>,
     /// Kinds `contrast` and `gsd`: the ground sampling distance at the first target's centre
     /// for which the camera is placed (exact projection through the port). **Unit:** m/px.
@@ -973,6 +987,7 @@ pub enum LessonKindValue {
     Gsd,
     Dive,
     Survey,
+    Completeness,
 }
 
 /// `[[lesson.variants]]` — one compared case.
@@ -1455,6 +1470,7 @@ mod tests {
             ],
             &["diver.cylinders.0.o2=0.32"],
             &["sun.elevation=0.5"],
+            &["objects.0.shape=\"coral\"", "objects.0.growth=\"massive\""],
             &[
                 "targets=[{type = \"points_file\", file = \"none.txt\", surface = \"seabed\", diameter = 0.1}]",
             ],

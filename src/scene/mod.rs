@@ -9,6 +9,7 @@
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 pub mod check;
+pub mod coral;
 pub mod diag;
 pub mod format;
 pub mod lesson;

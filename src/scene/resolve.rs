@@ -1238,7 +1238,7 @@ fn objects(
                 cx,
                 "shape",
                 &[
-                    "mesh", "plane", "box", "sphere", "cylinder", "seabed", "boulders",
+                    "mesh", "plane", "box", "sphere", "cylinder", "seabed", "boulders", "coral",
                 ],
             )
             .unwrap_or("box");
@@ -1335,6 +1335,7 @@ fn objects(
                     seed,
                 }
             }
+            "coral" => super::coral::shape(cx, &mut o, seed),
             _ => {
                 let width = o.f64(cx, "width", Dim::Length, 20.0);
                 let length = o.f64(cx, "length", Dim::Length, 20.0);

@@ -6,7 +6,6 @@
 //! | [`canonical`] | the canonical scenes of `tests/canonical/`, the analytic radiance oracle, and the geometry / radiometry checks every backend runs |
 //! | [`lesson`] | running a lesson's quick form; its page in headless Chromium |
 //! | [`mitsuba`], [`blender`], [`native`], [`plan`] | each suite's preset models, built with [`model`] |
-//! | [`page`] | headless Chromium for the lesson pages: DOM, screenshot, `data-key` cells |
 #![allow(dead_code)]
 
 pub mod blender;

@@ -233,7 +233,8 @@ pub fn describe(model: &Model) -> Result<Description, String> {
                 | Shape::Cylinder { .. }
                 | Shape::Mesh { .. }
                 | Shape::Seabed { .. }
-                | Shape::Boulders { .. } => {
+                | Shape::Boulders { .. }
+                | Shape::Coral { .. } => {
                     // Tessellated by the shared mesh module (same triangles as the native
                     // renderer), in the object frame; pose and scale stay in `matrix`.
                     let path = format!("assets/object_{i}.ply");
@@ -425,6 +426,7 @@ fn bounds(model: &Model) -> Value {
                 radius,
                 ..
             } => 0.5 * width.hypot(*length) + 2.0 * radius,
+            Shape::Coral { radius, .. } => 1.5 * radius,
             Shape::Mesh { .. } => 10.0,
         };
         add(o.pose.translation, r * o.scale.max_element());
