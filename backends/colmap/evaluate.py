@@ -10,6 +10,9 @@ perturbed ``cam_from_world`` poses), 3D points (initial, perturbed positions) an
 observations; COLMAP's bundle adjuster then refines poses, points and the camera model's
 intrinsics (self-calibration). The gauge is fixed by two cameras (COLMAP's
 ``TWO_CAMS_FROM_WORLD``); the result is compared with the truth by a similarity on the Rust side.
+With a ``rig`` (a rig calibrated beforehand), the cameras form one COLMAP rig, each rig pose
+one frame; the intrinsics and the sensors' poses in the rig are held, and the bundle adjuster
+refines the frames' poses and the points, the first frame held (the baseline sets the scale).
 
 ``images`` (images mode): COLMAP's own pipeline on rendered images: SIFT extraction, matching
 (sequential or exhaustive) and incremental mapping, with the same camera model, shared by all
@@ -21,7 +24,10 @@ Request (``bundle``)::
      "cameras": [{"id": 1, "width": W, "height": H, "fx": .., "fy": .., "cx": .., "cy": ..}],
      "images": [{"id": 1, "name": "..", "camera": 1, "qvec": [w, x, y, z], "tvec": [..],
                  "observations": [[u, v, point_id], ...]}],
-     "points": [{"id": 1, "xyz": [x, y, z]}]}
+     "points": [{"id": 1, "xyz": [x, y, z]}],
+     "rig": {"sensor_from_rig": [{"qvec": .., "tvec": ..}, ...],   # optional; per camera
+             "frames": [{"id": 1, "qvec": .., "tvec": ..}]}}      # rig_from_world per pose
+    (with a rig, each image also has ``"frame": id``)
 
 Request (``images``)::
 
@@ -108,22 +114,32 @@ def build_reconstruction(pycolmap, req: dict):
     rec = pycolmap.Reconstruction()
     ids: dict[int, int] = {}  # COLMAP's point id -> the request's
     model = req["model"]
-    for cam in req["cameras"]:
-        rec.add_camera_with_trivial_rig(make_camera(pycolmap, cam, model))
+    rig = req.get("rig")
     # Observations per point: (image id, point2D index).
     tracks: dict[int, list[tuple[int, int]]] = {}
+    images = []
     for im in req["images"]:
         obs = im["observations"]
         xy = np.array([[o[0], o[1]] for o in obs], dtype=float).reshape(-1, 2)
-        image = pycolmap.Image(
-            name=im["name"],
-            keypoints=xy,
-            camera_id=int(im["camera"]),
-            image_id=int(im["id"]),
+        images.append(
+            pycolmap.Image(
+                name=im["name"],
+                keypoints=xy,
+                camera_id=int(im["camera"]),
+                image_id=int(im["id"]),
+            )
         )
-        rec.add_image_with_trivial_frame(image, rigid(pycolmap, im["qvec"], im["tvec"]))
         for k, o in enumerate(obs):
             tracks.setdefault(int(o[2]), []).append((int(im["id"]), k))
+    if rig is None:
+        for cam in req["cameras"]:
+            rec.add_camera_with_trivial_rig(make_camera(pycolmap, cam, model))
+        for im, image in zip(req["images"], images):
+            rec.add_image_with_trivial_frame(
+                image, rigid(pycolmap, im["qvec"], im["tvec"])
+            )
+    else:
+        add_rig(pycolmap, rec, req, images)
     for p in req["points"]:
         elems = tracks.get(int(p["id"]), [])
         if len(elems) < 2:
@@ -136,12 +152,54 @@ def build_reconstruction(pycolmap, req: dict):
     return rec, ids
 
 
+def add_rig(pycolmap, rec, req: dict, images: list) -> None:
+    """A calibrated rig: one COLMAP rig whose reference sensor is the request's first camera,
+    the others at their ``sensor_from_rig`` poses, and one frame per rig pose holding that
+    pose's images, initialised at the frame's ``rig_from_world``."""
+    rig_req = req["rig"]
+    for cam in req["cameras"]:
+        rec.add_camera(make_camera(pycolmap, cam, req["model"]))
+    rig = pycolmap.Rig(rig_id=1)
+    for k, cam in enumerate(req["cameras"]):
+        sensor = rec.camera(int(cam["id"])).sensor_id
+        if k == 0:
+            rig.add_ref_sensor(sensor)
+        else:
+            s = rig_req["sensor_from_rig"][k]
+            rig.add_sensor(sensor, rigid(pycolmap, s["qvec"], s["tvec"]))
+    rec.add_rig(rig)
+    by_frame: dict[int, list] = {}
+    for im, image in zip(req["images"], images):
+        by_frame.setdefault(int(im["frame"]), []).append(image)
+    for f in rig_req["frames"]:
+        fid = int(f["id"])
+        members = by_frame.get(fid, [])
+        if not members:
+            continue
+        frame = pycolmap.Frame()
+        frame.frame_id = fid
+        frame.rig_id = 1
+        for image in members:
+            frame.add_data_id(image.data_id)
+        frame.rig_from_world = rigid(pycolmap, f["qvec"], f["tvec"])
+        rec.add_frame(frame)
+        for image in members:
+            image.frame_id = fid
+            rec.add_image(image)
+        rec.register_frame(fid)
+
+
 def ba_options(pycolmap, req: dict):
-    """Self-calibrating bundle adjustment: focal, principal point (if asked) and distortion."""
+    """Self-calibrating bundle adjustment: focal, principal point (if asked) and distortion;
+    with a calibrated rig, the intrinsics and the rig's relative poses held."""
     opts = pycolmap.BundleAdjustmentOptions()
-    opts.refine_focal_length = True
-    opts.refine_principal_point = bool(req.get("refine_principal_point", False))
-    opts.refine_extra_params = True
+    calibrated = req.get("rig") is not None
+    opts.refine_focal_length = not calibrated
+    opts.refine_principal_point = (
+        bool(req.get("refine_principal_point", False)) and not calibrated
+    )
+    opts.refine_extra_params = not calibrated
+    opts.refine_sensor_from_rig = False
     opts.print_summary = False
     so = opts.ceres.solver_options
     so.max_num_iterations = int(req.get("max_iterations", 200))
@@ -172,7 +230,14 @@ def bundle(pycolmap, req: dict) -> dict:
     config = pycolmap.BundleAdjustmentConfig()
     for image_id in sorted(rec.reg_image_ids()):
         config.add_image(image_id)
-    config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
+    if req.get("rig") is None:
+        config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
+    else:
+        # The calibrated rig fixes the scale (its baseline) and the intrinsics; the first
+        # frame's pose fixes the other six degrees of freedom.
+        for cam in req["cameras"]:
+            config.set_constant_cam_intrinsics(int(cam["id"]))
+        config.set_constant_rig_from_world_pose(min(rec.reg_frame_ids()))
     adjuster = pycolmap.create_default_bundle_adjuster(opts, config, rec)
     summary = adjuster.solve()
     rec.update_point_3d_errors()

@@ -7,6 +7,7 @@
 //! | `--noise` | 0.3 px | Gaussian pixel noise on every observation (observations mode) |
 //! | `--density` | 20 /m² | tie points per m² of surface (observations mode) |
 //! | `--gcp` | off | align on the targets' points (GCPs); the default aligns on all points |
+//! | `--rig` | off | observations mode: the rig is calibrated beforehand — intrinsics held at the in-water-equivalent values, the cameras' poses in the rig held at the truth; the bundle adjuster solves one pose per rig position (its baseline sets the scale) |
 //! | `--images DIR` | render | images mode: use the images already rendered in DIR (any backend) |
 //! | `--samples`, `--scale` | scene's | images mode: the native render's samples and resolution scale |
 use super::{CliError, SceneArgs, load_model};
@@ -42,6 +43,11 @@ pub struct Args {
     /// Let the bundle adjustment refine the principal point too.
     #[arg(long)]
     pub refine_principal_point: bool,
+    /// Observations mode: treat the rig as calibrated beforehand (intrinsics held at their
+    /// in-water-equivalent values, the cameras' poses in the rig held at the truth); the
+    /// bundle adjustment solves one pose per rig position.
+    #[arg(long)]
+    pub rig: bool,
     /// Seed of the tie points, the noise and the perturbed start.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -85,6 +91,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         }
         model = model.with_resolution_scale(s);
     }
+    if args.mode == Mode::Images && args.rig {
+        return Err(CliError::Usage(
+            "--rig belongs to `--mode observations` (COLMAP's mapper in images mode knows no rig)"
+                .into(),
+        ));
+    }
     if args.mode == Mode::Observations && (args.images.is_some() || args.samples.is_some()) {
         return Err(CliError::Usage(
             "--images and --samples belong to `--mode images`".into(),
@@ -97,6 +109,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         gcp: args.gcp,
         seed: args.seed,
         refine_principal_point: args.refine_principal_point,
+        rig: args.rig,
         progress: !args.quiet,
         perturb_position: args.perturb_position,
         perturb_rotation: args.perturb_rotation.to_radians(),

@@ -59,6 +59,9 @@ pub struct RequestImage {
     pub id: u32,
     pub name: String,
     pub camera: u32,
+    /// The rig pose (frame) the image belongs to, with a calibrated rig.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub qvec: Option<[f64; 4]>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -93,6 +96,32 @@ pub struct Request {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub matcher: Option<&'static str>,
     pub threads: usize,
+    /// A calibrated rig (observations mode, `--rig`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rig: Option<RequestRig>,
+}
+
+/// A rig calibrated beforehand: each camera's pose in the rig (camera 1 is the reference,
+/// identity) and the initial pose of every rig position.
+#[derive(Debug, Clone, Serialize)]
+pub struct RequestRig {
+    pub sensor_from_rig: Vec<RequestSensor>,
+    pub frames: Vec<RequestFrame>,
+}
+
+/// `sensor_from_rig`, COLMAP's (w, x, y, z) quaternion and translation.
+#[derive(Debug, Clone, Serialize)]
+pub struct RequestSensor {
+    pub qvec: [f64; 4],
+    pub tvec: [f64; 3],
+}
+
+/// One rig position: `rig_from_world`.
+#[derive(Debug, Clone, Serialize)]
+pub struct RequestFrame {
+    pub id: u32,
+    pub qvec: [f64; 4],
+    pub tvec: [f64; 3],
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]

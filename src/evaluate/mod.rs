@@ -26,7 +26,7 @@ pub mod report;
 use crate::geometry::bvh::target_mesh;
 use crate::geometry::mesh::{TriMesh, object_mesh};
 use crate::geometry::{Bvh as Scene, Ray, SurfaceId};
-use crate::model::Model;
+use crate::model::{Model, Pose};
 use crate::optics::project::Projector;
 use crate::rng::SplitMix64;
 use align::{AxisStats, Bowl, Similarity};
@@ -60,6 +60,11 @@ pub struct Options {
     pub seed: u64,
     /// Let the bundle adjustment refine the principal point (COLMAP's default: no).
     pub refine_principal_point: bool,
+    /// Observations mode: the rig is calibrated beforehand. The intrinsics are held at their
+    /// in-water-equivalent values ([`water_equivalent`]) and the cameras' poses in the rig at
+    /// the truth; COLMAP's bundle adjuster solves one pose per rig position (a COLMAP rig
+    /// and frames), so the rig's baseline, not the alignment, sets the scale.
+    pub rig: bool,
     /// Initial camera and point positions are off by this fraction of the median viewing
     /// distance (σ per axis), and rotations by `perturb_rotation` (σ, rad).
     pub perturb_position: f64,
@@ -76,6 +81,7 @@ impl Default for Options {
             gcp: false,
             seed: 1,
             refine_principal_point: false,
+            rig: false,
             perturb_position: 0.02,
             perturb_rotation: 1f64.to_radians(),
             progress: false,
@@ -246,6 +252,16 @@ pub fn texture_seen(model: &Model, scene: &Scene) -> TextureSeen {
     }
 }
 
+/// The request's cameras at their in-water-equivalent intrinsics at distance `d`: what a
+/// calibration in the water beforehand would give (`--rig`).
+fn calibrated_cameras(model: &Model, d: f64) -> Result<Vec<RequestCamera>, String> {
+    let mut cams = request_cameras(model);
+    for (i, c) in cams.iter_mut().enumerate() {
+        [c.fx, c.fy, c.cx, c.cy] = water_equivalent(model, i, d)?;
+    }
+    Ok(cams)
+}
+
 /// The paraxial in-water-equivalent (fx, fy, cx, cy) of camera `ci` at distance `d`.
 pub fn water_equivalent(model: &Model, ci: usize, d: f64) -> Result<[f64; 4], String> {
     let cam = &model.cameras[ci];
@@ -387,21 +403,66 @@ pub fn evaluate_observations(
     let sigma_pos = opts.perturb_position * distance;
 
     let mut rng = SplitMix64(opts.seed ^ 0x1417_1A11_5EED);
-    let mut req_images = Vec::new();
-    for (n, im) in used.iter().enumerate() {
-        let wfc = model.world_from_camera(im.pose, im.camera);
+    // A perturbed `world_from_x` as COLMAP's (w, x, y, z) and t of `x_from_world`.
+    let mut perturbed = |wfc: Pose| {
         let rot = random_rotation(&mut rng, opts.perturb_rotation)
             * DQuat::from_mat3(&wfc.rotation).normalize();
         let c = wfc.translation
             + sigma_pos * DVec3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng));
-        let q = rot.inverse(); // cam_from_world rotation
-        let t = -(q * c);
+        let q = rot.inverse(); // x_from_world rotation
+        ([q.w, q.x, q.y, q.z], (-(q * c)).to_array())
+    };
+    // With a calibrated rig: one perturbed start per rig pose (the first camera's frame,
+    // COLMAP's reference sensor); the images follow it through the rig.
+    let rig = if opts.rig {
+        let mut poses: Vec<usize> = used.iter().map(|im| im.pose).collect();
+        poses.sort_unstable();
+        poses.dedup();
+        let frames = poses
+            .iter()
+            .map(|&p| {
+                let (qvec, tvec) = perturbed(model.world_from_camera(p, 0));
+                colmap::RequestFrame {
+                    id: p as u32 + 1,
+                    qvec,
+                    tvec,
+                }
+            })
+            .collect();
+        let sensor_from_rig = (0..model.cameras.len())
+            .map(|k| {
+                let s = model
+                    .world_from_camera(0, k)
+                    .inverse()
+                    .compose(&model.world_from_camera(0, 0));
+                let q = DQuat::from_mat3(&s.rotation).normalize();
+                colmap::RequestSensor {
+                    qvec: [q.w, q.x, q.y, q.z],
+                    tvec: s.translation.to_array(),
+                }
+            })
+            .collect();
+        Some(colmap::RequestRig {
+            sensor_from_rig,
+            frames,
+        })
+    } else {
+        None
+    };
+    let mut req_images = Vec::new();
+    for (n, im) in used.iter().enumerate() {
+        let (qvec, tvec) = if opts.rig {
+            ([1.0, 0.0, 0.0, 0.0], [0.0; 3]) // unused: the frame's pose
+        } else {
+            perturbed(model.world_from_camera(im.pose, im.camera))
+        };
         req_images.push(RequestImage {
             id: n as u32 + 1,
             name: im.name.clone(),
             camera: im.camera as u32 + 1,
-            qvec: Some([q.w, q.x, q.y, q.z]),
-            tvec: Some(t.to_array()),
+            frame: opts.rig.then_some(im.pose as u32 + 1),
+            qvec: Some(qvec),
+            tvec: Some(tvec),
             observations: im
                 .points
                 .iter()
@@ -427,9 +488,14 @@ pub fn evaluate_observations(
         model: opts.model,
         refine_principal_point: opts.refine_principal_point,
         seed: opts.seed,
-        cameras: request_cameras(model),
+        cameras: if opts.rig {
+            calibrated_cameras(model, distance)?
+        } else {
+            request_cameras(model)
+        },
         images: req_images,
         points: req_points,
+        rig,
         image_dir: None,
         work_dir: None,
         matcher: None,
@@ -507,6 +573,7 @@ pub fn evaluate_observations(
             "density_per_m2": opts.density,
             "seed": opts.seed,
             "refine_principal_point": opts.refine_principal_point,
+            "calibrated_rig": opts.rig,
             "perturb_position_m": sigma_pos,
             "perturb_rotation_deg": opts.perturb_rotation.to_degrees(),
             "tie_points_sampled": points.len(),
@@ -629,6 +696,7 @@ pub fn evaluate_images(
                 id: n as u32 + 1,
                 name: f.clone(),
                 camera: *ci as u32 + 1,
+                frame: None,
                 qvec: None,
                 tvec: None,
                 observations: Vec::new(),
@@ -637,6 +705,7 @@ pub fn evaluate_images(
         points: Vec::new(),
         image_dir: Some(abs_dir.to_string_lossy().into_owned()),
         work_dir: Some(work.path().to_string_lossy().into_owned()),
+        rig: None,
         matcher: Some(if files.len() > 40 {
             "sequential"
         } else {
