@@ -103,6 +103,9 @@ pub enum LessonKind {
     /// Surface coverage: the share of the corals' surface seen by enough images, near enough
     /// to its normal ([`crate::lesson::completeness`]).
     Completeness,
+    /// A stereo rig's lighting (backscatter, contrast) and its measurement accuracy (`poser
+    /// evaluate` with the rig calibrated) per variant ([`crate::lesson::metrology`]).
+    Metrology,
 }
 
 /// One compared case: a scene file (absolute; `None`: the lesson's own scene) with `--set`

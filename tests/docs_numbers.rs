@@ -9,10 +9,19 @@ fn readme_deformation_table_matches_the_bench_report() {
             .unwrap();
     let rows = [
         ("| in air |", "in_air"),
-        ("| flat port, pupil 1 mm from the glass |", "flat_port_deformation_pupil_1mm"),
+        (
+            "| flat port, pupil 1 mm from the glass |",
+            "flat_port_deformation_pupil_1mm",
+        ),
         ("| flat port, pupil 3 cm |", "flat_port_deformation"),
-        ("| flat port, pupil 10 cm |", "flat_port_deformation_pupil_10cm"),
-        ("| flat port, pupil 3 cm, with an oblique pass |", "flat_port_deformation_obliques"),
+        (
+            "| flat port, pupil 10 cm |",
+            "flat_port_deformation_pupil_10cm",
+        ),
+        (
+            "| flat port, pupil 3 cm, with an oblique pass |",
+            "flat_port_deformation_obliques",
+        ),
         ("| centred dome |", "flat_port_deformation_dome"),
     ];
     for (prefix, scene) in rows {

@@ -234,7 +234,12 @@ fn images_mode_registers_every_image_of_a_small_textured_survey() {
         ])
         .args(["--set", "network.length=2", "--set", "network.width=1.5"])
         // The overlap SfM wants for matching (the lesson's plot has less, like the paper's).
-        .args(["--set", r#"network.overlap="80 %""#, "--set", r#"network.sidelap="60 %""#])
+        .args([
+            "--set",
+            r#"network.overlap="80 %""#,
+            "--set",
+            r#"network.sidelap="60 %""#,
+        ])
         .args([
             "--set",
             r#"objects.0.pattern={type="noise", size="0.015 m", amount=0.8, seed=4}"#,

@@ -71,3 +71,29 @@ fn the_shipped_survey_scenes_see_enough_texture() {
         assert!(seen.textured > 0.5, "{s}: {seen:?}");
     }
 }
+
+#[test]
+fn a_calibrated_rig_belongs_to_observations_mode() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("ev");
+    let o = Command::new(env!("CARGO_BIN_EXE_poser"))
+        .args([
+            "evaluate",
+            "scenarios/lessons/subsea_metrology.toml",
+            "--mode",
+            "images",
+            "--rig",
+            "--quiet",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("--rig belongs to `--mode observations`"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing may be written");
+}

@@ -124,7 +124,12 @@ pub fn sample_points(
                 world: p.world,
                 normal: t.pose.rotation.z_axis,
                 kind: PointKind::Target,
-                label: format!("{}/{}", t.name, p.id),
+                // A points file's disk is its own target, already named `file/id`.
+                label: if p.id == t.name || p.id.starts_with(&format!("{}/", t.name)) {
+                    p.id.clone()
+                } else {
+                    format!("{}/{}", t.name, p.id)
+                },
             });
         }
     }

@@ -17,7 +17,7 @@
 //! ([`crate::geometry::targets::reflectance`]) at each sample point of the target's own frame,
 //! and its pixel from the exact projection ([`crate::optics::project::Projector`]) — no pixel
 //! box is typed in. The helpers [`place`], [`render`], [`bilinear`] and [`view_png`] are shared
-//! with the kind `gsd`.
+//! with the kind `gsd`, and [`measure`] with the kind `metrology`.
 
 use super::Case;
 use super::html::{escape, num, png, svg};
@@ -207,6 +207,51 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
     if n == 0 { f64::NAN } else { s / n as f64 }
 }
 
+/// What is measured on a view of a checkerboard (pose 0, camera 0, the first target) and on
+/// the same view without it (`bs`): the numbers of the module's table.
+#[derive(Debug, Clone, Serialize)]
+pub struct Measured {
+    pub contrast: f64,
+    pub contrast_without_backscatter: f64,
+    pub r_over_g: f64,
+    pub b_over_g: f64,
+    /// Mean radiance of `bs` over the whole frame, [r, g, b], W/(m²·sr).
+    pub backscatter: [f64; 3],
+    pub veiling_share: f64,
+    /// Sample points on the light and the dark squares.
+    pub samples: [usize; 2],
+}
+
+/// Measure the checkerboard of `model` in `img`, with `bs` the same view rendered without it.
+pub fn measure(model: &Model, img: &native::Image, bs: &native::Image) -> Result<Measured, String> {
+    let pts = samples(model)?;
+    let at = |im: &native::Image, s: &Sample, ch| bilinear(im, s.u, s.v, ch);
+    let class = |light: bool, im: &native::Image, ch: usize| {
+        mean(
+            pts.iter()
+                .filter(|s| s.light == light)
+                .filter_map(|s| at(im, s, ch)),
+        )
+    };
+    let (il, id) = (class(true, img, 1), class(false, img, 1));
+    let (bl, bd) = (class(true, bs, 1), class(false, bs, 1));
+    let n = (bs.rgb.len() as f64).max(1.0);
+    let on_target = mean(pts.iter().filter_map(|s| at(bs, s, 1)));
+    let target = mean(pts.iter().filter_map(|s| at(img, s, 1)));
+    Ok(Measured {
+        contrast: (il - id) / (il + id),
+        contrast_without_backscatter: ((il - bl) - (id - bd)) / ((il - bl) + (id - bd)),
+        r_over_g: class(true, img, 0) / il,
+        b_over_g: class(true, img, 2) / il,
+        backscatter: std::array::from_fn(|k| bs.rgb.iter().map(|p| p[k] as f64).sum::<f64>() / n),
+        veiling_share: on_target / target,
+        samples: [
+            pts.iter().filter(|s| s.light).count(),
+            pts.iter().filter(|s| !s.light).count(),
+        ],
+    })
+}
+
 /// Render and measure every case.
 pub fn run(
     cases: &[Case],
@@ -225,30 +270,13 @@ pub fn run(
             )
         })?;
         let d = place(&mut m, gsd, &c.label)?;
-        let pts = samples(&m)?;
         progress(&format!("rendering `{}` at {d:.2} m", c.label));
         let img = render(&m)?;
         let mut empty = m.clone();
         empty.targets.clear();
         progress(&format!("rendering `{}` without the target", c.label));
         let bs = render(&empty)?;
-        let at = |im: &native::Image, s: &Sample, ch| bilinear(im, s.u, s.v, ch);
-        let class = |light: bool, im: &native::Image, ch: usize| {
-            mean(
-                pts.iter()
-                    .filter(|s| s.light == light)
-                    .filter_map(|s| at(im, s, ch)),
-            )
-        };
-        let (il, id) = (class(true, &img, 1), class(false, &img, 1));
-        let (bl, bd) = (class(true, &bs, 1), class(false, &bs, 1));
-        let rl = class(true, &img, 0);
-        let bbl = class(true, &img, 2);
-        let n = (img.rgb.len() as f64).max(1.0);
-        let backscatter: [f64; 3] =
-            std::array::from_fn(|k| bs.rgb.iter().map(|p| p[k] as f64).sum::<f64>() / n);
-        let on_target = mean(pts.iter().filter_map(|s| at(&bs, s, 1)));
-        let target = mean(pts.iter().filter_map(|s| at(&img, s, 1)));
+        let me = measure(&m, &img, &bs)?;
         let spots: Vec<DVec3> = m
             .lights
             .iter()
@@ -270,16 +298,13 @@ pub fn run(
             } else {
                 f64::NAN
             },
-            contrast: (il - id) / (il + id),
-            contrast_without_backscatter: ((il - bl) - (id - bd)) / ((il - bl) + (id - bd)),
-            r_over_g: rl / il,
-            b_over_g: bbl / il,
-            backscatter,
-            veiling_share: on_target / target,
-            samples: [
-                pts.iter().filter(|s| s.light).count(),
-                pts.iter().filter(|s| !s.light).count(),
-            ],
+            contrast: me.contrast,
+            contrast_without_backscatter: me.contrast_without_backscatter,
+            r_over_g: me.r_over_g,
+            b_over_g: me.b_over_g,
+            backscatter: me.backscatter,
+            veiling_share: me.veiling_share,
+            samples: me.samples,
             seconds: t0.elapsed().as_secs_f64(),
             view_png: view_png(&img, &dir.join("view.png"))?,
             backscatter_png: view_png(&bs, &dir.join("backscatter.png"))?,

@@ -68,6 +68,9 @@ pub struct Accuracy {
     pub rms_3d_mm: f64,
     pub rms_xyz_mm: [f64; 3],
     pub focal_error_percent: f64,
+    /// Scale of the similarity onto the truth, minus one, ppm: how far the block's own scale
+    /// (the calibrated rig's baseline, or the gauge) is off.
+    pub scale_error_ppm: f64,
     pub seconds: f64,
 }
 
@@ -241,28 +244,11 @@ pub fn run(
                 c.label,
                 m.poses.len()
             ));
-            let has_targets = !m.targets.is_empty();
             let opts = Options {
-                gcp: has_targets,
+                gcp: !m.targets.is_empty(),
                 ..Options::default()
             };
-            let ev = evaluate::evaluate_observations(m, &opts, &|_, _, _| {}).map_err(err)?;
-            evaluate::report::write(&ev, &out.join(&c.slug))?;
-            Some(Accuracy {
-                images: ev.images,
-                registered: ev.registered,
-                points: ev.points,
-                reprojection_px: ev.reprojection_error,
-                alignment: ev.alignment.clone(),
-                alignment_count: ev.alignment_count,
-                rms_3d_mm: 1e3 * ev.tie_errors.rms_3d,
-                rms_xyz_mm: ev.tie_errors.rms.map(|x| 1e3 * x),
-                focal_error_percent: ev
-                    .cameras
-                    .first()
-                    .map_or(f64::NAN, |c| 100.0 * c.focal_error),
-                seconds: ev.seconds,
-            })
+            Some(accuracy(m, &opts, &out.join(&c.slug)).map_err(err)?)
         } else {
             None
         };
@@ -368,6 +354,28 @@ pub fn run(
     Ok(Results {
         rows,
         rule_of_thumb: rule_of_thumb(&cfg, &depths),
+    })
+}
+
+/// `poser evaluate` (observations mode) on `m` with `opts`; its report is written into `dir`.
+pub fn accuracy(m: &crate::model::Model, opts: &Options, dir: &Path) -> Result<Accuracy, String> {
+    let ev = evaluate::evaluate_observations(m, opts, &|_, _, _| {})?;
+    evaluate::report::write(&ev, dir)?;
+    Ok(Accuracy {
+        images: ev.images,
+        registered: ev.registered,
+        points: ev.points,
+        reprojection_px: ev.reprojection_error,
+        alignment: ev.alignment.clone(),
+        alignment_count: ev.alignment_count,
+        rms_3d_mm: 1e3 * ev.tie_errors.rms_3d,
+        rms_xyz_mm: ev.tie_errors.rms.map(|x| 1e3 * x),
+        focal_error_percent: ev
+            .cameras
+            .first()
+            .map_or(f64::NAN, |c| 100.0 * c.focal_error),
+        scale_error_ppm: 1e6 * (ev.similarity.scale - 1.0),
+        seconds: ev.seconds,
     })
 }
 

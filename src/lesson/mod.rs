@@ -11,18 +11,20 @@
 //! | [`gsd`] | kind `gsd`: camera height for a GSD through the port, smallest resolved Siemens-star element |
 //! | [`dive`] | kinds `dive` and `survey`: survey and dive planner per variant (deco, gas, verdict, dives needed), `survey` adds `poser evaluate` with GCPs |
 //! | [`completeness`] | kind `completeness`: share of the corals' surface seen by ≥ 3 images within 60° of its normal |
+//! | [`metrology`] | kind `metrology`: a stereo rig's backscatter and contrast (native renders), and its accuracy (`poser evaluate --rig --gcp`) |
 //! | [`html`] | `index.html` (images inline, works offline) and `lesson.json` |
 //!
 //! Overrides are applied in this order, the later winning: the form's (`lesson.quick`, or
 //! `lesson.full` with `--full`), the variant's `set`, the command line's `--set`.
 
 pub mod calibration;
-pub mod contrast;
 pub mod completeness;
+pub mod contrast;
 pub mod deformation;
-pub mod gsd;
 pub mod dive;
+pub mod gsd;
 pub mod html;
+pub mod metrology;
 
 use crate::model::{Lesson, LessonKind, Model};
 use serde::Serialize;
@@ -71,6 +73,7 @@ pub enum Results {
     Dive(dive::Results),
     Survey(dive::Results),
     Completeness { rows: Vec<completeness::Row> },
+    Metrology { rows: Vec<metrology::Row> },
 }
 
 /// A "try next" line with the command that does it.
@@ -196,6 +199,9 @@ pub fn run(
         LessonKind::Survey => Results::Survey(dive::run(&cases, out, true, progress)?),
         LessonKind::Completeness => Results::Completeness {
             rows: completeness::run(&cases, opts.full, progress)?,
+        },
+        LessonKind::Metrology => Results::Metrology {
+            rows: metrology::run(&cases, out, progress)?,
         },
     };
     let mut command = format!("poser lesson {} -o {}", scene.display(), out.display());

@@ -418,7 +418,12 @@ pub fn expand(
                 let span = (per_strip - 1) as f64 * along;
                 let c0 = DVec3::new(center.x, center.y, z);
                 for i in 0..n_strips {
-                    let off = -w / 2.0 + i as f64 * ss;
+                    // One strip runs down the middle of the area.
+                    let off = if n_strips == 1 {
+                        0.0
+                    } else {
+                        -w / 2.0 + i as f64 * ss
+                    };
                     let dir = if i % 2 == 0 { a } else { -a };
                     let base = c0 + c * off;
                     let rot = nadir_rotation(dir, pass_tilt);
@@ -693,6 +698,30 @@ mod tests {
             .iter()
             .all(|v| v.abs() < 1e-12)
             && (r.determinant() - 1.0).abs() < 1e-12
+    }
+
+    #[test]
+    fn one_strip_runs_down_the_middle() {
+        let spec = NetworkSpec::Lawnmower {
+            center: DVec3::new(2.0, -1.0, 0.0),
+            width: 1.0,
+            length: 4.0,
+            heading: 0.0,
+            altitude: 1.5,
+            overlap: 0.8,
+            sidelap: 0.6,
+            strips: Some(1),
+            cross_strips: false,
+            tilt: 0.0,
+            obliques: 0.0,
+            trigger: Trigger::Overlap,
+        };
+        let (poses, s) = expand(&spec, &ctx()).unwrap();
+        assert_eq!(s.strips, 1);
+        assert!(poses.len() > 2);
+        for p in &poses {
+            assert!((p.world_from_rig.translation.x - 2.0).abs() < 1e-12);
+        }
     }
 
     #[test]

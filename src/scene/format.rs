@@ -961,8 +961,10 @@ pub struct LessonTable {
     /// backscatter), `"gsd"` (the camera height for `gsd` through the exact port, and the
     /// smallest resolved Siemens-star element), `"dive"` (`poser plan` and `poser dive` per
     /// variant: deco, gas, verdict, dives needed), `"survey"` (as `"dive"`, plus `poser
-    /// evaluate` with the targets as GCPs) or `"completeness"` (the share of the corals'
-    /// surface seen by at least 3 images within 60° of its normal). **Default:** `"deformation"`.
+    /// evaluate` with the targets as GCPs), `"completeness"` (the share of the corals'
+    /// surface seen by at least 3 images within 60° of its normal) or `"metrology"` (a
+    /// stereo rig: backscatter and contrast on the first target, a checkerboard, and `poser
+    /// evaluate --rig --gcp`). **Default:** `"deformation"`.
     pub kind: Option<LessonKindValue>,
     /// Kinds `contrast` and `gsd`: the ground sampling distance at the first target's centre
     /// for which the camera is placed (exact projection through the port). **Unit:** m/px.
@@ -988,6 +990,7 @@ pub enum LessonKindValue {
     Dive,
     Survey,
     Completeness,
+    Metrology,
 }
 
 /// `[[lesson.variants]]` — one compared case.

@@ -4,7 +4,7 @@
 //! | key | resolved to | check |
 //! |---|---|---|
 //! | `title`, `question`, `setup` | text of the page | `question` required |
-//! | `kind` | [`LessonKind`] | `deformation`, `calibration`, `contrast`, `gsd`, `dive`, `survey` or `completeness` |
+//! | `kind` | [`LessonKind`] | `deformation`, `calibration`, `contrast`, `gsd`, `dive`, `survey`, `completeness` or `metrology` |
 //! | `gsd` | m/px (kinds `contrast`, `gsd`) | positive |
 //! | `quick`, `full` | `--set` overrides of the quick and full forms | strings |
 //! | `[[lesson.variants]]` `label`, `scene`, `set` | [`LessonVariant`]; `scene` made absolute, relative to the file that names it | the file exists |
@@ -84,7 +84,16 @@ pub fn lesson(
     let kind = match t.choice(
         cx,
         "kind",
-        &["deformation", "calibration", "contrast", "gsd", "dive", "survey", "completeness"],
+        &[
+            "deformation",
+            "calibration",
+            "contrast",
+            "gsd",
+            "dive",
+            "survey",
+            "completeness",
+            "metrology",
+        ],
     ) {
         Some("calibration") => LessonKind::Calibration,
         Some("contrast") => LessonKind::Contrast,
@@ -92,6 +101,7 @@ pub fn lesson(
         Some("dive") => LessonKind::Dive,
         Some("survey") => LessonKind::Survey,
         Some("completeness") => LessonKind::Completeness,
+        Some("metrology") => LessonKind::Metrology,
         _ => LessonKind::Deformation,
     };
     let gsd = t.opt_f64(cx, "gsd", crate::units::Dim::Gsd);
