@@ -115,10 +115,123 @@ impl SeaInterface {
 
 /// The pixel at which a camera in the air sees the water point `p`: the (u, v) whose air ray
 /// (`ray(u, v)` → world origin and unit direction) refracts through `iface` and passes through
-/// `p`. Newton's method from `start`; the miss distance must fall below 1e-9 of the water path.
+/// `p`, on the branch that continues the flat surface's image. Homotopy: Newton on the flat
+/// surface from `start`, then on the waves scaled from 0 to their full height in steps (halved
+/// when Newton fails). Where that branch folds away (the point sits at a caustic of the view)
+/// the remaining images are searched on a grid around the last one ([`images_through`]) and
+/// the nearest is returned. `NoConvergence` when there is none.
 pub fn image_through(
     iface: &SeaInterface,
-    ray: impl Fn(f64, f64) -> Result<(DVec3, DVec3), NoSolution>,
+    ray: &dyn Fn(f64, f64) -> Result<(DVec3, DVec3), NoSolution>,
+    p: DVec3,
+    start: [f64; 2],
+) -> Result<[f64; 2], NoSolution> {
+    let flat = SeaInterface {
+        field: WaveField::flat(iface.field.period),
+        n_water: iface.n_water,
+    };
+    let mut uv = newton(&flat, ray, p, start)?;
+    if iface.field.components.is_empty() {
+        return Ok(uv);
+    }
+    let scaled = |s: f64| SeaInterface {
+        field: WaveField {
+            components: iface
+                .field
+                .components
+                .iter()
+                .map(|c| super::waves::Component {
+                    amplitude: c.amplitude * s,
+                    ..*c
+                })
+                .collect(),
+            ..iface.field.clone()
+        },
+        n_water: iface.n_water,
+    };
+    let (mut s, mut ds) = (0.0f64, 0.125f64);
+    while s < 1.0 {
+        let next = (s + ds).min(1.0);
+        match newton(&scaled(next), ray, p, uv) {
+            Ok(x) if (x[0] - uv[0]).hypot(x[1] - uv[1]) < 50.0 => {
+                uv = x;
+                s = next;
+                ds = (ds * 1.5).min(0.25);
+            }
+            _ if ds > 1e-3 => ds *= 0.5,
+            _ => {
+                // The branch folds away: look for the other images near where it was.
+                let all = images_through(iface, ray, p, uv, 40.0);
+                return all.into_iter().next().ok_or(NoSolution::NoConvergence);
+            }
+        }
+    }
+    Ok(uv)
+}
+
+/// Every image of `p` within `radius` px of `around` (a grid of 41 × 41 starts, Newton from
+/// each local minimum of the miss), nearest to `around` first, duplicates (within 1e-6 px)
+/// removed.
+pub fn images_through(
+    iface: &SeaInterface,
+    ray: &dyn Fn(f64, f64) -> Result<(DVec3, DVec3), NoSolution>,
+    p: DVec3,
+    around: [f64; 2],
+    radius: f64,
+) -> Vec<[f64; 2]> {
+    const N: i32 = 20;
+    let step = radius / N as f64;
+    let at = |i: i32, j: i32| [around[0] + i as f64 * step, around[1] + j as f64 * step];
+    let miss = |x: [f64; 2]| -> f64 {
+        ray(x[0], x[1])
+            .and_then(|(o, d)| iface.refract_down(o, d))
+            .map(|(s, w, _)| {
+                let q = p - s;
+                (q - q.dot(w) * w).length()
+            })
+            .unwrap_or(f64::INFINITY)
+    };
+    let grid: Vec<Vec<f64>> = (-N..=N)
+        .map(|i| (-N..=N).map(|j| miss(at(i, j))).collect())
+        .collect();
+    let mut found: Vec<[f64; 2]> = Vec::new();
+    for i in -N..=N {
+        for j in -N..=N {
+            let m = grid[(i + N) as usize][(j + N) as usize];
+            if !m.is_finite() {
+                continue;
+            }
+            let lower = (-1..=1).all(|a| {
+                (-1..=1).all(|b| {
+                    let (x, y) = (i + a, j + b);
+                    (a == 0 && b == 0)
+                        || !(-N..=N).contains(&x)
+                        || !(-N..=N).contains(&y)
+                        || grid[(x + N) as usize][(y + N) as usize] >= m
+                })
+            });
+            if !lower {
+                continue;
+            }
+            if let Ok(x) = newton(iface, ray, p, at(i, j))
+                && !found
+                    .iter()
+                    .any(|f| (f[0] - x[0]).hypot(f[1] - x[1]) < 1e-6)
+            {
+                found.push(x);
+            }
+        }
+    }
+    let d = |x: &[f64; 2]| (x[0] - around[0]).hypot(x[1] - around[1]);
+    found.sort_by(|a, b| d(a).total_cmp(&d(b)));
+    found
+}
+
+/// Newton's method from `start` on the miss of the water ray at `p`: the miss must fall below
+/// 1e-9 of the water path.
+fn newton(
+    iface: &SeaInterface,
+    ray: &dyn Fn(f64, f64) -> Result<(DVec3, DVec3), NoSolution>,
     p: DVec3,
     start: [f64; 2],
 ) -> Result<[f64; 2], NoSolution> {
@@ -148,8 +261,6 @@ pub fn image_through(
     const H: f64 = 1e-4;
     for _ in 0..60 {
         let (e, len) = miss(u, v)?;
-        #[cfg(test)]
-        eprintln!("it u {u} v {v} e {e:?} len {len}");
         if norm(e) <= 1e-9 * len {
             return Ok([u, v]);
         }
@@ -198,7 +309,7 @@ mod tests {
         let iface = SeaInterface::flat(n);
         let c = DVec3::new(0.0, 0.0, 10.0);
         let p = DVec3::new(3.0, -1.0, -4.0);
-        let px = image_through(&iface, pinhole(c, 1000.0), p, [800.0, 600.0]).unwrap();
+        let px = image_through(&iface, &pinhole(c, 1000.0), p, [800.0, 600.0]).unwrap();
         let (o, d) = pinhole(c, 1000.0)(px[0], px[1]).unwrap();
         let (s, w, t) = iface.refract_down(o, d).unwrap();
         assert!(s.z.abs() < 1e-12);
@@ -211,7 +322,7 @@ mod tests {
         assert!((q - q.dot(w) * w).length() < 1e-8);
         assert!(t > 0.9 && t < 1.0);
         // Nadir point: seen straight below, at the principal point.
-        let px = image_through(&iface, pinhole(c, 1000.0), DVec3::new(0.0, 0.0, -4.0), [510.0, 490.0]).unwrap();
+        let px = image_through(&iface, &pinhole(c, 1000.0), DVec3::new(0.0, 0.0, -4.0), [510.0, 490.0]).unwrap();
         assert!((px[0] - 500.0).abs() < 1e-6 && (px[1] - 500.0).abs() < 1e-6, "{px:?}");
     }
 
@@ -226,8 +337,8 @@ mod tests {
         let mut moved = 0.0f64;
         for i in 0..20 {
             let p = DVec3::new(-3.0 + 0.3 * i as f64, 1.0 - 0.1 * i as f64, -3.0);
-            let a = image_through(&flat, pinhole(c, 1000.0), p, [500.0, 500.0]).unwrap();
-            let b = image_through(&iface, pinhole(c, 1000.0), p, a).unwrap();
+            let a = image_through(&flat, &pinhole(c, 1000.0), p, [500.0, 500.0]).unwrap();
+            let b = image_through(&iface, &pinhole(c, 1000.0), p, a).unwrap();
             let (o, d) = pinhole(c, 1000.0)(b[0], b[1]).unwrap();
             let (s, w, _) = iface.refract_down(o, d).unwrap();
             assert!((s.z - iface.field.height(s.x, s.y)).abs() < 1e-9);
