@@ -3,7 +3,7 @@
 //!
 //! | item | meaning |
 //! |---|---|
-//! | [`SeaInterface::hit`] | first crossing of a downward air ray with `z = h(x, y)`: bracketed between the planes `z = ±max|h|`, marched in steps of at most 1/16 of the shortest wave's length, then bisected to 1e-12 m |
+//! | [`SeaInterface::hit`] | first crossing of a downward air ray with `z = h(x, y)`: sphere tracing from the plane `z = max|h|` with steps `f/L` (`L = |d_z| + Σ|aᵢ||kᵢ|·|d_xy|` bounds the slope of `f = z − h` along the ray, so no step passes the first crossing), then Newton's method from 0.1 mm above it, to 1e-11 m |
 //! | [`SeaInterface::refract_down`] | the ray in the water: vector Snell at the local normal `(−hx, −hy, 1)`, and the unpolarised Fresnel transmittance (air → water) |
 //! | [`image_through`] | the pixel at which a camera in the air sees a point under the surface: Newton's method in pixel space on the water ray's miss distance, the Jacobian by central differences (1e-4 px), from a start pixel (the straight-line projection) |
 //!
@@ -52,48 +52,52 @@ impl SeaInterface {
         if h_max == 0.0 {
             return Ok(o + (o.z / -d.z) * d);
         }
-        let (mut a, t_end) = ((o.z - h_max) / -d.z, (o.z + h_max) / -d.z);
-        // Steps short against the shortest wave, measured along the ray's horizontal run.
-        let k_max = self
+        let (t0, t_end) = ((o.z - h_max) / -d.z, (o.z + h_max) / -d.z);
+        // Sphere tracing: |f'| ≤ |d.z| + max|∇h|·|d_xy| (the gradient bound Σ|aᵢ|·|kᵢ|), so a
+        // step of f/that bound never passes the first crossing; it closes in on it
+        // geometrically (fast for the steep rays of a camera looking down).
+        let slope_max: f64 = self
             .field
             .components
             .iter()
-            .map(|c| c.kx.hypot(c.ky))
-            .fold(0.0, f64::max);
-        let lambda_min = std::f64::consts::TAU / k_max;
-        let horizontal = d.x.hypot(d.y);
-        let step = if horizontal > 0.0 {
-            (lambda_min / 16.0 / horizontal).min(t_end - a)
-        } else {
-            t_end - a
-        };
-        let mut fa = f(a);
-        let mut b = a;
-        let mut fb = fa;
-        while b < t_end {
-            b = (a + step).min(t_end);
-            fb = f(b);
-            if fb <= 0.0 {
+            .map(|c| c.amplitude.abs() * c.kx.hypot(c.ky))
+            .sum();
+        let lipschitz = -d.z + slope_max * d.x.hypot(d.y);
+        let tol = 1e-11 * (1.0 + o.z.abs());
+        let mut t = t0;
+        for _ in 0..100_000 {
+            let fv = f(t);
+            if fv <= tol {
+                return Ok(o + t * d);
+            }
+            if fv <= 1e-4 {
+                // Within 0.1 mm of the crossing: finish with Newton's method.
+                return self.polish(o, d, t, tol);
+            }
+            t += fv / lipschitz;
+            if t > t_end + 1.0 {
                 break;
             }
-            a = b;
-            fa = fb;
         }
-        if fb > 0.0 || fa < 0.0 {
-            return Err(NoSolution::NoConvergence);
-        }
-        for _ in 0..200 {
-            if b - a <= 1e-12 * (1.0 + b) {
-                break;
+        Err(NoSolution::NoConvergence)
+    }
+
+    /// Newton's method on `f(t) = z − h` from `t` (just above the first crossing).
+    fn polish(&self, o: DVec3, d: DVec3, mut t: f64, tol: f64) -> Result<DVec3, NoSolution> {
+        for _ in 0..20 {
+            let p = o + t * d;
+            let (h, hx, hy) = self.field.height_gradient(p.x, p.y);
+            let fv = p.z - h;
+            if fv.abs() <= tol {
+                return Ok(p);
             }
-            let m = 0.5 * (a + b);
-            if f(m) > 0.0 {
-                a = m;
-            } else {
-                b = m;
+            let df = d.z - hx * d.x - hy * d.y;
+            if !(df < 0.0) {
+                return Err(NoSolution::NoConvergence);
             }
+            t -= fv / df;
         }
-        Ok(o + b * d)
+        Err(NoSolution::NoConvergence)
     }
 
     /// The ray in the water below the point where `o + t·d` meets the surface: (that point,
@@ -107,7 +111,8 @@ impl SeaInterface {
         if cos_i <= 0.0 {
             return Err(NoSolution::MissesPort); // grazing the back of a wave
         }
-        let (t, cos_t) = refract(d, n, 1.0 / self.n_water).ok_or(NoSolution::TotalInternalReflection)?;
+        let (t, cos_t) =
+            refract(d, n, 1.0 / self.n_water).ok_or(NoSolution::TotalInternalReflection)?;
         let tr = fresnel_transmittance(1.0, self.n_water, cos_i, cos_t);
         Ok((s, t.normalize(), tr))
     }
@@ -167,6 +172,25 @@ pub fn image_through(
         }
     }
     Ok(uv)
+}
+
+/// The pixel of world point `w` for projector `p` at pose `pi`, seen from the air through
+/// the sea surface `iface`: [`image_through`] started from the straight-line projection, on
+/// the sensor.
+pub fn project_through(
+    p: &super::project::Projector,
+    iface: &SeaInterface,
+    pi: usize,
+    w: DVec3,
+) -> Result<[f64; 2], NoSolution> {
+    let start = p.project_world_unbounded(pi, w)?;
+    let ray = |u: f64, v: f64| p.pixel_ray_world(pi, u, v).map(|(o, d, _)| (o, d));
+    let uv = image_through(iface, &ray, w, start)?;
+    if p.on_sensor(uv) {
+        Ok(uv)
+    } else {
+        Err(NoSolution::OffSensor)
+    }
 }
 
 /// Every image of `p` within `radius` px of `around` (a grid of 41 × 41 starts, Newton from
@@ -264,7 +288,8 @@ fn newton(
         if norm(e) <= 1e-9 * len {
             return Ok([u, v]);
         }
-        let diff = |a: [f64; 2], b: [f64; 2]| [(a[0] - b[0]) / (2.0 * H), (a[1] - b[1]) / (2.0 * H)];
+        let diff =
+            |a: [f64; 2], b: [f64; 2]| [(a[0] - b[0]) / (2.0 * H), (a[1] - b[1]) / (2.0 * H)];
         let du = diff(miss(u + H, v)?.0, miss(u - H, v)?.0);
         let dv = diff(miss(u, v + H)?.0, miss(u, v - H)?.0);
         let det = du[0] * dv[1] - dv[0] * du[1];
@@ -322,8 +347,17 @@ mod tests {
         assert!((q - q.dot(w) * w).length() < 1e-8);
         assert!(t > 0.9 && t < 1.0);
         // Nadir point: seen straight below, at the principal point.
-        let px = image_through(&iface, &pinhole(c, 1000.0), DVec3::new(0.0, 0.0, -4.0), [510.0, 490.0]).unwrap();
-        assert!((px[0] - 500.0).abs() < 1e-6 && (px[1] - 500.0).abs() < 1e-6, "{px:?}");
+        let px = image_through(
+            &iface,
+            &pinhole(c, 1000.0),
+            DVec3::new(0.0, 0.0, -4.0),
+            [510.0, 490.0],
+        )
+        .unwrap();
+        assert!(
+            (px[0] - 500.0).abs() < 1e-6 && (px[1] - 500.0).abs() < 1e-6,
+            "{px:?}"
+        );
     }
 
     #[test]
@@ -346,7 +380,10 @@ mod tests {
             assert!((q - q.dot(w) * w).length() < 1e-8);
             moved = moved.max((a[0] - b[0]).hypot(a[1] - b[1]));
         }
-        assert!(moved > 1.0, "waves of 0.3 m move a point 3 m down by {moved} px");
+        assert!(
+            moved > 1.0,
+            "waves of 0.3 m move a point 3 m down by {moved} px"
+        );
     }
 
     #[test]
@@ -356,6 +393,10 @@ mod tests {
             iface.hit(DVec3::new(0.0, 0.0, 5.0), DVec3::Z),
             Err(NoSolution::MissesPort)
         );
-        assert!(iface.hit(DVec3::new(0.0, 0.0, 5.0), DVec3::new(f64::NAN, 0.0, -1.0)).is_err());
+        assert!(
+            iface
+                .hit(DVec3::new(0.0, 0.0, 5.0), DVec3::new(f64::NAN, 0.0, -1.0))
+                .is_err()
+        );
     }
 }
