@@ -106,6 +106,9 @@ pub enum LessonKind {
     /// A stereo rig's lighting (backscatter, contrast) and its measurement accuracy (`poser
     /// evaluate` with the rig calibrated) per variant ([`crate::lesson::metrology`]).
     Metrology,
+    /// A camera above the water: how far the waves move targets in the image, and the
+    /// caustics' contrast against depth ([`crate::lesson::surface`]).
+    Surface,
 }
 
 /// One compared case: a scene file (absolute; `None`: the lesson's own scene) with `--set`
@@ -663,6 +666,45 @@ pub struct Needs {
 }
 
 impl Model {
+    /// The air–water interface for channel `ch` (0 = R, 1 = G, 2 = B) that a camera above the
+    /// water looks through: the flat surface, or the waves (the same seeded field as the
+    /// native renderer's caustics). `None` without water or without a modelled surface.
+    pub fn sea_interface(&self, ch: usize) -> Option<crate::optics::surface::SeaInterface> {
+        use crate::optics::surface::SeaInterface;
+        use crate::optics::waves::{WIND_DIRECTION, WaveField};
+        let n_water = self.water.as_ref()?.ior[ch.min(2)];
+        match self.site.surface {
+            SeaSurface::None => None,
+            SeaSurface::Flat => Some(SeaInterface::flat(n_water)),
+            SeaSurface::Waves {
+                height,
+                wavelength,
+                wind_speed,
+            } => Some(SeaInterface {
+                field: WaveField::new(
+                    height,
+                    wavelength,
+                    wind_speed,
+                    WIND_DIRECTION,
+                    self.render.seed,
+                ),
+                n_water,
+            }),
+        }
+    }
+
+    /// Whether camera `cam` at rig pose `pose` is in the air above every crest, looking down
+    /// through the sea surface (a drone).
+    pub fn above_surface(&self, pose: usize, cam: usize) -> bool {
+        self.sea_interface(1)
+            .is_some_and(|s| s.above(self.world_from_camera(pose, cam).translation))
+    }
+
+    /// Whether any image of the network is taken from above the sea surface.
+    pub fn any_above_surface(&self) -> bool {
+        (0..self.poses.len()).any(|p| (0..self.cameras.len()).any(|c| self.above_surface(p, c)))
+    }
+
     /// Index of the medium the cameras' ports open into, per channel (1 in air).
     pub fn ambient_ior(&self) -> Rgb {
         self.water.as_ref().map(|w| w.ior).unwrap_or([1.0; 3])

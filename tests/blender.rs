@@ -605,7 +605,7 @@ bounces = 8
             clear_radius: 0.06,
             x_axis: Some(t.pose.rotation.x_axis),
         };
-        let Some((c, half)) = poser::compare::expected_disk(&proj, 0, &d) else {
+        let Some((c, half)) = poser::compare::expected_disk(&proj, None, 0, &d) else {
             continue;
         };
         let m = poser::compare::detect::disk_centroid(&gray, c, half, dark)

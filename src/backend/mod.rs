@@ -83,6 +83,14 @@ impl Backend {
         if self == Backend::Native {
             return Ok(());
         }
+        if model.any_above_surface() {
+            return Err(format!(
+                "the {} backend does not model a camera in the air looking through the sea \
+                 surface (this network has images taken from above the water); render it with \
+                 `--backend native`, whose camera rays refract at the flat or wavy surface",
+                self.name()
+            ));
+        }
         for c in &model.cameras {
             if let crate::model::Port::Flat { outer_layers, .. } = &c.port
                 && !outer_layers.is_empty()

@@ -182,6 +182,14 @@ pub fn run(
             Some(pose)
         }
     };
+    if world_pose.is_some_and(|pi| model.above_surface(pi, cam)) {
+        return Err(CliError::Failed(format!(
+            "camera `{}` is above the sea surface at pose {pose}: `poser project` projects \
+             through the port only\n  help: `poser truth` projects the scene's targets through \
+             the surface",
+            model.cameras[cam].name
+        )));
+    }
     let p = Projector::new(&model, cam, ch).map_err(CliError::Failed)?;
     let csv = project_csv(&p, &pts, world_pose);
     match output {

@@ -52,6 +52,7 @@ pub fn channel_means(rgb: &[f32]) -> [f64; 3] {
 use crate::backend::{Backend, RenderOptions};
 use crate::model::{Model, TargetKind};
 use crate::optics::project::Projector;
+use crate::optics::surface::SeaInterface;
 use glam::DVec3;
 use report::{BackendResult, PairResult, Report};
 use std::time::Instant;
@@ -106,10 +107,18 @@ pub fn disks(model: &Model) -> Vec<Disk> {
 
 /// Where a disk should appear in image (pose, cam): expected image centroid and window
 /// half-size, or `None` when it is not (fully) visible or too small/crowded to measure.
-pub fn expected_disk(proj: &Projector, pose: usize, d: &Disk) -> Option<([f64; 2], f64)> {
-    let c = detect::expected_centroid(d.center, d.normal, d.radius, |p| {
-        proj.project_world(pose, p).ok()
-    })?;
+pub fn expected_disk(
+    proj: &Projector,
+    surface: Option<&SeaInterface>,
+    pose: usize,
+    d: &Disk,
+) -> Option<([f64; 2], f64)> {
+    // From the air, through the sea surface; else through the port.
+    let project = |p: DVec3| match surface {
+        Some(s) => crate::optics::surface::project_through(proj, s, pose, p),
+        None => proj.project_world(pose, p),
+    };
+    let c = detect::expected_centroid(d.center, d.normal, d.radius, |p| project(p).ok())?;
     // Facing the camera?
     let cam = proj.world_from_camera(pose).translation;
     if d.normal.dot(cam - d.center) <= 0.0 {
@@ -129,9 +138,7 @@ pub fn expected_disk(proj: &Projector, pose: usize, d: &Disk) -> Option<([f64; 2
     for k in 0..N {
         let t = std::f64::consts::TAU * k as f64 / N as f64;
         let (ct, st) = (t.cos(), t.sin());
-        let p = proj
-            .project_world(pose, d.center + d.radius * (ct * a + st * b))
-            .ok()?;
+        let p = project(d.center + d.radius * (ct * a + st * b)).ok()?;
         r_disk = r_disk.max(cheb(p));
         // Square cell: scale the direction onto the square's boundary.
         let s = if d.x_axis.is_some() {
@@ -139,9 +146,7 @@ pub fn expected_disk(proj: &Projector, pose: usize, d: &Disk) -> Option<([f64; 2
         } else {
             1.0
         };
-        let q = proj
-            .project_world(pose, d.center + d.clear_radius * s * (ct * a + st * b))
-            .ok()?;
+        let q = project(d.center + d.clear_radius * s * (ct * a + st * b)).ok()?;
         r_clear = r_clear.min(cheb(q));
     }
     // 1.5 px of safety from the edge of the white surround (partly covered edge pixels).
@@ -195,7 +200,11 @@ pub fn measure_targets_in_channel(
                 data: &g,
             };
             for d in &disks {
-                let Some((c, half)) = expected_disk(&proj, pose, d) else {
+                let surface = model
+                    .above_surface(pose, cam)
+                    .then(|| model.sea_interface(channel))
+                    .flatten();
+                let Some((c, half)) = expected_disk(&proj, surface.as_ref(), pose, d) else {
                     continue;
                 };
                 expected += 1;

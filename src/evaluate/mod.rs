@@ -361,6 +361,14 @@ pub fn evaluate_observations(
     if model.poses.is_empty() {
         return Err("the scene's network has no poses: nothing to evaluate".into());
     }
+    if model.any_above_surface() {
+        return Err(
+            "observations mode projects through the cameras' ports only, and this \
+                    network has images taken from above the sea surface\n  help: use `--mode \
+                    images` (the native renderer's images refract at the surface)"
+                .into(),
+        );
+    }
     let (meshes, scene) = surfaces(model)?;
     let points = observe::sample_points(model, &meshes, opts.density, opts.seed)?;
     let n_images = (model.poses.len() * model.cameras.len()) as u64;

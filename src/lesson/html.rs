@@ -6,7 +6,7 @@
 //! |---|---|
 //! | header | title, the question, the set-up, the form (quick or full) and the command |
 //! | numbers | one table row per variant; every number measured by this run |
-//! | figures | per variant: deformation map and height profile, a rendered view and the residual vectors, the dive profile, or the seen/unseen surface maps (kinds `contrast`, `gsd`, `completeness` and `metrology` write their own sections: [`super::contrast::html`], [`super::gsd::html`], [`super::completeness::section`], [`super::metrology::html`]) |
+//! | figures | per variant: deformation map and height profile, a rendered view and the residual vectors, the dive profile, or the seen/unseen surface maps (kinds `contrast`, `gsd`, `completeness`, `metrology` and `surface` write their own sections: [`super::contrast::html`], [`super::gsd::html`], [`super::completeness::section`], [`super::metrology::html`], [`super::surface::html`]) |
 //! | try next | each suggestion with the `poser lesson … --set` that changes one thing |
 //!
 //! Every number cell carries `data-key="<variant slug>.<quantity>"` so tools (and the tests)
@@ -208,6 +208,7 @@ pub fn page(r: &Report) -> String {
         Results::Survey(res) => s.push_str(&super::dive::html(res, true)),
         Results::Completeness { rows } => s.push_str(&super::completeness::section(rows)),
         Results::Metrology { rows } => s.push_str(&super::metrology::html(rows)),
+        Results::Surface { rows } => s.push_str(&super::surface::html(rows)),
     }
     if !r.try_next.is_empty() {
         s.push_str("<h2>Try next</h2>\n<ul>\n");

@@ -11,6 +11,7 @@
 //! | [`gsd`] | kind `gsd`: camera height for a GSD through the port, smallest resolved Siemens-star element |
 //! | [`dive`] | kinds `dive` and `survey`: survey and dive planner per variant (deco, gas, verdict, dives needed), `survey` adds `poser evaluate` with GCPs |
 //! | [`completeness`] | kind `completeness`: share of the corals' surface seen by ≥ 3 images within 60° of its normal |
+//! | [`surface`] | kind `surface`: a drone above the water: targets moved by the waves (px), caustic contrast against depth, the view |
 //! | [`metrology`] | kind `metrology`: a stereo rig's backscatter and contrast (native renders), and its accuracy (`poser evaluate --rig --gcp`) |
 //! | [`html`] | `index.html` (images inline, works offline) and `lesson.json` |
 //!
@@ -25,6 +26,7 @@ pub mod dive;
 pub mod gsd;
 pub mod html;
 pub mod metrology;
+pub mod surface;
 
 use crate::model::{Lesson, LessonKind, Model};
 use serde::Serialize;
@@ -74,6 +76,7 @@ pub enum Results {
     Survey(dive::Results),
     Completeness { rows: Vec<completeness::Row> },
     Metrology { rows: Vec<metrology::Row> },
+    Surface { rows: Vec<surface::Row> },
 }
 
 /// A "try next" line with the command that does it.
@@ -202,6 +205,9 @@ pub fn run(
         },
         LessonKind::Metrology => Results::Metrology {
             rows: metrology::run(&cases, out, progress)?,
+        },
+        LessonKind::Surface => Results::Surface {
+            rows: surface::run(&cases, out, progress)?,
         },
     };
     let mut command = format!("poser lesson {} -o {}", scene.display(), out.display());

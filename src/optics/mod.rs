@@ -28,6 +28,7 @@ pub mod port;
 pub mod project;
 pub mod reference;
 pub mod sun;
+pub mod surface;
 pub mod types;
 pub mod water;
 pub mod waves;

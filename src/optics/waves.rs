@@ -177,6 +177,19 @@ impl WaveField {
         g
     }
 
+    /// Height and gradient `(h, ∂h/∂x, ∂h/∂y)` in one pass (one sine and cosine per
+    /// component).
+    pub fn height_gradient(&self, x: f64, y: f64) -> (f64, f64, f64) {
+        let mut r = (0.0, 0.0, 0.0);
+        for c in &self.components {
+            let (s, co) = (c.kx * x + c.ky * y + c.phase).sin_cos();
+            r.0 += c.amplitude * co;
+            r.1 -= c.amplitude * s * c.kx;
+            r.2 -= c.amplitude * s * c.ky;
+        }
+        r
+    }
+
     /// Bound on |h|: `Σ|aᵢ|`.
     pub fn max_abs_height(&self) -> f64 {
         self.components.iter().map(|c| c.amplitude.abs()).sum()

@@ -163,17 +163,23 @@ pub fn index(cx: &mut Cx, t: &Tab, key: &str, v: Rgb) {
 
 /// Whole-scene checks on the resolved model.
 pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
-    // A camera above the sea surface would be modelled as if in water (its port, the medium):
-    // refuse it. (A view from the air through the surface is not modelled yet.)
+    // A camera above the sea surface is modelled only as a camera in the air (no port) above
+    // every crest of a modelled surface (flat or waves): it looks through the surface. Any
+    // other camera out of the water would be modelled as if in it (its port, the medium).
     if m.water.is_some() {
+        let wrong = |pi: usize, ci: usize| {
+            m.world_from_camera(pi, ci).translation.z >= 0.0
+                && !(matches!(m.cameras[ci].port, crate::model::Port::None)
+                    && m.above_surface(pi, ci))
+        };
         let above = (0..m.poses.len())
             .flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
-            .find(|&(pi, ci)| m.world_from_camera(pi, ci).translation.z >= 0.0);
+            .find(|&(pi, ci)| wrong(pi, ci));
         if let Some((pi, ci)) = above {
             let z = m.world_from_camera(pi, ci).translation.z;
             let n = (0..m.poses.len())
                 .flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
-                .filter(|&(pi, ci)| m.world_from_camera(pi, ci).translation.z >= 0.0)
+                .filter(|&(pi, ci)| wrong(pi, ci))
                 .count();
             cx.push(
                 Diagnostic::error(
@@ -186,7 +192,7 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
                     ),
                 )
                 .label(spans.network, "puts cameras above the water")
-                .help("cameras are in the water (z < 0, the surface is z = 0): lower the altitude or raise `site.depth`; for a survey in air, remove [water]"),
+                .help("cameras are in the water (z < 0, the surface is z = 0): lower the altitude or raise `site.depth`; for a survey in air, remove [water]; for a drone looking down through the water, give the camera `[camera.port] type = \"none\"`, model the surface (`site.surface = \"flat\"` or `\"waves\"`) and keep it above the crests"),
             );
         }
     }

@@ -964,7 +964,9 @@ pub struct LessonTable {
     /// evaluate` with the targets as GCPs), `"completeness"` (the share of the corals'
     /// surface seen by at least 3 images within 60° of its normal) or `"metrology"` (a
     /// stereo rig: backscatter and contrast on the first target, a checkerboard, and `poser
-    /// evaluate --rig --gcp`). **Default:** `"deformation"`.
+    /// evaluate --rig --gcp`) or `"surface"` (a camera above the water: how far the waves
+    /// move the targets in the image, and the caustics' contrast from 1 to 10 m down).
+    /// **Default:** `"deformation"`.
     pub kind: Option<LessonKindValue>,
     /// Kinds `contrast` and `gsd`: the ground sampling distance at the first target's centre
     /// for which the camera is placed (exact projection through the port). **Unit:** m/px.
@@ -991,6 +993,7 @@ pub enum LessonKindValue {
     Survey,
     Completeness,
     Metrology,
+    Surface,
 }
 
 /// `[[lesson.variants]]` — one compared case.

@@ -4,7 +4,7 @@
 //! | key | resolved to | check |
 //! |---|---|---|
 //! | `title`, `question`, `setup` | text of the page | `question` required |
-//! | `kind` | [`LessonKind`] | `deformation`, `calibration`, `contrast`, `gsd`, `dive`, `survey`, `completeness` or `metrology` |
+//! | `kind` | [`LessonKind`] | `deformation`, `calibration`, `contrast`, `gsd`, `dive`, `survey`, `completeness`, `metrology` or `surface` |
 //! | `gsd` | m/px (kinds `contrast`, `gsd`) | positive |
 //! | `quick`, `full` | `--set` overrides of the quick and full forms | strings |
 //! | `[[lesson.variants]]` `label`, `scene`, `set` | [`LessonVariant`]; `scene` made absolute, relative to the file that names it | the file exists |
@@ -93,6 +93,7 @@ pub fn lesson(
             "survey",
             "completeness",
             "metrology",
+            "surface",
         ],
     ) {
         Some("calibration") => LessonKind::Calibration,
@@ -102,6 +103,7 @@ pub fn lesson(
         Some("survey") => LessonKind::Survey,
         Some("completeness") => LessonKind::Completeness,
         Some("metrology") => LessonKind::Metrology,
+        Some("surface") => LessonKind::Surface,
         _ => LessonKind::Deformation,
     };
     let gsd = t.opt_f64(cx, "gsd", crate::units::Dim::Gsd);

@@ -27,6 +27,7 @@ use crate::io::write_atomic;
 use crate::model::{Camera, LensModel, Model, Port, Pose};
 use crate::optics::NoSolution;
 use crate::optics::project::Projector;
+use crate::optics::surface::SeaInterface;
 use glam::{DMat3, DQuat, DVec3};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -151,14 +152,33 @@ pub fn compute_with(
                         .map(|tp| pr[1].world_to_camera(pi, tp.world))
                 })
                 .collect();
-            let uv_all: Vec<Vec<Result<[f64; 2], NoSolution>>> = pr
-                .iter()
-                .map(|p| {
-                    let mut out = vec![Err(NoSolution::NoConvergence); in_camera.len()];
-                    p.project_camera_many(&in_camera, &mut out);
-                    out
-                })
-                .collect();
+            // A camera above the water sees each point through the sea surface.
+            let through: Option<Vec<SeaInterface>> = model
+                .above_surface(pi, ci)
+                .then(|| (0..3).filter_map(|ch| model.sea_interface(ch)).collect());
+            let uv_all: Vec<Vec<Result<[f64; 2], NoSolution>>> = match &through {
+                None => pr
+                    .iter()
+                    .map(|p| {
+                        let mut out = vec![Err(NoSolution::NoConvergence); in_camera.len()];
+                        p.project_camera_many(&in_camera, &mut out);
+                        out
+                    })
+                    .collect(),
+                Some(ifaces) => pr
+                    .iter()
+                    .zip(ifaces)
+                    .map(|(p, iface)| {
+                        let world = model
+                            .targets
+                            .iter()
+                            .flat_map(|t| t.points.iter().map(|tp| tp.world));
+                        world
+                            .map(|w| crate::optics::surface::project_through(p, iface, pi, w))
+                            .collect()
+                    })
+                    .collect(),
+            };
             let mut k = 0;
             let mut points = Vec::new();
             for target in &model.targets {
@@ -169,9 +189,17 @@ pub fn compute_with(
                     let Ok(uv) = uv_all[1][i] else {
                         continue;
                     };
-                    // The water path: from the point back to where its ray leaves the port.
-                    let Ok((exit, _, _)) = pr[1].pixel_ray_world(pi, uv[0], uv[1]) else {
+                    // The water path: from the point back to where its ray leaves the port (or,
+                    // from the air, enters the water).
+                    let Ok((exit, d, _)) = pr[1].pixel_ray_world(pi, uv[0], uv[1]) else {
                         continue;
+                    };
+                    let exit = match &through {
+                        Some(ifaces) => match ifaces[1].refract_down(exit, d) {
+                            Ok((s, _, _)) => s,
+                            Err(_) => continue,
+                        },
+                        None => exit,
                     };
                     if (exit - tp.world).dot(normal) <= 0.0 {
                         continue; // seen from behind its own printed face

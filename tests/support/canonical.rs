@@ -71,8 +71,8 @@ pub fn dispersion_shift(model: &Model, channel: usize) -> f64 {
     for pose in 0..model.poses.len() {
         for d in poser::compare::disks(model) {
             if let (Some((a, _)), Some((b, _))) = (
-                poser::compare::expected_disk(&pc, pose, &d),
-                poser::compare::expected_disk(&pg, pose, &d),
+                poser::compare::expected_disk(&pc, None, pose, &d),
+                poser::compare::expected_disk(&pg, None, pose, &d),
             ) {
                 d2.push((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2));
             }
