@@ -18,7 +18,7 @@ The description (format `poser-blender/1`) is written by `poser compile --backen
 | depth (`render.outputs` has "depth") | a second 1-sample render per image: glass -> Refraction BSDF, water off, surfaces emit their camera-frame z; `<image>.depth.exr` |
 
 Emitters in water are scaled by (n_cam/n_water)^2 per camera before each render (the n^2
-convention, render-conventions §3.4).
+convention, docs/render-conventions.md §3.4).
 
 SAVED_AS_RENDERED: `build` ends by setting everything a render sets per image for the first
 image (strengths with the n^2 factor, seed, camera, resolution), so a .blend saved with
@@ -48,7 +48,7 @@ WATER_GAP = 5e-5
 # in one corner were at 16 % of their sunlit radiance and the image mean was 0.37 % low
 # (Cycles/analytic 0.9968); without it 1.0005. Consequence: a light placed inside a housing
 # shines through its port unrefracted (as in the native backend); put lights in the water
-# (render-conventions section 4).
+# (docs/render-conventions.md §4).
 
 
 # ------------------------------------------------------------------------------------------

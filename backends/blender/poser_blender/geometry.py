@@ -34,7 +34,7 @@ def blender_intrinsics(fx, fy, cx, cy, width, height):
 
     sensor_fit = HORIZONTAL, sensor width 36 mm; shifts are in units of the image width (the
     fit dimension) for both axes; +shift_x moves the principal point left, +shift_y down
-    (render-conventions §1.2). Cycles has one focal length: fx must equal fy.
+    (docs/render-conventions.md §1.2). Cycles has one focal length: fx must equal fy.
     """
     if abs(fx - fy) > 1e-9 * max(abs(fx), 1.0):
         raise ValueError(f"Cycles needs square pixels (fx = fy), got fx={fx} fy={fy}")
@@ -83,7 +83,7 @@ def emitter_scale(n_cam, n_water):
 
     Cycles does not apply the n^2 radiance law at refractive interfaces; Mitsuba (the
     radiometric reference) does. Scaling emitters in water by this factor makes Cycles agree
-    (render-conventions §3.4).
+    (docs/render-conventions.md §3.4).
     """
     return [(n_cam[c] / n_water[c]) ** 2 for c in range(3)]
 
