@@ -304,79 +304,14 @@ fn fournier_forand_table_keeps_the_backscatter_fraction() {
     }
 }
 
-/// Drop long number lists (tabulated phase values) from a snapshot.
-fn shorten(doc: &str) -> String {
-    doc.lines()
-        .map(|l| {
-            if l.contains("name=\"values\"") {
-                "      <string name=\"values\" value=\"…\"/>".to_string()
-            } else {
-                l.to_string()
-            }
-        })
-        .collect::<Vec<_>>()
-        .join("\n")
-}
-
-/// Scenes whose compiled XML is snapshotted (a fixed list, so that new scenes added by others
-/// do not fail CI before they are reviewed; every scene is still compiled below).
-const SNAPSHOT_SCENES: &[&str] = &[
-    "scenarios/calibration_flat.toml",
-    "scenarios/dome_orbit.toml",
-    "scenarios/reef_strip.toml",
-    "scenarios/paper_survey.toml",
-    "tests/canonical/flat_tilted.toml",
-    "tests/canonical/cylinder_off_axis.toml",
-    "tests/canonical/scattering_backscatter.toml",
-    "tests/canonical/dispersion.toml",
-];
-
-fn snapshot_text(c: &mitsuba::Compiled) -> String {
-    let names: Vec<String> = c.files.keys().cloned().collect();
-    let first = &c.manifest.views[0].passes[0].xml;
-    let mut snap = format!("files: {}\n\n", names.join(" "));
-    if let Some(w) = c.files.get(mitsuba::WORLD_FILE) {
-        snap.push_str(&format!(
-            "==== {} ====\n{}\n",
-            mitsuba::WORLD_FILE,
-            shorten(&String::from_utf8_lossy(w))
-        ));
-    }
-    snap.push_str(&format!(
-        "==== {first} ====\n{}\n",
-        shorten(&text(c, first))
-    ));
-    snap
-}
-
-#[test]
-fn example_scenarios_snapshots() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    for rel in SNAPSHOT_SCENES {
-        let path = root.join(rel);
-        if !path.exists() {
-            panic!("{rel} is gone: update SNAPSHOT_SCENES");
-        }
-        let stem = path.file_stem().unwrap().to_string_lossy().to_string();
-        let loaded = match poser::scene::load(&path, &[]) {
-            Ok(l) => l,
-            Err(f) => panic!("{rel}: {}", f.render()),
-        };
-        let c = mitsuba::build(&loaded.model).unwrap_or_else(|e| panic!("{rel}: {e}"));
-        insta::assert_snapshot!(format!("scenario_{stem}"), snapshot_text(&c));
-        // Stable bytes for the real scenes too (textures, meshes, XML).
-        let again = mitsuba::build(&loaded.model).unwrap();
-        assert_eq!(c.files, again.files, "{rel}: compile is not byte-stable");
-    }
-}
-
 /// Every scene shipped (scenarios/, tests/canonical/) compiles, or fails with a clear
-/// "cannot be expressed" error naming what Mitsuba lacks. The scenes of [`SNAPSHOT_SCENES`]
-/// are compiled (twice) by `example_scenarios_snapshots` and skipped here: their textures take
-/// seconds each to bake.
+/// "cannot be expressed" error naming what Mitsuba lacks. The scenes pinned by `tests/in/` are
+/// compiled (twice) and snapshotted by `tests/compile_out.rs` and skipped here: their textures
+/// take seconds each to bake.
 #[test]
 fn every_shipped_scene_compiles_or_says_why() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let pinned = support::pinned_scenes();
     for dir in ["scenarios", "tests/canonical"] {
         let Ok(rd) = std::fs::read_dir(root.join(dir)) else {
             continue;
@@ -384,7 +319,7 @@ fn every_shipped_scene_compiles_or_says_why() {
         let mut paths: Vec<_> = rd
             .map(|e| e.unwrap().path())
             .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-            .filter(|p| !SNAPSHOT_SCENES.iter().any(|s| root.join(s) == *p))
+            .filter(|p| !pinned.contains(&p.canonicalize().unwrap()))
             .collect();
         paths.sort();
         for path in paths {

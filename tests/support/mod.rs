@@ -15,3 +15,23 @@ pub mod mitsuba;
 pub mod model;
 pub mod native;
 pub mod plan;
+
+/// The shipped scenes that `tests/in/*.toml` includes (canonical paths): the scenes the snapshot
+/// suite (`tests/compile_out.rs`) already compiles with every backend.
+pub fn pinned_scenes() -> Vec<std::path::PathBuf> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/in");
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(&dir).expect("tests/in") {
+        let p = e.unwrap().path();
+        if p.extension().is_none_or(|x| x != "toml") {
+            continue;
+        }
+        let doc: toml::Table = toml::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+        if let Some(toml::Value::Array(list)) = doc.get("include") {
+            for inc in list.iter().filter_map(|v| v.as_str()) {
+                out.push(dir.join(inc).canonicalize().unwrap());
+            }
+        }
+    }
+    out
+}
