@@ -1,14 +1,35 @@
 //! `poser bench`: speed-against-error reports (projection solvers; render backends).
 use super::CliError;
+use crate::backend::Backend;
 use std::path::PathBuf;
 
-pub fn run(
-    what: &str,
-    json: Option<PathBuf>,
-    quick: bool,
-    backends: Vec<crate::backend::Backend>,
-    plot: Option<PathBuf>,
-) -> Result<(), CliError> {
+/// The arguments of `poser bench`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// What to benchmark: `projection`, `render` or `evaluate`.
+    pub what: String,
+    /// Write the report as JSON too.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+    /// Smaller, quicker run.
+    #[arg(long)]
+    pub quick: bool,
+    /// `render` only: the backends to compare (default: all three).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub backends: Vec<Backend>,
+    /// `render` only: write the speed-against-error curves as an SVG plot.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let (what, json, quick, backends, plot) = (
+        args.what.as_str(),
+        args.json.clone(),
+        args.quick,
+        args.backends.clone(),
+        args.plot.clone(),
+    );
     if what != "render" && (!backends.is_empty() || plot.is_some()) {
         return Err(CliError::Usage(
             "--backends and --plot apply to `poser bench render` only".into(),

@@ -1,15 +1,34 @@
 //! `poser compare`: render with several backends; report agreement with truth and each other.
 use super::{CliError, SceneArgs, load_model};
 use crate::backend::{Backend, RenderOptions};
-use std::path::Path;
+use std::path::PathBuf;
 
-pub fn run(
-    scene: &SceneArgs,
-    backends: &[Backend],
-    out: &Path,
-    samples: Option<u32>,
-    poses: Option<Vec<usize>>,
-) -> Result<(), CliError> {
+/// The arguments of `poser compare`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Backends to compare.
+    #[arg(long, value_delimiter = ',', default_value = "native,mitsuba,blender")]
+    pub backends: Vec<Backend>,
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Override samples per pixel.
+    #[arg(long)]
+    pub samples: Option<u32>,
+    /// Render only these pose indices (e.g. `0,3,5`).
+    #[arg(long, value_delimiter = ',')]
+    pub poses: Option<Vec<usize>>,
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let (scene, backends, out, samples, poses) = (
+        &args.scene,
+        &args.backends,
+        &args.out,
+        args.samples,
+        args.poses.clone(),
+    );
     let model = load_model(scene)?;
     let opts = RenderOptions {
         samples,

@@ -2,7 +2,7 @@
 use super::{CliError, SceneArgs};
 use crate::plan::dive::{DiveReport, plan_dive};
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::PathBuf;
 
 /// Sample interval of the exported profile, s.
 const SAMPLE_EVERY: f64 = 10.0;
@@ -195,12 +195,28 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
     o
 }
 
-pub fn run(
-    scene: &SceneArgs,
-    out: Option<&Path>,
-    plot: Option<&Path>,
-    json: bool,
-) -> Result<(), CliError> {
+/// The arguments of `poser dive`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Subsurface log to write (`.ssrf`).
+    #[arg(short, long)]
+    pub out: Option<PathBuf>,
+    /// Plot of depth, ceiling and NDL over time (`.svg` or `.png`).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let (scene, out, plot, json) = (
+        &args.scene,
+        args.out.as_deref(),
+        args.plot.as_deref(),
+        args.json,
+    );
     if let Some(path) = plot {
         let ext = path
             .extension()

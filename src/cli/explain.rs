@@ -6,7 +6,18 @@ use crate::model::{IorSource, LensModel, Model, Phase, Port, SeaSurface};
 use crate::optics::project::Projector;
 use std::fmt::Write;
 
-pub fn run(scene: &SceneArgs, json: bool) -> Result<(), CliError> {
+/// The arguments of `poser explain`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Print the whole resolved model as JSON instead.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let (scene, json) = (&args.scene, args.json);
     let model = super::load_model(scene)?;
     if json {
         let s =

@@ -3,7 +3,7 @@ use super::{CliError, SceneArgs};
 use crate::plan::survey::{self, CoverageSummary, Site, Stats, SurveyReport};
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::PathBuf;
 
 #[derive(Serialize)]
 struct Output<'a> {
@@ -131,7 +131,20 @@ fn text(model: &crate::model::Model, r: &SurveyReport, cov: Option<&CoverageSumm
     o
 }
 
-pub fn run(scene: &SceneArgs, json: bool, coverage: Option<&Path>) -> Result<(), CliError> {
+/// The arguments of `poser plan`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the coverage map/mesh into this directory.
+    #[arg(long)]
+    pub coverage: Option<PathBuf>,
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let (scene, json, coverage) = (&args.scene, args.json, args.coverage.as_deref());
     let model = super::load_model(scene)?;
     let site = Site::new(&model);
     let report = survey::survey(&model, &site).map_err(CliError::Failed)?;

@@ -9,7 +9,7 @@ use crate::optics::project::Projector;
 use crate::truth::csv_field;
 use glam::DVec3;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::PathBuf;
 
 /// Split one CSV line into fields (RFC 4180 quotes).
 fn split_csv(line: &str) -> Result<Vec<String>, String> {
@@ -142,15 +142,41 @@ pub fn project_csv(p: &Projector, pts: &[(String, DVec3)], world_pose: Option<us
     out
 }
 
-pub fn run(
-    scene: &SceneArgs,
-    points: &Path,
-    camera: Option<&str>,
-    frame: FrameArg,
-    pose: usize,
-    channel: &str,
-    output: Option<&Path>,
-) -> Result<(), CliError> {
+/// The arguments of `poser project`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// CSV file with header `id,x,y,z` (metres).
+    #[arg(long)]
+    pub points: PathBuf,
+    /// Camera of the rig (default: the first).
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Frame of the input points.
+    #[arg(long, value_enum, default_value = "camera")]
+    pub frame: FrameArg,
+    /// Rig pose index for `--frame world` (default 0).
+    #[arg(long, default_value_t = 0)]
+    pub pose: usize,
+    /// Colour channel: r, g or b (default g).
+    #[arg(long, default_value = "g")]
+    pub channel: String,
+    /// Output CSV (default: standard output).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let (scene, points, camera, frame, pose, channel, output) = (
+        &args.scene,
+        &args.points,
+        args.camera.as_deref(),
+        args.frame,
+        args.pose,
+        &args.channel,
+        args.output.as_deref(),
+    );
     let ch = parse_channel(channel).map_err(CliError::Usage)?;
     let text = std::fs::read_to_string(points)
         .map_err(|e| CliError::Failed(format!("{}: {e}", points.display())))?;

@@ -1,19 +1,48 @@
 //! `poser render`: render every pose with the chosen backend (native by default).
 use super::{CliError, SceneArgs, load_model};
 use crate::backend::{Backend, RenderOptions};
-use std::path::Path;
+use std::path::PathBuf;
+
+/// The arguments of `poser render`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[arg(long, value_enum, default_value = "native")]
+    pub backend: Backend,
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Override samples per pixel.
+    #[arg(long)]
+    pub samples: Option<u32>,
+    /// Render only these pose indices (e.g. `0,3,5`).
+    #[arg(long, value_delimiter = ',')]
+    pub poses: Option<Vec<usize>>,
+    /// Preview at a fraction of the cameras' resolution (e.g. `0.25`): same field of view,
+    /// lens and port; the ground truth is written for the scaled images.
+    #[arg(long)]
+    pub scale: Option<f64>,
+    /// Hide the progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Run the camera's sensor stage (docs/sensor.md) with the default sensor when the
+    /// scene has no `[sensor]`; writes `OUT/camera/<image>.jpg` and `.sensor.json`.
+    #[arg(long)]
+    pub sensor: bool,
+}
 
 #[allow(clippy::too_many_arguments)]
-pub fn run(
-    scene: &SceneArgs,
-    backend: Backend,
-    out: &Path,
-    samples: Option<u32>,
-    poses: Option<Vec<usize>>,
-    scale: Option<f64>,
-    quiet: bool,
-    sensor: bool,
-) -> Result<(), CliError> {
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let (scene, backend, out, samples, poses, scale, quiet, sensor) = (
+        &args.scene,
+        args.backend,
+        &args.out,
+        args.samples,
+        args.poses.clone(),
+        args.scale,
+        args.quiet,
+        args.sensor,
+    );
     let mut model = load_model(scene)?;
     if let Some(s) = scale {
         if !(s.is_finite() && s > 0.0 && s <= 4.0) {

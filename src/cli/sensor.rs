@@ -3,6 +3,7 @@
 use super::{CliError, SceneArgs, load_model};
 use crate::model::{Model, Sensor, SensorFormat};
 use std::path::Path;
+use std::path::PathBuf;
 
 /// After `poser render`: the sensor stage on every image, a summary line, and one warning line
 /// when the render noise of images exceeds the sensor's (naming the image when there is one).
@@ -55,15 +56,41 @@ pub fn after_render(
     Ok(())
 }
 
-pub fn run(
-    scene: &SceneArgs,
-    input: &Path,
-    out: &Path,
-    pose: usize,
-    camera: Option<&str>,
-    variance: Option<&Path>,
-    samples: Option<u32>,
-) -> Result<(), CliError> {
+/// The arguments of `poser sensor`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The linear EXR rendered from this scene.
+    pub input: PathBuf,
+    /// The camera image to write (`.jpg`/`.jpeg` or `.png`); the sidecar
+    /// `<stem>.sensor.json` goes beside it.
+    #[arg(short, long)]
+    pub out: PathBuf,
+    /// Rig pose index of the image (seeds its noise).
+    #[arg(long, default_value_t = 0)]
+    pub pose: usize,
+    /// Camera of the rig (default: the first).
+    #[arg(long)]
+    pub camera: Option<String>,
+    /// Per-pixel variance of the render (`<image>.variance.exr`) for the noise report.
+    #[arg(long)]
+    pub variance: Option<PathBuf>,
+    /// Samples per pixel of the render (for the noise report's hint).
+    #[arg(long)]
+    pub samples: Option<u32>,
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let (scene, input, out, pose, camera, variance, samples) = (
+        &args.scene,
+        &args.input,
+        &args.out,
+        args.pose,
+        args.camera.as_deref(),
+        args.variance.as_deref(),
+        args.samples,
+    );
     let model = load_model(scene)?;
     let mut sensor = model.sensor.clone().unwrap_or_default();
     let ext = out
@@ -135,7 +162,7 @@ pub fn run(
         dir,
         &stem,
     )?;
-    if done.image != out {
+    if done.image != *out {
         std::fs::rename(&done.image, out)
             .map_err(|e| CliError::Failed(format!("{}: {e}", out.display())))?;
     }

@@ -4,7 +4,22 @@
 use super::CliError;
 use std::path::PathBuf;
 
-pub fn run(scenes: &[PathBuf], sets: &[String], deny_warnings: bool) -> Result<(), CliError> {
+/// The arguments of `poser validate`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scene files.
+    #[arg(required = true)]
+    pub scenes: Vec<PathBuf>,
+    /// Override values in every scene (`KEY=VALUE`).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Treat warnings as errors.
+    #[arg(long)]
+    pub deny_warnings: bool,
+}
+
+pub fn run(args: &Args) -> Result<(), CliError> {
+    let (scenes, sets, deny_warnings) = (&args.scenes, &args.sets, args.deny_warnings);
     let mut bad = 0usize;
     for scene in scenes {
         let shown = crate::scene::source::display(scene);
