@@ -17,6 +17,7 @@ pub mod io;
 pub mod lesson;
 pub mod model;
 pub mod optics;
+pub mod pack;
 pub mod plan;
 pub mod rng;
 pub mod scene;

@@ -39,12 +39,17 @@ impl From<String> for CliError {
 
 /// Load, validate and resolve a scene; print its diagnostics (warnings too) to stderr.
 pub fn load_model(args: &SceneArgs) -> Result<Model, CliError> {
+    load_scene(args).map(|l| l.model)
+}
+
+/// [`load_model`], keeping the list of files the scene was read from.
+pub fn load_scene(args: &SceneArgs) -> Result<crate::scene::Loaded, CliError> {
     match crate::scene::load(&args.scene, &args.sets) {
         Ok(loaded) => {
             if !loaded.warnings.is_empty() {
                 eprint!("{}", loaded.render_warnings());
             }
-            Ok(loaded.model)
+            Ok(loaded)
         }
         Err(failure) => {
             eprint!("{}", failure.render());

@@ -15,15 +15,18 @@ mod dive;
 mod evaluate;
 mod explain;
 mod lesson;
+mod pack;
 mod plan;
 pub mod project;
 mod render;
+mod rerun;
 mod schema;
 mod sensor;
 mod truth;
+mod unpack;
 mod validate;
 
-pub use common::{CliError, load_model};
+pub use common::{CliError, load_model, load_scene};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -39,6 +42,8 @@ Examples:
   poser evaluate scenarios/lessons/flat_port_deformation.toml -o out/eval
   poser lesson scenarios/lessons/calibration_by_port.toml -o out/lesson
   poser dive scenarios/paper_survey.toml -o dive.ssrf
+  poser pack scenarios/dome_orbit.toml -o orbit.poserpack --run \"render --scale 0.1 --poses 0\"
+  poser rerun orbit.poserpack -o out/rerun
   poser schema";
 
 #[derive(Parser, Debug)]
@@ -101,6 +106,13 @@ pub enum Command {
     Lesson(lesson::Args),
     /// Dive profile, decompression and gas verdict; export to Subsurface.
     Dive(dive::Args),
+    /// Pack a scene, its includes and assets, and the commands run on it with the hashes of
+    /// their outputs, into one reproducible archive.
+    Pack(pack::Args),
+    /// Check a pack and write its files into a folder.
+    Unpack(unpack::Args),
+    /// Rerun a pack's commands and report, file by file, whether the outputs are identical.
+    Rerun(rerun::Args),
 }
 
 pub fn main() -> ExitCode {
@@ -116,7 +128,16 @@ pub fn main() -> ExitCode {
             };
         }
     };
-    let result = match cli.command {
+    let result = dispatch(cli.command);
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => e.report(),
+    }
+}
+
+/// Run one parsed command.
+pub fn dispatch(command: Command) -> Result<(), CliError> {
+    match command {
         Command::Validate(args) => validate::run(&args),
         Command::Explain(args) => explain::run(&args),
         Command::Schema(args) => schema::run(&args),
@@ -131,9 +152,8 @@ pub fn main() -> ExitCode {
         Command::Evaluate(args) => evaluate::run(&args),
         Command::Lesson(args) => lesson::run(&args),
         Command::Dive(args) => dive::run(&args),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => e.report(),
+        Command::Pack(args) => pack::run(&args),
+        Command::Unpack(args) => unpack::run(&args),
+        Command::Rerun(args) => rerun::run(&args),
     }
 }

@@ -25,12 +25,15 @@ pub use diag::{Diagnostic, Severity, Span};
 pub use format::{format_markdown, schema_json};
 
 use crate::model::Model;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A successfully loaded scene, with its warnings.
 pub struct Loaded {
     pub model: Model,
     pub warnings: Vec<Diagnostic>,
+    /// Every file the scene was read from, in reading order without repeats: the scene file,
+    /// its includes, then its assets (meshes, point lists). A reproducible pack holds these.
+    pub files: Vec<PathBuf>,
 }
 
 impl Loaded {
@@ -87,19 +90,29 @@ pub fn load(path: &Path, sets: &[String]) -> Result<Loaded, Failure> {
         return Err(finish_failure(diags, &sources));
     };
     source::apply_sets(&mut root, sets, &mut sources, &mut diags);
-    let mut cx = reader::Cx { diags };
+    let mut cx = reader::Cx {
+        diags,
+        files: Vec::new(),
+    };
     let (model, spans) = resolve::resolve(&root, path, &sources, &mut cx);
     check::scene(&mut cx, &model, &spans);
-    let mut diags = cx.diags;
+    let mut diags = std::mem::take(&mut cx.diags);
     for d in &mut diags {
         d.finish(&sources);
     }
     if diags.iter().any(|d| d.is_error()) {
         Err(Failure { diagnostics: diags })
     } else {
+        let mut files: Vec<PathBuf> = Vec::new();
+        for f in sources.paths.iter().flatten().chain(&cx.files) {
+            if !files.contains(f) {
+                files.push(f.clone());
+            }
+        }
         Ok(Loaded {
             model,
             warnings: diags,
+            files,
         })
     }
 }

@@ -12,6 +12,8 @@ use glam::DVec3;
 #[derive(Default)]
 pub struct Cx {
     pub diags: Vec<Diagnostic>,
+    /// Asset files read while resolving (meshes, point lists), for [`super::Loaded::files`].
+    pub files: Vec<std::path::PathBuf>,
 }
 
 impl Cx {

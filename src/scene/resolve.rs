@@ -1424,7 +1424,7 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
                         .map(|_| ())
                         .map_err(|e| e.to_string())
                 }) {
-                    Ok(()) => {}
+                    Ok(()) => cx.files.push(p.clone()),
                     Err(e) => cx.push(
                         Diagnostic::error(
                             "E0287",
@@ -1827,6 +1827,9 @@ fn points_file(
         .unwrap_or_else(|| scene.parent().map(Path::to_path_buf).unwrap_or_default());
     let file = dir.join(&rel);
     let pts = super::points_file::read(cx, &file, fspan);
+    if !pts.is_empty() {
+        cx.files.push(file.clone());
+    }
     if pts.is_empty() || !(diameter > 0.0) {
         return vec![];
     }
