@@ -30,7 +30,7 @@
 //!
 //! | module | owns |
 //! |---|---|
-//! | `mod.rs` | the constants, [`Manifest`] and [`Compiled`], [`build`], [`write`], [`compile`]; file-name rules |
+//! | `mod.rs` | the constants, [`Manifest`] and [`Compiled`], [`build`], [`write()`], [`compile`]; file-name rules |
 //! | [`world`] | `world.xml`: objects, targets, sun, world-mounted lights (and the light emitter the views share) |
 //! | [`view`] | one view document: integrator, water medium, sensor, port and housing, rig-mounted lights |
 //! | `runner.rs` | [`render`]: the embedded Python driver, its progress bar and report |

@@ -13,6 +13,9 @@
 //! (550 nm) index is used ([`super::SINGLE_PASS_CHANNEL`]), with them each pass uses its own
 //! channel's indices.
 
+// `!(x > y)` is deliberate: it rejects NaN as well as the failing comparison.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::world::{light, scene_bounds};
 use super::xml::El;
 use super::{SEA_MARGIN, TABPHASE_SAMPLES, WATER_ID, basis};
@@ -55,16 +58,16 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
     } else {
         None
     };
-    if let (Some(p), MediumRegion::Cube { min, max }) = (&port, region) {
-        if region.contains(cam_pos) {
-            let room = (cam_pos - min).min(max - cam_pos).min_element();
-            if p.extent >= room {
-                return Err(format!(
-                    "camera `{}`: the water box around the camera ({room:.3} m to its nearest \
-                     face) is too small to contain the port ({:.3} m)",
-                    cam.name, p.extent
-                ));
-            }
+    if let (Some(p), MediumRegion::Cube { min, max }) = (&port, region)
+        && region.contains(cam_pos)
+    {
+        let room = (cam_pos - min).min(max - cam_pos).min_element();
+        if p.extent >= room {
+            return Err(format!(
+                "camera `{}`: the water box around the camera ({room:.3} m to its nearest \
+                 face) is too small to contain the port ({:.3} m)",
+                cam.name, p.extent
+            ));
         }
     }
     let in_water = port.is_none() && region.contains(cam_pos);
