@@ -289,8 +289,8 @@ fn only_what_the_scene_needs() {
 fn fournier_forand_table_keeps_the_backscatter_fraction() {
     for (n, mu) in [(1.1, 3.5), (1.05, 3.2), (1.15, 4.0)] {
         let b_exact = 1.0 - poser::optics::phase::ff_cdf(n, mu, std::f64::consts::FRAC_PI_2);
-        let table = mitsuba::emit::ff_table(n, mu, mitsuba::emit::TABPHASE_SAMPLES);
-        let b_table = mitsuba::emit::table_backscatter(&table);
+        let table = mitsuba::view::ff_table(n, mu, mitsuba::TABPHASE_SAMPLES);
+        let b_table = mitsuba::view::table_backscatter(&table);
         // Cell-mean densities preserve each cell's mass; the piecewise-linear interpolation
         // moves at most half a cell of mass across 90°: < 1 % of B.
         assert!(

@@ -66,7 +66,7 @@ pub fn ff_backscatter(n: f64, mu: f64) -> f64 {
 /// Fournier–Forand cumulative distribution: the fraction of the scattered light within angle
 /// θ of the forward direction (Fournier & Jonasz 1999; Mobley, Sundman & Boss 2002). The
 /// backends tabulate FF from it: the native medium ([`crate::backend::native::medium`]) and
-/// Mitsuba's `tabphase` ([`crate::backend::mitsuba::emit`]).
+/// Mitsuba's `tabphase` ([`crate::backend::mitsuba::view::ff_table`]).
 pub fn ff_cdf(n: f64, mu: f64, theta: f64) -> f64 {
     let nu = (3.0 - mu) / 2.0;
     let k = 3.0 * (n - 1.0) * (n - 1.0);
