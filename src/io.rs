@@ -4,6 +4,24 @@
 use std::io::Write;
 use std::path::Path;
 
+/// Prefix of the temporary files that atomic writes rename into place: a file with this prefix
+/// is a write that was cut short (the process was killed), never an output.
+pub const TEMP_PREFIX: &str = ".poser-";
+
+/// Remove the temporary files of cut-short atomic writes directly in `dir`; returns how many.
+pub fn remove_stale_temporaries(dir: &Path) -> usize {
+    let Ok(rd) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    rd.filter_map(Result::ok)
+        .filter(|e| {
+            e.file_name().to_string_lossy().starts_with(TEMP_PREFIX)
+                && e.file_type().is_ok_and(|t| t.is_file())
+        })
+        .filter(|e| std::fs::remove_file(e.path()).is_ok())
+        .count()
+}
+
 /// Write `bytes` to `path` atomically: a temporary file in the same directory, then rename.
 /// Parent directories are created.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
@@ -12,7 +30,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         _ => Path::new("."),
     };
     std::fs::create_dir_all(dir)?;
-    let mut tmp = tempfile::NamedTempFile::new_in(dir)?;
+    let mut tmp = tempfile::Builder::new()
+        .prefix(TEMP_PREFIX)
+        .tempfile_in(dir)?;
     tmp.write_all(bytes)?;
     tmp.flush()?;
     readable(tmp.path())?;
@@ -33,7 +53,7 @@ pub fn write_atomic_with(
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("tmp");
     let tmp = tempfile::Builder::new()
-        .prefix(".poser-")
+        .prefix(TEMP_PREFIX)
         .suffix(&format!(".{ext}"))
         .tempfile_in(dir)
         .map_err(|e| format!("{}: {e}", dir.display()))?;

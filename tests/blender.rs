@@ -16,6 +16,7 @@ fn render(model: &Model, out: &Path, samples: u32) -> LinearImage {
         samples: Some(samples),
         poses: None,
         progress: false,
+        resume: false,
     };
     let report = poser::backend::blender::render(model, out, &opts).expect("Cycles render");
     assert_eq!(report.images.len(), 1);
@@ -315,6 +316,7 @@ fn ports_project_like_the_optics_truth() {
             samples: Some(64),
             poses: None,
             progress: false,
+            resume: false,
         };
         poser::backend::blender::render(&model, dir.path(), &opts).unwrap();
         let (found, expected) = poser::compare::measure_targets(&model, dir.path()).unwrap();
@@ -362,6 +364,7 @@ fn measure_canonical(scene: &str, sets: &[&str], samples: u32) -> (usize, f64, f
         samples: Some(samples),
         poses: None,
         progress: false,
+        resume: false,
     };
     poser::backend::blender::render(&model, dir.path(), &opts).unwrap();
     let script = std::fs::read_to_string(dir.path().join("scene.py")).unwrap();
@@ -456,6 +459,7 @@ fn depth_scene(name: &str, samples: u32) -> (Model, tempfile::TempDir, RenderOpt
         samples: Some(samples),
         poses: None,
         progress: false,
+        resume: false,
     };
     (model, tempfile::tempdir().unwrap(), opts)
 }
@@ -581,6 +585,7 @@ bounces = 8
         samples: Some(64),
         poses: None,
         progress: false,
+        resume: false,
     };
     poser::backend::blender::render(&model, &out, &opts).unwrap();
     let img = LinearImage::read(&out.join("img_0001.exr")).unwrap();
@@ -740,6 +745,7 @@ fn saved_blend_renders_what_poser_renders() {
         samples: None,
         poses: Some(vec![0]),
         progress: false,
+        resume: false,
     };
     let ours = poser::backend::blender::render(&m, &dir.path().join("poser"), &opts)
         .expect("Cycles render");

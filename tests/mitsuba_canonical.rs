@@ -24,6 +24,7 @@ fn geometry_rms(name: &str) -> f64 {
         samples,
         poses: None,
         progress: false,
+        resume: false,
     };
     poser::backend::mitsuba::render(&model, tmp.path(), &opts)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -116,6 +117,7 @@ fn radiometry(name: &str) -> Vec<(f64, f64)> {
         samples: None,
         poses: None,
         progress: false,
+        resume: false,
     };
     poser::backend::mitsuba::render(&model, tmp.path(), &opts)
         .unwrap_or_else(|e| panic!("{name}: {e}"));

@@ -43,6 +43,7 @@ fn render(backend: &str, model: &Model, dir: &Path, samples: u32) -> LinearImage
         samples: Some(samples),
         poses: None,
         progress: false,
+        resume: false,
     };
     poser::backend::Backend::parse(backend)
         .and_then(|b| b.render(model, dir, &opts))

@@ -159,6 +159,9 @@ pub struct RenderOptions {
     pub poses: Option<Vec<usize>>,
     /// Show a progress bar on stderr.
     pub progress: bool,
+    /// Native: skip the images that `OUT/render-manifest.json` records as finished with the
+    /// same model and samples, and whose files still have the recorded hashes.
+    pub resume: bool,
 }
 
 impl RenderOptions {

@@ -335,6 +335,7 @@ fn render_rgb(
         samples: Some(spp),
         poses: None,
         progress: false,
+        resume: false,
     };
     let t0 = std::time::Instant::now();
     let report = backend.render(model, dir, &opts)?;

@@ -34,6 +34,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         samples,
         poses,
         progress: true,
+        resume: false,
     };
     let report = crate::compare::run(&model, backends, out, &opts).map_err(CliError::Failed)?;
     print!("{}", report.to_markdown());

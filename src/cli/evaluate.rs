@@ -148,6 +148,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                                 samples: args.samples,
                                 poses: None,
                                 progress: false,
+                                resume: false,
                             },
                         )
                         .map_err(CliError::Failed)?;

@@ -29,6 +29,37 @@ pub struct Args {
     /// scene has no `[sensor]`; writes `OUT/camera/<image>.jpg` and `.sensor.json`.
     #[arg(long)]
     pub sensor: bool,
+    /// Render only shard `I` of `N` (`--shard 0/4` … `3/4`): the poses whose index modulo N
+    /// is I, after `--poses`. The shards together write exactly the files of one whole run.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Native: skip the images that an earlier, interrupted run into the same folder finished
+    /// (`OUT/render-manifest.json`, same model and samples, files unchanged).
+    #[arg(long)]
+    pub resume: bool,
+}
+
+/// `I/N` with `I < N`.
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let err = || format!("`{s}`: expected I/N with 0 ≤ I < N, e.g. 0/4");
+    let (i, n) = s.split_once('/').ok_or_else(err)?;
+    let (i, n): (usize, usize) = (
+        i.trim().parse().map_err(|_| err())?,
+        n.trim().parse().map_err(|_| err())?,
+    );
+    if n == 0 || i >= n {
+        return Err(err());
+    }
+    Ok((i, n))
+}
+
+/// The poses of shard `i` of `n` among `poses` (all `count` when `None`).
+pub fn shard_poses(poses: Option<Vec<usize>>, count: usize, (i, n): (usize, usize)) -> Vec<usize> {
+    poses
+        .unwrap_or_else(|| (0..count).collect())
+        .into_iter()
+        .filter(|p| p % n == i)
+        .collect()
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -64,10 +95,29 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     if sensor && model.sensor.is_none() {
         model.sensor = Some(crate::model::Sensor::default());
     }
+    if args.resume && backend != Backend::Native {
+        return Err(CliError::Usage(format!(
+            "--resume: only the native backend records finished images; {} renders every image again",
+            backend.name()
+        )));
+    }
+    let poses = match args.shard {
+        Some(sh) => {
+            let list = shard_poses(poses, model.poses.len(), sh);
+            if list.is_empty() {
+                eprintln!("shard {}/{}: no pose to render", sh.0, sh.1);
+                crate::truth::write(&model, &out.join("truth")).map_err(CliError::Failed)?;
+                return Ok(());
+            }
+            Some(list)
+        }
+        None => poses,
+    };
     let opts = RenderOptions {
         samples,
         poses,
         progress: !quiet,
+        resume: args.resume,
     };
     let report = backend
         .render(&model, out, &opts)

@@ -156,6 +156,7 @@ pub fn run(
                 samples: None,
                 poses: None,
                 progress: false,
+                resume: false,
             },
         )?;
         let mut images: Vec<PathBuf> = std::fs::read_dir(&images_dir)

@@ -410,6 +410,7 @@ pub fn view(model: &crate::model::Model, dir: &Path) -> Result<Vec<u8>, String> 
             samples: Some(VIEW_SAMPLES),
             poses: Some(vec![pose]),
             progress: false,
+            resume: false,
         },
     )?;
     if let Some(sensor) = &small.sensor {

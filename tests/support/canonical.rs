@@ -41,6 +41,7 @@ pub fn render(backend: &str, model: &Model, dir: &Path, samples: Option<u32>) {
         samples,
         poses: None,
         progress: false,
+        resume: false,
     };
     poser::backend::Backend::parse(backend)
         .and_then(|b| b.render(model, dir, &opts))

@@ -9,6 +9,7 @@
 //! | `OUT/<image>.png` | sRGB preview of `render.exposure × radiance` |
 //! | `OUT/<image>.variance.exr` | variance of each pixel's Monte Carlo mean per channel (render noise, [`Image::variance`]); when the scene has a `[sensor]` |
 //! | `OUT/<image>.depth.exr` | camera-frame z of the first surface hit through each pixel centre, m (0: none); when `render.outputs` has `"depth"` |
+//! | `OUT/render-manifest.json` | the finished images and the SHA-256 of their files, for `--resume` ([`resume`]) |
 //!
 //! Parallel over image rows with rayon; every pixel sample has its own counter-based random
 //! stream ([`sampler::Sampler`]), so the bytes do not depend on the number of threads. With
@@ -19,6 +20,7 @@ pub mod caustics;
 pub mod integrator;
 pub mod lights;
 pub mod medium;
+pub mod resume;
 pub mod sampler;
 pub mod scene;
 
@@ -220,39 +222,52 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     };
     let want_depth = model.render.outputs.iter().any(|o| o == "depth");
     let mut report = RenderReport::default();
+    let mut manifest = resume::Manifest::open(out, &resume::fingerprint(model, samples));
+    let mut resumed = 0usize;
+    if opts.resume {
+        // What a killed run was writing when it stopped (whole files are renamed into place).
+        crate::io::remove_stale_temporaries(out);
+    }
     for &p in &poses {
         for c in 0..model.cameras.len() {
-            let img = render_image(model, &scene, p, c, samples, pb.as_ref())?;
             let name = model.image_name(p, c);
             let exr = out.join(format!("{name}.exr"));
+            if opts.resume && manifest.is_done(out, &name) {
+                if let Some(pb) = &pb {
+                    pb.inc(model.cameras[c].height as u64);
+                }
+                report.images.push(exr);
+                resumed += 1;
+                continue;
+            }
+            let img = render_image(model, &scene, p, c, samples, pb.as_ref())?;
             write_exr(&exr, img.width, img.height, &img.rgb)?;
-            write_png(
-                &out.join(format!("{name}.png")),
-                &img,
-                model.render.exposure,
-            )?;
+            let png = out.join(format!("{name}.png"));
+            write_png(&png, &img, model.render.exposure)?;
+            let mut files = vec![exr.clone(), png];
             if model.sensor.is_some() {
-                write_exr(
-                    &out.join(format!("{name}.variance.exr")),
-                    img.width,
-                    img.height,
-                    &img.variance,
-                )?;
+                let path = out.join(format!("{name}.variance.exr"));
+                write_exr(&path, img.width, img.height, &img.variance)?;
+                files.push(path);
             }
             if want_depth {
                 let d: Vec<[f32; 3]> = img.depth.iter().map(|&z| [z, z, z]).collect();
-                write_exr(
-                    &out.join(format!("{name}.depth.exr")),
-                    img.width,
-                    img.height,
-                    &d,
-                )?;
+                let path = out.join(format!("{name}.depth.exr"));
+                write_exr(&path, img.width, img.height, &d)?;
+                files.push(path);
             }
+            manifest.record(out, &name, &files)?;
             report.images.push(exr);
         }
     }
     if let Some(pb) = pb {
         pb.finish_and_clear();
+    }
+    if opts.resume {
+        eprintln!(
+            "resume: {resumed} of {} image(s) were already finished",
+            report.images.len()
+        );
     }
     report.seconds = start.elapsed().as_secs_f64();
     Ok(report)

@@ -1,0 +1,82 @@
+//! Resumable native renders: `OUT/render-manifest.json` records every finished image with the
+//! SHA-256 of each of its files, written (atomically) right after the image's last file. A
+//! render stopped at any point, even by SIGKILL, leaves only whole files (each is written to a
+//! temporary file, then renamed) and a manifest of the images that are complete; with
+//! `--resume` the next run skips those and renders the rest.
+//!
+//! | field | meaning |
+//! |---|---|
+//! | `fingerprint` | SHA-256 of poser's version, the resolved model and the samples per pixel: a manifest from another scene, setting or poser is ignored |
+//! | `images` | image name → file name → SHA-256 |
+//!
+//! An image counts as done only when every file it lists still exists with its hash.
+
+use crate::model::Model;
+use crate::pack::sha256;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The manifest's file name in the output folder.
+pub const FILE: &str = "render-manifest.json";
+
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Manifest {
+    pub fingerprint: String,
+    pub images: BTreeMap<String, BTreeMap<String, String>>,
+}
+
+/// What decides an image's bytes: poser's version, the resolved model, the samples per pixel.
+pub fn fingerprint(model: &Model, samples: u32) -> String {
+    let mut bytes = serde_json::to_vec(model).unwrap_or_default();
+    bytes.extend_from_slice(env!("CARGO_PKG_VERSION").as_bytes());
+    bytes.extend_from_slice(option_env!("POSER_GIT_COMMIT").unwrap_or("").as_bytes());
+    bytes.extend_from_slice(&samples.to_le_bytes());
+    sha256(&bytes)
+}
+
+impl Manifest {
+    /// The manifest in `out` when it has this fingerprint (so that runs into one folder one
+    /// after another, such as shards, add to it), else an empty one.
+    pub fn open(out: &Path, fingerprint: &str) -> Manifest {
+        match std::fs::read(out.join(FILE))
+            .ok()
+            .and_then(|b| serde_json::from_slice::<Manifest>(&b).ok())
+        {
+            Some(m) if m.fingerprint == fingerprint => m,
+            _ => Manifest {
+                fingerprint: fingerprint.to_string(),
+                images: BTreeMap::new(),
+            },
+        }
+    }
+
+    /// Whether image `name` is recorded and every one of its files still has its hash.
+    pub fn is_done(&self, out: &Path, name: &str) -> bool {
+        self.images.get(name).is_some_and(|files| {
+            !files.is_empty()
+                && files
+                    .iter()
+                    .all(|(f, h)| std::fs::read(out.join(f)).is_ok_and(|b| sha256(&b) == *h))
+        })
+    }
+
+    /// Record image `name` as finished with `files` (paths inside `out`), and write the
+    /// manifest.
+    pub fn record(&mut self, out: &Path, name: &str, files: &[PathBuf]) -> Result<(), String> {
+        let mut map = BTreeMap::new();
+        for f in files {
+            let b = std::fs::read(f).map_err(|e| format!("{}: {e}", f.display()))?;
+            let rel = f
+                .strip_prefix(out)
+                .unwrap_or(f)
+                .to_string_lossy()
+                .replace('\\', "/");
+            map.insert(rel, sha256(&b));
+        }
+        self.images.insert(name.to_string(), map);
+        let json = serde_json::to_vec_pretty(self).map_err(|e| e.to_string())?;
+        let path = out.join(FILE);
+        crate::io::write_atomic(&path, &json).map_err(|e| format!("{}: {e}", path.display()))
+    }
+}
