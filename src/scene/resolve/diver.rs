@@ -68,108 +68,8 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
     let salt_water = !matches!(d.choice(cx, "water", &["salt", "fresh"]), Some("fresh"));
     let mut cylinders: Vec<Cylinder> = Vec::new();
     for (i, n) in d.tables(cx, "cylinders").into_iter().enumerate() {
-        let mut c = Tab::open(cx, Some(n), &format!("diver.cylinders[{i}]"), n.span);
-        let name = c
-            .opt_str(cx, "name")
-            .unwrap_or_else(|| format!("cylinder{i}"));
-        let volume = c.f64(cx, "volume", Dim::Volume, 0.012);
-        let pressure = c.f64(cx, "pressure", Dim::Pressure, 200e5);
-        check::positive(cx, &c, "volume", volume, "m³");
-        check::positive(cx, &c, "pressure", pressure, "Pa");
-        let gas_span = c.span_of("gas");
-        let (mut o2, mut he) = match c.opt_str(cx, "gas") {
-            None => (0.21, 0.0),
-            Some(g) => match parse_gas(&g) {
-                Some(x) => x,
-                None => {
-                    cx.push(
-                        Diagnostic::error("E0321", format!("unknown gas `{g}`"))
-                            .label(gas_span, "not a gas name")
-                            .help("write \"air\", \"EAN32\" (nitrox 32 % O₂), \"TX18/45\" (trimix), \"O2\", or give `o2`/`he` fractions"),
-                    );
-                    (0.21, 0.0)
-                }
-            },
-        };
-        if let Some(x) = c.opt_f64(cx, "o2", Dim::Fraction) {
-            o2 = x;
-        }
-        if let Some(x) = c.opt_f64(cx, "he", Dim::Fraction) {
-            he = x;
-        }
-        let mut mix_ok = true;
-        for (k, v, lo) in [("o2", o2, 0.0), ("he", he, -1e-12)] {
-            if !(v > lo && v <= 1.0 + 1e-12) {
-                mix_ok = false;
-                let sp = c.span_of(if c.has(k) { k } else { "gas" });
-                cx.push(
-                    Diagnostic::error("E0322", format!("`{k}` fraction out of range"))
-                        .label(
-                            sp,
-                            format!(
-                                "{} is not a fraction in {}",
-                                num(v),
-                                if k == "o2" { "(0, 1]" } else { "[0, 1]" }
-                            ),
-                        )
-                        .help(format!(
-                            "gas fractions are parts of one: `{k} = 0.32` or `{k} = \"32 %\"`"
-                        )),
-                );
-            }
-        }
-        if mix_ok && o2 + he > 1.0 + 1e-12 {
-            let sp = c.span_of(if c.has("he") {
-                "he"
-            } else if c.has("o2") {
-                "o2"
-            } else {
-                "gas"
-            });
-            cx.push(
-                Diagnostic::error("E0322", "impossible gas mix: O₂ + He exceed the whole")
-                    .label(sp, format!("O₂ {} + He {} = {} > 1", num(o2), num(he), num(o2 + he)))
-                    .help("the fractions of O₂ and He must add up to at most 1 (the rest is N₂), e.g. TX18/45: `o2 = 0.18`, `he = 0.45`"),
-            );
-        }
-        let role_given = c.choice(cx, "role", &["bottom", "stage", "deco"]);
-        let role = match role_given {
-            Some("stage") => CylinderRole::Stage,
-            Some("deco") => CylinderRole::Deco,
-            Some(_) => CylinderRole::Bottom,
-            // No role given: the first cylinder is the back gas; a later richer gas is for deco.
-            None => match cylinders.first() {
-                Some(first) if o2 > first.o2 + 1e-9 => CylinderRole::Deco,
-                _ => CylinderRole::Bottom,
-            },
-        };
-        let sw_span = c.span_of("switch_depth");
-        let switch_depth = c.opt_f64(cx, "switch_depth", Dim::Length);
-        if let Some(sw) = switch_depth {
-            if !(sw.is_finite() && sw >= 0.0) {
-                cx.push(
-                    Diagnostic::error("E0325", "`switch_depth` must be a depth ≥ 0")
-                        .label(sw_span, format!("{} m", num(sw)))
-                        .help("the depth from which the deco gas is breathed, e.g. `switch_depth = \"21 m\"` for EAN50"),
-                );
-            } else if role != CylinderRole::Deco {
-                cx.push(
-                    Diagnostic::error("E0325", "`switch_depth` is only for deco cylinders")
-                        .label(sw_span, "this cylinder is not a deco gas")
-                        .help("add `role = \"deco\"` or remove `switch_depth`"),
-                );
-            }
-        }
-        c.finish(cx);
-        cylinders.push(Cylinder {
-            name,
-            volume,
-            pressure,
-            o2,
-            he,
-            role,
-            switch_depth,
-        });
+        let c = cylinder(cx, i, n, cylinders.first());
+        cylinders.push(c);
     }
     if cylinders.is_empty() {
         cylinders.push(Cylinder {
@@ -204,6 +104,113 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
         po2_bottom,
         po2_deco,
     })
+}
+
+/// One `[[diver.cylinders]]` entry: size, fill pressure, gas and role; `first` is the
+/// list's first cylinder, if any (the back gas, against which the default role is decided).
+fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylinder {
+    let mut c = Tab::open(cx, Some(n), &format!("diver.cylinders[{i}]"), n.span);
+    let name = c
+        .opt_str(cx, "name")
+        .unwrap_or_else(|| format!("cylinder{i}"));
+    let volume = c.f64(cx, "volume", Dim::Volume, 0.012);
+    let pressure = c.f64(cx, "pressure", Dim::Pressure, 200e5);
+    check::positive(cx, &c, "volume", volume, "m³");
+    check::positive(cx, &c, "pressure", pressure, "Pa");
+    let gas_span = c.span_of("gas");
+    let (mut o2, mut he) = match c.opt_str(cx, "gas") {
+        None => (0.21, 0.0),
+        Some(g) => match parse_gas(&g) {
+            Some(x) => x,
+            None => {
+                cx.push(
+                    Diagnostic::error("E0321", format!("unknown gas `{g}`"))
+                        .label(gas_span, "not a gas name")
+                        .help("write \"air\", \"EAN32\" (nitrox 32 % O₂), \"TX18/45\" (trimix), \"O2\", or give `o2`/`he` fractions"),
+                );
+                (0.21, 0.0)
+            }
+        },
+    };
+    if let Some(x) = c.opt_f64(cx, "o2", Dim::Fraction) {
+        o2 = x;
+    }
+    if let Some(x) = c.opt_f64(cx, "he", Dim::Fraction) {
+        he = x;
+    }
+    let mut mix_ok = true;
+    for (k, v, lo) in [("o2", o2, 0.0), ("he", he, -1e-12)] {
+        if !(v > lo && v <= 1.0 + 1e-12) {
+            mix_ok = false;
+            let sp = c.span_of(if c.has(k) { k } else { "gas" });
+            cx.push(
+                Diagnostic::error("E0322", format!("`{k}` fraction out of range"))
+                    .label(
+                        sp,
+                        format!(
+                            "{} is not a fraction in {}",
+                            num(v),
+                            if k == "o2" { "(0, 1]" } else { "[0, 1]" }
+                        ),
+                    )
+                    .help(format!(
+                        "gas fractions are parts of one: `{k} = 0.32` or `{k} = \"32 %\"`"
+                    )),
+            );
+        }
+    }
+    if mix_ok && o2 + he > 1.0 + 1e-12 {
+        let sp = c.span_of(if c.has("he") {
+            "he"
+        } else if c.has("o2") {
+            "o2"
+        } else {
+            "gas"
+        });
+        cx.push(
+            Diagnostic::error("E0322", "impossible gas mix: O₂ + He exceed the whole")
+                .label(sp, format!("O₂ {} + He {} = {} > 1", num(o2), num(he), num(o2 + he)))
+                .help("the fractions of O₂ and He must add up to at most 1 (the rest is N₂), e.g. TX18/45: `o2 = 0.18`, `he = 0.45`"),
+        );
+    }
+    let role_given = c.choice(cx, "role", &["bottom", "stage", "deco"]);
+    let role = match role_given {
+        Some("stage") => CylinderRole::Stage,
+        Some("deco") => CylinderRole::Deco,
+        Some(_) => CylinderRole::Bottom,
+        // No role given: the first cylinder is the back gas; a later richer gas is for deco.
+        None => match first {
+            Some(first) if o2 > first.o2 + 1e-9 => CylinderRole::Deco,
+            _ => CylinderRole::Bottom,
+        },
+    };
+    let sw_span = c.span_of("switch_depth");
+    let switch_depth = c.opt_f64(cx, "switch_depth", Dim::Length);
+    if let Some(sw) = switch_depth {
+        if !(sw.is_finite() && sw >= 0.0) {
+            cx.push(
+                Diagnostic::error("E0325", "`switch_depth` must be a depth ≥ 0")
+                    .label(sw_span, format!("{} m", num(sw)))
+                    .help("the depth from which the deco gas is breathed, e.g. `switch_depth = \"21 m\"` for EAN50"),
+            );
+        } else if role != CylinderRole::Deco {
+            cx.push(
+                Diagnostic::error("E0325", "`switch_depth` is only for deco cylinders")
+                    .label(sw_span, "this cylinder is not a deco gas")
+                    .help("add `role = \"deco\"` or remove `switch_depth`"),
+            );
+        }
+    }
+    c.finish(cx);
+    Cylinder {
+        name,
+        volume,
+        pressure,
+        o2,
+        he,
+        role,
+        switch_depth,
+    }
 }
 
 /// `"air"`, `"EAN32"`, `"nitrox32"`, `"TX18/45"`, `"O2"` → (O₂, He) fractions.

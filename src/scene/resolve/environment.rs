@@ -62,7 +62,25 @@ pub(super) fn water(
     fallback: Span,
 ) -> Option<Water> {
     let mut w = Tab::open(cx, node, "water", fallback);
-    // Index: constant, per channel, or from temperature/salinity/depth.
+    let (ior, ior_source) = index(cx, &mut w, site);
+    let (absorption, scattering, jerlov) = iops(cx, &mut w);
+    let phase = phase(cx, &mut w);
+    let extent = extent(cx, &mut w);
+    w.finish(cx);
+    Some(Water {
+        ior,
+        ior_source,
+        absorption,
+        scattering,
+        jerlov,
+        phase,
+        extent,
+    })
+}
+
+/// The refractive index of the water per channel: `ior` as given, or from `temperature`,
+/// `salinity` and `ior_depth` (the site depth by default) by the seawater formula.
+fn index(cx: &mut Cx, w: &mut Tab, site: &Site) -> (Rgb, IorSource) {
     let temperature = w.f64(cx, "temperature", Dim::Temperature, 20.0);
     let salinity = w.f64(cx, "salinity", Dim::Number, 35.0);
     let ior_depth = w.f64(cx, "ior_depth", Dim::Length, site.depth);
@@ -97,8 +115,13 @@ pub(super) fn water(
             )
         }
     };
-    check::index(cx, &w, "ior", ior);
-    // Inherent optical properties.
+    check::index(cx, w, "ior", ior);
+    (ior, ior_source)
+}
+
+/// Absorption and scattering (1/m per channel): from a Jerlov water type (IB when neither
+/// `absorption` nor `scattering` is given), each overridden by its key when given.
+fn iops(cx: &mut Cx, w: &mut Tab) -> (Rgb, Rgb, Option<String>) {
     let jerlov_name = w.opt_str(cx, "jerlov");
     let jspan = w.span_of("jerlov");
     let has_iops = w.has("absorption") || w.has("scattering");
@@ -139,21 +162,26 @@ pub(super) fn water(
         }
     }
     if let Some(a) = w.opt_rgb(cx, "absorption", Dim::Number) {
-        check::non_negative_rgb(cx, &w, "absorption", a, "1/m");
+        check::non_negative_rgb(cx, w, "absorption", a, "1/m");
         absorption = a;
     }
     if let Some(b) = w.opt_rgb(cx, "scattering", Dim::Number) {
-        check::non_negative_rgb(cx, &w, "scattering", b, "1/m");
+        check::non_negative_rgb(cx, w, "scattering", b, "1/m");
         scattering = b;
     }
-    // Phase function.
+    (absorption, scattering, jerlov)
+}
+
+/// The scattering phase function: Henyey–Greenstein (`g`) or Fournier–Forand
+/// (`particle_index`, `junge_slope`).
+fn phase(cx: &mut Cx, w: &mut Tab) -> Phase {
     let phase_kind = w
         .choice(cx, "phase", &["hg", "fournier_forand"])
         .unwrap_or("hg");
     let g = w.f64(cx, "g", Dim::Number, 0.9);
     let n = w.f64(cx, "particle_index", Dim::Number, 1.1);
     let mu = w.f64(cx, "junge_slope", Dim::Number, 3.6);
-    let phase = if phase_kind == "fournier_forand" {
+    if phase_kind == "fournier_forand" {
         if !(n > 1.0) {
             let sp = w.span_of("particle_index");
             cx.push(
@@ -188,8 +216,11 @@ pub(super) fn water(
             );
         }
         Phase::HenyeyGreenstein { g }
-    };
-    // Extent.
+    }
+}
+
+/// Where the water is: everywhere, or a box of `box_half_size` around each camera.
+fn extent(cx: &mut Cx, w: &mut Tab) -> WaterExtent {
     let extent_kind = w
         .choice(cx, "extent", &["everywhere", "box"])
         .unwrap_or("everywhere");
@@ -203,7 +234,7 @@ pub(super) fn water(
         None => None,
     }
     .unwrap_or(DVec3::splat(2.0));
-    let extent = if extent_kind == "box" {
+    if extent_kind == "box" {
         if !(half.min_element() > 0.0) {
             let sp = w.span_of("box_half_size");
             cx.push(
@@ -215,17 +246,7 @@ pub(super) fn water(
         WaterExtent::BoxAroundCamera { half_size: half }
     } else {
         WaterExtent::Everywhere
-    };
-    w.finish(cx);
-    Some(Water {
-        ior,
-        ior_source,
-        absorption,
-        scattering,
-        jerlov,
-        phase,
-        extent,
-    })
+    }
 }
 
 /// `[sun]`, when present, with its direction and irradiance in the water.

@@ -42,120 +42,7 @@ pub(super) fn objects(
         let seed = o
             .opt_u64(cx, "seed")
             .unwrap_or(seed0.wrapping_add(i as u64));
-        let shape = match shape_kind {
-            "mesh" => {
-                let sp = o.span_of("path");
-                let rel = o.opt_str(cx, "path").unwrap_or_default();
-                if !o.has("path") {
-                    cx.push(
-                        Diagnostic::error("E0280", "a mesh object needs a `path`")
-                            .label(o.span, "no `path`")
-                            .help("give the glTF file relative to this scene file: `path = \"assets/amphora.glb\"`"),
-                    );
-                }
-                let resolved = resolve_asset(cx, &rel, sp, sources, scene);
-                Shape::Mesh { path: resolved }
-            }
-            "plane" => {
-                let w = o.f64(cx, "width", Dim::Length, 1.0);
-                let h = o.f64(cx, "height", Dim::Length, 1.0);
-                check::positive(cx, &o, "width", w, "m");
-                check::positive(cx, &o, "height", h, "m");
-                Shape::Plane {
-                    width: w,
-                    height: h,
-                }
-            }
-            "box" => {
-                let size = o.vec3(cx, "size", Dim::Length, DVec3::ONE);
-                if !(size.min_element() > 0.0) {
-                    let sp = o.span_of("size");
-                    cx.push(
-                        Diagnostic::error("E0281", "a box needs a positive size")
-                            .label(sp, "every side must be > 0")
-                            .help("e.g. `size = [1, 0.5, 0.3]` (metres)"),
-                    );
-                }
-                Shape::Box { size }
-            }
-            "sphere" => {
-                let r = o.f64(cx, "radius", Dim::Length, 0.5);
-                check::positive(cx, &o, "radius", r, "m");
-                Shape::Sphere { radius: r }
-            }
-            "cylinder" => {
-                let r = o.f64(cx, "radius", Dim::Length, 0.5);
-                let h = o.f64(cx, "height", Dim::Length, 1.0);
-                check::positive(cx, &o, "radius", r, "m");
-                check::positive(cx, &o, "height", h, "m");
-                Shape::Cylinder {
-                    radius: r,
-                    height: h,
-                }
-            }
-            "seabed" => {
-                let width = o.f64(cx, "width", Dim::Length, 20.0);
-                let length = o.f64(cx, "length", Dim::Length, 20.0);
-                let roughness = o.f64(cx, "roughness", Dim::Length, 0.1);
-                let resolution = o.f64(cx, "resolution", Dim::Length, 0.05);
-                check::positive(cx, &o, "width", width, "m");
-                check::positive(cx, &o, "length", length, "m");
-                check::positive(cx, &o, "resolution", resolution, "m");
-                if roughness < 0.0 {
-                    check::positive(cx, &o, "roughness", roughness, "m");
-                }
-                if width > 0.0
-                    && length > 0.0
-                    && resolution > 0.0
-                    && (width / resolution) * (length / resolution) > 5e7
-                {
-                    let sp = o.span_of("resolution");
-                    cx.push(
-                        Diagnostic::error("E0282", "the seabed heightfield is too fine")
-                            .label(
-                                sp,
-                                format!(
-                                    "{:.0} cells",
-                                    (width / resolution) * (length / resolution)
-                                ),
-                            )
-                            .help(
-                                "keep width/resolution × length/resolution under 50 million cells",
-                            ),
-                    );
-                }
-                Shape::Seabed {
-                    width,
-                    length,
-                    roughness,
-                    resolution,
-                    seed,
-                }
-            }
-            "coral" => crate::scene::coral::shape(cx, &mut o, seed),
-            _ => {
-                let width = o.f64(cx, "width", Dim::Length, 20.0);
-                let length = o.f64(cx, "length", Dim::Length, 20.0);
-                let count = o.u32(cx, "count", 30);
-                let radius = o.f64(cx, "radius", Dim::Length, 0.3);
-                let count = if check::at_most(cx, &o, "count", count as u64, 1_000_000, "boulders")
-                {
-                    count
-                } else {
-                    0
-                };
-                check::positive(cx, &o, "width", width, "m");
-                check::positive(cx, &o, "length", length, "m");
-                check::positive(cx, &o, "radius", radius, "m");
-                Shape::Boulders {
-                    width,
-                    length,
-                    count,
-                    radius,
-                    seed,
-                }
-            }
-        };
+        let shape = shape(cx, &mut o, shape_kind, seed, sources, scene);
         let default_pos = if matches!(shape, Shape::Seabed { .. } | Shape::Boulders { .. }) {
             DVec3::new(0.0, 0.0, -site.depth)
         } else {
@@ -195,6 +82,135 @@ pub(super) fn objects(
     out
 }
 
+/// The shape of an object by its `shape` key; the generated ones (seabed, boulders, coral) are
+/// made from `seed`.
+fn shape(
+    cx: &mut Cx,
+    o: &mut Tab,
+    kind: &str,
+    seed: u64,
+    sources: &Sources,
+    scene: &Path,
+) -> Shape {
+    match kind {
+        "mesh" => {
+            let sp = o.span_of("path");
+            let rel = o.opt_str(cx, "path").unwrap_or_default();
+            if !o.has("path") {
+                cx.push(
+                    Diagnostic::error("E0280", "a mesh object needs a `path`")
+                        .label(o.span, "no `path`")
+                        .help("give the glTF file relative to this scene file: `path = \"assets/amphora.glb\"`"),
+                );
+            }
+            let resolved = resolve_asset(cx, &rel, sp, sources, scene);
+            Shape::Mesh { path: resolved }
+        }
+        "plane" => {
+            let w = o.f64(cx, "width", Dim::Length, 1.0);
+            let h = o.f64(cx, "height", Dim::Length, 1.0);
+            check::positive(cx, o, "width", w, "m");
+            check::positive(cx, o, "height", h, "m");
+            Shape::Plane {
+                width: w,
+                height: h,
+            }
+        }
+        "box" => {
+            let size = o.vec3(cx, "size", Dim::Length, DVec3::ONE);
+            if !(size.min_element() > 0.0) {
+                let sp = o.span_of("size");
+                cx.push(
+                    Diagnostic::error("E0281", "a box needs a positive size")
+                        .label(sp, "every side must be > 0")
+                        .help("e.g. `size = [1, 0.5, 0.3]` (metres)"),
+                );
+            }
+            Shape::Box { size }
+        }
+        "sphere" => {
+            let r = o.f64(cx, "radius", Dim::Length, 0.5);
+            check::positive(cx, o, "radius", r, "m");
+            Shape::Sphere { radius: r }
+        }
+        "cylinder" => {
+            let r = o.f64(cx, "radius", Dim::Length, 0.5);
+            let h = o.f64(cx, "height", Dim::Length, 1.0);
+            check::positive(cx, o, "radius", r, "m");
+            check::positive(cx, o, "height", h, "m");
+            Shape::Cylinder {
+                radius: r,
+                height: h,
+            }
+        }
+        "seabed" => seabed(cx, o, seed),
+        "coral" => crate::scene::coral::shape(cx, o, seed),
+        _ => boulders(cx, o, seed),
+    }
+}
+
+/// A generated seabed heightfield of `width` × `length`, with `roughness` sampled every
+/// `resolution` (at most 50 million cells).
+fn seabed(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
+    let width = o.f64(cx, "width", Dim::Length, 20.0);
+    let length = o.f64(cx, "length", Dim::Length, 20.0);
+    let roughness = o.f64(cx, "roughness", Dim::Length, 0.1);
+    let resolution = o.f64(cx, "resolution", Dim::Length, 0.05);
+    check::positive(cx, o, "width", width, "m");
+    check::positive(cx, o, "length", length, "m");
+    check::positive(cx, o, "resolution", resolution, "m");
+    if roughness < 0.0 {
+        check::positive(cx, o, "roughness", roughness, "m");
+    }
+    if width > 0.0
+        && length > 0.0
+        && resolution > 0.0
+        && (width / resolution) * (length / resolution) > 5e7
+    {
+        let sp = o.span_of("resolution");
+        cx.push(
+            Diagnostic::error("E0282", "the seabed heightfield is too fine")
+                .label(
+                    sp,
+                    format!("{:.0} cells", (width / resolution) * (length / resolution)),
+                )
+                .help("keep width/resolution × length/resolution under 50 million cells"),
+        );
+    }
+    Shape::Seabed {
+        width,
+        length,
+        roughness,
+        resolution,
+        seed,
+    }
+}
+
+/// `count` boulders of about `radius` scattered over `width` × `length`.
+fn boulders(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
+    let width = o.f64(cx, "width", Dim::Length, 20.0);
+    let length = o.f64(cx, "length", Dim::Length, 20.0);
+    let count = o.u32(cx, "count", 30);
+    let radius = o.f64(cx, "radius", Dim::Length, 0.3);
+    let count = if check::at_most(cx, o, "count", count as u64, 1_000_000, "boulders") {
+        count
+    } else {
+        0
+    };
+    check::positive(cx, o, "width", width, "m");
+    check::positive(cx, o, "length", length, "m");
+    check::positive(cx, o, "radius", radius, "m");
+    Shape::Boulders {
+        width,
+        length,
+        count,
+        radius,
+        seed,
+    }
+}
+
+/// The mesh file `rel`, relative to the scene file that names it: it must be a readable glTF
+/// file inside the scene's folder. Returns its canonical path (the joined path after an error).
 fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &Path) -> String {
     if rel.is_empty() {
         return String::new();
@@ -284,6 +300,8 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
     crate::scene::source::display(&p)
 }
 
+/// `albedo` and an optional `[….pattern]` texture (checker, noise, fbm, sand, rock, coral)
+/// with its `variation` and `texel`.
 fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
     let albedo = o.rgb(cx, "albedo", Dim::Number, [default_albedo; 3]);
     if albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {

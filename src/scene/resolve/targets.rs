@@ -61,112 +61,7 @@ pub(super) fn targets(
             out.extend(disks);
             continue;
         }
-        let kind = match ty {
-            "checkerboard" => {
-                let cols = g.u32(cx, "cols", 9);
-                let rows = g.u32(cx, "rows", 6);
-                let square = g.f64(cx, "square", Dim::Length, 0.04);
-                check::at_least(cx, &g, "cols", cols, 2);
-                check::at_least(cx, &g, "rows", rows, 2);
-                check::positive(cx, &g, "square", square, "m");
-                let (cols, rows) = limit_grid(cx, &g, cols, rows);
-                TargetKind::Checkerboard { cols, rows, square }
-            }
-            "circle_grid" => {
-                let cols = g.u32(cx, "cols", 7);
-                let rows = g.u32(cx, "rows", 5);
-                let spacing = g.f64(cx, "spacing", Dim::Length, 0.05);
-                let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
-                check::at_least(cx, &g, "cols", cols, 1);
-                check::at_least(cx, &g, "rows", rows, 1);
-                check::positive(cx, &g, "spacing", spacing, "m");
-                check::positive(cx, &g, "diameter", diameter, "m");
-                check::fits(cx, &g, "diameter", diameter, spacing, "the spacing");
-                let (cols, rows) = limit_grid(cx, &g, cols, rows);
-                TargetKind::CircleGrid {
-                    cols,
-                    rows,
-                    spacing,
-                    diameter,
-                }
-            }
-            "coded" => {
-                let count = g.u32(cx, "count", 12);
-                let spacing = g.f64(cx, "spacing", Dim::Length, 0.1);
-                let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
-                let first_code = g.u32(cx, "first_code", 1);
-                check::at_least(cx, &g, "count", count, 1);
-                let count =
-                    if check::at_most(cx, &g, "count", count as u64, 10_000, "coded targets") {
-                        count
-                    } else {
-                        1
-                    };
-                check::positive(cx, &g, "spacing", spacing, "m");
-                check::positive(cx, &g, "diameter", diameter, "m");
-                check::fits(
-                    cx,
-                    &g,
-                    "diameter",
-                    diameter * 2.5,
-                    spacing,
-                    "the spacing (the code ring is 2.5 × the diameter)",
-                );
-                TargetKind::Coded {
-                    count,
-                    spacing,
-                    diameter,
-                    first_code,
-                }
-            }
-            "scale_bar" => {
-                let length = g.f64(cx, "length", Dim::Length, 1.0);
-                let width = g.f64(cx, "width", Dim::Length, 0.04);
-                let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
-                check::positive(cx, &g, "length", length, "m");
-                check::positive(cx, &g, "width", width, "m");
-                check::positive(cx, &g, "diameter", diameter, "m");
-                check::fits(cx, &g, "diameter", diameter, width, "the bar width");
-                TargetKind::ScaleBar {
-                    length,
-                    width,
-                    diameter,
-                }
-            }
-            "siemens_star" => {
-                let diameter = g.f64(cx, "diameter", Dim::Length, 0.2);
-                let spokes = g.u32(cx, "spokes", 16);
-                check::positive(cx, &g, "diameter", diameter, "m");
-                check::at_least(cx, &g, "spokes", spokes, 2);
-                let spokes = if check::at_most(cx, &g, "spokes", spokes as u64, 10_000, "spokes") {
-                    spokes
-                } else {
-                    16
-                };
-                TargetKind::SiemensStar { diameter, spokes }
-            }
-            _ => {
-                let size = g.f64(cx, "size", Dim::Length, 0.5);
-                let levels = g.u32(cx, "levels", 3);
-                let step = g.f64(cx, "step", Dim::Length, 0.05);
-                let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
-                check::positive(cx, &g, "size", size, "m");
-                check::at_least(cx, &g, "levels", levels, 1);
-                let levels = if check::at_most(cx, &g, "levels", levels as u64, 1000, "levels") {
-                    levels
-                } else {
-                    1
-                };
-                check::positive(cx, &g, "step", step, "m");
-                check::positive(cx, &g, "diameter", diameter, "m");
-                TargetKind::TestObject {
-                    size,
-                    levels: levels.max(1),
-                    step,
-                    diameter,
-                }
-            }
-        };
+        let kind = kind(cx, &mut g, ty);
         let pose = placement(cx, &mut g, DVec3::ZERO);
         if out.iter().any(|o| o.name == name) {
             let sp = g.span_of("name");
@@ -187,6 +82,115 @@ pub(super) fn targets(
         });
     }
     out
+}
+
+/// The printed pattern of a target of type `ty` (not `points_file`), from its keys.
+fn kind(cx: &mut Cx, g: &mut Tab, ty: &str) -> TargetKind {
+    match ty {
+        "checkerboard" => {
+            let cols = g.u32(cx, "cols", 9);
+            let rows = g.u32(cx, "rows", 6);
+            let square = g.f64(cx, "square", Dim::Length, 0.04);
+            check::at_least(cx, g, "cols", cols, 2);
+            check::at_least(cx, g, "rows", rows, 2);
+            check::positive(cx, g, "square", square, "m");
+            let (cols, rows) = limit_grid(cx, g, cols, rows);
+            TargetKind::Checkerboard { cols, rows, square }
+        }
+        "circle_grid" => {
+            let cols = g.u32(cx, "cols", 7);
+            let rows = g.u32(cx, "rows", 5);
+            let spacing = g.f64(cx, "spacing", Dim::Length, 0.05);
+            let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
+            check::at_least(cx, g, "cols", cols, 1);
+            check::at_least(cx, g, "rows", rows, 1);
+            check::positive(cx, g, "spacing", spacing, "m");
+            check::positive(cx, g, "diameter", diameter, "m");
+            check::fits(cx, g, "diameter", diameter, spacing, "the spacing");
+            let (cols, rows) = limit_grid(cx, g, cols, rows);
+            TargetKind::CircleGrid {
+                cols,
+                rows,
+                spacing,
+                diameter,
+            }
+        }
+        "coded" => {
+            let count = g.u32(cx, "count", 12);
+            let spacing = g.f64(cx, "spacing", Dim::Length, 0.1);
+            let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
+            let first_code = g.u32(cx, "first_code", 1);
+            check::at_least(cx, g, "count", count, 1);
+            let count = if check::at_most(cx, g, "count", count as u64, 10_000, "coded targets") {
+                count
+            } else {
+                1
+            };
+            check::positive(cx, g, "spacing", spacing, "m");
+            check::positive(cx, g, "diameter", diameter, "m");
+            check::fits(
+                cx,
+                g,
+                "diameter",
+                diameter * 2.5,
+                spacing,
+                "the spacing (the code ring is 2.5 × the diameter)",
+            );
+            TargetKind::Coded {
+                count,
+                spacing,
+                diameter,
+                first_code,
+            }
+        }
+        "scale_bar" => {
+            let length = g.f64(cx, "length", Dim::Length, 1.0);
+            let width = g.f64(cx, "width", Dim::Length, 0.04);
+            let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
+            check::positive(cx, g, "length", length, "m");
+            check::positive(cx, g, "width", width, "m");
+            check::positive(cx, g, "diameter", diameter, "m");
+            check::fits(cx, g, "diameter", diameter, width, "the bar width");
+            TargetKind::ScaleBar {
+                length,
+                width,
+                diameter,
+            }
+        }
+        "siemens_star" => {
+            let diameter = g.f64(cx, "diameter", Dim::Length, 0.2);
+            let spokes = g.u32(cx, "spokes", 16);
+            check::positive(cx, g, "diameter", diameter, "m");
+            check::at_least(cx, g, "spokes", spokes, 2);
+            let spokes = if check::at_most(cx, g, "spokes", spokes as u64, 10_000, "spokes") {
+                spokes
+            } else {
+                16
+            };
+            TargetKind::SiemensStar { diameter, spokes }
+        }
+        _ => {
+            let size = g.f64(cx, "size", Dim::Length, 0.5);
+            let levels = g.u32(cx, "levels", 3);
+            let step = g.f64(cx, "step", Dim::Length, 0.05);
+            let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
+            check::positive(cx, g, "size", size, "m");
+            check::at_least(cx, g, "levels", levels, 1);
+            let levels = if check::at_most(cx, g, "levels", levels as u64, 1000, "levels") {
+                levels
+            } else {
+                1
+            };
+            check::positive(cx, g, "step", step, "m");
+            check::positive(cx, g, "diameter", diameter, "m");
+            TargetKind::TestObject {
+                size,
+                levels: levels.max(1),
+                step,
+                diameter,
+            }
+        }
+    }
 }
 
 /// `type = "points_file"` (see [`crate::scene::points_file`]): one disk target per line of `file`.
