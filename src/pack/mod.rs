@@ -144,7 +144,9 @@ fn hex(d: &[u8]) -> String {
 }
 
 /// Every regular file below `dir`, with paths relative to it (`/`-separated), sorted.
-/// Symbolic links are skipped: a command's outputs are regular files.
+/// Symbolic links are skipped: a command's outputs are regular files. The native renderer's
+/// resume bookkeeping (`render-manifest.json`, which fingerprints the scene's absolute paths)
+/// is not an output and is skipped too.
 pub fn hash_dir(dir: &Path) -> Result<Vec<FileHash>, String> {
     fn walk(root: &Path, dir: &Path, out: &mut Vec<FileHash>) -> Result<(), String> {
         let rd = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -154,7 +156,7 @@ pub fn hash_dir(dir: &Path) -> Result<Vec<FileHash>, String> {
             let p = e.path();
             if ty.is_dir() {
                 walk(root, &p, out)?;
-            } else if ty.is_file() {
+            } else if ty.is_file() && e.file_name() != crate::backend::native::resume::FILE {
                 let bytes = std::fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))?;
                 out.push(FileHash {
                     path: rel_string(p.strip_prefix(root).unwrap())?,

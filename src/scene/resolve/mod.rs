@@ -1,0 +1,306 @@
+//! Resolution: the merged scene tree → [`Model`] in SI units, with presets applied, optical
+//! constants computed (through [`crate::optics`]), networks expanded (through
+//! [`crate::plan::network::expand`]) and [`Needs`] decided. Every table's keys, units and
+//! defaults are documented in [`super::format`] (the source of the JSON Schema and of
+//! `docs/format.md`); the checks here must stay in step with it.
+//!
+//! This file holds the entry point [`resolve`] (which reads the sections in dependency order:
+//! the site before the water, the cameras before the network), the [`Spans`] kept for the
+//! whole-scene checks of [`super::check`], [`needs`], and the small pose helpers the sections
+//! share. Each scene section is read by one file:
+//!
+//! | file | scene section | resolves to |
+//! |---|---|---|
+//! | `mod.rs` | top level: `name`, `description`, `include` | [`Model`], [`Spans`], [`Needs`] |
+//! | `environment.rs` | `[site]`, `[water]`, `[sun]` | [`Site`], [`Water`], [`Sun`] |
+//! | `render.rs` | `[render]` | [`RenderSettings`] |
+//! | `camera.rs` | `[camera]` (its `distortion` and `port`, flat-port `layers`), `[rig]` | [`Camera`]s with their [`Port`] |
+//! | `lights.rs` | `[[lights]]` | [`Light`]s |
+//! | `objects.rs` | `[[objects]]`: shapes, mesh files, materials and patterns | [`Object`]s |
+//! | `targets.rs` | `[[targets]]`, points files included | [`Target`]s |
+//! | `network.rs` | `[network]`, its `trigger` and `[[network.poses]]` | [`RigPose`]s, [`NetworkSummary`] |
+//! | `diver.rs` | `[diver]`, `[[diver.cylinders]]` | [`Diver`] |
+//! | elsewhere | `[sensor]` ([`super::sensor`]), `[lesson]` ([`super::lesson`]), coral shapes ([`super::coral`]) | |
+
+mod camera;
+mod diver;
+mod environment;
+mod lights;
+mod network;
+mod objects;
+mod render;
+mod targets;
+
+pub use diver::parse_gas;
+
+use super::diag::{Diagnostic, Span};
+use super::reader::{Cx, Tab};
+use super::source::{Node, Sources};
+use crate::model::*;
+use crate::optics;
+use crate::units::Dim;
+use glam::{DMat3, DVec3, EulerRot};
+use std::path::Path;
+
+/// Spans of things later checks need to point at.
+#[derive(Default)]
+pub struct Spans {
+    pub camera: Vec<CameraSpans>,
+    pub targets: Vec<Span>,
+    pub objects: Vec<Span>,
+    pub lights: Vec<(Span, Span)>,
+    pub network: Span,
+    pub sidelap: Option<Span>,
+    /// `overlap` / `sidelap` as written in the scene (absent when defaulted).
+    pub overlap_asked: Option<Span>,
+    pub sidelap_asked: Option<Span>,
+    pub water: Span,
+    /// The stereo baseline, when given.
+    pub baseline: Option<Span>,
+}
+
+/// Spans of one camera's port keys, for the checks that point at them.
+#[derive(Default, Clone)]
+pub struct CameraSpans {
+    pub port: Span,
+    pub thickness: Span,
+    pub distance: Span,
+    pub center: Span,
+    pub material: Span,
+}
+
+/// Read the whole scene into a [`Model`]; every problem found goes to `cx`.
+pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -> (Model, Spans) {
+    let top = Span {
+        file: 0,
+        start: 0,
+        end: 0,
+    };
+    let mut t = Tab::open(cx, Some(root), "", top);
+    let mut spans = Spans::default();
+    let name = t.opt_str(cx, "name").unwrap_or_else(|| {
+        scene_path
+            .file_stem()
+            .map(|s| s.to_string_lossy().to_string())
+            .unwrap_or_default()
+    });
+    let description = t.opt_str(cx, "description").unwrap_or_default();
+    t.get("include"); // handled by the loader; known here
+
+    // Site first: the water's pressure depth and seabed defaults depend on it.
+    let water_present = t.has("water");
+    let site = environment::site(cx, &mut t, water_present);
+    let water = if water_present {
+        let node = t.get("water");
+        spans.water = t.span_of("water");
+        environment::water(cx, node, &site, top)
+    } else {
+        t.get("water");
+        None
+    };
+    let ior = water.as_ref().map(|w| w.ior).unwrap_or([1.0; 3]);
+    let sun = environment::sun(cx, t.get("sun"), water.as_ref(), &site, top);
+    let render = render::render(cx, t.get("render"), top);
+    let cameras = camera::cameras(cx, &mut t, water.is_some(), &mut spans, top);
+    let f_number = cameras.first().and_then(|c| c.f_number);
+    let sensor = super::sensor::sensor(cx, t.get("sensor"), f_number, top);
+    let lights = lights::lights(cx, &mut t, &mut spans);
+    let objects = objects::objects(
+        cx,
+        &mut t,
+        &site,
+        sources,
+        scene_path,
+        &mut spans,
+        render.seed,
+    );
+    let targets = targets::targets(cx, &mut t, &mut spans, &objects, &site, sources, scene_path);
+    let diver = diver::diver(cx, t.get("diver"), top);
+    let lesson = super::lesson::lesson(cx, t.get("lesson"), sources, &name, &description, top);
+    let speed_default = diver.as_ref().map(|d| d.speed).unwrap_or(0.2);
+    let (poses, summary) = network::network(
+        cx,
+        t.get("network"),
+        &cameras,
+        ior,
+        &site,
+        speed_default,
+        &mut spans,
+        top,
+    );
+    t.finish(cx);
+
+    let mut model = Model {
+        name,
+        description,
+        source: sources
+            .files
+            .first()
+            .map(|f| f.0.clone())
+            .unwrap_or_default(),
+        water,
+        site,
+        sun,
+        cameras,
+        lights,
+        objects,
+        targets,
+        poses,
+        network: summary,
+        diver,
+        render,
+        sensor,
+        needs: Needs::default(),
+        lesson,
+    };
+    model.needs = needs(&model);
+    (model, spans)
+}
+
+// ------------------------------------------------------------------------------------------
+// Pose helpers shared by the sections
+// ------------------------------------------------------------------------------------------
+
+/// The rotation of Euler angles `[x, y, z]` (radians), applied about x, then y, then z.
+fn euler(v: DVec3) -> DMat3 {
+    DMat3::from_euler(EulerRot::ZYX, v.z, v.y, v.x)
+}
+
+/// A right-handed frame whose +z is `z` (−z when `z` is zero); x and y are arbitrary but fixed.
+fn orthonormal_frame(z: DVec3) -> DMat3 {
+    let z = z.try_normalize().unwrap_or(DVec3::NEG_Z);
+    let helper = if z.z.abs() < 0.9 { DVec3::Z } else { DVec3::Y };
+    let x = helper.cross(z).normalize();
+    let y = z.cross(x);
+    DMat3::from_cols(x, y, z)
+}
+
+/// `world_from_x` from `position` and `rotation` (Euler XYZ angles) or `look_at` (+z towards
+/// a point).
+fn placement(cx: &mut Cx, t: &mut Tab, default_pos: DVec3) -> Pose {
+    let position = t.vec3(cx, "position", Dim::Length, default_pos);
+    let rotation = t.opt_vec3(cx, "rotation", Dim::Angle);
+    let look = t.opt_vec3(cx, "look_at", Dim::Length);
+    let r = match (rotation, look) {
+        (Some(r), None) => euler(r),
+        (None, Some(p)) => match (p - position).try_normalize() {
+            Some(z) => orthonormal_frame(z),
+            None => {
+                let sp = t.span_of("look_at");
+                cx.push(
+                    Diagnostic::error("E0270", "`look_at` is the object's own position")
+                        .label(sp, "no direction to face")
+                        .help("look at a point other than `position`"),
+                );
+                DMat3::IDENTITY
+            }
+        },
+        (Some(r), Some(_)) => {
+            let sp = t.key_span("look_at");
+            cx.push(
+                Diagnostic::error("E0271", "give either `rotation` or `look_at`, not both")
+                    .label(sp, "remove this or `rotation`")
+                    .help("`look_at` turns the +z axis (the printed face) towards a point"),
+            );
+            euler(r)
+        }
+        (None, None) => DMat3::IDENTITY,
+    };
+    Pose {
+        rotation: r,
+        translation: position,
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+
+/// Decide what the scene needs modelled, with reasons.
+pub fn needs(m: &Model) -> Needs {
+    let mut n = Needs::default();
+    let ior = m.ambient_ior();
+    match &m.water {
+        None => n
+            .reasons
+            .push("no [water]: survey in air, no medium is emitted".into()),
+        Some(w) => {
+            let t = w.extinction();
+            n.medium = t.iter().any(|x| *x > 0.0);
+            if n.medium {
+                n.reasons.push(format!(
+                    "medium: σt = [{:.4}, {:.4}, {:.4}] 1/m (R, G, B){}",
+                    t[0],
+                    t[1],
+                    t[2],
+                    w.jerlov
+                        .as_ref()
+                        .map(|j| format!(" from Jerlov type {j}"))
+                        .unwrap_or_default()
+                ));
+            } else {
+                n.reasons.push("no medium: the water has zero absorption and scattering (clear water, index kept)".into());
+            }
+            if let WaterExtent::BoxAroundCamera { half_size } = w.extent {
+                n.medium_box = n.medium;
+                n.reasons.push(format!(
+                    "medium box: water.extent = \"box\", half-size [{:.2}, {:.2}, {:.2}] m around each camera",
+                    half_size.x, half_size.y, half_size.z
+                ));
+            }
+        }
+    }
+    let ports: Vec<&str> = m
+        .cameras
+        .iter()
+        .filter(|c| !matches!(c.port, Port::None))
+        .map(|c| c.port.kind_name())
+        .collect();
+    n.refraction = !ports.is_empty();
+    if n.refraction {
+        n.reasons.push(format!(
+            "refraction: {} port{} in front of the camera{}",
+            ports.join(", "),
+            if ports.len() > 1 { "s" } else { "" },
+            if m.cameras.len() > 1 { "s" } else { "" }
+        ));
+    } else {
+        n.reasons.push("no refraction: no housing port".into());
+    }
+    n.lateral_color_px = m
+        .cameras
+        .iter()
+        .map(|c| optics::lateral_color_px(c, ior))
+        .fold(0.0, f64::max);
+    if !n.lateral_color_px.is_finite() {
+        n.lateral_color_px = 0.0;
+    }
+    n.per_channel_passes = m.render.dispersion && n.lateral_color_px >= 0.1;
+    n.reasons.push(if !m.render.dispersion {
+        format!(
+            "one render pass: dispersion is off (lateral colour would be {:.3} px)",
+            n.lateral_color_px
+        )
+    } else if n.per_channel_passes {
+        format!(
+            "one pass per channel: dispersion is on and lateral colour is {:.3} px ≥ 0.1 px",
+            n.lateral_color_px
+        )
+    } else {
+        format!(
+            "one render pass: dispersion is on but lateral colour is only {:.3} px < 0.1 px",
+            n.lateral_color_px
+        )
+    });
+    if let Some(_s) = &m.sun {
+        if m.water.is_some() && !matches!(m.site.surface, SeaSurface::None) {
+            n.sun_refraction = true;
+            n.reasons
+                .push("sun refraction: sunlight enters the water through the sea surface".into());
+        }
+        if m.water.is_some() && matches!(m.site.surface, SeaSurface::Waves { .. }) {
+            n.caustics = true;
+            n.reasons
+                .push("caustics: the sun shines through a wavy surface".into());
+        }
+    }
+    n
+}

@@ -1,0 +1,441 @@
+//! The `[[objects]]` of a scene: their shape (glTF mesh, plane, box, sphere, cylinder,
+//! generated seabed, boulders, coral), placement, scale and material (albedo and texture
+//! pattern). Mesh paths are resolved relative to the scene file that names them, checked to be
+//! readable glTF and kept inside the scene's folder.
+
+use super::{Spans, placement};
+use crate::model::*;
+use crate::scene::check;
+use crate::scene::diag::{Diagnostic, Span};
+use crate::scene::reader::{Cx, Tab};
+use crate::scene::source::{Sources, Val};
+use crate::units::Dim;
+use glam::DVec3;
+use std::path::Path;
+
+/// Every `[[objects]]` entry; generated objects without a `seed` get `seed0` + their index.
+pub(super) fn objects(
+    cx: &mut Cx,
+    t: &mut Tab,
+    site: &Site,
+    sources: &Sources,
+    scene: &Path,
+    spans: &mut Spans,
+    seed0: u64,
+) -> Vec<Object> {
+    let mut out = Vec::new();
+    for (i, n) in t.tables(cx, "objects").into_iter().enumerate() {
+        let path = format!("objects[{i}]");
+        let mut o = Tab::open(cx, Some(n), &path, n.span);
+        let name = o
+            .opt_str(cx, "name")
+            .unwrap_or_else(|| format!("object{i}"));
+        let shape_kind = o
+            .choice(
+                cx,
+                "shape",
+                &[
+                    "mesh", "plane", "box", "sphere", "cylinder", "seabed", "boulders", "coral",
+                ],
+            )
+            .unwrap_or("box");
+        let seed = o
+            .opt_u64(cx, "seed")
+            .unwrap_or(seed0.wrapping_add(i as u64));
+        let shape = shape(cx, &mut o, shape_kind, seed, sources, scene);
+        let default_pos = if matches!(shape, Shape::Seabed { .. } | Shape::Boulders { .. }) {
+            DVec3::new(0.0, 0.0, -site.depth)
+        } else {
+            DVec3::ZERO
+        };
+        let pose = placement(cx, &mut o, default_pos);
+        let scale = match o.get("scale") {
+            Some(n) if matches!(n.val, Val::Array(_)) => {
+                crate::scene::reader::vector(cx, n, Dim::Number, &o.full("scale"), Some(3))
+                    .map(|v| DVec3::new(v[0], v[1], v[2]))
+            }
+            Some(n) => {
+                crate::scene::reader::number(cx, n, Dim::Number, &o.full("scale")).map(DVec3::splat)
+            }
+            None => None,
+        }
+        .unwrap_or(DVec3::ONE);
+        if !(scale.min_element() > 0.0) {
+            let sp = o.span_of("scale");
+            cx.push(
+                Diagnostic::error("E0283", "the scale must be positive")
+                    .label(sp, "every factor must be > 0")
+                    .help("use `scale = 1` for the original size"),
+            );
+        }
+        let material = material(cx, &mut o, 0.3);
+        spans.objects.push(o.span);
+        o.finish_as(cx, Some(&format!("a {shape_kind} object (`{path}`)")));
+        out.push(Object {
+            name,
+            shape,
+            pose,
+            scale,
+            material,
+        });
+    }
+    out
+}
+
+/// The shape of an object by its `shape` key; the generated ones (seabed, boulders, coral) are
+/// made from `seed`.
+fn shape(
+    cx: &mut Cx,
+    o: &mut Tab,
+    kind: &str,
+    seed: u64,
+    sources: &Sources,
+    scene: &Path,
+) -> Shape {
+    match kind {
+        "mesh" => {
+            let sp = o.span_of("path");
+            let rel = o.opt_str(cx, "path").unwrap_or_default();
+            if !o.has("path") {
+                cx.push(
+                    Diagnostic::error("E0280", "a mesh object needs a `path`")
+                        .label(o.span, "no `path`")
+                        .help("give the glTF file relative to this scene file: `path = \"assets/amphora.glb\"`"),
+                );
+            }
+            let resolved = resolve_asset(cx, &rel, sp, sources, scene);
+            Shape::Mesh { path: resolved }
+        }
+        "plane" => {
+            let w = o.f64(cx, "width", Dim::Length, 1.0);
+            let h = o.f64(cx, "height", Dim::Length, 1.0);
+            check::positive(cx, o, "width", w, "m");
+            check::positive(cx, o, "height", h, "m");
+            Shape::Plane {
+                width: w,
+                height: h,
+            }
+        }
+        "box" => {
+            let size = o.vec3(cx, "size", Dim::Length, DVec3::ONE);
+            if !(size.min_element() > 0.0) {
+                let sp = o.span_of("size");
+                cx.push(
+                    Diagnostic::error("E0281", "a box needs a positive size")
+                        .label(sp, "every side must be > 0")
+                        .help("e.g. `size = [1, 0.5, 0.3]` (metres)"),
+                );
+            }
+            Shape::Box { size }
+        }
+        "sphere" => {
+            let r = o.f64(cx, "radius", Dim::Length, 0.5);
+            check::positive(cx, o, "radius", r, "m");
+            Shape::Sphere { radius: r }
+        }
+        "cylinder" => {
+            let r = o.f64(cx, "radius", Dim::Length, 0.5);
+            let h = o.f64(cx, "height", Dim::Length, 1.0);
+            check::positive(cx, o, "radius", r, "m");
+            check::positive(cx, o, "height", h, "m");
+            Shape::Cylinder {
+                radius: r,
+                height: h,
+            }
+        }
+        "seabed" => seabed(cx, o, seed),
+        "coral" => crate::scene::coral::shape(cx, o, seed),
+        _ => boulders(cx, o, seed),
+    }
+}
+
+/// A generated seabed heightfield of `width` × `length`, with `roughness` sampled every
+/// `resolution` (at most 50 million cells).
+fn seabed(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
+    let width = o.f64(cx, "width", Dim::Length, 20.0);
+    let length = o.f64(cx, "length", Dim::Length, 20.0);
+    let roughness = o.f64(cx, "roughness", Dim::Length, 0.1);
+    let resolution = o.f64(cx, "resolution", Dim::Length, 0.05);
+    check::positive(cx, o, "width", width, "m");
+    check::positive(cx, o, "length", length, "m");
+    check::positive(cx, o, "resolution", resolution, "m");
+    if roughness < 0.0 {
+        check::positive(cx, o, "roughness", roughness, "m");
+    }
+    if width > 0.0
+        && length > 0.0
+        && resolution > 0.0
+        && (width / resolution) * (length / resolution) > 5e7
+    {
+        let sp = o.span_of("resolution");
+        cx.push(
+            Diagnostic::error("E0282", "the seabed heightfield is too fine")
+                .label(
+                    sp,
+                    format!("{:.0} cells", (width / resolution) * (length / resolution)),
+                )
+                .help("keep width/resolution × length/resolution under 50 million cells"),
+        );
+    }
+    Shape::Seabed {
+        width,
+        length,
+        roughness,
+        resolution,
+        seed,
+    }
+}
+
+/// `count` boulders of about `radius` scattered over `width` × `length`.
+fn boulders(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
+    let width = o.f64(cx, "width", Dim::Length, 20.0);
+    let length = o.f64(cx, "length", Dim::Length, 20.0);
+    let count = o.u32(cx, "count", 30);
+    let radius = o.f64(cx, "radius", Dim::Length, 0.3);
+    let count = if check::at_most(cx, o, "count", count as u64, 1_000_000, "boulders") {
+        count
+    } else {
+        0
+    };
+    check::positive(cx, o, "width", width, "m");
+    check::positive(cx, o, "length", length, "m");
+    check::positive(cx, o, "radius", radius, "m");
+    Shape::Boulders {
+        width,
+        length,
+        count,
+        radius,
+        seed,
+    }
+}
+
+/// The mesh file `rel`, relative to the scene file that names it: it must be a readable glTF
+/// file inside the scene's folder. Returns its canonical path (the joined path after an error).
+fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &Path) -> String {
+    if rel.is_empty() {
+        return String::new();
+    }
+    let dir = sources
+        .dir_of(span.file)
+        .unwrap_or_else(|| scene.parent().map(Path::to_path_buf).unwrap_or_default());
+    let p = dir.join(rel);
+    match std::fs::metadata(&p) {
+        Ok(m) if m.is_file() => {
+            let ext = p
+                .extension()
+                .map(|e| e.to_string_lossy().to_lowercase())
+                .unwrap_or_default();
+            if ext != "glb" && ext != "gltf" {
+                cx.push(
+                    Diagnostic::error("E0285", "meshes must be glTF files")
+                        .label(span, format!("`.{ext}` file"))
+                        .help("convert the mesh to glTF (`.glb` or `.gltf`), e.g. with Blender's exporter"),
+                );
+            } else {
+                match std::fs::read(&p).map_err(|e| e.to_string()).and_then(|b| {
+                    gltf::Gltf::from_slice(&b)
+                        .map(|_| ())
+                        .map_err(|e| e.to_string())
+                }) {
+                    Ok(()) => cx.files.push(p.clone()),
+                    Err(e) => cx.push(
+                        Diagnostic::error(
+                            "E0287",
+                            format!(
+                                "`{}` is not a readable glTF file",
+                                crate::scene::source::display(&p)
+                            ),
+                        )
+                        .label(span, e)
+                        .help("re-export the mesh as glTF 2.0 (`.glb`), e.g. from Blender"),
+                    ),
+                }
+            }
+            // The model carries the canonical path, so every backend finds the file
+            // wherever it runs from; it must stay inside the scene's directory tree.
+            let canon = p.canonicalize().unwrap_or_else(|_| p.clone());
+            let roots: Vec<std::path::PathBuf> =
+                [Some(dir.clone()), scene.parent().map(Path::to_path_buf)]
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|d| {
+                        (if d.as_os_str().is_empty() {
+                            Path::new(".").to_path_buf()
+                        } else {
+                            d
+                        })
+                        .canonicalize()
+                        .ok()
+                    })
+                    .collect();
+            if !roots.iter().any(|r| canon.starts_with(r)) {
+                cx.push(
+                    Diagnostic::error("E0286", "the mesh file is outside the scene's directory")
+                        .label(span, "this path leaves the directory of the scene")
+                        .help("keep assets next to the scene (e.g. `assets/wreck.glb`) so the scene can be shared as one folder"),
+                );
+            }
+            return canon.to_string_lossy().to_string();
+        }
+        Ok(_) => cx.push(
+            Diagnostic::error(
+                "E0284",
+                format!("`{}` is not a file", crate::scene::source::display(&p)),
+            )
+            .label(span, "a directory")
+            .help("give the path of the .glb/.gltf file itself"),
+        ),
+        Err(_) => cx.push(
+            Diagnostic::error(
+                "E0284",
+                format!(
+                    "mesh file `{}` not found",
+                    crate::scene::source::display(&p)
+                ),
+            )
+            .label(span, "no such file")
+            .help("paths are relative to the scene file that names them"),
+        ),
+    }
+    crate::scene::source::display(&p)
+}
+
+/// `albedo` and an optional `[….pattern]` texture (checker, noise, fbm, sand, rock, coral)
+/// with its `variation` and `texel`.
+fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
+    let albedo = o.rgb(cx, "albedo", Dim::Number, [default_albedo; 3]);
+    if albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {
+        let sp = o.span_of("albedo");
+        cx.push(
+            Diagnostic::error("E0290", "albedo must be between 0 and 1")
+                .label(sp, "outside [0, 1]")
+                .help("albedo is the fraction of light reflected: 0.05 black ink, 0.9 white paper"),
+        );
+    }
+    let mut variation = 0.0;
+    let mut texel = None;
+    let pattern = o.get("pattern").map(|n| {
+        let mut p = Tab::open(cx, Some(n), &o.full("pattern"), n.span);
+        let ty = p
+            .choice(
+                cx,
+                "type",
+                &["checker", "noise", "fbm", "sand", "rock", "coral"],
+            )
+            .unwrap_or("noise");
+        let seed = |cx: &mut Cx, p: &mut Tab| p.opt_u64(cx, "seed").unwrap_or(0);
+        // A length ≥ 0 (0 switches the feature off).
+        let len0 = |cx: &mut Cx, p: &mut Tab, key: &'static str, default: f64| {
+            let v = p.f64(cx, key, Dim::Length, default);
+            check::non_negative(cx, p, key, v, "m");
+            v
+        };
+        let len = |cx: &mut Cx, p: &mut Tab, key: &'static str, default: f64| {
+            let v = p.f64(cx, key, Dim::Length, default);
+            check::positive(cx, p, key, v, "m");
+            v
+        };
+        let fraction = |cx: &mut Cx, p: &mut Tab, key: &'static str, default: f64| {
+            let v = p.f64(cx, key, Dim::Number, default);
+            check::within(cx, p, key, v, 0.0, 1.0);
+            v
+        };
+        let r = match ty {
+            "checker" => Pattern::Checker {
+                size: len(cx, &mut p, "size", 0.1),
+                contrast: p.f64(cx, "contrast", Dim::Number, 0.5),
+            },
+            "fbm" => Pattern::Fbm {
+                size: len(cx, &mut p, "size", 1.0),
+                smallest: len0(cx, &mut p, "smallest", 0.0),
+                gain: fraction(cx, &mut p, "gain", 0.7),
+                contrast: fraction(cx, &mut p, "contrast", 0.3),
+                seed: seed(cx, &mut p),
+            },
+            "sand" => Pattern::Sand {
+                wavelength: len0(cx, &mut p, "wavelength", 0.1),
+                direction: p.f64(cx, "direction", Dim::Angle, 0.0),
+                ripple: fraction(cx, &mut p, "ripple", 0.15),
+                grain: len0(cx, &mut p, "grain", 0.0005),
+                contrast: fraction(cx, &mut p, "contrast", 0.2),
+                seed: seed(cx, &mut p),
+            },
+            "rock" => Pattern::Rock {
+                size: len(cx, &mut p, "size", 0.5),
+                crack: len0(cx, &mut p, "crack", 0.2),
+                crack_width: len0(cx, &mut p, "crack_width", 0.003),
+                speckle: len0(cx, &mut p, "speckle", 0.002),
+                contrast: fraction(cx, &mut p, "contrast", 0.25),
+                seed: seed(cx, &mut p),
+            },
+            "coral" => {
+                let size = len(cx, &mut p, "size", 0.3);
+                let cover = fraction(cx, &mut p, "cover", 0.6);
+                let colors = coral_colors(cx, &mut p);
+                Pattern::Coral {
+                    size,
+                    cover,
+                    colors,
+                    polyp: len0(cx, &mut p, "polyp", 0.005),
+                    contrast: fraction(cx, &mut p, "contrast", 0.2),
+                    seed: seed(cx, &mut p),
+                }
+            }
+            _ => Pattern::Noise {
+                size: len(cx, &mut p, "size", 0.1),
+                amount: p.f64(cx, "amount", Dim::Number, 0.5),
+                seed: seed(cx, &mut p),
+            },
+        };
+        if ty != "checker" {
+            variation = fraction(cx, &mut p, "variation", 0.0);
+            texel = p.opt_f64(cx, "texel", Dim::Length);
+            if let Some(t) = texel {
+                check::positive(cx, &p, "texel", t, "m");
+            }
+        }
+        p.finish_as(cx, Some(&format!("a {ty} pattern")));
+        r
+    });
+    Material {
+        albedo,
+        pattern,
+        variation,
+        texel,
+    }
+}
+
+/// `colors = [[r, g, b], …]` of a coral pattern: albedos in [0, 1]; empty = the default palette.
+fn coral_colors(cx: &mut Cx, p: &mut Tab) -> Vec<crate::model::Rgb> {
+    let full = p.full("colors");
+    let Some(n) = p.get("colors") else {
+        return vec![];
+    };
+    let Val::Array(items) = &n.val else {
+        cx.push(crate::scene::reader::type_error(
+            n,
+            &full,
+            "a list of [r, g, b] albedos",
+            &n.val,
+        ));
+        return vec![];
+    };
+    let mut out = Vec::new();
+    for (i, item) in items.iter().enumerate() {
+        let Some(v) =
+            crate::scene::reader::vector(cx, item, Dim::Number, &format!("{full}.{i}"), Some(3))
+        else {
+            continue;
+        };
+        if v.iter().any(|a| !(0.0..=1.0).contains(a)) {
+            cx.push(
+                Diagnostic::error("E0290", "albedo must be between 0 and 1")
+                    .label(item.span, "outside [0, 1]")
+                    .help("each colour is an albedo `[r, g, b]` with values in [0, 1]"),
+            );
+            continue;
+        }
+        out.push([v[0], v[1], v[2]]);
+    }
+    out
+}

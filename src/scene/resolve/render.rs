@@ -1,0 +1,75 @@
+//! The `[render]` settings shared by every backend: samples per pixel, seed, bounces,
+//! dispersion, the outputs written (`rgb`, `depth`, `truth`) and the exposure.
+
+use crate::model::*;
+use crate::scene::check;
+use crate::scene::diag::{Diagnostic, Span};
+use crate::scene::reader::{Cx, Tab};
+use crate::scene::source::{Node, Val};
+use crate::units::Dim;
+
+/// `[render]`, with every default filled in.
+pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> RenderSettings {
+    let mut r = Tab::open(cx, node, "render", fallback);
+    let samples = r.u32(cx, "samples", 64);
+    if samples == 0 {
+        let sp = r.span_of("samples");
+        cx.push(
+            Diagnostic::error("E0220", "at least one sample per pixel is needed")
+                .label(sp, "0 samples")
+                .help("use e.g. `samples = 64`"),
+        );
+    }
+    let seed = r.opt_u64(cx, "seed").unwrap_or(0);
+    let max_bounces = r.u32(cx, "bounces", 8);
+    let dispersion = r.bool(cx, "dispersion", false);
+    let outputs = match r.get("outputs") {
+        None => vec!["rgb".to_string(), "depth".into(), "truth".into()],
+        Some(n) => match &n.val {
+            Val::Array(a) => {
+                let mut out = Vec::new();
+                for x in a {
+                    match &x.val {
+                        Val::Str(s) if ["rgb", "depth", "truth"].contains(&s.as_str()) => {
+                            out.push(s.clone())
+                        }
+                        _ => {
+                            let mut d = Diagnostic::error("E0221", "unknown output")
+                                .label(x.span, "expected \"rgb\", \"depth\" or \"truth\"");
+                            if let Val::Str(s) = &x.val
+                                && let Some(m) =
+                                    crate::scene::reader::did_you_mean(s, ["rgb", "depth", "truth"])
+                            {
+                                d = d.help(format!("did you mean `{m}`?"));
+                            } else {
+                                d = d.help("outputs = [\"rgb\", \"depth\", \"truth\"]");
+                            }
+                            cx.push(d);
+                        }
+                    }
+                }
+                out
+            }
+            v => {
+                cx.push(crate::scene::reader::type_error(
+                    n,
+                    "render.outputs",
+                    "a list of strings",
+                    v,
+                ));
+                vec![]
+            }
+        },
+    };
+    let exposure = r.f64(cx, "exposure", Dim::Number, 1.0);
+    check::positive(cx, &r, "exposure", exposure, "");
+    r.finish(cx);
+    RenderSettings {
+        samples,
+        seed,
+        max_bounces,
+        dispersion,
+        outputs,
+        exposure,
+    }
+}
