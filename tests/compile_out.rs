@@ -3,7 +3,7 @@
 //!
 //! | out | what is pinned |
 //! |---|---|
-//! | `tests/out/model/` | the resolved model as JSON (lists longer than 12 entries cut to their first three and last one) |
+//! | `tests/out/model/` | the resolved model as JSON (lists longer than 12 entries cut to their first three and last one; the checkout's path written `$CARGO_MANIFEST_DIR`) |
 //! | `tests/out/mitsuba/` | the compiled file list, `world.xml` and the first view's XML (tabulated phase values cut); or Mitsuba's refusal |
 //! | `tests/out/blender/` | the scene description that `scene.py` carries, its assets (size and FNV-1a hash), warnings; or Blender's refusal |
 //!
@@ -65,7 +65,11 @@ fn cut_long_lists(v: &mut Value) {
 fn model_text(model: &poser::model::Model) -> String {
     let mut v = serde_json::to_value(model).unwrap();
     cut_long_lists(&mut v);
-    serde_json::to_string_pretty(&v).unwrap()
+    // Paths are absolute in the model; pin them relative to the checkout, wherever it is.
+    let root = format!("{}/", root().display());
+    serde_json::to_string_pretty(&v)
+        .unwrap()
+        .replace(&root, "$CARGO_MANIFEST_DIR/")
 }
 
 /// Drop long number lists (tabulated phase values) from an XML document.
