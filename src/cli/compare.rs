@@ -19,6 +19,10 @@ pub struct Args {
     /// Render only these pose indices (e.g. `0,3,5`).
     #[arg(long, value_delimiter = ',')]
     pub poses: Option<Vec<usize>>,
+    /// Compare at a fraction of the cameras' resolution (e.g. `0.25`): same field of view, lens
+    /// and port; the truth the targets are measured against is the scaled one.
+    #[arg(long)]
+    pub scale: Option<f64>,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
@@ -29,7 +33,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         args.samples,
         args.poses.clone(),
     );
-    let model = load_model(scene)?;
+    let model = super::common::apply_scale(load_model(scene)?, args.scale)?;
     let opts = RenderOptions {
         samples,
         poses,

@@ -74,15 +74,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         args.quiet,
         args.sensor,
     );
-    let mut model = load_model(scene)?;
-    if let Some(s) = scale {
-        if !(s.is_finite() && s > 0.0 && s <= 4.0) {
-            return Err(CliError::Usage(format!(
-                "--scale {s}: expected a factor in (0, 4], e.g. 0.25 for a quarter-resolution preview"
-            )));
-        }
-        model = model.with_resolution_scale(s);
-    }
+    let mut model = super::common::apply_scale(load_model(scene)?, scale)?;
     if let Some(p) = poses
         .as_ref()
         .and_then(|p| p.iter().find(|&&i| i >= model.poses.len()))
