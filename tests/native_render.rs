@@ -286,9 +286,17 @@ fn resolution_scale_keeps_every_ray_in_place() {
         let c0 = &model.cameras[0];
         let c1 = &small_model.cameras[0];
         assert_eq!(c1.width, (c0.width as f64 * scale).round() as u32);
-        let (sx, sy) = (
-            c1.width as f64 / c0.width as f64,
-            c1.height as f64 / c0.height as f64,
+        // Square pixels stay square: both axes scale by the width's ratio.
+        let sx = c1.width as f64 / c0.width as f64;
+        let sy = if c0.fx == c0.fy {
+            sx
+        } else {
+            c1.height as f64 / c0.height as f64
+        };
+        assert_eq!(
+            c1.fx == c1.fy,
+            c0.fx == c0.fy,
+            "scale {scale}: squareness kept"
         );
         let small = poser::optics::project::Projector::new(&small_model, 0, 1).unwrap();
         let mut checked = 0;

@@ -4,9 +4,11 @@
 //! | module | what |
 //! |---|---|
 //! | [`evaluate`] | `poser bench evaluate`: CPU time and results of `poser evaluate` on the deformation lessons |
+//! | [`parity`] | `poser bench parity`: every shipped scene in every backend, and whether they agree |
 //! | [`projection`] | `poser bench projection`: port solvers (scalar, batch) against the double-double reference |
 //! | [`render`] | `poser bench render`: speed against error of every render backend |
 
 pub mod evaluate;
+pub mod parity;
 pub mod projection;
 pub mod render;

@@ -1,4 +1,5 @@
-//! `poser bench`: speed-against-error reports (projection solvers; render backends).
+//! `poser bench`: speed-against-error reports (projection solvers; render backends), and the
+//! backends' agreement on every shipped scene (`parity`).
 use super::CliError;
 use crate::backend::Backend;
 use std::path::PathBuf;
@@ -6,7 +7,7 @@ use std::path::PathBuf;
 /// The arguments of `poser bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// What to benchmark: `projection`, `render` or `evaluate`.
+    /// What to benchmark: `projection`, `render`, `evaluate` or `parity`.
     pub what: String,
     /// Write the report as JSON too.
     #[arg(long)]
@@ -14,12 +15,19 @@ pub struct Args {
     /// Smaller, quicker run.
     #[arg(long)]
     pub quick: bool,
-    /// `render` only: the backends to compare (default: all three).
+    /// `render` and `parity`: the backends to compare (default: all three).
     #[arg(long, value_enum, value_delimiter = ',')]
     pub backends: Vec<Backend>,
     /// `render` only: write the speed-against-error curves as an SVG plot.
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// `parity` only: only the scenes whose file name contains this.
+    #[arg(long)]
+    pub only: Option<String>,
+    /// `parity` only: keep the renders and each scene's `poser compare` report here (default:
+    /// a temporary folder, removed afterwards).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
@@ -30,9 +38,19 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         args.backends.clone(),
         args.plot.clone(),
     );
-    if what != "render" && (!backends.is_empty() || plot.is_some()) {
+    if what != "render" && plot.is_some() {
         return Err(CliError::Usage(
-            "--backends and --plot apply to `poser bench render` only".into(),
+            "--plot applies to `poser bench render` only".into(),
+        ));
+    }
+    if !matches!(what, "render" | "parity") && !backends.is_empty() {
+        return Err(CliError::Usage(
+            "--backends applies to `poser bench render` and `poser bench parity` only".into(),
+        ));
+    }
+    if what != "parity" && (args.only.is_some() || args.out.is_some()) {
+        return Err(CliError::Usage(
+            "--only and --out apply to `poser bench parity` only".into(),
         ));
     }
     match what {
@@ -73,8 +91,29 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             print!("{}", crate::bench::evaluate::table(&rows));
             write_json(json.as_deref(), &rows)
         }
+        "parity" => {
+            let backends = if backends.is_empty() {
+                Backend::ALL.to_vec()
+            } else {
+                backends
+            };
+            let tmp;
+            let out = match &args.out {
+                Some(o) => o.clone(),
+                None => {
+                    tmp = tempfile::tempdir().map_err(|e| CliError::Failed(e.to_string()))?;
+                    tmp.path().to_path_buf()
+                }
+            };
+            let root = crate::backend::python::repo_root();
+            let rows =
+                crate::bench::parity::run(&root, &backends, quick, args.only.as_deref(), &out)
+                    .map_err(CliError::Failed)?;
+            print!("{}", crate::bench::parity::table(&rows));
+            write_json(json.as_deref(), &rows)
+        }
         other => Err(CliError::Usage(format!(
-            "bench `{other}`: expected `projection`, `render` or `evaluate`"
+            "bench `{other}`: expected `projection`, `render`, `evaluate` or `parity`"
         ))),
     }
 }

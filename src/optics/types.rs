@@ -89,12 +89,20 @@ pub struct Camera {
 impl Camera {
     /// The same camera with its pixel grid resampled by `scale` (a preview at a fraction of the
     /// resolution): same sensor, field of view, lens, distortion and port; sizes rounded to
-    /// whole pixels (at least 1) and the intrinsics scaled per axis by the exact ratio of the
-    /// new to the old size, so that every ray keeps its place on the sensor.
+    /// whole pixels (at least 1) and the intrinsics scaled by the exact ratio of the new to the
+    /// old width, so that every ray keeps its place on the sensor. Square pixels stay square
+    /// (Mitsuba's perspective sensor has no other kind): both axes take the width's ratio, and
+    /// the rounded height crops or extends the bottom edge by under half a pixel. Non-square
+    /// pixels are scaled per axis.
     pub fn with_resolution_scale(&self, scale: f64) -> Camera {
         let w = ((self.width as f64 * scale).round() as u32).max(1);
         let h = ((self.height as f64 * scale).round() as u32).max(1);
-        let (sx, sy) = (w as f64 / self.width as f64, h as f64 / self.height as f64);
+        let sx = w as f64 / self.width as f64;
+        let sy = if self.fx == self.fy {
+            sx
+        } else {
+            h as f64 / self.height as f64
+        };
         Camera {
             width: w,
             height: h,
