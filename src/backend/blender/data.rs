@@ -145,8 +145,8 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         // almost no paths (caustics_shallow at 80×60, 16 spp: 98 % of the pixels black, image
         // mean 0.0 against the native 38).
         return Err(
-            "the sun through a wavy sea surface (caustics) cannot be rendered by the Blender              backend: Cycles reaches the seabed through the wavy glass only by its manifold              next-event estimation, which finds almost none of these paths (the seabed renders              black with fireflies)
-  help: use `surface = \"flat\"` or render with the              native backend"
+            "the sun through a wavy sea surface (caustics) cannot be rendered by the Blender backend: Cycles reaches the seabed through the wavy glass only by its manifold next-event estimation, which finds almost none of these paths (the seabed renders black with fireflies)
+  help: use `surface = \"flat\"` or render with the native backend"
                 .into(),
         );
     }
