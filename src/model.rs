@@ -394,6 +394,18 @@ pub struct Material {
     /// the scene's cameras on this object (see [`crate::texture::bake`]).
     #[serde(default)]
     pub texel: Option<f64>,
+    /// Lines of a survey grid (string or tape) drawn over a baked pattern.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grid: Option<Grid>,
+}
+
+/// Lines along the object's x and y axes every `spacing` m, `width` m wide, of albedo `albedo`
+/// (a site's grid strings or tapes), baked into the texture over the pattern.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Grid {
+    pub spacing: f64,
+    pub width: f64,
+    pub albedo: Rgb,
 }
 
 impl Material {
@@ -401,6 +413,7 @@ impl Material {
     /// which every backend draws exactly, or any colour variation).
     pub fn is_baked(&self) -> bool {
         self.variation > 0.0
+            || self.grid.is_some()
             || matches!(&self.pattern, Some(p) if !matches!(p, Pattern::Checker { .. }))
     }
 }

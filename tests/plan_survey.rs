@@ -24,6 +24,7 @@ fn seabed(depth: f64) -> Object {
             pattern: None,
             variation: 0.0,
             texel: None,
+            grid: None,
         },
     }
 }
@@ -105,6 +106,7 @@ fn coverage_sees_occlusion_under_a_box() {
             pattern: None,
             variation: 0.0,
             texel: None,
+            grid: None,
         },
     });
     let site = Site::new(&m);

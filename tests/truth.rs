@@ -58,6 +58,7 @@ fn occluded_and_back_facing_points_are_left_out() {
             pattern: None,
             variation: 0.0,
             texel: None,
+            grid: None,
         },
     });
     let cams: Vec<DVec3> = (0..model.poses.len())

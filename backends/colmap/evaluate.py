@@ -304,6 +304,22 @@ def images(pycolmap, req: dict) -> dict:
     mapper.num_threads = extraction.num_threads
     mapper.multiple_models = False
     mapper.ba_refine_principal_point = bool(req.get("refine_principal_point", False))
+    mapper.random_seed = int(req.get("seed", 0))
+    # A survey's neighbours are a few degrees apart (nadir strips at 80 % overlap: about 8°
+    # between consecutive images); COLMAP's default of 16° for the initial pair suits
+    # turntable-like sets and leaves a strip with no pair to start from.
+    mapper.mapper.init_min_tri_angle = float(req.get("init_min_tri_angle", 8.0))
+    # Intrinsics held at the prior while the model grows, refined once by a global bundle
+    # adjustment at the end (docs/evaluate.md): self-calibrating from the first pair of a
+    # nearly flat nadir survey runs the focal length away with the distortion (measured on
+    # reef_strip's quick form: 4 of 22 images registered, f 610 px for 445; held: 22 of 22).
+    hold = bool(req.get("hold_intrinsics", True))
+    if hold:
+        mapper.ba_refine_focal_length = False
+        mapper.ba_refine_extra_params = False
+        mapper.ba_refine_principal_point = False
+        mapper.mapper.abs_pose_refine_focal_length = False
+        mapper.mapper.abs_pose_refine_extra_params = False
     sparse = work / "sparse"
     sparse.mkdir(exist_ok=True)
     maps = pycolmap.incremental_mapping(db, image_dir, sparse, options=mapper)
@@ -313,6 +329,8 @@ def images(pycolmap, req: dict) -> dict:
             "scene is textured at the image's GSD, raise samples, or add overlap)"
         )
     rec = max(maps.values(), key=lambda r: r.num_reg_images())
+    if hold:
+        pycolmap.bundle_adjustment(rec, ba_options(pycolmap, req))
     result = export(rec)
     keypoints = 0
     with pycolmap.Database.open(db) as database:

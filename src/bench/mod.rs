@@ -4,11 +4,13 @@
 //! | module | what |
 //! |---|---|
 //! | [`evaluate`] | `poser bench evaluate`: CPU time and results of `poser evaluate` on the deformation lessons |
+//! | [`images`] | `poser bench images`: COLMAP's whole pipeline on native renders of the shipped survey scenes |
 //! | [`parity`] | `poser bench parity`: every shipped scene in every backend, and whether they agree |
 //! | [`projection`] | `poser bench projection`: port solvers (scalar, batch) against the double-double reference |
 //! | [`render`] | `poser bench render`: speed against error of every render backend |
 
 pub mod evaluate;
+pub mod images;
 pub mod parity;
 pub mod projection;
 pub mod render;

@@ -62,6 +62,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
         pattern: None,
         variation: 0.0,
         texel: None,
+        grid: None,
     };
     let boxed = |name: &str, at: DVec3, size: f64, a: [f64; 3]| Object {
         name: name.into(),

@@ -1,4 +1,5 @@
-//! `poser bench`: speed-against-error reports (projection solvers; render backends), and the
+//! `poser bench`: speed-against-error reports (projection solvers; render backends), COLMAP on
+//! rendered surveys (`images`), and the
 //! backends' agreement on every shipped scene (`parity`).
 use super::CliError;
 use crate::backend::Backend;
@@ -7,7 +8,7 @@ use std::path::PathBuf;
 /// The arguments of `poser bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// What to benchmark: `projection`, `render`, `evaluate` or `parity`.
+    /// What to benchmark: `projection`, `render`, `evaluate`, `parity` or `images`.
     pub what: String,
     /// Write the report as JSON too.
     #[arg(long)]
@@ -21,11 +22,11 @@ pub struct Args {
     /// `render` only: write the speed-against-error curves as an SVG plot.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// `parity` only: only the scenes whose file name contains this.
+    /// `parity` and `images`: only the scenes whose file name contains this.
     #[arg(long)]
     pub only: Option<String>,
-    /// `parity` only: keep the renders and each scene's `poser compare` report here (default:
-    /// a temporary folder, removed afterwards).
+    /// `parity` and `images`: keep the renders (and `parity`'s `poser compare` reports) here
+    /// (default: a temporary folder, removed afterwards).
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
@@ -48,9 +49,9 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--backends applies to `poser bench render` and `poser bench parity` only".into(),
         ));
     }
-    if what != "parity" && (args.only.is_some() || args.out.is_some()) {
+    if !matches!(what, "parity" | "images") && (args.only.is_some() || args.out.is_some()) {
         return Err(CliError::Usage(
-            "--only and --out apply to `poser bench parity` only".into(),
+            "--only and --out apply to `poser bench parity` and `poser bench images` only".into(),
         ));
     }
     match what {
@@ -112,8 +113,23 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             print!("{}", crate::bench::parity::table(&rows));
             write_json(json.as_deref(), &rows)
         }
+        "images" => {
+            let tmp;
+            let out = match &args.out {
+                Some(o) => o.clone(),
+                None => {
+                    tmp = tempfile::tempdir().map_err(|e| CliError::Failed(e.to_string()))?;
+                    tmp.path().to_path_buf()
+                }
+            };
+            let root = crate::backend::python::repo_root();
+            let rows = crate::bench::images::run(&root, quick, args.only.as_deref(), &out)
+                .map_err(CliError::Failed)?;
+            print!("{}", crate::bench::images::table(&rows));
+            write_json(json.as_deref(), &rows)
+        }
         other => Err(CliError::Usage(format!(
-            "bench `{other}`: expected `projection`, `render`, `evaluate` or `parity`"
+            "bench `{other}`: expected `projection`, `render`, `evaluate`, `parity` or `images`"
         ))),
     }
 }

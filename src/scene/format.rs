@@ -630,6 +630,14 @@ pub struct PatternTable {
     /// sample distance of the scene's cameras on the object (coarsened to keep every baked texture of the scene within 16 Mi texels together and
     /// 8192 texels a side; `poser explain` says by how much).
     pub texel: Option<Length>,
+    /// A survey grid drawn over the pattern (strings or tapes along the object's x and y axes,
+    /// as on an excavation): line spacing. Not with `checker`. **Unit:** m. **Default:** none.
+    pub grid: Option<Length>,
+    /// Width of the grid's lines. **Unit:** m. **Default:** 1 cm.
+    pub grid_width: Option<Length>,
+    /// Albedo of the grid's lines. **Unit:** 1. **Default:** [0.8, 0.75, 0.5] (a pale yellow
+    /// string).
+    pub grid_albedo: Option<PerChannel<Number>>,
 }
 
 /// `[[targets]]` — a calibration target, scale bar or GSD target with known 3D points (ids

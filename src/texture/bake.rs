@@ -627,9 +627,12 @@ fn bake_from(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side:
                         texel_hash: hash2(c.seed, i as i64, j as i64),
                     };
                     let a = albedo(pattern, base, &at);
+                    let cover = o.material.grid.map_or(0.0, |g| grid_cover(&g, at.x, at.y, texel));
                     let k = 3 * (c.ox + i) as usize;
                     for ch in 0..3 {
-                        line[k + ch] = ((a[ch] * tint[ch]).clamp(0.0, 1.0) * 255.0).round() as u8;
+                        let v = (1.0 - cover) * a[ch] * tint[ch]
+                            + cover * o.material.grid.map_or(0.0, |g| g.albedo[ch]);
+                        line[k + ch] = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
                     }
                 }
             }
@@ -687,6 +690,18 @@ pub fn ply_bytes(mesh: &TriMesh, uv: &[[f32; 2]], flip_t: bool) -> Vec<u8> {
     out
 }
 
+/// Fraction of a texel centred at (x, y) (chart coordinates, m) that a grid's lines cover:
+/// a smoothstep one texel wide around each line's edge, as for cracks.
+fn grid_cover(g: &crate::model::Grid, x: f64, y: f64, texel: f64) -> f64 {
+    let d = |v: f64| (v - (v / g.spacing).round() * g.spacing).abs();
+    let half = 0.5 * g.width;
+    let edge = |d: f64| {
+        let t = ((d - (half - 0.5 * texel)) / texel).clamp(0.0, 1.0);
+        1.0 - t * t * (3.0 - 2.0 * t)
+    };
+    edge(d(x)).max(edge(d(y)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -703,6 +718,7 @@ mod tests {
                 pattern: Some(pattern),
                 variation: 0.2,
                 texel: None,
+                grid: None,
             },
         }
     }
@@ -753,6 +769,52 @@ mod tests {
         assert_eq!(again.texture, b.texture);
         let png = b.texture.png().unwrap();
         assert_eq!(png, again.texture.png().unwrap());
+    }
+
+    #[test]
+    fn a_grid_draws_its_lines_over_the_pattern_on_the_objects_axes() {
+        // A 0.2 × 0.1 m plane with a grid every 5 cm, 4 mm wide, at 1 mm texels.
+        let mut o = object(
+            Shape::Plane {
+                width: 0.2,
+                height: 0.1,
+            },
+            rock(),
+        );
+        o.material.variation = 0.0;
+        let local = crate::geometry::mesh::shape_mesh(&o.shape, Path::new(".")).unwrap();
+        let plain = bake(&o, &local, 0.001, "test".into(), MAX_SIDE);
+        o.material.grid = Some(crate::model::Grid {
+            spacing: 0.05,
+            width: 0.004,
+            albedo: [1.0, 0.0, 0.0],
+        });
+        let lined = bake(&o, &local, 0.001, "test".into(), MAX_SIDE);
+        let at = |b: &Baked, x: f64, y: f64| {
+            // Texel of the point (x, y) of the plane (corner (−0.1, −0.05) at texel (2, 2)).
+            let i = (2.0 + (x + 0.1) / 0.001).floor() as usize;
+            let j = (2.0 + (y + 0.05) / 0.001).floor() as usize;
+            let k = 3 * (j * b.texture.width as usize + i);
+            [b.texture.rgb[k], b.texture.rgb[k + 1], b.texture.rgb[k + 2]]
+        };
+        // On the lines x = 0, x = ±0.05 and y = 0: the line's colour.
+        for (x, y) in [(0.0005, 0.023), (0.0505, -0.031), (-0.0495, 0.012), (0.033, 0.0005)] {
+            assert_eq!(at(&lined, x, y), [255, 0, 0], "({x}, {y})");
+        }
+        // Between them: the pattern, untouched.
+        for (x, y) in [(0.0255, 0.0255), (-0.0245, -0.0205), (0.071, 0.031)] {
+            assert_eq!(at(&lined, x, y), at(&plain, x, y), "({x}, {y})");
+        }
+        // Five lines across x (−0.1 … 0.1 m, 4 texels each, in 204 texels with the borders) and
+        // three across y (in 104): 1 − (1 − 20/204)(1 − 12/104) ≈ 20 % of the texels.
+        let red = lined
+            .texture
+            .rgb
+            .chunks(3)
+            .filter(|p| p == &[255, 0, 0])
+            .count() as f64
+            / (lined.texture.width * lined.texture.height) as f64;
+        assert!((0.18..0.22).contains(&red), "{red}");
     }
 
     #[test]

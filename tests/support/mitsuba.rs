@@ -128,6 +128,7 @@ pub fn showcase() -> Model {
                 pattern: None,
                 variation: 0.0,
                 texel: None,
+                grid: None,
             },
         },
         Object {
@@ -145,6 +146,7 @@ pub fn showcase() -> Model {
                 pattern: None,
                 variation: 0.0,
                 texel: None,
+                grid: None,
             },
         },
         Object {
@@ -163,6 +165,7 @@ pub fn showcase() -> Model {
                 pattern: None,
                 variation: 0.0,
                 texel: None,
+                grid: None,
             },
         },
     ];

@@ -111,6 +111,7 @@ pub fn plane(name: &str, z: f64, size: f64, albedo: Rgb) -> Object {
             pattern: None,
             variation: 0.0,
             texel: None,
+            grid: None,
         },
     }
 }

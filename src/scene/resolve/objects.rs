@@ -314,6 +314,7 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
     }
     let mut variation = 0.0;
     let mut texel = None;
+    let mut grid = None;
     let pattern = o.get("pattern").map(|n| {
         let mut p = Tab::open(cx, Some(n), &o.full("pattern"), n.span);
         let ty = p
@@ -393,6 +394,24 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
             if let Some(t) = texel {
                 check::positive(cx, &p, "texel", t, "m");
             }
+            if let Some(spacing) = p.opt_f64(cx, "grid", Dim::Length) {
+                check::positive(cx, &p, "grid", spacing, "m");
+                let width = len(cx, &mut p, "grid_width", 0.01);
+                let albedo = p.rgb(cx, "grid_albedo", Dim::Number, GRID_ALBEDO);
+                if albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {
+                    let sp = p.span_of("grid_albedo");
+                    cx.push(
+                        Diagnostic::error("E0290", "albedo must be between 0 and 1")
+                            .label(sp, "outside [0, 1]")
+                            .help("a white string's albedo is about 0.8"),
+                    );
+                }
+                grid = Some(crate::model::Grid {
+                    spacing,
+                    width,
+                    albedo,
+                });
+            }
         }
         p.finish_as(cx, Some(&format!("a {ty} pattern")));
         r
@@ -402,8 +421,12 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
         pattern,
         variation,
         texel,
+        grid,
     }
 }
+
+/// Default albedo of a pattern's grid lines: a pale yellow string.
+const GRID_ALBEDO: crate::model::Rgb = [0.8, 0.75, 0.5];
 
 /// `colors = [[r, g, b], …]` of a coral pattern: albedos in [0, 1]; empty = the default palette.
 fn coral_colors(cx: &mut Cx, p: &mut Tab) -> Vec<crate::model::Rgb> {

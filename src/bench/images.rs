@@ -1,0 +1,239 @@
+//! `poser bench images`: can real photogrammetry software process poser's images? Each
+//! shipped survey scene is rendered by the native backend at a reduced size, run through its
+//! sensor stage (when it has one), and handed to COLMAP's whole pipeline (`poser evaluate
+//! --mode images`, the same code): the share of images registered, points, track length,
+//! reprojection error and the recovered focal length against the in-water-equivalent truth.
+//!
+//! | scene | network (both forms) | quick: scale, samples | full: scale, samples |
+//! |---|---|---|---|
+//! | `scenarios/reef_strip.toml` | a 1.5 × 3 m corner: 4 strips, 44 images | 0.4, 16 | 0.8, 64 |
+//! | `scenarios/dome_orbit.toml` | as shipped: 36 images | 0.25, 16 | 0.5, 64 |
+//! | `scenarios/lessons/archaeology.toml` | a 3 × 3 m trench: 36 images | 0.1, 16 | 0.2, 64 |
+//! | `scenarios/lessons/coral_self_occlusion.toml` | as shipped: 50 images | 0.25, 16 | 0.5, 64 |
+//! | `scenarios/lessons/subsea_metrology.toml` | 2 m of pipeline: 11 stereo pairs, 22 images | 0.2, 16 | 0.4, 64 |
+//!
+//! A scene that cannot be processed (untextured, or COLMAP registering fewer than three
+//! images) is a row with its reason, never a skipped line.
+
+use super::evaluate::cpu_seconds;
+use crate::backend::{Backend, RenderOptions};
+use crate::evaluate::{Options, check_images_texture, evaluate_images};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One scene of the bench: where it is, the `--set`s of its network, its reduced size.
+pub struct Case {
+    pub scene: &'static str,
+    pub sets: &'static [&'static str],
+    /// Resolution scale and samples per pixel of the quick form; the full form doubles the
+    /// scale and quadruples the samples.
+    pub scale: f64,
+    pub samples: u32,
+}
+
+/// The shipped survey scenes (issue 21's list).
+pub const CASES: &[Case] = &[
+    Case {
+        scene: "scenarios/reef_strip.toml",
+        sets: &["network.width=\"1.5 m\"", "network.length=\"3 m\""],
+        scale: 0.4,
+        samples: 16,
+    },
+    Case {
+        scene: "scenarios/dome_orbit.toml",
+        sets: &[],
+        scale: 0.25,
+        samples: 16,
+    },
+    Case {
+        scene: "scenarios/lessons/archaeology.toml",
+        sets: &["network.width=\"3 m\"", "network.length=\"3 m\""],
+        scale: 0.1,
+        samples: 16,
+    },
+    Case {
+        scene: "scenarios/lessons/coral_self_occlusion.toml",
+        sets: &[],
+        scale: 0.25,
+        samples: 16,
+    },
+    Case {
+        scene: "scenarios/lessons/subsea_metrology.toml",
+        sets: &["network.length=\"2 m\""],
+        scale: 0.2,
+        samples: 16,
+    },
+];
+
+/// One scene processed by COLMAP.
+#[derive(Debug, Clone, Serialize)]
+pub struct Row {
+    pub scene: String,
+    pub form: &'static str,
+    pub width: usize,
+    pub height: usize,
+    pub samples: u32,
+    pub images: usize,
+    pub registered: usize,
+    /// registered / images.
+    pub share: f64,
+    pub points: usize,
+    pub mean_track_length: f64,
+    pub reprojection_px: f64,
+    /// (f recovered − f truth)/f truth, the truth being the in-water-equivalent focal length
+    /// (first camera).
+    pub focal_error: Option<f64>,
+    /// Wall seconds of the render (and sensor stage), and of COLMAP's pipeline.
+    pub render_wall_s: f64,
+    pub colmap_wall_s: f64,
+    pub cpu_s: f64,
+    /// Why the scene could not be processed, if it could not.
+    pub failure: Option<String>,
+}
+
+/// Run the cases whose file name contains `only` (all when `None`); renders go to `out`.
+pub fn run(root: &Path, quick: bool, only: Option<&str>, out: &Path) -> Result<Vec<Row>, String> {
+    let mut rows = Vec::new();
+    for case in CASES {
+        if only.is_some_and(|o| !case.scene.contains(o)) {
+            continue;
+        }
+        eprintln!("bench images: {}", case.scene);
+        rows.push(run_case(root, case, quick, out)?);
+    }
+    if rows.is_empty() {
+        return Err(format!(
+            "--only {}: no scene of `poser bench images` matches",
+            only.unwrap_or("")
+        ));
+    }
+    Ok(rows)
+}
+
+/// Render and process one case.
+pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row, String> {
+    let (scale, samples) = if quick {
+        (case.scale, case.samples)
+    } else {
+        (2.0 * case.scale, 4 * case.samples)
+    };
+    let sets: Vec<String> = case.sets.iter().map(|s| s.to_string()).collect();
+    let model = crate::scene::load(&root.join(case.scene), &sets)
+        .map_err(|f| f.render())?
+        .model
+        .with_resolution_scale(scale);
+    let stem = Path::new(case.scene)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let cam = &model.cameras[0];
+    let mut row = Row {
+        scene: stem.clone(),
+        form: if quick { "quick" } else { "full" },
+        width: cam.width as usize,
+        height: cam.height as usize,
+        samples,
+        images: model.poses.len() * model.cameras.len(),
+        registered: 0,
+        share: 0.0,
+        points: 0,
+        mean_track_length: 0.0,
+        reprojection_px: f64::NAN,
+        focal_error: None,
+        render_wall_s: 0.0,
+        colmap_wall_s: 0.0,
+        cpu_s: 0.0,
+        failure: None,
+    };
+    let c0 = cpu_seconds();
+    if let Err(e) = check_images_texture(&model) {
+        row.failure = Some(first_line(&e));
+        return Ok(row);
+    }
+    let dir = out.join(&stem);
+    let t0 = std::time::Instant::now();
+    Backend::Native.render(
+        &model,
+        &dir,
+        &RenderOptions {
+            samples: Some(samples),
+            poses: None,
+            progress: false,
+            resume: false,
+        },
+    )?;
+    if let Some(sensor) = &model.sensor {
+        let poses: Vec<usize> = (0..model.poses.len()).collect();
+        crate::sensor::files::apply(&model, sensor, &dir, &poses, samples)?;
+    }
+    row.render_wall_s = t0.elapsed().as_secs_f64();
+    let t1 = std::time::Instant::now();
+    match evaluate_images(&model, &dir, &Options::default(), &|_, _, _| {}) {
+        Ok(ev) => {
+            row.registered = ev.registered;
+            row.share = ev.registered as f64 / ev.images.max(1) as f64;
+            row.points = ev.points;
+            row.mean_track_length = ev.mean_track_length;
+            row.reprojection_px = ev.reprojection_error;
+            row.focal_error = ev.cameras.first().map(|c| c.focal_error);
+        }
+        Err(e) => row.failure = Some(first_line(&e)),
+    }
+    row.colmap_wall_s = t1.elapsed().as_secs_f64();
+    row.cpu_s = cpu_seconds() - c0;
+    Ok(row)
+}
+
+fn first_line(s: &str) -> String {
+    s.lines().next().unwrap_or_default().to_string()
+}
+
+/// The Markdown table of the rows.
+pub fn table(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| scene | form | size | images | registered | points | track | reprojection | focal error | render | COLMAP | note |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        if let Some(f) = &r.failure {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | — | — | — | — | {:.0} s | {:.0} s | {} |",
+                r.scene,
+                r.form,
+                r.width,
+                r.height,
+                r.samples,
+                r.images,
+                r.registered,
+                100.0 * r.share,
+                r.render_wall_s,
+                r.colmap_wall_s,
+                f.replace('|', "/")
+            );
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | {} | {:.1} | {:.2} px | {} | {:.0} s | {:.0} s | |",
+            r.scene,
+            r.form,
+            r.width,
+            r.height,
+            r.samples,
+            r.images,
+            r.registered,
+            100.0 * r.share,
+            r.points,
+            r.mean_track_length,
+            r.reprojection_px,
+            r.focal_error
+                .map(|f| format!("{:+.1} %", 100.0 * f))
+                .unwrap_or_else(|| "—".into()),
+            r.render_wall_s,
+            r.colmap_wall_s
+        );
+    }
+    s
+}
