@@ -43,3 +43,32 @@ fn readme_deformation_table_matches_the_bench_report() {
         assert_eq!(cells[5], share, "{line}");
     }
 }
+
+/// docs/bench/images.md is `poser bench images --quick --json docs/bench/images.json`'s output:
+/// each scene's size, images and registered share there match the JSON.
+#[test]
+fn images_bench_table_matches_its_json() {
+    let md = std::fs::read_to_string("docs/bench/images.md").unwrap();
+    let bench: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("docs/bench/images.json").unwrap())
+            .unwrap();
+    let rows = bench.as_array().unwrap();
+    assert_eq!(rows.len(), 5, "the five shipped survey scenes");
+    for r in rows {
+        let prefix = format!(
+            "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) |",
+            r["scene"].as_str().unwrap(),
+            r["form"].as_str().unwrap(),
+            r["width"],
+            r["height"],
+            r["samples"],
+            r["images"],
+            r["registered"],
+            100.0 * r["share"].as_f64().unwrap()
+        );
+        assert!(
+            md.lines().any(|l| l.starts_with(&prefix)),
+            "docs/bench/images.md has no row `{prefix}`"
+        );
+    }
+}

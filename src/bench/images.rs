@@ -13,7 +13,12 @@
 //! | `scenarios/lessons/subsea_metrology.toml` | 2 m of pipeline: 11 stereo pairs, 22 images | 0.2, 16 | 0.4, 64 |
 //!
 //! A scene that cannot be processed (untextured, or COLMAP registering fewer than three
-//! images) is a row with its reason, never a skipped line.
+//! images) is a row with its reason, never a skipped line. Beside COLMAP's numbers each row
+//! gives the render's median relative Monte Carlo noise (√var / L, from the variance EXR) and
+//! whether the images determine the focal length at all
+//! ([`crate::evaluate::Evaluation::focal_sensitivity`]): over a flat block seen from above,
+//! focal length and height trade against each other, and the focal error is then no
+//! measurement.
 
 use super::evaluate::cpu_seconds;
 use crate::backend::{Backend, RenderOptions};
@@ -84,6 +89,12 @@ pub struct Row {
     /// (f recovered − f truth)/f truth, the truth being the in-water-equivalent focal length
     /// (first camera).
     pub focal_error: Option<f64>,
+    /// Rise of the mean reprojection error with the focal length held 10 % off; below
+    /// [`crate::evaluate::FOCAL_DETERMINED`] the images do not determine the focal length.
+    pub focal_sensitivity: Option<f64>,
+    /// Median over the images of the median relative Monte Carlo noise of a pixel's radiance,
+    /// √var / L (from the render's variance EXR): what SIFT has to see through.
+    pub render_noise: Option<f64>,
     /// Wall seconds of the render (and sensor stage), and of COLMAP's pipeline.
     pub render_wall_s: f64,
     pub colmap_wall_s: f64,
@@ -141,6 +152,8 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
         mean_track_length: 0.0,
         reprojection_px: f64::NAN,
         focal_error: None,
+        focal_sensitivity: None,
+        render_noise: None,
         render_wall_s: 0.0,
         colmap_wall_s: 0.0,
         cpu_s: 0.0,
@@ -168,6 +181,7 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
         crate::sensor::files::apply(&model, sensor, &dir, &poses, samples)?;
     }
     row.render_wall_s = t0.elapsed().as_secs_f64();
+    row.render_noise = render_noise(&model, &dir);
     let t1 = std::time::Instant::now();
     match evaluate_images(&model, &dir, &Options::default(), &|_, _, _| {}) {
         Ok(ev) => {
@@ -177,6 +191,7 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
             row.mean_track_length = ev.mean_track_length;
             row.reprojection_px = ev.reprojection_error;
             row.focal_error = ev.cameras.first().map(|c| c.focal_error);
+            row.focal_sensitivity = ev.focal_sensitivity();
         }
         Err(e) => row.failure = Some(first_line(&e)),
     }
@@ -185,21 +200,51 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
     Ok(row)
 }
 
+/// Median over the images of each image's median √var / L over pixel-channels with signal.
+fn render_noise(model: &crate::model::Model, dir: &Path) -> Option<f64> {
+    use crate::sensor::files::read_exr;
+    let mut per_image = Vec::new();
+    for p in 0..model.poses.len() {
+        for c in 0..model.cameras.len() {
+            let name = model.image_name(p, c);
+            let (Ok(img), Ok(var)) = (
+                read_exr(&dir.join(format!("{name}.exr"))),
+                read_exr(&dir.join(format!("{name}.variance.exr"))),
+            ) else {
+                continue;
+            };
+            let rel: Vec<f64> = img
+                .rgb
+                .iter()
+                .zip(&var.rgb)
+                .flat_map(|(l, v)| (0..3).map(move |k| (l[k] as f64, v[k] as f64)))
+                .filter(|(l, v)| l.is_finite() && *l > 0.0 && v.is_finite() && *v >= 0.0)
+                .map(|(l, v)| v.sqrt() / l)
+                .collect();
+            if let Some(m) = crate::sensor::percentile(rel, 0.5) {
+                per_image.push(m);
+            }
+        }
+    }
+    crate::sensor::percentile(per_image, 0.5)
+}
+
 fn first_line(s: &str) -> String {
     s.lines().next().unwrap_or_default().to_string()
 }
 
 /// The Markdown table of the rows.
 pub fn table(rows: &[Row]) -> String {
+    let noise = |n: Option<f64>| n.map_or("—".to_string(), |n| format!("{:.0} %", 100.0 * n));
     let mut s = String::from(
-        "| scene | form | size | images | registered | points | track | reprojection | focal error | render | COLMAP | note |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| scene | form | size | images | registered | points | track | reprojection | focal error | render noise | render | COLMAP | note |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         if let Some(f) = &r.failure {
             let _ = writeln!(
                 s,
-                "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | — | — | — | — | {:.0} s | {:.0} s | {} |",
+                "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | — | — | — | — | {} | {:.0} s | {:.0} s | {} |",
                 r.scene,
                 r.form,
                 r.width,
@@ -208,6 +253,7 @@ pub fn table(rows: &[Row]) -> String {
                 r.images,
                 r.registered,
                 100.0 * r.share,
+                noise(r.render_noise),
                 r.render_wall_s,
                 r.colmap_wall_s,
                 f.replace('|', "/")
@@ -216,7 +262,7 @@ pub fn table(rows: &[Row]) -> String {
         }
         let _ = writeln!(
             s,
-            "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | {} | {:.1} | {:.2} px | {} | {:.0} s | {:.0} s | |",
+            "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | {} | {:.1} | {:.2} px | {} | {} | {:.0} s | {:.0} s | |",
             r.scene,
             r.form,
             r.width,
@@ -228,9 +274,14 @@ pub fn table(rows: &[Row]) -> String {
             r.points,
             r.mean_track_length,
             r.reprojection_px,
-            r.focal_error
-                .map(|f| format!("{:+.1} %", 100.0 * f))
-                .unwrap_or_else(|| "—".into()),
+            match (r.focal_error, r.focal_sensitivity) {
+                (Some(f), Some(s)) if s < crate::evaluate::FOCAL_DETERMINED =>
+                    format!("({:+.1} %, not determined: +{:.4} % at f + 10 %)", 100.0 * f, 100.0 * s),
+                (Some(f), Some(s)) => format!("{:+.1} % (+{:.2} % at f + 10 %)", 100.0 * f, 100.0 * s),
+                (Some(f), None) => format!("{:+.1} %", 100.0 * f),
+                _ => "—".into(),
+            },
+            noise(r.render_noise),
             r.render_wall_s,
             r.colmap_wall_s
         );

@@ -178,8 +178,13 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         ev.mean_track_length,
         ev.reprojection_error,
         cam.map(|c| format!(
-            ", focal {:+.2} % against the water-equivalent truth",
-            100.0 * c.focal_error
+            ", focal {:+.2} % against the water-equivalent truth{}",
+            100.0 * c.focal_error,
+            if ev.focal_determined() == Some(false) {
+                " (not determined by these images)"
+            } else {
+                ""
+            }
         ))
         .unwrap_or_default()
     );

@@ -153,6 +153,26 @@ pub struct Evaluation {
     pub centres: Vec<DVec3>,
 }
 
+/// Below this rise of the mean reprojection error, with the focal length held 10 % off its
+/// estimate, the block does not determine the focal length (images mode; see
+/// [`Evaluation::focal_sensitivity`]).
+pub const FOCAL_DETERMINED: f64 = 0.005;
+
+impl Evaluation {
+    /// Images mode: the relative rise of the mean reprojection error when the focal length is
+    /// held 10 % above COLMAP's estimate and the rest is adjusted again (`focal_sensitivity`
+    /// in `backends/colmap/evaluate.py`). Below [`FOCAL_DETERMINED`] the images do not
+    /// determine the focal length (a flat nadir block: focal length and height trade).
+    pub fn focal_sensitivity(&self) -> Option<f64> {
+        self.colmap.get("focal_sensitivity").and_then(|v| v.as_f64())
+    }
+
+    /// Whether the block determines the focal length (`None`: not measured).
+    pub fn focal_determined(&self) -> Option<bool> {
+        self.focal_sensitivity().map(|s| s >= FOCAL_DETERMINED)
+    }
+}
+
 /// World-frame meshes of every object and target, labelled, and the occlusion scene built
 /// from them.
 fn surfaces(model: &Model) -> Result<(Vec<(String, TriMesh)>, Scene), String> {
