@@ -50,8 +50,7 @@ fn readme_deformation_table_matches_the_bench_report() {
 fn images_bench_table_matches_its_json() {
     let md = std::fs::read_to_string("docs/bench/images.md").unwrap();
     let bench: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string("docs/bench/images.json").unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string("docs/bench/images.json").unwrap()).unwrap();
     let rows = bench.as_array().unwrap();
     assert_eq!(rows.len(), 5, "the five shipped survey scenes");
     for r in rows {

@@ -303,5 +303,8 @@ fn images_mode_processes_the_shipped_archaeology_survey() {
     // (measured: the reprojection error rises 2.4 % with f held 10 % off; a flat nadir block
     // such as reef_strip's quick form rises 0.002 %).
     let sens = report["colmap"]["focal_sensitivity"].as_f64().unwrap();
-    assert!(sens >= poser::evaluate::FOCAL_DETERMINED, "focal sensitivity {sens}");
+    assert!(
+        sens >= poser::evaluate::FOCAL_DETERMINED,
+        "focal sensitivity {sens}"
+    );
 }

@@ -1,6 +1,7 @@
 //! `poser bench images`: can real photogrammetry software process poser's images? Each
 //! shipped survey scene is rendered by the native backend at a reduced size, run through its
-//! sensor stage (when it has one), and handed to COLMAP's whole pipeline (`poser evaluate
+//! sensor stage (the scene's `[sensor]`, else the default camera of `poser render --sensor`),
+//! and handed to COLMAP's whole pipeline (`poser evaluate
 //! --mode images`, the same code): the share of images registered, points, track length,
 //! reprojection error and the recovered focal length against the in-water-equivalent truth.
 //!
@@ -130,10 +131,15 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
         (2.0 * case.scale, 4 * case.samples)
     };
     let sets: Vec<String> = case.sets.iter().map(|s| s.to_string()).collect();
-    let model = crate::scene::load(&root.join(case.scene), &sets)
+    let mut model = crate::scene::load(&root.join(case.scene), &sets)
         .map_err(|f| f.render())?
         .model
         .with_resolution_scale(scale);
+    // Every image goes through a camera: the scene's `[sensor]`, else the default one (as
+    // `poser render --sensor`), which also writes the render's variance for the noise column.
+    if model.sensor.is_none() {
+        model.sensor = Some(crate::model::Sensor::default());
+    }
     let stem = Path::new(case.scene)
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -275,9 +281,13 @@ pub fn table(rows: &[Row]) -> String {
             r.mean_track_length,
             r.reprojection_px,
             match (r.focal_error, r.focal_sensitivity) {
-                (Some(f), Some(s)) if s < crate::evaluate::FOCAL_DETERMINED =>
-                    format!("({:+.1} %, not determined: +{:.4} % at f + 10 %)", 100.0 * f, 100.0 * s),
-                (Some(f), Some(s)) => format!("{:+.1} % (+{:.2} % at f + 10 %)", 100.0 * f, 100.0 * s),
+                (Some(f), Some(s)) if s < crate::evaluate::FOCAL_DETERMINED => format!(
+                    "({:+.1} %, not determined: {:+.4} % at f + 10 %)",
+                    100.0 * f,
+                    100.0 * s
+                ),
+                (Some(f), Some(s)) =>
+                    format!("{:+.1} % ({:+.2} % at f + 10 %)", 100.0 * f, 100.0 * s),
                 (Some(f), None) => format!("{:+.1} %", 100.0 * f),
                 _ => "—".into(),
             },

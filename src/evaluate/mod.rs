@@ -164,7 +164,9 @@ impl Evaluation {
     /// in `backends/colmap/evaluate.py`). Below [`FOCAL_DETERMINED`] the images do not
     /// determine the focal length (a flat nadir block: focal length and height trade).
     pub fn focal_sensitivity(&self) -> Option<f64> {
-        self.colmap.get("focal_sensitivity").and_then(|v| v.as_f64())
+        self.colmap
+            .get("focal_sensitivity")
+            .and_then(|v| v.as_f64())
     }
 
     /// Whether the block determines the focal length (`None`: not measured).

@@ -627,7 +627,10 @@ fn bake_from(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side:
                         texel_hash: hash2(c.seed, i as i64, j as i64),
                     };
                     let a = albedo(pattern, base, &at);
-                    let cover = o.material.grid.map_or(0.0, |g| grid_cover(&g, at.x, at.y, texel));
+                    let cover = o
+                        .material
+                        .grid
+                        .map_or(0.0, |g| grid_cover(&g, at.x, at.y, texel));
                     let k = 3 * (c.ox + i) as usize;
                     for ch in 0..3 {
                         let v = (1.0 - cover) * a[ch] * tint[ch]
@@ -798,7 +801,12 @@ mod tests {
             [b.texture.rgb[k], b.texture.rgb[k + 1], b.texture.rgb[k + 2]]
         };
         // On the lines x = 0, x = ±0.05 and y = 0: the line's colour.
-        for (x, y) in [(0.0005, 0.023), (0.0505, -0.031), (-0.0495, 0.012), (0.033, 0.0005)] {
+        for (x, y) in [
+            (0.0005, 0.023),
+            (0.0505, -0.031),
+            (-0.0495, 0.012),
+            (0.033, 0.0005),
+        ] {
             assert_eq!(at(&lined, x, y), [255, 0, 0], "({x}, {y})");
         }
         // Between them: the pattern, untouched.
