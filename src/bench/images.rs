@@ -15,7 +15,7 @@
 //!
 //! A scene that cannot be processed (untextured, or COLMAP registering fewer than three
 //! images) is a row with its reason, never a skipped line. Beside COLMAP's numbers each row
-//! gives the render's median relative Monte Carlo noise (√var / L, from the variance EXR) and
+//! gives the render's median relative Monte Carlo noise (√var / L, from the sidecars) and
 //! whether the images determine the focal length at all
 //! ([`crate::evaluate::Evaluation::focal_sensitivity`]): over a flat block seen from above,
 //! focal length and height trade against each other, and the focal error is then no
@@ -94,7 +94,8 @@ pub struct Row {
     /// [`crate::evaluate::FOCAL_DETERMINED`] the images do not determine the focal length.
     pub focal_sensitivity: Option<f64>,
     /// Median over the images of the median relative Monte Carlo noise of a pixel's radiance,
-    /// √var / L (from the render's variance EXR): what SIFT has to see through.
+    /// √var / L, as the sensor stage's sidecars report it (pixel-channels with signal below
+    /// the full well): what SIFT has to see through.
     pub render_noise: Option<f64>,
     /// Wall seconds of the render (and sensor stage), and of COLMAP's pipeline.
     pub render_wall_s: f64,
@@ -137,9 +138,10 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
         .with_resolution_scale(scale);
     // Every image goes through a camera: the scene's `[sensor]`, else the default one (as
     // `poser render --sensor`), which also writes the render's variance for the noise column.
-    if model.sensor.is_none() {
-        model.sensor = Some(crate::model::Sensor::default());
-    }
+    let sensor = model
+        .sensor
+        .get_or_insert_with(crate::model::Sensor::default)
+        .clone();
     let stem = Path::new(case.scene)
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -182,12 +184,17 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
             resume: false,
         },
     )?;
-    if let Some(sensor) = &model.sensor {
-        let poses: Vec<usize> = (0..model.poses.len()).collect();
-        crate::sensor::files::apply(&model, sensor, &dir, &poses, samples)?;
-    }
+    let poses: Vec<usize> = (0..model.poses.len()).collect();
+    let developed = crate::sensor::files::apply(&model, &sensor, &dir, &poses, samples)?;
     row.render_wall_s = t0.elapsed().as_secs_f64();
-    row.render_noise = render_noise(&model, &dir);
+    // Median over the images of each one's median √var / L, as its sidecar reports it.
+    row.render_noise = crate::sensor::percentile(
+        developed
+            .iter()
+            .filter_map(|d| d.sidecar.render_noise.as_ref().map(|n| n.relative_median))
+            .collect(),
+        0.5,
+    );
     let t1 = std::time::Instant::now();
     match evaluate_images(&model, &dir, &Options::default(), &|_, _, _| {}) {
         Ok(ev) => {
@@ -206,35 +213,6 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
     Ok(row)
 }
 
-/// Median over the images of each image's median √var / L over pixel-channels with signal.
-fn render_noise(model: &crate::model::Model, dir: &Path) -> Option<f64> {
-    use crate::sensor::files::read_exr;
-    let mut per_image = Vec::new();
-    for p in 0..model.poses.len() {
-        for c in 0..model.cameras.len() {
-            let name = model.image_name(p, c);
-            let (Ok(img), Ok(var)) = (
-                read_exr(&dir.join(format!("{name}.exr"))),
-                read_exr(&dir.join(format!("{name}.variance.exr"))),
-            ) else {
-                continue;
-            };
-            let rel: Vec<f64> = img
-                .rgb
-                .iter()
-                .zip(&var.rgb)
-                .flat_map(|(l, v)| (0..3).map(move |k| (l[k] as f64, v[k] as f64)))
-                .filter(|(l, v)| l.is_finite() && *l > 0.0 && v.is_finite() && *v >= 0.0)
-                .map(|(l, v)| v.sqrt() / l)
-                .collect();
-            if let Some(m) = crate::sensor::percentile(rel, 0.5) {
-                per_image.push(m);
-            }
-        }
-    }
-    crate::sensor::percentile(per_image, 0.5)
-}
-
 fn first_line(s: &str) -> String {
     s.lines().next().unwrap_or_default().to_string()
 }
@@ -247,28 +225,37 @@ pub fn table(rows: &[Row]) -> String {
          |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
-        if let Some(f) = &r.failure {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | — | — | — | — | {} | {:.0} s | {:.0} s | {} |",
-                r.scene,
-                r.form,
-                r.width,
-                r.height,
-                r.samples,
-                r.images,
-                r.registered,
-                100.0 * r.share,
-                noise(r.render_noise),
-                r.render_wall_s,
-                r.colmap_wall_s,
-                f.replace('|', "/")
-            );
-            continue;
-        }
+        // A scene COLMAP could not process has no reconstruction columns, only its reason.
+        let (points, track, reprojection, focal, note) = match &r.failure {
+            Some(f) => (
+                "—".into(),
+                "—".into(),
+                "—".into(),
+                "—".into(),
+                format!(" {}", f.replace('|', "/")),
+            ),
+            None => (
+                r.points.to_string(),
+                format!("{:.1}", r.mean_track_length),
+                format!("{:.2} px", r.reprojection_px),
+                match (r.focal_error, r.focal_sensitivity) {
+                    (Some(f), Some(s)) if s < crate::evaluate::FOCAL_DETERMINED => format!(
+                        "({:+.1} %, not determined: {:+.4} % at f + 10 %)",
+                        100.0 * f,
+                        100.0 * s
+                    ),
+                    (Some(f), Some(s)) => {
+                        format!("{:+.1} % ({:+.2} % at f + 10 %)", 100.0 * f, 100.0 * s)
+                    }
+                    (Some(f), None) => format!("{:+.1} %", 100.0 * f),
+                    _ => "—".into(),
+                },
+                String::new(),
+            ),
+        };
         let _ = writeln!(
             s,
-            "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | {} | {:.1} | {:.2} px | {} | {} | {:.0} s | {:.0} s | |",
+            "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | {points} | {track} | {reprojection} | {focal} | {} | {:.0} s | {:.0} s |{note} |",
             r.scene,
             r.form,
             r.width,
@@ -277,24 +264,54 @@ pub fn table(rows: &[Row]) -> String {
             r.images,
             r.registered,
             100.0 * r.share,
-            r.points,
-            r.mean_track_length,
-            r.reprojection_px,
-            match (r.focal_error, r.focal_sensitivity) {
-                (Some(f), Some(s)) if s < crate::evaluate::FOCAL_DETERMINED => format!(
-                    "({:+.1} %, not determined: {:+.4} % at f + 10 %)",
-                    100.0 * f,
-                    100.0 * s
-                ),
-                (Some(f), Some(s)) =>
-                    format!("{:+.1} % ({:+.2} % at f + 10 %)", 100.0 * f, 100.0 * s),
-                (Some(f), None) => format!("{:+.1} %", 100.0 * f),
-                _ => "—".into(),
-            },
             noise(r.render_noise),
             r.render_wall_s,
-            r.colmap_wall_s
+            r.colmap_wall_s,
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(failure: Option<&str>) -> Row {
+        Row {
+            scene: "s".into(),
+            form: "quick",
+            width: 40,
+            height: 30,
+            samples: 4,
+            images: 10,
+            registered: if failure.is_some() { 0 } else { 10 },
+            share: if failure.is_some() { 0.0 } else { 1.0 },
+            points: 123,
+            mean_track_length: 4.25,
+            reprojection_px: 0.5,
+            focal_error: Some(0.012),
+            focal_sensitivity: Some(0.02),
+            render_noise: Some(0.2),
+            render_wall_s: 3.0,
+            colmap_wall_s: 1.0,
+            cpu_s: 4.0,
+            failure: failure.map(str::to_string),
+        }
+    }
+
+    #[test]
+    fn every_row_has_the_headers_columns() {
+        let t = table(&[row(None), row(Some("COLMAP failed | badly"))]);
+        let lines: Vec<&str> = t.lines().collect();
+        let columns = |l: &str| l.matches('|').count();
+        assert!(lines.iter().all(|l| columns(l) == columns(lines[0])), "{t}");
+        assert!(lines[2].starts_with(
+            "| s | quick | 40×30, 4 spp | 10 | 10 (100 %) | 123 | 4.2 | 0.50 px | +1.2 % (+2.00 % at f + 10 %) | 20 % | 3 s | 1 s |"
+        ), "{t}");
+        assert!(
+            lines[3].contains("| — | — | — | — | 20 % |")
+                && lines[3].contains("COLMAP failed / badly"),
+            "{t}"
+        );
+    }
 }

@@ -98,14 +98,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             } else {
                 backends
             };
-            let tmp;
-            let out = match &args.out {
-                Some(o) => o.clone(),
-                None => {
-                    tmp = tempfile::tempdir().map_err(|e| CliError::Failed(e.to_string()))?;
-                    tmp.path().to_path_buf()
-                }
-            };
+            let (_tmp, out) = out_dir(args.out.as_ref())?;
             let root = crate::backend::python::repo_root();
             let rows =
                 crate::bench::parity::run(&root, &backends, quick, args.only.as_deref(), &out)
@@ -114,14 +107,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             write_json(json.as_deref(), &rows)
         }
         "images" => {
-            let tmp;
-            let out = match &args.out {
-                Some(o) => o.clone(),
-                None => {
-                    tmp = tempfile::tempdir().map_err(|e| CliError::Failed(e.to_string()))?;
-                    tmp.path().to_path_buf()
-                }
-            };
+            let (_tmp, out) = out_dir(args.out.as_ref())?;
             let root = crate::backend::python::repo_root();
             let rows = crate::bench::images::run(&root, quick, args.only.as_deref(), &out)
                 .map_err(CliError::Failed)?;
@@ -131,6 +117,18 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         other => Err(CliError::Usage(format!(
             "bench `{other}`: expected `projection`, `render`, `evaluate`, `parity` or `images`"
         ))),
+    }
+}
+
+/// `--out DIR`, else a temporary folder (removed when the returned guard drops).
+fn out_dir(out: Option<&PathBuf>) -> Result<(Option<tempfile::TempDir>, PathBuf), CliError> {
+    match out {
+        Some(o) => Ok((None, o.clone())),
+        None => {
+            let tmp = tempfile::tempdir().map_err(|e| CliError::Failed(e.to_string()))?;
+            let path = tmp.path().to_path_buf();
+            Ok((Some(tmp), path))
+        }
     }
 }
 

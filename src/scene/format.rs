@@ -1470,7 +1470,9 @@ mod tests {
                 "objects.1.pattern={type = \"noise\"}",
             ],
             &["objects.0.pattern={type = \"rock\"}"],
-            &["objects.0.pattern={type = \"sand\", grid = 1, grid_width = 0.01, grid_albedo = [0.8, 0.8, 0.6]}"],
+            &[
+                "objects.0.pattern={type = \"sand\", grid = 1, grid_width = 0.01, grid_albedo = [0.8, 0.8, 0.6]}",
+            ],
             &["objects.0.pattern={type = \"coral\", colors = [[0.5, 0.2, 0.3]]}"],
             &["targets.0.type=\"checkerboard\""],
             &["targets.0.type=\"circle_grid\""],
