@@ -374,3 +374,95 @@ fn aureole_sampling_is_unbiased_and_cuts_sunlit_seabed_noise() {
     assert!((mg - mp).abs() < 4.0 * se, "biased: {mg} vs {mp} ± {se}");
     assert!(vg < 0.25 * vp, "no variance reduction: {vg} vs {vp}");
 }
+
+/// Sunlit, forward-scattering water seen from 2 m above a seabed 10 m deep: sun-aware distance
+/// sampling along medium segments and no Russian roulette before `max_bounces` (what the
+/// integrator does in sunlit water) leave the estimate unchanged and cut its variance.
+/// Light scattered near the surface has crossed little water on its way down, so free-flight
+/// vertices there (sampled with density `σt e^(−σt t)` from the seabed) carry large weights.
+/// Measured (40 000 paths straight down): bounces = 2, 2.738 vs 2.712 ± 0.052 with the
+/// variance 6.8× lower; bounces = 8, 32.6 vs 34.1 ± 1.2 with the variance 5.3× lower.
+#[test]
+fn sun_distance_sampling_and_roulette_policy_are_unbiased_and_cut_sunlit_water_noise() {
+    use poser::backend::native::{
+        integrator::{Integrator, ROULETTE_FROM},
+        lights::Lights,
+        medium::Medium,
+        sampler::Sampler,
+    };
+    let mut m = nadir_model(2.0);
+    {
+        let w = m.water.as_mut().unwrap();
+        w.absorption = [0.3, 0.06, 0.03];
+        w.scattering = [0.3, 0.35, 0.5];
+        w.phase = Phase::HenyeyGreenstein { g: 0.92 };
+    }
+    let dir = DVec3::new(0.3, 0.1, -1.0).normalize();
+    m.sun = Some(sun_along(dir, [800.0; 3], [600.0; 3]));
+    m.poses[0].world_from_rig.translation.z -= 10.0;
+    for o in &mut m.objects {
+        o.pose.translation.z -= 10.0;
+    }
+    let scene = Scene::build(&m).unwrap();
+    let cam = m.world_from_camera(0, 0);
+    let models: Vec<_> = [2u32, 8]
+        .iter()
+        .map(|&b| {
+            let mut mm = m.clone();
+            mm.render.max_bounces = b;
+            mm
+        })
+        .collect();
+    let make = |bounces: u32| {
+        let mm = &models[usize::from(bounces == 8)];
+        Integrator::new(
+            &scene,
+            mm,
+            Medium::new(mm, cam.translation),
+            Lights::at_pose(mm, &mm.poses[0].world_from_rig),
+        )
+    };
+    let n = 40_000u64;
+    let stats = |integ: &Integrator| {
+        let v: Vec<f64> = (0..n)
+            .map(|k| {
+                let mut rng = Sampler::new(11, 0, 0, 0, k);
+                integ.li(cam.translation, -DVec3::Z, &mut rng).y
+            })
+            .collect();
+        assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0));
+        let mean = v.iter().sum::<f64>() / n as f64;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        (mean, var)
+    };
+    let agree = |a: (f64, f64), b: (f64, f64), what: &str| {
+        let se = (a.1 / n as f64 + b.1 / n as f64).sqrt();
+        eprintln!(
+            "{what}: {:.4} (var {:.3}) vs {:.4} (var {:.3}), se {se:.4}",
+            a.0, a.1, b.0, b.1
+        );
+        assert!((a.0 - b.0).abs() < 4.0 * se, "{what}: biased");
+    };
+    // Single scattering off the seabed: the sun-aware distance sample alone.
+    let on = make(2);
+    assert!(on.sun_sampling && on.roulette_from == 2);
+    let mut off = make(2);
+    off.sun_sampling = false;
+    let (s_on, s_off) = (stats(&on), stats(&off));
+    agree(s_on, s_off, "bounces 2, sun sampling on/off");
+    assert!(
+        s_on.1 < 0.5 * s_off.1,
+        "no variance reduction: {s_on:?} vs {s_off:?}"
+    );
+    // Deep paths: roulette from depth 3 against none before max_bounces.
+    let full = make(8);
+    assert_eq!(full.roulette_from, 8);
+    let mut rr = make(8);
+    rr.roulette_from = ROULETTE_FROM;
+    let (s_full, s_rr) = (stats(&full), stats(&rr));
+    agree(s_full, s_rr, "bounces 8, roulette from max/3");
+    assert!(
+        s_full.1 < 0.5 * s_rr.1,
+        "no variance reduction: {s_full:?} vs {s_rr:?}"
+    );
+}
