@@ -466,3 +466,62 @@ fn sun_distance_sampling_and_roulette_policy_are_unbiased_and_cut_sunlit_water_n
         "no variance reduction: {s_full:?} vs {s_rr:?}"
     );
 }
+
+/// Lamps in coastal water (the shipped `subsea_metrology` lesson, 2 m of pipeline, a fifth of
+/// the resolution): a secondary ray from the pipe that passes near a lamp sees its
+/// forward-scattered glow mostly far before the lamp, where the scattering angle is small.
+/// Phase-angular sampling of that in-scattering leaves the estimate unchanged and cuts its
+/// variance. Measured (40 000 paths through the image centre, bounces = 2): 0.098 against
+/// 0.114 ± 0.017 with 32× less variance (without it, one path in 40 000 carries most of it).
+#[test]
+fn lamp_phase_sampling_is_unbiased_and_cuts_lamp_glow_noise() {
+    use poser::backend::native::{
+        camera::CameraRays, integrator::Integrator, lights::Lights, medium::Medium,
+        sampler::Sampler,
+    };
+    let loaded = poser::scene::load(
+        std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/scenarios/lessons/subsea_metrology.toml"
+        )),
+        &["render.bounces=2".into(), "network.length=\"2 m\"".into()],
+    )
+    .unwrap();
+    let m = loaded.model.with_resolution_scale(0.2);
+    let scene = Scene::build(&m).unwrap();
+    let pose = 2;
+    let make = || {
+        Integrator::new(
+            &scene,
+            &m,
+            Medium::new(&m, m.world_from_camera(pose, 0).translation),
+            Lights::at_pose(&m, &m.poses[pose].world_from_rig),
+        )
+    };
+    let on = make();
+    assert!(on.lamp_phase_sampling);
+    let mut off = make();
+    off.lamp_phase_sampling = false;
+    let rays = CameraRays::new(&m, pose, 0, 1).unwrap();
+    let (w, h) = (m.cameras[0].width as u64, m.cameras[0].height as u64);
+    let n = 40_000u64;
+    let stats = |integ: &Integrator| {
+        let v: Vec<f64> = (0..n)
+            .map(|k| {
+                let mut rng = Sampler::new(5, 0, 0, (h / 2) * w + w / 2, k);
+                let (du, dv) = rng.next2();
+                let (o, d, wt) = rays.ray((w / 2) as f64 + du, (h / 2) as f64 + dv).unwrap();
+                integ.li(o, d, &mut rng).y * wt
+            })
+            .collect();
+        assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0));
+        let mean = v.iter().sum::<f64>() / n as f64;
+        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        (mean, var)
+    };
+    let (a, b) = (stats(&on), stats(&off));
+    let se = (a.1 / n as f64 + b.1 / n as f64).sqrt();
+    eprintln!("phase-angular on {a:?}, off {b:?}, se {se:.5}");
+    assert!((a.0 - b.0).abs() < 4.0 * se, "biased: {a:?} vs {b:?}");
+    assert!(a.1 < 0.5 * b.1, "no variance reduction: {a:?} vs {b:?}");
+}

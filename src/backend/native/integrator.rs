@@ -11,6 +11,12 @@
 //!   area lights (MIS with BSDF/phase sampling, power heuristic).
 //! * Equiangular sampling (Kulla & Fajardo 2012) of in-scattering from point/spot lights along
 //!   every medium segment, combined with distance sampling by MIS (power heuristic).
+//! * Phase-angular sampling of in-scattering from point/spot lights on every medium segment: the
+//!   distance whose direction to the light makes a scattering angle drawn from the phase
+//!   function (restricted to the angles the segment spans). A ray that passes near a lamp in
+//!   forward-scattering water sees its glow mostly where the angle is small, far before the
+//!   lamp, where equiangular sampling (uniform in the angle seen from the light) rarely goes.
+//!   Free flight, equiangular and phase-angular samples are combined by MIS (power heuristic).
 //! * Sun-aware distance sampling of in-scattered sunlight along every medium segment, combined
 //!   with free-flight sampling by MIS (power heuristic): sunlight scattered at distance `t`
 //!   along a ray has crossed `t` of water from the ray's start plus the water above the point,
@@ -75,6 +81,9 @@ pub struct Integrator<'a> {
     /// Sun-aware distance sampling along medium segments (`false` turns it off; the estimate
     /// stays the same, only noisier).
     pub sun_sampling: bool,
+    /// Phase-angular sampling of point/spot lights' in-scattering (`false` turns it off; the
+    /// estimate stays the same, only noisier).
+    pub lamp_phase_sampling: bool,
     object_from_world: Vec<Pose>,
     target_from_world: Vec<Pose>,
 }
@@ -108,6 +117,7 @@ impl<'a> Integrator<'a> {
                 ROULETTE_FROM
             },
             sun_sampling: true,
+            lamp_phase_sampling: true,
             object_from_world: model.objects.iter().map(|o| o.pose.inverse()).collect(),
             target_from_world: model.targets.iter().map(|t| t.pose.inverse()).collect(),
         }
@@ -312,6 +322,9 @@ impl<'a> Integrator<'a> {
                     if use_eq {
                         for pl in &self.lights.points {
                             l += beta * self.equiangular(m, pl, o, d, a, b, rng);
+                            if self.lamp_phase_sampling {
+                                l += beta * self.lamp_phase(m, pl, o, d, a, b, rng);
+                            }
                         }
                     }
                     // Sun-aware distance sampling of the sunlight scattered along [a, b].
@@ -342,7 +355,9 @@ impl<'a> Integrator<'a> {
                         let pdf = |w: DVec3| self.medium_pdf(d, w);
                         let pw = |_i: usize, x: DVec3| {
                             if use_eq {
-                                power(pdf_d, equiangular_pdf(o, d, a, b, x, t))
+                                let pe = equiangular_pdf(o, d, a, b, x, t);
+                                let pp = self.lamp_phase_pdf(m, o, d, a, b, x, t);
+                                power3(pdf_d, pe, pp)
                             } else {
                                 1.0
                             }
@@ -525,6 +540,85 @@ impl<'a> Integrator<'a> {
         m.sigma_s * trc * ph * sun.irradiance * self.tr_seg(p, dir, s) * (caustic * w / pdf_s)
     }
 
+    /// Density at `t` of phase-angular sampling for a light at `x` on `[a, b]` of the ray
+    /// `o + t d` (0 when it is off): the cosine `μ(t) = (δ − t)/r` between the ray and the
+    /// direction to the light is drawn from the phase function restricted to `[μ(b), μ(a)]`,
+    /// so `p(t) = 2π p(μ) · dd²/r³ / mass` (`δ`, `dd`: the light's distance along and off the
+    /// ray; `r`: from the point to the light).
+    #[allow(clippy::too_many_arguments)]
+    fn lamp_phase_pdf(
+        &self,
+        m: &Medium,
+        o: DVec3,
+        d: DVec3,
+        a: f64,
+        b: f64,
+        x: DVec3,
+        t: f64,
+    ) -> f64 {
+        if !self.lamp_phase_sampling {
+            return 0.0;
+        }
+        let (delta, dd) = along_off(o, d, x);
+        let mass =
+            (m.phase.u_of_cos(mu_at(delta, dd, a)) - m.phase.u_of_cos(mu_at(delta, dd, b))).abs();
+        if !(mass > 0.0) {
+            return 0.0;
+        }
+        let r = (dd * dd + (t - delta) * (t - delta)).sqrt();
+        let mu = (delta - t) / r;
+        2.0 * PI * m.phase.eval(mu) * dd * dd / (r * r * r) / mass
+    }
+
+    /// In-scattered radiance from point light `pl` along `[a, b]` of the ray, at a distance
+    /// sampled by phase-angular sampling ([`Integrator::lamp_phase_pdf`]) and MIS-weighted
+    /// against free flight and equiangular sampling. Excludes the ray's `beta`.
+    #[allow(clippy::too_many_arguments)]
+    fn lamp_phase(
+        &self,
+        m: &Medium,
+        pl: &super::lights::PointLight,
+        o: DVec3,
+        d: DVec3,
+        a: f64,
+        b: f64,
+        rng: &mut Sampler,
+    ) -> DVec3 {
+        let (delta, dd) = along_off(o, d, pl.pos);
+        let (ua, ub) = (
+            m.phase.u_of_cos(mu_at(delta, dd, a)),
+            m.phase.u_of_cos(mu_at(delta, dd, b)),
+        );
+        let u = ua + (ub - ua) * rng.next();
+        let mu = m.phase.sample_cos(u).clamp(-1.0 + 1e-12, 1.0 - 1e-12);
+        let t = delta - dd * mu / (1.0 - mu * mu).sqrt();
+        if !(t >= a && t <= b) {
+            return DVec3::ZERO;
+        }
+        let pdf_p = self.lamp_phase_pdf(m, o, d, a, b, pl.pos, t);
+        if !(pdf_p > 0.0 && pdf_p.is_finite()) {
+            return DVec3::ZERO;
+        }
+        let p = o + t * d;
+        let i_to = pl.intensity_to(p);
+        if i_to == DVec3::ZERO {
+            return DVec3::ZERO;
+        }
+        let wl = pl.pos - p;
+        let r2 = wl.length_squared();
+        let r = r2.sqrt();
+        let dir = wl / r;
+        let trc = tr(m.sigma_t, t - a);
+        let pdf_d = mean(m.sigma_t * trc);
+        let pdf_e = equiangular_pdf(o, d, a, b, pl.pos, t);
+        let w = power3(pdf_p, pdf_d, pdf_e);
+        if w <= 0.0 || self.scene.occluded(p, pl.pos) {
+            return DVec3::ZERO;
+        }
+        m.sigma_s * trc * m.phase.eval(d.dot(dir)) * i_to * self.tr_seg(p, dir, r) / r2
+            * (w / pdf_p)
+    }
+
     /// In-scattered radiance from point light `pl` along `[a, b]` of the ray, sampled
     /// equiangularly and MIS-weighted against distance sampling. Excludes the ray's `beta`.
     #[allow(clippy::too_many_arguments)]
@@ -562,7 +656,8 @@ impl<'a> Integrator<'a> {
         let dir = wl / r;
         let trc = tr(m.sigma_t, t - a);
         let pdf_d = mean(m.sigma_t * trc);
-        let w = power(pdf_e, pdf_d);
+        let pdf_p = self.lamp_phase_pdf(m, o, d, a, b, pl.pos, t);
+        let w = power3(pdf_e, pdf_d, pdf_p);
         if w <= 0.0 || self.scene.occluded(p, pl.pos) {
             return DVec3::ZERO;
         }
@@ -615,6 +710,33 @@ fn sample_trunc_exp(k: f64, a: f64, b: f64, u: f64) -> f64 {
 /// uniformly, so the mean of the three channels' truncated exponentials.
 fn sun_pdf(k: DVec3, a: f64, b: f64, t: f64) -> f64 {
     (trunc_exp_pdf(k.x, a, b, t) + trunc_exp_pdf(k.y, a, b, t) + trunc_exp_pdf(k.z, a, b, t)) / 3.0
+}
+
+/// Power heuristic among three techniques: the weight of the first.
+#[inline]
+fn power3(a: f64, b: f64, c: f64) -> f64 {
+    let (a2, b2, c2) = (a * a, b * b, c * c);
+    if a2 + b2 + c2 > 0.0 {
+        a2 / (a2 + b2 + c2)
+    } else {
+        0.0
+    }
+}
+
+/// Distance of `x` along the ray `o + t d` (`δ`) and off it (`dd`, at least 1e-9 m).
+fn along_off(o: DVec3, d: DVec3, x: DVec3) -> (f64, f64) {
+    let delta = (x - o).dot(d);
+    (delta, (o + delta * d - x).length().max(1e-9))
+}
+
+/// Cosine between the ray and the direction from its point at `t` to a light at (`δ`, `dd`);
+/// −1 at `t = +∞`.
+fn mu_at(delta: f64, dd: f64, t: f64) -> f64 {
+    if t.is_infinite() {
+        return -t.signum();
+    }
+    let q = delta - t;
+    q / (dd * dd + q * q).sqrt()
 }
 
 /// Density of equiangular sampling of `t` on `[a, b]` for a light at `x`.

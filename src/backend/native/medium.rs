@@ -77,6 +77,38 @@ impl PhaseFn {
         }
     }
 
+    /// The uniform number that [`PhaseFn::sample_cos`] maps to `cos` (its inverse): the
+    /// phase function's probability between two cosines is the difference of their values.
+    pub fn u_of_cos(&self, cos: f64) -> f64 {
+        let c = cos.clamp(-1.0, 1.0);
+        match self {
+            PhaseFn::Hg { g } => {
+                let g = *g;
+                if g.abs() < 1e-4 {
+                    return (1.0 - c) / 2.0;
+                }
+                let s = (1.0 + g * g - 2.0 * g * c).max(0.0).sqrt();
+                if s <= 0.0 {
+                    return 1.0;
+                }
+                (((1.0 - g * g) / s - (1.0 - g)) / (2.0 * g)).clamp(0.0, 1.0)
+            }
+            PhaseFn::Tab { mu, cdf, .. } => {
+                let k = mu
+                    .partition_point(|&m| m > c)
+                    .saturating_sub(1)
+                    .min(mu.len() - 2);
+                let span = mu[k + 1] - mu[k];
+                let f = if span != 0.0 {
+                    ((c - mu[k]) / span).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                cdf[k] + (cdf[k + 1] - cdf[k]) * f
+            }
+        }
+    }
+
     /// Sample a new propagation direction around `d`; returns (direction, density).
     pub fn sample(&self, d: DVec3, u1: f64, u2: f64) -> (DVec3, f64) {
         let c = self.sample_cos(u1);
@@ -237,6 +269,36 @@ fn ex(s: f64, len: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `u_of_cos` inverts `sample_cos` for Henyey–Greenstein (forward, backward, isotropic)
+    /// and the Fournier–Forand table, and the mass between two cosines is the integral of
+    /// the density.
+    #[test]
+    fn u_of_cos_inverts_the_cosine_sampler() {
+        for ph in [
+            PhaseFn::Hg { g: 0.92 },
+            PhaseFn::Hg { g: -0.3 },
+            PhaseFn::Hg { g: 0.0 },
+            ff_table(1.10, 3.5835),
+        ] {
+            for i in 0..=200 {
+                let u = i as f64 / 200.0;
+                let c = ph.sample_cos(u);
+                let back = ph.sample_cos(ph.u_of_cos(c));
+                assert!((back - c).abs() < 1e-9, "{ph:?}: u {u}, cos {c} -> {back}");
+            }
+            let (c0, c1) = (0.2, 0.9);
+            let n = 20_000;
+            let mass: f64 = (0..n)
+                .map(|i| {
+                    ph.eval(c0 + (c1 - c0) * (i as f64 + 0.5) / n as f64) * 2.0 * PI * (c1 - c0)
+                        / n as f64
+                })
+                .sum();
+            let du = (ph.u_of_cos(c1) - ph.u_of_cos(c0)).abs();
+            assert!((du - mass).abs() < 1e-4 * mass.max(1.0), "{du} vs {mass}");
+        }
+    }
 
     #[test]
     fn phase_tables_integrate_to_one_and_sample_consistently() {
