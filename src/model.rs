@@ -655,6 +655,9 @@ pub struct RenderSettings {
     pub outputs: Vec<String>,
     /// Exposure multiplier applied to the PNG preview only (EXR stays linear).
     pub exposure: f64,
+    /// The native renderer's optional illumination denoiser (`None`: off): the Gaussian
+    /// radius in pixels ([`crate::backend::native::denoise`]).
+    pub denoise_radius: Option<f64>,
 }
 
 /// What the scene needs modelled, decided once, with reasons a person can read.

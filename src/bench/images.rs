@@ -80,6 +80,8 @@ pub struct Row {
     pub width: usize,
     pub height: usize,
     pub samples: u32,
+    /// σ of the native illumination denoiser when the scene turns it on (`render.denoise`).
+    pub denoise_radius: Option<f64>,
     pub images: usize,
     pub registered: usize,
     /// registered / images.
@@ -153,6 +155,7 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
         width: cam.width as usize,
         height: cam.height as usize,
         samples,
+        denoise_radius: model.render.denoise_radius,
         images: model.poses.len() * model.cameras.len(),
         registered: 0,
         share: 0.0,
@@ -255,12 +258,14 @@ pub fn table(rows: &[Row]) -> String {
         };
         let _ = writeln!(
             s,
-            "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) | {points} | {track} | {reprojection} | {focal} | {} | {:.0} s | {:.0} s |{note} |",
+            "| {} | {} | {}×{}, {} spp{} | {} | {} ({:.0} %) | {points} | {track} | {reprojection} | {focal} | {} | {:.0} s | {:.0} s |{note} |",
             r.scene,
             r.form,
             r.width,
             r.height,
             r.samples,
+            r.denoise_radius
+                .map_or(String::new(), |d| format!(", denoised (σ {d} px)")),
             r.images,
             r.registered,
             100.0 * r.share,
@@ -283,6 +288,7 @@ mod tests {
             width: 40,
             height: 30,
             samples: 4,
+            denoise_radius: None,
             images: 10,
             registered: if failure.is_some() { 0 } else { 10 },
             share: if failure.is_some() { 0.0 } else { 1.0 },

@@ -163,6 +163,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
             dispersion: false,
             outputs: vec!["rgb".into()],
             exposure: 1.0,
+            denoise_radius: None,
         },
         sensor: None,
         lesson: None,

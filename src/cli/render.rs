@@ -87,6 +87,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     if sensor && model.sensor.is_none() {
         model.sensor = Some(crate::model::Sensor::default());
     }
+    if model.render.denoise_radius.is_some() && backend != Backend::Native {
+        eprintln!(
+            "warning: render.denoise is the native renderer's; {}'s images are not filtered",
+            backend.name()
+        );
+    }
     if args.resume && backend != Backend::Native {
         return Err(CliError::Usage(format!(
             "--resume: only the native backend records finished images; {} renders every image again",

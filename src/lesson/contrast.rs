@@ -452,6 +452,7 @@ mod tests {
             rgb: vec![[1.0, 2.0, 3.0], [3.0, 4.0, 5.0]],
             depth: vec![0.0; 2],
             variance: vec![[0.0; 3]; 2],
+            albedo: Vec::new(),
         };
         assert_eq!(bilinear(&img, 0.5, 0.5, 1), Some(2.0));
         assert_eq!(bilinear(&img, 1.5, 0.5, 0), Some(3.0));

@@ -888,6 +888,14 @@ pub struct Render {
     /// Exposure multiplier for the PNG preview (EXR stays linear). **Unit:** 1.
     /// **Default:** 1.
     pub exposure: Option<Number>,
+    /// Native renderer: `"illumination"` also writes `<image>.denoised.exr`, the render with
+    /// its illumination (radiance ÷ first-hit albedo) smoothed across neighbouring pixels at
+    /// the same depth and the albedo multiplied back: texture stays sharp, shadow edges soften
+    /// by about `denoise_radius`. The PNG preview and the sensor stage then use it; the `.exr`
+    /// stays the unfiltered render (`docs/native.md`). **Default:** `"none"`.
+    pub denoise: Option<String>,
+    /// Gaussian radius of the illumination denoiser (σ). **Unit:** px. **Default:** 2.
+    pub denoise_radius: Option<Number>,
 }
 
 /// `[sensor]` — the camera after the lens: exposure, photon shot noise, read noise, ADC, white

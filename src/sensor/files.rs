@@ -158,9 +158,18 @@ pub fn apply(
     for &p in poses {
         for (c, cam) in model.cameras.iter().enumerate() {
             let name = model.image_name(p, c);
-            let exr = out.join(format!("{name}.exr"));
+            // With the native renderer's illumination denoiser on, the camera sees the
+            // denoised render (an explicit option of the scene; the sidecar names its input).
+            let denoised = out.join(format!("{name}.denoised.exr"));
+            let (exr, var_path) = if model.render.denoise_radius.is_some() && denoised.exists() {
+                (denoised, out.join(format!("{name}.denoised.variance.exr")))
+            } else {
+                (
+                    out.join(format!("{name}.exr")),
+                    out.join(format!("{name}.variance.exr")),
+                )
+            };
             let img = read_exr(&exr)?;
-            let var_path = out.join(format!("{name}.variance.exr"));
             let variance = if var_path.exists() {
                 Some(read_exr(&var_path)?)
             } else {

@@ -8,6 +8,7 @@
 //! | `OUT/<image>.exr` | linear RGB radiance (float32), Mitsuba's radiometric conventions |
 //! | `OUT/<image>.png` | sRGB preview of `render.exposure × radiance` |
 //! | `OUT/<image>.variance.exr` | variance of each pixel's Monte Carlo mean per channel (render noise, [`Image::variance`]); when the scene has a `[sensor]` |
+//! | `OUT/<image>.denoised.exr`, `OUT/<image>.denoised.variance.exr` | with `render.denoise = "illumination"`: the render and its variance through [`denoise::illumination`] (the PNG preview is made from it) |
 //! | `OUT/<image>.depth.exr` | camera-frame z of the first surface hit through each pixel centre, m (0: none); when `render.outputs` has `"depth"` |
 //! | `OUT/render-manifest.json` | the finished images and the SHA-256 of their files, for `--resume` ([`resume`]) |
 //!
@@ -17,6 +18,7 @@
 
 pub mod camera;
 pub mod caustics;
+pub mod denoise;
 pub mod integrator;
 pub mod lights;
 pub mod medium;
@@ -42,6 +44,9 @@ pub struct Image {
     /// Variance of each pixel's Monte Carlo mean per channel (the sample variance of its
     /// samples / their number; 0 with one sample): the render noise the sensor stage reports.
     pub variance: Vec<[f32; 3]>,
+    /// Mean albedo of the first surface hit by each pixel's samples (0 where they see only
+    /// water); filled when the denoiser needs it, else empty.
+    pub albedo: Vec<[f32; 3]>,
 }
 
 /// Render one image (rig pose `pose`, camera `cam`) with `samples` per pixel.
@@ -73,14 +78,17 @@ pub fn render_image(
     let seed = model.render.seed;
     let spp = samples.max(1);
     let cam_from_world = model.world_from_camera(pose, cam).inverse();
-    type Row = (Vec<[f32; 3]>, Vec<f32>, Vec<[f32; 3]>);
+    let want_albedo = model.render.denoise_radius.is_some();
+    type Row = (Vec<[f32; 3]>, Vec<f32>, Vec<[f32; 3]>, Vec<[f32; 3]>);
     let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|j| {
             let mut row = Vec::with_capacity(w as usize);
             let mut drow = Vec::with_capacity(w as usize);
             let mut vrow = Vec::with_capacity(w as usize);
+            let mut arow = Vec::with_capacity(if want_albedo { w as usize } else { 0 });
             for i in 0..w {
+                let mut alb = DVec3::ZERO;
                 let pixel = j as u64 * w as u64 + i as u64;
                 let mut sum = DVec3::ZERO;
                 let mut var = DVec3::ZERO;
@@ -92,6 +100,12 @@ pub fn render_image(
                             sampler::Sampler::new(seed, image_id, k as u64, pixel, s as u64);
                         let (du, dv) = rng.next2();
                         if let Some((o, d, wgt)) = r.ray(i as f64 + du, j as f64 + dv) {
+                            if want_albedo && k == 0 {
+                                let ray = scene::Ray { origin: o, dir: d };
+                                if let Some(hit) = scene.intersect(&ray, f64::INFINITY) {
+                                    alb += integ.albedo(&hit);
+                                }
+                            }
                             let v = integ.li(o, d, &mut rng) * wgt;
                             if v.is_finite() {
                                 acc += v;
@@ -117,6 +131,10 @@ pub fn render_image(
                 }
                 row.push([sum.x as f32, sum.y as f32, sum.z as f32]);
                 vrow.push([var.x as f32, var.y as f32, var.z as f32]);
+                if want_albedo {
+                    let a = alb / spp as f64;
+                    arow.push([a.x as f32, a.y as f32, a.z as f32]);
+                }
                 // Depth through the pixel centre (green channel rays).
                 let r = &rays[if passes.len() == 1 { 0 } else { 1 }];
                 let z = r
@@ -130,13 +148,15 @@ pub fn render_image(
             if let Some(pb) = progress {
                 pb.inc(1);
             }
-            (row, drow, vrow)
+            (row, drow, vrow, arow)
         })
         .collect();
     let mut rgb = Vec::with_capacity((w * h) as usize);
     let mut depth = Vec::with_capacity((w * h) as usize);
     let mut variance = Vec::with_capacity((w * h) as usize);
-    for (r, d, v) in rows {
+    let mut albedo = Vec::new();
+    for (r, d, v, a) in rows {
+        albedo.extend(a);
         rgb.extend(r);
         depth.extend(d);
         variance.extend(v);
@@ -147,6 +167,7 @@ pub fn render_image(
         rgb,
         depth,
         variance,
+        albedo,
     })
 }
 
@@ -242,14 +263,39 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
             }
             let img = render_image(model, &scene, p, c, samples, pb.as_ref())?;
             write_exr(&exr, img.width, img.height, &img.rgb)?;
-            let png = out.join(format!("{name}.png"));
-            write_png(&png, &img, model.render.exposure)?;
-            let mut files = vec![exr.clone(), png];
+            let mut files = vec![exr.clone()];
             if model.sensor.is_some() {
                 let path = out.join(format!("{name}.variance.exr"));
                 write_exr(&path, img.width, img.height, &img.variance)?;
                 files.push(path);
             }
+            let png = out.join(format!("{name}.png"));
+            if let Some(sigma) = model.render.denoise_radius {
+                let (rgb, variance) = denoise::illumination(
+                    img.width as usize,
+                    img.height as usize,
+                    &img.rgb,
+                    &img.variance,
+                    &img.albedo,
+                    &img.depth,
+                    sigma,
+                );
+                let path = out.join(format!("{name}.denoised.exr"));
+                write_exr(&path, img.width, img.height, &rgb)?;
+                files.push(path);
+                let path = out.join(format!("{name}.denoised.variance.exr"));
+                write_exr(&path, img.width, img.height, &variance)?;
+                files.push(path);
+                let filtered = Image {
+                    rgb,
+                    variance,
+                    ..img.clone()
+                };
+                write_png(&png, &filtered, model.render.exposure)?;
+            } else {
+                write_png(&png, &img, model.render.exposure)?;
+            }
+            files.push(png);
             if want_depth {
                 let d: Vec<[f32; 3]> = img.depth.iter().map(|&z| [z, z, z]).collect();
                 let path = out.join(format!("{name}.depth.exr"));

@@ -1,5 +1,6 @@
 //! The `[render]` settings shared by every backend: samples per pixel, seed, bounces,
-//! dispersion, the outputs written (`rgb`, `depth`, `truth`) and the exposure.
+//! dispersion, the outputs written (`rgb`, `depth`, `truth`), the exposure and the native
+//! renderer's illumination denoiser.
 
 use crate::model::*;
 use crate::scene::check;
@@ -63,6 +64,12 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
     };
     let exposure = r.f64(cx, "exposure", Dim::Number, 1.0);
     check::positive(cx, &r, "exposure", exposure, "");
+    let denoise = r
+        .choice(cx, "denoise", &["none", "illumination"])
+        .unwrap_or("none");
+    let radius = r.f64(cx, "denoise_radius", Dim::Number, 2.0);
+    check::positive(cx, &r, "denoise_radius", radius, "px");
+    let denoise_radius = (denoise == "illumination" && radius > 0.0).then_some(radius);
     r.finish(cx);
     RenderSettings {
         samples,
@@ -71,5 +78,6 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
         dispersion,
         outputs,
         exposure,
+        denoise_radius,
     }
 }
