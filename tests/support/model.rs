@@ -135,6 +135,7 @@ pub fn render_settings(samples: u32) -> RenderSettings {
         dispersion: false,
         outputs: vec!["rgb".into()],
         exposure: 1.0,
+        denoise_radius: None,
     }
 }
 

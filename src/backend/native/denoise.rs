@@ -3,10 +3,14 @@
 //!
 //! | step | what |
 //! |---|---|
-//! | demodulate | `E = L / A` per channel, with `A` the mean first-hit albedo of the pixel's samples (pixels whose albedo is under [`MIN_ALBEDO`] in a channel, or that see only water, are filtered as radiance) |
-//! | filter | `E'_p = Σ_q w_pq E_q / Σ_q w_pq`, `w = exp(−d²/2σ²) · exp(−(Δz / z_p)² / 2τ²)`, `d` in pixels, `z` the pixel's depth, `τ` = [`DEPTH_TOLERANCE`]; only pixels of the same kind (surface or water) mix |
+//! | demodulate | `A`: the mean first-hit albedo of each pixel's samples; the light on a pixel is estimated as a ratio, `E'_p = Σ_q w_pq L_q / Σ_q w_pq A_q` (pixels whose albedo is under [`MIN_ALBEDO`] in a channel, or that see only water, are filtered as radiance, `A = 1`) |
+//! | weights | `w = exp(−d²/2σ²) · exp(−(Δz / z_p)² / 2τ²)`, `d` in pixels, `z` the pixel's depth, `τ` = [`DEPTH_TOLERANCE`]; only pixels of the same kind (surface or water) mix |
 //! | remodulate | `L'_p = A_p E'_p` |
-//! | noise | `var'_p = A_p² Σ_q w_pq² var_q / A_q² / (Σ_q w_pq)²` (the samples of different pixels are independent) |
+//! | noise | `var'_p = A_p² Σ_q w_pq² var_q / (Σ_q w_pq A_q)²` (the samples of different pixels are independent) |
+//!
+//! The ratio form (rather than averaging `L_q / A_q`) keeps a dark pixel's noise from being
+//! multiplied by its bright neighbours' albedo: at the edge of a black target print a firefly
+//! would otherwise be copied onto the white around it, 18× brighter.
 //!
 //! What it changes: the Monte Carlo noise of the light falls by about `1/(2√π σ)` (a Gaussian
 //! of σ pixels averages about `4πσ²` of them); the albedo (the texture SIFT matches) is kept at
@@ -58,7 +62,7 @@ pub fn illumination(
                 let mut v = [0f32; 3];
                 for c in 0..3 {
                     let kp = kind(p, c);
-                    let (mut sw, mut sw2v, mut se) = (0.0f64, 0.0f64, 0.0f64);
+                    let (mut sa, mut sw2v, mut se) = (0.0f64, 0.0f64, 0.0f64);
                     for dy in -radius..=radius {
                         let qy = y + dy;
                         if qy < 0 || qy >= h {
@@ -78,16 +82,15 @@ pub fn illumination(
                                 let rel = (depth[q] as f64 - zp) / zp;
                                 wt *= (-(rel * rel) / two_t2).exp();
                             }
-                            let f = factor(q, c);
-                            se += wt * rgb[q][c] as f64 / f;
-                            sw2v += wt * wt * variance[q][c] as f64 / (f * f);
-                            sw += wt;
+                            se += wt * rgb[q][c] as f64;
+                            sw2v += wt * wt * variance[q][c] as f64;
+                            sa += wt * factor(q, c);
                         }
                     }
                     let fp = factor(p, c);
-                    // sw ≥ 1: the pixel itself always counts.
-                    o[c] = (fp * se / sw) as f32;
-                    v[c] = (fp * fp * sw2v / (sw * sw)) as f32;
+                    // sa ≥ factor(p, c) > 0: the pixel itself always counts.
+                    o[c] = (fp * se / sa) as f32;
+                    v[c] = (fp * fp * sw2v / (sa * sa)) as f32;
                 }
                 out.push(o);
                 var.push(v);
