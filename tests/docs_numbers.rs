@@ -54,8 +54,11 @@ fn images_bench_table_matches_its_json() {
     let rows = bench.as_array().unwrap();
     assert_eq!(rows.len(), 5, "the five shipped survey scenes");
     for r in rows {
+        let denoised = r["denoise_radius"]
+            .as_f64()
+            .map_or(String::new(), |d| format!(", denoised (σ {d} px)"));
         let prefix = format!(
-            "| {} | {} | {}×{}, {} spp | {} | {} ({:.0} %) |",
+            "| {} | {} | {}×{}, {} spp{denoised} | {} | {} ({:.0} %) |",
             r["scene"].as_str().unwrap(),
             r["form"].as_str().unwrap(),
             r["width"],
