@@ -30,8 +30,8 @@
 //!   forward-scattered sun (the aureole, p(0°) ≈ 300× the isotropic value at g = 0.92) is what
 //!   lights a seabed from above, and the path's own lobe alone finds it as fireflies.
 //! * `max_bounces` = the largest number of scattering vertices (surface or medium) on a path;
-//!   Russian roulette after three, gentler in sunlit, scattering water
-//!   ([`SUNLIT_ROULETTE_GAIN`]).
+//!   Russian roulette after three, except in sunlit, scattering water
+//!   ([`Integrator::roulette_from`]).
 
 use super::lights::Lights;
 use super::medium::{Medium, tr};
@@ -48,14 +48,8 @@ pub const AUREOLE_FRACTION: f64 = 0.5;
 /// sampling: 4× isotropic.
 const AUREOLE_MIN_PEAK: f64 = 4.0 / (4.0 * PI);
 
-/// Depth from which Russian roulette may end a path.
+/// Depth from which Russian roulette may end a path (outside sunlit water).
 pub const ROULETTE_FROM: u32 = 3;
-/// Gain of Russian roulette's survival probability in sunlit, scattering water: only paths
-/// whose weight fell under 1/16 are at risk, and survivors are raised to 1/16 at most.
-/// Measured on a sunlit seabed 10 m deep (HG g = 0.92, 8 bounces, 40 000 paths; the test
-/// below): variance 47 900 at gain 1 in 58 ms, 15 100 at 4 in 63 ms, 10 300 at 16 in 70 ms,
-/// 9 000 without roulette in 100 ms — 16 is the most efficient.
-pub const SUNLIT_ROULETTE_GAIN: f64 = 16.0;
 
 /// Offset of new ray origins along the surface normal, m.
 const SURFACE_OFFSET: f64 = 1e-6;
@@ -81,11 +75,9 @@ pub struct Integrator<'a> {
     /// Unit direction towards the sun in the water, when surface bounces sample its aureole
     /// (`None` turns that sampling off; the estimate stays the same, only noisier).
     pub aureole: Option<DVec3>,
-    /// Depth from which Russian roulette may end a path ([`Integrator::roulette`]).
+    /// Depth from which Russian roulette may end a path ([`Integrator::roulette`]):
+    /// [`ROULETTE_FROM`], or `max_bounces` in sunlit, scattering water.
     pub roulette_from: u32,
-    /// Russian roulette keeps a path with probability `min(0.95, gain · max β)`: 1, or
-    /// [`SUNLIT_ROULETTE_GAIN`] in sunlit, scattering water.
-    pub roulette_gain: f64,
     /// Sun-aware distance sampling along medium segments (`false` turns it off; the estimate
     /// stays the same, only noisier).
     pub sun_sampling: bool,
@@ -118,14 +110,12 @@ impl<'a> Integrator<'a> {
             aureole,
             // In sunlit, scattering water the light grows towards the surface: a path that
             // roulette lets survive deep down with its weight raised to ~1 then climbs into
-            // sunlight 10–100× brighter (a firefly). There, survivors are raised to 1/16 at
-            // most ([`SUNLIT_ROULETTE_GAIN`]).
-            roulette_gain: if aureole.is_some() {
-                SUNLIT_ROULETTE_GAIN
+            // sunlight 10–100× brighter (a firefly). There, only `max_bounces` ends paths.
+            roulette_from: if aureole.is_some() {
+                model.render.max_bounces
             } else {
-                1.0
+                ROULETTE_FROM
             },
-            roulette_from: ROULETTE_FROM,
             sun_sampling: true,
             lamp_phase_sampling: true,
             object_from_world: model.objects.iter().map(|o| o.pose.inverse()).collect(),
@@ -478,7 +468,7 @@ impl<'a> Integrator<'a> {
         if depth < self.roulette_from {
             return true;
         }
-        let q = (self.roulette_gain * beta.max_element()).min(0.95);
+        let q = beta.max_element().min(0.95);
         if q <= 0.0 || rng.next() >= q {
             return false;
         }
