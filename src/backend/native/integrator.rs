@@ -596,7 +596,26 @@ impl<'a> Integrator<'a> {
             return DVec3::ZERO;
         }
         let pdf_p = self.lamp_phase_pdf(m, o, d, a, b, pl.pos, t);
-        if !(pdf_p > 0.0 && pdf_p.is_finite()) {
+        let pdf_e = equiangular_pdf(o, d, a, b, pl.pos, t);
+        self.lamp_inscatter_at(m, pl, o, d, a, t, pdf_p, pdf_e)
+    }
+
+    /// One sample of a lamp's in-scattering at distance `t` on `[a, …]` of the ray, drawn
+    /// with density `pdf_own` by one of the two lamp techniques; `pdf_other` is the other
+    /// technique's density there. MIS-weighted (power heuristic) against both and free flight.
+    #[allow(clippy::too_many_arguments)]
+    fn lamp_inscatter_at(
+        &self,
+        m: &Medium,
+        pl: &super::lights::PointLight,
+        o: DVec3,
+        d: DVec3,
+        a: f64,
+        t: f64,
+        pdf_own: f64,
+        pdf_other: f64,
+    ) -> DVec3 {
+        if !(pdf_own > 0.0 && pdf_own.is_finite()) {
             return DVec3::ZERO;
         }
         let p = o + t * d;
@@ -610,13 +629,12 @@ impl<'a> Integrator<'a> {
         let dir = wl / r;
         let trc = tr(m.sigma_t, t - a);
         let pdf_d = mean(m.sigma_t * trc);
-        let pdf_e = equiangular_pdf(o, d, a, b, pl.pos, t);
-        let w = power3(pdf_p, pdf_d, pdf_e);
+        let w = power3(pdf_own, pdf_d, pdf_other);
         if w <= 0.0 || self.scene.occluded(p, pl.pos) {
             return DVec3::ZERO;
         }
         m.sigma_s * trc * m.phase.eval(d.dot(dir)) * i_to * self.tr_seg(p, dir, r) / r2
-            * (w / pdf_p)
+            * (w / pdf_own)
     }
 
     /// In-scattered radiance from point light `pl` along `[a, b]` of the ray, sampled
@@ -632,8 +650,7 @@ impl<'a> Integrator<'a> {
         b: f64,
         rng: &mut Sampler,
     ) -> DVec3 {
-        let delta = (pl.pos - o).dot(d);
-        let dd = (o + delta * d - pl.pos).length().max(1e-9);
+        let (delta, dd) = along_off(o, d, pl.pos);
         let ta = (a - delta).atan2(dd);
         let tb = (b - delta).atan2(dd);
         if tb <= ta {
@@ -645,24 +662,8 @@ impl<'a> Integrator<'a> {
             return DVec3::ZERO;
         }
         let pdf_e = dd / ((tb - ta) * (dd * dd + (t - delta) * (t - delta)));
-        let p = o + t * d;
-        let i_to = pl.intensity_to(p);
-        if i_to == DVec3::ZERO {
-            return DVec3::ZERO;
-        }
-        let wl = pl.pos - p;
-        let r2 = wl.length_squared();
-        let r = r2.sqrt();
-        let dir = wl / r;
-        let trc = tr(m.sigma_t, t - a);
-        let pdf_d = mean(m.sigma_t * trc);
         let pdf_p = self.lamp_phase_pdf(m, o, d, a, b, pl.pos, t);
-        let w = power3(pdf_e, pdf_d, pdf_p);
-        if w <= 0.0 || self.scene.occluded(p, pl.pos) {
-            return DVec3::ZERO;
-        }
-        m.sigma_s * trc * m.phase.eval(d.dot(dir)) * i_to * self.tr_seg(p, dir, r) / r2
-            * (w / pdf_e)
+        self.lamp_inscatter_at(m, pl, o, d, a, t, pdf_e, pdf_p)
     }
 }
 
@@ -741,8 +742,7 @@ fn mu_at(delta: f64, dd: f64, t: f64) -> f64 {
 
 /// Density of equiangular sampling of `t` on `[a, b]` for a light at `x`.
 fn equiangular_pdf(o: DVec3, d: DVec3, a: f64, b: f64, x: DVec3, t: f64) -> f64 {
-    let delta = (x - o).dot(d);
-    let dd = (o + delta * d - x).length().max(1e-9);
+    let (delta, dd) = along_off(o, d, x);
     let ta = (a - delta).atan2(dd);
     let tb = (b - delta).atan2(dd);
     if tb <= ta {
