@@ -658,6 +658,26 @@ pub struct RenderSettings {
     /// The native renderer's optional illumination denoiser (`None`: off): the Gaussian
     /// radius in pixels ([`crate::backend::native::denoise`]).
     pub denoise_radius: Option<f64>,
+    /// The native renderer's noise target (`None`: `samples` per pixel everywhere)
+    /// ([`crate::backend::native::adaptive`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<NoiseTarget>,
+}
+
+/// `render.noise`: adaptive sampling to a relative standard error per pixel.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct NoiseTarget {
+    /// Relative standard error of each pixel's mean aimed at.
+    pub relative: f64,
+    /// The most samples a pixel takes after its pilot (`None`: 16 × the pilot's samples).
+    pub max_samples: Option<u32>,
+}
+
+impl NoiseTarget {
+    /// The most samples after a pilot of `pilot` samples.
+    pub fn max_samples_for(&self, pilot: u32) -> u32 {
+        self.max_samples.unwrap_or(16 * pilot).max(pilot)
+    }
 }
 
 /// What the scene needs modelled, decided once, with reasons a person can read.

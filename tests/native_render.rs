@@ -153,22 +153,22 @@ fn busy_model() -> Model {
     m
 }
 
+/// `render` into a temporary folder on a pool of `threads` threads.
+fn render_on(m: &Model, threads: usize) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| render(m, dir.path(), &RenderOptions::default()))
+        .unwrap();
+    dir
+}
+
 #[test]
 fn same_bytes_with_one_and_two_threads_and_no_nan() {
     let m = busy_model();
-    let dirs: Vec<_> = [1usize, 2]
-        .iter()
-        .map(|&n| {
-            let dir = tempfile::tempdir().unwrap();
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .unwrap();
-            pool.install(|| render(&m, dir.path(), &RenderOptions::default()))
-                .unwrap();
-            dir
-        })
-        .collect();
+    let dirs: Vec<_> = [1usize, 2].iter().map(|&n| render_on(&m, n)).collect();
     for f in ["img_0000.exr", "img_0000.png", "img_0000.depth.exr"] {
         let a = std::fs::read(dirs[0].path().join(f)).unwrap();
         let b = std::fs::read(dirs[1].path().join(f)).unwrap();
@@ -567,4 +567,51 @@ fn illumination_denoiser_feeds_the_camera_and_keeps_the_mean() {
             .unwrap();
     let input = side["input"].as_str().unwrap();
     assert!(input.ends_with("img_0001.denoised.exr"), "{input}");
+}
+
+#[test]
+fn noise_target_reaches_its_noise_without_bias_and_the_same_bytes_on_any_thread_count() {
+    let mut m = busy_model();
+    m.render.noise = Some(NoiseTarget {
+        relative: 0.1,
+        max_samples: Some(1024),
+    });
+    let scene = Scene::build(&m).unwrap();
+    let img = render_image(&m, &scene, 0, 0, 16, None).unwrap();
+    let rep = img.noise.clone().expect("a noise report");
+    eprintln!("{rep:?}");
+    // Each pixel took what its pilot asked for: a spread of counts, the median noise near the
+    // target (the pilot's 16-sample variance is itself noisy, so not exactly on it).
+    assert!(rep.samples.max > 2.0 * rep.samples.median, "{rep:?}");
+    assert!(rep.samples.median > 16.0, "{rep:?}");
+    assert!(
+        rep.achieved.median > 0.6 * 0.1 && rep.achieved.median < 1.3 * 0.1,
+        "{rep:?}"
+    );
+    assert!(rep.share_capped < 0.2, "{rep:?}");
+    // Unbiased: the image's mean against a plain 256-spp render, within 4 σ of both.
+    let mut plain = m.clone();
+    plain.render.noise = None;
+    let refimg = render_image(&plain, &scene, 0, 0, 256, None).unwrap();
+    let stats = |im: &poser::backend::native::Image| {
+        let n = im.rgb.len() as f64;
+        let mean: f64 = im.rgb.iter().map(|p| p[1] as f64).sum::<f64>() / n;
+        let var: f64 = im.variance.iter().map(|p| p[1] as f64).sum::<f64>() / (n * n);
+        (mean, var)
+    };
+    let (ma, va) = stats(&img);
+    let (mr, vr) = stats(&refimg);
+    assert!(
+        (ma - mr).abs() < 4.0 * (va + vr).sqrt(),
+        "adaptive {ma} ± {} vs plain {mr} ± {}",
+        va.sqrt(),
+        vr.sqrt()
+    );
+    // The same bytes with one and two threads.
+    let dirs: Vec<_> = [1usize, 2].iter().map(|&n| render_on(&m, n)).collect();
+    for f in ["img_0000.exr", "img_0000.noise.json"] {
+        let a = std::fs::read(dirs[0].path().join(f)).unwrap();
+        let b = std::fs::read(dirs[1].path().join(f)).unwrap();
+        assert!(a == b, "{f} differs between 1 and 2 threads");
+    }
 }

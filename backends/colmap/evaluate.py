@@ -354,18 +354,24 @@ def focal_sensitivity(pycolmap, rec, req: dict) -> float:
     """How well the block determines the focal length: the relative rise of the mean
     reprojection error when the focal length is held 10 % above its estimate and everything
     else (poses, points, distortion) is adjusted again. A flat nadir block barely notices
-    (focal length and height trade against each other); a block with relief or obliques does."""
+    (focal length and height trade against each other); a block with relief or obliques does.
+    A model with two focal lengths (fx, fy) is probed one axis at a time and the smaller rise
+    returned: obliques tilted only forward determine fy and leave fx free."""
     base = rec.compute_mean_reprojection_error()
-    probe = pycolmap.Reconstruction(rec)
-    for cam in probe.cameras.values():
-        params = cam.params.copy()
-        for i in cam.focal_length_idxs():
-            params[i] *= 1.1
-        cam.params = params
-    opts = ba_options(pycolmap, req)
-    opts.refine_focal_length = False
-    pycolmap.bundle_adjustment(probe, opts)
-    return (probe.compute_mean_reprojection_error() - base) / max(base, 1e-12)
+    axes = max((len(c.focal_length_idxs()) for c in rec.cameras.values()), default=0)
+    rises = []
+    for axis in range(axes):
+        probe = pycolmap.Reconstruction(rec)
+        for cam in probe.cameras.values():
+            params = cam.params.copy()
+            idxs = list(cam.focal_length_idxs())
+            params[idxs[min(axis, len(idxs) - 1)]] *= 1.1
+            cam.params = params
+        opts = ba_options(pycolmap, req)
+        opts.refine_focal_length = False
+        pycolmap.bundle_adjustment(probe, opts)
+        rises.append((probe.compute_mean_reprojection_error() - base) / max(base, 1e-12))
+    return min(rises) if rises else 0.0
 
 
 def export(rec, ids: dict[int, int] | None = None) -> dict:

@@ -42,7 +42,11 @@ pub struct Case {
 pub const CASES: &[Case] = &[
     Case {
         scene: "scenarios/reef_strip.toml",
-        sets: &["network.width=\"1.5 m\"", "network.length=\"3 m\""],
+        sets: &[
+            "network.width=\"1.5 m\"",
+            "network.length=\"3 m\"",
+            "network.obliques=\"30 deg\"",
+        ],
         scale: 0.4,
         samples: 16,
     },
@@ -60,13 +64,13 @@ pub const CASES: &[Case] = &[
     },
     Case {
         scene: "scenarios/lessons/coral_self_occlusion.toml",
-        sets: &[],
+        sets: &["network.obliques=\"30 deg\""],
         scale: 0.25,
         samples: 16,
     },
     Case {
         scene: "scenarios/lessons/subsea_metrology.toml",
-        sets: &["network.length=\"2 m\""],
+        sets: &["network.length=\"2 m\"", "network.obliques=\"30 deg\""],
         scale: 0.2,
         samples: 16,
     },
@@ -199,7 +203,11 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
         0.5,
     );
     let t1 = std::time::Instant::now();
-    match evaluate_images(&model, &dir, &Options::default(), &|_, _, _| {}) {
+    let opts = Options {
+        model: crate::evaluate::Mode::Images.default_model(),
+        ..Options::default()
+    };
+    match evaluate_images(&model, &dir, &opts, &|_, _, _| {}) {
         Ok(ev) => {
             row.registered = ev.registered;
             row.share = ev.registered as f64 / ev.images.max(1) as f64;

@@ -164,6 +164,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
             outputs: vec!["rgb".into()],
             exposure: 1.0,
             denoise_radius: None,
+            noise: None,
         },
         sensor: None,
         lesson: None,

@@ -3,7 +3,7 @@
 //! | option | default | meaning |
 //! |---|---|---|
 //! | `--mode` | observations | `observations`: exact projections of tie points + noise, bundle-adjusted; `images`: COLMAP's full pipeline on rendered images |
-//! | `--model` | simple_radial | camera model COLMAP self-calibrates (the port is ignored, as practitioners do) |
+//! | `--model` | opencv (observations), radial (images) | camera model COLMAP self-calibrates (the port is ignored, as practitioners do) |
 //! | `--noise` | 0.3 px | Gaussian pixel noise on every observation (observations mode) |
 //! | `--density` | 20 /m² | tie points per m² of surface (observations mode) |
 //! | `--gcp` | off | align on the targets' points (GCPs); the default aligns on all points |
@@ -28,9 +28,10 @@ pub struct Args {
     pub out: PathBuf,
     #[arg(long, value_enum, default_value = "observations")]
     pub mode: Mode,
-    /// Camera model COLMAP self-calibrates.
-    #[arg(long, value_enum, default_value = "opencv")]
-    pub model: CameraModel,
+    /// Camera model COLMAP self-calibrates [default: opencv in observations mode, radial
+    /// (one focal length) in images mode].
+    #[arg(long, value_enum)]
+    pub model: Option<CameraModel>,
     /// Pixel noise (σ, px) added to every observation (observations mode).
     #[arg(long, default_value_t = 0.3)]
     pub noise: f64,
@@ -103,7 +104,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         ));
     }
     let opts = Options {
-        model: args.model,
+        model: args.model.unwrap_or(args.mode.default_model()),
         noise: args.noise,
         density: args.density,
         gcp: args.gcp,

@@ -93,6 +93,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             backend.name()
         );
     }
+    if model.render.noise.is_some() && backend != Backend::Native {
+        eprintln!(
+            "warning: render.noise is the native renderer's; {} takes render.samples per pixel",
+            backend.name()
+        );
+    }
     if args.resume && backend != Backend::Native {
         return Err(CliError::Usage(format!(
             "--resume: only the native backend records finished images; {} renders every image again",

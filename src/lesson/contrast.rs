@@ -453,6 +453,7 @@ mod tests {
             depth: vec![0.0; 2],
             variance: vec![[0.0; 3]; 2],
             albedo: Vec::new(),
+            noise: None,
         };
         assert_eq!(bilinear(&img, 0.5, 0.5, 1), Some(2.0));
         assert_eq!(bilinear(&img, 1.5, 0.5, 0), Some(3.0));

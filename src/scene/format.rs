@@ -896,6 +896,16 @@ pub struct Render {
     pub denoise: Option<String>,
     /// Gaussian radius of the illumination denoiser (σ). **Unit:** px. **Default:** 2.
     pub denoise_radius: Option<Number>,
+    /// Native renderer: a noise target, the relative standard error of each pixel's mean
+    /// (e.g. `"2 %"`). Every pixel first takes `samples` samples as a pilot, then as many
+    /// fresh ones as its pilot says it needs (up to `max_samples`); the pilot is dropped, so
+    /// the mean stays unbiased. Writes `<image>.noise.json` with the samples taken and the
+    /// noise achieved (`docs/native.md`). **Unit:** fraction. **Default:** none (`samples`
+    /// everywhere).
+    pub noise: Option<Fraction>,
+    /// With `noise`: the most samples a pixel takes after its pilot. **Default:** 16 ×
+    /// `samples`.
+    pub max_samples: Option<u32>,
 }
 
 /// `[sensor]` — the camera after the lens: exposure, photon shot noise, read noise, ADC, white

@@ -136,6 +136,7 @@ pub fn render_settings(samples: u32) -> RenderSettings {
         outputs: vec!["rgb".into()],
         exposure: 1.0,
         denoise_radius: None,
+        noise: None,
     }
 }
 

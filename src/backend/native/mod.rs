@@ -9,6 +9,7 @@
 //! | `OUT/<image>.png` | sRGB preview of `render.exposure × radiance` |
 //! | `OUT/<image>.variance.exr` | variance of each pixel's Monte Carlo mean per channel (render noise, [`Image::variance`]); when the scene has a `[sensor]` |
 //! | `OUT/<image>.denoised.exr`, `OUT/<image>.denoised.variance.exr` | with `render.denoise = "illumination"`: the render and its variance through [`denoise::illumination`] (the PNG preview is made from it) |
+//! | `OUT/<image>.noise.json` | with a noise target (`render.noise`): the samples each pixel took and the noise it achieved ([`adaptive::Report`]) |
 //! | `OUT/<image>.depth.exr` | camera-frame z of the first surface hit through each pixel centre, m (0: none); when `render.outputs` has `"depth"` |
 //! | `OUT/render-manifest.json` | the finished images and the SHA-256 of their files, for `--resume` ([`resume`]) |
 //!
@@ -16,6 +17,7 @@
 //! stream ([`sampler::Sampler`]), so the bytes do not depend on the number of threads. With
 //! `needs.per_channel_passes`, each channel is rendered with its own camera rays (dispersion).
 
+pub mod adaptive;
 pub mod camera;
 pub mod caustics;
 pub mod denoise;
@@ -47,6 +49,8 @@ pub struct Image {
     /// Mean albedo of the first surface hit by each pixel's samples (0 where they see only
     /// water); filled when the denoiser needs it, else empty.
     pub albedo: Vec<[f32; 3]>,
+    /// With a noise target (`render.noise`): the samples taken and the noise achieved.
+    pub noise: Option<adaptive::Report>,
 }
 
 /// Render one image (rig pose `pose`, camera `cam`) with `samples` per pixel.
@@ -79,7 +83,73 @@ pub fn render_image(
     let spp = samples.max(1);
     let cam_from_world = model.world_from_camera(pose, cam).inverse();
     let want_albedo = model.render.denoise_radius.is_some();
-    type Row = (Vec<[f32; 3]>, Vec<f32>, Vec<[f32; 3]>, Vec<[f32; 3]>);
+    let target = model
+        .render
+        .noise
+        .map(|t| (t.relative, t.max_samples_for(spp)));
+    // `n` samples of pixel (i, j), pass `k`, from stream index `from` on: their mean and the
+    // variance of that mean; the first-hit albedo is added to `alb`.
+    let run = |i: u32, j: u32, k: usize, from: u32, n: u32, alb: &mut DVec3| {
+        let r = &rays[k];
+        let pixel = j as u64 * w as u64 + i as u64;
+        let mut acc = DVec3::ZERO;
+        let mut acc2 = DVec3::ZERO;
+        for s in from..from + n {
+            let mut rng = sampler::Sampler::new(seed, image_id, k as u64, pixel, s as u64);
+            let (du, dv) = rng.next2();
+            if let Some((o, d, wgt)) = r.ray(i as f64 + du, j as f64 + dv) {
+                if want_albedo && k == 0 {
+                    let ray = scene::Ray { origin: o, dir: d };
+                    if let Some(hit) = scene.intersect(&ray, f64::INFINITY) {
+                        *alb += integ.albedo(&hit);
+                    }
+                }
+                let v = integ.li(o, d, &mut rng) * wgt;
+                if v.is_finite() {
+                    acc += v;
+                    acc2 += v * v;
+                }
+            }
+        }
+        let nf = n as f64;
+        acc /= nf;
+        // Unbiased sample variance of the samples, over n: that of their mean.
+        let v_mean = if n > 1 {
+            ((acc2 / nf - acc * acc) * (nf / (nf - 1.0)) / nf).max(DVec3::ZERO)
+        } else {
+            DVec3::ZERO
+        };
+        (acc, v_mean)
+    };
+    let channel_of = |k: usize| (passes.len() > 1).then_some(passes[k]);
+    // With a noise target: every pixel's pilot, then how many fresh samples each one takes.
+    let counts: Vec<[u32; 3]> = match target {
+        None => Vec::new(),
+        Some((relative, max)) => {
+            let (run, channel_of, npass) = (&run, &channel_of, rays.len());
+            let rv: Vec<[f64; 3]> = (0..h)
+                .into_par_iter()
+                .flat_map_iter(|j| {
+                    (0..w).map(move |i| {
+                        let mut out = [0.0; 3];
+                        for (k, o) in out.iter_mut().enumerate().take(npass) {
+                            let (m, v) = run(i, j, k, 0, spp, &mut DVec3::default());
+                            *o = adaptive::relative_variance(m, v, channel_of(k));
+                        }
+                        out
+                    })
+                })
+                .collect();
+            adaptive::plan(w as usize, h as usize, &rv, spp, relative, max)
+        }
+    };
+    type Row = (
+        Vec<[f32; 3]>,
+        Vec<f32>,
+        Vec<[f32; 3]>,
+        Vec<[f32; 3]>,
+        Vec<(u32, f32)>,
+    );
     let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|j| {
@@ -87,52 +157,47 @@ pub fn render_image(
             let mut drow = Vec::with_capacity(w as usize);
             let mut vrow = Vec::with_capacity(w as usize);
             let mut arow = Vec::with_capacity(if want_albedo { w as usize } else { 0 });
+            let mut nrow = Vec::with_capacity(if target.is_some() { w as usize } else { 0 });
             for i in 0..w {
                 let mut alb = DVec3::ZERO;
-                let pixel = j as u64 * w as u64 + i as u64;
+                let mut alb_n = 0u32;
+                let pixel = j as usize * w as usize + i as usize;
                 let mut sum = DVec3::ZERO;
                 let mut var = DVec3::ZERO;
-                for (k, r) in rays.iter().enumerate() {
-                    let mut acc = DVec3::ZERO;
-                    let mut acc2 = DVec3::ZERO;
-                    for s in 0..spp {
-                        let mut rng =
-                            sampler::Sampler::new(seed, image_id, k as u64, pixel, s as u64);
-                        let (du, dv) = rng.next2();
-                        if let Some((o, d, wgt)) = r.ray(i as f64 + du, j as f64 + dv) {
-                            if want_albedo && k == 0 {
-                                let ray = scene::Ray { origin: o, dir: d };
-                                if let Some(hit) = scene.intersect(&ray, f64::INFINITY) {
-                                    alb += integ.albedo(&hit);
-                                }
-                            }
-                            let v = integ.li(o, d, &mut rng) * wgt;
-                            if v.is_finite() {
-                                acc += v;
-                                acc2 += v * v;
-                            }
+                let mut taken = 0u32;
+                for k in 0..rays.len() {
+                    let channel = channel_of(k);
+                    // With a noise target the pilot (stream indices 0..spp) is dropped and the
+                    // pixel's fresh samples follow it, so that their number does not depend on
+                    // the samples averaged (unbiased).
+                    let (from, n) = match counts.get(pixel) {
+                        Some(c) => (spp, c[k]),
+                        None => (0, spp),
+                    };
+                    let (acc, v_mean) = run(i, j, k, from, n, &mut alb);
+                    if k == 0 {
+                        alb_n = n;
+                    }
+                    taken += n;
+                    match channel {
+                        None => {
+                            sum = acc;
+                            var = v_mean;
+                        }
+                        Some(c) => {
+                            sum[c] = acc[c];
+                            var[c] = v_mean[c];
                         }
                     }
-                    acc /= spp as f64;
-                    // Unbiased sample variance of the samples, over n: that of their mean.
-                    let n = spp as f64;
-                    let v_mean = if spp > 1 {
-                        ((acc2 / n - acc * acc) * (n / (n - 1.0)) / n).max(DVec3::ZERO)
-                    } else {
-                        DVec3::ZERO
-                    };
-                    if passes.len() == 1 {
-                        sum = acc;
-                        var = v_mean;
-                    } else {
-                        sum[passes[k]] = acc[passes[k]];
-                        var[passes[k]] = v_mean[passes[k]];
-                    }
+                }
+                if target.is_some() {
+                    let rel = adaptive::relative_error(sum, var);
+                    nrow.push((taken / rays.len() as u32, rel as f32));
                 }
                 row.push([sum.x as f32, sum.y as f32, sum.z as f32]);
                 vrow.push([var.x as f32, var.y as f32, var.z as f32]);
                 if want_albedo {
-                    let a = alb / spp as f64;
+                    let a = alb / alb_n.max(1) as f64;
                     arow.push([a.x as f32, a.y as f32, a.z as f32]);
                 }
                 // Depth through the pixel centre (green channel rays).
@@ -148,15 +213,17 @@ pub fn render_image(
             if let Some(pb) = progress {
                 pb.inc(1);
             }
-            (row, drow, vrow, arow)
+            (row, drow, vrow, arow, nrow)
         })
         .collect();
     let mut rgb = Vec::with_capacity((w * h) as usize);
     let mut depth = Vec::with_capacity((w * h) as usize);
     let mut variance = Vec::with_capacity((w * h) as usize);
     let mut albedo = Vec::new();
-    for (r, d, v, a) in rows {
+    let mut per_pixel = Vec::new();
+    for (r, d, v, a, n) in rows {
         albedo.extend(a);
+        per_pixel.extend(n);
         rgb.extend(r);
         depth.extend(d);
         variance.extend(v);
@@ -168,6 +235,7 @@ pub fn render_image(
         depth,
         variance,
         albedo,
+        noise: target.map(|(relative, max)| adaptive::Report::new(relative, spp, max, &per_pixel)),
     })
 }
 
@@ -296,6 +364,13 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
                 write_png(&png, &img, model.render.exposure)?;
             }
             files.push(png);
+            if let Some(noise) = &img.noise {
+                let path = out.join(format!("{name}.noise.json"));
+                let json = serde_json::to_vec_pretty(noise).map_err(|e| e.to_string())?;
+                crate::io::write_atomic(&path, &json)
+                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                files.push(path);
+            }
             if want_depth {
                 let d: Vec<[f32; 3]> = img.depth.iter().map(|&z| [z, z, z]).collect();
                 let path = out.join(format!("{name}.depth.exr"));

@@ -1,6 +1,6 @@
 //! The `[render]` settings shared by every backend: samples per pixel, seed, bounces,
 //! dispersion, the outputs written (`rgb`, `depth`, `truth`), the exposure and the native
-//! renderer's illumination denoiser.
+//! renderer's illumination denoiser and noise target.
 
 use crate::model::*;
 use crate::scene::check;
@@ -70,6 +70,47 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
     let radius = r.f64(cx, "denoise_radius", Dim::Number, 2.0);
     check::positive(cx, &r, "denoise_radius", radius, "px");
     let denoise_radius = (denoise == "illumination" && radius > 0.0).then_some(radius);
+    let noise = r.opt_f64(cx, "noise", Dim::Fraction);
+    let max_samples = r.opt_u32(cx, "max_samples");
+    let noise = match noise {
+        Some(v) if !(v > 0.0 && v < 1.0) => {
+            let sp = r.span_of("noise");
+            cx.push(
+                Diagnostic::error("E0235", "`noise` must be a relative error in (0, 1)")
+                    .label(sp, crate::scene::diag::num(v))
+                    .help("write e.g. `noise = \"2 %\"` (each pixel's standard error ÷ its value)"),
+            );
+            None
+        }
+        Some(relative) => Some(NoiseTarget {
+            relative,
+            max_samples,
+        }),
+        None => {
+            if max_samples.is_some() {
+                let sp = r.span_of("max_samples");
+                cx.push(
+                    Diagnostic::warning("W0236", "`max_samples` does nothing without `noise`")
+                        .label(sp, "ignored")
+                        .help("set a noise target, e.g. `noise = \"2 %\"`"),
+                );
+            }
+            None
+        }
+    };
+    if let (Some(t), Some(m)) = (noise, max_samples)
+        && m < samples
+    {
+        let sp = r.span_of("max_samples");
+        cx.push(
+            Diagnostic::error("E0237", "`max_samples` is below the pilot's `samples`")
+                .label(sp, format!("{m} < {samples}"))
+                .help(format!(
+                    "raise it to at least {samples}, or lower `samples` (the pilot) for a {} % target",
+                    100.0 * t.relative
+                )),
+        );
+    }
     r.finish(cx);
     RenderSettings {
         samples,
@@ -79,5 +120,6 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
         outputs,
         exposure,
         denoise_radius,
+        noise,
     }
 }
