@@ -17,6 +17,18 @@ if ! command -v chromium >/dev/null 2>&1; then
     exit 1
   fi
 fi
+# A one-node SLURM cluster runs the `poser slurm` test (Debian's `slurm-wlm` and `munge`;
+# backends/slurm/start.sh starts it).
+if ! command -v slurmctld >/dev/null 2>&1 && [ ! -x /usr/sbin/slurmctld ]; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y slurm-wlm munge
+  else
+    echo "error: slurm-wlm is missing (the \`poser slurm\` test runs a one-node cluster)" >&2
+    echo "  help: run \`sudo apt-get update && sudo apt-get install -y slurm-wlm munge\`," >&2
+    echo "        or run backends/setup.sh as root" >&2
+    exit 1
+  fi
+fi
 want="$(sha256sum "$req" | cut -d' ' -f1)"
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
   exit 0

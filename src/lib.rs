@@ -22,6 +22,7 @@ pub mod plan;
 pub mod rng;
 pub mod scene;
 pub mod sensor;
+pub mod slurm;
 pub mod texture;
 pub mod truth;
 pub mod units;

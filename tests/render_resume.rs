@@ -87,6 +87,30 @@ fn shards_write_the_files_of_one_whole_run() {
 }
 
 #[test]
+fn shards_running_at_once_write_the_files_of_one_whole_run() {
+    // As the tasks of a SLURM array do: the manifest is updated under a lock, so no shard's
+    // record is lost (without it, the last writer wins and the others' images are forgotten).
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole");
+    assert!(render(&whole, &[]).status().unwrap().success());
+    let shards = dir.path().join("shards");
+    let children: Vec<_> = ["0/5", "1/5", "2/5", "3/5", "4/5"]
+        .iter()
+        .map(|sh| {
+            render(&shards, &["--shard", sh])
+                .stderr(Stdio::null())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for mut c in children {
+        assert!(c.wait().unwrap().success());
+    }
+    same(&whole, &shards);
+    assert_eq!(finished_images(&shards), 5);
+}
+
+#[test]
 fn a_killed_render_resumes_where_it_stopped_with_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
     let whole = dir.path().join("whole");

@@ -22,6 +22,7 @@ mod render;
 mod rerun;
 mod schema;
 mod sensor;
+mod slurm;
 mod truth;
 mod unpack;
 mod validate;
@@ -44,6 +45,7 @@ Examples:
   poser dive scenarios/paper_survey.toml -o dive.ssrf
   poser pack scenarios/dome_orbit.toml -o orbit.poserpack --run \"render --scale 0.1 --poses 0\"
   poser rerun orbit.poserpack -o out/rerun
+  poser slurm scenarios/reef_strip.toml -o /scratch/reef --shards 32 --cpus 8
   poser schema";
 
 #[derive(Parser, Debug)]
@@ -113,6 +115,8 @@ pub enum Command {
     Unpack(unpack::Args),
     /// Rerun a pack's commands and report, file by file, whether the outputs are identical.
     Rerun(rerun::Args),
+    /// Write SLURM job-array scripts that render the survey in shards on a cluster.
+    Slurm(slurm::Args),
 }
 
 pub fn main() -> ExitCode {
@@ -155,5 +159,6 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
         Command::Pack(args) => pack::run(&args),
         Command::Unpack(args) => unpack::run(&args),
         Command::Rerun(args) => rerun::run(&args),
+        Command::Slurm(args) => slurm::run(&args),
     }
 }

@@ -37,6 +37,10 @@ pub struct Args {
     /// (`OUT/render-manifest.json`, same model and samples, files unchanged).
     #[arg(long)]
     pub resume: bool,
+    /// Do not write `OUT/truth/` (a job that writes it once, such as `poser slurm`'s merge
+    /// job, does).
+    #[arg(long)]
+    pub skip_truth: bool,
 }
 
 /// `I/N` with `I < N`.
@@ -110,7 +114,9 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             let list = shard_poses(poses, model.poses.len(), sh);
             if list.is_empty() {
                 eprintln!("shard {}/{}: no pose to render", sh.0, sh.1);
-                crate::truth::write(&model, &out.join("truth")).map_err(CliError::Failed)?;
+                if !args.skip_truth {
+                    crate::truth::write(&model, &out.join("truth")).map_err(CliError::Failed)?;
+                }
                 return Ok(());
             }
             Some(list)
@@ -127,7 +133,9 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         .render(&model, out, &opts)
         .map_err(CliError::Failed)?;
     // The ground truth beside the images, the same for every backend.
-    crate::truth::write(&model, &out.join("truth")).map_err(CliError::Failed)?;
+    if !args.skip_truth {
+        crate::truth::write(&model, &out.join("truth")).map_err(CliError::Failed)?;
+    }
     eprintln!(
         "rendered {} image(s) into {} in {:.2} s",
         report.images.len(),

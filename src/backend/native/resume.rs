@@ -9,7 +9,8 @@
 //! | `fingerprint` | SHA-256 of poser's version, the resolved model and the samples per pixel: a manifest from another scene, setting or poser is ignored |
 //! | `images` | image name → file name → SHA-256 |
 //!
-//! An image counts as done only when every file it lists still exists with its hash.
+//! An image counts as done only when every file it lists still exists with its hash. Renders
+//! running at once into one folder (shards of a SLURM array) update the manifest under a lock.
 
 use crate::model::Model;
 use crate::pack::sha256;
@@ -19,6 +20,9 @@ use std::path::{Path, PathBuf};
 
 /// The manifest's file name in the output folder.
 pub const FILE: &str = "render-manifest.json";
+/// The lock file that serialises updates of the manifest by renders running at once (an empty
+/// file beside it; `flock`, which Linux's NFS client maps to POSIX locks across nodes).
+pub const LOCK: &str = ".render-manifest.lock";
 
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct Manifest {
@@ -26,9 +30,14 @@ pub struct Manifest {
     pub images: BTreeMap<String, BTreeMap<String, String>>,
 }
 
-/// What decides an image's bytes: poser's version, the resolved model, the samples per pixel.
+/// What decides an image's bytes: poser's version, the resolved model (but the path it was
+/// loaded from), the samples per pixel.
 pub fn fingerprint(model: &Model, samples: u32) -> String {
-    let mut bytes = serde_json::to_vec(model).unwrap_or_default();
+    // Not the scene's path as typed: a relative and an absolute path to one scene (a local run
+    // and a SLURM task) render the same bytes.
+    let mut m = model.clone();
+    m.source.clear();
+    let mut bytes = serde_json::to_vec(&m).unwrap_or_default();
     bytes.extend_from_slice(env!("CARGO_PKG_VERSION").as_bytes());
     bytes.extend_from_slice(option_env!("POSER_GIT_COMMIT").unwrap_or("").as_bytes());
     bytes.extend_from_slice(&samples.to_le_bytes());
@@ -62,7 +71,9 @@ impl Manifest {
     }
 
     /// Record image `name` as finished with `files` (paths inside `out`), and write the
-    /// manifest.
+    /// manifest. Renders into one folder may run at once (the shards of a SLURM job array):
+    /// under an exclusive lock on [`LOCK`], the manifest on disk is read again and this run's
+    /// images are merged into it, so that no shard's record is lost.
     pub fn record(&mut self, out: &Path, name: &str, files: &[PathBuf]) -> Result<(), String> {
         let mut map = BTreeMap::new();
         for f in files {
@@ -74,9 +85,25 @@ impl Manifest {
                 .replace('\\', "/");
             map.insert(rel, sha256(&b));
         }
+        let lock_path = out.join(LOCK);
+        let lock = std::fs::OpenOptions::new()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&lock_path)
+            .map_err(|e| format!("{}: {e}", lock_path.display()))?;
+        lock.lock()
+            .map_err(|e| format!("{}: cannot lock: {e}", lock_path.display()))?;
+        let on_disk = Manifest::open(out, &self.fingerprint);
+        for (k, v) in on_disk.images {
+            self.images.entry(k).or_insert(v);
+        }
         self.images.insert(name.to_string(), map);
         let json = serde_json::to_vec_pretty(self).map_err(|e| e.to_string())?;
         let path = out.join(FILE);
-        crate::io::write_atomic(&path, &json).map_err(|e| format!("{}: {e}", path.display()))
+        let written =
+            crate::io::write_atomic(&path, &json).map_err(|e| format!("{}: {e}", path.display()));
+        drop(lock);
+        written
     }
 }
