@@ -667,10 +667,15 @@ pub struct RenderSettings {
 /// `render.noise`: adaptive sampling to a relative standard error per pixel.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct NoiseTarget {
-    /// Relative standard error of each pixel's mean aimed at.
+    /// Relative standard error of each pixel's mean aimed at; with `against_sensor`, the ratio
+    /// of the render's noise to the sensor's (1: `noise = "sensor"`).
     pub relative: f64,
     /// The most samples a pixel takes after its pilot (`None`: 16 × the pilot's samples).
     pub max_samples: Option<u32>,
+    /// `noise = "sensor"`: aim at the sensor's own noise at each pixel, at the exposure the
+    /// sensor stage chooses for the pilot image (needs a `[sensor]` or `--sensor`).
+    #[serde(default)]
+    pub against_sensor: bool,
 }
 
 impl NoiseTarget {

@@ -575,6 +575,7 @@ fn noise_target_reaches_its_noise_without_bias_and_the_same_bytes_on_any_thread_
     m.render.noise = Some(NoiseTarget {
         relative: 0.1,
         max_samples: Some(1024),
+        against_sensor: false,
     });
     let scene = Scene::build(&m).unwrap();
     let img = render_image(&m, &scene, 0, 0, 16, None).unwrap();
@@ -614,4 +615,35 @@ fn noise_target_reaches_its_noise_without_bias_and_the_same_bytes_on_any_thread_
         let b = std::fs::read(dirs[1].path().join(f)).unwrap();
         assert!(a == b, "{f} differs between 1 and 2 threads");
     }
+}
+
+#[test]
+fn noise_target_against_the_sensor_aims_at_the_sensors_own_noise() {
+    // A small-pixel sensor (full well 400 e⁻: at least 5 % shot noise at the top of its
+    // range) so that the test stays cheap; `render.noise = "sensor"`.
+    let mut m = busy_model();
+    m.sensor = Some(Sensor {
+        full_well: 400.0,
+        ..Sensor::default()
+    });
+    m.render.noise = Some(NoiseTarget {
+        relative: 1.0,
+        max_samples: Some(2048),
+        against_sensor: true,
+    });
+    let scene = Scene::build(&m).unwrap();
+    let img = render_image(&m, &scene, 0, 0, 16, None).unwrap();
+    let rep = img.noise.clone().expect("a noise report");
+    eprintln!("{rep:?}");
+    assert_eq!(rep.measure, "render noise / sensor noise");
+    assert!(rep.electrons_per_radiance.is_some());
+    assert!(
+        rep.achieved.median > 0.6 && rep.achieved.median < 1.4,
+        "{rep:?}"
+    );
+    assert!(rep.share_capped < 0.2, "{rep:?}");
+    // Without a sensor the target has nothing to aim at: an error, not a panic.
+    m.sensor = None;
+    let e = render_image(&m, &scene, 0, 0, 16, None).unwrap_err();
+    assert!(e.contains("needs a sensor"), "{e}");
 }

@@ -897,12 +897,14 @@ pub struct Render {
     /// Gaussian radius of the illumination denoiser (σ). **Unit:** px. **Default:** 2.
     pub denoise_radius: Option<Number>,
     /// Native renderer: a noise target, the relative standard error of each pixel's mean
-    /// (e.g. `"2 %"`). Every pixel first takes `samples` samples as a pilot, then as many
-    /// fresh ones as its pilot says it needs (up to `max_samples`); the pilot is dropped, so
-    /// the mean stays unbiased. Writes `<image>.noise.json` with the samples taken and the
-    /// noise achieved (`docs/native.md`). **Unit:** fraction. **Default:** none (`samples`
-    /// everywhere).
-    pub noise: Option<Fraction>,
+    /// (e.g. `"2 %"`), or `"sensor"`: no more than the sensor's own noise (shot and read
+    /// noise) at each pixel, at the exposure the sensor stage picks (needs `[sensor]` or
+    /// `--sensor`). Every pixel first takes `samples` samples as a pilot, then as many fresh
+    /// ones as its pilot says it needs (up to `max_samples`); the pilot is dropped, so the
+    /// mean stays unbiased. Writes `<image>.noise.json` with the samples taken and the noise
+    /// achieved (`docs/native.md`). **Unit:** fraction, or `"sensor"`. **Default:** none
+    /// (`samples` everywhere).
+    pub noise: Option<NoiseGoal>,
     /// With `noise`: the most samples a pixel takes after its pilot. **Default:** 16 ×
     /// `samples`.
     pub max_samples: Option<u32>,
@@ -1043,6 +1045,14 @@ pub struct TryNextTable {
     pub text: Option<String>,
     /// The `--set KEY=VALUE` that changes that one thing (required).
     pub set: Option<String>,
+}
+
+/// A noise target: a relative standard error (a fraction) or `"sensor"`.
+#[derive(JsonSchema)]
+#[serde(untagged)]
+pub enum NoiseGoal {
+    Relative(Fraction),
+    Sensor(String),
 }
 
 /// A white balance: a mode name or fixed gains `[r, g, b]`.

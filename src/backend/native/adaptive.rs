@@ -49,6 +49,51 @@ pub fn relative_variance(mean: DVec3, var_of_mean: DVec3, channel: Option<usize>
     }
 }
 
+/// What the noise target measures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Measure {
+    /// The relative standard error of the pixel's mean ([`relative_variance`]).
+    Relative,
+    /// The render's noise against the sensor's at the exposure `electrons_per_radiance`
+    /// (e⁻ per W/(m²·sr) per channel): `k_c² var_c / (k_c L_c + σ_r²)` is the squared ratio of
+    /// the render's noise to the sensor's shot and read noise, in electrons. A channel at or
+    /// above the full well clips, so its noise does not matter.
+    Sensor {
+        electrons_per_radiance: [f64; 3],
+        read_noise: f64,
+        full_well: f64,
+    },
+}
+
+impl Measure {
+    /// The squared measure of a mean `mean` whose variance is `var_of_mean`: the largest over
+    /// the channels (see [`relative_variance`] for which count), or of `channel` alone.
+    pub fn squared(&self, mean: DVec3, var_of_mean: DVec3, channel: Option<usize>) -> f64 {
+        match *self {
+            Measure::Relative => relative_variance(mean, var_of_mean, channel),
+            Measure::Sensor {
+                electrons_per_radiance: k,
+                read_noise,
+                full_well,
+            } => {
+                let q = |c: usize| {
+                    let mu = k[c] * mean[c].max(0.0);
+                    let v = k[c] * k[c] * var_of_mean[c].max(0.0);
+                    if !(mu < full_well) || !v.is_finite() {
+                        0.0
+                    } else {
+                        v / (mu + read_noise * read_noise).max(f64::MIN_POSITIVE)
+                    }
+                };
+                match channel {
+                    Some(c) => q(c),
+                    None => (0..3).map(q).fold(0.0, f64::max),
+                }
+            }
+        }
+    }
+}
+
 /// Fresh samples after a pilot of `pilot` samples whose mean has the squared relative error
 /// `rv`, to reach a relative standard error `target`: `⌈pilot × rv / target²⌉` in
 /// `[pilot, max]`.
@@ -134,16 +179,23 @@ impl Spread {
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Report {
     pub format: &'static str,
-    /// The target: relative standard error of a pixel's mean.
+    /// `"relative standard error"` of a pixel's mean, or `"render noise / sensor noise"`
+    /// (`render.noise = "sensor"`).
+    pub measure: &'static str,
+    /// The target of that measure.
     pub target: f64,
+    /// With `"sensor"`: the sensor's electrons per unit radiance per channel at the exposure
+    /// picked for the pilot image.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub electrons_per_radiance: Option<[f64; 3]>,
     /// Samples of every pixel's pilot (dropped from the image).
     pub pilot_samples: u32,
     /// The most samples a pixel may take after its pilot.
     pub max_samples: u32,
     /// Samples each pixel took after its pilot.
     pub samples: Spread,
-    /// Relative standard error achieved per pixel (largest over its relevant channels, as
-    /// the image's own samples estimate it); dark pixels count as 0.
+    /// The measure achieved per pixel (largest over its relevant channels, as the image's own
+    /// samples estimate it); dark pixels count as 0.
     pub achieved: Spread,
     /// Share of pixels whose achieved error is at most the target.
     pub share_at_target: f64,
@@ -153,11 +205,28 @@ pub struct Report {
 
 impl Report {
     /// From each pixel's (samples after the pilot, achieved relative error).
-    pub fn new(target: f64, pilot: u32, max: u32, per_pixel: &[(u32, f32)]) -> Report {
+    pub fn new(
+        target: f64,
+        pilot: u32,
+        max: u32,
+        measure: &Measure,
+        per_pixel: &[(u32, f32)],
+    ) -> Report {
         let n = per_pixel.len().max(1) as f64;
         Report {
             format: "poser noise target 1",
+            measure: match measure {
+                Measure::Relative => "relative standard error",
+                Measure::Sensor { .. } => "render noise / sensor noise",
+            },
             target,
+            electrons_per_radiance: match measure {
+                Measure::Relative => None,
+                Measure::Sensor {
+                    electrons_per_radiance,
+                    ..
+                } => Some(*electrons_per_radiance),
+            },
             pilot_samples: pilot,
             max_samples: max.max(pilot),
             samples: Spread::of(per_pixel.iter().map(|p| p.0 as f64).collect()),
@@ -191,6 +260,25 @@ mod tests {
         assert!(relative_variance(weak, v, None) < 1e-5);
         assert!(relative_variance(weak, v, Some(0)) > 1.0);
         assert!(relative_error(DVec3::new(f64::NAN, 1.0, 1.0), DVec3::ZERO).is_finite());
+    }
+
+    #[test]
+    fn the_sensor_measure_is_the_ratio_of_render_to_sensor_noise_in_electrons() {
+        let m = Measure::Sensor {
+            electrons_per_radiance: [100.0, 200.0, 50.0],
+            read_noise: 3.0,
+            full_well: 10_000.0,
+        };
+        // Green: 2 W/(m²·sr) → 400 e⁻, sensor variance 400 + 9; render σ 0.1 → 20 e⁻.
+        let mean = DVec3::new(1.0, 2.0, 0.0);
+        let var = DVec3::new(0.0, 0.01, 0.0);
+        assert!((m.squared(mean, var, Some(1)) - 400.0 / 409.0).abs() < 1e-12);
+        assert!((m.squared(mean, var, None) - 400.0 / 409.0).abs() < 1e-12);
+        // A dark channel has the read noise as its floor; a clipped one does not count.
+        let dark = m.squared(DVec3::ZERO, DVec3::new(0.0, 0.0, 0.01), Some(2));
+        assert!((dark - 25.0 / 9.0).abs() < 1e-12);
+        let clipped = m.squared(DVec3::splat(1e3), DVec3::splat(1.0), None);
+        assert_eq!(clipped, 0.0);
     }
 
     #[test]

@@ -123,21 +123,58 @@ pub fn render_image(
     };
     let channel_of = |k: usize| (passes.len() > 1).then_some(passes[k]);
     // With a noise target: every pixel's pilot, then how many fresh samples each one takes.
+    let mut measure = adaptive::Measure::Relative;
     let counts: Vec<[u32; 3]> = match target {
         None => Vec::new(),
         Some((relative, max)) => {
             let (run, channel_of, npass) = (&run, &channel_of, rays.len());
-            let rv: Vec<[f64; 3]> = (0..h)
+            // Each pixel's pilot mean and variance of the mean (per-channel passes: each
+            // channel from its own pass).
+            let pilot: Vec<(DVec3, DVec3)> = (0..h)
                 .into_par_iter()
                 .flat_map_iter(|j| {
                     (0..w).map(move |i| {
-                        let mut out = [0.0; 3];
-                        for (k, o) in out.iter_mut().enumerate().take(npass) {
-                            let (m, v) = run(i, j, k, 0, spp, &mut DVec3::default());
-                            *o = adaptive::relative_variance(m, v, channel_of(k));
+                        let (mut m, mut v) = (DVec3::ZERO, DVec3::ZERO);
+                        for k in 0..npass {
+                            let (pm, pv) = run(i, j, k, 0, spp, &mut DVec3::default());
+                            match channel_of(k) {
+                                None => (m, v) = (pm, pv),
+                                Some(c) => (m[c], v[c]) = (pm[c], pv[c]),
+                            }
                         }
-                        out
+                        (m, v)
                     })
+                })
+                .collect();
+            if model.render.noise.is_some_and(|t| t.against_sensor) {
+                let sensor = model.sensor.as_ref().ok_or_else(|| {
+                    "render.noise = \"sensor\" needs a sensor: add a [sensor] table or pass --sensor"
+                        .to_string()
+                })?;
+                let linear = crate::sensor::Linear {
+                    width: w,
+                    height: h,
+                    rgb: pilot
+                        .iter()
+                        .map(|(m, _)| [m.x as f32, m.y as f32, m.z as f32])
+                        .collect(),
+                };
+                let pitch = crate::sensor::files::pixel_pitch(camera, w);
+                let e = crate::sensor::expose(sensor, &linear, pitch);
+                measure = adaptive::Measure::Sensor {
+                    electrons_per_radiance: e.electrons_per_radiance,
+                    read_noise: sensor.read_noise,
+                    full_well: sensor.full_well,
+                };
+            }
+            let rv: Vec<[f64; 3]> = pilot
+                .iter()
+                .map(|&(m, v)| {
+                    let mut out = [0.0; 3];
+                    for (k, o) in out.iter_mut().enumerate().take(npass) {
+                        *o = measure.squared(m, v, channel_of(k));
+                    }
+                    out
                 })
                 .collect();
             adaptive::plan(w as usize, h as usize, &rv, spp, relative, max)
@@ -191,7 +228,7 @@ pub fn render_image(
                     }
                 }
                 if target.is_some() {
-                    let rel = adaptive::relative_error(sum, var);
+                    let rel = measure.squared(sum, var, None).sqrt();
                     nrow.push((taken / rays.len() as u32, rel as f32));
                 }
                 row.push([sum.x as f32, sum.y as f32, sum.z as f32]);
@@ -235,7 +272,8 @@ pub fn render_image(
         depth,
         variance,
         albedo,
-        noise: target.map(|(relative, max)| adaptive::Report::new(relative, spp, max, &per_pixel)),
+        noise: target
+            .map(|(relative, max)| adaptive::Report::new(relative, spp, max, &measure, &per_pixel)),
     })
 }
 

@@ -70,21 +70,49 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
     let radius = r.f64(cx, "denoise_radius", Dim::Number, 2.0);
     check::positive(cx, &r, "denoise_radius", radius, "px");
     let denoise_radius = (denoise == "illumination" && radius > 0.0).then_some(radius);
-    let noise = r.opt_f64(cx, "noise", Dim::Fraction);
+    let against_sensor =
+        matches!(r.get("noise"), Some(n) if matches!(&n.val, Val::Str(s) if s == "sensor"));
+    let word = match r.get("noise") {
+        Some(n) => match &n.val {
+            Val::Str(s) if !against_sensor && !s.chars().any(|c| c.is_ascii_digit()) => {
+                Some((s.clone(), n.span))
+            }
+            _ => None,
+        },
+        None => None,
+    };
+    let noise = if against_sensor {
+        Some(1.0)
+    } else if let Some((w, span)) = word {
+        let mut d = Diagnostic::error("E0235", "`noise` takes a relative error or \"sensor\"")
+            .label(span, format!("`{w}` is neither"));
+        d = match crate::scene::reader::did_you_mean(&w, ["sensor"]) {
+            Some(m) => d.help(format!("did you mean `\"{m}\"`?")),
+            None => d.help("write e.g. `noise = \"2 %\"`, or `noise = \"sensor\"`"),
+        };
+        cx.push(d);
+        None
+    } else {
+        r.opt_f64(cx, "noise", Dim::Fraction)
+    };
     let max_samples = r.opt_u32(cx, "max_samples");
     let noise = match noise {
-        Some(v) if !(v > 0.0 && v < 1.0) => {
+        Some(v) if !against_sensor && !(v > 0.0 && v < 1.0) => {
             let sp = r.span_of("noise");
             cx.push(
                 Diagnostic::error("E0235", "`noise` must be a relative error in (0, 1)")
                     .label(sp, crate::scene::diag::num(v))
-                    .help("write e.g. `noise = \"2 %\"` (each pixel's standard error ÷ its value)"),
+                    .help(
+                        "write e.g. `noise = \"2 %\"` (each pixel's standard error ÷ its value), \
+                         or `noise = \"sensor\"` (no more than the sensor's own noise)",
+                    ),
             );
             None
         }
         Some(relative) => Some(NoiseTarget {
             relative,
             max_samples,
+            against_sensor,
         }),
         None => {
             if max_samples.is_some() {
@@ -106,8 +134,12 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
             Diagnostic::error("E0237", "`max_samples` is below the pilot's `samples`")
                 .label(sp, format!("{m} < {samples}"))
                 .help(format!(
-                    "raise it to at least {samples}, or lower `samples` (the pilot) for a {} % target",
-                    100.0 * t.relative
+                    "raise it to at least {samples}, or lower `samples` (the pilot){}",
+                    if t.against_sensor {
+                        String::new()
+                    } else {
+                        format!(" for a {} % target", 100.0 * t.relative)
+                    }
                 )),
         );
     }
