@@ -70,7 +70,7 @@ pub const CASES: &[Case] = &[
     },
     Case {
         scene: "scenarios/lessons/subsea_metrology.toml",
-        sets: &["network.length=\"2 m\"", "network.obliques=\"30 deg\""],
+        sets: &["network.length=\"2 m\"", "network.obliques=\"15 deg\""],
         scale: 0.2,
         samples: 16,
     },
