@@ -148,3 +148,35 @@ fn coverage_sees_occlusion_under_a_box() {
     let img = cov.map(256);
     assert!(img.width() == 256 || img.height() == 256);
 }
+
+#[test]
+fn an_overlap_lost_to_relief_is_not_blamed_on_the_trigger() {
+    // flat_port_deformation's full form: the trigger spacing already gives the nominal 65 % on
+    // the mean footprint, but relief and the diver's wobble leave 60 % on the site. The note
+    // must not suggest the same spacing as a remedy ("every 0.34 m instead of 0.34 m").
+    let m = poser::scene::load(
+        std::path::Path::new("scenarios/lessons/flat_port_deformation.toml"),
+        &[],
+    )
+    .map_err(|f| f.render())
+    .unwrap()
+    .model;
+    let r = survey(&m, &Site::new(&m)).unwrap();
+    let o = r.overlap.unwrap().mean;
+    assert!(
+        o < m.network.overlap_requested.unwrap() - 0.03,
+        "overlap {o}"
+    );
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.contains("matches the mean footprint")),
+        "{:?}",
+        r.notes
+    );
+    assert!(
+        !r.notes.iter().any(|n| n.contains("trigger every")),
+        "{:?}",
+        r.notes
+    );
+}

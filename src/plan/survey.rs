@@ -299,14 +299,27 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
     ) && o.mean < nom - 0.03
     {
         let need = (1.0 - nom) * fp.mean;
-        notes.push(format!(
-            "forward overlap {:.0} % is below the nominal {:.0} %: trigger every {need:.2} m \
-                 instead of {sp:.2} m ({:.0} images instead of {})",
-            o.mean * 100.0,
-            nom * 100.0,
-            (n as f64 * sp / need).ceil(),
-            n
-        ));
+        if need < 0.98 * sp {
+            notes.push(format!(
+                "forward overlap {:.0} % is below the nominal {:.0} %: trigger every {need:.2} m \
+                     instead of {sp:.2} m ({:.0} images instead of {})",
+                o.mean * 100.0,
+                nom * 100.0,
+                (n as f64 * sp / need).ceil(),
+                n
+            ));
+        } else {
+            // The spacing already gives the nominal overlap on the mean footprint: what is
+            // lost is lost to relief, the diver's wobble or occlusion, not to the trigger.
+            notes.push(format!(
+                "forward overlap {:.0} % is below the nominal {:.0} % although the trigger \
+                     spacing ({sp:.2} m) matches the mean footprint: relief, wobble and \
+                     occlusion take the rest; ask for more `overlap` to keep {:.0} %",
+                o.mean * 100.0,
+                nom * 100.0,
+                nom * 100.0
+            ));
+        }
     }
     if let (Some(sl), Some(nom), Some(fp), Some(ss)) = (
         sidelap,
