@@ -33,7 +33,7 @@ pub fn after_render(
             eprintln!(
                 "warning: render noise exceeds the sensor's noise in {} of {} images (ratio up \
                  to {:.2}×; each image's numbers are in its .sensor.json); raise \
-                 render.samples to about {}",
+                 render.samples to about {}, or set render.noise = \"sensor\" (native)",
                 many.len(),
                 done.len(),
                 worst.0,

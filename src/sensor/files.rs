@@ -108,7 +108,7 @@ pub fn process(
                 r.samples_needed
                     .map(|n| format!(" to about {n}"))
                     .unwrap_or_default()
-            )
+            ) + ", or let the native renderer sample each pixel to it (render.noise = \"sensor\")"
         })
     });
     if warning.is_some() {
