@@ -7,6 +7,9 @@
 //! targets, BVH) shared by the truth, the planner and the native renderer, [`plan`] for survey
 //! and dive planning, and [`compare`] / [`bench`] driving the back ends from outside.
 
+// `!(x > 0.0)` is how poser rejects NaN together with the values out of range.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod backend;
 pub mod bench;
 pub mod cli;

@@ -613,13 +613,13 @@ pub fn html(res: &Results, survey: bool) -> String {
     }
     s.push_str("</table>\n<h2>The dives</h2>\n");
     for r in &res.rows {
-        let _ = write!(s, "<h3>{}</h3>\n", escape(&r.label));
+        let _ = writeln!(s, "<h3>{}</h3>", escape(&r.label));
         if !r.view_png.is_empty() {
-            let _ = write!(
+            let _ = writeln!(
                 s,
                 "<figure><img alt=\"rendered view, {}\" src=\"data:image/png;base64,{}\">\
                  <figcaption>The view from the pose nearest the centre (native renderer, a \
-                 twentieth of the resolution, 32 samples per pixel).</figcaption></figure>\n",
+                 twentieth of the resolution, 32 samples per pixel).</figcaption></figure>",
                 escape(&r.label),
                 super::html::base64(&r.view_png)
             );

@@ -400,12 +400,11 @@ fn port_radius(cam: &crate::model::Camera, n_water: f64) -> f64 {
                 return 0.0;
             };
             let (w, h) = (cam.width as f64, cam.height as f64);
-            let aperture = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
+            [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
                 .iter()
                 .filter_map(|&(u, v)| pr.camera_ray(u, v).ok())
                 .map(|r| (r.origin - *normal * normal.dot(r.origin)).length())
-                .fold(0.0, f64::max);
-            aperture
+                .fold(0.0, f64::max)
         }
         Port::Dome {
             center,

@@ -50,7 +50,8 @@ pub fn illumination(
         }
     };
     let kind = |i: usize, c: usize| -> bool { depth[i] > 0.0 && albedo[i][c] as f64 >= MIN_ALBEDO };
-    let rows: Vec<(Vec<[f32; 3]>, Vec<[f32; 3]>)> = (0..h)
+    type Rows = Vec<(Vec<[f32; 3]>, Vec<[f32; 3]>)>;
+    let rows: Rows = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut out = Vec::with_capacity(width);

@@ -97,7 +97,7 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
     };
     let max_samples = r.opt_u32(cx, "max_samples");
     let noise = match noise {
-        Some(v) if !against_sensor && !(v > 0.0 && v < 1.0) => {
+        Some(v) if !against_sensor && (v.is_nan() || v <= 0.0 || v >= 1.0) => {
             let sp = r.span_of("noise");
             cx.push(
                 Diagnostic::error("E0235", "`noise` must be a relative error in (0, 1)")
