@@ -351,6 +351,8 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     let mut report = RenderReport::default();
     let mut manifest = resume::Manifest::open(out, &resume::fingerprint(model, samples));
     let mut resumed = 0usize;
+    // With a noise target: (images, Σ mean samples, Σ median achieved, at-target shares).
+    let mut noise_sum = (0usize, 0.0f64, 0.0f64, 0.0f64);
     if opts.resume {
         // What a killed run was writing when it stopped (whole files are renamed into place).
         crate::io::remove_stale_temporaries(out);
@@ -403,6 +405,10 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
             }
             files.push(png);
             if let Some(noise) = &img.noise {
+                noise_sum.0 += 1;
+                noise_sum.1 += noise.samples.mean;
+                noise_sum.2 += noise.achieved.median;
+                noise_sum.3 += noise.share_at_target;
                 let path = out.join(format!("{name}.noise.json"));
                 let json = serde_json::to_vec_pretty(noise).map_err(|e| e.to_string())?;
                 crate::io::write_atomic(&path, &json)
@@ -426,6 +432,22 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         eprintln!(
             "resume: {resumed} of {} image(s) were already finished",
             report.images.len()
+        );
+    }
+    if let (Some(t), (n @ 1.., taken, achieved, share)) = (model.render.noise, noise_sum) {
+        let k = n as f64;
+        eprintln!(
+            "noise target {}: {n} image(s), {:.0} samples per pixel on average after a pilot of \
+             {samples}, median achieved {:.3} ({:.0} % of the pixels at or below the \
+             target); each image's <image>.noise.json has the details",
+            if t.against_sensor {
+                "render noise ≤ sensor noise".to_string()
+            } else {
+                format!("{} %", crate::scene::diag::num(100.0 * t.relative))
+            },
+            taken / k,
+            achieved / k,
+            100.0 * share / k,
         );
     }
     report.seconds = start.elapsed().as_secs_f64();

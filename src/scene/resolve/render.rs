@@ -138,7 +138,10 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
                     if t.against_sensor {
                         String::new()
                     } else {
-                        format!(" for a {} % target", 100.0 * t.relative)
+                        format!(
+                            " for a {} % target",
+                            crate::scene::diag::num(100.0 * t.relative)
+                        )
                     }
                 )),
         );
