@@ -158,12 +158,13 @@ pub fn scripts(job: &Job) -> Result<Vec<(&'static str, String, bool)>, String> {
     ])
 }
 
-/// Write the scripts into `OUT/slurm/` (atomically, `submit.sh` executable); their paths.
-pub fn write(job: &Job) -> Result<Vec<PathBuf>, String> {
-    let dir = job.out.join("slurm");
+/// Write `files` ([`scripts`]) into `OUT/slurm/` (atomically, the executable ones with mode
+/// 755); their paths.
+pub fn write(out: &Path, files: Vec<(&'static str, String, bool)>) -> Result<Vec<PathBuf>, String> {
+    let dir = out.join("slurm");
     std::fs::create_dir_all(dir.join("logs")).map_err(|e| format!("{}: {e}", dir.display()))?;
     let mut paths = Vec::new();
-    for (name, text, exec) in scripts(job)? {
+    for (name, text, exec) in files {
         let path = dir.join(name);
         crate::io::write_atomic(&path, text.as_bytes())
             .map_err(|e| format!("{}: {e}", path.display()))?;

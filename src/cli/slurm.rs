@@ -121,8 +121,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         args: shared_args(args),
         resume: args.backend == Backend::Native,
     };
-    crate::slurm::scripts(&job).map_err(CliError::Usage)?;
-    let paths = crate::slurm::write(&job).map_err(CliError::Failed)?;
+    let files = crate::slurm::scripts(&job).map_err(CliError::Usage)?;
+    let paths = crate::slurm::write(&job.out, files).map_err(CliError::Failed)?;
     let images = model.poses.len() * model.cameras.len();
     eprintln!(
         "wrote {} SLURM scripts into {}: {} task(s) over {images} image(s), then a merge job",

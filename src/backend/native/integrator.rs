@@ -560,8 +560,8 @@ impl<'a> Integrator<'a> {
             return 0.0;
         }
         let (delta, dd) = along_off(o, d, x);
-        let mass =
-            (m.phase.u_of_cos(mu_at(delta, dd, a)) - m.phase.u_of_cos(mu_at(delta, dd, b))).abs();
+        let (ua, ub) = phase_window(m, delta, dd, a, b);
+        let mass = (ua - ub).abs();
         if !(mass > 0.0) {
             return 0.0;
         }
@@ -585,10 +585,7 @@ impl<'a> Integrator<'a> {
         rng: &mut Sampler,
     ) -> DVec3 {
         let (delta, dd) = along_off(o, d, pl.pos);
-        let (ua, ub) = (
-            m.phase.u_of_cos(mu_at(delta, dd, a)),
-            m.phase.u_of_cos(mu_at(delta, dd, b)),
-        );
+        let (ua, ub) = phase_window(m, delta, dd, a, b);
         let u = ua + (ub - ua) * rng.next();
         let mu = m.phase.sample_cos(u).clamp(-1.0 + 1e-12, 1.0 - 1e-12);
         let t = delta - dd * mu / (1.0 - mu * mu).sqrt();
@@ -728,6 +725,15 @@ fn power3(a: f64, b: f64, c: f64) -> f64 {
 fn along_off(o: DVec3, d: DVec3, x: DVec3) -> (f64, f64) {
     let delta = (x - o).dot(d);
     (delta, (o + delta * d - x).length().max(1e-9))
+}
+
+/// The phase sampler's variable `u` at the two ends `a`, `b` of a segment whose light lies
+/// `delta` along and `dd` off the ray: phase-angular sampling draws `u` between them.
+fn phase_window(m: &Medium, delta: f64, dd: f64, a: f64, b: f64) -> (f64, f64) {
+    (
+        m.phase.u_of_cos(mu_at(delta, dd, a)),
+        m.phase.u_of_cos(mu_at(delta, dd, b)),
+    )
 }
 
 /// Cosine between the ray and the direction from its point at `t` to a light at (`δ`, `dd`);
