@@ -6,10 +6,16 @@ set -euo pipefail
 cd "$(dirname "$0")"
 backends/setup.sh
 export POSER_PYTHON="$PWD/.venv/bin/python"
-if [ -d backends ] && ls backends/*/*.py >/dev/null 2>&1; then
-  .venv/bin/ruff check backends
-  .venv/bin/python -m pytest -q backends
-fi
+# The Python module (crates/poser-py): build the abi3 wheel with maturin, install it into .venv
+# (the Blender add-on's tests use it in-process), and the binary its tests compare against.
+rm -rf target/wheels
+.venv/bin/maturin build --release --locked --quiet -m crates/poser-py/Cargo.toml \
+  -o target/wheels -i .venv/bin/python
+.venv/bin/pip install --quiet --force-reinstall --no-deps target/wheels/poser-*.whl
+cargo build --release --locked --features backends --bin poser
+.venv/bin/ruff check backends crates/poser-py
+OPENCV_IO_ENABLE_OPENEXR=1 POSER_BIN="$PWD/target/release/poser" \
+  .venv/bin/python -m pytest -q -p no:cacheprovider backends crates/poser-py/tests
 cargo test --release --locked --features backends
 # Each fuzz target for a minute, when a nightly toolchain is available (fuzz/run.sh says so and
 # skips otherwise; the stable replay of the corpus ran above as `fuzz_replay`).

@@ -5,7 +5,8 @@
 //! one [`backend::Backend`]), with the optics core ([`optics`], pure math) as the geometric truth
 //! that [`truth`] and every back end are checked against, the [`geometry`] service (meshes,
 //! targets, BVH) shared by the truth, the planner and the native renderer, [`plan`] for survey
-//! and dive planning, and [`compare`] / [`bench`] driving the back ends from outside.
+//! and dive planning, [`compare`] / [`bench`] driving the back ends from outside, and
+//! [`export`] writing the model for other tools (a glTF preview of the whole scene).
 
 // `!(x > 0.0)` is how poser rejects NaN together with the values out of range.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -15,6 +16,7 @@ pub mod bench;
 pub mod cli;
 pub mod compare;
 pub mod evaluate;
+pub mod export;
 pub mod geometry;
 pub mod io;
 pub mod lesson;

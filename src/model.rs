@@ -767,6 +767,31 @@ impl Model {
         }
     }
 
+    /// [`Model::with_resolution_scale`] with the factor checked: in (0, 4].
+    pub fn with_checked_resolution_scale(self, scale: f64) -> Result<Model, String> {
+        if scale.is_finite() && scale > 0.0 && scale <= 4.0 {
+            Ok(self.with_resolution_scale(scale))
+        } else {
+            Err(format!(
+                "scale {scale}: expected a factor in (0, 4], e.g. 0.25 for a quarter-resolution preview"
+            ))
+        }
+    }
+
+    /// The index of the rig's camera called `name`; the error lists the names there are.
+    pub fn camera_index(&self, name: &str) -> Result<usize, String> {
+        self.cameras
+            .iter()
+            .position(|c| c.name == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = self.cameras.iter().map(|c| c.name.as_str()).collect();
+                format!(
+                    "camera `{name}`: no such camera (the rig has: {})",
+                    names.join(", ")
+                )
+            })
+    }
+
     /// Every camera resampled by `scale` ([`Camera::with_resolution_scale`]).
     pub fn with_resolution_scale(mut self, scale: f64) -> Model {
         for c in &mut self.cameras {

@@ -63,9 +63,8 @@ pub fn load_scene(args: &SceneArgs) -> Result<crate::scene::Loaded, CliError> {
 pub fn apply_scale(model: Model, scale: Option<f64>) -> Result<Model, CliError> {
     match scale {
         None => Ok(model),
-        Some(s) if s.is_finite() && s > 0.0 && s <= 4.0 => Ok(model.with_resolution_scale(s)),
-        Some(s) => Err(CliError::Usage(format!(
-            "--scale {s}: expected a factor in (0, 4], e.g. 0.25 for a quarter-resolution preview"
-        ))),
+        Some(s) => model
+            .with_checked_resolution_scale(s)
+            .map_err(|e| CliError::Usage(format!("--{e}"))),
     }
 }

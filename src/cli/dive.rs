@@ -4,9 +4,6 @@ use crate::plan::dive::{DiveReport, plan_dive};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// Sample interval of the exported profile, s.
-const SAMPLE_EVERY: f64 = 10.0;
-
 fn mmss(s: f64) -> String {
     let s = s.max(0.0).round() as u64;
     format!("{}:{:02}", s / 60, s % 60)
@@ -231,7 +228,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         }
     }
     let model = super::load_model(scene)?;
-    let report = plan_dive(&model, SAMPLE_EVERY).map_err(CliError::Failed)?;
+    let report =
+        plan_dive(&model, crate::plan::dive::PROFILE_SAMPLE_EVERY).map_err(CliError::Failed)?;
     if let Some(path) = out {
         let bytes = crate::plan::ssrf::to_ssrf(&model, &report).map_err(CliError::Failed)?;
         crate::io::write_atomic(path, &bytes)

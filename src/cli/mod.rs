@@ -13,7 +13,8 @@ mod compare;
 mod compile;
 mod dive;
 mod evaluate;
-mod explain;
+pub mod explain;
+mod export;
 mod lesson;
 mod pack;
 mod plan;
@@ -43,6 +44,7 @@ Examples:
   poser evaluate scenarios/lessons/flat_port_deformation.toml -o out/eval
   poser lesson scenarios/lessons/calibration_by_port.toml -o out/lesson
   poser dive scenarios/paper_survey.toml -o dive.ssrf
+  poser export scenarios/reef_strip.toml -o reef.glb         # glTF preview for any viewer
   poser pack scenarios/dome_orbit.toml -o orbit.poserpack --run \"render --scale 0.1 --poses 0\"
   poser rerun orbit.poserpack -o out/rerun
   poser slurm scenarios/reef_strip.toml -o /scratch/reef --shards 32 --cpus 8
@@ -115,6 +117,9 @@ pub enum Command {
     Unpack(unpack::Args),
     /// Rerun a pack's commands and report, file by file, whether the outputs are identical.
     Rerun(rerun::Args),
+    /// Write the scene as a glTF 2.0 binary preview (.glb): site, targets, water surface, ports,
+    /// every camera pose, the swim path and the lights, for any glTF viewer.
+    Export(export::Args),
     /// Write SLURM job-array scripts that render the survey in shards on a cluster.
     Slurm(slurm::Args),
 }
@@ -160,5 +165,6 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
         Command::Unpack(args) => unpack::run(&args),
         Command::Rerun(args) => rerun::run(&args),
         Command::Slurm(args) => slurm::run(&args),
+        Command::Export(args) => export::run(&args),
     }
 }

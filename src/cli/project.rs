@@ -122,16 +122,8 @@ pub fn parse_channel(s: &str) -> Result<usize, String> {
 /// Project every point; returns the CSV text.
 pub fn project_csv(p: &Projector, pts: &[(String, DVec3)], world_pose: Option<usize>) -> String {
     let mut out = String::from("id,u,v,status\n");
-    // Camera frame, then the batch solver (same results as point by point, faster).
-    let cam: Vec<DVec3> = pts
-        .iter()
-        .map(|(_, x)| match world_pose {
-            Some(pose) => p.world_to_camera(pose, *x),
-            None => *x,
-        })
-        .collect();
-    let mut px = vec![Err(crate::optics::NoSolution::NoConvergence); cam.len()];
-    p.project_camera_many_unbounded(&cam, &mut px);
+    let xs: Vec<DVec3> = pts.iter().map(|(_, x)| *x).collect();
+    let px = p.project_points(&xs, world_pose);
     for ((id, _), r) in pts.iter().zip(px) {
         let _ = match r {
             Ok(px) if p.on_sensor(px) => writeln!(out, "{},{},{},ok", csv_field(id), px[0], px[1]),
@@ -185,16 +177,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let cam = match camera {
         None => 0,
         Some(name) => model
-            .cameras
-            .iter()
-            .position(|c| c.name == name)
-            .ok_or_else(|| {
-                let names: Vec<&str> = model.cameras.iter().map(|c| c.name.as_str()).collect();
-                CliError::Usage(format!(
-                    "--camera `{name}`: no such camera (the rig has: {})",
-                    names.join(", ")
-                ))
-            })?,
+            .camera_index(name)
+            .map_err(|e| CliError::Usage(format!("--{e}")))?,
     };
     let world_pose = match frame {
         FrameArg::Camera => None,

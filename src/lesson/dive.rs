@@ -21,9 +21,6 @@ use crate::plan::survey::{self, Site};
 use serde::Serialize;
 use std::path::Path;
 
-/// Sampling of the simulated dive for the plot, s (as `poser dive`).
-const SAMPLE_EVERY: f64 = 10.0;
-
 /// Depths of the rule-of-thumb table the exercise asks for, m (each case's depth is added).
 pub const RULE_DEPTHS: [f64; 2] = [15.0, 40.0];
 
@@ -216,7 +213,8 @@ pub fn run(
             m.poses.len()
         ));
         let plan = survey::survey(m, &Site::new(m)).map_err(err)?;
-        let report: DiveReport = dive::plan_dive(m, SAMPLE_EVERY).map_err(err)?;
+        let report: DiveReport =
+            dive::plan_dive(m, crate::plan::dive::PROFILE_SAMPLE_EVERY).map_err(err)?;
         let (cfg, d, v) = (&report.config, &report.dive, &report.verdict);
         // Dives needed: the planner's own split when one dive is not OK.
         let track = Track::from_model(m).map_err(err)?;

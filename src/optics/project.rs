@@ -159,6 +159,27 @@ impl Projector {
         }
     }
 
+    /// Many points, in the camera frame (`world_pose` `None`) or in the world at rig pose
+    /// `world_pose`, to pixels without the sensor-bounds check (the batch solver; check
+    /// [`Projector::on_sensor`] for the `off_sensor` status). What `poser project` and the
+    /// Python module's `Scene.project` return.
+    pub fn project_points(
+        &self,
+        pts: &[DVec3],
+        world_pose: Option<usize>,
+    ) -> Vec<Result<[f64; 2], NoSolution>> {
+        let cam: Vec<DVec3> = pts
+            .iter()
+            .map(|&x| match world_pose {
+                Some(pose) => self.world_to_camera(pose, x),
+                None => x,
+            })
+            .collect();
+        let mut px = vec![Err(NoSolution::NoConvergence); cam.len()];
+        self.project_camera_many_unbounded(&cam, &mut px);
+        px
+    }
+
     /// World point → camera frame at rig pose `pose` (panics if out of range).
     #[inline]
     pub fn world_to_camera(&self, pose: usize, p_world: DVec3) -> DVec3 {

@@ -1231,6 +1231,10 @@ pub struct DiveReport {
     pub verdict: Verdict,
 }
 
+/// Sample interval of the exported and plotted dive profile, s (`poser dive`, the lessons,
+/// the Python module's `Scene.dive`).
+pub const PROFILE_SAMPLE_EVERY: f64 = 10.0;
+
 /// Plan the dive of a model's survey.
 pub fn plan_dive(model: &Model, sample_every: f64) -> Result<DiveReport, String> {
     if model.water.is_none() {

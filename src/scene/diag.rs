@@ -78,6 +78,15 @@ impl Diagnostic {
         self.severity == Severity::Error
     }
 
+    /// `(file, line, column)` of the primary label (1-based), split out of `location`.
+    pub fn position(&self) -> Option<(&str, usize, usize)> {
+        let loc = self.location.as_deref()?;
+        let mut parts = loc.rsplitn(3, ':');
+        let col = parts.next()?.parse().ok()?;
+        let line = parts.next()?.parse().ok()?;
+        Some((parts.next()?, line, col))
+    }
+
     /// Render against the sources and fill `location` / `rendered`.
     pub fn finish(&mut self, sources: &Sources) {
         let mut files = SimpleFiles::new();
@@ -143,4 +152,17 @@ pub fn num(v: f64) -> String {
     }
     let r: f64 = format!("{v:.5e}").parse().unwrap_or(v);
     format!("{r}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn position_splits_the_location_from_the_right() {
+        let mut d = Diagnostic::error("E0000", "x");
+        assert_eq!(d.position(), None);
+        d.location = Some("C:/scenes/a:b.toml:12:7".into());
+        assert_eq!(d.position(), Some(("C:/scenes/a:b.toml", 12, 7)));
+    }
 }

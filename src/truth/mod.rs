@@ -238,7 +238,9 @@ pub fn compute_with(
     })
 }
 
-fn camera_truth(cam: &Camera, water: [f64; 3]) -> CameraTruth {
+/// One camera's exact intrinsics, lens, port and indices as the truth files give them
+/// (`water`: the ambient indices per channel).
+pub fn camera_truth(cam: &Camera, water: [f64; 3]) -> CameraTruth {
     CameraTruth {
         name: cam.name.clone(),
         width: cam.width,

@@ -1,4 +1,4 @@
-"""poser for Blender: import a compiled poser scene (`scene.json`) into the open Blender.
+"""poser for Blender: import a poser scene into the open Blender.
 
 Install: copy the folders `poser_addon` and `poser_blender` (both in `backends/blender/` of the
 poser sources) into Blender's `scripts/addons/` directory and enable "poser" in the
@@ -8,6 +8,7 @@ What it adds:
 
 | where | what |
 |---|---|
+| File > Import > poser scene (.toml) | loads, validates and compiles a scene file in-process with the `poser` Python module (the wheel, docs/python.md), then builds it as below; an invalid scene reports its first error with file, line and column |
 | File > Import > poser scene (.json) | builds the scene written by `poser compile --backend blender` into a new Blender scene |
 | 3D View sidebar, tab "poser" | the scenario's name, pose stepping (one frame per pose) and one button per camera |
 """
@@ -15,6 +16,7 @@ What it adds:
 import json
 import os
 import sys
+import tempfile
 
 import bpy
 from bpy.props import IntProperty, StringProperty
@@ -25,7 +27,7 @@ bl_info = {
     "author": "poser contributors",
     "version": (0, 1, 0),
     "blender": (4, 2, 0),
-    "location": "File > Import > poser scene (.json); 3D View > Sidebar > poser",
+    "location": "File > Import > poser scene (.toml, .json); 3D View > Sidebar > poser",
     "description": "Import underwater photogrammetry survey scenes compiled by poser",
     "category": "Import-Export",
 }
@@ -57,6 +59,64 @@ def import_scene(path, context=None):
     if window is not None:
         window.scene = scene
     return scene
+
+
+NO_MODULE = (
+    "the `poser` Python module is not installed in Blender's Python: install the wheel "
+    "(docs/python.md), or run `poser compile SCENE --backend blender -o DIR` and import "
+    "DIR/scene.json"
+)
+
+
+def import_toml(path, context=None, overrides=None):
+    """Load, validate and compile the poser scene file at `path` in-process (the `poser` module),
+    then build it into a new Blender scene. `overrides` are `--set` values, e.g.
+    `{"water.temperature": 12}`. Raises `poser.SceneError` for an invalid scene."""
+    try:
+        import poser
+    except ImportError as e:
+        raise ImportError(NO_MODULE) from e
+    scene = poser.load(path, set=overrides or {})
+    # The compiled scene's textures and meshes are read from here while the .blend is open.
+    out = tempfile.mkdtemp(prefix=f"poser-{scene.name[:32]}-".replace(os.sep, "_"))
+    scene.compile("blender", out)
+    return import_scene(os.path.join(out, "scene.json"), context)
+
+
+def _first_error(e):
+    """`file:line:column: message (help)` of a SceneError's first error."""
+    for d in getattr(e, "diagnostics", []):
+        if d.severity == "error":
+            where = f"{d.file}:{d.line}:{d.column}: " if d.line is not None else ""
+            hint = f" (help: {d.help})" if d.help else ""
+            return f"{where}{d.message}{hint}"
+    return str(e)
+
+
+class POSER_OT_import_toml(bpy.types.Operator, ImportHelper):
+    """Import a poser scene file (.toml): validated and compiled in-process by the poser module"""
+
+    bl_idname = "import_scene.poser_toml"
+    bl_label = "Import poser scene file"
+    bl_options = {"REGISTER", "UNDO"}
+    filename_ext = ".toml"
+    filter_glob: StringProperty(default="*.toml", options={"HIDDEN"})
+
+    def execute(self, context):
+        try:
+            scene = import_toml(self.filepath, context)
+        except ImportError as e:
+            self.report({"ERROR"}, f"poser: {e}")
+            return {"CANCELLED"}
+        except Exception as e:  # poser.SceneError / PoserError, OSError
+            if type(e).__name__ not in ("SceneError", "PoserError") and not isinstance(
+                e, (OSError, ValueError, KeyError)
+            ):
+                raise
+            self.report({"ERROR"}, f"poser: {_first_error(e)}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"poser: imported {scene.name!r}")
+        return {"FINISHED"}
 
 
 class POSER_OT_import(bpy.types.Operator, ImportHelper):
@@ -103,6 +163,7 @@ class POSER_PT_panel(bpy.types.Panel):
 
     def draw(self, context):
         layout = self.layout
+        layout.operator(POSER_OT_import_toml.bl_idname, icon="IMPORT")
         layout.operator(POSER_OT_import.bl_idname, icon="IMPORT")
         scene = context.scene
         if "poser_source" not in scene:
@@ -116,10 +177,11 @@ class POSER_PT_panel(bpy.types.Panel):
 
 
 def _menu(self, context):
+    self.layout.operator(POSER_OT_import_toml.bl_idname, text="poser scene (.toml)")
     self.layout.operator(POSER_OT_import.bl_idname, text="poser scene (.json)")
 
 
-_classes = (POSER_OT_import, POSER_OT_view_camera, POSER_PT_panel)
+_classes = (POSER_OT_import_toml, POSER_OT_import, POSER_OT_view_camera, POSER_PT_panel)
 
 
 def register():

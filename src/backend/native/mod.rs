@@ -53,6 +53,32 @@ pub struct Image {
     pub noise: Option<adaptive::Report>,
 }
 
+/// Render one image in memory (rig pose `pose`, camera `cam`; `samples` per pixel, else the
+/// scene's): the linear radiance `poser render` writes as `<image>.exr`, before any
+/// denoising. What the Python module's `Scene.render` returns.
+pub fn render_one(
+    model: &Model,
+    pose: usize,
+    cam: usize,
+    samples: Option<u32>,
+) -> Result<Image, String> {
+    if pose >= model.poses.len() {
+        return Err(format!(
+            "pose {pose} is out of range (the network has {} poses)",
+            model.poses.len()
+        ));
+    }
+    if cam >= model.cameras.len() {
+        return Err(format!(
+            "camera index {cam} is out of range (the rig has {} cameras)",
+            model.cameras.len()
+        ));
+    }
+    let scene = scene::Scene::build(model)?;
+    let samples = samples.unwrap_or(model.render.samples).max(1);
+    render_image(model, &scene, pose, cam, samples, None)
+}
+
 /// Render one image (rig pose `pose`, camera `cam`) with `samples` per pixel.
 pub fn render_image(
     model: &Model,
