@@ -18,6 +18,7 @@ pub mod compare;
 pub mod evaluate;
 pub mod export;
 pub mod geometry;
+pub mod import;
 pub mod io;
 pub mod lesson;
 pub mod model;

@@ -40,14 +40,17 @@ fn scenarios() -> Vec<PathBuf> {
 }
 
 fn export(scene: &Path, out: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_poser"))
-        .arg("export")
-        .arg(scene)
-        .arg("-o")
-        .arg(out)
-        .current_dir(root())
-        .output()
-        .expect("run poser")
+    export_with(scene, &[], out)
+}
+
+/// `poser export SCENE --set …` into `out`.
+fn export_with(scene: &Path, sets: &[String], out: &Path) -> std::process::Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_poser"));
+    cmd.arg("export").arg(scene).arg("-o").arg(out);
+    for s in sets {
+        cmd.arg("--set").arg(s);
+    }
+    cmd.current_dir(root()).output().expect("run poser")
 }
 
 fn extras(e: &gltf::json::Extras) -> serde_json::Value {
@@ -115,8 +118,12 @@ fn positions(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data]) -> Vec<[f32
 
 /// Returns how many principal-point rays were checked.
 fn check_scenario(scene: &Path, glb: &Path) -> usize {
+    check_scenario_with(scene, &[], glb)
+}
+
+fn check_scenario_with(scene: &Path, sets: &[String], glb: &Path) -> usize {
     let name = scene.file_name().unwrap().to_string_lossy().to_string();
-    let model: Model = poser::scene::load(scene, &[])
+    let model: Model = poser::scene::load(scene, sets)
         .unwrap_or_else(|f| panic!("{name}: {}", f.render()))
         .model;
     let bytes = std::fs::read(glb).unwrap();
@@ -134,9 +141,9 @@ fn check_scenario(scene: &Path, glb: &Path) -> usize {
             let mut seen = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
             for p in positions(&prim, &buffers) {
                 assert!(p.iter().all(|x| x.is_finite()), "{name}: {p:?}");
-                for k in 0..3 {
-                    seen.0[k] = seen.0[k].min(p[k]);
-                    seen.1[k] = seen.1[k].max(p[k]);
+                for (k, v) in p.into_iter().enumerate() {
+                    seen.0[k] = seen.0[k].min(v);
+                    seen.1[k] = seen.1[k].max(v);
                 }
             }
             // The bounds are f32 values written as their shortest f64 text.
@@ -542,4 +549,126 @@ fn a_non_finite_value_is_refused_by_name() {
     bad.objects[0].pose.translation.x = f64::NAN;
     let e = poser::export::gltf::export(&bad).unwrap_err();
     assert!(e.contains("finite"), "{e}");
+}
+
+/// A scene with every light kind (rig-mounted point and spot, a world area light, an ambient
+/// light, the sun through a flat surface), exported with each port kind.
+#[test]
+fn every_light_and_port_kind() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = tmp.path().join("lights.toml");
+    let base = root().join("tests/invalid/shared/base.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "include = [{:?}]\n\
+             [sun]\nelevation = \"50 deg\"\nazimuth = \"120 deg\"\n\
+             [[lights]]\ntype = \"point\"\nname = \"torch\"\nposition = [0.1, 0, 0]\nintensity = [2, 1, 0.5]\n\
+             [[lights]]\ntype = \"spot\"\nname = \"strobe\"\nposition = [0.2, 0, 0]\naim = [0, 1, 1]\nbeam_angle = \"100 deg\"\n\
+             [[lights]]\ntype = \"area\"\nname = \"panel\"\nposition = [0, 0, -1]\nwidth = 1\nheight = 0.5\n\
+             [[lights]]\ntype = \"ambient\"\nname = \"sky\"\nradiance = 0.05\n\
+             [[objects]]\nname = \"floor\"\nshape = \"plane\"\nwidth = 4\nheight = 4\nposition = [0, 0, -5]\n",
+            base.to_string_lossy()
+        ),
+    )
+    .unwrap();
+    let cases: [&[&str]; 4] = [
+        &[],
+        &["camera.port.type=dome", "camera.port.inner_radius=0.05"],
+        &["camera.port.type=cylinder", "camera.port.inner_radius=0.06"],
+        &["camera.port.type=flat", "camera.port.tilt=5 deg"],
+    ];
+    for (k, sets) in cases.iter().enumerate() {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let glb = tmp.path().join(format!("lights-{k}.glb"));
+        let o = export_with(&scene, &sets, &glb);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{sets:?}: {err}");
+        assert!(
+            err.contains("approximated:")
+                && err.contains("area light `panel`")
+                && err.contains("ambient light `sky`"),
+            "{err}"
+        );
+        check_scenario_with(&scene, &sets, &glb);
+
+        let model = poser::scene::load(&scene, &sets).ok().unwrap().model;
+        let bytes = std::fs::read(&glb).unwrap();
+        let (doc, buffers, _) = gltf::import_slice(&bytes).unwrap();
+        let g = globals(&doc);
+        let lights = group(&doc, "lights");
+        let by_name = |n: &str| lights.iter().find(|x| x.name() == Some(n)).unwrap();
+        let down = |node: &gltf::Node| g[node.index()].transform_vector3(DVec3::NEG_Z).normalize();
+        // The point light: candela = 683 lm/W × the largest channel, colour = the ratios.
+        let torch = by_name("torch").light().unwrap();
+        assert_eq!(torch.intensity(), (683.0 * 2.0) as f32);
+        assert_eq!(torch.color(), [1.0, 0.5, 0.25]);
+        let rig = model.poses[0].world_from_rig;
+        let at = g[by_name("torch").index()].transform_point3(DVec3::ZERO);
+        let want = to_gltf(rig.transform_point(DVec3::new(0.1, 0.0, 0.0)));
+        assert!((at - want).length() < 1e-5, "{at} {want}");
+        // The spot: its cone and its direction (the rig's aim, in the world, then glTF).
+        let strobe = by_name("strobe");
+        let gltf::khr_lights_punctual::Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } = strobe.light().unwrap().kind()
+        else {
+            panic!("not a spot")
+        };
+        assert_eq!(outer_cone_angle, 50f64.to_radians() as f32);
+        assert!(inner_cone_angle < outer_cone_angle && inner_cone_angle > 0.9 * outer_cone_angle);
+        let aim = to_gltf(rig.transform_vector(DVec3::new(0.0, 1.0, 1.0).normalize()));
+        assert!(
+            (down(strobe) - aim).length() < 1e-6,
+            "{} {aim}",
+            down(strobe)
+        );
+        // The sun: directional, along the refracted direction the model lights the water with.
+        let sun = by_name("sun");
+        assert!(matches!(
+            sun.light().unwrap().kind(),
+            gltf::khr_lights_punctual::Kind::Directional
+        ));
+        let s = model.sun.as_ref().unwrap();
+        let want = to_gltf(s.direction_water);
+        assert!((down(sun) - want).length() < 1e-6, "{} {want}", down(sun));
+        assert!(
+            (s.direction_water - s.direction_air).length() > 1e-3,
+            "refracted"
+        );
+        let lux = 683.0 * s.irradiance_water.iter().cloned().fold(0.0, f64::max);
+        assert_eq!(sun.light().unwrap().intensity(), lux as f32);
+        // The area light: an emissive rectangle of its size where the model puts it.
+        let panel = doc
+            .meshes()
+            .find(|m| m.name() == Some("area light panel (emissive)"))
+            .unwrap();
+        let prim = panel.primitives().next().unwrap();
+        assert_eq!(prim.material().emissive_factor(), [1.0; 3]);
+        let pts = positions(&prim, &buffers);
+        assert_eq!(pts.len(), 4);
+        let y: Vec<f32> = pts.iter().map(|p| p[1]).collect();
+        assert!(y.iter().all(|v| (*v - -1.0).abs() < 1e-6), "{y:?}");
+        // The port mesh: in front of the camera (pose 0), within a few port radii.
+        let port = group(&doc, "ports");
+        assert_eq!(port.len(), 1);
+        let prim = port[0].mesh().unwrap().primitives().next().unwrap();
+        let cam = model.world_from_camera(0, 0);
+        let kind = model.cameras[0].port.kind_name();
+        for p in positions(&prim, &buffers) {
+            let w = DVec3::new(p[0] as f64, -(p[2] as f64), p[1] as f64);
+            let local = cam.inverse().transform_point(w);
+            assert!(local.length() < 0.5, "{kind}: port vertex {local}");
+            if kind == "flat" || kind == "dome" {
+                assert!(
+                    local.z > -1e-6,
+                    "{kind}: port vertex behind the pupil {local}"
+                );
+            }
+        }
+        let e = extras(port[0].extras());
+        assert_eq!(e["port"]["kind"].as_str(), Some(kind));
+        assert_eq!(kind, ["flat", "dome", "cylinder", "flat"][k]);
+    }
 }

@@ -15,6 +15,7 @@ mod dive;
 mod evaluate;
 pub mod explain;
 mod export;
+mod import;
 mod lesson;
 mod pack;
 mod plan;
@@ -44,6 +45,7 @@ Examples:
   poser evaluate scenarios/lessons/flat_port_deformation.toml -o out/eval
   poser lesson scenarios/lessons/calibration_by_port.toml -o out/lesson
   poser dive scenarios/paper_survey.toml -o dive.ssrf
+  poser import out/mi/img_*.xml -o imported.toml              # Mitsuba 3 XML → poser scene
   poser export scenarios/reef_strip.toml -o reef.glb         # glTF preview for any viewer
   poser pack scenarios/dome_orbit.toml -o orbit.poserpack --run \"render --scale 0.1 --poses 0\"
   poser rerun orbit.poserpack -o out/rerun
@@ -120,6 +122,9 @@ pub enum Command {
     /// Write the scene as a glTF 2.0 binary preview (.glb): site, targets, water surface, ports,
     /// every camera pose, the swim path and the lights, for any glTF viewer.
     Export(export::Args),
+    /// Import Mitsuba 3 XML scenes into a poser scene file (meshes as glTF assets); what cannot
+    /// be expressed is listed with file, line and column.
+    Import(import::Args),
     /// Write SLURM job-array scripts that render the survey in shards on a cluster.
     Slurm(slurm::Args),
 }
@@ -166,5 +171,6 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
         Command::Rerun(args) => rerun::run(&args),
         Command::Slurm(args) => slurm::run(&args),
         Command::Export(args) => export::run(&args),
+        Command::Import(args) => import::run(&args),
     }
 }

@@ -149,7 +149,7 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
         site.push(b.mesh_node(&o.name, vec![prim], None));
         s.objects += 1;
     }
-    b.group("site", site, None);
+    b.group("site", site);
 
     // Targets.
     let mut tnodes = Vec::new();
@@ -167,7 +167,7 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
         tnodes.push(b.mesh_node(&t.name, prims, extras_of(&what, extras)?));
         s.targets += 1;
     }
-    b.group("targets", tnodes, None);
+    b.group("targets", tnodes);
 
     for p in 0..model.poses.len() {
         bounds.add(model.poses[p].world_from_rig.translation);
@@ -253,7 +253,7 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
         ));
         s.ports += 1;
     }
-    b.group("ports", pnodes, None);
+    b.group("ports", pnodes);
 
     // Cameras.
     let mut cnodes = Vec::new();
@@ -263,7 +263,7 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
             s.cameras += 1;
         }
     }
-    b.group("cameras", cnodes, None);
+    b.group("cameras", cnodes);
 
     // Swim path.
     let path: Vec<DVec3> = model
@@ -290,7 +290,7 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
 
     // Lights.
     let (lnodes, ambient) = lights(&mut b, model, &bounds, &mut s)?;
-    b.group("lights", lnodes, None);
+    b.group("lights", lnodes);
 
     // Scene extras.
     let extras = json!({
@@ -725,14 +725,13 @@ impl Builder {
     }
 
     /// A parent node of `children` at the scene's root (nothing when there are none).
-    fn group(&mut self, name: &str, children: Vec<json::Index<json::Node>>, extras: json::Extras) {
+    fn group(&mut self, name: &str, children: Vec<json::Index<json::Node>>) {
         if children.is_empty() {
             return;
         }
         let n = self.root.push(json::Node {
             children: Some(children),
             name: Some(name.to_string()),
-            extras,
             ..Default::default()
         });
         self.scene_nodes.push(n);
@@ -1431,8 +1430,13 @@ fn lights(
         } else {
             (sun.direction_air, sun.irradiance, false)
         };
+        let what = "the sun".to_string();
+        if !(dir.is_finite() && e.iter().all(|x| x.is_finite())) {
+            return Err(format!(
+                "{what}: its direction or irradiance is not finite; nothing was written"
+            ));
+        }
         if dir.z < 0.0 {
-            let what = "the sun".to_string();
             let extras = json!({
                 "poser_kind": "sun",
                 "refracted": refracted,

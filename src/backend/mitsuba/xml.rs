@@ -3,7 +3,8 @@
 //! Everything that reaches the file goes through quick-xml's attribute escaping; comments
 //! (the only place where scene names appear) are sanitised so that they cannot close the
 //! comment or break the document. Numbers are printed with [`num`], which is deterministic and
-//! short (10 significant digits, no `-0`).
+//! short (15 significant digits, so that `poser import` reads back the model to ~1e-15, and
+//! no `-0`).
 
 use glam::{DMat3, DVec3};
 use quick_xml::Writer;
@@ -174,13 +175,14 @@ pub fn xml_chars(t: &str) -> String {
         .collect()
 }
 
-/// Deterministic short decimal for a float: 10 significant digits, `-0` printed as `0`.
+/// Deterministic short decimal for a float: 15 significant digits (every f64 is read back
+/// within 5e-15 relative; a decimal like 0.3 stays `0.3`), `-0` printed as `0`.
 pub fn num(x: f64) -> String {
     if !x.is_finite() {
         // Caught by `validate_finite` before anything is written.
         return format!("{x}");
     }
-    let r: f64 = format!("{x:.9e}").parse().unwrap_or(x);
+    let r: f64 = format!("{x:.14e}").parse().unwrap_or(x);
     if r.abs() < 1e-12 {
         "0".to_string()
     } else {
@@ -245,7 +247,9 @@ mod tests {
         assert_eq!(num(-0.0), "0");
         assert_eq!(num(1.0), "1");
         assert_eq!(num(-2.5e-7), "-0.00000025");
-        assert_eq!(num(1.0 / 3.0), "0.3333333333");
+        assert_eq!(num(1.0 / 3.0), "0.333333333333333");
+        let x = 38.068868712345678_f64;
+        assert!((num(x).parse::<f64>().unwrap() / x - 1.0).abs() < 5e-15);
     }
 
     #[test]

@@ -1,0 +1,1622 @@
+//! Mitsuba 3 XML → a poser scene: the reader of `poser import` for `.xml` files.
+//!
+//! | Mitsuba 3 | poser | notes |
+//! |---|---|---|
+//! | `perspective`, `thinlens` sensor: `fov`, `fov_axis`, `principal_point_offset_x/y`, film `width`/`height`, `to_world` | `[camera]` `fx`, `principal_point`, size; one `[[network.poses]]` per sensor (in file order, then file by file) | Mitsuba's camera looks along +Z with +X left: `R_poser = R · diag(−1, −1, 1)`; `thinlens` gives `f_number`/`focus_distance` |
+//! | `rectangle`, `cube`, `sphere`, `cylinder` | `plane`, `box`, `sphere`, `cylinder` objects | `to_world` split into position, rotation (x, y, z angles) and size |
+//! | `disk`, `obj`, `ply` | `mesh` objects, written as `.glb` assets | `to_world` baked into the vertices |
+//! | `diffuse` BSDF (`rgb`, `spectrum`, `bitmap` reflectance), `twosided` | `albedo` | a bitmap gives its mean albedo; other BSDFs their diffuse reflectance, noted |
+//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write |
+//! | `point`, `spot`, `directional`, `constant`, `area` on a `rectangle` | `point`, `spot`, `[sun]`, `ambient`, `area` lights | lights of a per-image file (not of an included world) are rig-mounted |
+//! | `homogeneous` medium (`sigma_t`, `albedo`, `scale`, `hg`/`isotropic`) | `[water]` `absorption`, `scattering`, `g` | the glass's `ext_ior` gives the water's index |
+//! | a `null` `cube` holding the water, top at z = 0 | `site.surface = "flat"` | the sun is refracted back into the air |
+//! | `default`, `$name`, `ref`/`id`, `include` | resolved while reading | |
+//!
+//! Safety: a document type declaration (and with it every entity) is refused; `include` and
+//! `filename` paths must stay inside the first file's folder; counts are bounded.
+
+use super::{Imported, Note, meshes, safe_file_name};
+use crate::geometry::mesh::TriMesh;
+use glam::{DMat3, DMat4, DVec3, EulerRot};
+use quick_xml::events::Event;
+use std::collections::HashMap;
+use std::path::{Component, Path, PathBuf};
+use toml::{Table, Value};
+
+/// Most XML elements read, over all files and includes.
+pub const MAX_ELEMENTS: usize = 1_000_000;
+/// Deepest nesting of elements, and of includes.
+pub const MAX_DEPTH: usize = 64;
+const MAX_INCLUDES: usize = 8;
+/// Largest XML file read, bytes.
+pub const MAX_FILE: u64 = 256 << 20;
+
+/// One XML element with where it starts.
+#[derive(Debug, Clone)]
+struct X {
+    tag: String,
+    attrs: Vec<(String, String)>,
+    kids: Vec<X>,
+    /// The first comment inside the element (poser's files name things there).
+    comment: Option<String>,
+    loc: String,
+    /// The element comes from an included file (the shared world of a set of views).
+    included: bool,
+    /// Folder its `filename`s are relative to.
+    dir: PathBuf,
+}
+
+impl X {
+    fn attr(&self, k: &str) -> Option<&str> {
+        self.attrs
+            .iter()
+            .find(|(a, _)| a == k)
+            .map(|(_, v)| v.as_str())
+    }
+    fn ty(&self) -> &str {
+        self.attr("type").unwrap_or("")
+    }
+    fn named(&self, name: &str) -> Option<&X> {
+        self.kids.iter().find(|k| k.attr("name") == Some(name))
+    }
+}
+
+fn line_col(text: &str, at: usize) -> (usize, usize) {
+    let mut at = at.min(text.len());
+    while at < text.len() && text.as_bytes()[at].is_ascii_whitespace() {
+        at += 1;
+    }
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let before = &text[..at];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+/// A path named in the scene, resolved against `dir` and kept inside `root`.
+fn inside(root: &Path, dir: &Path, name: &str, loc: &str) -> Result<PathBuf, String> {
+    let p = Path::new(name);
+    if p.is_absolute() || p.components().any(|c| matches!(c, Component::Prefix(_))) {
+        return Err(format!(
+            "{loc}: `{name}` is an absolute path\n  help: imported scenes name their files \
+             relative to the scene's folder"
+        ));
+    }
+    let joined = dir.join(p);
+    let mut norm = PathBuf::new();
+    for c in joined.components() {
+        match c {
+            Component::ParentDir => {
+                if !norm.pop() {
+                    return Err(format!("{loc}: `{name}` leaves the scene's folder"));
+                }
+            }
+            Component::CurDir => {}
+            c => norm.push(c),
+        }
+    }
+    if !norm.starts_with(root) {
+        return Err(format!(
+            "{loc}: `{name}` leaves the scene's folder ({})\n  help: copy the file into that \
+             folder",
+            root.display()
+        ));
+    }
+    Ok(norm)
+}
+
+struct Reader {
+    root: PathBuf,
+    elements: usize,
+    params: HashMap<String, String>,
+}
+
+impl Reader {
+    fn parse_file(&mut self, path: &Path, depth: usize, included: bool) -> Result<X, String> {
+        let shown = shown(path);
+        let meta = std::fs::metadata(path).map_err(|e| format!("{shown}: {e}"))?;
+        if meta.len() > MAX_FILE {
+            return Err(format!("{shown}: larger than {} MiB", MAX_FILE >> 20));
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{shown}: {e}"))?;
+        let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        let mut r = quick_xml::Reader::from_str(&text);
+        r.config_mut().trim_text(true);
+        let mut stack: Vec<X> = vec![X {
+            tag: "#document".into(),
+            attrs: Vec::new(),
+            kids: Vec::new(),
+            comment: None,
+            loc: shown.clone(),
+            included,
+            dir: dir.clone(),
+        }];
+        loop {
+            let at = r.buffer_position() as usize;
+            let ev = r.read_event().map_err(|e| {
+                let (l, c) = line_col(&text, r.error_position() as usize);
+                format!("{shown}:{l}:{c}: not well-formed XML: {e}")
+            })?;
+            let loc = || {
+                let (l, c) = line_col(&text, at);
+                format!("{shown}:{l}:{c}")
+            };
+            match ev {
+                Event::DocType(_) => {
+                    return Err(format!(
+                        "{}: a document type declaration (<!DOCTYPE …>) is refused\n  help: \
+                         Mitsuba scenes need none; entities could read other files",
+                        loc()
+                    ));
+                }
+                Event::Start(_) | Event::Empty(_) => {
+                    let (e, empty) = match &ev {
+                        Event::Start(e) => (e, false),
+                        Event::Empty(e) => (e, true),
+                        _ => unreachable!(),
+                    };
+                    self.elements += 1;
+                    if self.elements > MAX_ELEMENTS {
+                        return Err(format!("{}: more than {MAX_ELEMENTS} elements", loc()));
+                    }
+                    if stack.len() > MAX_DEPTH {
+                        return Err(format!("{}: nested deeper than {MAX_DEPTH}", loc()));
+                    }
+                    let tag = e.name().0.to_string();
+                    let mut attrs = Vec::new();
+                    for a in e.attributes() {
+                        let a = a.map_err(|err| format!("{}: {err}", loc()))?;
+                        let k = a.key.0.to_string();
+                        let v = a
+                            .normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                            .map_err(|err| {
+                                format!(
+                                    "{}: attribute `{k}`: {err}\n  help: only XML's own entities \
+                                 (&amp; &lt; &gt; &quot; &apos;) are read",
+                                    loc()
+                                )
+                            })?;
+                        attrs.push((k, self.substitute(&v)));
+                    }
+                    let x = X {
+                        tag,
+                        attrs,
+                        kids: Vec::new(),
+                        comment: None,
+                        loc: loc(),
+                        included,
+                        dir: dir.clone(),
+                    };
+                    if empty {
+                        self.close(&mut stack, x, depth)?;
+                    } else {
+                        stack.push(x);
+                    }
+                }
+                Event::End(_) => {
+                    let x = stack
+                        .pop()
+                        .ok_or_else(|| format!("{}: unbalanced", loc()))?;
+                    self.close(&mut stack, x, depth)?;
+                }
+                Event::Comment(c) => {
+                    if let Some(top) = stack.last_mut()
+                        && top.comment.is_none()
+                    {
+                        top.comment = Some(c[..].trim().to_string());
+                    }
+                }
+                Event::GeneralRef(_) => {
+                    return Err(format!("{}: an entity reference in text is refused", loc()));
+                }
+                Event::Eof => break,
+                _ => {}
+            }
+        }
+        let mut doc = stack.pop().ok_or("empty document")?;
+        if !stack.is_empty() {
+            return Err(format!("{shown}: unclosed elements at the end"));
+        }
+        match doc.kids.len() {
+            1 => Ok(doc.kids.remove(0)),
+            _ => Err(format!("{shown}: expected one root element <scene>")),
+        }
+    }
+
+    /// An element is complete: handle `default` and `include`, else attach it to its parent.
+    fn close(&mut self, stack: &mut [X], x: X, depth: usize) -> Result<(), String> {
+        let parent = stack.last_mut().ok_or("unbalanced document")?;
+        match x.tag.as_str() {
+            "default" => {
+                let (Some(n), Some(v)) = (x.attr("name"), x.attr("value")) else {
+                    return Err(format!("{}: <default> needs `name` and `value`", x.loc));
+                };
+                self.params
+                    .entry(n.to_string())
+                    .or_insert_with(|| v.to_string());
+            }
+            "include" => {
+                if depth >= MAX_INCLUDES {
+                    return Err(format!(
+                        "{}: includes nested deeper than {MAX_INCLUDES}",
+                        x.loc
+                    ));
+                }
+                let name = x
+                    .attr("filename")
+                    .ok_or_else(|| format!("{}: <include> needs `filename`", x.loc))?;
+                let path = inside(&self.root, &x.dir, name, &x.loc)?;
+                let inc = self.parse_file(&path, depth + 1, true)?;
+                parent.kids.extend(inc.kids);
+            }
+            _ => parent.kids.push(x),
+        }
+        Ok(())
+    }
+
+    fn substitute(&self, v: &str) -> String {
+        if !v.contains('$') {
+            return v.to_string();
+        }
+        let mut out = v.to_string();
+        let mut keys: Vec<&String> = self.params.keys().collect();
+        keys.sort_by_key(|k| std::cmp::Reverse(k.len()));
+        for k in keys {
+            out = out.replace(&format!("${k}"), &self.params[k]);
+        }
+        out
+    }
+}
+
+// ---- values ---------------------------------------------------------------------------
+
+fn nums(s: &str, loc: &str) -> Result<Vec<f64>, String> {
+    s.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .map(|t| {
+            t.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("{loc}: `{t}` is not a finite number"))
+        })
+        .collect()
+}
+
+struct Cx {
+    notes: Vec<Note>,
+    /// Targets already noted (poser's files name a target once per element group).
+    targets: Vec<String>,
+    ids: HashMap<String, X>,
+    root: PathBuf,
+}
+
+impl Cx {
+    fn note(&mut self, x: &X, msg: impl Into<String>, help: Option<&str>) {
+        let mut n = Note::new(Some(x.loc.clone()), msg);
+        if let Some(h) = help {
+            n = n.help(h);
+        }
+        self.notes.push(n);
+    }
+
+    /// `x` itself, or the element its `<ref id>` names.
+    fn deref<'a>(&'a self, x: &'a X) -> Result<&'a X, String> {
+        if x.tag == "ref" {
+            let id = x.attr("id").unwrap_or("");
+            self.ids
+                .get(id)
+                .ok_or_else(|| format!("{}: no element has id `{id}`", x.loc))
+        } else {
+            Ok(x)
+        }
+    }
+
+    fn float(&self, x: &X, name: &str, default: f64) -> Result<f64, String> {
+        match x.named(name) {
+            None => Ok(default),
+            Some(k) => {
+                let v = nums(k.attr("value").unwrap_or(""), &k.loc)?;
+                v.first()
+                    .copied()
+                    .ok_or_else(|| format!("{}: `{name}` has no value", k.loc))
+            }
+        }
+    }
+
+    fn int(&self, x: &X, name: &str, default: i64) -> Result<i64, String> {
+        Ok(self.float(x, name, default as f64)?.round() as i64)
+    }
+
+    /// A colour: `rgb`, `float`, uniform `spectrum`, or a `constvolume`/`uniform` wrapper.
+    fn colour(&mut self, x: &X, name: &str) -> Result<Option<[f64; 3]>, String> {
+        let Some(k) = x.named(name) else {
+            return Ok(None);
+        };
+        let k = self.deref(k)?.clone();
+        self.colour_of(&k)
+    }
+
+    fn colour_of(&mut self, k: &X) -> Result<Option<[f64; 3]>, String> {
+        match k.tag.as_str() {
+            "rgb" | "float" => {
+                let v = nums(k.attr("value").unwrap_or(""), &k.loc)?;
+                match v.len() {
+                    1 => Ok(Some([v[0]; 3])),
+                    3 => Ok(Some([v[0], v[1], v[2]])),
+                    _ => Err(format!("{}: expected 1 or 3 numbers", k.loc)),
+                }
+            }
+            "spectrum" => {
+                let s = k.attr("value").unwrap_or("");
+                if s.contains(':') {
+                    let pairs: Vec<f64> = s
+                        .split(',')
+                        .filter_map(|p| p.split(':').nth(1))
+                        .filter_map(|v| v.trim().parse().ok())
+                        .collect();
+                    if pairs.is_empty() {
+                        return Err(format!("{}: an empty spectrum", k.loc));
+                    }
+                    let mean = pairs.iter().sum::<f64>() / pairs.len() as f64;
+                    self.note(
+                        k,
+                        "a sampled spectrum is imported as its mean (grey)",
+                        Some("give an `rgb` value for colour"),
+                    );
+                    Ok(Some([mean; 3]))
+                } else {
+                    let v = nums(s, &k.loc)?;
+                    Ok(v.first().map(|&x| [x; 3]))
+                }
+            }
+            "volume" | "texture" => match k.ty() {
+                "constvolume" | "uniform" => match k.named("value").or(k.kids.first()) {
+                    Some(v) => {
+                        let v = self.deref(v)?.clone();
+                        self.colour_of(&v)
+                    }
+                    None => Ok(None),
+                },
+                "bitmap" => self.bitmap_mean(k).map(Some),
+                t => {
+                    self.note(
+                        k,
+                        format!("a `{t}` {} is not imported; 0.5 is used", k.tag),
+                        Some("poser's albedos are constants or poser's own patterns"),
+                    );
+                    Ok(Some([0.5; 3]))
+                }
+            },
+            _ => Ok(None),
+        }
+    }
+
+    /// The mean colour of a `bitmap` texture (8-bit images decoded from sRGB).
+    fn bitmap_mean(&mut self, k: &X) -> Result<[f64; 3], String> {
+        let name = k
+            .named("filename")
+            .and_then(|f| f.attr("value"))
+            .ok_or_else(|| format!("{}: a bitmap without `filename`", k.loc))?;
+        let path = inside(&self.root, &k.dir, name, &k.loc)?;
+        let img = image::open(&path).map_err(|e| format!("{}: {}: {e}", k.loc, path.display()))?;
+        let rgb = img.to_rgb32f();
+        let srgb = !matches!(
+            img,
+            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
+        );
+        let mut sum = [0.0f64; 3];
+        let n = (rgb.width() as f64 * rgb.height() as f64).max(1.0);
+        for p in rgb.pixels() {
+            for (acc, &v) in sum.iter_mut().zip(&p.0) {
+                let v = v as f64;
+                *acc += if srgb { srgb_to_linear(v) } else { v };
+            }
+        }
+        self.note(
+            k,
+            format!(
+                "texture `{name}` is imported as its mean albedo ({:.3}, {:.3}, {:.3})",
+                sum[0] / n,
+                sum[1] / n,
+                sum[2] / n
+            ),
+            Some("poser textures are its own patterns (docs/textures.md)"),
+        );
+        Ok(sum.map(|s| s / n))
+    }
+
+    fn point(&self, x: &X, name: &str, default: DVec3) -> Result<DVec3, String> {
+        match x.named(name) {
+            None => Ok(default),
+            Some(k) => vec3(k),
+        }
+    }
+
+    /// The `to_world` of `x` (identity when absent).
+    fn to_world(&self, x: &X) -> Result<DMat4, String> {
+        match x.named("to_world") {
+            None => Ok(DMat4::IDENTITY),
+            Some(t) => transform(t),
+        }
+    }
+}
+
+/// The sRGB transfer function, inverted (8-bit textures are stored encoded).
+fn srgb_to_linear(v: f64) -> f64 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn vec3(k: &X) -> Result<DVec3, String> {
+    if let Some(v) = k.attr("value") {
+        let v = nums(v, &k.loc)?;
+        return match v.len() {
+            1 => Ok(DVec3::splat(v[0])),
+            3 => Ok(DVec3::new(v[0], v[1], v[2])),
+            _ => Err(format!("{}: expected 3 numbers", k.loc)),
+        };
+    }
+    let c = |a: &str| -> Result<f64, String> {
+        match k.attr(a) {
+            None => Ok(0.0),
+            Some(s) => nums(s, &k.loc)?
+                .first()
+                .copied()
+                .ok_or_else(|| format!("{}: `{a}` is empty", k.loc)),
+        }
+    };
+    Ok(DVec3::new(c("x")?, c("y")?, c("z")?))
+}
+
+/// A `<transform>`: its operations applied in order (each one on the left).
+fn transform(t: &X) -> Result<DMat4, String> {
+    let mut m = DMat4::IDENTITY;
+    for op in &t.kids {
+        let step = match op.tag.as_str() {
+            "translate" => DMat4::from_translation(vec3(op)?),
+            "scale" => {
+                let s = if op.attr("value").is_some() {
+                    vec3(op)?
+                } else {
+                    let g = |a: &str| op.attr(a).and_then(|v| v.trim().parse::<f64>().ok());
+                    DVec3::new(
+                        g("x").unwrap_or(1.0),
+                        g("y").unwrap_or(1.0),
+                        g("z").unwrap_or(1.0),
+                    )
+                };
+                DMat4::from_scale(s)
+            }
+            "rotate" => {
+                let axis = vec3(op)?;
+                let angle = op
+                    .attr("angle")
+                    .and_then(|a| a.trim().parse::<f64>().ok())
+                    .ok_or_else(|| format!("{}: <rotate> needs `angle` (degrees)", op.loc))?;
+                if axis.length() == 0.0 {
+                    return Err(format!("{}: <rotate> needs a non-zero axis", op.loc));
+                }
+                DMat4::from_axis_angle(axis.normalize(), angle.to_radians())
+            }
+            "matrix" => {
+                let v = nums(op.attr("value").unwrap_or(""), &op.loc)?;
+                match v.len() {
+                    16 => DMat4::from_cols_array(&[
+                        v[0], v[4], v[8], v[12], v[1], v[5], v[9], v[13], v[2], v[6], v[10], v[14],
+                        v[3], v[7], v[11], v[15],
+                    ]),
+                    9 => DMat4::from_mat3(DMat3::from_cols_array(&[
+                        v[0], v[3], v[6], v[1], v[4], v[7], v[2], v[5], v[8],
+                    ])),
+                    n => return Err(format!("{}: a matrix of {n} numbers (16 or 9)", op.loc)),
+                }
+            }
+            "lookat" => {
+                let g = |a: &str| -> Result<DVec3, String> {
+                    let v = nums(op.attr(a).unwrap_or(""), &op.loc)?;
+                    if v.len() != 3 {
+                        return Err(format!("{}: <lookat> `{a}` needs 3 numbers", op.loc));
+                    }
+                    Ok(DVec3::new(v[0], v[1], v[2]))
+                };
+                let (o, target) = (g("origin")?, g("target")?);
+                let up = if op.attr("up").is_some() {
+                    g("up")?
+                } else {
+                    DVec3::Y
+                };
+                let dir = (target - o).normalize_or_zero();
+                let left = up.cross(dir).normalize_or_zero();
+                if dir == DVec3::ZERO || left == DVec3::ZERO {
+                    return Err(format!(
+                        "{}: <lookat> with origin = target or up along the view",
+                        op.loc
+                    ));
+                }
+                let new_up = dir.cross(left);
+                DMat4::from_cols(
+                    left.extend(0.0),
+                    new_up.extend(0.0),
+                    dir.extend(0.0),
+                    o.extend(1.0),
+                )
+            }
+            other => return Err(format!("{}: unknown transform operation <{other}>", op.loc)),
+        };
+        m = step * m;
+    }
+    if !m.is_finite() {
+        return Err(format!("{}: the transform is not finite", t.loc));
+    }
+    Ok(m)
+}
+
+/// `m`'s linear part split into column lengths and an orthonormal frame (`None` when the
+/// columns are not orthogonal: a shear), with a flag for a mirror.
+fn decompose(m: &DMat4) -> (DVec3, DMat3, bool, bool) {
+    let c = [
+        m.x_axis.truncate(),
+        m.y_axis.truncate(),
+        m.z_axis.truncate(),
+    ];
+    let len = DVec3::new(c[0].length(), c[1].length(), c[2].length());
+    let u = [0, 1, 2].map(|i| c[i] / len[i]);
+    let mirror = u[0].cross(u[1]).dot(u[2]) < 0.0;
+    let z = u[0].cross(u[1]);
+    let sheared =
+        u[0].dot(u[1]).abs() > 1e-9 || u[0].dot(u[2]).abs() > 1e-9 || u[1].dot(u[2]).abs() > 1e-9;
+    (len, DMat3::from_cols(u[0], u[1], z), mirror, sheared)
+}
+
+/// Rotations about x, y, z (x first, as the scene format composes them) of an orthonormal
+/// frame.
+fn euler_xyz(r: DMat3) -> [f64; 3] {
+    let (z, y, x) = r.to_euler(EulerRot::ZYX);
+    [x, y, z].map(|a| a + 0.0)
+}
+
+fn arr(v: impl IntoIterator<Item = f64>) -> Value {
+    Value::Array(v.into_iter().map(|x| Value::Float(x + 0.0)).collect())
+}
+
+// ---- the scene ------------------------------------------------------------------------
+
+struct Sensor {
+    x: X,
+    width: i64,
+    height: i64,
+    fx: f64,
+    cx: f64,
+    cy: f64,
+    thin: Option<(f64, f64)>,
+    /// world_from_camera in poser's camera axes (x right, y down, z forward).
+    rot: DMat3,
+    pos: DVec3,
+    samples: Option<i64>,
+    /// Which input file it comes from.
+    doc: usize,
+}
+
+fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
+    let thin = match x.ty() {
+        "perspective" => None,
+        "thinlens" => Some((
+            cx.float(x, "aperture_radius", 0.0)?,
+            cx.float(x, "focus_distance", 0.0)?,
+        )),
+        t => {
+            cx.note(
+                x,
+                format!("a `{t}` sensor is not imported"),
+                Some("poser's cameras are perspective (with an optional thin lens)"),
+            );
+            return Ok(None);
+        }
+    };
+    let film = x.kids.iter().find(|k| k.tag == "film");
+    let (width, height) = match film {
+        Some(f) => (cx.int(f, "width", 768)?, cx.int(f, "height", 576)?),
+        None => (768, 576),
+    };
+    if !(1..=100_000).contains(&width) || !(1..=100_000).contains(&height) {
+        return Err(format!("{}: film of {width}×{height} pixels", x.loc));
+    }
+    let (w, h) = (width as f64, height as f64);
+    let fov = if let Some(_f) = x.named("focal_length") {
+        let s = x
+            .named("focal_length")
+            .and_then(|f| f.attr("value"))
+            .unwrap_or("");
+        let mm: f64 = s
+            .trim_end_matches("mm")
+            .trim()
+            .parse()
+            .map_err(|_| format!("{}: focal_length `{s}`", x.loc))?;
+        // Mitsuba: a 35 mm-equivalent focal length on the film's diagonal.
+        2.0 * (36f64.hypot(24.0) / (2.0 * mm)).atan().to_degrees()
+    } else {
+        cx.float(x, "fov", f64::NAN)?
+    };
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(format!(
+            "{}: the sensor needs a `fov` in (0, 180) degrees",
+            x.loc
+        ));
+    }
+    let axis_px = match x
+        .named("fov_axis")
+        .and_then(|a| a.attr("value"))
+        .unwrap_or("x")
+    {
+        "x" => w,
+        "y" => h,
+        "diagonal" => w.hypot(h),
+        "smaller" => w.min(h),
+        "larger" => w.max(h),
+        other => return Err(format!("{}: unknown fov_axis `{other}`", x.loc)),
+    };
+    let fx = axis_px / 2.0 / (fov.to_radians() / 2.0).tan();
+    let cxp = w * (0.5 - cx.float(x, "principal_point_offset_x", 0.0)?);
+    let cyp = h * (0.5 - cx.float(x, "principal_point_offset_y", 0.0)?);
+    let m = cx.to_world(x)?;
+    let (_, frame, mirror, sheared) = decompose(&m);
+    if sheared {
+        cx.note(
+            x,
+            "the sensor's to_world is sheared; its rotation is taken from the first two axes",
+            None,
+        );
+    }
+    let mut rot = frame * DMat3::from_diagonal(DVec3::new(-1.0, -1.0, 1.0));
+    if mirror {
+        rot = DMat3::from_cols(-rot.x_axis, rot.y_axis, rot.z_axis);
+        cx.note(
+            x,
+            "the sensor's to_world mirrors the image (a negative scale); imported unmirrored",
+            Some("the imported camera's images are the originals flipped left–right"),
+        );
+    }
+    let samples = x
+        .kids
+        .iter()
+        .find(|k| k.tag == "sampler")
+        .map(|s| cx.int(s, "sample_count", 4))
+        .transpose()?;
+    Ok(Some(Sensor {
+        x: x.clone(),
+        width,
+        height,
+        fx,
+        cx: cxp,
+        cy: cyp,
+        thin,
+        rot,
+        pos: m.w_axis.truncate(),
+        samples,
+        doc: 0,
+    }))
+}
+
+/// The name poser's own files give an element in its first comment (`object `name``…).
+fn comment_name(x: &X, kind: &str) -> Option<String> {
+    let c = x.comment.as_deref()?;
+    let rest = c.strip_prefix(kind)?.trim_start();
+    let rest = rest.strip_prefix('`')?;
+    let end = rest.find('`')?;
+    Some(rest[..end].to_string()).filter(|s| !s.is_empty())
+}
+
+struct Water {
+    sigma_a: [f64; 3],
+    sigma_s: [f64; 3],
+    g: f64,
+}
+
+fn medium(cx: &mut Cx, x: &X) -> Result<Option<Water>, String> {
+    if x.ty() != "homogeneous" {
+        cx.note(
+            x,
+            format!("a `{}` medium is not imported", x.ty()),
+            Some("poser's water is homogeneous"),
+        );
+        return Ok(None);
+    }
+    let st = cx.colour(x, "sigma_t")?.unwrap_or([1.0; 3]);
+    let al = cx.colour(x, "albedo")?.unwrap_or([0.75; 3]);
+    let scale = cx.float(x, "scale", 1.0)?;
+    let st = st.map(|v| v * scale);
+    let sigma_s = [0, 1, 2].map(|c| al[c] * st[c]);
+    let sigma_a = [0, 1, 2].map(|c| st[c] - sigma_s[c]);
+    let g = match x.kids.iter().find(|k| k.tag == "phase") {
+        None => 0.0,
+        Some(p) => match p.ty() {
+            "hg" => cx.float(p, "g", 0.8)?,
+            "isotropic" => 0.0,
+            t => {
+                cx.note(
+                    p,
+                    format!("a `{t}` phase function is imported as isotropic"),
+                    Some("poser's phase functions are Henyey–Greenstein and Fournier–Forand"),
+                );
+                0.0
+            }
+        },
+    };
+    Ok(Some(Water {
+        sigma_a,
+        sigma_s,
+        g,
+    }))
+}
+
+/// The albedo of a shape's BSDF (Mitsuba's default: diffuse 0.5), or `None` for a BSDF that
+/// is not a surface poser can hold (null, dielectric).
+fn albedo(cx: &mut Cx, shape: &X) -> Result<Result<[f64; 3], &'static str>, String> {
+    let Some(b) = shape.kids.iter().find(|k| {
+        k.tag == "bsdf" || (k.tag == "ref" && k.attr("name").is_none_or(|n| n == "bsdf"))
+    }) else {
+        return Ok(Ok([0.5; 3]));
+    };
+    let mut b = cx.deref(b)?.clone();
+    while b.ty() == "twosided" || b.ty() == "mask" {
+        match b.kids.iter().find(|k| k.tag == "bsdf" || k.tag == "ref") {
+            Some(k) => b = cx.deref(k)?.clone(),
+            None => break,
+        }
+    }
+    match b.ty() {
+        "null" => Ok(Err("null")),
+        "dielectric" | "thindielectric" | "roughdielectric" => Ok(Err("dielectric")),
+        "diffuse" => Ok(Ok(cx.colour(&b, "reflectance")?.unwrap_or([0.5; 3]))),
+        t => {
+            let c = match cx.colour(&b, "diffuse_reflectance")? {
+                Some(c) => c,
+                None => cx.colour(&b, "reflectance")?.unwrap_or([0.5; 3]),
+            };
+            cx.note(
+                &b,
+                format!(
+                    "a `{t}` BSDF is imported as diffuse with albedo ({:.3}, {:.3}, {:.3})",
+                    c[0], c[1], c[2]
+                ),
+                Some("poser's surfaces are Lambertian"),
+            );
+            Ok(Ok(c))
+        }
+    }
+}
+
+fn disk_mesh(m: &DMat4) -> TriMesh {
+    let n = 64u32;
+    let mut t = TriMesh::default();
+    t.positions.push(m.transform_point3(DVec3::ZERO));
+    for i in 0..n {
+        let a = std::f64::consts::TAU * i as f64 / n as f64;
+        t.positions
+            .push(m.transform_point3(DVec3::new(a.cos(), a.sin(), 0.0)));
+    }
+    for i in 0..n {
+        t.triangles.push([0, 1 + i, 1 + (i + 1) % n]);
+    }
+    t
+}
+
+/// Import Mitsuba 3 scene files. The first file gives the world (its shapes, lights, water);
+/// every file gives its sensors, in order, as the poses of the network. `assets` is how the
+/// scene file names the assets folder (relative to the scene file).
+pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
+    let first = files.first().ok_or("no input file")?;
+    let root = std::fs::canonicalize(first.parent().unwrap_or(Path::new(".")).join("."))
+        .map_err(|e| format!("{}: {e}", first.display()))?;
+    let mut docs = Vec::new();
+    for f in files {
+        let abs = std::fs::canonicalize(f).map_err(|e| format!("{}: {e}", f.display()))?;
+        if !abs.starts_with(&root) {
+            return Err(format!(
+                "{}: every file of one import must be in the first file's folder ({})",
+                f.display(),
+                root.display()
+            ));
+        }
+        let mut r = Reader {
+            root: root.clone(),
+            elements: 0,
+            params: HashMap::new(),
+        };
+        let mut doc = r.parse_file(&abs, 0, false)?;
+        // Keep the given spelling of the path in locations.
+        let shown = f.display().to_string();
+        relabel(&mut doc, &self::shown(&abs), &shown);
+        if doc.tag != "scene" {
+            return Err(format!(
+                "{}: the root element is <{}>, not <scene>",
+                doc.loc, doc.tag
+            ));
+        }
+        docs.push(doc);
+    }
+    let mut cx = Cx {
+        notes: Vec::new(),
+        targets: Vec::new(),
+        ids: HashMap::new(),
+        root: root.clone(),
+    };
+    for d in &docs {
+        collect_ids(d, &mut cx.ids);
+    }
+
+    // Sensors → camera and poses.
+    let mut sensors = Vec::new();
+    for (di, d) in docs.iter().enumerate() {
+        for k in d.kids.iter().filter(|k| k.tag == "sensor") {
+            if let Some(mut s) = sensor(&mut cx, k)? {
+                s.doc = di;
+                sensors.push(s);
+            }
+        }
+    }
+    let Some(s0) = sensors.first() else {
+        return Err(format!(
+            "{}: no sensor\n  help: a poser scene needs a camera; add a <sensor type=\"perspective\">",
+            first.display()
+        ));
+    };
+    for s in &sensors[1..] {
+        if (s.width, s.height) != (s0.width, s0.height)
+            || (s.fx / s0.fx - 1.0).abs() > 1e-9
+            || (s.cx - s0.cx).abs() > 1e-6
+            || (s.cy - s0.cy).abs() > 1e-6
+        {
+            cx.note(
+                &s.x,
+                "this sensor's intrinsics differ from the first's; it is imported with the first's",
+                Some("poser's network shares one camera; import the sensors separately"),
+            );
+        }
+    }
+
+    // The water: the medium inside a `null` shape (poser's sea box), else the first medium.
+    let world = &docs[0];
+    let mut water = None;
+    let mut surface = false;
+    let mut n_water: Option<f64> = None;
+    for k in world.kids.iter().filter(|k| k.tag == "medium") {
+        if water.is_none() {
+            water = medium(&mut cx, k)?;
+        }
+    }
+    for d in &docs {
+        for k in d
+            .kids
+            .iter()
+            .filter(|k| k.tag == "shape" && k.ty() == "cube")
+        {
+            let interior = k.kids.iter().any(|c| c.attr("name") == Some("interior"));
+            if interior {
+                if water.is_none()
+                    && let Some(r) = k.kids.iter().find(|c| c.attr("name") == Some("interior"))
+                {
+                    let m = cx.deref(r)?.clone();
+                    water = medium(&mut cx, &m)?;
+                }
+                let m = cx.to_world(k)?;
+                let top = m
+                    .transform_point3(DVec3::ONE)
+                    .z
+                    .max(m.transform_point3(-DVec3::ONE).z);
+                surface |= top.abs() < 1e-6;
+            }
+        }
+        for k in d.kids.iter().filter(|k| k.tag == "medium") {
+            if water.is_none() {
+                water = medium(&mut cx, k)?;
+            }
+        }
+    }
+
+    let mut t = Table::new();
+    let name = comment_name(&docs[0], "poser scene")
+        .or_else(|| first.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .unwrap_or_else(|| "imported".into());
+    t.insert("name".into(), Value::String(name.clone()));
+    t.insert(
+        "description".into(),
+        Value::String(format!(
+            "imported from Mitsuba 3 XML ({} file(s))",
+            files.len()
+        )),
+    );
+
+    // Housing: dielectric and black shapes close to a sensor; the port's geometry.
+    let near_sensor = |m: &DMat4| -> bool {
+        let c = m.transform_point3(DVec3::ZERO);
+        sensors.iter().any(|s| (s.pos - c).length() < 0.5)
+    };
+
+    let mut objects: Vec<Value> = Vec::new();
+    let mut lights: Vec<Value> = Vec::new();
+    let mut assets_out: Vec<(String, Vec<u8>)> = Vec::new();
+    let mut port_faces: Vec<(X, DMat4, f64, f64)> = Vec::new();
+    let mut used_names: HashMap<String, usize> = HashMap::new();
+    let mut unique = |n: String| -> String {
+        let c = used_names.entry(n.clone()).or_insert(0);
+        *c += 1;
+        if *c == 1 { n } else { format!("{n}_{c}") }
+    };
+    let mut sun: Option<(X, DVec3, [f64; 3])> = None;
+
+    // Shapes of the world (the first file; its included world for a poser view file) and the
+    // rig-mounted lights of each view (elements of the view file itself, not included).
+    let mut view_lights: Vec<(X, usize)> = Vec::new();
+    for (di, d) in docs.iter().enumerate() {
+        for k in &d.kids {
+            let shared = di == 0 || k.included;
+            match k.tag.as_str() {
+                "shape" if di == 0 => {
+                    shape(
+                        &mut cx,
+                        k,
+                        &near_sensor,
+                        &mut objects,
+                        &mut lights,
+                        &mut assets_out,
+                        &mut port_faces,
+                        &mut unique,
+                        assets,
+                    )?;
+                }
+                // A view file that includes a shared world (poser's layout): its own lights
+                // move with the camera. Otherwise lights are the first file's, in the world.
+                "emitter" if !k.included && d.kids.iter().any(|x| x.included) => {
+                    view_lights.push((k.clone(), di))
+                }
+                "emitter" if shared && di == 0 => {
+                    emitter(&mut cx, k, None, &mut lights, &mut sun, &mut unique)?;
+                }
+                "shape" | "emitter" | "sensor" | "medium" | "bsdf" | "texture" => {}
+                "integrator" if di == 0 && !k.included => {
+                    let depth = cx.int(k, "max_depth", -1)?;
+                    if depth > 0 {
+                        cx.note(k, format!("integrator max_depth {depth} is not imported; render.max_bounces keeps its default"), Some("poser counts scattering vertices: set render.max_bounces yourself"));
+                    }
+                }
+                other if di == 0 => cx.note(k, format!("<{other}> is not imported"), None),
+                _ => {}
+            }
+        }
+    }
+    // Rig-mounted lights: those of the first view, in that view's camera frame.
+    let first_view = view_lights.first().map(|(_, d)| *d);
+    for (k, d) in &view_lights {
+        if Some(*d) != first_view {
+            continue;
+        }
+        let s = sensors.iter().find(|s| s.doc == *d).unwrap_or(s0);
+        emitter(
+            &mut cx,
+            k,
+            Some((s.rot, s.pos)),
+            &mut lights,
+            &mut sun,
+            &mut unique,
+        )?;
+    }
+
+    // Camera.
+    let mut cam = Table::new();
+    cam.insert("width".into(), Value::Integer(s0.width));
+    cam.insert("height".into(), Value::Integer(s0.height));
+    cam.insert("fx".into(), Value::Float(s0.fx));
+    cam.insert("principal_point".into(), arr([s0.cx, s0.cy]));
+    if let Some((aperture, focus)) = s0.thin {
+        // f-number for poser's default pixel pitch: the aperture radius (in metres) is what
+        // the blur depends on, and it comes back unchanged.
+        let pitch = 3.76e-6;
+        cam.insert("pixel_pitch".into(), Value::Float(pitch));
+        if aperture > 0.0 {
+            cam.insert(
+                "f_number".into(),
+                Value::Float(s0.fx * pitch / (2.0 * aperture)),
+            );
+        }
+        if focus > 0.0 {
+            cam.insert("focus_distance".into(), Value::Float(focus));
+        }
+        cam.remove("fx");
+        cam.insert("focal_length".into(), Value::Float(s0.fx * pitch));
+    }
+    t.insert("camera".into(), Value::Table(cam));
+    if !port_faces.is_empty() {
+        port_note(&mut cx, s0, &port_faces);
+    }
+
+    if let Some(w) = &water {
+        let mut wt = Table::new();
+        wt.insert("absorption".into(), arr(w.sigma_a));
+        wt.insert("scattering".into(), arr(w.sigma_s));
+        wt.insert("g".into(), Value::Float(w.g));
+        n_water = n_water.or_else(|| {
+            port_faces
+                .iter()
+                .map(|p| p.3)
+                .filter(|&n| n > 1.0)
+                .fold(None, |a: Option<f64>, n| Some(a.map_or(n, |a| a.max(n))))
+        });
+        if let Some(n) = n_water {
+            wt.insert("ior".into(), Value::Float(n));
+        }
+        t.insert("water".into(), Value::Table(wt));
+        if surface {
+            let mut site = Table::new();
+            site.insert("surface".into(), Value::String("flat".into()));
+            t.insert("site".into(), Value::Table(site));
+        }
+    }
+    if let Some((k, dir, e)) = &sun {
+        let (dir_air, e_air) = match (&water, surface) {
+            (Some(_), true) => {
+                let n = n_water.unwrap_or(1.334);
+                unrefract(*dir, *e, n)
+            }
+            _ => (*dir, *e),
+        };
+        let elevation = (-dir_air.z).clamp(-1.0, 1.0).asin();
+        let azimuth = (-dir_air.x).atan2(-dir_air.y);
+        let mut st = Table::new();
+        st.insert("elevation".into(), Value::Float(elevation));
+        st.insert(
+            "azimuth".into(),
+            Value::Float(if azimuth < 0.0 {
+                azimuth + std::f64::consts::TAU
+            } else {
+                azimuth
+            }),
+        );
+        st.insert("irradiance".into(), arr(e_air));
+        t.insert("sun".into(), Value::Table(st));
+        if water.is_some() && surface {
+            cx.note(k, "the directional light is read as the sun refracted at the flat sea surface: elevation and irradiance are those above the water", None);
+        }
+    }
+    if !lights.is_empty() {
+        t.insert("lights".into(), Value::Array(lights));
+    }
+    if !objects.is_empty() {
+        t.insert("objects".into(), Value::Array(objects));
+    }
+
+    // Network: one explicit pose per sensor.
+    let mut poses = Vec::new();
+    for s in &sensors {
+        let mut p = Table::new();
+        p.insert("position".into(), arr(s.pos.to_array()));
+        p.insert("rotation".into(), arr(euler_xyz(s.rot)));
+        poses.push(Value::Table(p));
+    }
+    let mut net = Table::new();
+    net.insert("type".into(), Value::String("explicit".into()));
+    net.insert("poses".into(), Value::Array(poses));
+    t.insert("network".into(), Value::Table(net));
+    if let Some(spp) = s0.samples {
+        let mut r = Table::new();
+        r.insert("samples".into(), Value::Integer(spp.clamp(1, 1 << 20)));
+        t.insert("render".into(), Value::Table(r));
+    }
+
+    let body = toml::to_string(&t).map_err(|e| format!("writing the scene: {e}"))?;
+    let mut head = format!(
+        "# Imported by `poser import` from {}.\n# Check it with `poser validate` and `poser explain`; what was not imported:\n",
+        files
+            .iter()
+            .map(|f| f.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    if cx.notes.is_empty() {
+        head.push_str("#   (nothing)\n");
+    }
+    for n in &cx.notes {
+        for l in n.render().lines() {
+            head.push_str("#   ");
+            head.push_str(l);
+            head.push('\n');
+        }
+    }
+    Ok(Imported {
+        toml: format!("{head}\n{body}"),
+        assets: assets_out,
+        notes: cx.notes,
+    })
+}
+
+/// Sun direction and irradiance in water back to air through a flat surface of index `n`
+/// (the inverse of `optics::sun::refract_into_water`).
+fn unrefract(dir_w: DVec3, e_w: [f64; 3], n: f64) -> (DVec3, [f64; 3]) {
+    let d = dir_w.normalize();
+    let h = DVec3::new(d.x, d.y, 0.0);
+    let s_a = (h.length() * n).min(1.0);
+    let c_a = (1.0 - s_a * s_a).max(0.0).sqrt();
+    let dir_a = if h.length() > 0.0 {
+        h.normalize() * s_a - DVec3::Z * c_a
+    } else {
+        -DVec3::Z
+    };
+    let (_, f) = crate::optics::sun::refract_into_water(dir_a, n);
+    let e = if f > 0.0 { e_w.map(|v| v / f) } else { e_w };
+    (dir_a, e)
+}
+
+/// How locations name a file: relative to the working folder when it is inside it.
+fn shown(path: &Path) -> String {
+    std::env::current_dir()
+        .ok()
+        .and_then(|cwd| path.strip_prefix(cwd).ok().map(|p| p.display().to_string()))
+        .unwrap_or_else(|| path.display().to_string())
+}
+
+fn relabel(x: &mut X, from: &str, to: &str) {
+    if let Some(rest) = x.loc.strip_prefix(from) {
+        x.loc = format!("{to}{rest}");
+    }
+    for k in &mut x.kids {
+        relabel(k, from, to);
+    }
+}
+
+fn collect_ids(x: &X, ids: &mut HashMap<String, X>) {
+    for k in &x.kids {
+        if k.tag != "ref"
+            && let Some(id) = k.attr("id")
+        {
+            ids.entry(id.to_string()).or_insert_with(|| k.clone());
+        }
+        collect_ids(k, ids);
+    }
+}
+
+fn port_note(cx: &mut Cx, s: &Sensor, faces: &[(X, DMat4, f64, f64)]) {
+    // Flat port: rectangles facing the camera; distances along the optical axis.
+    let axis = s.rot.z_axis;
+    let mut d: Vec<(f64, f64, f64)> = faces
+        .iter()
+        .filter(|(x, _, ni, _)| x.ty() == "rectangle" && *ni > 1.0)
+        .filter_map(|(_, m, ni, ne)| {
+            let nrm = m.z_axis.truncate().normalize_or_zero();
+            (nrm.dot(axis).abs() > 1.0 - 1e-9)
+                .then(|| ((m.w_axis.truncate() - s.pos).dot(axis), *ni, *ne))
+        })
+        .collect();
+    d.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let x = faces[0].0.clone();
+    let help = if d.len() >= 2 && d[0].0 > 0.0 {
+        format!(
+            "this is a flat port: declare it as [camera.port] type = \"flat\", pupil_distance = {:.6}, thickness = {:.6}, and its glass's index {:.6} (docs/format.md, camera.port)",
+            d[0].0,
+            d[d.len() - 1].0 - d[0].0,
+            d[0].1
+        )
+    } else {
+        "declare the camera's housing port as [camera.port] (flat, dome or cylinder; docs/format.md)".to_string()
+    };
+    cx.notes.push(
+        Note::new(
+            Some(x.loc),
+            format!(
+                "{} glass and housing shape(s) around the camera are not imported as geometry",
+                faces.len()
+            ),
+        )
+        .help(help),
+    );
+}
+
+#[allow(clippy::too_many_arguments)]
+fn shape(
+    cx: &mut Cx,
+    k: &X,
+    near_sensor: &dyn Fn(&DMat4) -> bool,
+    objects: &mut Vec<Value>,
+    lights: &mut Vec<Value>,
+    assets_out: &mut Vec<(String, Vec<u8>)>,
+    port_faces: &mut Vec<(X, DMat4, f64, f64)>,
+    unique: &mut dyn FnMut(String) -> String,
+    assets: &str,
+) -> Result<(), String> {
+    let m = cx.to_world(k)?;
+    let kind = k.ty().to_string();
+    // An area emitter on the shape.
+    if let Some(e) = k.kids.iter().find(|c| c.tag == "emitter") {
+        if e.ty() == "area" && kind == "rectangle" {
+            let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
+            let (len, frame, ..) = decompose(&m);
+            let mut l = Table::new();
+            l.insert(
+                "name".into(),
+                Value::String(unique(
+                    comment_name(k, "light").unwrap_or_else(|| "area".into()),
+                )),
+            );
+            l.insert("type".into(), Value::String("area".into()));
+            l.insert("mount".into(), Value::String("world".into()));
+            l.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+            l.insert("aim".into(), arr(frame.z_axis.to_array()));
+            l.insert("width".into(), Value::Float(2.0 * len.x));
+            l.insert("height".into(), Value::Float(2.0 * len.y));
+            l.insert("radiance".into(), arr(radiance));
+            lights.push(Value::Table(l));
+            return Ok(());
+        }
+        cx.note(
+            e,
+            format!("an area emitter on a `{kind}` is not imported"),
+            Some("poser's area lights are rectangles"),
+        );
+    }
+    let alb = albedo(cx, k)?;
+    let alb = match alb {
+        Ok(a) => a,
+        Err("null") => return Ok(()), // a medium boundary (the sea box)
+        Err(_) => {
+            let bsdf = k.kids.iter().find(|c| c.tag == "bsdf").cloned();
+            let (ni, ne) = bsdf
+                .map(|b| {
+                    (
+                        cx.float(&b, "int_ior", 1.5).unwrap_or(1.5),
+                        cx.float(&b, "ext_ior", 1.0).unwrap_or(1.0),
+                    )
+                })
+                .unwrap_or((1.5, 1.0));
+            // Glass is the camera's housing port, near the camera or (a mesh in world
+            // coordinates) anywhere: poser declares ports, it does not model them.
+            port_faces.push((k.clone(), m, ni, ne));
+            return Ok(());
+        }
+    };
+    if alb == [0.0; 3] && near_sensor(&m) {
+        port_faces.push((k.clone(), m, 1.0, 1.0));
+        return Ok(());
+    }
+    if alb.iter().any(|&a| !(0.0..=1.0).contains(&a)) {
+        cx.note(
+            k,
+            format!(
+                "albedo ({:.3}, {:.3}, {:.3}) clamped to [0, 1]",
+                alb[0], alb[1], alb[2]
+            ),
+            None,
+        );
+    }
+    let alb = alb.map(|a| a.clamp(0.0, 1.0));
+    if let Some(t) = comment_name(k, "target").filter(|t| !cx.targets.contains(t)) {
+        cx.targets.push(t.clone());
+        cx.note(k, format!("target `{t}` is imported as plain geometry: its known 3D points (the ground truth) are not"), Some("declare it as [[targets]] to get its points in `poser truth`"));
+    }
+    let name = unique(
+        comment_name(k, "object")
+            .or_else(|| k.attr("id").map(str::to_string))
+            .unwrap_or_else(|| kind.clone()),
+    );
+    let mut o = Table::new();
+    o.insert("name".into(), Value::String(name.clone()));
+    let (len, frame, mirror, sheared) = decompose(&m);
+    let placed = |o: &mut Table| {
+        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+        o.insert("rotation".into(), arr(euler_xyz(frame)));
+    };
+    let analytic = !sheared && !mirror;
+    match kind.as_str() {
+        "rectangle" if analytic => {
+            o.insert("shape".into(), Value::String("plane".into()));
+            o.insert("width".into(), Value::Float(2.0 * len.x));
+            o.insert("height".into(), Value::Float(2.0 * len.y));
+            placed(&mut o);
+        }
+        "cube" if analytic => {
+            o.insert("shape".into(), Value::String("box".into()));
+            o.insert("size".into(), arr((2.0 * len).to_array()));
+            placed(&mut o);
+        }
+        "sphere"
+            if analytic
+                && (len.x - len.y).abs() < 1e-9 * len.x
+                && (len.x - len.z).abs() < 1e-9 * len.x =>
+        {
+            let r = cx.float(k, "radius", 1.0)? * len.x;
+            let c = m.transform_point3(cx.point(k, "center", DVec3::ZERO)?);
+            o.insert("shape".into(), Value::String("sphere".into()));
+            o.insert("radius".into(), Value::Float(r));
+            o.insert("position".into(), arr(c.to_array()));
+        }
+        "cylinder"
+            if analytic
+                && (len.x - len.y).abs() < 1e-9 * len.x
+                && (len.x - len.z).abs() < 1e-9 * len.x =>
+        {
+            let p0 = m.transform_point3(cx.point(k, "p0", DVec3::ZERO)?);
+            let p1 = m.transform_point3(cx.point(k, "p1", DVec3::Z)?);
+            let r = cx.float(k, "radius", 1.0)? * len.x;
+            let axis = (p1 - p0).normalize_or_zero();
+            if axis == DVec3::ZERO {
+                return Err(format!("{}: a cylinder with p0 = p1", k.loc));
+            }
+            let rot = DMat3::from_quat(glam::DQuat::from_rotation_arc(DVec3::Z, axis));
+            o.insert("shape".into(), Value::String("cylinder".into()));
+            o.insert("radius".into(), Value::Float(r));
+            o.insert("height".into(), Value::Float((p1 - p0).length()));
+            o.insert("position".into(), arr((0.5 * (p0 + p1)).to_array()));
+            o.insert("rotation".into(), arr(euler_xyz(rot)));
+            cx.note(k, "Mitsuba's cylinder is open; poser's has caps", None);
+        }
+        "rectangle" | "cube" | "sphere" | "cylinder" | "disk" | "obj" | "ply" => {
+            let mesh = match kind.as_str() {
+                "obj" | "ply" => {
+                    let f = k
+                        .named("filename")
+                        .and_then(|f| f.attr("value"))
+                        .ok_or_else(|| format!("{}: a `{kind}` shape without `filename`", k.loc))?;
+                    let path = inside(&cx.root, &k.dir, f, &k.loc)?;
+                    let bytes = std::fs::read(&path)
+                        .map_err(|e| format!("{}: {}: {e}", k.loc, path.display()))?;
+                    let shown = path.display().to_string();
+                    let local = if kind == "obj" {
+                        meshes::read_obj(&String::from_utf8_lossy(&bytes), &shown)?
+                    } else {
+                        meshes::read_ply(&bytes, &shown)?
+                    };
+                    let mut w = local;
+                    for p in &mut w.positions {
+                        *p = m.transform_point3(*p);
+                    }
+                    if m.determinant() < 0.0 {
+                        for t in &mut w.triangles {
+                            t.swap(1, 2);
+                        }
+                    }
+                    w
+                }
+                "disk" => disk_mesh(&m),
+                _ => {
+                    // Sheared or mirrored analytic shapes: tessellate them.
+                    use crate::geometry::mesh as gm;
+                    let mut w = match kind.as_str() {
+                        "rectangle" => gm::plane(2.0, 2.0),
+                        "cube" => gm::cuboid(DVec3::splat(2.0)),
+                        "sphere" => gm::sphere(1.0, gm::SPHERE_SEGMENTS),
+                        _ => gm::cylinder(1.0, 1.0, gm::CYLINDER_SEGMENTS),
+                    };
+                    for p in &mut w.positions {
+                        *p = m.transform_point3(*p);
+                    }
+                    w
+                }
+            };
+            let file = safe_file_name(&format!("{}.glb", name));
+            assets_out.push((file.clone(), meshes::glb(&mesh, &name)));
+            o.insert("shape".into(), Value::String("mesh".into()));
+            o.insert("path".into(), Value::String(format!("{assets}/{file}")));
+        }
+        other => {
+            cx.note(
+                k,
+                format!("a `{other}` shape is not imported"),
+                Some("poser reads rectangle, cube, sphere, cylinder, disk, obj and ply"),
+            );
+            return Ok(());
+        }
+    }
+    o.insert("albedo".into(), arr(alb));
+    objects.push(Value::Table(o));
+    Ok(())
+}
+
+/// A light (not an area emitter). `view`: the camera (rotation, centre) of the view file the
+/// light comes from, for a rig-mounted light.
+fn emitter(
+    cx: &mut Cx,
+    k: &X,
+    view: Option<(DMat3, DVec3)>,
+    lights: &mut Vec<Value>,
+    sun: &mut Option<(X, DVec3, [f64; 3])>,
+    unique: &mut dyn FnMut(String) -> String,
+) -> Result<(), String> {
+    let m = cx.to_world(k)?;
+    let name = comment_name(k, "light").or_else(|| k.attr("id").map(str::to_string));
+    let mut l = Table::new();
+    let place = |l: &mut Table, pos: DVec3, aim: Option<DVec3>| match view {
+        Some((r, c)) => {
+            let inv = r.transpose();
+            l.insert("mount".into(), Value::String("rig".into()));
+            l.insert("position".into(), arr((inv * (pos - c)).to_array()));
+            if let Some(a) = aim {
+                l.insert("aim".into(), arr((inv * a).to_array()));
+            }
+        }
+        None => {
+            l.insert("mount".into(), Value::String("world".into()));
+            l.insert("position".into(), arr(pos.to_array()));
+            if let Some(a) = aim {
+                l.insert("aim".into(), arr(a.to_array()));
+            }
+        }
+    };
+    match k.ty() {
+        "point" => {
+            let pos = if k.named("position").is_some() {
+                cx.point(k, "position", DVec3::ZERO)?
+            } else {
+                m.w_axis.truncate()
+            };
+            l.insert(
+                "name".into(),
+                Value::String(unique(name.unwrap_or_else(|| "point".into()))),
+            );
+            l.insert("type".into(), Value::String("point".into()));
+            place(&mut l, pos, None);
+            l.insert(
+                "intensity".into(),
+                arr(cx.colour(k, "intensity")?.unwrap_or([1.0; 3])),
+            );
+        }
+        "spot" => {
+            let cutoff = cx.float(k, "cutoff_angle", 20.0)?;
+            let beam = cx.float(k, "beam_width", cutoff * 0.75)?;
+            if beam < cutoff * (1.0 - 1e-3) {
+                cx.note(k, format!("the spot's soft edge (beam_width {beam}° inside cutoff_angle {cutoff}°) is imported sharp at the cutoff"), Some("poser's spots have a sharp edge"));
+            }
+            l.insert(
+                "name".into(),
+                Value::String(unique(name.unwrap_or_else(|| "spot".into()))),
+            );
+            l.insert("type".into(), Value::String("spot".into()));
+            place(
+                &mut l,
+                m.w_axis.truncate(),
+                Some(m.z_axis.truncate().normalize()),
+            );
+            l.insert(
+                "beam_angle".into(),
+                Value::Float((2.0 * cutoff).to_radians()),
+            );
+            l.insert(
+                "intensity".into(),
+                arr(cx.colour(k, "intensity")?.unwrap_or([1.0; 3])),
+            );
+        }
+        "directional" => {
+            let dir = if k.named("direction").is_some() {
+                cx.point(k, "direction", -DVec3::Z)?
+            } else {
+                m.z_axis.truncate()
+            };
+            let e = cx.colour(k, "irradiance")?.unwrap_or([1.0; 3]);
+            if sun.is_some() {
+                cx.note(
+                    k,
+                    "a second directional light is not imported",
+                    Some("poser has one sun"),
+                );
+            } else if dir.z >= 0.0 {
+                cx.note(
+                    k,
+                    "a directional light shining upwards is not imported",
+                    Some("poser's sun shines down"),
+                );
+            } else {
+                *sun = Some((k.clone(), dir.normalize(), e));
+            }
+            return Ok(());
+        }
+        "constant" => {
+            l.insert(
+                "name".into(),
+                Value::String(unique(name.unwrap_or_else(|| "ambient".into()))),
+            );
+            l.insert("type".into(), Value::String("ambient".into()));
+            l.insert(
+                "radiance".into(),
+                arr(cx.colour(k, "radiance")?.unwrap_or([1.0; 3])),
+            );
+        }
+        t => {
+            cx.note(
+                k,
+                format!("a `{t}` emitter is not imported"),
+                Some("poser's lights are point, spot, area, ambient and the sun"),
+            );
+            return Ok(());
+        }
+    }
+    lights.push(Value::Table(l));
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn x(tag: &str, attrs: &[(&str, &str)], kids: Vec<X>) -> X {
+        X {
+            tag: tag.into(),
+            attrs: attrs
+                .iter()
+                .map(|(a, b)| (a.to_string(), b.to_string()))
+                .collect(),
+            kids,
+            comment: None,
+            loc: "t.xml:1:1".into(),
+            included: false,
+            dir: PathBuf::from("."),
+        }
+    }
+
+    #[test]
+    fn transforms_compose_in_order() {
+        let t = x(
+            "transform",
+            &[("name", "to_world")],
+            vec![
+                x("scale", &[("value", "2")], vec![]),
+                x("rotate", &[("z", "1"), ("angle", "90")], vec![]),
+                x("translate", &[("x", "1"), ("y", "2"), ("z", "3")], vec![]),
+            ],
+        );
+        let m = transform(&t).unwrap();
+        let p = m.transform_point3(DVec3::X);
+        assert!((p - DVec3::new(1.0, 4.0, 3.0)).length() < 1e-12, "{p}");
+        let la = x(
+            "transform",
+            &[],
+            vec![x(
+                "lookat",
+                &[
+                    ("origin", "0, 0, 1"),
+                    ("target", "0, 0, 0"),
+                    ("up", "0, 1, 0"),
+                ],
+                vec![],
+            )],
+        );
+        let m = transform(&la).unwrap();
+        assert!((m.z_axis.truncate() - DVec3::NEG_Z).length() < 1e-12);
+        assert!((m.w_axis.truncate() - DVec3::Z).length() < 1e-12);
+    }
+
+    #[test]
+    fn euler_angles_invert_the_scene_format_s() {
+        let v = DVec3::new(0.3, -1.1, 2.5);
+        let r = DMat3::from_euler(EulerRot::ZYX, v.z, v.y, v.x);
+        let e = euler_xyz(r);
+        assert!((DVec3::from_array(e) - v).length() < 1e-12);
+    }
+
+    #[test]
+    fn paths_stay_inside_the_root() {
+        let root = Path::new("/a/b");
+        assert!(inside(root, root, "m.ply", "l").is_ok());
+        assert!(
+            inside(root, root, "../c.ply", "l")
+                .unwrap_err()
+                .contains("leaves")
+        );
+        assert!(
+            inside(root, root, "/etc/passwd", "l")
+                .unwrap_err()
+                .contains("absolute")
+        );
+        assert!(inside(root, &root.join("sub"), "../x.ply", "l").is_ok());
+    }
+
+    #[test]
+    fn the_sun_goes_back_through_the_surface() {
+        let dir_a = crate::optics::sun::direction_from(0.9, 2.0);
+        let (dir_w, f) = crate::optics::sun::refract_into_water(dir_a, 1.34);
+        let (back, e) = unrefract(dir_w, [f * 800.0; 3], 1.34);
+        assert!((back - dir_a).length() < 1e-12, "{back} {dir_a}");
+        assert!((e[0] / 800.0 - 1.0).abs() < 1e-12);
+    }
+}

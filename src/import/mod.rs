@@ -1,0 +1,149 @@
+//! `poser import`: scenes written for other renderers → one poser scene file (TOML) and its
+//! assets. A second front end in front of the first: it writes scene *text*, which the scene
+//! front end ([`crate::scene`]) then loads and validates like any hand-written scene.
+//!
+//! | module | reads | writes |
+//! |---|---|---|
+//! | [`mitsuba`] | Mitsuba 3 XML (quick-xml; no DOCTYPE, no entities; `include`, `default`, `ref`) | cameras, poses, objects, lights, water |
+//! | [`meshes`] | Wavefront OBJ, PLY (ASCII and binary) | glTF 2.0 binary (`.glb`) assets |
+//!
+//! Whatever the poser format cannot express is dropped with a [`Note`] naming the element, its
+//! file, line and column, and a hint; the notes go to the terminal and, as comments, to the top
+//! of the scene file. Nothing is written outside the scene file's folder and `--assets`, and
+//! every file is written whole (temporary file, then rename).
+
+pub mod meshes;
+pub mod mitsuba;
+
+use std::path::{Path, PathBuf};
+
+/// Something the importer dropped or changed, with where it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Note {
+    /// `file:line:column` of the element, when it has one.
+    pub location: Option<String>,
+    pub message: String,
+    pub help: Option<String>,
+}
+
+impl Note {
+    pub fn new(location: Option<String>, message: impl Into<String>) -> Note {
+        Note {
+            location,
+            message: message.into(),
+            help: None,
+        }
+    }
+
+    pub fn help(mut self, h: impl Into<String>) -> Note {
+        self.help = Some(h.into());
+        self
+    }
+
+    /// `file:line:col: message` and an indented `help:` line, as the terminal shows it.
+    pub fn render(&self) -> String {
+        let mut s = match &self.location {
+            Some(l) => format!("{l}: {}", self.message),
+            None => self.message.clone(),
+        };
+        if let Some(h) = &self.help {
+            s.push_str(&format!("\n  help: {h}"));
+        }
+        s
+    }
+}
+
+/// An import's result: the scene file's text, its assets (paths relative to the assets
+/// folder) and the notes.
+#[derive(Debug, Clone, Default)]
+pub struct Imported {
+    pub toml: String,
+    pub assets: Vec<(String, Vec<u8>)>,
+    pub notes: Vec<Note>,
+}
+
+/// A name that is safe as one file name component: ASCII letters, digits, `_`, `-`, `.`
+/// (no leading dot), at most 64 characters; anything else becomes `_`.
+pub fn safe_file_name(name: &str) -> String {
+    let mut s: String = name
+        .chars()
+        .take(64)
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    while s.starts_with('.') {
+        s.replace_range(0..1, "_");
+    }
+    if s.is_empty() { "_".into() } else { s }
+}
+
+/// Write the scene file and its assets. `assets` is the folder the assets go to (created);
+/// the scene names them relative to its own folder. Refuses asset names that are not a single
+/// safe file name, so that nothing is written outside `assets`.
+pub fn write(imported: &Imported, scene: &Path, assets: &Path) -> Result<Vec<PathBuf>, String> {
+    let mut written = Vec::new();
+    for (name, bytes) in &imported.assets {
+        if name != &safe_file_name(name) {
+            return Err(format!("asset name `{name}` is not a plain file name"));
+        }
+        let path = assets.join(name);
+        crate::io::write_atomic(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        written.push(path);
+    }
+    crate::io::write_atomic(scene, imported.toml.as_bytes())
+        .map_err(|e| format!("{}: {e}", scene.display()))?;
+    written.push(scene.to_path_buf());
+    Ok(written)
+}
+
+/// `to` relative to the folder `from` (both absolute or both relative to the same place),
+/// with `/` separators, as a scene file names its assets.
+pub fn relative_path(from: &Path, to: &Path) -> String {
+    let a: Vec<_> = from.components().collect();
+    let b: Vec<_> = to.components().collect();
+    let common = a.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    let mut parts: Vec<String> = Vec::new();
+    for _ in common..a.len() {
+        parts.push("..".into());
+    }
+    for c in &b[common..] {
+        parts.push(c.as_os_str().to_string_lossy().into_owned());
+    }
+    if parts.is_empty() {
+        ".".into()
+    } else {
+        parts.join("/")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn file_names_stay_in_their_folder() {
+        assert_eq!(safe_file_name("../../etc/passwd"), "_._.._etc_passwd");
+        assert_eq!(safe_file_name(".hidden"), "_hidden");
+        assert_eq!(safe_file_name(""), "_");
+        assert_eq!(safe_file_name("mesh_01.glb"), "mesh_01.glb");
+        assert!(safe_file_name(&"x".repeat(500)).len() <= 64);
+    }
+
+    #[test]
+    fn relative_paths() {
+        assert_eq!(
+            relative_path(Path::new("/a/b"), Path::new("/a/b/assets")),
+            "assets"
+        );
+        assert_eq!(
+            relative_path(Path::new("/a/b"), Path::new("/a/c/d")),
+            "../c/d"
+        );
+        assert_eq!(relative_path(Path::new("out"), Path::new("out")), ".");
+    }
+}

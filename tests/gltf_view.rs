@@ -1,0 +1,362 @@
+//! `poser export` files in real glTF tools (full tier: `--features backends`; needs node with
+//! the pinned npm packages of `backends/gltf/` and Debian's `chromium`, both installed by
+//! `backends/setup.sh`):
+//!
+//! | test | what |
+//! |---|---|
+//! | [`khronos_validator_finds_no_error_in_any_scenario`] | every shipped scenario and lesson (and a synthetic scene with an area light, with a cylinder or a tilted flat port) exported, then run through the Khronos glTF validator (`gltf-validator`, `backends/gltf/validate.mjs`): zero errors; warnings, infos and hints are reported |
+//! | [`three_js_loads_and_renders_the_export`] | headless Chromium opens `backends/gltf/view.html` (three.js's `GLTFLoader`) on exports served from a temporary folder: the meshes, lines, cameras and lights three.js found equal the file's; the screenshot is not uniform |
+//!
+//! Everything is written into a temporary folder (the page and the exports are served from it
+//! by a small HTTP server in this test, with `node_modules` linked in).
+
+use std::io::{BufRead, BufReader, Write};
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tools() -> PathBuf {
+    let dir = root().join("backends/gltf");
+    assert!(
+        dir.join("node_modules/gltf-validator").is_dir() && dir.join("node_modules/three").is_dir(),
+        "the pinned npm packages of backends/gltf are missing\n  help: run backends/setup.sh \
+         (it runs `npm ci --prefix backends/gltf`)"
+    );
+    dir
+}
+
+fn scenarios() -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for dir in ["scenarios", "scenarios/lessons"] {
+        for e in std::fs::read_dir(root().join(dir)).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|x| x == "toml") {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// `poser export` of `scene` into `dir`; the path of the `.glb`.
+fn export(scene: &Path, dir: &Path) -> PathBuf {
+    let stem = scene.file_stem().unwrap().to_string_lossy().to_string();
+    export_with(scene, &[], &dir.join(format!("{stem}.glb")))
+}
+
+fn export_with(scene: &Path, sets: &[&str], glb: &Path) -> PathBuf {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_poser"));
+    cmd.arg("export").arg(scene).arg("-o").arg(glb);
+    for s in sets {
+        cmd.arg("--set").arg(s);
+    }
+    let o = cmd.current_dir(root()).output().expect("run poser");
+    assert!(
+        o.status.success(),
+        "poser export {} {sets:?} failed:\n{}",
+        scene.display(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    glb.to_path_buf()
+}
+
+/// A scene with what the shipped ones lack: an area light (an emissive mesh), point and spot
+/// lights, the sun; exported with a cylinder port and with a tilted flat port.
+fn synthetic(dir: &Path) -> Vec<PathBuf> {
+    let scene = dir.join("synthetic.toml");
+    let base = root().join("tests/invalid/shared/base.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "include = [{:?}]\n\
+             [sun]\nelevation = \"50 deg\"\n\
+             [[lights]]\ntype = \"point\"\nposition = [0.1, 0, 0]\n\
+             [[lights]]\ntype = \"spot\"\nposition = [0.2, 0, 0]\n\
+             [[lights]]\ntype = \"area\"\nposition = [0, 0, -1]\n\
+             [[lights]]\ntype = \"ambient\"\n\
+             [[objects]]\nshape = \"sphere\"\nradius = 0.3\nposition = [0, 0, -5]\n",
+            base.to_string_lossy()
+        ),
+    )
+    .unwrap();
+    vec![
+        export_with(
+            &scene,
+            &["camera.port.type=cylinder"],
+            &dir.join("synthetic_cylinder.glb"),
+        ),
+        export_with(
+            &scene,
+            &["camera.port.type=flat", "camera.port.tilt=5 deg"],
+            &dir.join("synthetic_tilted_flat.glb"),
+        ),
+    ]
+}
+
+#[test]
+fn khronos_validator_finds_no_error_in_any_scenario() {
+    let tools = tools();
+    let tmp = tempfile::tempdir().unwrap();
+    let mut files: Vec<PathBuf> = scenarios().iter().map(|s| export(s, tmp.path())).collect();
+    files.extend(synthetic(tmp.path()));
+    let o = Command::new("node")
+        .arg(tools.join("validate.mjs"))
+        .args(&files)
+        .output()
+        .expect("run node (help: run backends/setup.sh, which installs nodejs and npm)");
+    assert!(
+        o.status.success(),
+        "the validator failed to run:\n{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let text = String::from_utf8_lossy(&o.stdout);
+    let mut reports = 0;
+    let mut bad = Vec::new();
+    println!("Khronos glTF validator: file, errors, warnings, infos, hints");
+    for line in text.lines() {
+        let r: serde_json::Value = serde_json::from_str(line).unwrap();
+        let file = Path::new(r["file"].as_str().unwrap())
+            .file_name()
+            .unwrap()
+            .to_string_lossy()
+            .to_string();
+        let n = |k: &str| {
+            r[k].as_u64()
+                .unwrap_or_else(|| panic!("{file}: no `{k}` in {r}"))
+        };
+        println!(
+            "  {file}: {} errors, {} warnings, {} infos, {} hints (validator {})",
+            n("errors"),
+            n("warnings"),
+            n("infos"),
+            n("hints"),
+            r["validatorVersion"]
+        );
+        for m in r["messages"].as_array().unwrap() {
+            if m["severity"].as_u64() == Some(0) {
+                bad.push(format!(
+                    "{file}: {} at {}: {}",
+                    m["code"], m["pointer"], m["message"]
+                ));
+            }
+        }
+        if n("errors") > 0 && bad.is_empty() {
+            bad.push(format!("{file}: {} errors", n("errors")));
+        }
+        reports += 1;
+    }
+    assert_eq!(reports, files.len(), "one report per file:\n{text}");
+    assert!(bad.is_empty(), "validation errors:\n{}", bad.join("\n"));
+}
+
+/// A static file server for `dir` on a free local port (a thread per connection); its URL.
+fn serve(dir: PathBuf) -> String {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let url = format!("http://{}", listener.local_addr().unwrap());
+    std::thread::spawn(move || {
+        for stream in listener.incoming() {
+            let Ok(mut stream) = stream else { continue };
+            let dir = dir.clone();
+            std::thread::spawn(move || {
+                let mut reader = BufReader::new(stream.try_clone().unwrap());
+                let mut request = String::new();
+                if reader.read_line(&mut request).is_err() {
+                    return;
+                }
+                loop {
+                    let mut h = String::new();
+                    if reader.read_line(&mut h).map_or(true, |n| n == 0) || h.trim().is_empty() {
+                        break;
+                    }
+                }
+                let target = request.split_whitespace().nth(1).unwrap_or("/");
+                let path = target
+                    .split('?')
+                    .next()
+                    .unwrap_or("/")
+                    .trim_start_matches('/');
+                let file = dir.join(path);
+                let ok = !path.split('/').any(|c| c == "..") && file.is_file();
+                let (status, body) = if ok {
+                    ("200 OK", std::fs::read(&file).unwrap_or_default())
+                } else {
+                    ("404 Not Found", b"not found".to_vec())
+                };
+                let mime = match file.extension().and_then(|e| e.to_str()) {
+                    Some("html") => "text/html; charset=utf-8",
+                    Some("js" | "mjs") => "text/javascript",
+                    Some("glb") => "model/gltf-binary",
+                    Some("json") => "application/json",
+                    _ => "application/octet-stream",
+                };
+                let _ = write!(
+                    stream,
+                    "HTTP/1.1 {status}\r\nContent-Type: {mime}\r\nContent-Length: {}\r\n\
+                     Connection: close\r\n\r\n",
+                    body.len()
+                );
+                let _ = stream.write_all(&body);
+            });
+        }
+    });
+    url
+}
+
+fn chromium() -> PathBuf {
+    for name in ["chromium", "chromium-browser"] {
+        if let Ok(o) = Command::new("which").arg(name).output()
+            && o.status.success()
+        {
+            return PathBuf::from(String::from_utf8_lossy(&o.stdout).trim());
+        }
+    }
+    panic!(
+        "headless Chromium is missing\n  help: run backends/setup.sh as root (it runs \
+         `apt-get install -y chromium`), or install Debian's `chromium` package"
+    );
+}
+
+fn chromium_run(profile: &Path, action: &str, url: &str) -> std::process::Output {
+    Command::new(chromium())
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--use-angle=swiftshader",
+            "--enable-unsafe-swiftshader",
+            "--hide-scrollbars",
+            "--virtual-time-budget=30000",
+            "--window-size=800,600",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg(action)
+        .arg(url)
+        .output()
+        .expect("run chromium")
+}
+
+/// The text of the `data-key` cell `key`.
+fn cell(dom: &str, key: &str) -> u64 {
+    let tag = format!("data-key=\"{key}\">");
+    let i = dom
+        .find(&tag)
+        .unwrap_or_else(|| panic!("no cell `{key}` in the page:\n{dom}"))
+        + tag.len();
+    let j = dom[i..].find('<').unwrap() + i;
+    dom[i..j]
+        .trim()
+        .parse()
+        .unwrap_or_else(|_| panic!("cell `{key}` is `{}`", &dom[i..j]))
+}
+
+#[test]
+fn three_js_loads_and_renders_the_export() {
+    let tools = tools();
+    let tmp = tempfile::tempdir().unwrap();
+    let site = tmp.path().join("site");
+    std::fs::create_dir(&site).unwrap();
+    std::fs::copy(tools.join("view.html"), site.join("view.html")).unwrap();
+    std::os::unix::fs::symlink(tools.join("node_modules"), site.join("node_modules")).unwrap();
+    let url = serve(site.clone());
+    // A survey with the sun, a stereo rig with spots and a seabed, a dome orbit, a drone
+    // over waves (one pose: the path is a point).
+    for name in [
+        "scenarios/reef_strip.toml",
+        "scenarios/lessons/subsea_metrology.toml",
+        "scenarios/dome_orbit.toml",
+        "scenarios/lessons/uav_through_waves.toml",
+    ] {
+        let scene = root().join(name);
+        let glb = export(&scene, &site);
+        let file = glb.file_name().unwrap().to_string_lossy().to_string();
+
+        // What the file holds.
+        let bytes = std::fs::read(&glb).unwrap();
+        let doc = gltf::Gltf::from_slice(&bytes).unwrap().document;
+        let (mut triangles, mut lines, mut points) = (0, 0, 0);
+        for m in doc.meshes() {
+            for p in m.primitives() {
+                match p.mode() {
+                    gltf::mesh::Mode::Triangles => triangles += 1,
+                    gltf::mesh::Mode::LineStrip => lines += 1,
+                    gltf::mesh::Mode::Points => points += 1,
+                    other => panic!("{name}: unexpected primitive mode {other:?}"),
+                }
+            }
+        }
+        let cameras = doc.nodes().filter(|n| n.camera().is_some()).count() as u64;
+        let lights = doc.lights().map_or(0, |l| l.count()) as u64;
+        let model = poser::scene::load(&scene, &[]).ok().unwrap().model;
+        assert_eq!(
+            cameras,
+            (model.poses.len() * model.cameras.len()) as u64,
+            "{name}"
+        );
+
+        // What three.js loaded.
+        let profile = tmp.path().join(format!("profile-{file}"));
+        let page = format!("{url}/view.html?glb={file}");
+        let o = chromium_run(&profile, "--dump-dom", &page);
+        let dom = String::from_utf8_lossy(&o.stdout).to_string();
+        assert!(
+            o.status.success(),
+            "chromium --dump-dom failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            dom.contains("data-status=\"ok\""),
+            "{name}: the page did not finish loading:\n{dom}"
+        );
+        assert_eq!(cell(&dom, "meshes"), triangles as u64, "{name}: meshes");
+        assert_eq!(cell(&dom, "lines"), lines as u64, "{name}: lines");
+        assert_eq!(cell(&dom, "points"), points as u64, "{name}: points");
+        assert_eq!(cell(&dom, "cameras"), cameras, "{name}: cameras");
+        assert_eq!(cell(&dom, "lights"), lights, "{name}: lights");
+        assert!(cell(&dom, "frames") >= 1);
+        println!(
+            "{name}: three.js loaded {triangles} meshes, {lines} line(s), {points} point set(s), \
+             {cameras} cameras, {lights} lights"
+        );
+
+        // The overview and an exported camera's view are rendered, not blank.
+        for (label, query) in [
+            ("overview", String::new()),
+            ("camera 0", "&camera=0".into()),
+        ] {
+            let shot = tmp
+                .path()
+                .join(format!("{file}-{}.png", label.replace(' ', "")));
+            let o = chromium_run(
+                &profile,
+                &format!("--screenshot={}", shot.display()),
+                &format!("{page}{query}"),
+            );
+            assert!(
+                o.status.success() && shot.exists(),
+                "chromium --screenshot failed: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            let img = image::open(&shot).unwrap().to_luma8();
+            // The scene's part of the window (the panel at the top left is left out).
+            let (w, h) = img.dimensions();
+            let px: Vec<f64> = img
+                .enumerate_pixels()
+                .filter(|(x, y, _)| *x > w / 3 || *y > h / 3)
+                .map(|(_, _, p)| p[0] as f64)
+                .collect();
+            let n = px.len() as f64;
+            let mean = px.iter().sum::<f64>() / n;
+            let sd = (px.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+            println!("{name}: {label} screenshot grey mean {mean:.1}, standard deviation {sd:.1}");
+            assert!(
+                sd > 3.0,
+                "{name}: the {label} screenshot is uniform (sd {sd:.2})"
+            );
+        }
+    }
+}
