@@ -791,6 +791,61 @@ fn albedo(cx: &mut Cx, shape: &X) -> Result<Result<[f64; 3], &'static str>, Stri
     }
 }
 
+/// The triangles of an `obj`/`ply` shape, in the world (`m` applied).
+fn file_mesh(cx: &Cx, k: &X, m: &DMat4) -> Result<TriMesh, String> {
+    let kind = k.ty();
+    let f = k
+        .named("filename")
+        .and_then(|f| f.attr("value"))
+        .ok_or_else(|| format!("{}: a `{kind}` shape without `filename`", k.loc))?;
+    let path = inside(&cx.root, &k.dir, f, &k.loc)?;
+    let bytes = std::fs::read(&path).map_err(|e| format!("{}: {}: {e}", k.loc, path.display()))?;
+    let shown = shown(&path);
+    let mut w = if kind == "obj" {
+        meshes::read_obj(&String::from_utf8_lossy(&bytes), &shown)
+    } else {
+        meshes::read_ply(&bytes, &shown)
+    }
+    .map_err(|e| format!("{}: {e}", k.loc))?;
+    for p in &mut w.positions {
+        *p = m.transform_point3(*p);
+    }
+    if m.determinant() < 0.0 {
+        for t in &mut w.triangles {
+            t.swap(1, 2);
+        }
+    }
+    Ok(w)
+}
+
+/// A mesh that is one planar rectangle (four corners, two triangles): its centre, edge
+/// vectors (`u`, `v`) and the unit normal its winding gives.
+fn rectangle_of(mesh: &TriMesh) -> Option<(DVec3, DVec3, DVec3, DVec3)> {
+    if mesh.triangles.len() != 2 {
+        return None;
+    }
+    let t = mesh.triangles[0];
+    let p = |i: u32| mesh.positions[i as usize];
+    let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
+    let n = (b - a).cross(c - a);
+    if n.length() == 0.0 {
+        return None;
+    }
+    let n = n.normalize();
+    // The fourth corner: the one vertex of the second triangle not in the first.
+    let d = mesh.triangles[1]
+        .iter()
+        .map(|&i| p(i))
+        .find(|q| ![a, b, c].contains(q))?;
+    // Corners in order around the rectangle: a, b, c, d with b − a ⟂ d − a.
+    let (u, v) = (b - a, d - a);
+    let tol = 1e-9 * (u.length() + v.length());
+    if u.dot(v).abs() > tol * (u.length() + v.length()) || (a + u + v - c).length() > tol {
+        return None;
+    }
+    Some((a + 0.5 * (u + v), u, v, n))
+}
+
 fn disk_mesh(m: &DMat4) -> TriMesh {
     let n = 64u32;
     let mut t = TriMesh::default();
@@ -953,6 +1008,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
     // Shapes of the world (the first file; its included world for a poser view file) and the
     // rig-mounted lights of each view (elements of the view file itself, not included).
     let mut view_lights: Vec<(X, usize)> = Vec::new();
+    let mut max_depth: Option<(X, i64)> = None;
     for (di, d) in docs.iter().enumerate() {
         for k in &d.kids {
             let shared = di == 0 || k.included;
@@ -980,10 +1036,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
                 }
                 "shape" | "emitter" | "sensor" | "medium" | "bsdf" | "texture" => {}
                 "integrator" if di == 0 && !k.included => {
-                    let depth = cx.int(k, "max_depth", -1)?;
-                    if depth > 0 {
-                        cx.note(k, format!("integrator max_depth {depth} is not imported; render.max_bounces keeps its default"), Some("poser counts scattering vertices: set render.max_bounces yourself"));
-                    }
+                    max_depth = Some((k.clone(), cx.int(k, "max_depth", -1)?));
                 }
                 other if di == 0 => cx.note(k, format!("<{other}> is not imported"), None),
                 _ => {}
@@ -1051,11 +1104,23 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
             wt.insert("ior".into(), Value::Float(n));
         }
         t.insert("water".into(), Value::Table(wt));
-        if surface {
-            let mut site = Table::new();
-            site.insert("surface".into(), Value::String("flat".into()));
-            t.insert("site".into(), Value::Table(site));
+        if !surface && sensors.iter().any(|s| s.pos.z >= 0.0) {
+            cx.notes.push(
+                Note::new(
+                    Some(s0.x.loc.clone()),
+                    "a camera is at z ≥ 0 in water: poser's water lies below z = 0",
+                )
+                .help("move the scene down (every to_world) so that the cameras are at z < 0"),
+            );
         }
+        // poser's sea has a flat surface at z = 0 unless told otherwise; a Mitsuba medium
+        // without poser's sea box fills the scene.
+        let mut site = Table::new();
+        site.insert(
+            "surface".into(),
+            Value::String(if surface { "flat" } else { "none" }.into()),
+        );
+        t.insert("site".into(), Value::Table(site));
     }
     if let Some((k, dir, e)) = &sun {
         let (dir_air, e_air) = match (&water, surface) {
@@ -1102,9 +1167,29 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
     net.insert("type".into(), Value::String("explicit".into()));
     net.insert("poses".into(), Value::Array(poses));
     t.insert("network".into(), Value::Table(net));
+    let mut r = Table::new();
     if let Some(spp) = s0.samples {
-        let mut r = Table::new();
         r.insert("samples".into(), Value::Integer(spp.clamp(1, 1 << 20)));
+    }
+    if let Some((k, depth)) = &max_depth {
+        // Mitsuba counts path vertices from the camera and every glass face (poser's port:
+        // 2); poser counts scattering vertices (docs/render-conventions.md §3.5).
+        let glass = if port_faces.iter().any(|p| p.2 > 1.0) {
+            2
+        } else {
+            0
+        };
+        if *depth > 1 + glass {
+            r.insert("bounces".into(), Value::Integer(depth - 1 - glass));
+        } else {
+            cx.note(
+                k,
+                format!("integrator max_depth {depth} is not imported"),
+                Some("poser's render.bounces counts scattering vertices; its default is used"),
+            );
+        }
+    }
+    if !r.is_empty() {
         t.insert("render".into(), Value::Table(r));
     }
 
@@ -1251,10 +1336,42 @@ fn shape(
             lights.push(Value::Table(l));
             return Ok(());
         }
+        if e.ty() == "area"
+            && (kind == "obj" || kind == "ply")
+            && let Some((centre, u, v, n)) = rectangle_of(&file_mesh(cx, k, &m)?)
+        {
+            let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
+            let mut l = Table::new();
+            l.insert(
+                "name".into(),
+                Value::String(unique(
+                    k.attr("id")
+                        .map(str::to_string)
+                        .unwrap_or_else(|| "area".into()),
+                )),
+            );
+            l.insert("type".into(), Value::String("area".into()));
+            l.insert("mount".into(), Value::String("world".into()));
+            l.insert("position".into(), arr(centre.to_array()));
+            l.insert("aim".into(), arr(n.to_array()));
+            l.insert("width".into(), Value::Float(u.length()));
+            l.insert("height".into(), Value::Float(v.length()));
+            l.insert("radiance".into(), arr(radiance));
+            lights.push(Value::Table(l));
+            if (u.length() - v.length()).abs() > 1e-9 * u.length() {
+                cx.note(
+                    e,
+                    "a rectangular mesh emitter becomes an area light; its turn about its \
+                         normal follows poser's convention for `aim`",
+                    None,
+                );
+            }
+            return Ok(());
+        }
         cx.note(
             e,
             format!("an area emitter on a `{kind}` is not imported"),
-            Some("poser's area lights are rectangles"),
+            Some("poser's area lights are rectangles (a `rectangle`, or a mesh of one)"),
         );
     }
     let alb = albedo(cx, k)?;
@@ -1354,31 +1471,7 @@ fn shape(
         }
         "rectangle" | "cube" | "sphere" | "cylinder" | "disk" | "obj" | "ply" => {
             let mesh = match kind.as_str() {
-                "obj" | "ply" => {
-                    let f = k
-                        .named("filename")
-                        .and_then(|f| f.attr("value"))
-                        .ok_or_else(|| format!("{}: a `{kind}` shape without `filename`", k.loc))?;
-                    let path = inside(&cx.root, &k.dir, f, &k.loc)?;
-                    let bytes = std::fs::read(&path)
-                        .map_err(|e| format!("{}: {}: {e}", k.loc, path.display()))?;
-                    let shown = path.display().to_string();
-                    let local = if kind == "obj" {
-                        meshes::read_obj(&String::from_utf8_lossy(&bytes), &shown)?
-                    } else {
-                        meshes::read_ply(&bytes, &shown)?
-                    };
-                    let mut w = local;
-                    for p in &mut w.positions {
-                        *p = m.transform_point3(*p);
-                    }
-                    if m.determinant() < 0.0 {
-                        for t in &mut w.triangles {
-                            t.swap(1, 2);
-                        }
-                    }
-                    w
-                }
+                "obj" | "ply" => file_mesh(cx, k, &m)?,
                 "disk" => disk_mesh(&m),
                 _ => {
                     // Sheared or mirrored analytic shapes: tessellate them.
