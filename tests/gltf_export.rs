@@ -16,27 +16,14 @@ use poser::model::{LightKind, Model, Port};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod support;
+
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// Every shipped scenario and every lesson scene.
 fn scenarios() -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    for dir in ["scenarios", "scenarios/lessons"] {
-        for e in std::fs::read_dir(root().join(dir)).unwrap() {
-            let p = e.unwrap().path();
-            if p.extension().is_some_and(|x| x == "toml") {
-                out.push(p);
-            }
-        }
-    }
-    out.sort();
-    assert!(
-        out.len() >= 10 && out.iter().any(|p| p.to_string_lossy().contains("lessons")),
-        "found only {out:?}"
-    );
-    out
+    support::shipped_scenes()
 }
 
 fn export(scene: &Path, out: &Path) -> std::process::Output {

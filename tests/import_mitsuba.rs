@@ -8,19 +8,18 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod support;
+
 fn poser() -> Command {
     Command::new(env!("CARGO_BIN_EXE_poser"))
 }
 
+/// The shipped scenes in `sub` (`scenarios` or `scenarios/lessons`).
 fn scenes(sub: &str) -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join(sub);
-    let mut out: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
-        .collect();
-    out.sort();
-    out
+    support::shipped_scenes()
+        .into_iter()
+        .filter(|p| p.parent().is_some_and(|d| d.ends_with(sub)))
+        .collect()
 }
 
 /// Numbers of `a` and `b` (JSON of model parts) agree within `rel` relative (1e-12 absolute).

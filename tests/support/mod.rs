@@ -16,6 +16,27 @@ pub mod model;
 pub mod native;
 pub mod plan;
 
+/// Every shipped scenario and lesson scene (`scenarios/*.toml`, `scenarios/lessons/*.toml`),
+/// sorted.
+pub fn shipped_scenes() -> Vec<std::path::PathBuf> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut out = Vec::new();
+    for dir in ["scenarios", "scenarios/lessons"] {
+        for e in std::fs::read_dir(root.join(dir)).expect("scenarios") {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|x| x == "toml") {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    assert!(
+        out.len() >= 10 && out.iter().any(|p| p.to_string_lossy().contains("lessons")),
+        "found only {out:?}"
+    );
+    out
+}
+
 /// The shipped scenes that `tests/in/*.toml` includes (canonical paths): the scenes the snapshot
 /// suite (`tests/compile_out.rs`) already compiles with every backend.
 pub fn pinned_scenes() -> Vec<std::path::PathBuf> {
