@@ -211,7 +211,7 @@ fn chromium_run(profile: &Path, action: &str, url: &str) -> std::process::Output
             "--use-angle=swiftshader",
             "--enable-unsafe-swiftshader",
             "--hide-scrollbars",
-            "--virtual-time-budget=30000",
+            "--virtual-time-budget=60000",
             "--window-size=800,600",
         ])
         .arg(format!("--user-data-dir={}", profile.display()))
