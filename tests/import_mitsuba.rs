@@ -47,6 +47,30 @@ fn close(a: &Value, b: &Value, rel: f64, path: &str) -> Result<(), String> {
     }
 }
 
+/// A light as it stands in the world at rig pose `pose`.
+fn in_world(m: &Model, l: &poser::model::Light, pose: usize) -> poser::model::Light {
+    use poser::model::{LightKind, Mount};
+    let mut l = l.clone();
+    if l.mount == Mount::Rig {
+        let w = &m.poses[pose].world_from_rig;
+        match &mut l.kind {
+            LightKind::Point { position, .. } => *position = w.transform_point(*position),
+            LightKind::Spot {
+                position,
+                direction,
+                ..
+            } => {
+                *position = w.transform_point(*position);
+                *direction = w.rotation * *direction;
+            }
+            LightKind::Area { frame, .. } => *frame = w.compose(frame),
+            LightKind::Ambient { .. } => {}
+        }
+        l.mount = Mount::World;
+    }
+    l
+}
+
 fn json<T: serde::Serialize>(v: &T) -> Value {
     serde_json::to_value(v).unwrap()
 }
@@ -71,16 +95,17 @@ fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<Strin
             why.trim()
         )));
     }
-    if model.cameras.len() > 1 {
-        return Ok(Some(
-            "a multi-camera rig: the importer makes one pose per sensor".into(),
-        ));
-    }
     let manifest: Value =
         serde_json::from_slice(&std::fs::read(mi.join("manifest.json")).unwrap()).unwrap();
     let views = manifest["views"].as_array().unwrap();
-    let step = views.len().div_ceil(max_views).max(1);
-    let picked: Vec<&Value> = views.iter().step_by(step).collect();
+    // Every camera's view of up to `max_views` rig poses, spread over the network.
+    let n_cams = model.cameras.len();
+    let n_poses = views.len() / n_cams;
+    let step = n_poses.div_ceil(max_views).max(1);
+    let picked: Vec<&Value> = views
+        .iter()
+        .filter(|v| (v["pose"].as_u64().unwrap() as usize).is_multiple_of(step))
+        .collect();
     let files: Vec<PathBuf> = picked
         .iter()
         .map(|v| {
@@ -110,17 +135,23 @@ fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<Strin
         .map_err(|e| e.render())?
         .model;
 
-    // Poses: world_from_camera of every imported view.
-    if back.poses.len() != picked.len() {
+    // Poses: world_from_camera of every imported view (the imported rig's frame may differ).
+    if back.poses.len() * n_cams != picked.len() || back.cameras.len() != n_cams {
         return Err(format!(
-            "{} poses for {} views",
+            "{} poses × {} cameras for {} views",
             back.poses.len(),
+            back.cameras.len(),
             picked.len()
         ));
     }
-    for (i, v) in picked.iter().enumerate() {
+    let index = |m: &Model, name: &str| m.cameras.iter().position(|c| c.name == name).unwrap();
+    for (k, v) in picked.iter().enumerate() {
         let p = v["pose"].as_u64().unwrap() as usize;
-        let (a, b) = (model.world_from_camera(p, 0), back.world_from_camera(i, 0));
+        let name = v["camera"].as_str().unwrap();
+        let (a, b) = (
+            model.world_from_camera(p, index(&model, name)),
+            back.world_from_camera(k / n_cams, if n_cams == 1 { 0 } else { index(&back, name) }),
+        );
         let dr = (a.rotation - b.rotation)
             .to_cols_array()
             .iter()
@@ -129,23 +160,29 @@ fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<Strin
         let dt = (a.translation - b.translation).length();
         if dr > 1e-9 || dt > 1e-9 {
             return Err(format!(
-                "pose {p}: rotation off by {dr:e}, centre by {dt:e} m"
+                "pose {p}, camera {name}: rotation off by {dr:e}, centre by {dt:e} m"
             ));
         }
     }
-    // Intrinsics.
-    let (c, d) = (&model.cameras[0], &back.cameras[0]);
-    if (c.width, c.height) != (d.width, d.height) {
-        return Err("image size differs".into());
-    }
-    for (what, x, y) in [
-        ("fx", c.fx, d.fx),
-        ("fy", c.fy, d.fy),
-        ("cx", c.cx, d.cx),
-        ("cy", c.cy, d.cy),
-    ] {
-        if (x - y).abs() > 1e-12 * x.abs().max(1.0) {
-            return Err(format!("{what}: {x} vs {y}"));
+    // Intrinsics, camera by camera.
+    for c in &model.cameras {
+        let d = if n_cams == 1 {
+            &back.cameras[0]
+        } else {
+            &back.cameras[index(&back, &c.name)]
+        };
+        if (c.width, c.height) != (d.width, d.height) {
+            return Err("image size differs".into());
+        }
+        for (what, x, y) in [
+            ("fx", c.fx, d.fx),
+            ("fy", c.fy, d.fy),
+            ("cx", c.cx, d.cx),
+            ("cy", c.cy, d.cy),
+        ] {
+            if (x - y).abs() > 1e-12 * x.abs().max(1.0) {
+                return Err(format!("{}: {what}: {x} vs {y}", c.name));
+            }
         }
     }
     // Water.
@@ -175,16 +212,17 @@ fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<Strin
         }
         _ => return Err("water present in one model only".into()),
     }
-    // Lights, by name.
+    // Lights, by name, in the world at the first imported pose (rig frames may differ).
+    let p0 = picked[0]["pose"].as_u64().unwrap() as usize;
     let mut a: Vec<_> = model
         .lights
         .iter()
-        .map(|l| (l.name.clone(), json(l)))
+        .map(|l| (l.name.clone(), json(&in_world(&model, l, p0))))
         .collect();
     let mut b: Vec<_> = back
         .lights
         .iter()
-        .map(|l| (l.name.clone(), json(l)))
+        .map(|l| (l.name.clone(), json(&in_world(&back, l, 0))))
         .collect();
     a.sort_by(|x, y| x.0.cmp(&y.0));
     b.sort_by(|x, y| x.0.cmp(&y.0));

@@ -600,6 +600,19 @@ struct Sensor {
     samples: Option<i64>,
     /// Which input file it comes from.
     doc: usize,
+    /// The (pose, camera) a poser view file names in its first comment.
+    view: Option<(usize, String)>,
+}
+
+/// poser's view files name their image's rig pose and camera in their first comment:
+/// "… image `left_img_0001` = pose 0 (`img_0001`), camera `left`; …".
+fn view_of(doc: &X) -> Option<(usize, String)> {
+    let c = doc.comment.as_deref()?;
+    let i = c.find("= pose ")? + "= pose ".len();
+    let pose: usize = c[i..].split_whitespace().next()?.parse().ok()?;
+    let j = c.find("camera `")? + "camera `".len();
+    let name = c[j..].split('`').next()?.to_string();
+    Some((pose, name))
 }
 
 fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
@@ -699,6 +712,7 @@ fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
         pos: m.w_axis.truncate(),
         samples,
         doc: 0,
+        view: None,
     }))
 }
 
@@ -911,6 +925,9 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         for k in d.kids.iter().filter(|k| k.tag == "sensor") {
             if let Some(mut s) = sensor(&mut cx, k)? {
                 s.doc = di;
+                if d.kids.iter().filter(|k| k.tag == "sensor").count() == 1 {
+                    s.view = view_of(d);
+                }
                 sensors.push(s);
             }
         }
@@ -921,7 +938,20 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
             first.display()
         ));
     };
+    // A rig: poser's view files of several cameras (each names its pose and camera).
+    let mut names: Vec<String> = Vec::new();
+    for s in &sensors {
+        if let Some((_, n)) = &s.view
+            && !names.contains(n)
+        {
+            names.push(n.clone());
+        }
+    }
+    let rig = names.len() > 1 && sensors.iter().all(|s| s.view.is_some());
     for s in &sensors[1..] {
+        if rig {
+            break;
+        }
         if (s.width, s.height) != (s0.width, s0.height)
             || (s.fx / s0.fx - 1.0).abs() > 1e-9
             || (s.cx - s0.cx).abs() > 1e-6
@@ -1094,8 +1124,10 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         wt.insert("scattering".into(), arr(w.sigma_s));
         wt.insert("g".into(), Value::Float(w.g));
         n_water = n_water.or_else(|| {
+            // The index outside the glass faces that border the water (an `exterior` medium).
             port_faces
                 .iter()
+                .filter(|p| p.0.kids.iter().any(|c| c.attr("name") == Some("exterior")))
                 .map(|p| p.3)
                 .filter(|&n| n > 1.0)
                 .fold(None, |a: Option<f64>, n| Some(a.map_or(n, |a| a.max(n))))
@@ -1155,13 +1187,71 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         t.insert("objects".into(), Value::Array(objects));
     }
 
-    // Network: one explicit pose per sensor.
+    // Network: one explicit pose per sensor, or per rig pose (the rig frame is the first
+    // camera's).
     let mut poses = Vec::new();
-    for s in &sensors {
-        let mut p = Table::new();
-        p.insert("position".into(), arr(s.pos.to_array()));
-        p.insert("rotation".into(), arr(euler_xyz(s.rot)));
-        poses.push(Value::Table(p));
+    if rig {
+        let find = |p: usize, n: &str| {
+            sensors
+                .iter()
+                .find(|s| s.view.as_ref().is_some_and(|v| v.0 == p && v.1 == n))
+        };
+        let mut ids: Vec<usize> = Vec::new();
+        for s in &sensors {
+            let p = s.view.as_ref().map_or(0, |v| v.0);
+            if !ids.contains(&p) {
+                ids.push(p);
+            }
+        }
+        let mut cams = Vec::new();
+        for n in &names {
+            let Some((a, b)) = ids
+                .iter()
+                .find_map(|&p| Some((find(p, &names[0])?, find(p, n)?)))
+            else {
+                return Err(format!(
+                    "camera `{n}` is never imaged at a pose of camera `{}`: its place in the rig is unknown",
+                    names[0]
+                ));
+            };
+            let inv = a.rot.transpose();
+            let mut c = Table::new();
+            c.insert("name".into(), Value::String(n.clone()));
+            c.insert("position".into(), arr((inv * (b.pos - a.pos)).to_array()));
+            c.insert("rotation".into(), arr(euler_xyz(inv * b.rot)));
+            c.insert("width".into(), Value::Integer(b.width));
+            c.insert("height".into(), Value::Integer(b.height));
+            c.insert("fx".into(), Value::Float(b.fx));
+            c.insert("principal_point".into(), arr([b.cx, b.cy]));
+            cams.push(Value::Table(c));
+        }
+        let mut rt = Table::new();
+        rt.insert("type".into(), Value::String("multi".into()));
+        rt.insert("cameras".into(), Value::Array(cams));
+        t.insert("rig".into(), Value::Table(rt));
+        for &p in &ids {
+            let Some(s) = find(p, &names[0]) else {
+                cx.notes.push(Note::new(
+                    None,
+                    format!(
+                        "rig pose {p} has no image of camera `{}`: it is not imported",
+                        names[0]
+                    ),
+                ));
+                continue;
+            };
+            let mut pt = Table::new();
+            pt.insert("position".into(), arr(s.pos.to_array()));
+            pt.insert("rotation".into(), arr(euler_xyz(s.rot)));
+            poses.push(Value::Table(pt));
+        }
+    } else {
+        for s in &sensors {
+            let mut p = Table::new();
+            p.insert("position".into(), arr(s.pos.to_array()));
+            p.insert("rotation".into(), arr(euler_xyz(s.rot)));
+            poses.push(Value::Table(p));
+        }
     }
     let mut net = Table::new();
     net.insert("type".into(), Value::String("explicit".into()));
