@@ -271,6 +271,32 @@ pub struct Light {
     pub kind: LightKind,
 }
 
+impl Light {
+    /// This light as it stands in the world when the rig is at `world_from_rig` (a
+    /// world-mounted light unchanged; the result is world-mounted).
+    pub fn in_world(&self, world_from_rig: &Pose) -> Light {
+        let mut l = self.clone();
+        if l.mount == Mount::Rig {
+            let w = world_from_rig;
+            match &mut l.kind {
+                LightKind::Point { position, .. } => *position = w.transform_point(*position),
+                LightKind::Spot {
+                    position,
+                    direction,
+                    ..
+                } => {
+                    *position = w.transform_point(*position);
+                    *direction = w.transform_vector(*direction);
+                }
+                LightKind::Area { frame, .. } => *frame = w.compose(frame),
+                LightKind::Ambient { .. } => {}
+            }
+            l.mount = Mount::World;
+        }
+        l
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Mount {

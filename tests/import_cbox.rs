@@ -9,6 +9,16 @@ use std::process::Command;
 const RES: u32 = 64;
 const SPP: u32 = 256;
 
+/// Run a command; it must succeed.
+fn run(cmd: &mut Command) {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn exr_rgb(path: &Path) -> Vec<[f32; 3]> {
     let img = image::open(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -37,18 +47,11 @@ fn the_mitsuba_cornell_box_imports_and_renders_the_same_natively() {
     std::fs::write(cbox.join("cbox.xml"), &xml).unwrap();
 
     let scene = dir.path().join("cbox.toml");
-    let out = Command::new(env!("CARGO_BIN_EXE_poser"))
+    run(Command::new(env!("CARGO_BIN_EXE_poser"))
         .arg("import")
         .arg(cbox.join("cbox.xml"))
         .arg("-o")
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+        .arg(&scene));
     let model = poser::scene::load(&scene, &[]).unwrap().model;
     assert_eq!(
         model.objects.len(),
@@ -62,17 +65,10 @@ fn the_mitsuba_cornell_box_imports_and_renders_the_same_natively() {
     );
 
     let native = dir.path().join("native");
-    let out = Command::new(env!("CARGO_BIN_EXE_poser"))
+    run(Command::new(env!("CARGO_BIN_EXE_poser"))
         .args(["render", "--quiet", "--samples", &SPP.to_string(), "-o"])
         .arg(&native)
-        .arg(&scene)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+        .arg(&scene));
     let a = exr_rgb(&native.join("img_0001.exr"));
 
     // The original, rendered by Mitsuba 3 (scalar_rgb).
@@ -87,16 +83,9 @@ fn the_mitsuba_cornell_box_imports_and_renders_the_same_natively() {
     )
     .unwrap();
     let mi_exr = dir.path().join("mitsuba.exr");
-    let out = poser::backend::python::command(&script)
+    run(poser::backend::python::command(&script)
         .arg(cbox.join("cbox.xml"))
-        .arg(&mi_exr)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+        .arg(&mi_exr));
     let b = exr_rgb(&mi_exr);
     assert_eq!(a.len(), b.len());
     assert_eq!(a.len(), (RES * RES) as usize);

@@ -47,30 +47,6 @@ fn close(a: &Value, b: &Value, rel: f64, path: &str) -> Result<(), String> {
     }
 }
 
-/// A light as it stands in the world at rig pose `pose`.
-fn in_world(m: &Model, l: &poser::model::Light, pose: usize) -> poser::model::Light {
-    use poser::model::{LightKind, Mount};
-    let mut l = l.clone();
-    if l.mount == Mount::Rig {
-        let w = &m.poses[pose].world_from_rig;
-        match &mut l.kind {
-            LightKind::Point { position, .. } => *position = w.transform_point(*position),
-            LightKind::Spot {
-                position,
-                direction,
-                ..
-            } => {
-                *position = w.transform_point(*position);
-                *direction = w.rotation * *direction;
-            }
-            LightKind::Area { frame, .. } => *frame = w.compose(frame),
-            LightKind::Ambient { .. } => {}
-        }
-        l.mount = Mount::World;
-    }
-    l
-}
-
 fn json<T: serde::Serialize>(v: &T) -> Value {
     serde_json::to_value(v).unwrap()
 }
@@ -217,12 +193,22 @@ fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<Strin
     let mut a: Vec<_> = model
         .lights
         .iter()
-        .map(|l| (l.name.clone(), json(&in_world(&model, l, p0))))
+        .map(|l| {
+            (
+                l.name.clone(),
+                json(&l.in_world(&model.poses[p0].world_from_rig)),
+            )
+        })
         .collect();
     let mut b: Vec<_> = back
         .lights
         .iter()
-        .map(|l| (l.name.clone(), json(&in_world(&back, l, 0))))
+        .map(|l| {
+            (
+                l.name.clone(),
+                json(&l.in_world(&back.poses[0].world_from_rig)),
+            )
+        })
         .collect();
     a.sort_by(|x, y| x.0.cmp(&y.0));
     b.sort_by(|x, y| x.0.cmp(&y.0));

@@ -424,15 +424,6 @@ fn quat(what: &str, m: DMat3) -> Result<json::scene::UnitQuaternion, String> {
     Ok(json::scene::UnitQuaternion(v.map(|x| x / n)))
 }
 
-/// A rotation whose −z axis is the unit vector `d` (glTF frame).
-fn looking_along(d: DVec3) -> DMat3 {
-    let z = -d.normalize();
-    let up = if z.y.abs() < 0.9 { DVec3::Y } else { DVec3::X };
-    let x = up.cross(z).normalize();
-    let y = z.cross(x);
-    DMat3::from_cols(x, y, z)
-}
-
 impl Builder {
     fn new() -> Builder {
         Builder {
@@ -791,16 +782,6 @@ impl Builder {
 // Targets
 // ------------------------------------------------------------------------------------------
 
-/// sRGB encoding of a linear value in [0, 1] (IEC 61966-2-1).
-fn srgb_encode(x: f64) -> f64 {
-    let x = x.clamp(0.0, 1.0);
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
-
 fn target_primitives(
     b: &mut Builder,
     t: &crate::model::Target,
@@ -858,7 +839,10 @@ fn target_primitives(
         image::imageops::resize(&img, pw, ph, image::imageops::FilterType::Nearest)
     };
     let lut: Vec<u8> = (0..=255u32)
-        .map(|v| (srgb_encode(v as f64 / 255.0) * 255.0).round() as u8)
+        .map(|v| {
+            (crate::sensor::tone(crate::model::ToneCurve::Srgb, v as f64 / 255.0) * 255.0).round()
+                as u8
+        })
         .collect();
     for px in img.pixels_mut() {
         px.0 = px.0.map(|v| lut[v as usize]);
@@ -1282,7 +1266,8 @@ fn light_node(
     direction: Option<DVec3>,
 ) -> Result<json::Index<json::Node>, String> {
     let rotation = match direction {
-        Some(d) => Some(quat(what, looking_along(GLTF_FROM_POSER * d))?),
+        // A glTF light shines along its node's −z.
+        Some(d) => Some(quat(what, z_to(-(GLTF_FROM_POSER * d)))?),
         None => None,
     };
     Ok(b.root.push(json::Node {
@@ -1315,19 +1300,7 @@ fn lights(
             Mount::Rig => "rig",
             Mount::World => "world",
         };
-        let to_world = |p: &Pose| match l.mount {
-            Mount::Rig => rig.compose(p),
-            Mount::World => *p,
-        };
-        let pt = |p: DVec3| match l.mount {
-            Mount::Rig => rig.transform_point(p),
-            Mount::World => p,
-        };
-        let vec = |v: DVec3| match l.mount {
-            Mount::Rig => rig.transform_vector(v),
-            Mount::World => v,
-        };
-        match l.kind {
+        match l.in_world(&rig).kind {
             LightKind::Point {
                 position,
                 intensity,
@@ -1338,7 +1311,7 @@ fn lights(
                     "conversion": "candela = 683 lm/W * max channel (W/sr); color = channels / max",
                 });
                 let li = push_light(b, &what, &l.name, Type::Point, intensity, None, extras)?;
-                nodes.push(light_node(b, &what, &l.name, li, pt(position), None)?);
+                nodes.push(light_node(b, &what, &l.name, li, position, None)?);
                 s.lights += 1;
             }
             LightKind::Spot {
@@ -1371,13 +1344,13 @@ fn lights(
                     Some((inner, outer)),
                     extras,
                 )?;
-                let d = vec(direction);
+                let d = direction;
                 if !(d.is_finite() && d.length() > 0.0) {
                     return Err(format!(
                         "{what}: its direction is not finite; nothing was written"
                     ));
                 }
-                nodes.push(light_node(b, &what, &l.name, li, pt(position), Some(d))?);
+                nodes.push(light_node(b, &what, &l.name, li, position, Some(d))?);
                 s.lights += 1;
             }
             LightKind::Area {
@@ -1386,8 +1359,8 @@ fn lights(
                 height,
                 radiance,
             } => {
-                let f = to_world(&frame);
-                let mesh = crate::geometry::mesh::plane(width, height).transformed(&f, DVec3::ONE);
+                let mesh =
+                    crate::geometry::mesh::plane(width, height).transformed(&frame, DVec3::ONE);
                 let (color, _) = photometric(radiance);
                 let name = format!("area light {} (emissive)", l.name);
                 let mat = b.material(

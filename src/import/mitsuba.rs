@@ -969,7 +969,6 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
     let world = &docs[0];
     let mut water = None;
     let mut surface = false;
-    let mut n_water: Option<f64> = None;
     for k in world.kids.iter().filter(|k| k.tag == "medium") {
         if water.is_none() {
             water = medium(&mut cx, k)?;
@@ -1041,7 +1040,6 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
     let mut max_depth: Option<(X, i64)> = None;
     for (di, d) in docs.iter().enumerate() {
         for k in &d.kids {
-            let shared = di == 0 || k.included;
             match k.tag.as_str() {
                 "shape" if di == 0 => {
                     shape(
@@ -1061,7 +1059,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
                 "emitter" if !k.included && d.kids.iter().any(|x| x.included) => {
                     view_lights.push((k.clone(), di))
                 }
-                "emitter" if shared && di == 0 => {
+                "emitter" if di == 0 => {
                     emitter(&mut cx, k, None, &mut lights, &mut sun, &mut unique)?;
                 }
                 "shape" | "emitter" | "sensor" | "medium" | "bsdf" | "texture" => {}
@@ -1118,20 +1116,18 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         port_note(&mut cx, s0, &port_faces);
     }
 
+    // The index outside the glass faces that border the water (an `exterior` medium).
+    let n_water = port_faces
+        .iter()
+        .filter(|p| p.0.kids.iter().any(|c| c.attr("name") == Some("exterior")))
+        .map(|p| p.3)
+        .filter(|&n| n > 1.0)
+        .reduce(f64::max);
     if let Some(w) = &water {
         let mut wt = Table::new();
         wt.insert("absorption".into(), arr(w.sigma_a));
         wt.insert("scattering".into(), arr(w.sigma_s));
         wt.insert("g".into(), Value::Float(w.g));
-        n_water = n_water.or_else(|| {
-            // The index outside the glass faces that border the water (an `exterior` medium).
-            port_faces
-                .iter()
-                .filter(|p| p.0.kids.iter().any(|c| c.attr("name") == Some("exterior")))
-                .map(|p| p.3)
-                .filter(|&n| n > 1.0)
-                .fold(None, |a: Option<f64>, n| Some(a.map_or(n, |a| a.max(n))))
-        });
         if let Some(n) = n_water {
             wt.insert("ior".into(), Value::Float(n));
         }

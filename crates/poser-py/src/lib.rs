@@ -50,6 +50,7 @@ fn failed(e: String) -> PyErr {
 /// One diagnostic of a scene: where (file, line, column; `None` when the diagnostic has no
 /// place in a file), what, and the hint.
 #[pyclass(frozen, module = "poser", get_all)]
+#[derive(Clone)]
 struct Diagnostic {
     /// `"error"` or `"warning"`.
     severity: &'static str,
@@ -216,17 +217,6 @@ impl Scene {
     }
 }
 
-fn channel(s: &str) -> PyResult<usize> {
-    match s.to_ascii_lowercase().as_str() {
-        "r" | "red" => Ok(0),
-        "g" | "green" => Ok(1),
-        "b" | "blue" => Ok(2),
-        _ => Err(PyValueError::new_err(format!(
-            "channel `{s}`: expected \"r\", \"g\" or \"b\""
-        ))),
-    }
-}
-
 #[pymethods]
 impl Scene {
     /// The scenario's name.
@@ -244,19 +234,7 @@ impl Scene {
     /// The scene's warnings (a valid scene may have some), as `poser.Diagnostic`s.
     #[getter]
     fn warnings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
-        PyList::new(
-            py,
-            self.warnings.iter().map(|d| Diagnostic {
-                severity: d.severity,
-                code: d.code,
-                message: d.message.clone(),
-                file: d.file.clone(),
-                line: d.line,
-                column: d.column,
-                help: d.help.clone(),
-                rendered: d.rendered.clone(),
-            }),
-        )
+        PyList::new(py, self.warnings.iter().cloned())
     }
 
     /// Every file the scene was read from: the scene, its includes, its assets.
@@ -328,7 +306,7 @@ impl Scene {
         pose: usize,
         channel: &str,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let ch = self::channel(channel)?;
+        let ch = poser::cli::project::parse_channel(channel).map_err(PyValueError::new_err)?;
         let cam = self.camera(camera)?;
         let world_pose = match frame {
             "camera" => None,

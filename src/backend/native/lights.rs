@@ -8,7 +8,7 @@
 //! | sun | directional light in the water: propagation `direction_water`, irradiance `irradiance_water` just below z = 0, attenuated by the water between the point and z = 0 |
 //! | ambient | uniform radiance from every direction, reached by rays that leave the scene |
 
-use crate::model::{LightKind, Model, Mount, Pose};
+use crate::model::{LightKind, Model, Pose};
 use glam::DVec3;
 
 #[derive(Debug, Clone)]
@@ -88,27 +88,12 @@ impl Lights {
     pub fn at_pose(model: &Model, world_from_rig: &Pose) -> Lights {
         let mut out = Lights::default();
         for l in &model.lights {
-            let to_world = |p: &Pose| match l.mount {
-                Mount::Rig => world_from_rig.compose(p),
-                Mount::World => *p,
-            };
-            let pt = |p: DVec3| {
-                to_world(&Pose {
-                    rotation: glam::DMat3::IDENTITY,
-                    translation: p,
-                })
-                .translation
-            };
-            let vec = |v: DVec3| match l.mount {
-                Mount::Rig => world_from_rig.transform_vector(v),
-                Mount::World => v,
-            };
-            match l.kind {
+            match l.in_world(world_from_rig).kind {
                 LightKind::Point {
                     position,
                     intensity,
                 } => out.points.push(PointLight {
-                    pos: pt(position),
+                    pos: position,
                     intensity: DVec3::from_array(intensity),
                     cone: None,
                 }),
@@ -118,17 +103,16 @@ impl Lights {
                     half_angle,
                     intensity,
                 } => out.points.push(PointLight {
-                    pos: pt(position),
+                    pos: position,
                     intensity: DVec3::from_array(intensity),
-                    cone: Some((vec(direction).normalize(), half_angle.cos())),
+                    cone: Some((direction.normalize(), half_angle.cos())),
                 }),
                 LightKind::Area {
-                    frame,
+                    frame: f,
                     width,
                     height,
                     radiance,
                 } => {
-                    let f = to_world(&frame);
                     let ax = f.rotation.x_axis * (0.5 * width);
                     let ay = f.rotation.y_axis * (0.5 * height);
                     out.areas.push(AreaLight {
