@@ -3,7 +3,6 @@
 //! written by hand in Mitsuba's own style imports, and hostile files are refused without
 //! writing anything.
 
-use poser::model::Model;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -22,55 +21,14 @@ fn scenes(sub: &str) -> Vec<PathBuf> {
         .collect()
 }
 
-/// Numbers of `a` and `b` (JSON of model parts) agree within `rel` relative (1e-12 absolute).
-fn close(a: &Value, b: &Value, rel: f64, path: &str) -> Result<(), String> {
-    match (a, b) {
-        (Value::Number(x), Value::Number(y)) => {
-            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
-            if (x - y).abs() <= 1e-12 + rel * x.abs().max(y.abs()) {
-                Ok(())
-            } else {
-                Err(format!("{path}: {x} vs {y}"))
-            }
-        }
-        (Value::Array(x), Value::Array(y)) if x.len() == y.len() => x
-            .iter()
-            .zip(y)
-            .enumerate()
-            .try_for_each(|(i, (p, q))| close(p, q, rel, &format!("{path}[{i}]"))),
-        (Value::Object(x), Value::Object(y)) => x.iter().try_for_each(|(k, v)| match y.get(k) {
-            Some(w) => close(v, w, rel, &format!("{path}.{k}")),
-            None => Err(format!("{path}.{k} missing")),
-        }),
-        _ if a == b => Ok(()),
-        _ => Err(format!("{path}: {a} vs {b}")),
-    }
-}
-
-fn json<T: serde::Serialize>(v: &T) -> Value {
-    serde_json::to_value(v).unwrap()
-}
-
 /// Compile `scene` for Mitsuba, import (up to `max_views` views) and compare. `Ok(None)` when
 /// the Mitsuba backend refuses the scene or the comparison does not apply (with the reason).
 fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<String>, String> {
-    let model: Model = poser::scene::load(scene, &[])
-        .map_err(|e| e.render())?
-        .model;
     let mi = dir.join("mi");
-    let out = poser()
-        .args(["compile", "--backend", "mitsuba", "-o"])
-        .arg(&mi)
-        .arg(scene)
-        .output()
-        .unwrap();
-    if !out.status.success() {
-        let why = String::from_utf8_lossy(&out.stderr);
-        return Ok(Some(format!(
-            "refused by the Mitsuba backend: {}",
-            why.trim()
-        )));
-    }
+    let model = match support::import::load_and_compile(scene, "mitsuba", &mi) {
+        Ok(m) => m,
+        Err(why) => return Ok(Some(why)),
+    };
     let manifest: Value =
         serde_json::from_slice(&std::fs::read(mi.join("manifest.json")).unwrap()).unwrap();
     let views = manifest["views"].as_array().unwrap();
@@ -111,136 +69,16 @@ fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<Strin
         .map_err(|e| e.render())?
         .model;
 
-    // Poses: world_from_camera of every imported view (the imported rig's frame may differ).
-    if back.poses.len() * n_cams != picked.len() || back.cameras.len() != n_cams {
-        return Err(format!(
-            "{} poses × {} cameras for {} views",
-            back.poses.len(),
-            back.cameras.len(),
-            picked.len()
-        ));
-    }
-    let index = |m: &Model, name: &str| m.cameras.iter().position(|c| c.name == name).unwrap();
-    for (k, v) in picked.iter().enumerate() {
-        let p = v["pose"].as_u64().unwrap() as usize;
-        let name = v["camera"].as_str().unwrap();
-        let (a, b) = (
-            model.world_from_camera(p, index(&model, name)),
-            back.world_from_camera(k / n_cams, if n_cams == 1 { 0 } else { index(&back, name) }),
-        );
-        let dr = (a.rotation - b.rotation)
-            .to_cols_array()
-            .iter()
-            .map(|x| x.abs())
-            .fold(0.0, f64::max);
-        let dt = (a.translation - b.translation).length();
-        if dr > 1e-9 || dt > 1e-9 {
-            return Err(format!(
-                "pose {p}, camera {name}: rotation off by {dr:e}, centre by {dt:e} m"
-            ));
-        }
-    }
-    // Intrinsics, camera by camera.
-    for c in &model.cameras {
-        let d = if n_cams == 1 {
-            &back.cameras[0]
-        } else {
-            &back.cameras[index(&back, &c.name)]
-        };
-        if (c.width, c.height) != (d.width, d.height) {
-            return Err("image size differs".into());
-        }
-        for (what, x, y) in [
-            ("fx", c.fx, d.fx),
-            ("fy", c.fy, d.fy),
-            ("cx", c.cx, d.cx),
-            ("cy", c.cy, d.cy),
-        ] {
-            if (x - y).abs() > 1e-12 * x.abs().max(1.0) {
-                return Err(format!("{}: {what}: {x} vs {y}", c.name));
-            }
-        }
-    }
-    // Water.
-    match (&model.water, &back.water) {
-        (None, None) => {}
-        (Some(w), Some(v)) => {
-            close(
-                &json(&w.absorption),
-                &json(&v.absorption),
-                1e-9,
-                "absorption",
-            )?;
-            close(
-                &json(&w.scattering),
-                &json(&v.scattering),
-                1e-9,
-                "scattering",
-            )?;
-            if let (
-                poser::model::Phase::HenyeyGreenstein { g },
-                poser::model::Phase::HenyeyGreenstein { g: h },
-            ) = (&w.phase, &v.phase)
-                && (g - h).abs() > 1e-9
-            {
-                return Err(format!("g: {g} vs {h}"));
-            }
-        }
-        _ => return Err("water present in one model only".into()),
-    }
-    // Lights, by name, in the world at the first imported pose (rig frames may differ).
-    let p0 = picked[0]["pose"].as_u64().unwrap() as usize;
-    let mut a: Vec<_> = model
-        .lights
+    let views: Vec<(usize, String)> = picked
         .iter()
-        .map(|l| {
+        .map(|v| {
             (
-                l.name.clone(),
-                json(&l.in_world(&model.poses[p0].world_from_rig)),
+                v["pose"].as_u64().unwrap() as usize,
+                v["camera"].as_str().unwrap().to_string(),
             )
         })
         .collect();
-    let mut b: Vec<_> = back
-        .lights
-        .iter()
-        .map(|l| {
-            (
-                l.name.clone(),
-                json(&l.in_world(&back.poses[0].world_from_rig)),
-            )
-        })
-        .collect();
-    a.sort_by(|x, y| x.0.cmp(&y.0));
-    b.sort_by(|x, y| x.0.cmp(&y.0));
-    if a.iter().map(|x| &x.0).ne(b.iter().map(|x| &x.0)) {
-        return Err(format!(
-            "lights {:?} vs {:?}",
-            a.iter().map(|x| &x.0).collect::<Vec<_>>(),
-            b.iter().map(|x| &x.0).collect::<Vec<_>>()
-        ));
-    }
-    for ((n, x), (_, y)) in a.iter().zip(&b) {
-        close(x, y, 1e-9, &format!("light {n}"))?;
-    }
-    // The sun as Mitsuba sees it: its direction and irradiance in the water.
-    match (&model.sun, &back.sun) {
-        (None, None) => {}
-        (Some(s), Some(t)) => {
-            close(
-                &json(&s.direction_water),
-                &json(&t.direction_water),
-                1e-9,
-                "sun direction",
-            )?;
-            close(
-                &json(&s.irradiance_water),
-                &json(&t.irradiance_water),
-                1e-9,
-                "sun irradiance",
-            )?;
-        }
-        _ => return Err("sun present in one model only".into()),
-    }
+    support::import::same_model(&model, &back, &views)?;
     Ok(None)
 }
 
@@ -383,6 +221,7 @@ fn a_hand_written_scene_imports_with_located_notes() {
     assert!(err.contains("help:"), "{err}");
     let text = std::fs::read_to_string(dir.path().join("out/scene.toml")).unwrap();
     assert!(text.contains("roughplastic"), "the notes head the file");
+    insta::assert_snapshot!("hand_written_scene", text);
     let m = poser::scene::load(&dir.path().join("out/scene.toml"), &[])
         .unwrap()
         .model;
@@ -524,4 +363,32 @@ fn hostile_files_are_refused_and_nothing_leaves_the_output_folder() {
             .any(|f| f.starts_with("in/out/scene_assets/") && f.ends_with(".glb")),
         "{files:?}"
     );
+}
+
+#[test]
+fn the_cornell_box_imports_to_the_same_scene_text() {
+    // Mitsuba's tutorial scene (tests/import/cbox); the written text is a snapshot.
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/import/cbox");
+    for e in std::fs::read_dir(&src).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, dir.path().join(p.file_name().unwrap())).unwrap();
+        } else {
+            let sub = dir.path().join(p.file_name().unwrap());
+            std::fs::create_dir(&sub).unwrap();
+            for f in std::fs::read_dir(&p).unwrap() {
+                let f = f.unwrap().path();
+                std::fs::copy(&f, sub.join(f.file_name().unwrap())).unwrap();
+            }
+        }
+    }
+    let out = import(dir.path(), &["cbox.xml"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(dir.path().join("out/scene.toml")).unwrap();
+    insta::assert_snapshot!("cornell_box", text);
 }

@@ -1,13 +1,15 @@
-//! `poser import`: Mitsuba 3 XML scenes → a poser scene file and its mesh assets, validated.
+//! `poser import`: Mitsuba 3 XML or Blender `.blend` scenes → a poser scene file and its mesh
+//! assets, validated.
 use super::CliError;
 use std::path::PathBuf;
 
 /// The arguments of `poser import`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Mitsuba 3 scene file(s) (`.xml`). The first gives the world (shapes, lights, water);
+    /// Mitsuba 3 scene file(s) (`.xml`): the first gives the world (shapes, lights, water);
     /// every file adds its sensors as poses, in order (e.g. the `img_*.xml` views that
-    /// `poser compile --backend mitsuba` writes).
+    /// `poser compile --backend mitsuba` writes). Or one Blender file (`.blend`), read by the
+    /// pinned `bpy` with its scripts off.
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
     /// The poser scene file to write.
@@ -19,18 +21,25 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    for f in &args.files {
-        let ext = f
-            .extension()
+    let ext = |f: &std::path::Path| {
+        f.extension()
             .and_then(|e| e.to_str())
             .unwrap_or("")
-            .to_ascii_lowercase();
-        if ext != "xml" {
+            .to_ascii_lowercase()
+    };
+    let blend = args.files.iter().any(|f| ext(f) == "blend");
+    for f in &args.files {
+        if ext(f) != "xml" && ext(f) != "blend" {
             return Err(CliError::Usage(format!(
-                "{}: poser imports Mitsuba 3 scenes (.xml)",
+                "{}: poser imports Mitsuba 3 scenes (.xml) and Blender files (.blend)",
                 f.display()
             )));
         }
+    }
+    if blend && args.files.len() != 1 {
+        return Err(CliError::Usage(
+            "a Blender file is imported on its own: one .blend, no other file".into(),
+        ));
     }
     let out_dir = args
         .out
@@ -47,7 +56,13 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         out_dir.join(format!("{}_assets", crate::import::safe_file_name(&stem)))
     });
     let rel = crate::import::relative_path(&absolute(&out_dir), &absolute(&assets));
-    let imported = crate::import::mitsuba::import(&args.files, &rel).map_err(CliError::Failed)?;
+    let imported = if blend {
+        let work = tempfile::tempdir().map_err(|e| CliError::Failed(e.to_string()))?;
+        crate::import::blender::import(&args.files[0], &rel, work.path())
+    } else {
+        crate::import::mitsuba::import(&args.files, &rel)
+    }
+    .map_err(CliError::Failed)?;
     for n in &imported.notes {
         eprintln!("note: {}", n.render());
     }

@@ -15,9 +15,11 @@
 //! Safety: a document type declaration (and with it every entity) is refused; `include` and
 //! `filename` paths must stay inside the first file's folder; counts are bounded.
 
-use super::{Imported, Note, meshes, safe_file_name};
+use super::{
+    Imported, Note, arr, euler_xyz, explicit_network, finish, meshes, safe_file_name, unrefract,
+};
 use crate::geometry::mesh::TriMesh;
-use glam::{DMat3, DMat4, DVec3, EulerRot};
+use glam::{DMat3, DMat4, DVec3};
 use quick_xml::events::Event;
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
@@ -571,17 +573,6 @@ fn decompose(m: &DMat4) -> (DVec3, DMat3, bool, bool) {
     let sheared =
         u[0].dot(u[1]).abs() > 1e-9 || u[0].dot(u[2]).abs() > 1e-9 || u[1].dot(u[2]).abs() > 1e-9;
     (len, DMat3::from_cols(u[0], u[1], z), mirror, sheared)
-}
-
-/// Rotations about x, y, z (x first, as the scene format composes them) of an orthonormal
-/// frame.
-fn euler_xyz(r: DMat3) -> [f64; 3] {
-    let (z, y, x) = r.to_euler(EulerRot::ZYX);
-    [x, y, z].map(|a| a + 0.0)
-}
-
-fn arr(v: impl IntoIterator<Item = f64>) -> Value {
-    Value::Array(v.into_iter().map(|x| Value::Float(x + 0.0)).collect())
 }
 
 // ---- the scene ------------------------------------------------------------------------
@@ -1154,7 +1145,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         let (dir_air, e_air) = match (&water, surface) {
             (Some(_), true) => {
                 let n = n_water.unwrap_or(1.334);
-                unrefract(*dir, *e, n)
+                unrefract(*dir, *e, [n; 3])
             }
             _ => (*dir, *e),
         };
@@ -1236,23 +1227,12 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
                 ));
                 continue;
             };
-            let mut pt = Table::new();
-            pt.insert("position".into(), arr(s.pos.to_array()));
-            pt.insert("rotation".into(), arr(euler_xyz(s.rot)));
-            poses.push(Value::Table(pt));
+            poses.push((s.rot, s.pos));
         }
     } else {
-        for s in &sensors {
-            let mut p = Table::new();
-            p.insert("position".into(), arr(s.pos.to_array()));
-            p.insert("rotation".into(), arr(euler_xyz(s.rot)));
-            poses.push(Value::Table(p));
-        }
+        poses.extend(sensors.iter().map(|s| (s.rot, s.pos)));
     }
-    let mut net = Table::new();
-    net.insert("type".into(), Value::String("explicit".into()));
-    net.insert("poses".into(), Value::Array(poses));
-    t.insert("network".into(), Value::Table(net));
+    t.insert("network".into(), explicit_network(poses));
     let mut r = Table::new();
     if let Some(spp) = s0.samples {
         r.insert("samples".into(), Value::Integer(spp.clamp(1, 1 << 20)));
@@ -1279,47 +1259,12 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         t.insert("render".into(), Value::Table(r));
     }
 
-    let body = toml::to_string(&t).map_err(|e| format!("writing the scene: {e}"))?;
-    let mut head = format!(
-        "# Imported by `poser import` from {}.\n# Check it with `poser validate` and `poser explain`; what was not imported:\n",
-        files
-            .iter()
-            .map(|f| f.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
-    if cx.notes.is_empty() {
-        head.push_str("#   (nothing)\n");
-    }
-    for n in &cx.notes {
-        for l in n.render().lines() {
-            head.push_str("#   ");
-            head.push_str(l);
-            head.push('\n');
-        }
-    }
-    Ok(Imported {
-        toml: format!("{head}\n{body}"),
-        assets: assets_out,
-        notes: cx.notes,
-    })
-}
-
-/// Sun direction and irradiance in water back to air through a flat surface of index `n`
-/// (the inverse of `optics::sun::refract_into_water`).
-fn unrefract(dir_w: DVec3, e_w: [f64; 3], n: f64) -> (DVec3, [f64; 3]) {
-    let d = dir_w.normalize();
-    let h = DVec3::new(d.x, d.y, 0.0);
-    let s_a = (h.length() * n).min(1.0);
-    let c_a = (1.0 - s_a * s_a).max(0.0).sqrt();
-    let dir_a = if h.length() > 0.0 {
-        h.normalize() * s_a - DVec3::Z * c_a
-    } else {
-        -DVec3::Z
-    };
-    let (_, f) = crate::optics::sun::refract_into_water(dir_a, n);
-    let e = if f > 0.0 { e_w.map(|v| v / f) } else { e_w };
-    (dir_a, e)
+    let sources = files
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    finish(&t, &sources, cx.notes, assets_out)
 }
 
 /// How locations name a file: relative to the working folder when it is inside it.
@@ -1717,6 +1662,7 @@ fn emitter(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::EulerRot;
 
     fn x(tag: &str, attrs: &[(&str, &str)], kids: Vec<X>) -> X {
         X {
@@ -1794,7 +1740,7 @@ mod tests {
     fn the_sun_goes_back_through_the_surface() {
         let dir_a = crate::optics::sun::direction_from(0.9, 2.0);
         let (dir_w, f) = crate::optics::sun::refract_into_water(dir_a, 1.34);
-        let (back, e) = unrefract(dir_w, [f * 800.0; 3], 1.34);
+        let (back, e) = unrefract(dir_w, [f * 800.0; 3], [1.34; 3]);
         assert!((back - dir_a).length() < 1e-12, "{back} {dir_a}");
         assert!((e[0] / 800.0 - 1.0).abs() < 1e-12);
     }

@@ -5,6 +5,7 @@
 //! | module | reads | writes |
 //! |---|---|---|
 //! | [`mitsuba`] | Mitsuba 3 XML (quick-xml; no DOCTYPE, no entities; `include`, `default`, `ref`) | cameras, poses, objects, lights, water |
+//! | [`blender`] | Blender `.blend` files, read by the pinned `bpy` with scripts off (`backends/blender/read_blend.py`) | cameras, rig, poses, objects, lights, water |
 //! | [`meshes`] | Wavefront OBJ, PLY (ASCII and binary) | glTF 2.0 binary (`.glb`) assets |
 //!
 //! Whatever the poser format cannot express is dropped with a [`Note`] naming the element, its
@@ -12,10 +13,13 @@
 //! of the scene file. Nothing is written outside the scene file's folder and `--assets`, and
 //! every file is written whole (temporary file, then rename).
 
+pub mod blender;
 pub mod meshes;
 pub mod mitsuba;
 
+use glam::{DMat3, DVec3, EulerRot};
 use std::path::{Path, PathBuf};
+use toml::{Table, Value};
 
 /// Something the importer dropped or changed, with where it came from.
 #[derive(Debug, Clone, PartialEq)]
@@ -60,6 +64,85 @@ pub struct Imported {
     pub toml: String,
     pub assets: Vec<(String, Vec<u8>)>,
     pub notes: Vec<Note>,
+}
+
+/// The scene file's text: a header naming the `sources` and listing the notes as comments,
+/// then the tables.
+pub(crate) fn finish(
+    t: &Table,
+    sources: &str,
+    notes: Vec<Note>,
+    assets: Vec<(String, Vec<u8>)>,
+) -> Result<Imported, String> {
+    let body = toml::to_string(t).map_err(|e| format!("writing the scene: {e}"))?;
+    let mut head = format!(
+        "# Imported by `poser import` from {sources}.\n# Check it with `poser validate` and `poser explain`; what was not imported:\n"
+    );
+    if notes.is_empty() {
+        head.push_str("#   (nothing)\n");
+    }
+    for n in &notes {
+        for l in n.render().lines() {
+            head.push_str("#   ");
+            head.push_str(l);
+            head.push('\n');
+        }
+    }
+    Ok(Imported {
+        toml: format!("{head}\n{body}"),
+        assets,
+        notes,
+    })
+}
+
+/// Rotations about x, y, z (x first, as the scene format composes them) of an orthonormal
+/// frame.
+pub(crate) fn euler_xyz(r: DMat3) -> [f64; 3] {
+    let (z, y, x) = r.to_euler(EulerRot::ZYX);
+    [x, y, z].map(|a| a + 0.0)
+}
+
+/// An explicit `[network]` of the given world_from_rig poses (rotation, position).
+pub(crate) fn explicit_network(poses: impl IntoIterator<Item = (DMat3, DVec3)>) -> Value {
+    let ps = poses
+        .into_iter()
+        .map(|(rot, pos)| {
+            let mut p = Table::new();
+            p.insert("position".into(), arr(pos.to_array()));
+            p.insert("rotation".into(), arr(euler_xyz(rot)));
+            Value::Table(p)
+        })
+        .collect();
+    let mut net = Table::new();
+    net.insert("type".into(), Value::String("explicit".into()));
+    net.insert("poses".into(), Value::Array(ps));
+    Value::Table(net)
+}
+
+/// Numbers as a TOML array of floats (no negative zeros).
+pub(crate) fn arr(v: impl IntoIterator<Item = f64>) -> Value {
+    Value::Array(v.into_iter().map(|x| Value::Float(x + 0.0)).collect())
+}
+
+/// Sun direction and irradiance in water back to air through a flat surface of index `n` per
+/// channel (the inverse of what the scene front end does: the direction refracts with the
+/// reference channel's index `n[1]`, each channel's irradiance with its own Fresnel factor);
+/// beyond the critical angle the sun comes out grazing.
+pub(crate) fn unrefract(dir_w: DVec3, e_w: [f64; 3], n: [f64; 3]) -> (DVec3, [f64; 3]) {
+    let d = dir_w.normalize();
+    let h = DVec3::new(d.x, d.y, 0.0);
+    let s_a = (h.length() * n[1]).min(1.0);
+    let c_a = (1.0 - s_a * s_a).max(0.0).sqrt();
+    let dir_a = if h.length() > 0.0 {
+        h.normalize() * s_a - DVec3::Z * c_a
+    } else {
+        -DVec3::Z
+    };
+    let e = [0, 1, 2].map(|c| {
+        let (_, f) = crate::optics::sun::refract_into_water(dir_a, n[c]);
+        if f > 0.0 { e_w[c] / f } else { e_w[c] }
+    });
+    (dir_a, e)
 }
 
 /// A name that is safe as one file name component: ASCII letters, digits, `_`, `-`, `.`

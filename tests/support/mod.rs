@@ -10,6 +10,7 @@
 
 pub mod blender;
 pub mod canonical;
+pub mod import;
 pub mod lesson;
 pub mod mitsuba;
 pub mod model;

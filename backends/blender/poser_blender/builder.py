@@ -264,6 +264,10 @@ def build(desc, base_dir=".", scene=None):
         rig.matrix_world = _matrix(pose["world_from_rig"])
         rig.keyframe_insert("location", frame=i)
         rig.keyframe_insert("rotation_quaternion", frame=i)
+    # SHADOWS: poser's exact f64 values beside Blender's float32 ones, for `poser import`
+    # (backends/blender/read_blend.py uses a shadow only while it agrees with Blender's value).
+    rig["poser_keys"] = _flat([p["world_from_rig"] for p in desc["poses"]])
+    scene["poser_bounces"] = int(desc["render"].get("max_bounces", 64))
     _constant_interpolation(rig)
     scene.frame_start = 0
     scene.frame_end = len(desc["poses"]) - 1
@@ -275,13 +279,16 @@ def build(desc, base_dir=".", scene=None):
         frame.parent = rig
         frame.matrix_parent_inverse.identity()
         frame.matrix_basis = _matrix(cam["rig_from_camera"])
+        frame["poser_basis"] = _flat([cam["rig_from_camera"]])
         frame.empty_display_size = 0.05
         data = bpy.data.cameras.new(f"camera:{cam['name']}")
         _set_intrinsics(data, cam)
+        data["poser_camera"] = _camera_shadow(ci, cam)
         obj = _new_object(coll, f"camera:{cam['name']}", data)
         obj.parent = frame
         obj.matrix_parent_inverse.identity()
         obj.matrix_basis = _matrix(geo.CV_TO_BLENDER)
+        obj["poser_basis"] = _flat([geo.CV_TO_BLENDER])
         built.cameras.append(obj)
         h = geo.housing(cam)
         if h is None:
@@ -348,6 +355,24 @@ def prepare_image(built, pose_index, cam_index):
     scene.render.resolution_y = int(cam["height"])
     scene.cycles.seed = image_seed(desc, pose_index, cam_index)
     _apply_emitters(built, _emitter_scale(desc, cam, bool(desc.get("per_channel_passes"))))
+
+
+def _flat(matrices):
+    """Row-major 4x4 matrices as one flat list of f64 (an ID property array of doubles)."""
+    return [float(x) for m in matrices for row in m for x in row]
+
+
+def _camera_shadow(index, cam):
+    """The camera's exact intrinsics (only what is set; ID properties hold no None)."""
+    out = {"index": int(index), "lens": str(cam.get("lens", "rectilinear"))}
+    for k in ("width", "height"):
+        out[k] = int(cam[k])
+    for k in ("fx", "fy", "cx", "cy", "focus_distance", "f_number", "focal_length"):
+        if cam.get(k) is not None:
+            out[k] = float(cam[k])
+    for k, v in (cam.get("distortion") or {}).items():
+        out[k] = float(v)
+    return out
 
 
 def _constant_interpolation(obj):
@@ -672,6 +697,16 @@ def _build_water(built, coll, desc, shells, n_w, ref):
     mesh = _water_mesh(desc, 0, gapped)
     me = _mesh_from("poser_water", mesh, smooth=True)
     boundary = _volume_only_material("water boundary", water)
+    boundary["poser_water"] = {
+        "absorption": [float(x) for x in water["absorption"]],
+        "scattering": [float(x) for x in water["scattering"]],
+        "g": float(water["phase"].get("g", 0.0)),
+        "particle_index": float(water["phase"].get("n", 0.0)),
+        "junge_slope": float(water["phase"].get("mu", 0.0)),
+        "backscatter": float(water["phase"].get("backscatter", 0.0)),
+        "ior": [float(x) for x in water["ior"]],
+        "surface": str(desc.get("surface", {}).get("kind", "flat")),
+    }
     me.materials.append(boundary)
     me.materials.append(boundary)
     # The housing body too (HOUSING_SHADOW): a black surface here, even one made transparent
@@ -702,7 +737,7 @@ def _build_lights(built, coll, desc):
         kind = light["type"]
         name = f"light:{light['name']}"
         if kind == "ambient":
-            _world(built, light["radiance"], in_water)
+            _world(built, light["radiance"], in_water, light["name"])
             continue
         if kind == "point":
             data = bpy.data.lights.new(name, "POINT")
@@ -742,6 +777,14 @@ def _build_lights(built, coll, desc):
             obj.matrix_basis = _matrix(geo.compose(rot, pos))
         else:
             obj.matrix_world = _matrix(geo.compose(rot, pos))
+        obj["poser_basis"] = _flat([geo.compose(rot, pos)])
+        shadow = {"values": [float(x) for x in values], "mount": str(light.get("mount", "world"))}
+        if kind == "spot":
+            shadow["beam_angle"] = min(2.0 * float(light["half_angle"]), math.pi)
+        if kind == "area":
+            shadow["width"] = float(light["width"])
+            shadow["height"] = float(light["height"])
+        data["poser_light"] = shadow
         built.lights.append({"data": data, "values": values, "factor": factor,
                              "in_water": in_water})
     sun = desc.get("sun")
@@ -751,17 +794,20 @@ def _build_lights(built, coll, desc):
         obj = _new_object(coll, "sun", data)
         obj.matrix_world = _matrix(geo.compose(geo.frame_looking_along(sun["direction"]),
                                                [0.0, 0.0, 10.0]))
+        obj["poser_basis"] = _flat([geo.compose(geo.frame_looking_along(sun["direction"]),
+                                                [0.0, 0.0, 10.0])])
         if sun.get("caustics"):
             data.cycles.is_caustics_light = True
         layer = _sun_layer_factor(desc, sun)
         values = [float(e) * t for e, t in zip(sun["irradiance"], layer)]
+        data["poser_light"] = {"values": values, "in_water": bool(sun.get("in_water"))}
         built.lights.append({"data": data, "values": values, "factor": 1.0,
                              "in_water": bool(sun.get("in_water"))})
     if built.world_bg is None:
         _world(built, [0.0, 0.0, 0.0], in_water)
 
 
-def _world(built, radiance, in_water):
+def _world(built, radiance, in_water, name="ambient"):
     scene = built.scene
     world = scene.world or bpy.data.worlds.new("poser world")
     scene.world = world
@@ -774,6 +820,7 @@ def _world(built, radiance, in_water):
     bg = nt.nodes.new("ShaderNodeBackground")
     nt.links.new(bg.outputs[0], out.inputs["Surface"])
     built.world_bg = {"node": bg, "values": radiance, "factor": 1.0, "in_water": in_water}
+    world["poser_light"] = {"values": [float(x) for x in radiance], "name": name}
 
 
 def _apply_emitters(built, scale, channel=None):
@@ -790,9 +837,13 @@ def _apply_emitters(built, scale, channel=None):
         if "data" in rec:
             rec["data"].color = colour
             rec["data"].energy = strength
+            holder = rec["data"].get("poser_light")
         else:
             rec["node"].inputs["Color"].default_value = (*colour, 1.0)
             rec["node"].inputs["Strength"].default_value = strength
+            holder = built.scene.world.get("poser_light")
+        if holder is not None and channel is None:
+            holder["scale"] = [float(x) for x in s]
 
 
 def _build_objects(built, coll, desc, base_dir):
@@ -828,6 +879,7 @@ def _build_objects(built, coll, desc, base_dir):
             me.materials.append(_diffuse_material(name, ob["material"], scale))
         obj = _new_object(coll, name, me)
         obj.matrix_world = _matrix(ob["matrix"])
+        obj["poser_basis"] = _flat([ob["matrix"]])
         _caustics_receiver(obj, desc)
 
 

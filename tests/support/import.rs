@@ -1,0 +1,192 @@
+//! Comparing a model with the one `poser import` gives back (the import round trips).
+
+use poser::model::Model;
+use serde_json::Value;
+use std::path::Path;
+
+/// Load `scene` and compile it with `backend` into `out`: the model, or `Err(reason)` when the
+/// backend refuses the scene (with its message).
+pub fn load_and_compile(scene: &Path, backend: &str, out: &Path) -> Result<Model, String> {
+    let model = poser::scene::load(scene, &[])
+        .map_err(|e| e.render())
+        .expect("a shipped scene loads")
+        .model;
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
+        .args(["compile", "--backend", backend, "-o"])
+        .arg(out)
+        .arg(scene)
+        .output()
+        .unwrap();
+    if !run.status.success() {
+        let why = String::from_utf8_lossy(&run.stderr);
+        return Err(format!("refused by the {backend} backend: {}", why.trim()));
+    }
+    Ok(model)
+}
+
+/// Numbers of `a` and `b` (JSON of model parts) agree within `rel` relative (1e-12 absolute).
+pub fn close(a: &Value, b: &Value, rel: f64, path: &str) -> Result<(), String> {
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            if (x - y).abs() <= 1e-12 + rel * x.abs().max(y.abs()) {
+                Ok(())
+            } else {
+                Err(format!("{path}: {x} vs {y}"))
+            }
+        }
+        (Value::Array(x), Value::Array(y)) if x.len() == y.len() => x
+            .iter()
+            .zip(y)
+            .enumerate()
+            .try_for_each(|(i, (p, q))| close(p, q, rel, &format!("{path}[{i}]"))),
+        (Value::Object(x), Value::Object(y)) => x.iter().try_for_each(|(k, v)| match y.get(k) {
+            Some(w) => close(v, w, rel, &format!("{path}.{k}")),
+            None => Err(format!("{path}.{k} missing")),
+        }),
+        _ if a == b => Ok(()),
+        _ => Err(format!("{path}: {a} vs {b}")),
+    }
+}
+
+fn json<T: serde::Serialize>(v: &T) -> Value {
+    serde_json::to_value(v).unwrap()
+}
+
+/// `back` (imported) against `model` (the original): every camera's world pose at each of
+/// `views` (original pose index, camera name; `back`'s poses are the views' in order, one per
+/// rig pose) to 1e-9, the intrinsics to 1e-12, the water, the lights in the world at the first
+/// view's pose and the sun to 1e-9 relative.
+pub fn same_model(model: &Model, back: &Model, views: &[(usize, String)]) -> Result<(), String> {
+    let n_cams = model.cameras.len();
+    // Poses: world_from_camera of every imported view (the imported rig's frame may differ).
+    if back.poses.len() * n_cams != views.len() || back.cameras.len() != n_cams {
+        return Err(format!(
+            "{} poses × {} cameras for {} views",
+            back.poses.len(),
+            back.cameras.len(),
+            views.len()
+        ));
+    }
+    let index = |m: &Model, name: &str| m.cameras.iter().position(|c| c.name == name).unwrap();
+    for (k, (p, name)) in views.iter().enumerate() {
+        let (p, name) = (*p, name.as_str());
+        let (a, b) = (
+            model.world_from_camera(p, index(model, name)),
+            back.world_from_camera(k / n_cams, if n_cams == 1 { 0 } else { index(back, name) }),
+        );
+        let dr = (a.rotation - b.rotation)
+            .to_cols_array()
+            .iter()
+            .map(|x| x.abs())
+            .fold(0.0, f64::max);
+        let dt = (a.translation - b.translation).length();
+        if dr > 1e-9 || dt > 1e-9 {
+            return Err(format!(
+                "pose {p}, camera {name}: rotation off by {dr:e}, centre by {dt:e} m"
+            ));
+        }
+    }
+    // Intrinsics, camera by camera.
+    for c in &model.cameras {
+        let d = if n_cams == 1 {
+            &back.cameras[0]
+        } else {
+            &back.cameras[index(back, &c.name)]
+        };
+        if (c.width, c.height) != (d.width, d.height) {
+            return Err("image size differs".into());
+        }
+        for (what, x, y) in [
+            ("fx", c.fx, d.fx),
+            ("fy", c.fy, d.fy),
+            ("cx", c.cx, d.cx),
+            ("cy", c.cy, d.cy),
+        ] {
+            if (x - y).abs() > 1e-12 * x.abs().max(1.0) {
+                return Err(format!("{}: {what}: {x} vs {y}", c.name));
+            }
+        }
+    }
+    // Water.
+    match (&model.water, &back.water) {
+        (None, None) => {}
+        (Some(w), Some(v)) => {
+            close(
+                &json(&w.absorption),
+                &json(&v.absorption),
+                1e-9,
+                "absorption",
+            )?;
+            close(
+                &json(&w.scattering),
+                &json(&v.scattering),
+                1e-9,
+                "scattering",
+            )?;
+            if let (
+                poser::model::Phase::HenyeyGreenstein { g },
+                poser::model::Phase::HenyeyGreenstein { g: h },
+            ) = (&w.phase, &v.phase)
+                && (g - h).abs() > 1e-9
+            {
+                return Err(format!("g: {g} vs {h}"));
+            }
+        }
+        _ => return Err("water present in one model only".into()),
+    }
+    // Lights, by name, in the world at the first imported pose (rig frames may differ).
+    let p0 = views[0].0;
+    let mut a: Vec<_> = model
+        .lights
+        .iter()
+        .map(|l| {
+            (
+                l.name.clone(),
+                json(&l.in_world(&model.poses[p0].world_from_rig)),
+            )
+        })
+        .collect();
+    let mut b: Vec<_> = back
+        .lights
+        .iter()
+        .map(|l| {
+            (
+                l.name.clone(),
+                json(&l.in_world(&back.poses[0].world_from_rig)),
+            )
+        })
+        .collect();
+    a.sort_by(|x, y| x.0.cmp(&y.0));
+    b.sort_by(|x, y| x.0.cmp(&y.0));
+    if a.iter().map(|x| &x.0).ne(b.iter().map(|x| &x.0)) {
+        return Err(format!(
+            "lights {:?} vs {:?}",
+            a.iter().map(|x| &x.0).collect::<Vec<_>>(),
+            b.iter().map(|x| &x.0).collect::<Vec<_>>()
+        ));
+    }
+    for ((n, x), (_, y)) in a.iter().zip(&b) {
+        close(x, y, 1e-9, &format!("light {n}"))?;
+    }
+    // The sun as Mitsuba sees it: its direction and irradiance in the water.
+    match (&model.sun, &back.sun) {
+        (None, None) => {}
+        (Some(s), Some(t)) => {
+            close(
+                &json(&s.direction_water),
+                &json(&t.direction_water),
+                1e-9,
+                "sun direction",
+            )?;
+            close(
+                &json(&s.irradiance_water),
+                &json(&t.irradiance_water),
+                1e-9,
+                "sun irradiance",
+            )?;
+        }
+        _ => return Err("sun present in one model only".into()),
+    }
+    Ok(())
+}
