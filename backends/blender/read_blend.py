@@ -477,6 +477,9 @@ def camera(r, c, width, height):
                 dist[k] = float(r.shadow(p, k, dist[k], f"{where} {k}"))
         if "lens" in p:
             out["lens"] = str(p["lens"])
+    if d.clip_start > 0.100001 or d.clip_end < 100.0:  # beyond Blender's defaults
+        r.note(where, f"clipping ({d.clip_start:g} to {d.clip_end:g} m) is not imported",
+               "poser's cameras see every distance")
     if d.dof.use_dof:
         if d.dof.focus_object is not None:
             r.note(where, "the focus object is dropped; the focus distance is used")
