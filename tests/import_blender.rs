@@ -412,3 +412,81 @@ fn walk(d: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+#[test]
+fn a_principled_volume_box_below_z0_becomes_the_water() {
+    // A user's sea: a camera 2 m down in a 40 m box whose top is the surface, filled with a
+    // Principled Volume; the sun above.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    bpy_script(
+        d,
+        r#"
+import bpy, math
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scene = bpy.context.scene
+cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+scene.collection.objects.link(cam)
+cam.location = (0.0, 0.0, -2.0)
+scene.camera = cam
+bpy.ops.mesh.primitive_cube_add(size=40.0, location=(0, 0, -20.0))
+sea = bpy.context.object
+sea.name = "Sea"
+m = bpy.data.materials.new("Water")
+m.use_nodes = True
+nodes = m.node_tree.nodes
+nodes.remove(nodes["Principled BSDF"])
+v = nodes.new("ShaderNodeVolumePrincipled")
+v.inputs["Color"].default_value = (0.1, 0.2, 0.3, 1.0)
+v.inputs["Absorption Color"].default_value = (0.25, 0.64, 0.81, 1.0)
+v.inputs["Density"].default_value = 0.5
+v.inputs["Anisotropy"].default_value = 0.8
+m.node_tree.links.new(v.outputs[0], nodes["Material Output"].inputs["Volume"])
+sea.data.materials.append(m)
+sun = bpy.data.objects.new("Sun", bpy.data.lights.new("Sun", "SUN"))
+sun.data.energy = 3.0
+sun.rotation_euler = (math.radians(20), 0.0, 0.0)
+scene.collection.objects.link(sun)
+bpy.ops.wm.save_as_mainfile(filepath="sea.blend")
+"#,
+    );
+    let toml = d.join("sea.toml");
+    let out = import(&d.join("sea.blend"), &toml);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&toml).unwrap();
+    let m = poser::scene::load(&toml, &[])
+        .map_err(|e| e.render())
+        .unwrap()
+        .model;
+    let w = m.water.as_ref().expect("water");
+    // σs = colour · density; σa = (1 − colour)(1 − √absorption colour) · density.
+    let want_s = [0.05, 0.1, 0.15];
+    let want_a = [0.9 * 0.5 * 0.5, 0.8 * 0.2 * 0.5, 0.7 * 0.1 * 0.5];
+    for c in 0..3 {
+        assert!(
+            (w.scattering[c] - want_s[c]).abs() < 1e-6,
+            "{:?}",
+            w.scattering
+        );
+        assert!(
+            (w.absorption[c] - want_a[c]).abs() < 1e-6,
+            "{:?}",
+            w.absorption
+        );
+    }
+    assert!(
+        matches!(w.phase, poser::model::Phase::HenyeyGreenstein { g } if (g - 0.8).abs() < 1e-6)
+    );
+    assert!(text.contains("surface = \"flat\""), "{text}");
+    // The sun shines in Cycles' water at 20° from the vertical: poser's refracted sun too.
+    let s = m.sun.as_ref().expect("sun");
+    assert!(
+        (s.direction_water.z + 20f64.to_radians().cos()).abs() < 1e-6,
+        "{:?}",
+        s.direction_water
+    );
+}

@@ -159,11 +159,24 @@ def volume_of(node, r, where):
         c = np.asarray(colour_of(node.inputs["Color"]))
         d = float(node.inputs["Density"].default_value)
         return ([0.0] * 3, list(c * d), phase_of(node, r, where))
+    if t == "ShaderNodeVolumePrincipled":
+        # Cycles' svm_node_principled_volume: scattering colour x density; absorption
+        # (1 - colour)(1 - sqrt(absorption colour)) x density.
+        c = np.clip(np.asarray(colour_of(node.inputs["Color"])), 0.0, None)
+        a = np.sqrt(np.clip(np.asarray(colour_of(node.inputs["Absorption Color"])), 0.0, None))
+        d = max(float(node.inputs["Density"].default_value), 0.0)
+        if float(node.inputs["Emission Strength"].default_value) > 0.0 or \
+                float(node.inputs["Blackbody Intensity"].default_value) > 0.0:
+            r.note(where, "the Principled Volume's emission is not imported")
+        if any(i.is_linked for i in node.inputs):
+            r.note(where, "the Principled Volume's linked inputs are read at their unlinked values")
+        sa = np.maximum(1.0 - c, 0.0) * np.maximum(1.0 - a, 0.0) * d
+        return (list(sa), list(c * d), float(node.inputs["Anisotropy"].default_value))
     if t == "ShaderNodeVolumeCoefficients":
         return (colour_of(node.inputs["Absorption Coefficients"]),
                 colour_of(node.inputs["Scatter Coefficients"]), phase_of(node, r, where))
     r.note(where, f"volume shader `{node.name}` ({t}) is not imported",
-           "poser reads Volume Absorption, Volume Scatter, their sum, and Volume Coefficients")
+           "poser reads Volume Absorption, Volume Scatter, their sum, Principled Volume and Volume Coefficients")
     return None
 
 

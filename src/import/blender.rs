@@ -8,7 +8,7 @@
 //! | one pose per frame when the first camera moves, else one | `[network]` explicit poses |
 //! | perspective camera: lens, sensor fit, shift, depth of field | `fx`, `principal_point`, `focal_length`, `f_number`, `focus_distance` |
 //! | point, spot, area (W) and sun (W/m²) lights; the world's background | `[[lights]]` (W/sr, W/(m²·sr)), `[sun]`, an ambient light |
-//! | a volume-only material on a mesh (Volume Absorption/Scatter/Coefficients), or the world's volume | `[water]`; a mesh whose top is at z = 0 gives a flat sea surface |
+//! | a volume-only material on a mesh (Volume Absorption/Scatter/Coefficients, Principled Volume), or the world's volume | `[water]`; a mesh whose top is at z = 0 gives a flat sea surface |
 //! | meshes with a Principled or Diffuse BSDF | `.glb` assets, albedo = base colour |
 //! | glass at a camera | a note with the `[camera.port]` to declare |
 //!
