@@ -390,7 +390,7 @@ impl Bvh {
     }
 
     /// Walk the BVH; `any` stops at the first hit.
-    fn traverse(&self, ray: &Ray, mut tmax: f64, any: bool) -> Option<(f64, u32)> {
+    fn traverse(&self, ray: &Ray, tmax: f64, any: bool) -> Option<(f64, u32)> {
         if self.tris.is_empty() || tmax.is_nan() || tmax <= RAY_EPSILON {
             return None;
         }
@@ -405,10 +405,32 @@ impl Bvh {
                 f32::INFINITY
             }
         };
+        // Most rays of a path tracer (shadow rays in open water) miss the root box: that test
+        // comes before anything else, the stack included.
+        Self::slab(&self.nodes[0], o32, inv, t32(tmax))?;
+        self.walk(o, d, o32, inv, tmax, any)
+    }
+
+    /// [`Bvh::traverse`] below the root, whose box the ray enters.
+    fn walk(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        o32: Vec3A,
+        inv: Vec3A,
+        mut tmax: f64,
+        any: bool,
+    ) -> Option<(f64, u32)> {
+        let t32 = |t: f64| {
+            if t.is_finite() {
+                (t * (1.0 + 1e-5)) as f32
+            } else {
+                f32::INFINITY
+            }
+        };
         let mut best: Option<(f64, u32)> = None;
         let mut stack = [0u32; 96];
         let mut sp = 0usize;
-        Self::slab(&self.nodes[0], o32, inv, t32(tmax))?;
         let mut cur = 0u32;
         loop {
             let n = &self.nodes[cur as usize];

@@ -325,7 +325,8 @@ fn quintic(t: f64) -> f64 {
 
 /// Value noise in [-1, 1] on the integer lattice, trilinear with quintic fade.
 pub fn value_noise3(seed: u64, p: DVec3) -> f64 {
-    let f = p.floor();
+    let fl = crate::texture::floor;
+    let f = DVec3::new(fl(p.x), fl(p.y), fl(p.z));
     let (ix, iy, iz) = (f.x as i64, f.y as i64, f.z as i64);
     let d = p - f;
     let (u, v, w) = (quintic(d.x), quintic(d.y), quintic(d.z));
@@ -580,7 +581,9 @@ pub fn pattern_factor(pattern: &Pattern, p: DVec3) -> f64 {
             if size <= 0.0 {
                 return 1.0;
             }
-            let q = (p / size).floor();
+            let q = p / size;
+            let fl = crate::texture::floor;
+            let q = DVec3::new(fl(q.x), fl(q.y), fl(q.z));
             let parity = (q.x as i64 + q.y as i64 + q.z as i64).rem_euclid(2);
             if parity == 0 { 1.0 } else { contrast }
         }

@@ -59,7 +59,7 @@ impl Texture {
     pub fn sample(&self, u: f64, v: f64) -> [f64; 3] {
         let x = u * self.width as f64 - 0.5;
         let y = v * self.height as f64 - 0.5;
-        let (fx, fy) = (x.floor(), y.floor());
+        let (fx, fy) = (super::floor(x), super::floor(y));
         let (i, j) = (fx as i64, fy as i64);
         let (a, b) = (x - fx, y - fy);
         let t00 = self.texel(i, j);
@@ -380,6 +380,15 @@ pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, St
     Ok(Some(b))
 }
 
+/// `y.round() as u8` for `y` in [0, 255] (or NaN), without libm's `round` call and without a
+/// branch: the truncation is the floor there and `y − ⌊y⌋` is exact, so halves round up
+/// exactly as `f64::round` does (NaN gives 0, as `NaN as u8`).
+#[inline]
+fn round_unit(y: f64) -> u8 {
+    let i = y as u8;
+    i + (y - i as f64 >= 0.5) as u8
+}
+
 #[derive(Debug, Clone)]
 struct Chart {
     part: u32,
@@ -635,7 +644,7 @@ fn bake_from(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side:
                     for ch in 0..3 {
                         let v = (1.0 - cover) * a[ch] * tint[ch]
                             + cover * o.material.grid.map_or(0.0, |g| g.albedo[ch]);
-                        line[k + ch] = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+                        line[k + ch] = round_unit(v.clamp(0.0, 1.0) * 255.0);
                     }
                 }
             }
@@ -708,6 +717,18 @@ fn grid_cover(g: &crate::model::Grid, x: f64, y: f64, texel: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The texel quantiser rounds like `f64::round` on every value it can meet.
+    #[test]
+    fn round_unit_is_f64_round() {
+        for i in 0..=2_550_000u32 {
+            let y = i as f64 * 1e-4;
+            for v in [y, y.next_up(), y.next_down().max(0.0)] {
+                assert_eq!(round_unit(v), v.round() as u8, "{v}");
+            }
+        }
+        assert_eq!(round_unit(f64::NAN), 0);
+    }
     use crate::model::{Material, Pose};
 
     fn object(shape: Shape, pattern: Pattern) -> Object {

@@ -218,9 +218,9 @@ impl<'a> Integrator<'a> {
     fn direct(
         &self,
         p: DVec3,
-        f: &dyn Fn(DVec3) -> DVec3,
-        pdf: &dyn Fn(DVec3) -> f64,
-        point_weight: &dyn Fn(usize, DVec3) -> f64,
+        f: impl Fn(DVec3) -> DVec3,
+        pdf: impl Fn(DVec3) -> f64,
+        point_weight: impl Fn(usize, DVec3) -> f64,
         sun_weight: f64,
         rng: &mut Sampler,
     ) -> DVec3 {
@@ -318,18 +318,22 @@ impl<'a> Integrator<'a> {
                 if m.scatters() && can_scatter {
                     // Equiangular in-scattering from point/spot lights on every segment: it
                     // removes the 1/r² spikes of vertices that land near a strobe.
-                    let use_eq = true;
-                    if use_eq {
-                        for pl in &self.lights.points {
-                            l += beta * self.equiangular(m, pl, o, d, a, b, rng);
-                            if self.lamp_phase_sampling {
-                                l += beta * self.lamp_phase(m, pl, o, d, a, b, rng);
-                            }
+                    // Each lamp's geometry relative to this segment, computed once and shared by
+                    // its two samplers and the MIS weights at a free-flight vertex.
+                    let mut segs = [LampSeg::default(); LAMP_CACHE];
+                    for (i, pl) in self.lights.points.iter().enumerate() {
+                        let seg = LampSeg::new(m, o, d, a, b, pl.pos, self.lamp_phase_sampling);
+                        if let Some(c) = segs.get_mut(i) {
+                            *c = seg;
+                        }
+                        l += beta * self.equiangular(m, pl, o, d, a, &seg, rng);
+                        if self.lamp_phase_sampling {
+                            l += beta * self.lamp_phase(m, pl, o, d, a, b, &seg, rng);
                         }
                     }
                     // Sun-aware distance sampling of the sunlight scattered along [a, b].
-                    let sun_rate = self.sun_rate(m, d, b - a);
-                    if let Some(k) = sun_rate {
+                    let sun_rate = self.sun_rate(m, d, b - a).map(|k| SunSeg::new(k, a, b));
+                    if let Some(k) = &sun_rate {
                         l += beta * self.sun_inscatter(m, k, o, d, a, b, rng);
                     }
                     let c = ((rng.next() * 3.0) as usize).min(2);
@@ -344,7 +348,10 @@ impl<'a> Integrator<'a> {
                         if area_hit.is_none()
                             && let Some(h) = &hit
                         {
-                            l += beta * tr(m.sigma_t, b - a) * self.surface_direct(h, d, rng);
+                            let albedo = self.albedo(h);
+                            l += beta
+                                * tr(m.sigma_t, b - a)
+                                * self.surface_direct(h, d, albedo, rng);
                         }
                         let trv = tr(m.sigma_t, t - a);
                         let pdf_d = mean(m.sigma_t * trv);
@@ -353,17 +360,17 @@ impl<'a> Integrator<'a> {
                         let phase = &m.phase;
                         let f = |w: DVec3| DVec3::splat(phase.eval(d.dot(w)));
                         let pdf = |w: DVec3| self.medium_pdf(d, w);
-                        let pw = |_i: usize, x: DVec3| {
-                            if use_eq {
-                                let pe = equiangular_pdf(o, d, a, b, x, t);
-                                let pp = self.lamp_phase_pdf(m, o, d, a, b, x, t);
-                                power3(pdf_d, pe, pp)
-                            } else {
-                                1.0
-                            }
+                        let pw = |i: usize, x: DVec3| {
+                            let seg = match segs.get(i) {
+                                Some(s) => *s,
+                                None => LampSeg::new(m, o, d, a, b, x, self.lamp_phase_sampling),
+                            };
+                            let pe = seg.equiangular_pdf(t);
+                            let pp = seg.phase_pdf(m, t);
+                            power3(pdf_d, pe, pp)
                         };
-                        let sw = sun_rate.map_or(1.0, |k| power(pdf_d, sun_pdf(k, a, b, t)));
-                        l += beta * self.direct(p, &f, &pdf, &pw, sw, rng);
+                        let sw = sun_rate.map_or(1.0, |k| power(pdf_d, k.pdf(t)));
+                        l += beta * self.direct(p, f, pdf, pw, sw, rng);
                         let (nd, ppdf) = self.sample_medium(d, rng);
                         if ppdf <= 0.0 {
                             break;
@@ -420,7 +427,7 @@ impl<'a> Integrator<'a> {
                 break;
             }
             let p = h.point + n * SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
-            l += beta_nee * self.surface_direct(&h, d, rng);
+            l += beta_nee * self.surface_direct(&h, d, albedo, rng);
             // f·cos/pdf = albedo·(cos/π)/pdf (= albedo for pure cosine sampling).
             let (nd, pdf) = self.sample_surface(n, rng);
             let cos = n.dot(nd);
@@ -439,15 +446,14 @@ impl<'a> Integrator<'a> {
         l
     }
 
-    /// Next-event estimate of the light reflected at surface hit `h` towards `-d` (no path
-    /// weight).
-    fn surface_direct(&self, h: &Hit, d: DVec3, rng: &mut Sampler) -> DVec3 {
+    /// Next-event estimate of the light reflected at surface hit `h` (of albedo `albedo`,
+    /// [`Integrator::albedo`]) towards `-d` (no path weight).
+    fn surface_direct(&self, h: &Hit, d: DVec3, albedo: DVec3, rng: &mut Sampler) -> DVec3 {
         let n = if h.normal.dot(d) > 0.0 {
             -h.normal
         } else {
             h.normal
         };
-        let albedo = self.albedo(h);
         if albedo == DVec3::ZERO {
             return DVec3::ZERO;
         }
@@ -461,7 +467,7 @@ impl<'a> Integrator<'a> {
             }
         };
         let pdf = |w: DVec3| self.surface_pdf(n, w);
-        self.direct(p, &f, &pdf, &|_, _| 1.0, 1.0, rng)
+        self.direct(p, f, pdf, |_, _| 1.0, 1.0, rng)
     }
 
     fn roulette(&self, beta: &mut DVec3, depth: u32, rng: &mut Sampler) -> bool {
@@ -494,12 +500,12 @@ impl<'a> Integrator<'a> {
     }
 
     /// Sunlight scattered towards `o` along `[a, b]` of the ray, at a distance sampled by
-    /// [`sun_pdf`] and MIS-weighted against free-flight sampling. Excludes the ray's `beta`.
+    /// [`SunSeg::pdf`] and MIS-weighted against free-flight sampling. Excludes the ray's `beta`.
     #[allow(clippy::too_many_arguments)]
     fn sun_inscatter(
         &self,
         m: &Medium,
-        k: DVec3,
+        k: &SunSeg,
         o: DVec3,
         d: DVec3,
         a: f64,
@@ -511,11 +517,11 @@ impl<'a> Integrator<'a> {
         };
         let c = ((rng.next() * 3.0) as usize).min(2);
         let u = rng.next();
-        let t = sample_trunc_exp(k[c], a, b, u);
+        let t = sample_trunc_exp_with(k.k[c], a, b, u, k.em1[c]);
         if !(t >= a && t <= b) {
             return DVec3::ZERO;
         }
-        let pdf_s = sun_pdf(k, a, b, t);
+        let pdf_s = k.pdf(t);
         if !(pdf_s > 0.0 && pdf_s.is_finite()) {
             return DVec3::ZERO;
         }
@@ -540,36 +546,6 @@ impl<'a> Integrator<'a> {
         m.sigma_s * trc * ph * sun.irradiance * self.tr_seg(p, dir, s) * (caustic * w / pdf_s)
     }
 
-    /// Density at `t` of phase-angular sampling for a light at `x` on `[a, b]` of the ray
-    /// `o + t d` (0 when it is off): the cosine `μ(t) = (δ − t)/r` between the ray and the
-    /// direction to the light is drawn from the phase function restricted to `[μ(b), μ(a)]`,
-    /// so `p(t) = 2π p(μ) · dd²/r³ / mass` (`δ`, `dd`: the light's distance along and off the
-    /// ray; `r`: from the point to the light).
-    #[allow(clippy::too_many_arguments)]
-    fn lamp_phase_pdf(
-        &self,
-        m: &Medium,
-        o: DVec3,
-        d: DVec3,
-        a: f64,
-        b: f64,
-        x: DVec3,
-        t: f64,
-    ) -> f64 {
-        if !self.lamp_phase_sampling {
-            return 0.0;
-        }
-        let (delta, dd) = along_off(o, d, x);
-        let (ua, ub) = phase_window(m, delta, dd, a, b);
-        let mass = (ua - ub).abs();
-        if !(mass > 0.0) {
-            return 0.0;
-        }
-        let r = (dd * dd + (t - delta) * (t - delta)).sqrt();
-        let mu = (delta - t) / r;
-        2.0 * PI * m.phase.eval(mu) * dd * dd / (r * r * r) / mass
-    }
-
     /// In-scattered radiance from point light `pl` along `[a, b]` of the ray, at a distance
     /// sampled by phase-angular sampling ([`Integrator::lamp_phase_pdf`]) and MIS-weighted
     /// against free flight and equiangular sampling. Excludes the ray's `beta`.
@@ -582,18 +558,19 @@ impl<'a> Integrator<'a> {
         d: DVec3,
         a: f64,
         b: f64,
+        seg: &LampSeg,
         rng: &mut Sampler,
     ) -> DVec3 {
-        let (delta, dd) = along_off(o, d, pl.pos);
-        let (ua, ub) = phase_window(m, delta, dd, a, b);
+        let (delta, dd) = (seg.delta, seg.dd);
+        let (ua, ub) = (seg.ua, seg.ub);
         let u = ua + (ub - ua) * rng.next();
         let mu = m.phase.sample_cos(u).clamp(-1.0 + 1e-12, 1.0 - 1e-12);
         let t = delta - dd * mu / (1.0 - mu * mu).sqrt();
         if !(t >= a && t <= b) {
             return DVec3::ZERO;
         }
-        let pdf_p = self.lamp_phase_pdf(m, o, d, a, b, pl.pos, t);
-        let pdf_e = equiangular_pdf(o, d, a, b, pl.pos, t);
+        let pdf_p = seg.phase_pdf(m, t);
+        let pdf_e = seg.equiangular_pdf(t);
         self.lamp_inscatter_at(m, pl, o, d, a, t, pdf_p, pdf_e)
     }
 
@@ -644,29 +621,41 @@ impl<'a> Integrator<'a> {
         o: DVec3,
         d: DVec3,
         a: f64,
-        b: f64,
+        seg: &LampSeg,
         rng: &mut Sampler,
     ) -> DVec3 {
-        let (delta, dd) = along_off(o, d, pl.pos);
-        let ta = (a - delta).atan2(dd);
-        let tb = (b - delta).atan2(dd);
+        let (delta, dd, ta, tb) = (seg.delta, seg.dd, seg.ta, seg.tb);
         if tb <= ta {
             return DVec3::ZERO;
         }
         let u = rng.next();
         let t = delta + dd * (ta + u * (tb - ta)).tan();
-        if !(t >= a && t <= b) {
+        if !(t >= seg.a && t <= seg.b) {
             return DVec3::ZERO;
         }
-        let pdf_e = dd / ((tb - ta) * (dd * dd + (t - delta) * (t - delta)));
-        let pdf_p = self.lamp_phase_pdf(m, o, d, a, b, pl.pos, t);
+        let pdf_e = seg.equiangular_pdf(t);
+        let pdf_p = seg.phase_pdf(m, t);
         self.lamp_inscatter_at(m, pl, o, d, a, t, pdf_e, pdf_p)
     }
 }
 
 /// Density at `t` of the truncated exponential of rate `k` (1/m, any sign) on `[a, b]`:
 /// `k e^(−k (t−a)) / (1 − e^(−k (b−a)))`, uniform as `k → 0`.
+#[cfg(test)]
 fn trunc_exp_pdf(k: f64, a: f64, b: f64, t: f64) -> f64 {
+    trunc_exp_pdf_with(k, a, b, t, trunc_exp_em1(k, b - a))
+}
+
+/// `e^(−|k| len) − 1`: the normalisation shared by [`trunc_exp_pdf_with`] and
+/// [`sample_trunc_exp_with`] on a segment of length `len` (computed once per segment).
+#[inline]
+fn trunc_exp_em1(k: f64, len: f64) -> f64 {
+    (-k.abs() * len).exp_m1()
+}
+
+/// [`trunc_exp_pdf`] given `em1 = trunc_exp_em1(k, b − a)`.
+#[inline]
+fn trunc_exp_pdf_with(k: f64, a: f64, b: f64, t: f64, em1: f64) -> f64 {
     let len = b - a;
     if !len.is_finite() {
         return if k > 0.0 {
@@ -679,16 +668,23 @@ fn trunc_exp_pdf(k: f64, a: f64, b: f64, t: f64) -> f64 {
         return 1.0 / len;
     }
     if k > 0.0 {
-        k * (-k * (t - a)).exp() / -(-k * len).exp_m1()
+        k * (-k * (t - a)).exp() / -em1
     } else {
         // Written from the far end so that nothing overflows: q e^(−q (b−t)) / (1 − e^(−q len)).
         let q = -k;
-        q * (-q * (b - t)).exp() / -(-q * len).exp_m1()
+        q * (-q * (b - t)).exp() / -em1
     }
 }
 
 /// Sample `t` on `[a, b]` from the truncated exponential of rate `k` with the uniform `u`.
+#[cfg(test)]
 fn sample_trunc_exp(k: f64, a: f64, b: f64, u: f64) -> f64 {
+    sample_trunc_exp_with(k, a, b, u, trunc_exp_em1(k, b - a))
+}
+
+/// [`sample_trunc_exp`] given `em1 = trunc_exp_em1(k, b − a)`.
+#[inline]
+fn sample_trunc_exp_with(k: f64, a: f64, b: f64, u: f64, em1: f64) -> f64 {
     let len = b - a;
     if !len.is_finite() {
         return a - (1.0 - u).ln() / k;
@@ -697,17 +693,50 @@ fn sample_trunc_exp(k: f64, a: f64, b: f64, u: f64) -> f64 {
         return a + u * len;
     }
     if k > 0.0 {
-        (a - (u * (-k * len).exp_m1()).ln_1p() / k).clamp(a, b)
+        (a - (u * em1).ln_1p() / k).clamp(a, b)
     } else {
         let q = -k;
-        (b + (u * (-q * len).exp_m1()).ln_1p() / q).clamp(a, b)
+        (b + (u * em1).ln_1p() / q).clamp(a, b)
     }
 }
 
-/// Density of sun-aware distance sampling at `t` ([`Integrator::sun_rate`]): a channel picked
-/// uniformly, so the mean of the three channels' truncated exponentials.
-fn sun_pdf(k: DVec3, a: f64, b: f64, t: f64) -> f64 {
-    (trunc_exp_pdf(k.x, a, b, t) + trunc_exp_pdf(k.y, a, b, t) + trunc_exp_pdf(k.z, a, b, t)) / 3.0
+/// Sun-aware distance sampling on one medium segment `[a, b]`: the rates per channel
+/// ([`Integrator::sun_rate`]) and their truncated exponentials' normalisations, computed once
+/// per segment for the sampler and both densities.
+#[derive(Debug, Clone, Copy)]
+struct SunSeg {
+    k: DVec3,
+    a: f64,
+    b: f64,
+    /// `trunc_exp_em1(k_c, b − a)` per channel.
+    em1: DVec3,
+}
+
+impl SunSeg {
+    fn new(k: DVec3, a: f64, b: f64) -> SunSeg {
+        let len = b - a;
+        SunSeg {
+            k,
+            a,
+            b,
+            em1: DVec3::new(
+                trunc_exp_em1(k.x, len),
+                trunc_exp_em1(k.y, len),
+                trunc_exp_em1(k.z, len),
+            ),
+        }
+    }
+
+    /// Density of sun-aware distance sampling at `t`: a channel picked uniformly, so the mean
+    /// of the three channels' truncated exponentials.
+    #[inline]
+    fn pdf(&self, t: f64) -> f64 {
+        let (k, a, b, e) = (self.k, self.a, self.b, self.em1);
+        (trunc_exp_pdf_with(k.x, a, b, t, e.x)
+            + trunc_exp_pdf_with(k.y, a, b, t, e.y)
+            + trunc_exp_pdf_with(k.z, a, b, t, e.z))
+            / 3.0
+    }
 }
 
 /// Power heuristic among three techniques: the weight of the first.
@@ -746,15 +775,80 @@ fn mu_at(delta: f64, dd: f64, t: f64) -> f64 {
     q / (dd * dd + q * q).sqrt()
 }
 
-/// Density of equiangular sampling of `t` on `[a, b]` for a light at `x`.
-fn equiangular_pdf(o: DVec3, d: DVec3, a: f64, b: f64, x: DVec3, t: f64) -> f64 {
-    let (delta, dd) = along_off(o, d, x);
-    let ta = (a - delta).atan2(dd);
-    let tb = (b - delta).atan2(dd);
-    if tb <= ta {
-        return 0.0;
+/// Point lights whose [`LampSeg`] a medium segment keeps (on the stack); the MIS weights of
+/// any further light recompute it.
+const LAMP_CACHE: usize = 8;
+
+/// A point light's geometry relative to one medium segment `[a, b]` of the ray `o + t d`,
+/// shared by equiangular and phase-angular sampling and their densities (computed once per
+/// segment and light: the two `atan2` and the phase window are the costly part).
+#[derive(Debug, Clone, Copy, Default)]
+struct LampSeg {
+    a: f64,
+    b: f64,
+    /// The light's distance along (`δ`) and off (`dd`) the ray.
+    delta: f64,
+    dd: f64,
+    /// Equiangular sampling's angles at `a` and `b`.
+    ta: f64,
+    tb: f64,
+    /// Phase-angular sampling's window `[u(a), u(b)]` and its mass (0 when that sampling is
+    /// off).
+    ua: f64,
+    ub: f64,
+    mass: f64,
+}
+
+impl LampSeg {
+    /// The segment `[a, b]` of `o + t d` seen from a light at `x`; `phase` when phase-angular
+    /// sampling is on.
+    fn new(m: &Medium, o: DVec3, d: DVec3, a: f64, b: f64, x: DVec3, phase: bool) -> LampSeg {
+        let (delta, dd) = along_off(o, d, x);
+        let ta = (a - delta).atan2(dd);
+        let tb = (b - delta).atan2(dd);
+        let (ua, ub) = if phase {
+            phase_window(m, delta, dd, a, b)
+        } else {
+            (0.0, 0.0)
+        };
+        LampSeg {
+            a,
+            b,
+            delta,
+            dd,
+            ta,
+            tb,
+            ua,
+            ub,
+            mass: (ua - ub).abs(),
+        }
     }
-    dd / ((tb - ta) * (dd * dd + (t - delta) * (t - delta)))
+
+    /// Density of equiangular sampling of `t` on the segment.
+    #[inline]
+    fn equiangular_pdf(&self, t: f64) -> f64 {
+        let (delta, dd, ta, tb) = (self.delta, self.dd, self.ta, self.tb);
+        if tb <= ta {
+            return 0.0;
+        }
+        dd / ((tb - ta) * (dd * dd + (t - delta) * (t - delta)))
+    }
+
+    /// Density at `t` of phase-angular sampling (0 when it is off): the cosine
+    /// `μ(t) = (δ − t)/r` between the ray and the direction to the light is drawn from the
+    /// phase function restricted to `[μ(b), μ(a)]`, so `p(t) = 2π p(μ) · dd²/r³ / mass`
+    /// (`r`: from the point to the light).
+    #[inline]
+    fn phase_pdf(&self, m: &Medium, t: f64) -> f64 {
+        let mass = self.mass;
+        if !(mass > 0.0) {
+            return 0.0;
+        }
+        let (delta, dd) = (self.delta, self.dd);
+        let r = (dd * dd + (t - delta) * (t - delta)).sqrt();
+        let mu = (delta - t) / r;
+        2.0 * PI * m.phase.eval(mu) * dd * dd / (r * r * r) / mass
+    }
 }
 
 #[cfg(test)]
