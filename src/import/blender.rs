@@ -16,7 +16,8 @@
 //! reader uses each while it agrees with Blender's float32 value, so the round trip is exact.
 
 use super::{
-    Imported, Note, arr, euler_xyz, explicit_network, finish, meshes, safe_file_name, unrefract,
+    Imported, Note, arr, euler_xyz, explicit_network, finish, meshes, safe_file_name, sun_table,
+    unrefract,
 };
 use crate::backend::python;
 use glam::{DMat3, DMat4, DVec3};
@@ -366,16 +367,7 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
             } else {
                 (dir, e)
             };
-            let elevation = (-dir_air.z).clamp(-1.0, 1.0).asin();
-            let azimuth = (-dir_air.x).atan2(-dir_air.y);
-            let mut st = Table::new();
-            st.insert("elevation".into(), Value::Float(elevation));
-            st.insert(
-                "azimuth".into(),
-                Value::Float(azimuth.rem_euclid(std::f64::consts::TAU)),
-            );
-            st.insert("irradiance".into(), arr(e_air));
-            t.insert("sun".into(), Value::Table(st));
+            t.insert("sun".into(), sun_table(dir_air, e_air));
             continue;
         }
         let mut lt = Table::new();

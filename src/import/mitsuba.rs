@@ -16,7 +16,8 @@
 //! `filename` paths must stay inside the first file's folder; counts are bounded.
 
 use super::{
-    Imported, Note, arr, euler_xyz, explicit_network, finish, meshes, safe_file_name, unrefract,
+    Imported, Note, arr, euler_xyz, explicit_network, finish, meshes, safe_file_name, sun_table,
+    unrefract,
 };
 use crate::geometry::mesh::TriMesh;
 use glam::{DMat3, DMat4, DVec3};
@@ -1149,20 +1150,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
             }
             _ => (*dir, *e),
         };
-        let elevation = (-dir_air.z).clamp(-1.0, 1.0).asin();
-        let azimuth = (-dir_air.x).atan2(-dir_air.y);
-        let mut st = Table::new();
-        st.insert("elevation".into(), Value::Float(elevation));
-        st.insert(
-            "azimuth".into(),
-            Value::Float(if azimuth < 0.0 {
-                azimuth + std::f64::consts::TAU
-            } else {
-                azimuth
-            }),
-        );
-        st.insert("irradiance".into(), arr(e_air));
-        t.insert("sun".into(), Value::Table(st));
+        t.insert("sun".into(), sun_table(dir_air, e_air));
         if water.is_some() && surface {
             cx.note(k, "the directional light is read as the sun refracted at the flat sea surface: elevation and irradiance are those above the water", None);
         }

@@ -119,6 +119,21 @@ pub(crate) fn explicit_network(poses: impl IntoIterator<Item = (DMat3, DVec3)>) 
     Value::Table(net)
 }
 
+/// The `[sun]` table of a sun shining along `dir_air` with irradiance `e_air` (W/m² per
+/// channel) above the water.
+pub(crate) fn sun_table(dir_air: DVec3, e_air: [f64; 3]) -> Value {
+    let elevation = (-dir_air.z).clamp(-1.0, 1.0).asin();
+    let azimuth = (-dir_air.x).atan2(-dir_air.y);
+    let mut st = Table::new();
+    st.insert("elevation".into(), Value::Float(elevation));
+    st.insert(
+        "azimuth".into(),
+        Value::Float(azimuth.rem_euclid(std::f64::consts::TAU)),
+    );
+    st.insert("irradiance".into(), arr(e_air));
+    Value::Table(st)
+}
+
 /// Numbers as a TOML array of floats (no negative zeros).
 pub(crate) fn arr(v: impl IntoIterator<Item = f64>) -> Value {
     Value::Array(v.into_iter().map(|x| Value::Float(x + 0.0)).collect())
