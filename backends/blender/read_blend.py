@@ -307,7 +307,7 @@ def read(bpy, blend, work):
     for fi, f in enumerate(frames):
         scene.frame_set(f)
         for ci, c in enumerate(cams):
-            worlds[(ci, fi)] = r.world(c, fi - 0) @ CV_TO_BLENDER
+            worlds[(ci, fi)] = r.world(c, fi) @ CV_TO_BLENDER
         if fi == 0:
             for lo in light_objs:
                 light_worlds[lo.name] = r.world(lo, 0)
@@ -364,7 +364,7 @@ def read(bpy, blend, work):
         if kind == "volume" or o.name == "poser_water":
             water = water_of(r, o, mats, value, water, where)
             continue
-        if kind == "glass" or kind == "housing":
+        if kind == "glass":
             centre = np.array(o.matrix_world, dtype=float)[:3, 3]
             near = [cams[i].name for i, cc in enumerate(cam_centres) if np.linalg.norm(cc - centre) < 0.5]
             if near:
@@ -506,8 +506,6 @@ def camera(r, c, width, height):
             out.update({"focal_length": fl, "f_number": n, "focus_distance": focus})
         else:
             out.update({"focal_length": fl, "f_number": fl / (2.0 * aperture), "focus_distance": focus})
-    if abs(out["fx"] - out["fy"]) > 0 and d.type == "PERSP":
-        out["fy"] = out["fx"]
     return out
 
 
