@@ -51,7 +51,7 @@
 //! | fisheye lens, Brown distortion, fx ≠ fy | — | error naming the camera |
 //! | film | `hdrfilm`, rgb, float32, `box` rfilter; `independent` sampler | |
 //! | flat port | closed slab: 6 `rectangle`s, `dielectric`; housing: 5 black `rectangle`s behind it | inner face air→glass, other faces glass→water; the walls absorb light reflected back into the housing |
-//! | dome port | two `sphere`s: inner air→glass, outer glass→water | full spheres (their back halves stand in for the housing) |
+//! | dome port | two `sphere`s: inner air→glass, outer glass→water; housing: a black `disk` across the inner sphere behind the pupil | full spheres; the disk absorbs light the glass reflects back into the housing |
 //! | cylinder port | two `cylinder`s closed by `disk` caps | length covers the field of view with margin |
 //! | water | `homogeneous` medium `water`: σt (`constvolume`, unbounded), albedo (rgb), `hg` or `tabphase` (Fournier–Forand, [`view::ff_table`]) | bounded by a `null` cube: the sea below z = 0, or a box around the camera |
 //! | camera without port in water | `<ref name="medium" id="water"/>` in the sensor | |
@@ -59,7 +59,7 @@
 //! | point / spot | `point` / `spot` (W/sr; `cutoff_angle` = half angle, sharp edge) | |
 //! | area | `rectangle` + `area` emitter (one-sided, +z) + `null` BSDF | casts no shadow, reflects nothing |
 //! | ambient | `constant` | |
-//! | integrator | `volpath`, `max_depth = max_bounces + 1 + port interfaces` | Mitsuba counts every vertex, glass faces included |
+//! | integrator | `volpathmis` with water (spectral MIS over the channels), else `volpath`; `max_depth = max_bounces + 1 + port interfaces` | Mitsuba counts every vertex, glass faces included |
 
 mod runner;
 pub mod view;
