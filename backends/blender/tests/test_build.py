@@ -57,6 +57,14 @@ def test_water_port_lights_and_poses_are_built(scene_desc):
     assert glass.inputs["IOR"].default_value == pytest.approx(1.518, rel=1e-6)
     # One shape key per pose (+ basis) moves the housing cut-out with the rig.
     assert len(water.data.shape_keys.key_blocks) == 1 + len(scene_desc["poses"])
+    # HOUSING_INSIDE: black walls inside the cut-out end the light the port reflects back into
+    # the housing; shadow rays pass them (no housing shadow).
+    body = bpy.data.objects["housing:cam"]
+    assert not body.visible_shadow and body.parent == bpy.data.objects["port inner:cam"].parent
+    bsdf = [n for n in body.data.materials[0].node_tree.nodes
+            if n.bl_idname == "ShaderNodeBsdfDiffuse"][0]
+    assert tuple(bsdf.inputs["Color"].default_value)[:3] == (0.0, 0.0, 0.0)
+    assert len(body.data.polygons) == 5  # flat port: the back and four sides
     # n^2: the spot in water, seen from a camera in air, is scaled by (1/n_w)^2.
     k = geo.emitter_scale([1.0] * 3, [1.334] * 3)
     pbuild._apply_emitters(built, k)
