@@ -5,9 +5,9 @@
 //! (`poser::bench::parity`). Disk targets, where a scene has them, must be found by every
 //! backend and sit within [`TARGET_RMS_PX`] of the exact truth.
 //!
-//! The whole list, every scenario and lesson scene, is `poser bench parity`
-//! (docs/bench/parity.md). A scene or pair left out here is left out for a measured reason,
-//! written beside it; the list is the CI's share of that table.
+//! Every scenario and lesson scene has its test here (`every_shipped_scene_has_a_test`), the
+//! same list as `poser bench parity` (docs/bench/parity.md). A pair left unchecked is left out
+//! for a measured reason, written beside it.
 
 mod support;
 use poser::backend::Backend;
@@ -100,6 +100,21 @@ fn check_refusing(name: &str, skip: &[(&str, &str)], refuse: &[(&str, &str)]) ->
     assert!(row.status != "dark", "{name}: black in every backend");
     assert!(failures.is_empty(), "{name}:\n  {}", failures.join("\n  "));
     row
+}
+
+#[test]
+fn every_shipped_scene_has_a_test() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let source = include_str!("scenario_parity.rs");
+    let missing: Vec<String> = poser::bench::parity::shipped_scenes(root)
+        .iter()
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .filter(|stem| !source.contains(&format!("fn {stem}() {{")))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "shipped scenes without a parity test: {missing:?}"
+    );
 }
 
 // Scenes where all three backends agree (quick form, measured by `poser bench parity --quick`).
@@ -199,5 +214,82 @@ fn coral_self_occlusion() {
     check(
         "coral_self_occlusion",
         &[("native", "blender"), ("mitsuba", "blender")],
+    );
+}
+
+#[test]
+fn scuba_survey() {
+    // paper_survey's scene with a different dive plan: the same renders, the same measured
+    // pair left to the full form (Mitsuba and Cycles on either side of native: +3.2 / +6.0 /
+    // +4.9 % between them against an allowance of 4.4 %).
+    check("scuba_survey", &[("mitsuba", "blender")]);
+}
+
+#[test]
+fn flat_port_deformation_pupil_1mm() {
+    check("flat_port_deformation_pupil_1mm", &[]);
+}
+
+#[test]
+fn flat_port_deformation() {
+    // Mitsuba's housing shadows the sun (Mitsuba 3 has no per-ray-type visibility; `compile`
+    // warns): −3.0 / −3.0 / −2.9 % against native, allowance 2.6 %. Native and Cycles cast no
+    // housing shadow and agree (−0.6 / −0.7 / −0.8 %).
+    check("flat_port_deformation", &[("native", "mitsuba")]);
+}
+
+#[test]
+fn flat_port_deformation_obliques() {
+    // The same scene and first pose as flat_port_deformation: the same Mitsuba housing shadow.
+    check("flat_port_deformation_obliques", &[("native", "mitsuba")]);
+}
+
+#[test]
+fn flat_port_deformation_pupil_10cm() {
+    // The housing behind a pupil 10 cm from the glass is deep, and Mitsuba's shadows the sun
+    // over more of the view: −11.9 / −11.3 / −11.0 % against native. Cycles is −1.6 / −2.1 /
+    // −2.5 % against native (allowance 2.45 %), on a trend with the pupil's distance (−0.3 % G
+    // at 1 mm, −0.7 % at 3 cm); cause not yet found. Only the targets are checked here.
+    check(
+        "flat_port_deformation_pupil_10cm",
+        &[
+            ("native", "mitsuba"),
+            ("native", "blender"),
+            ("mitsuba", "blender"),
+        ],
+    );
+}
+
+#[test]
+fn archaeology() {
+    // Cycles +5.4 / +0.1 / +0.2 % against native (allowance 2.7 %) and +5.4 / +1.5 / +1.5 %
+    // against Mitsuba, in red only; Mitsuba and native agree (+0.1 / −1.4 / −1.3 %). Not yet
+    // diagnosed (docs/backends.md, "Known differences").
+    check(
+        "archaeology",
+        &[("native", "blender"), ("mitsuba", "blender")],
+    );
+}
+
+#[test]
+fn calibration_by_port() {
+    // Cycles +4.4 % in blue against native (allowance 3.3 %; R and G within 0.7 %), within
+    // the allowance against Mitsuba, which agrees with native. Not yet diagnosed.
+    check("calibration_by_port", &[("native", "blender")]);
+}
+
+#[test]
+fn two_gas_dive() {
+    // 33 m deep, lit by the sky alone through Jerlov II water: the sky's red reaches the
+    // seabed at e⁻²⁰ of itself, the image means are near zero, and at 16 spp the backends
+    // differ by factors (Mitsuba +13000 % in R, Cycles +578 % in G against native). The quick
+    // form cannot decide this scene; it must still render in every backend, and not black.
+    check(
+        "two_gas_dive",
+        &[
+            ("native", "mitsuba"),
+            ("native", "blender"),
+            ("mitsuba", "blender"),
+        ],
     );
 }
