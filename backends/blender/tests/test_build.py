@@ -36,6 +36,51 @@ def test_camera_projects_like_opencv(scene_desc):
         assert v == pytest.approx(cam["fy"] * p_cam[1] / p_cam[2] + cam["cy"], abs=1e-4)
 
 
+@pytest.mark.parametrize("port", [
+    None,  # the fixture's flat port
+    {"kind": "dome", "center": [0.0, 0.0, 0.002], "inner_radius": 0.05, "thickness": 0.006},
+    {"kind": "cylinder", "axis_point": [0.0, 0.0, 0.0], "axis": [0.0, 1.0, 0.0],
+     "inner_radius": 0.05, "thickness": 0.005},
+])
+def test_light_reflected_into_the_housing_ends_on_its_walls(scene_desc, port):
+    # HOUSING_INSIDE: whatever the port glass reflects back into the housing must meet the
+    # black walls before the water's cut-out. On a dome the walls once lay exactly on the
+    # cut-out's back, the water boundary won, and the reflected light reached the sky.
+    if port is not None:
+        port["glass"] = scene_desc["cameras"][0]["port"]["glass"]
+        scene_desc["cameras"][0]["port"] = port
+    scene = _fresh()
+    pbuild.build(scene_desc, ".", scene)
+    scene.frame_set(0)
+    dg = bpy.context.evaluated_depsgraph_get()
+    m = np.asarray(scene_desc["poses"][0]["world_from_rig"], dtype=float)
+    origin = Vector(m[:3, 3])
+    rng = np.random.default_rng(1)
+    for _ in range(64):
+        d = rng.normal(size=3)
+        d[2] = -abs(d[2]) - 0.3  # backwards (camera -z) and sideways, camera frame
+        d = m[:3, :3] @ (d / np.linalg.norm(d))
+        hit, _, _, _, obj, _ = scene.ray_cast(dg, origin, Vector(d))
+        assert hit and obj.name in ("housing:cam", "port inner:cam"), (
+            f"a ray leaving the pupil backwards along {d} met {obj.name if hit else 'nothing'}")
+        if obj.name == "housing:cam":
+            # Strictly inside the cut-out, not coincident with it (a tie can go either way).
+            walls = _first_hit(dg, obj, origin, d)
+            water = _first_hit(dg, bpy.data.objects["poser_water"], origin, d)
+            assert water - walls > 1e-5, f"walls at {walls} m, the cut-out at {water} m"
+
+
+def _first_hit(dg, obj, origin, d):
+    """Distance along world direction `d` from `origin` to `obj`'s first face."""
+    ev = obj.evaluated_get(dg)
+    inv = ev.matrix_world.inverted()
+    o = inv @ origin
+    dl = (inv.to_3x3() @ Vector(d)).normalized()
+    hit, loc, _, _ = ev.ray_cast(o, dl)
+    assert hit, f"{obj.name} not met"
+    return (ev.matrix_world @ loc - origin).length
+
+
 def test_water_port_lights_and_poses_are_built(scene_desc):
     scene = _fresh()
     built = pbuild.build(scene_desc, ".", scene)
