@@ -642,9 +642,26 @@ def _sun_layer_factor(desc, sun):
     return out
 
 
+# SEA_WALLS: material index of the sea box's sides and bottom, black. Under a sea surface
+# native's sea is unbounded: light that leaves sideways or downwards never comes back. Cycles'
+# box is finite (`bounds`: 5 extinction lengths, 5-100 m), and open sides would let the
+# ambient light in through the water left to them. Measured on calibration_by_port (a camera
+# looking horizontally through water absorbing 0.03/m in blue, 1/4 size, 64 spp): open sides
+# +4.2 % in B against native, black ones −0.1 %.
+SEA_WALLS = 3
+
+
+def _sea_below_surface(desc):
+    return (desc["water"]["extent"]["kind"] == "everywhere"
+            and desc.get("surface", {}).get("kind") in ("flat", "waves"))
+
+
 def _water_mesh(desc, pose_index, shells):
     lo, hi = _water_box(desc, pose_index)
-    parts = [geo.box_mesh(lo, hi, 0)]
+    box = geo.box_mesh(lo, hi, 0)
+    if _sea_below_surface(desc):
+        box["tags"] = [SEA_WALLS] * 5 + [0]  # box_mesh's faces: -x, +x, -y, +y, -z, +z (top)
+    parts = [box]
     pose = geo.mat4(desc["poses"][pose_index]["world_from_rig"])
     for s in shells:
         if s is None:
@@ -713,6 +730,7 @@ def _build_water(built, coll, desc, shells, n_w, ref):
     # The housing body too (HOUSING_SHADOW): a black surface here, even one made transparent
     # for shadow rays, still shadowed the sun (measured); a pure volume boundary does not.
     me.materials.append(boundary)
+    me.materials.append(_black_material("sea sides and bottom", water))  # SEA_WALLS
     obj = _new_object(coll, "poser_water", me)
     obj.visible_shadow = True
     n_poses = len(desc["poses"])

@@ -81,13 +81,34 @@ def _first_hit(dg, obj, origin, d):
     return (ev.matrix_world @ loc - origin).length
 
 
+def test_the_sea_under_a_surface_has_black_sides_and_bottom(scene_desc):
+    # SEA_WALLS: below a sea surface, light leaving Cycles' finite box sideways or downwards
+    # must not see the sky (native's sea is unbounded); the top stays a volume boundary.
+    scene_desc["surface"] = {"kind": "flat"}
+    scene_desc["poses"] = [{**p, "world_from_rig": [r[:3] + [r[3] - (4.0 if i == 2 else 0.0)]
+                                                    for i, r in enumerate(p["world_from_rig"])]}
+                           for p in scene_desc["poses"]]
+    pbuild.build(scene_desc, ".", _fresh())
+    water = bpy.data.objects["poser_water"].data
+    slots = [m.name for m in water.materials]
+    by_normal = {}
+    for poly in water.polygons[:6]:  # the box comes first, then the housing's cut-out
+        by_normal[tuple(round(x) for x in poly.normal)] = slots[poly.material_index]
+    assert by_normal[(0, 0, 1)] == "water boundary"
+    for n in [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, -1)]:
+        assert by_normal[n] == "sea sides and bottom", n
+    bsdf = [n for n in water.materials[pbuild.SEA_WALLS].node_tree.nodes
+            if n.bl_idname == "ShaderNodeBsdfDiffuse"][0]
+    assert tuple(bsdf.inputs["Color"].default_value)[:3] == (0.0, 0.0, 0.0)
+
+
 def test_water_port_lights_and_poses_are_built(scene_desc):
     scene = _fresh()
     built = pbuild.build(scene_desc, ".", scene)
     water = bpy.data.objects["poser_water"]
     names = [m.name for m in water.data.materials]
     # The housing body is a pure volume boundary too (no housing shadow, HOUSING_SHADOW).
-    assert names == ["water boundary", "water boundary", "water boundary"]
+    assert names == ["water boundary", "water boundary", "water boundary", "sea sides and bottom"]
     nodes = {n.bl_idname: n for n in water.data.materials[1].node_tree.nodes}
     vol = nodes["ShaderNodeVolumeCoefficients"]
     assert tuple(vol.inputs["Absorption Coefficients"].default_value) == pytest.approx(
