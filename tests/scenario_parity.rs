@@ -256,13 +256,9 @@ fn flat_port_deformation_pupil_10cm() {
 
 #[test]
 fn archaeology() {
-    // Cycles +5.4 / +0.1 / +0.2 % against native (allowance 2.7 %) and +5.4 / +1.5 / +1.5 %
-    // against Mitsuba, in red only; Mitsuba and native agree (+0.1 / −1.4 / −1.3 %). Not yet
-    // diagnosed (docs/backends.md, "Known differences").
-    check(
-        "archaeology",
-        &[("native", "blender"), ("mitsuba", "blender")],
-    );
+    // Sun, strobes and sky at once: Cycles' red was +5.3 % with its light tree on (each light
+    // alone agreed); the tree is off now (LIGHT_TREE in backends/blender/poser_blender/builder.py).
+    check("archaeology", &[]);
 }
 
 #[test]

@@ -453,3 +453,5 @@ def test_build_sets_what_the_first_render_sets(scene_desc):
     assert scene.cycles.seed == 1234
     pbuild.prepare_image(built, 1, 0)
     assert scene.cycles.seed == 5678
+    # LIGHT_TREE: off in what is saved too (biased red with the sun, strobes and sky at once).
+    assert not scene.cycles.use_light_tree
