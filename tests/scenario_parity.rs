@@ -242,8 +242,9 @@ fn flat_port_deformation_obliques() {
 fn flat_port_deformation_pupil_10cm() {
     // The housing behind a pupil 10 cm from the glass is deep, and Mitsuba's shadows the sun
     // over more of the view: −11.9 / −11.3 / −11.0 % against native. Cycles is −1.6 / −2.1 /
-    // −2.5 % against native (allowance 2.45 %), on a trend with the pupil's distance (−0.3 % G
-    // at 1 mm, −0.7 % at 3 cm); cause not yet found. Only the targets are checked here.
+    // −2.5 % against native (allowance 2.45 %): light scattered in the water where its
+    // housing stands (without scattering +0.6 / +0.1 / +0.1 %), which native, having no
+    // housing, keeps. Only the targets are checked here.
     check(
         "flat_port_deformation_pupil_10cm",
         &[
