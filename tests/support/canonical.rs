@@ -61,7 +61,6 @@ pub fn render(backend: &str, model: &Model, dir: &Path, samples: Option<u32>) {
 pub fn geometry_samples(backend: &str) -> Option<u32> {
     match backend {
         "native" => Some(64),
-        "blender" => Some(256),
         _ => Some(256),
     }
 }
@@ -151,12 +150,11 @@ pub fn geometry(backend: &str) {
             // floored at 0.045–0.051 px on the flat ports whether at 1024 or 2048 spp (the
             // detector's edge-pixel coverage on so few pixels, and Mitsuba's noisier ambient
             // estimate); at 2× and 256 spp (the same cost) 0.016–0.044 px.
-            let bound = MAX_RMS_PX;
-            if rms > bound {
+            if rms > MAX_RMS_PX {
                 for (id, img, d) in &found {
                     eprintln!("    {img} {id}: ({:+.3}, {:+.3})", d[0], d[1]);
                 }
-                failures.push(format!("{name}: RMS {rms:.4} px > {bound}"));
+                failures.push(format!("{name}: RMS {rms:.4} px > {MAX_RMS_PX}"));
             }
         }
     }
