@@ -1,38 +1,77 @@
-//! `poser bench render`: speed against error for the three render backends.
+//! `poser bench render`: speed against error for the three render backends, on every shipped
+//! scene.
 //!
-//! Each backend renders the same benchmark scenes at increasing samples per pixel (spp). The
-//! error of an image is its relative RMSE against that backend's own converged reference, so
-//! that differences in conventions do not floor the curve; the reference is the average of two
-//! independent renders at [`REF_SPP`] spp, and its remaining noise is removed from every error
-//! (E[MSE(img, (a+b)/2)] = σ²(img) + MSE(a, b)/4). The references of the three backends are
-//! then compared with each other (channel means), which shows that the curves time the same
-//! physics.
+//! Each backend renders each scene's first pose at a reduced size and increasing samples per
+//! pixel (spp). The error of an image is its relative RMSE against that backend's own
+//! converged reference, so that differences in conventions do not floor the curve; the
+//! reference is the average of two independent renders, and its remaining noise is removed
+//! from every error (E[MSE(img, (a+b)/2)] = σ²(img) + MSE(a, b)/4). The references of the
+//! three backends are then compared with each other (channel means), which shows that the
+//! curves time the same physics.
 //!
-//! Time is wall-clock, as a user sees it, and is split by a least-squares fit
-//! `t = t₀ + k·spp` over all renders into a fixed start-up cost `t₀` (Python import, scene
-//! build, BVH) and a cost per sample `k`. The spp needed to reach [`TARGET_RMSE`] is
-//! interpolated log-log between the bracketing points (extrapolated with RMSE ∝ spp^-½ past
-//! the last one, and marked so). The report gives, per backend, the time to the target with and
-//! without start-up, and native's speed-up over the faster of the other two.
+//! Time is wall-clock, as a user sees it: every render is a whole `Backend::render` call
+//! (a fresh Python process for Mitsuba and Cycles; for native, the scene, BVH and texture bake
+//! are rebuilt each time). A least-squares fit `t = t₀ + k·spp` over all renders splits it into
+//! a fixed start-up cost `t₀` and a cost per sample `k`; `k` × threads / pixels is the cost per
+//! path in core-µs. The spp needed to reach each of [`TARGETS`] is interpolated log-log between
+//! the bracketing points (extrapolated with RMSE ∝ spp^-½ past the last one, and marked so).
+//! The report gives, per backend and target, the time with and without start-up, and native's
+//! speed-up over the faster of the other two.
+//!
+//! | setting | quick (`--quick`) | full |
+//! |---|---|---|
+//! | scenes | the two benchmark scenes below, `scenarios/*.toml`, `scenarios/lessons/*.toml` | the same |
+//! | size | 48 px wide (each camera scaled, aspect kept) | 128 px wide |
+//! | spp of the curve | 1, 4 | 1, 8, 64 |
+//! | reference | 2 × 32 spp | 2 × 512 spp |
+//! | poses | the first | the first |
+//!
+//! The two benchmark scenes isolate the estimators:
 //!
 //! | scene | content |
 //! |---|---|
-//! | `strobe_backscatter` | bounces = 1 (direct light and single scattering); camera in air behind a flat PMMA port, 160×120 (80×60 with `--quick`); scattering and absorbing water (σa = 0.40/0.10/0.05, σs = 0.08/0.10/0.12 1/m, HG g = 0.9); a rig strobe in the water; a diffuse back plane 3 m away and three boxes |
+//! | `strobe_backscatter` | bounces = 1 (direct light and single scattering); camera in air behind a flat PMMA port; scattering and absorbing water (σa = 0.40/0.10/0.05, σs = 0.08/0.10/0.12 1/m, HG g = 0.9); a rig strobe in the water; a diffuse back plane 3 m away and three boxes |
 //! | `clear_strobe` | the same without scattering (σs = 0) and with bounces = 4: absorption, interreflection and the port only |
 //!
-//! Every backend runs through [`crate::backend::Backend::render`]; Mitsuba and Cycles need
-//! their Python modules, and a backend that fails is reported as such and skipped.
+//! A backend that refuses a scene (caustics) or fails is reported as such, and the others go
+//! on. A scene black at its first pose is reported, with no curve.
 
 use crate::backend::{Backend, RenderOptions};
 use crate::model::*;
 use glam::{DMat3, DVec3};
 use std::path::Path;
 
-/// Relative RMSE the report times each backend to.
-pub const TARGET_RMSE: f64 = 0.10;
-/// Samples per pixel of each of the two renders of a converged reference.
-pub const REF_SPP: u32 = 1024;
-pub const QUICK_REF_SPP: u32 = 256;
+/// Relative RMSEs the report times each backend to.
+pub const TARGETS: [f64; 2] = [0.05, 0.02];
+
+/// The size and sampling of a run (see the module table).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Form {
+    /// Width of every camera's image, px (the height keeps the aspect).
+    pub width: u32,
+    /// Samples per pixel of each of the two renders of a reference.
+    pub reference_spp: u32,
+    /// The spp of the measured curve.
+    pub spps: Vec<u32>,
+}
+
+impl Form {
+    pub fn new(quick: bool) -> Form {
+        if quick {
+            Form {
+                width: 48,
+                reference_spp: 32,
+                spps: vec![1, 4],
+            }
+        } else {
+            Form {
+                width: 128,
+                reference_spp: 256,
+                spps: vec![1, 8, 64],
+            }
+        }
+    }
+}
 
 /// The benchmark scenes (see the module table), at `width`×`height`.
 pub fn bench_models(width: u32, height: u32) -> Vec<Model> {
@@ -225,7 +264,7 @@ impl Reference {
 }
 
 /// One measured point of a speed/error curve.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Point {
     pub spp: u32,
     pub seconds: f64,
@@ -285,11 +324,24 @@ pub fn spp_to(points: &[Point], target: f64) -> Option<(f64, bool)> {
     Some((last.spp as f64 * (last.rmse / target).powi(2), true))
 }
 
+/// What one backend needs to reach one target error.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ToTarget {
+    /// The target relative RMSE.
+    pub rmse: f64,
+    /// spp needed, and whether it was extrapolated past the last measured point.
+    pub spp: f64,
+    pub extrapolated: bool,
+    /// Wall-clock seconds, with the start-up cost and without it.
+    pub seconds: f64,
+    pub render_seconds: f64,
+}
+
 /// One backend's curve on one scene.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Curve {
     pub backend: String,
-    /// Error message when the backend could not run.
+    /// Why the backend could not render the scene, when it could not.
     pub error: Option<String>,
     pub reference_spp: u32,
     /// Wall-clock seconds of one reference render.
@@ -302,30 +354,113 @@ pub struct Curve {
     /// Fixed start-up seconds and seconds per spp of the fit `t = t0 + k·spp`.
     pub startup_seconds: f64,
     pub seconds_per_spp: f64,
-    /// spp needed to reach [`TARGET_RMSE`], and whether it was extrapolated.
-    pub spp_to_target: Option<f64>,
-    pub extrapolated: bool,
-    /// Wall-clock seconds to the target, with and without the start-up cost.
-    pub seconds_to_target: Option<f64>,
-    pub render_seconds_to_target: Option<f64>,
+    /// Cost per path (one sample of one pixel), core-µs: `k` × threads / pixels.
+    pub core_us_per_path: f64,
+    /// One entry per [`TARGETS`] it has a curve for, in order.
+    pub to_target: Vec<ToTarget>,
+}
+
+impl Curve {
+    fn empty(backend: &str, reference_spp: u32) -> Curve {
+        Curve {
+            backend: backend.into(),
+            error: None,
+            reference_spp,
+            reference_seconds: 0.0,
+            reference_residual: 0.0,
+            reference_means: [0.0; 3],
+            points: vec![],
+            startup_seconds: 0.0,
+            seconds_per_spp: 0.0,
+            core_us_per_path: 0.0,
+            to_target: vec![],
+        }
+    }
+
+    /// Its entry for `target`, if it has one.
+    pub fn at(&self, target: f64) -> Option<&ToTarget> {
+        self.to_target.iter().find(|t| t.rmse == target)
+    }
+
+    /// Whether the measured noise is too heavy-tailed for the extrapolation to be trusted:
+    /// the error did not fall at every step of the curve, or the reference's own remaining
+    /// noise is more than half the last point's error (with finite per-pixel variance it is
+    /// √(spp / 2·reference spp) of it: 0.35 at 64 against 2 × 256). Rare, very bright paths
+    /// (fireflies) do both.
+    pub fn heavy_tailed(&self) -> bool {
+        let falls = self.points.windows(2).all(|w| w[1].rmse < w[0].rmse);
+        let last = self.points.last().map_or(0.0, |p| p.rmse);
+        !falls || self.reference_residual > 0.5 * last
+    }
 }
 
 /// One scene's results.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct SceneReport {
     pub scene: String,
     pub width: u32,
     pub height: u32,
     pub max_bounces: u32,
+    /// Set when the scene is black at its first pose in every backend (no curves).
+    pub dark: bool,
     pub curves: Vec<Curve>,
 }
 
 /// Whole report.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Report {
-    pub target_rmse: f64,
+    pub form: Form,
+    pub targets: Vec<f64>,
     pub threads: usize,
     pub scenes: Vec<SceneReport>,
+}
+
+/// A scene to benchmark: its name and its model at the run's size.
+pub struct BenchScene {
+    pub name: String,
+    pub model: Model,
+}
+
+/// The scenes of a run: the two benchmark scenes, then every shipped scene (or those whose
+/// file name contains `only`), each scaled to `width` px and reduced to its first pose.
+pub fn scenes(root: &Path, width: u32, only: Option<&str>) -> Result<Vec<BenchScene>, String> {
+    let mut out = Vec::new();
+    let keep = |name: &str| only.is_none_or(|o| name.contains(o));
+    for m in bench_models(width, width * 3 / 4) {
+        if keep(&m.name) {
+            out.push(BenchScene {
+                name: m.name.clone(),
+                model: m,
+            });
+        }
+    }
+    for path in crate::bench::parity::shipped_scenes(root) {
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if !keep(&name) {
+            continue;
+        }
+        let mut model = crate::scene::load(&path, &[])
+            .map_err(|f| f.render())?
+            .model;
+        let w0 = model.cameras.first().map_or(width, |c| c.width).max(1);
+        model = model.with_resolution_scale(width as f64 / w0 as f64);
+        model.poses.truncate(1);
+        out.push(BenchScene { name, model });
+    }
+    Ok(out)
+}
+
+/// Pixels of one rig pose: every camera's.
+fn pixels_per_pose(model: &Model) -> f64 {
+    model
+        .cameras
+        .iter()
+        .map(|c| c.width as f64 * c.height as f64)
+        .sum::<f64>()
+        .max(1.0)
 }
 
 fn render_rgb(
@@ -336,7 +471,7 @@ fn render_rgb(
 ) -> Result<(Vec<f32>, f64), String> {
     let opts = RenderOptions {
         samples: Some(spp),
-        poses: None,
+        poses: Some(vec![0]),
         progress: false,
         resume: false,
     };
@@ -348,26 +483,29 @@ fn render_rgb(
     Ok((img.rgb.into_flattened(), secs))
 }
 
-fn curve(backend: Backend, model: &Model, ref_spp: u32, max_spp: u32) -> Curve {
-    let mut c = Curve {
-        backend: backend.name().into(),
-        error: None,
-        reference_spp: ref_spp,
-        reference_seconds: 0.0,
-        reference_residual: 0.0,
-        reference_means: [0.0; 3],
-        points: vec![],
-        startup_seconds: 0.0,
-        seconds_per_spp: 0.0,
-        spp_to_target: None,
-        extrapolated: false,
-        seconds_to_target: None,
-        render_seconds_to_target: None,
-    };
+/// Below this reference mean an image counts as black (nothing reaches the camera).
+const DARK: f64 = 1e-9;
+/// The error of a curve on a scene black at its first pose.
+const BLACK: &str = "black at the first pose";
+/// The start of the error of a backend that refuses a scene.
+const REFUSED: &str = "refused: ";
+
+/// One backend's curve on one scene: two references, then the form's spp in turn (stopping
+/// once the error is under half the smallest target).
+fn curve(backend: Backend, model: &Model, form: &Form, threads: usize) -> Curve {
+    let mut c = Curve::empty(backend.name(), form.reference_spp);
     let run = |c: &mut Curve| -> Result<(), String> {
+        backend.refuse(model).map_err(|e| format!("{REFUSED}{e}"))?;
         let tmp = tempfile::tempdir().map_err(|e| e.to_string())?;
+        // A backend that does not take the scene says so when it compiles it (not timed).
+        if backend != Backend::Native {
+            backend
+                .compile(model, &tmp.path().join("compiled"))
+                .map_err(|e| format!("{REFUSED}{e}"))?;
+        }
         let mut timings = Vec::new();
         let mut refs = Vec::new();
+        let ref_spp = form.reference_spp;
         for (k, seed) in [9_999u64, 19_999].into_iter().enumerate() {
             let mut m = model.clone();
             m.render.seed = seed;
@@ -381,8 +519,11 @@ fn curve(backend: Backend, model: &Model, ref_spp: u32, max_spp: u32) -> Curve {
         let reference = Reference::new(&refs[0], &refs[1]);
         c.reference_residual = reference.residual();
         c.reference_means = crate::compare::channel_means(&reference.image);
-        let mut spp = 1;
-        while spp <= max_spp {
+        if reference.mean < DARK {
+            return Err(BLACK.into());
+        }
+        let smallest = TARGETS.iter().copied().fold(f64::INFINITY, f64::min);
+        for &spp in &form.spps {
             let dir = tmp.path().join(format!("s{spp}"));
             let (img, secs) = render_rgb(backend, model, spp, &dir)?;
             let rmse = reference.error_of(&img);
@@ -393,19 +534,24 @@ fn curve(backend: Backend, model: &Model, ref_spp: u32, max_spp: u32) -> Curve {
                 seconds: secs,
                 rmse,
             });
-            if rmse < 0.5 * TARGET_RMSE {
+            if rmse < 0.5 * smallest {
                 break;
             }
-            spp *= 4;
         }
         let (t0, k) = fit_cost(&timings);
         c.startup_seconds = t0;
         c.seconds_per_spp = k;
-        if let Some((s, extra)) = spp_to(&c.points, TARGET_RMSE) {
-            c.spp_to_target = Some(s);
-            c.extrapolated = extra;
-            c.seconds_to_target = Some(t0 + k * s);
-            c.render_seconds_to_target = Some(k * s);
+        c.core_us_per_path = k * threads as f64 * 1e6 / pixels_per_pose(model);
+        for target in TARGETS {
+            if let Some((spp, extrapolated)) = spp_to(&c.points, target) {
+                c.to_target.push(ToTarget {
+                    rmse: target,
+                    spp,
+                    extrapolated,
+                    seconds: t0 + k * spp,
+                    render_seconds: k * spp,
+                });
+            }
         }
         Ok(())
     };
@@ -415,71 +561,122 @@ fn curve(backend: Backend, model: &Model, ref_spp: u32, max_spp: u32) -> Curve {
     c
 }
 
+/// The name a report gives a backend.
+fn display(backend: &str) -> &str {
+    match backend {
+        "mitsuba" => "Mitsuba",
+        "blender" => "Cycles",
+        other => other,
+    }
+}
+
+/// Seconds with three significant figures at most.
+fn fmt_s(v: f64) -> String {
+    if v >= 100.0 {
+        format!("{v:.0}")
+    } else if v >= 10.0 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.2}")
+    }
+}
+
+fn times(v: Option<f64>) -> String {
+    v.map(|r| format!("{r:.1}×")).unwrap_or_else(|| "–".into())
+}
+
 impl SceneReport {
-    /// native's speed-up over the faster of the others: (wall, render only).
-    pub fn speedup(&self) -> (Option<f64>, Option<f64>) {
-        let native = self.curves.iter().find(|c| c.backend == "native");
-        let others = self.curves.iter().filter(|c| c.backend != "native");
-        let best = |f: fn(&Curve) -> Option<f64>| -> Option<f64> {
-            let n = f(native?)?;
-            let o = others.clone().filter_map(f).fold(f64::INFINITY, f64::min);
+    /// native's speed-up to `target` over the faster of the others: (wall, render only).
+    pub fn speedup(&self, target: f64) -> (Option<f64>, Option<f64>) {
+        let ok = |c: &&Curve| c.error.is_none();
+        let native = self
+            .curves
+            .iter()
+            .filter(ok)
+            .find(|c| c.backend == "native");
+        let others: Vec<&Curve> = self
+            .curves
+            .iter()
+            .filter(ok)
+            .filter(|c| c.backend != "native")
+            .collect();
+        let best = |f: fn(&ToTarget) -> f64| -> Option<f64> {
+            let n = f(native?.at(target)?);
+            let o = others
+                .iter()
+                .filter_map(|c| c.at(target).map(f))
+                .fold(f64::INFINITY, f64::min);
             (o.is_finite() && n > 0.0).then(|| o / n)
         };
-        (
-            best(|c| c.seconds_to_target),
-            best(|c| c.render_seconds_to_target),
-        )
+        (best(|t| t.seconds), best(|t| t.render_seconds))
     }
 
-    /// Markdown: the speed table, then the agreement of the references.
-    pub fn to_markdown(&self, target: f64) -> String {
+    /// Markdown: the curves, then the agreement of the references.
+    pub fn to_markdown(&self, targets: &[f64]) -> String {
         let mut s = format!(
-            "### `{}` ({}×{}, bounces = {}), target relative RMSE {:.0} %\n\n\
-             | backend | spp to target | time to target (s) | without start-up (s) | start-up (s) | s per spp | curve (spp: s, RMSE) |\n\
-             |---|---|---|---|---|---|---|\n",
-            self.scene,
-            self.width,
-            self.height,
-            self.max_bounces,
-            100.0 * target
+            "### `{}` ({}×{}, bounces = {})\n\n",
+            self.scene, self.width, self.height, self.max_bounces
+        );
+        if self.dark {
+            s += "Black at the first pose in every backend: nothing to time.\n";
+            return s;
+        }
+        let heads: Vec<String> = targets
+            .iter()
+            .map(|t| format!("to {:.0} %: spp, s, s w/o start-up", 100.0 * t))
+            .collect();
+        s += &format!(
+            "| backend | {} | start-up (s) | s per spp | core-µs per path | curve (spp: s, RMSE) |\n|---|{}---|---|---|---|\n",
+            heads.join(" | "),
+            "---|".repeat(targets.len())
         );
         for c in &self.curves {
             if let Some(e) = &c.error {
-                s += &format!(
-                    "| {} | failed: {} | | | | | |\n",
-                    c.backend,
-                    e.lines().next().unwrap_or("")
-                );
+                let first = e.lines().next().unwrap_or("").replace('|', "/");
+                let gap = " |".repeat(targets.len() + 4);
+                s += &format!("| {} | {first}{gap}\n", display(&c.backend));
                 continue;
             }
-            let opt = |v: Option<f64>, p: usize| {
-                v.map(|x| format!("{x:.p$}")).unwrap_or_else(|| "–".into())
-            };
-            let mark = if c.extrapolated { " (extrap.)" } else { "" };
+            let cols: Vec<String> = targets
+                .iter()
+                .map(|&t| match c.at(t) {
+                    Some(x) => format!(
+                        "{:.1}{}, {}, {}",
+                        x.spp,
+                        if x.extrapolated { " (extrap.)" } else { "" },
+                        fmt_s(x.seconds),
+                        fmt_s(x.render_seconds)
+                    ),
+                    None => "–".into(),
+                })
+                .collect();
             let pts: Vec<String> = c
                 .points
                 .iter()
                 .map(|p| format!("{}: {:.2}, {:.3}", p.spp, p.seconds, p.rmse))
                 .collect();
             s += &format!(
-                "| {} | {}{mark} | {} | {} | {:.2} | {:.4} | {} |\n",
-                c.backend,
-                opt(c.spp_to_target, 1),
-                opt(c.seconds_to_target, 3),
-                opt(c.render_seconds_to_target, 3),
+                "| {}{} | {} | {:.2} | {:.4} | {:.2} | {} |\n",
+                display(&c.backend),
+                if c.heavy_tailed() { " †" } else { "" },
+                cols.join(" | "),
                 c.startup_seconds,
                 c.seconds_per_spp,
+                c.core_us_per_path,
                 pts.join("; ")
             );
         }
-        let (wall, render) = self.speedup();
-        let x = |v: Option<f64>| v.map(|r| format!("{r:.1}×")).unwrap_or_else(|| "–".into());
-        s += &format!(
-            "\nnative's speed-up over the faster of the others at equal error: {} wall-clock, {} without start-up.\n\n",
-            x(wall),
-            x(render)
-        );
-        s += "| backend | reference | residual noise | mean R, G, B | vs native |\n|---|---|---|---|---|\n";
+        s += "\n";
+        for &t in targets {
+            let (wall, render) = self.speedup(t);
+            s += &format!(
+                "native's speed-up over the faster of the others to {:.0} %: {} wall-clock, {} without start-up.\n",
+                100.0 * t,
+                times(wall),
+                times(render)
+            );
+        }
+        s += "\n| backend | reference | residual noise | mean R, G, B | vs native |\n|---|---|---|---|---|\n";
         let native = self
             .curves
             .iter()
@@ -490,17 +687,23 @@ impl SceneReport {
             let vs = match native {
                 Some(n) if c.backend != "native" => {
                     let d: Vec<String> = (0..3)
-                        .map(|i| format!("{:+.2} %", 100.0 * (m[i] / n[i].max(1e-300) - 1.0)))
+                        .map(|i| {
+                            if n[i] > 0.0 {
+                                format!("{:+.1} %", 100.0 * (m[i] / n[i] - 1.0))
+                            } else {
+                                "–".into()
+                            }
+                        })
                         .collect();
                     d.join(", ")
                 }
                 _ => "–".into(),
             };
             s += &format!(
-                "| {} | 2 × {} spp ({:.1} s each) | {:.2} % | {:.4}, {:.4}, {:.4} | {vs} |\n",
-                c.backend,
+                "| {} | 2 × {} spp ({} s each) | {:.2} % | {:.4}, {:.4}, {:.4} | {vs} |\n",
+                display(&c.backend),
                 c.reference_spp,
-                c.reference_seconds,
+                fmt_s(c.reference_seconds),
                 100.0 * c.reference_residual,
                 m[0],
                 m[1],
@@ -511,38 +714,133 @@ impl SceneReport {
     }
 }
 
+/// The first and last lines of the README's generated block.
+pub const README_BEGIN: &str =
+    "<!-- generated by `poser bench render --readme README.md`: begin -->";
+pub const README_END: &str = "<!-- generated by `poser bench render --readme README.md`: end -->";
+
 impl Report {
-    pub fn to_markdown(&self) -> String {
+    /// The summary table, one row per scene: each backend's wall-clock seconds to each
+    /// target, native's cost per path, and native's speed-up to the last target.
+    pub fn summary(&self) -> String {
+        let ts: Vec<String> = self
+            .targets
+            .iter()
+            .map(|t| format!("{:.0} %", 100.0 * t))
+            .collect();
+        let ts = ts.join(" / ");
+        let last = self.targets.last().copied().unwrap_or(0.0);
         let mut s = format!(
-            "Render speed against error ({} threads; times are wall-clock).\n\n",
-            self.threads
+            "| scene | size | native, s to {ts} | Mitsuba, s to {ts} | Cycles, s to {ts} | native core-µs per path | native's speed-up to {:.0} %, wall (render only) |\n|---|---|---|---|---|---|---|\n",
+            100.0 * last
         );
         for sc in &self.scenes {
-            s += &sc.to_markdown(self.target_rmse);
+            let size = format!("{}×{}", sc.width, sc.height);
+            if sc.dark {
+                s += &format!("| `{}` | {size} | {BLACK} | | | | |\n", sc.scene);
+                continue;
+            }
+            let col = |b: &str| -> String {
+                let Some(c) = sc.curves.iter().find(|c| c.backend == b) else {
+                    return "not run".into();
+                };
+                if let Some(e) = &c.error {
+                    return if e.starts_with(REFUSED) {
+                        "refused".into()
+                    } else {
+                        "failed".into()
+                    };
+                }
+                let heavy = if c.heavy_tailed() { "†" } else { "" };
+                let v: Vec<String> = self
+                    .targets
+                    .iter()
+                    .map(|&t| match c.at(t) {
+                        Some(x) => {
+                            let extra = if x.extrapolated { "*" } else { "" };
+                            format!("{}{extra}{heavy}", fmt_s(x.seconds))
+                        }
+                        None => "–".into(),
+                    })
+                    .collect();
+                v.join(" / ")
+            };
+            let us = sc
+                .curves
+                .iter()
+                .find(|c| c.backend == "native" && c.error.is_none())
+                .map_or("–".into(), |c| format!("{:.1}", c.core_us_per_path));
+            let (wall, render) = sc.speedup(last);
+            let heavy = sc
+                .curves
+                .iter()
+                .any(|c| c.error.is_none() && c.heavy_tailed());
+            s += &format!(
+                "| `{}` | {size} | {} | {} | {} | {us} | {} ({}){} |\n",
+                sc.scene,
+                col("native"),
+                col("mitsuba"),
+                col("blender"),
+                times(wall),
+                times(render),
+                if heavy && wall.is_some() { " †" } else { "" }
+            );
+        }
+        s += "\n\\* extrapolated past the last measured point with RMSE ∝ spp^-½. \
+              † heavy-tailed noise (fireflies): the error did not fall at every step, or the \
+              reference is not converged enough to measure it; the time is an order of \
+              magnitude, not a measurement.\n";
+        s
+    }
+
+    /// The README's block: the markers around a line on the run and the summary.
+    pub fn readme_block(&self) -> String {
+        format!(
+            "{README_BEGIN}\n{} threads; every camera {} px wide; first pose; wall-clock seconds to a relative RMSE, start-up included.\n\n{}{README_END}",
+            self.threads,
+            self.form.width,
+            self.summary()
+        )
+    }
+
+    pub fn to_markdown(&self) -> String {
+        let mut s = format!(
+            "Render speed against error ({} threads; times are wall-clock; every camera {} px wide; first pose; references 2 × {} spp).\n\n{}\n",
+            self.threads,
+            self.form.width,
+            self.form.reference_spp,
+            self.summary()
+        );
+        for sc in &self.scenes {
+            s += &sc.to_markdown(&self.targets);
             s += "\n";
         }
         s
     }
 
-    /// Log-log plot of error against wall-clock time, one panel per scene.
+    /// Log-log plots of error against wall-clock time, one panel per scene, four to a row.
     pub fn plot_svg(&self) -> Result<String, String> {
         crate::plan::plot::register_font()?;
         use plotters::prelude::*;
+        const COLS: usize = 4;
         let mut buf = String::new();
         {
             let n = self.scenes.len().max(1);
-            let root = SVGBackend::with_string(&mut buf, (560 * n as u32, 420)).into_drawing_area();
+            let rows = n.div_ceil(COLS);
+            let cols = n.min(COLS);
+            let root = SVGBackend::with_string(&mut buf, (420 * cols as u32, 320 * rows as u32))
+                .into_drawing_area();
             root.fill(&WHITE).map_err(|e| e.to_string())?;
-            let panels = root.split_evenly((1, n));
-            let colours = [
-                RGBColor(200, 40, 40),
-                RGBColor(20, 80, 200),
-                RGBColor(230, 130, 20),
-            ];
+            let panels = root.split_evenly((rows, cols));
+            let colour = |b: &str| match b {
+                "native" => RGBColor(200, 40, 40),
+                "mitsuba" => RGBColor(20, 80, 200),
+                _ => RGBColor(230, 130, 20),
+            };
             for (sc, area) in self.scenes.iter().zip(panels.iter()) {
                 let pts = sc.curves.iter().flat_map(|c| c.points.iter());
                 let (mut tmin, mut tmax, mut emin, mut emax) = (f64::MAX, 0f64, f64::MAX, 0f64);
-                for p in pts.filter(|p| p.rmse > 0.0) {
+                for p in pts.filter(|p| p.rmse > 0.0 && p.seconds > 0.0) {
                     tmin = tmin.min(p.seconds);
                     tmax = tmax.max(p.seconds);
                     emin = emin.min(p.rmse);
@@ -551,20 +849,21 @@ impl Report {
                 if tmax <= 0.0 {
                     continue;
                 }
-                emin = emin.min(self.target_rmse) * 0.8;
-                emax = emax.max(self.target_rmse) * 1.25;
+                for &t in &self.targets {
+                    emin = emin.min(t);
+                    emax = emax.max(t);
+                }
+                let (emin, emax) = (emin * 0.8, emax * 1.25);
+                let (t0, t1) = (tmin * 0.8, tmax * 1.25);
                 let mut chart = ChartBuilder::on(area)
                     .caption(
                         format!("{} ({}×{})", sc.scene, sc.width, sc.height),
-                        ("sans-serif", 18),
+                        ("sans-serif", 15),
                     )
-                    .margin(12)
-                    .x_label_area_size(40)
-                    .y_label_area_size(56)
-                    .build_cartesian_2d(
-                        (tmin * 0.8..tmax * 1.25).log_scale(),
-                        (emin..emax).log_scale(),
-                    )
+                    .margin(8)
+                    .x_label_area_size(34)
+                    .y_label_area_size(48)
+                    .build_cartesian_2d((t0..t1).log_scale(), (emin..emax).log_scale())
                     .map_err(|e| e.to_string())?;
                 chart
                     .configure_mesh()
@@ -572,25 +871,26 @@ impl Report {
                     .y_desc("relative RMSE")
                     .draw()
                     .map_err(|e| e.to_string())?;
-                let target = self.target_rmse;
-                chart
-                    .draw_series(LineSeries::new(
-                        [(tmin * 0.8, target), (tmax * 1.25, target)],
-                        BLACK.mix(0.4),
-                    ))
-                    .map_err(|e| e.to_string())?;
-                for (k, c) in sc.curves.iter().enumerate() {
-                    let col = colours[k % colours.len()];
+                for &target in &self.targets {
+                    chart
+                        .draw_series(LineSeries::new(
+                            [(t0, target), (t1, target)],
+                            BLACK.mix(0.35),
+                        ))
+                        .map_err(|e| e.to_string())?;
+                }
+                for c in sc.curves.iter().filter(|c| c.error.is_none()) {
+                    let col = colour(&c.backend);
                     let line: Vec<(f64, f64)> = c
                         .points
                         .iter()
-                        .filter(|p| p.rmse > 0.0)
+                        .filter(|p| p.rmse > 0.0 && p.seconds > 0.0)
                         .map(|p| (p.seconds, p.rmse))
                         .collect();
                     chart
                         .draw_series(LineSeries::new(line.clone(), col.stroke_width(2)))
                         .map_err(|e| e.to_string())?
-                        .label(c.backend.clone())
+                        .label(display(&c.backend).to_string())
                         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], col));
                     chart
                         .draw_series(line.into_iter().map(|p| Circle::new(p, 3, col.filled())))
@@ -610,47 +910,83 @@ impl Report {
     }
 }
 
+/// Replace the block from [`README_BEGIN`] to [`README_END`] (markers included) in `text`
+/// with `block`.
+pub fn replace_block(text: &str, block: &str) -> Result<String, String> {
+    let a = text
+        .find(README_BEGIN)
+        .ok_or_else(|| format!("no line `{README_BEGIN}` to replace from"))?;
+    let b = text[a..]
+        .find(README_END)
+        .map(|i| a + i + README_END.len())
+        .ok_or_else(|| format!("no line `{README_END}` after `{README_BEGIN}`"))?;
+    Ok(format!("{}{block}{}", &text[..a], &text[b..]))
+}
+
 /// Options of the render benchmark.
 #[derive(Debug, Clone, Default)]
 pub struct BenchOptions {
     pub quick: bool,
     /// Backends to run (default: all).
     pub backends: Vec<Backend>,
+    /// Only the scenes whose name contains this.
+    pub only: Option<String>,
     pub json: Option<std::path::PathBuf>,
     pub plot: Option<std::path::PathBuf>,
+    /// A Markdown file (the README) whose generated block gets the summary.
+    pub readme: Option<std::path::PathBuf>,
 }
 
-/// Run the render benchmark: prints a Markdown report; writes JSON and an SVG plot when asked.
-pub fn run(opts: &BenchOptions) -> Result<Report, String> {
-    let (w, h) = if opts.quick { (80, 60) } else { (160, 120) };
-    let ref_spp = if opts.quick { QUICK_REF_SPP } else { REF_SPP };
+/// Run the render benchmark on the scenes under `root`: prints a Markdown report; writes
+/// JSON, an SVG plot and the README's block when asked.
+pub fn run(root: &Path, opts: &BenchOptions) -> Result<Report, String> {
+    let form = Form::new(opts.quick);
     let backends: Vec<Backend> = if opts.backends.is_empty() {
         Backend::ALL.to_vec()
     } else {
         opts.backends.clone()
     };
-    let mut scenes = Vec::new();
-    for model in bench_models(w, h) {
+    // Check the README's markers before the rendering, not after.
+    let readme = match &opts.readme {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            replace_block(&text, "").map_err(|e| format!("{}: {e}", p.display()))?;
+            Some((p.clone(), text))
+        }
+        None => None,
+    };
+    let threads = rayon::current_num_threads();
+    let mut reports = Vec::new();
+    for bs in scenes(root, form.width, opts.only.as_deref())? {
+        let model = &bs.model;
+        let (width, height) = model
+            .cameras
+            .first()
+            .map_or((0, 0), |c| (c.width, c.height));
         let mut curves = Vec::new();
         for b in &backends {
             eprintln!(
-                "bench render: {} with {b} (reference 2 × {ref_spp} spp)",
-                model.name
+                "bench render: {} ({width}×{height}) with {b} (reference 2 × {} spp)",
+                bs.name, form.reference_spp
             );
-            curves.push(curve(*b, &model, ref_spp, ref_spp / 4));
+            curves.push(curve(*b, model, &form, threads));
         }
-        scenes.push(SceneReport {
-            scene: model.name.clone(),
-            width: w,
-            height: h,
+        let dark = curves.iter().any(|c| c.error.as_deref() == Some(BLACK))
+            && curves.iter().all(|c| c.error.is_some());
+        reports.push(SceneReport {
+            scene: bs.name,
+            width,
+            height,
             max_bounces: model.render.max_bounces,
+            dark,
             curves,
         });
     }
     let report = Report {
-        target_rmse: TARGET_RMSE,
-        threads: rayon::current_num_threads(),
-        scenes,
+        form,
+        targets: TARGETS.to_vec(),
+        threads,
+        scenes: reports,
     };
     println!("{}", report.to_markdown());
     if let Some(p) = &opts.json {
@@ -660,6 +996,10 @@ pub fn run(opts: &BenchOptions) -> Result<Report, String> {
     if let Some(p) = &opts.plot {
         let svg = report.plot_svg()?;
         crate::io::write_atomic(p, svg.as_bytes()).map_err(|e| format!("{}: {e}", p.display()))?;
+    }
+    if let Some((p, text)) = readme {
+        let new = replace_block(&text, &report.readme_block())?;
+        crate::io::write_atomic(&p, new.as_bytes()).map_err(|e| format!("{}: {e}", p.display()))?;
     }
     Ok(report)
 }
@@ -726,32 +1066,113 @@ mod tests {
         assert_eq!(m[0].port_interfaces(), 2);
     }
 
-    #[test]
-    fn speedup_is_against_the_faster_other_backend() {
-        let c = |b: &str, t: f64| Curve {
-            backend: b.into(),
-            error: None,
-            reference_spp: 1,
-            reference_seconds: 0.0,
-            reference_residual: 0.0,
-            reference_means: [1.0; 3],
-            points: vec![],
-            startup_seconds: 0.0,
-            seconds_per_spp: 0.0,
-            spp_to_target: Some(1.0),
-            extrapolated: false,
-            seconds_to_target: Some(t),
-            render_seconds_to_target: Some(t / 2.0),
-        };
+    fn curve_to(b: &str, t: f64) -> Curve {
+        let mut c = Curve::empty(b, 1);
+        c.reference_means = [1.0; 3];
+        c.core_us_per_path = 2.5;
+        for (rmse, f) in [(0.05, 1.0), (0.02, 6.25)] {
+            c.to_target.push(ToTarget {
+                rmse,
+                spp: f,
+                extrapolated: b == "mitsuba",
+                seconds: t * f,
+                render_seconds: t * f / 2.0,
+            });
+        }
+        c
+    }
+
+    fn report() -> Report {
         let sc = SceneReport {
             scene: "s".into(),
-            width: 1,
-            height: 1,
+            width: 128,
+            height: 96,
             max_bounces: 1,
-            curves: vec![c("native", 1.0), c("mitsuba", 30.0), c("blender", 12.0)],
+            dark: false,
+            curves: vec![
+                curve_to("native", 1.0),
+                curve_to("mitsuba", 30.0),
+                curve_to("blender", 12.0),
+            ],
         };
-        assert_eq!(sc.speedup(), (Some(12.0), Some(12.0)));
-        let md = sc.to_markdown(0.1);
-        assert!(md.contains("12.0× wall-clock"), "{md}");
+        let mut refused = sc.clone();
+        refused.scene = "r".into();
+        refused.curves[1].error = Some(format!("{REFUSED}no caustics"));
+        refused.curves[1].to_target.clear();
+        Report {
+            form: Form::new(false),
+            targets: TARGETS.to_vec(),
+            threads: 2,
+            scenes: vec![sc, refused],
+        }
+    }
+
+    #[test]
+    fn speedup_is_against_the_faster_other_backend() {
+        let r = report();
+        let sc = &r.scenes[0];
+        assert_eq!(sc.speedup(0.02), (Some(12.0), Some(12.0)));
+        // A backend that failed does not count.
+        let mut failed = sc.clone();
+        failed.curves[2].error = Some("bpy crashed".into());
+        assert_eq!(failed.speedup(0.05), (Some(30.0), Some(30.0)));
+        let md = sc.to_markdown(&TARGETS);
+        assert!(md.contains("to 2 %: 12.0× wall-clock"), "{md}");
+    }
+
+    #[test]
+    fn summary_gives_every_backend_and_target_and_marks_refusals_and_extrapolation() {
+        let s = report().summary();
+        let row = s.lines().find(|l| l.starts_with("| `s` |")).unwrap();
+        assert_eq!(
+            row,
+            "| `s` | 128×96 | 1.00 / 6.25 | 30.0* / 188* | 12.0 / 75.0 | 2.5 | 12.0× (12.0×) |"
+        );
+        let row = s.lines().find(|l| l.starts_with("| `r` |")).unwrap();
+        assert!(row.contains("| refused |"), "{row}");
+    }
+
+    #[test]
+    fn readme_block_is_replaced_in_place_and_missing_markers_are_an_error() {
+        let r = report();
+        let text = format!("# poser\n\nbefore\n{README_BEGIN}\nold\n{README_END}\nafter\n");
+        let new = replace_block(&text, &r.readme_block()).unwrap();
+        assert!(new.starts_with("# poser\n\nbefore\n"));
+        assert!(new.ends_with(&format!("{README_END}\nafter\n")));
+        assert!(new.contains("| `s` | 128×96 |") && !new.contains("old"));
+        // Idempotent.
+        assert_eq!(replace_block(&new, &r.readme_block()).unwrap(), new);
+        assert!(replace_block("no markers", "x").is_err());
+        assert!(replace_block(README_BEGIN, "x").is_err());
+    }
+
+    #[test]
+    fn heavy_tailed_noise_is_flagged_from_the_curve_and_the_reference() {
+        let mut c = curve_to("native", 1.0);
+        c.points = vec![pt(1, 1.0), pt(8, 0.36), pt(64, 0.125)];
+        // Finite variance: the reference (2 × 256) keeps 0.35 of the 64-spp error.
+        c.reference_residual = 0.044;
+        assert!(!c.heavy_tailed());
+        // A firefly in the 8-spp image: the error rose.
+        c.points[1].rmse = 1.3;
+        assert!(c.heavy_tailed());
+        c.points[1].rmse = 0.36;
+        // The reference is as noisy as the image it measures.
+        c.reference_residual = 0.1;
+        assert!(c.heavy_tailed());
+        let mut r = report();
+        r.scenes[0].curves[0] = c;
+        let s = r.summary();
+        let row = s.lines().find(|l| l.starts_with("| `s` |")).unwrap();
+        assert!(row.ends_with("(12.0×) † |"), "{row}");
+        assert!(row.contains("| 1.00† / 6.25† | 30.0* / 188* |"), "{row}");
+    }
+
+    #[test]
+    fn the_report_survives_its_json() {
+        let r = report();
+        let json = serde_json::to_string(&r).unwrap();
+        let back: Report = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.summary(), r.summary());
     }
 }

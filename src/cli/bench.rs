@@ -22,7 +22,10 @@ pub struct Args {
     /// `render` only: write the speed-against-error curves as an SVG plot.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// `parity` and `images`: only the scenes whose file name contains this.
+    /// `render` only: replace the generated summary block of this Markdown file (the README).
+    #[arg(long)]
+    pub readme: Option<PathBuf>,
+    /// `render`, `parity` and `images`: only the scenes whose file name contains this.
     #[arg(long)]
     pub only: Option<String>,
     /// `parity` and `images`: keep the renders (and `parity`'s `poser compare` reports) here
@@ -39,9 +42,9 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         args.backends.clone(),
         args.plot.clone(),
     );
-    if what != "render" && plot.is_some() {
+    if what != "render" && (plot.is_some() || args.readme.is_some()) {
         return Err(CliError::Usage(
-            "--plot applies to `poser bench render` only".into(),
+            "--plot and --readme apply to `poser bench render` only".into(),
         ));
     }
     if !matches!(what, "render" | "parity") && !backends.is_empty() {
@@ -49,9 +52,14 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--backends applies to `poser bench render` and `poser bench parity` only".into(),
         ));
     }
-    if !matches!(what, "parity" | "images") && (args.only.is_some() || args.out.is_some()) {
+    if !matches!(what, "render" | "parity" | "images") && args.only.is_some() {
         return Err(CliError::Usage(
-            "--only and --out apply to `poser bench parity` and `poser bench images` only".into(),
+            "--only applies to `poser bench render`, `parity` and `images` only".into(),
+        ));
+    }
+    if !matches!(what, "parity" | "images") && args.out.is_some() {
+        return Err(CliError::Usage(
+            "--out applies to `poser bench parity` and `poser bench images` only".into(),
         ));
     }
     match what {
@@ -79,10 +87,13 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             let opts = crate::bench::render::BenchOptions {
                 quick,
                 backends,
+                only: args.only.clone(),
                 json,
                 plot,
+                readme: args.readme.clone(),
             };
-            crate::bench::render::run(&opts)
+            let root = crate::backend::python::repo_root();
+            crate::bench::render::run(&root, &opts)
                 .map(|_| ())
                 .map_err(CliError::Failed)
         }

@@ -1,0 +1,138 @@
+//! `poser bench render` end to end: the speed-against-error report a user regenerates with one
+//! command (its JSON, plot and the README's block), on real renders. The native run is in the
+//! plain tier; the run with all three backends needs the `backends` feature.
+
+use poser::bench::render::{README_BEGIN, README_END, Report, TARGETS};
+use std::process::Command;
+
+fn poser() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_poser"))
+}
+
+/// Run the quick bench on the scenes matching `only` with `backends`, into a temporary folder
+/// holding a README copy; returns the folder and the parsed report.
+fn bench(only: &str, backends: &str) -> (tempfile::TempDir, Report) {
+    let dir = tempfile::tempdir().unwrap();
+    let readme = dir.path().join("README.md");
+    std::fs::write(
+        &readme,
+        format!("# x\n\nbefore\n\n{README_BEGIN}\nstale\n{README_END}\n\nafter\n"),
+    )
+    .unwrap();
+    let json = dir.path().join("render.json");
+    let svg = dir.path().join("render.svg");
+    let out = poser()
+        .args(["bench", "render", "--quick", "--only", only, "--backends"])
+        .arg(backends)
+        .arg("--json")
+        .arg(&json)
+        .arg("--plot")
+        .arg(&svg)
+        .arg("--readme")
+        .arg(&readme)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Report = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // The printed report is the one in the JSON.
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(stdout.trim_end(), report.to_markdown().trim_end());
+    // The README's block, and only it, was replaced.
+    let text = std::fs::read_to_string(&readme).unwrap();
+    assert!(
+        text.starts_with("# x\n\nbefore\n\n") && text.ends_with("\n\nafter\n"),
+        "{text}"
+    );
+    assert!(text.contains(&report.readme_block()) && !text.contains("stale"));
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        plot.starts_with("<svg") && plot.contains(only),
+        "{plot:.200}"
+    );
+    (dir, report)
+}
+
+#[test]
+fn native_curve_reaches_both_targets_and_the_readme_block_is_regenerated() {
+    let (_dir, report) = bench("clear_strobe", "native");
+    assert_eq!(report.scenes.len(), 1);
+    let sc = &report.scenes[0];
+    assert_eq!(
+        (sc.scene.as_str(), sc.width, sc.height),
+        ("clear_strobe", 48, 36)
+    );
+    let c = &sc.curves[0];
+    assert_eq!((c.backend.as_str(), c.error.as_deref()), ("native", None));
+    // The error falls with the samples, as a Monte Carlo estimate's should (∝ spp^-½: 4× the
+    // samples halves it; allow for the reference's own noise).
+    let p = &c.points;
+    assert_eq!(p.iter().map(|p| p.spp).collect::<Vec<_>>(), [1, 4]);
+    let ratio = p[0].rmse / p[1].rmse;
+    assert!((1.5..2.7).contains(&ratio), "RMSE 1 → 4 spp fell {ratio}×");
+    // Each target has its spp and time; the smaller target costs more.
+    assert_eq!(c.to_target.len(), TARGETS.len());
+    let (a, b) = (&c.to_target[0], &c.to_target[1]);
+    assert_eq!((a.rmse, b.rmse), (TARGETS[0], TARGETS[1]));
+    assert!(b.spp > a.spp && b.seconds > a.seconds && a.seconds >= a.render_seconds);
+    // 0.05 vs 0.02 is (5/2)² = 6.25× the samples on the same ∝ spp^-½ law.
+    assert!((b.spp / a.spp - 6.25).abs() < 1e-9, "{} {}", a.spp, b.spp);
+    assert!(c.core_us_per_path > 0.0 && c.core_us_per_path.is_finite());
+    assert!(c.reference_means.iter().all(|&m| m > 0.0));
+}
+
+#[test]
+fn a_readme_without_the_markers_is_refused_before_any_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let readme = dir.path().join("README.md");
+    std::fs::write(&readme, "# no markers here\n").unwrap();
+    let json = dir.path().join("render.json");
+    let out = poser()
+        .args(["bench", "render", "--quick", "--backends", "native"])
+        .args(["--only", "clear_strobe", "--readme"])
+        .arg(&readme)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("README.md") && err.contains(README_BEGIN),
+        "{err}"
+    );
+    assert!(
+        !err.contains("bench render: clear_strobe"),
+        "rendered first: {err}"
+    );
+    assert!(!json.exists());
+    assert_eq!(
+        std::fs::read_to_string(&readme).unwrap(),
+        "# no markers here\n"
+    );
+}
+
+/// The three backends time the same image: one curve each, and their converged references
+/// agree on the mean.
+#[cfg(feature = "backends")]
+#[test]
+fn every_backend_has_a_curve_on_the_same_image() {
+    let (_dir, report) = bench("strobe_backscatter", "native,mitsuba,blender");
+    let sc = &report.scenes[0];
+    let names: Vec<&str> = sc.curves.iter().map(|c| c.backend.as_str()).collect();
+    assert_eq!(names, ["native", "mitsuba", "blender"]);
+    let native = sc.curves[0].reference_means;
+    for c in &sc.curves {
+        assert_eq!(c.error, None, "{}", c.backend);
+        assert_eq!(c.to_target.len(), TARGETS.len(), "{}", c.backend);
+        for (ch, (m, n)) in c.reference_means.iter().zip(native).enumerate() {
+            let d = m / n - 1.0;
+            assert!(d.abs() < 0.05, "{} channel {ch}: {d:+.3}", c.backend);
+        }
+    }
+    let (wall, render) = sc.speedup(TARGETS[1]);
+    assert!(wall.is_some() && render.is_some());
+}
