@@ -74,3 +74,35 @@ fn images_bench_table_matches_its_json() {
         );
     }
 }
+
+/// The README's speed table, docs/bench/render.md and the plot's data are one run of
+/// `poser bench render --readme README.md --json docs/bench/render.json …`, which covers every
+/// shipped scene.
+#[test]
+fn readme_speed_table_is_the_render_bench_report_over_every_shipped_scene() {
+    let report: poser::bench::render::Report =
+        serde_json::from_str(&std::fs::read_to_string("docs/bench/render.json").unwrap()).unwrap();
+    let readme = std::fs::read_to_string("README.md").unwrap();
+    assert!(
+        readme.contains(&report.readme_block()),
+        "README's generated block is not the one docs/bench/render.json gives; rerun the command \
+         in the README's section `Speed against error`"
+    );
+    let md = std::fs::read_to_string("docs/bench/render.md").unwrap();
+    assert_eq!(md.trim_end(), report.to_markdown().trim_end());
+    assert!(
+        report.form == poser::bench::render::Form::new(false),
+        "not the full form"
+    );
+    for scene in poser::bench::parity::shipped_scenes(std::path::Path::new(".")) {
+        let name = scene.file_stem().unwrap().to_string_lossy();
+        let row = report.scenes.iter().find(|s| s.scene == name);
+        let row = row.unwrap_or_else(|| panic!("{name} is not in docs/bench/render.json"));
+        assert!(
+            row.curves
+                .iter()
+                .any(|c| c.backend == "native" && c.error.is_none()),
+            "{name}: no native curve"
+        );
+    }
+}

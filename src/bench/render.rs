@@ -869,6 +869,8 @@ impl Report {
                     .configure_mesh()
                     .x_desc("wall-clock time (s)")
                     .y_desc("relative RMSE")
+                    .x_label_formatter(&|v| tick(*v))
+                    .y_label_formatter(&|v| tick(*v))
                     .draw()
                     .map_err(|e| e.to_string())?;
                 for &target in &self.targets {
@@ -900,13 +902,27 @@ impl Report {
                     .configure_series_labels()
                     .background_style(WHITE.mix(0.8))
                     .border_style(BLACK)
-                    .position(SeriesLabelPosition::UpperRight)
+                    .position(SeriesLabelPosition::LowerLeft)
                     .draw()
                     .map_err(|e| e.to_string())?;
             }
             root.present().map_err(|e| e.to_string())?;
         }
         Ok(buf)
+    }
+}
+
+/// An axis label: at most three significant figures, no trailing zeros.
+fn tick(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
     }
 }
 
@@ -1166,6 +1182,15 @@ mod tests {
         let row = s.lines().find(|l| l.starts_with("| `s` |")).unwrap();
         assert!(row.ends_with("(12.0×) † |"), "{row}");
         assert!(row.contains("| 1.00† / 6.25† | 30.0* / 188* |"), "{row}");
+    }
+
+    #[test]
+    fn axis_labels_are_short() {
+        let t: Vec<String> = [0.7000000000000001, 0.02, 1.0, 12.5, 1234.0, 0.0012345]
+            .into_iter()
+            .map(tick)
+            .collect();
+        assert_eq!(t, ["0.7", "0.02", "1", "12.5", "1234", "0.00123"]);
     }
 
     #[test]
