@@ -23,7 +23,7 @@
 //! | scenes | the two benchmark scenes below, `scenarios/*.toml`, `scenarios/lessons/*.toml` | the same |
 //! | size | 48 px wide (each camera scaled, aspect kept) | 128 px wide |
 //! | spp of the curve | 1, 4 | 1, 8, 64 |
-//! | reference | 2 × 32 spp | 2 × 512 spp |
+//! | reference | 2 × 32 spp | 2 × 256 spp |
 //! | poses | the first | the first |
 //!
 //! The two benchmark scenes isolate the estimators:
