@@ -495,9 +495,9 @@ const REFUSED: &str = "refused: ";
 fn curve(backend: Backend, model: &Model, form: &Form, threads: usize) -> Curve {
     let mut c = Curve::empty(backend.name(), form.reference_spp);
     let run = |c: &mut Curve| -> Result<(), String> {
-        backend.refuse(model).map_err(|e| format!("{REFUSED}{e}"))?;
         let tmp = tempfile::tempdir().map_err(|e| e.to_string())?;
-        // A backend that does not take the scene says so when it compiles it (not timed).
+        // A backend that does not take the scene says so when it compiles it (not timed);
+        // `Backend::compile` runs `Backend::refuse` first.
         if backend != Backend::Native {
             backend
                 .compile(model, &tmp.path().join("compiled"))
