@@ -14,6 +14,7 @@
 pub mod backend;
 pub mod bench;
 pub mod cli;
+pub mod column;
 pub mod compare;
 pub mod evaluate;
 pub mod export;

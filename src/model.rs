@@ -688,6 +688,22 @@ pub struct RenderSettings {
     /// ([`crate::backend::native::adaptive`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise: Option<NoiseTarget>,
+    /// How the native renderer carries daylight through the water (`render.daylight`).
+    #[serde(default)]
+    pub daylight: Daylight,
+}
+
+/// `render.daylight`: the native renderer's estimator for daylight in the water.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Daylight {
+    /// The column where it applies ([`Model::column_input`]), else traced.
+    #[default]
+    Auto,
+    /// Light the scene with the solved water column ([`crate::optics::column`]).
+    Column,
+    /// Random walks through the water, as Mitsuba and Cycles do.
+    Traced,
 }
 
 /// `render.noise`: adaptive sampling to a relative standard error per pixel.
@@ -978,3 +994,131 @@ pub fn is_safe_file_name(s: &str) -> bool {
         && s.chars()
             .all(|c| c.is_alphanumeric() || matches!(c, '_' | '-' | '.'))
 }
+
+// ------------------------------------------------------------------------------------------
+// The water column's light
+// ------------------------------------------------------------------------------------------
+
+/// Photons per channel of the column solve ([`crate::optics::column`]).
+pub const COLUMN_PHOTONS: usize = 400_000;
+
+impl Model {
+    /// The plane-parallel water column the scene's daylight comes through, or why the scene is
+    /// not one: water everywhere below a flat or wavy surface, scattering and absorbing in
+    /// every channel, lit by the sun or the sky, over a seabed at `site.depth`. The bottom's
+    /// albedo is the largest horizontal plane or seabed's (else the mean of the objects').
+    pub fn column_input(&self) -> Result<crate::optics::column::ColumnInput, String> {
+        use crate::optics::column::{ColumnInput, ColumnSun};
+        let w = self.water.as_ref().ok_or("the scene has no water")?;
+        if !w.scattering.iter().any(|s| *s > 0.0) {
+            return Err("the water does not scatter: daylight needs no column".into());
+        }
+        if let WaterExtent::BoxAroundCamera { .. } = w.extent {
+            return Err(
+                "the water is a box around the camera, not a column from the surface down".into(),
+            );
+        }
+        if let Some(c) = (0..3).find(|&c| !(w.absorption[c] > 0.0)) {
+            return Err(format!(
+                "the water does not absorb in channel {} (σa = 0): the column's light would \
+                 never converge",
+                ["R", "G", "B"][c]
+            ));
+        }
+        let sun = self
+            .sun
+            .as_ref()
+            .filter(|s| s.direction_water.z < 0.0)
+            .map(|s| ColumnSun {
+                dir: s.direction_water.normalize(),
+                irradiance: s.irradiance_water,
+            });
+        let mut ambient = [0.0; 3];
+        for l in &self.lights {
+            if let LightKind::Ambient { radiance } = l.kind {
+                for c in 0..3 {
+                    ambient[c] += radiance[c];
+                }
+            }
+        }
+        if sun.is_none() && ambient.iter().all(|a| *a <= 0.0) {
+            return Err("no daylight (sun or ambient sky) comes down the water".into());
+        }
+        let above = (0..self.poses.len())
+            .flat_map(|p| (0..self.cameras.len()).map(move |c| (p, c)))
+            .any(|(p, c)| self.world_from_camera(p, c).translation.z >= 0.0);
+        if above {
+            return Err("a camera is above the water".into());
+        }
+        if !(self.site.depth > 0.0) {
+            return Err(format!(
+                "the site's depth is {} m: the column needs a seabed below the surface",
+                self.site.depth
+            ));
+        }
+        Ok(ColumnInput {
+            depth: self.site.depth,
+            sigma_a: w.absorption,
+            sigma_s: w.scattering,
+            phase: crate::optics::phase::PhaseFn::from_model(&w.phase),
+            sun,
+            ambient,
+            bottom_albedo: self.bottom_albedo(),
+            photons: COLUMN_PHOTONS,
+            seed: self.render.seed,
+        })
+    }
+
+    /// The albedo of the column's bottom: the largest horizontal plane or seabed object's,
+    /// else the mean over the objects, else 0.
+    pub fn bottom_albedo(&self) -> Rgb {
+        let mut best: Option<(f64, Rgb)> = None;
+        for o in &self.objects {
+            let area = match o.shape {
+                Shape::Plane { width, height } => width * height * o.scale.x * o.scale.y,
+                Shape::Seabed { width, length, .. } => width * length * o.scale.x * o.scale.y,
+                _ => continue,
+            };
+            let up = o.pose.rotation * DVec3::Z;
+            if up.z.abs() < 0.9 {
+                continue;
+            }
+            if best.is_none_or(|(a, _)| area > a) {
+                best = Some((area, o.material.albedo));
+            }
+        }
+        if let Some((_, a)) = best {
+            return a;
+        }
+        if self.objects.is_empty() {
+            return [0.0; 3];
+        }
+        let n = self.objects.len() as f64;
+        [0, 1, 2].map(|c| self.objects.iter().map(|o| o.material.albedo[c]).sum::<f64>() / n)
+    }
+
+    /// Whether the native renderer lights this scene with the water column, and why.
+    pub fn daylight_choice(&self) -> (bool, String) {
+        match (self.render.daylight, self.column_input()) {
+            (Daylight::Traced, _) => (
+                false,
+                "traced (render.daylight = \"traced\"): random walks through the water".into(),
+            ),
+            (_, Ok(_)) => (
+                true,
+                format!(
+                    "column{}: daylight from the plane-parallel water column solved once \
+                     (docs/column.md); the scene traces only its own geometry, strobes and the \
+                     sun's first scattering",
+                    if self.render.daylight == Daylight::Column {
+                        " (render.daylight = \"column\")"
+                    } else {
+                        ""
+                    }
+                ),
+            ),
+            (_, Err(why)) => (false, format!("traced: the column does not apply ({why})")),
+        }
+    }
+}
+

@@ -204,6 +204,8 @@ pub fn bench_model(width: u32, height: u32) -> Model {
             exposure: 1.0,
             denoise_radius: None,
             noise: None,
+            // The benchmark isolates the traced estimators.
+            daylight: crate::model::Daylight::Traced,
         },
         sensor: None,
         lesson: None,

@@ -285,6 +285,31 @@ pub fn explain(m: &Model) -> String {
     for r in &m.needs.reasons {
         let _ = writeln!(s, "  - {r}");
     }
+    // Daylight in the native renderer: the water column, or traced, and why.
+    let (column, why) = m.daylight_choice();
+    let _ = writeln!(s, "daylight (native): {why}");
+    if column
+        && let Ok(input) = m.column_input()
+    {
+        match crate::optics::column::solve(&input) {
+            Ok(col) => {
+                for line in crate::column::summary(&col) {
+                    let _ = writeln!(s, "{line}");
+                }
+            }
+            Err(e) => {
+                let _ = writeln!(s, "  the column cannot be solved: {e}; daylight is traced");
+            }
+        }
+    }
+    if !column && m.water.is_some() {
+        // What the bounce limit leaves out of the traced daylight (see docs/column.md).
+        let _ = writeln!(
+            s,
+            "  traced daylight ends paths after render.bounces = {} scatterings",
+            m.render.max_bounces
+        );
+    }
     if let Some(d) = &m.diver {
         let _ = writeln!(
             s,

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 mod bench;
+mod column;
 mod common;
 mod compare;
 mod compile;
@@ -36,6 +37,7 @@ Examples:
   poser render scenarios/reef_strip.toml -o out/reef          # native renderer, no Python
   poser validate scenarios/*.toml
   poser explain scenarios/calibration_flat.toml --set water.temperature=12
+  poser column scenarios/reef_strip.toml -o out/column        # the water column's light
   poser project scenarios/calibration_flat.toml --points pts.csv --frame world
   poser truth scenarios/reef_strip.toml -o out/truth
   poser compile scenarios/dome_orbit.toml --backend mitsuba -o out/mi
@@ -87,6 +89,9 @@ pub enum Command {
     Validate(validate::Args),
     /// Print the resolved model's key numbers and what will be modelled, and why.
     Explain(explain::Args),
+    /// Solve the water column's light (sun, sky, scattering, seabed) and write its profiles:
+    /// column.json, column.csv and column.svg.
+    Column(column::Args),
     /// Write the JSON Schema of the scene format (and the format reference in docs/).
     Schema(schema::Args),
     /// Project 3D points (CSV `id,x,y,z`) to pixels through the port; writes `id,u,v,status`.
@@ -154,6 +159,7 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
     match command {
         Command::Validate(args) => validate::run(&args),
         Command::Explain(args) => explain::run(&args),
+        Command::Column(args) => column::run(&args),
         Command::Schema(args) => schema::run(&args),
         Command::Project(args) => project::run(&args),
         Command::Truth(args) => truth::run(&args),

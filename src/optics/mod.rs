@@ -4,7 +4,8 @@
 //! | module | owns |
 //! |---|---|
 //! | [`water`], [`glass`] | refractive indices (Quan–Fry, Millard–Seaver, Sellmeier), Jerlov IOPs |
-//! | [`phase`] | Henyey–Greenstein and Fournier–Forand |
+//! | [`phase`] | Henyey–Greenstein and Fournier–Forand, and [`phase::PhaseFn`] (closed form or table) |
+//! | [`column`] | the plane-parallel water column's light field, solved once per scene (1D Monte Carlo) |
 //! | [`sun`] | NOAA solar position, refraction of sunlight into the sea |
 //! | [`interface`] | vector Snell with explicit TIR, unpolarised Fresnel |
 //! | [`lens`] | rectilinear + Brown, equidistant and equisolid fisheye |
@@ -19,6 +20,7 @@
 // `!(x > y)` is deliberate throughout: it rejects NaN as well as the failing comparison.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod column;
 pub mod glass;
 pub mod interface;
 pub mod lanes;

@@ -10,6 +10,7 @@
 //!
 //! Angles are scattering angles θ from the forward direction; `cos θ` is returned by samplers.
 
+use glam::DVec3;
 use std::f64::consts::PI;
 
 /// Henyey–Greenstein phase function (1/sr) at `cos_theta`.
@@ -83,6 +84,142 @@ pub fn ff_cdf(n: f64, mu: f64, theta: f64) -> f64 {
         * theta.sin().powi(2);
     first + second
 }
+
+/// Number of bins of the tabulated Fournier–Forand phase function.
+pub const FF_BINS: usize = 2048;
+
+/// A phase function ready for rendering: HG in closed form, or any phase function as a table in
+/// cos θ (evaluation and sampling use the same table, so sample weights are exact). Shared by
+/// the native renderer and the water-column solver ([`crate::optics::column`]).
+#[derive(Debug, Clone)]
+pub enum PhaseFn {
+    Hg {
+        g: f64,
+    },
+    /// Table: bin k spans θ ∈ [theta[k], theta[k+1]] (μ decreasing); `cdf[k]` is the mass of
+    /// bins < k; density `dens[k]` per steradian inside bin k.
+    Tab {
+        mu: Vec<f64>,
+        cdf: Vec<f64>,
+        dens: Vec<f64>,
+    },
+}
+
+impl PhaseFn {
+    /// Density per steradian at `cos θ`.
+    pub fn eval(&self, cos: f64) -> f64 {
+        match self {
+            PhaseFn::Hg { g } => hg_eval(*g, cos),
+            PhaseFn::Tab { mu, dens, .. } => {
+                // mu is decreasing; find bin k with mu[k] >= cos >= mu[k+1].
+                let k = mu
+                    .partition_point(|&m| m > cos)
+                    .saturating_sub(1)
+                    .min(dens.len() - 1);
+                dens[k]
+            }
+        }
+    }
+
+    /// Sample `cos θ` from a uniform number.
+    pub fn sample_cos(&self, u: f64) -> f64 {
+        match self {
+            PhaseFn::Hg { g } => hg_sample(*g, u),
+            PhaseFn::Tab { mu, cdf, .. } => {
+                let k = cdf
+                    .partition_point(|&c| c <= u)
+                    .saturating_sub(1)
+                    .min(mu.len() - 2);
+                let mass = cdf[k + 1] - cdf[k];
+                let f = if mass > 0.0 {
+                    ((u - cdf[k]) / mass).clamp(0.0, 1.0)
+                } else {
+                    0.5
+                };
+                mu[k] + (mu[k + 1] - mu[k]) * f
+            }
+        }
+    }
+
+    /// The uniform number that [`PhaseFn::sample_cos`] maps to `cos` (its inverse): the
+    /// phase function's probability between two cosines is the difference of their values.
+    pub fn u_of_cos(&self, cos: f64) -> f64 {
+        let c = cos.clamp(-1.0, 1.0);
+        match self {
+            PhaseFn::Hg { g } => {
+                let g = *g;
+                if g.abs() < 1e-4 {
+                    return (1.0 - c) / 2.0;
+                }
+                let s = (1.0 + g * g - 2.0 * g * c).max(0.0).sqrt();
+                if s <= 0.0 {
+                    return 1.0;
+                }
+                (((1.0 - g * g) / s - (1.0 - g)) / (2.0 * g)).clamp(0.0, 1.0)
+            }
+            PhaseFn::Tab { mu, cdf, .. } => {
+                let k = mu
+                    .partition_point(|&m| m > c)
+                    .saturating_sub(1)
+                    .min(mu.len() - 2);
+                let span = mu[k + 1] - mu[k];
+                let f = if span != 0.0 {
+                    ((c - mu[k]) / span).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                cdf[k] + (cdf[k + 1] - cdf[k]) * f
+            }
+        }
+    }
+
+    /// Sample a new propagation direction around `d`; returns (direction, density).
+    pub fn sample(&self, d: DVec3, u1: f64, u2: f64) -> (DVec3, f64) {
+        let c = self.sample_cos(u1);
+        let s = (1.0 - c * c).max(0.0).sqrt();
+        let phi = 2.0 * PI * u2;
+        let (t, b) = d.any_orthonormal_pair();
+        let w = (t * (s * phi.cos()) + b * (s * phi.sin()) + d * c).normalize();
+        (w, self.eval(c))
+    }
+}
+
+/// Fournier–Forand as a [`PhaseFn::Tab`] of [`FF_BINS`] bins (particle index `n`, Junge slope
+/// `mu_slope`).
+pub fn ff_table(n: f64, mu_slope: f64) -> PhaseFn {
+    // θ edges: 0, then log-spaced from 1e-5 rad to π.
+    let mut theta = vec![0.0];
+    let (lo, hi) = (1e-5f64.ln(), PI.ln());
+    for k in 0..FF_BINS {
+        theta.push((lo + (hi - lo) * k as f64 / (FF_BINS - 1) as f64).exp());
+    }
+    *theta.last_mut().unwrap() = PI;
+    let mu: Vec<f64> = theta.iter().map(|t| t.cos()).collect();
+    let mut f: Vec<f64> = theta
+        .iter()
+        .map(|&t| ff_cdf(n, mu_slope, t))
+        .collect();
+    // Monotone and normalised (F(π) = 1 analytically; guard rounding).
+    for k in 1..f.len() {
+        f[k] = f[k].max(f[k - 1]);
+    }
+    let total = *f.last().unwrap();
+    for v in &mut f {
+        *v /= total;
+    }
+    let dens = (0..FF_BINS)
+        .map(|k| {
+            let dmu = mu[k] - mu[k + 1];
+            if dmu > 0.0 {
+                (f[k + 1] - f[k]) / (2.0 * PI * dmu)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    PhaseFn::Tab { mu, cdf: f, dens }
+}
+
 
 #[cfg(test)]
 mod tests {

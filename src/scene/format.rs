@@ -908,6 +908,14 @@ pub struct Render {
     /// With `noise`: the most samples a pixel takes after its pilot. **Default:** 16 ×
     /// `samples`.
     pub max_samples: Option<u32>,
+    /// Native renderer: how daylight reaches the scene through the water. `"column"` solves
+    /// the plane-parallel water column once (sun, sky, scattering, seabed) and lights the
+    /// scene with it, tracing only the scene's own geometry, strobes and the sun's first
+    /// scattering: far less noise for the same samples. `"traced"` random-walks the light
+    /// through the water, as Mitsuba and Cycles do. `"auto"` takes the column where it applies
+    /// (water everywhere below the surface, absorbing and scattering, lit by sun or sky; see
+    /// `poser explain`). **Default:** `"auto"`.
+    pub daylight: Option<String>,
 }
 
 /// `[sensor]` — the camera after the lens: exposure, photon shot noise, read noise, ADC, white

@@ -137,6 +137,7 @@ pub fn render_settings(samples: u32) -> RenderSettings {
         exposure: 1.0,
         denoise_radius: None,
         noise: None,
+        daylight: Default::default(),
     }
 }
 

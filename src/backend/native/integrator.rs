@@ -29,6 +29,14 @@
 //!   lobe about the sun ([`AUREOLE_FRACTION`]; one-sample MIS, so unbiased): the
 //!   forward-scattered sun (the aureole, p(0°) ≈ 300× the isotropic value at g = 0.92) is what
 //!   lights a seabed from above, and the path's own lobe alone finds it as fireflies.
+//! * Daylight from the water column ([`crate::optics::column`], when the scene has one,
+//!   [`Integrator::column`]): daylight's paths have no medium vertices. Each segment of the
+//!   camera ray and of the surface bounces adds the column's in-scattered light along it,
+//!   `L_m(z_o, ω) − T(s) L_m(z_q, ω)`, exact for the column's own field; each surface vertex adds
+//!   next-event estimation against the table (importance-sampled, visibility by tracing the
+//!   segment to the local geometry), MIS-weighted with the bounce that finds the same segment.
+//!   The sun's direct light and its first scattering along each segment stay traced (shadows,
+//!   shafts). A path that scatters in the water carries strobe light only from there on.
 //! * `max_bounces` = the largest number of scattering vertices (surface or medium) on a path;
 //!   Russian roulette after three, except in sunlit, scattering water
 //!   ([`Integrator::roulette_from`]).
@@ -47,6 +55,11 @@ pub const AUREOLE_FRACTION: f64 = 0.5;
 /// Phase functions flatter than this peak value (per sr, forward) gain nothing from aureole
 /// sampling: 4× isotropic.
 const AUREOLE_MIN_PEAK: f64 = 4.0 / (4.0 * PI);
+
+/// With a column, the share of medium segments that try a free-flight vertex (for the strobes'
+/// light scattered more than once in the water); the others pass to the next surface with the
+/// analytic transmittance and keep their daylight.
+pub const COLUMN_FREE_FLIGHT: f64 = 0.25;
 
 /// Depth from which Russian roulette may end a path (outside sunlit water).
 pub const ROULETTE_FROM: u32 = 3;
@@ -84,6 +97,11 @@ pub struct Integrator<'a> {
     /// Phase-angular sampling of point/spot lights' in-scattering (`false` turns it off; the
     /// estimate stays the same, only noisier).
     pub lamp_phase_sampling: bool,
+    /// The water column lighting the scene with daylight (`None`: daylight is traced).
+    pub column: Option<&'a crate::optics::column::Column>,
+    /// Share of medium segments on which a free-flight vertex is tried: 1 when daylight is
+    /// traced; with a column, [`COLUMN_FREE_FLIGHT`] with strobes or area lights, else 0.
+    pub ff_share: f64,
     object_from_world: Vec<Pose>,
     target_from_world: Vec<Pose>,
 }
@@ -101,6 +119,7 @@ impl<'a> Integrator<'a> {
             }
             _ => None,
         };
+        let no_lamps = lights.points.is_empty() && lights.areas.is_empty();
         Integrator {
             scene,
             model,
@@ -118,6 +137,12 @@ impl<'a> Integrator<'a> {
             },
             sun_sampling: true,
             lamp_phase_sampling: true,
+            column: scene.column.as_deref(),
+            ff_share: match (&scene.column, no_lamps) {
+                (None, _) => 1.0,
+                (Some(_), true) => 0.0,
+                (Some(_), false) => COLUMN_FREE_FLIGHT,
+            },
             object_from_world: model.objects.iter().map(|o| o.pose.inverse()).collect(),
             target_from_world: model.targets.iter().map(|t| t.pose.inverse()).collect(),
         }
@@ -295,6 +320,10 @@ impl<'a> Integrator<'a> {
         // Density of the direction sampled at the previous vertex (0: camera ray, no MIS).
         let mut prev_pdf = 0.0;
         let mut depth = 0u32;
+        // The path still carries daylight; with a column, a medium vertex ends that.
+        let mut day = true;
+        // The column's sampling density of the direction sampled at the previous surface vertex.
+        let mut prev_col_pdf = 0.0;
         loop {
             let hit = self
                 .scene
@@ -308,6 +337,17 @@ impl<'a> Integrator<'a> {
                 }
             }
             let can_scatter = depth < self.max_bounces;
+            if day
+                && self.max_bounces > 0
+                && let Some(col) = self.column
+            {
+                let w = if prev_pdf > 0.0 {
+                    power(prev_pdf, prev_col_pdf)
+                } else {
+                    1.0
+                };
+                l += beta * self.column_segment(col, o, d, t_end, depth > 0) * w;
+            }
             // Weight of next-event estimation at the surface ending this segment: the analytic
             // transmittance, whichever way the free flight below goes (both branches add it
             // exactly once), so direct light on surfaces carries no free-flight noise.
@@ -332,14 +372,25 @@ impl<'a> Integrator<'a> {
                         }
                     }
                     // Sun-aware distance sampling of the sunlight scattered along [a, b].
-                    let sun_rate = self.sun_rate(m, d, b - a).map(|k| SunSeg::new(k, a, b));
+                    // With a column, only the camera ray traces the sun's first scattering.
+                    let sun_rate = if day && (self.column.is_none() || depth == 0) {
+                        self.sun_rate(m, d, b - a).map(|k| SunSeg::new(k, a, b))
+                    } else {
+                        None
+                    };
                     if let Some(k) = &sun_rate {
                         l += beta * self.sun_inscatter(m, k, o, d, a, b, rng);
                     }
+                    // With a column only strobe light needs medium vertices: a share of the
+                    // free flights is tried (none without strobes), the rest pass analytically.
+                    let share = self.ff_share;
+                    let attempt = share >= 1.0 || (share > 0.0 && rng.next() < share);
                     let c = ((rng.next() * 3.0) as usize).min(2);
                     let u = rng.next();
                     let st = m.sigma_t[c];
-                    let t = if st > 0.0 {
+                    let t = if !attempt {
+                        f64::INFINITY
+                    } else if st > 0.0 {
                         a - (1.0 - u).ln() / st
                     } else {
                         f64::INFINITY
@@ -351,10 +402,10 @@ impl<'a> Integrator<'a> {
                             let albedo = self.albedo(h);
                             l += beta
                                 * tr(m.sigma_t, b - a)
-                                * self.surface_direct(h, d, albedo, rng);
+                                * self.surface_direct(h, d, albedo, day, rng);
                         }
                         let trv = tr(m.sigma_t, t - a);
-                        let pdf_d = mean(m.sigma_t * trv);
+                        let pdf_d = share * mean(m.sigma_t * trv);
                         beta *= m.sigma_s * trv / pdf_d;
                         let p = o + t * d;
                         let phase = &m.phase;
@@ -369,7 +420,13 @@ impl<'a> Integrator<'a> {
                             let pp = seg.phase_pdf(m, t);
                             power3(pdf_d, pe, pp)
                         };
-                        let sw = sun_rate.map_or(1.0, |k| power(pdf_d, k.pdf(t)));
+                        // With a column, daylight ends at a medium vertex (the column holds
+                        // the light scattered in the water).
+                        let sw = if self.column.is_some() || !day {
+                            0.0
+                        } else {
+                            sun_rate.map_or(1.0, |k| power(pdf_d, k.pdf(t)))
+                        };
                         l += beta * self.direct(p, f, pdf, pw, sw, rng);
                         let (nd, ppdf) = self.sample_medium(d, rng);
                         if ppdf <= 0.0 {
@@ -380,13 +437,20 @@ impl<'a> Integrator<'a> {
                         d = nd;
                         prev_pdf = ppdf;
                         depth += 1;
+                        if self.column.is_some() {
+                            day = false;
+                        }
                         if !self.roulette(&mut beta, depth, rng) {
                             break;
                         }
                         continue;
                     }
                     let trv = tr(m.sigma_t, b - a);
-                    let p_pass = mean(trv);
+                    let p_pass = if share >= 1.0 {
+                        mean(trv)
+                    } else {
+                        (1.0 - share) + share * mean(trv)
+                    };
                     if p_pass <= 0.0 {
                         break;
                     }
@@ -411,7 +475,10 @@ impl<'a> Integrator<'a> {
                 break;
             }
             let Some(h) = hit else {
-                l += beta * self.lights.ambient;
+                // With a column the sky is in its table (added along the segment above).
+                if day && self.column.is_none() {
+                    l += beta * self.lights.ambient;
+                }
                 break;
             };
             if !can_scatter {
@@ -427,7 +494,7 @@ impl<'a> Integrator<'a> {
                 break;
             }
             let p = h.point + n * SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
-            l += beta_nee * self.surface_direct(&h, d, albedo, rng);
+            l += beta_nee * self.surface_direct(&h, d, albedo, day, rng);
             // f·cos/pdf = albedo·(cos/π)/pdf (= albedo for pure cosine sampling).
             let (nd, pdf) = self.sample_surface(n, rng);
             let cos = n.dot(nd);
@@ -435,6 +502,10 @@ impl<'a> Integrator<'a> {
                 break;
             }
             prev_pdf = pdf;
+            prev_col_pdf = match self.column {
+                Some(col) if day => col.pdf(-p.z, n.z >= 0.0, nd),
+                _ => 0.0,
+            };
             beta *= albedo * (cos / PI / pdf);
             o = p;
             d = nd;
@@ -446,9 +517,37 @@ impl<'a> Integrator<'a> {
         l
     }
 
+    /// The column's daylight scattered towards `o` along the ray `o + t d` up to `t_end` (a
+    /// surface, or ∞): `L_m(z_o, d) − T(t_end) L_m(z_end, d)` ([`crate::optics::column`]).
+    /// `with_first`: the sun's first scattering from the column too (on the segments after a
+    /// surface bounce; the camera ray traces it, with the shadows it shows).
+    fn column_segment(
+        &self,
+        col: &crate::optics::column::Column,
+        o: DVec3,
+        d: DVec3,
+        t_end: f64,
+        with_first: bool,
+    ) -> DVec3 {
+        let near = col.radiance(-o.z, d, with_first);
+        if !t_end.is_finite() {
+            return near;
+        }
+        let q = o + t_end * d;
+        near - self.tr_seg(o, d, t_end) * col.radiance(-q.z, d, with_first)
+    }
+
     /// Next-event estimate of the light reflected at surface hit `h` (of albedo `albedo`,
-    /// [`Integrator::albedo`]) towards `-d` (no path weight).
-    fn surface_direct(&self, h: &Hit, d: DVec3, albedo: DVec3, rng: &mut Sampler) -> DVec3 {
+    /// [`Integrator::albedo`]) towards `-d` (no path weight). `day`: the path still carries
+    /// daylight (sun, and the column's light when there is one).
+    fn surface_direct(
+        &self,
+        h: &Hit,
+        d: DVec3,
+        albedo: DVec3,
+        day: bool,
+        rng: &mut Sampler,
+    ) -> DVec3 {
         let n = if h.normal.dot(d) > 0.0 {
             -h.normal
         } else {
@@ -467,7 +566,23 @@ impl<'a> Integrator<'a> {
             }
         };
         let pdf = |w: DVec3| self.surface_pdf(n, w);
-        self.direct(p, f, pdf, |_, _| 1.0, 1.0, rng)
+        let mut l = self.direct(p, &f, pdf, |_, _| 1.0, if day { 1.0 } else { 0.0 }, rng);
+        if day && let Some(col) = self.column {
+            let (u0, u1, u2) = (rng.next(), rng.next(), rng.next());
+            let up = n.z >= 0.0;
+            if let Some((w, pc)) = col.sample(-p.z, up, u0, u1, u2) {
+                let fv = f(w);
+                if fv != DVec3::ZERO {
+                    let t = self
+                        .scene
+                        .intersect(&Ray { origin: p, dir: w }, f64::INFINITY)
+                        .map_or(f64::INFINITY, |h| h.t);
+                    let e = self.column_segment(col, p, w, t, true);
+                    l += fv * e * (power(pc, self.surface_pdf(n, w)) / pc);
+                }
+            }
+        }
+        l
     }
 
     fn roulette(&self, beta: &mut DVec3, depth: u32, rng: &mut Sampler) -> bool {
@@ -533,7 +648,12 @@ impl<'a> Integrator<'a> {
         }
         let trc = tr(m.sigma_t, t - a);
         let pdf_d = mean(m.sigma_t * trc);
-        let w = power(pdf_s, pdf_d);
+        // With a column no medium vertex gathers sunlight: this sampler is the only one.
+        let w = if self.column.is_some() {
+            1.0
+        } else {
+            power(pdf_s, pdf_d)
+        };
         if w <= 0.0
             || self
                 .scene
@@ -602,7 +722,7 @@ impl<'a> Integrator<'a> {
         let r = r2.sqrt();
         let dir = wl / r;
         let trc = tr(m.sigma_t, t - a);
-        let pdf_d = mean(m.sigma_t * trc);
+        let pdf_d = self.ff_share * mean(m.sigma_t * trc);
         let w = power3(pdf_own, pdf_d, pdf_other);
         if w <= 0.0 || self.scene.occluded(p, pl.pos) {
             return DVec3::ZERO;

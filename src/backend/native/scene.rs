@@ -1,12 +1,13 @@
 //! What the native renderer traces against: the model's geometry ([`crate::geometry::Bvh`],
 //! shared with the truth and the planner) plus what only the renderer needs, the sun's caustic
-//! volume under waves ([`super::caustics`]), precomputed once.
+//! volume under waves ([`super::caustics`]) and the water column's light, precomputed once.
 //!
 //! | item | meaning |
 //! |---|---|
 //! | [`Scene::build`] | the BVH of every object and target, and the caustic volume when the model needs caustics |
 //! | [`Scene::bvh`] | the geometry (also reached through `Deref`: `scene.intersect(…)`) |
 //! | [`Scene::caustics`] | the caustic volume, if any |
+//! | [`Scene::column`] | the water column's light ([`crate::optics::column`]), when daylight comes from it ([`Model::daylight_choice`]) |
 //!
 //! Queries are read-only, so one `Scene` is shared by every rendering thread.
 
@@ -22,6 +23,8 @@ pub struct Scene {
     pub bvh: Bvh,
     /// The sun's caustics under a wavy surface, when the model needs them.
     pub caustics: Option<Arc<super::caustics::CausticVolume>>,
+    /// The solved water column, when the scene's daylight comes from it.
+    pub column: Option<Arc<crate::optics::column::Column>>,
 }
 
 impl Scene {
@@ -41,7 +44,22 @@ impl Scene {
         } else {
             None
         };
-        Scene { bvh, caustics }
+        let column = if model.daylight_choice().0 {
+            // `column_input` succeeded in the choice; a solve can still refuse odd input, and
+            // then the scene is traced (the choice is re-checked by `explain`).
+            model
+                .column_input()
+                .ok()
+                .and_then(|i| crate::optics::column::solve(&i).ok())
+                .map(Arc::new)
+        } else {
+            None
+        };
+        Scene {
+            bvh,
+            caustics,
+            column,
+        }
     }
 }
 

@@ -100,7 +100,8 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
     };
     let ior = water.as_ref().map(|w| w.ior).unwrap_or([1.0; 3]);
     let sun = environment::sun(cx, t.get("sun"), water.as_ref(), &site, top);
-    let render = render::render(cx, t.get("render"), top);
+    let mut daylight_at = None;
+    let render = render::render(cx, t.get("render"), top, &mut daylight_at);
     let cameras = camera::cameras(cx, &mut t, water.is_some(), &mut spans, top);
     let f_number = cameras.first().and_then(|c| c.f_number);
     let sensor = super::sensor::sensor(cx, t.get("sensor"), f_number, top);
@@ -154,6 +155,15 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
         lesson,
     };
     model.needs = needs(&model);
+    if model.render.daylight == Daylight::Column
+        && let (Some(span), Err(why)) = (daylight_at, model.column_input())
+    {
+        cx.push(
+            Diagnostic::error("E0238", "the water column cannot light this scene")
+                .label(span, why)
+                .help("use `daylight = \"traced\"` (or `\"auto\"`, which falls back to it)"),
+        );
+    }
     (model, spans)
 }
 

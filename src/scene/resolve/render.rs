@@ -1,6 +1,6 @@
 //! The `[render]` settings shared by every backend: samples per pixel, seed, bounces,
 //! dispersion, the outputs written (`rgb`, `depth`, `truth`), the exposure and the native
-//! renderer's illumination denoiser and noise target.
+//! renderer's illumination denoiser, noise target and daylight estimator.
 
 use crate::model::*;
 use crate::scene::check;
@@ -10,7 +10,13 @@ use crate::scene::source::{Node, Val};
 use crate::units::Dim;
 
 /// `[render]`, with every default filled in.
-pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> RenderSettings {
+/// `daylight_at`: where `daylight` was written, for the check that the column applies.
+pub(super) fn render(
+    cx: &mut Cx,
+    node: Option<&Node>,
+    fallback: Span,
+    daylight_at: &mut Option<Span>,
+) -> RenderSettings {
     let mut r = Tab::open(cx, node, "render", fallback);
     let samples = r.u32(cx, "samples", 64);
     if samples == 0 {
@@ -146,7 +152,14 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
                 )),
         );
     }
+    let daylight = match r.choice(cx, "daylight", &["auto", "column", "traced"]) {
+        Some("column") => Daylight::Column,
+        Some("traced") => Daylight::Traced,
+        _ => Daylight::Auto,
+    };
+    let daylight_span = r.has("daylight").then(|| r.span_of("daylight"));
     r.finish(cx);
+    *daylight_at = daylight_span;
     RenderSettings {
         samples,
         seed,
@@ -156,5 +169,6 @@ pub(super) fn render(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Render
         exposure,
         denoise_radius,
         noise,
+        daylight,
     }
 }
