@@ -99,7 +99,10 @@ pub fn svg(col: &Column, title: &str) -> Result<String, String> {
             lo = 1e-3;
             hi = 1.0;
         }
-        let (lo, hi) = (lo.log10().floor(), hi.log10().ceil().max(lo.log10().floor() + 1.0));
+        let (lo, hi) = (
+            lo.log10().floor(),
+            hi.log10().ceil().max(lo.log10().floor() + 1.0),
+        );
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 18))
             .margin(12)

@@ -698,11 +698,12 @@ pub struct RenderSettings {
 #[serde(rename_all = "snake_case")]
 pub enum Daylight {
     /// The column where it applies ([`Model::column_input`]), else traced.
-    #[default]
     Auto,
     /// Light the scene with the solved water column ([`crate::optics::column`]).
     Column,
-    /// Random walks through the water, as Mitsuba and Cycles do.
+    /// Random walks through the water, as Mitsuba and Cycles do (the default until the
+    /// column's table noise is below 1 %, docs/column.md).
+    #[default]
     Traced,
 }
 
@@ -1094,7 +1095,13 @@ impl Model {
             return [0.0; 3];
         }
         let n = self.objects.len() as f64;
-        [0, 1, 2].map(|c| self.objects.iter().map(|o| o.material.albedo[c]).sum::<f64>() / n)
+        [0, 1, 2].map(|c| {
+            self.objects
+                .iter()
+                .map(|o| o.material.albedo[c])
+                .sum::<f64>()
+                / n
+        })
     }
 
     /// Whether the native renderer lights this scene with the water column, and why.
@@ -1121,4 +1128,3 @@ impl Model {
         }
     }
 }
-

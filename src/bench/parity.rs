@@ -8,6 +8,7 @@
 //! | size | 1/10 of each camera's resolution | 1/4 |
 //! | samples per pixel | 16 | 64 |
 //! | poses | the first | the first |
+//! | native daylight | traced (`render.daylight = "traced"`): the transport all three share; the water column's difference from it is measured in `docs/column.md` | the same |
 //!
 //! A pair of backends **agrees** when, in every channel, the image means differ by at most
 //! [`TOLERANCE`] plus a noise allowance computed from the images: three standard errors of the
@@ -29,6 +30,9 @@ pub const TOLERANCE: f64 = 0.02;
 /// the camera at the first pose (a deep scene without lights). Dim is not dark: the relative
 /// comparison and its noise allowance hold at any exposure.
 const DARK: f64 = 1e-6;
+
+/// The parity runs compare the traced transport the three backends share.
+pub const PARITY_DAYLIGHT: &str = "render.daylight=\"traced\"";
 
 /// The size and sampling of a run.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -115,7 +119,8 @@ pub fn run_scene(
     form: Form,
     out: &Path,
 ) -> Result<Row, String> {
-    let model = crate::scene::load(scene, &[])
+    // Like for like: the native renderer traces daylight as Mitsuba and Cycles do.
+    let model = crate::scene::load(scene, &[PARITY_DAYLIGHT.to_string()])
         .map_err(|f| f.render())?
         .model
         .with_resolution_scale(form.scale);

@@ -31,9 +31,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         }
         input.photons = n;
     }
-    let col = crate::optics::column::solve(&input).map_err(|e| {
-        CliError::Failed(format!("{}: {e}", args.scene.scene.display()))
-    })?;
+    let col = crate::optics::column::solve(&input)
+        .map_err(|e| CliError::Failed(format!("{}: {e}", args.scene.scene.display())))?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| CliError::Failed(format!("{}: {e}", args.out.display())))?;
     let write = |name: &str, bytes: &[u8]| {
@@ -48,10 +47,16 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let svg = crate::column::svg(&col, &format!("{}: the water column's light", model.name))
         .map_err(CliError::Failed)?;
     write("column.svg", svg.as_bytes())?;
-    println!("water column of {} (seabed at {} m):", model.name, col.depth);
+    println!(
+        "water column of {} (seabed at {} m):",
+        model.name, col.depth
+    );
     for line in crate::column::summary(&col) {
         println!("{line}");
     }
-    println!("wrote column.json, column.csv, column.svg into {}", args.out.display());
+    println!(
+        "wrote column.json, column.csv, column.svg into {}",
+        args.out.display()
+    );
     Ok(())
 }

@@ -288,9 +288,7 @@ pub fn explain(m: &Model) -> String {
     // Daylight in the native renderer: the water column, or traced, and why.
     let (column, why) = m.daylight_choice();
     let _ = writeln!(s, "daylight (native): {why}");
-    if column
-        && let Ok(input) = m.column_input()
-    {
+    if column && let Ok(input) = m.column_input() {
         match crate::optics::column::solve(&input) {
             Ok(col) => {
                 for line in crate::column::summary(&col) {

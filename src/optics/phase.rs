@@ -195,10 +195,7 @@ pub fn ff_table(n: f64, mu_slope: f64) -> PhaseFn {
     }
     *theta.last_mut().unwrap() = PI;
     let mu: Vec<f64> = theta.iter().map(|t| t.cos()).collect();
-    let mut f: Vec<f64> = theta
-        .iter()
-        .map(|&t| ff_cdf(n, mu_slope, t))
-        .collect();
+    let mut f: Vec<f64> = theta.iter().map(|&t| ff_cdf(n, mu_slope, t)).collect();
     // Monotone and normalised (F(π) = 1 analytically; guard rounding).
     for k in 1..f.len() {
         f[k] = f[k].max(f[k - 1]);
@@ -219,7 +216,6 @@ pub fn ff_table(n: f64, mu_slope: f64) -> PhaseFn {
         .collect();
     PhaseFn::Tab { mu, cdf: f, dens }
 }
-
 
 #[cfg(test)]
 mod tests {

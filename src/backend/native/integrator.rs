@@ -32,7 +32,8 @@
 //! * Daylight from the water column ([`crate::optics::column`], when the scene has one,
 //!   [`Integrator::column`]): daylight's paths have no medium vertices. Each segment of the
 //!   camera ray and of the surface bounces adds the column's in-scattered light along it,
-//!   `L_m(z_o, ω) − T(s) L_m(z_q, ω)`, exact for the column's own field; each surface vertex adds
+//!   `L_m(z_o, ω) − T(s) L_m(z_q, ω)` (plus the sky's or the column bottom's radiance through
+//!   the water when nothing is hit), exact for the column's own field; each surface vertex adds
 //!   next-event estimation against the table (importance-sampled, visibility by tracing the
 //!   segment to the local geometry), MIS-weighted with the bounce that finds the same segment.
 //!   The sun's direct light and its first scattering along each segment stay traced (shadows,
@@ -531,7 +532,13 @@ impl<'a> Integrator<'a> {
     ) -> DVec3 {
         let near = col.radiance(-o.z, d, with_first);
         if !t_end.is_finite() {
-            return near;
+            // Nothing in the way: the sky or the column's bottom through the water.
+            let s = col.to_boundary(-o.z, d);
+            return if s.is_finite() {
+                near + self.tr_seg(o, d, s) * col.boundary(d)
+            } else {
+                near
+            };
         }
         let q = o + t_end * d;
         near - self.tr_seg(o, d, t_end) * col.radiance(-q.z, d, with_first)
@@ -566,7 +573,7 @@ impl<'a> Integrator<'a> {
             }
         };
         let pdf = |w: DVec3| self.surface_pdf(n, w);
-        let mut l = self.direct(p, &f, pdf, |_, _| 1.0, if day { 1.0 } else { 0.0 }, rng);
+        let mut l = self.direct(p, f, pdf, |_, _| 1.0, if day { 1.0 } else { 0.0 }, rng);
         if day && let Some(col) = self.column {
             let (u0, u1, u2) = (rng.next(), rng.next(), rng.next());
             let up = n.z >= 0.0;

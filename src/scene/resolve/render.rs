@@ -154,8 +154,8 @@ pub(super) fn render(
     }
     let daylight = match r.choice(cx, "daylight", &["auto", "column", "traced"]) {
         Some("column") => Daylight::Column,
-        Some("traced") => Daylight::Traced,
-        _ => Daylight::Auto,
+        Some("auto") => Daylight::Auto,
+        _ => Daylight::Traced,
     };
     let daylight_span = r.has("daylight").then(|| r.span_of("daylight"));
     r.finish(cx);

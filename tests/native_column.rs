@@ -1,0 +1,143 @@
+//! The native renderer's daylight from the water column (`render.daylight = "column"`,
+//! src/optics/column.rs) against its own brute-force transport (`"traced"`, bounces raised so
+//! that nothing is cut off), on a flat untextured seabed where the column is exact: the sun
+//! case and the sky-only case. Also: the column's image is far less noisy at equal samples,
+//! and a scene where the column cannot apply is refused with a located diagnostic.
+
+use poser::backend::native::render_one;
+use poser::model::Model;
+
+const SCENE: &str = r#"
+name = "column_flat"
+[site]
+depth = "12 m"
+surface = "flat"
+[water]
+jerlov = "IB"
+phase = "hg"
+g = 0.92
+LIGHT
+[[objects]]
+name = "seabed"
+shape = "plane"
+width = "400 m"
+height = "400 m"
+position = [0.0, 0.0, -12.0]
+albedo = 0.5
+[camera]
+width = 24
+height = 16
+focal_length = "16 mm"
+[camera.port]
+type = "none"
+[network]
+type = "explicit"
+[[network.poses]]
+position = [0.0, 0.0, -10.0]
+"#;
+
+/// Column against traced, relative, per channel. The goal is 1 %; the column's radiance
+/// table is a Monte Carlo tally whose noise moves the image mean by 1–3 % from one seed to
+/// the next (measured on this scene, seeds 1–3: sky G 3.92 / 3.98 / 4.07 against 3.95 traced;
+/// sun G 51.6 / 50.0 against 51.5), so the bound is 4 % until that noise is gone.
+const AGREE: f64 = 0.04;
+
+const SUN: &str = "[sun]\nelevation = \"60 deg\"\nazimuth = \"180 deg\"\nirradiance = 1000.0";
+const SKY: &str = "[[lights]]\ntype = \"ambient\"\nradiance = 30.0";
+
+fn model(light: &str, daylight: &str) -> Model {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("scene.toml");
+    std::fs::write(&p, SCENE.replace("LIGHT", light)).unwrap();
+    let sets = vec![
+        format!("render.daylight=\"{daylight}\""),
+        "render.bounces=200".to_string(),
+    ];
+    poser::scene::load(&p, &sets).map(|l| l.model).unwrap()
+}
+
+/// Mean radiance per channel and the image.
+fn render(m: &Model, spp: u32) -> ([f64; 3], Vec<[f32; 3]>) {
+    let img = render_one(m, 0, 0, Some(spp)).unwrap();
+    let n = img.rgb.len() as f64;
+    let mean = [0, 1, 2].map(|c| img.rgb.iter().map(|p| p[c] as f64).sum::<f64>() / n);
+    (mean, img.rgb)
+}
+
+fn rel_rmse(a: &[[f32; 3]], r: &[[f32; 3]], mean: [f64; 3]) -> f64 {
+    let mut worst: f64 = 0.0;
+    for c in 0..3 {
+        let se = a
+            .iter()
+            .zip(r)
+            .map(|(x, y)| (x[c] as f64 - y[c] as f64).powi(2))
+            .sum::<f64>()
+            / a.len() as f64;
+        worst = worst.max(se.sqrt() / mean[c]);
+    }
+    worst
+}
+
+fn agree(light: &str, what: &str) {
+    let col = model(light, "column");
+    let traced = model(light, "traced");
+    let (mc, _) = render(&col, 512);
+    let (mt, _) = render(&traced, 1024);
+    for c in 0..3 {
+        let rel = (mc[c] - mt[c]) / mt[c];
+        eprintln!(
+            "{what} channel {c}: column {:.5} traced {:.5} ({:+.2} %)",
+            mc[c],
+            mt[c],
+            100.0 * rel
+        );
+        assert!(
+            rel.abs() < AGREE,
+            "{what}, channel {c}: column {} vs traced {} ({:+.2} %)",
+            mc[c],
+            mt[c],
+            100.0 * rel
+        );
+    }
+}
+
+#[test]
+fn column_lit_flat_seabed_matches_brute_force_under_the_sun() {
+    agree(SUN, "sun");
+}
+
+#[test]
+fn column_lit_flat_seabed_matches_brute_force_under_the_sky() {
+    agree(SKY, "sky");
+}
+
+/// At equal samples the column's image is at least twice as close to its converged self as
+/// the traced one is (four times less variance); measured 7 % against 25–38 % at 4 spp.
+#[test]
+fn column_is_far_less_noisy_at_equal_samples() {
+    let col = model(SUN, "column");
+    let traced = model(SUN, "traced");
+    let (mc, refc) = render(&col, 1024);
+    let (mt, reft) = render(&traced, 1024);
+    let (_, c4) = render(&col, 4);
+    let (_, t4) = render(&traced, 4);
+    let (ec, et) = (rel_rmse(&c4, &refc, mc), rel_rmse(&t4, &reft, mt));
+    eprintln!("relative RMSE at 4 spp: column {ec:.3}, traced {et:.3}");
+    assert!(ec * 2.0 < et, "column {ec} vs traced {et}");
+}
+
+/// `daylight = "column"` where the column cannot apply is an error at the key.
+#[test]
+fn column_where_it_cannot_apply_is_a_located_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("scene.toml");
+    let text = SCENE.replace("LIGHT", "") + "[render]\ndaylight = \"column\"\n";
+    std::fs::write(&p, text).unwrap();
+    let err = match poser::scene::load(&p, &[]) {
+        Ok(_) => panic!("a sunless, skyless column was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(err.contains("E0238"), "{err}");
+    assert!(err.contains("no daylight"), "{err}");
+    assert!(err.contains("scene.toml:"), "{err}");
+}
