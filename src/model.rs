@@ -702,7 +702,7 @@ pub enum Daylight {
     /// Light the scene with the solved water column ([`crate::optics::column`]).
     Column,
     /// Random walks through the water, as Mitsuba and Cycles do (the default until the
-    /// column's table noise is below 1 %, docs/column.md).
+    /// column's bias on strong relief is measured, docs/column.md).
     #[default]
     Traced,
 }

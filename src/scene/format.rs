@@ -914,8 +914,8 @@ pub struct Render {
     /// scattering: far less noise for the same samples. `"traced"` random-walks the light
     /// through the water, as Mitsuba and Cycles do. `"auto"` takes the column where it applies
     /// (water everywhere below the surface, absorbing and scattering, lit by sun or sky; see
-    /// `poser explain`). **Default:** `"traced"` (the column's image mean still varies by
-    /// 1–3 % with the seed, `docs/column.md`).
+    /// `poser explain`). **Default:** `"traced"` (until the column's bias on strong relief is
+    /// measured against converged references, `docs/column.md`).
     pub daylight: Option<String>,
 }
 

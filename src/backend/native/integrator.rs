@@ -347,7 +347,12 @@ impl<'a> Integrator<'a> {
                 } else {
                     1.0
                 };
-                l += beta * self.column_segment(col, o, d, t_end, depth > 0) * w;
+                l += beta
+                    * if depth == 0 {
+                        self.column_gather(col, o, d, t_end, rng)
+                    } else {
+                        self.column_segment(col, o, d, t_end, true) * w
+                    };
             }
             // Weight of next-event estimation at the surface ending this segment: the analytic
             // transmittance, whichever way the free flight below goes (both branches add it
@@ -542,6 +547,59 @@ impl<'a> Integrator<'a> {
         }
         let q = o + t_end * d;
         near - self.tr_seg(o, d, t_end) * col.radiance(-q.z, d, with_first)
+    }
+
+    /// The column's daylight scattered towards `o` along the camera ray `o + t d` up to
+    /// `t_end`, gathered: one distance drawn ∝ the transmittance (spectral one-sample MIS),
+    /// one direction from the phase function, and the column's whole diffuse radiance there
+    /// (the table with the sun's first scattering, plus the boundary through the water). It
+    /// estimates the same integral as [`Integrator::column_segment`], but averages the table
+    /// over the phase function instead of reading two of its bins, so the table's noise does
+    /// not print a bias on the image (the difference of two bins moved image means by 1–3 %).
+    /// Adds the sky's or the bottom's radiance through the water when nothing is hit.
+    fn column_gather(
+        &self,
+        col: &crate::optics::column::Column,
+        o: DVec3,
+        d: DVec3,
+        t_end: f64,
+        rng: &mut Sampler,
+    ) -> DVec3 {
+        let Some(m) = &self.medium else {
+            return self.column_segment(col, o, d, t_end, false);
+        };
+        let (u0, u1, u2, u3) = (rng.next(), rng.next(), rng.next(), rng.next());
+        let (s, beyond) = if t_end.is_finite() {
+            (t_end, DVec3::ZERO)
+        } else {
+            let sb = col.to_boundary(-o.z, d);
+            if !sb.is_finite() {
+                // Horizontal to infinity: the table's own value along it.
+                return self.column_segment(col, o, d, t_end, false);
+            }
+            (sb, self.tr_seg(o, d, sb) * col.boundary(d))
+        };
+        let Some((a, b)) = m.interval(o, d, 0.0, s) else {
+            return beyond;
+        };
+        let seg = SunSeg::new(m.sigma_t, a, b);
+        let c = ((u0 * 3.0) as usize).min(2);
+        let t = sample_trunc_exp_with(seg.k[c], a, b, u1, seg.em1[c]);
+        let pdf = seg.pdf(t);
+        if !(pdf > 0.0 && pdf.is_finite() && t >= a && t <= b) {
+            return beyond;
+        }
+        let x = o + t * d;
+        let (w, _) = m.phase.sample(d, u2, u3);
+        let lw = col.radiance(-x.z, w, true);
+        let sb = col.to_boundary(-x.z, w);
+        let lb = if sb.is_finite() {
+            tr(m.sigma_t, sb) * col.boundary(w)
+        } else {
+            DVec3::ZERO
+        };
+        // Phase sampled exactly: its value over its density is 1.
+        m.sigma_s * tr(m.sigma_t, t - a) * (lw + lb) / pdf + beyond
     }
 
     /// Next-event estimate of the light reflected at surface hit `h` (of albedo `albedo`,
