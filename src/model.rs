@@ -1104,15 +1104,18 @@ impl Model {
         })
     }
 
-    /// Whether the native renderer lights this scene with the water column, and why.
-    pub fn daylight_choice(&self) -> (bool, String) {
-        match (self.render.daylight, self.column_input()) {
-            (Daylight::Traced, _) => (
-                false,
+    /// The column the native renderer lights this scene with (`None`: daylight is traced), and
+    /// why.
+    pub fn daylight_choice(&self) -> (Option<crate::optics::column::ColumnInput>, String) {
+        if self.render.daylight == Daylight::Traced {
+            return (
+                None,
                 "traced (render.daylight = \"traced\"): random walks through the water".into(),
-            ),
-            (_, Ok(_)) => (
-                true,
+            );
+        }
+        match self.column_input() {
+            Ok(input) => (
+                Some(input),
                 format!(
                     "column{}: daylight from the plane-parallel water column solved once \
                      (docs/column.md); the scene traces only its own geometry, strobes and the \
@@ -1124,7 +1127,7 @@ impl Model {
                     }
                 ),
             ),
-            (_, Err(why)) => (false, format!("traced: the column does not apply ({why})")),
+            Err(why) => (None, format!("traced: the column does not apply ({why})")),
         }
     }
 }

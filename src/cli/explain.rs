@@ -288,8 +288,8 @@ pub fn explain(m: &Model) -> String {
     // Daylight in the native renderer: the water column, or traced, and why.
     let (column, why) = m.daylight_choice();
     let _ = writeln!(s, "daylight (native): {why}");
-    if column && let Ok(input) = m.column_input() {
-        match crate::optics::column::solve(&input) {
+    if let Some(input) = &column {
+        match crate::optics::column::solve(input) {
             Ok(col) => {
                 for line in crate::column::summary(&col) {
                     let _ = writeln!(s, "{line}");
@@ -300,7 +300,7 @@ pub fn explain(m: &Model) -> String {
             }
         }
     }
-    if !column && m.water.is_some() {
+    if column.is_none() && m.water.is_some() {
         // What the bounce limit leaves out of the traced daylight (see docs/column.md).
         let _ = writeln!(
             s,

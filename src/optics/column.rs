@@ -242,14 +242,6 @@ fn bin_solid_angle(i: usize) -> f64 {
     (mu_edge(i + 1) - mu_edge(i)) * (PI / NPHI as f64) * 2.0
 }
 
-/// The weight window's attenuation, 1/m: σa, a lower bound of the diffuse attenuation
-/// (K_d ≈ σa/μ̄ + b_b with μ̄ ≤ 1), so that the window never splits faster than the light
-/// fades (an overestimate multiplies the photons exponentially with depth; measured: 5–30×
-/// slower on the 33 m sky-lit scenes); the population thins by `e^(−(K_d − σa) z)` instead.
-fn k_estimate(sa: f64) -> f64 {
-    sa
-}
-
 impl ColumnInput {
     fn check(&self) -> Result<(), ColumnError> {
         if !(self.depth.is_finite() && self.depth > 0.0) {
@@ -486,7 +478,11 @@ fn run_batch(input: &ColumnInput, c: usize, batch: usize, n: usize, az: DVec3) -
     let st = sa + ss;
     let albedo_ss = if st > 0.0 { ss / st } else { 0.0 };
     let a_bottom = input.bottom_albedo[c];
-    let k = k_estimate(sa).clamp(0.0, 40.0 / h);
+    // The weight window's attenuation: σa, a lower bound of the diffuse attenuation
+    // (K_d ≈ σa/μ̄ + b_b with μ̄ ≤ 1), so that the window never splits faster than the light
+    // fades (an overestimate multiplies the photons exponentially with depth; measured: 5–30×
+    // slower on the 33 m sky-lit scenes); the population thins by `e^(−(K_d − σa) z)` instead.
+    let k = sa.clamp(0.0, 40.0 / h);
     let target = |depth: f64| (-k * depth).exp();
     // Horizontal fluxes of the two sources and the photons each gets.
     let f_sun = input.sun.map_or(0.0, |s| s.irradiance[c] * -s.dir.z);

@@ -380,7 +380,7 @@ impl<'a> Integrator<'a> {
                     // Sun-aware distance sampling of the sunlight scattered along [a, b].
                     // With a column, only the camera ray traces the sun's first scattering.
                     let sun_rate = if day && (self.column.is_none() || depth == 0) {
-                        self.sun_rate(m, d, b - a).map(|k| SunSeg::new(k, a, b))
+                        self.sun_rate(m, d, b - a).map(|k| TruncExp::new(k, a, b))
                     } else {
                         None
                     };
@@ -582,7 +582,7 @@ impl<'a> Integrator<'a> {
         let Some((a, b)) = m.interval(o, d, 0.0, s) else {
             return beyond;
         };
-        let seg = SunSeg::new(m.sigma_t, a, b);
+        let seg = TruncExp::new(m.sigma_t, a, b);
         let c = ((u0 * 3.0) as usize).min(2);
         let t = sample_trunc_exp_with(seg.k[c], a, b, u1, seg.em1[c]);
         let pdf = seg.pdf(t);
@@ -680,12 +680,12 @@ impl<'a> Integrator<'a> {
     }
 
     /// Sunlight scattered towards `o` along `[a, b]` of the ray, at a distance sampled by
-    /// [`SunSeg::pdf`] and MIS-weighted against free-flight sampling. Excludes the ray's `beta`.
+    /// [`TruncExp::pdf`] and MIS-weighted against free-flight sampling. Excludes the ray's `beta`.
     #[allow(clippy::too_many_arguments)]
     fn sun_inscatter(
         &self,
         m: &Medium,
-        k: &SunSeg,
+        k: &TruncExp,
         o: DVec3,
         d: DVec3,
         a: f64,
@@ -885,11 +885,11 @@ fn sample_trunc_exp_with(k: f64, a: f64, b: f64, u: f64, em1: f64) -> f64 {
     }
 }
 
-/// Sun-aware distance sampling on one medium segment `[a, b]`: the rates per channel
-/// ([`Integrator::sun_rate`]) and their truncated exponentials' normalisations, computed once
-/// per segment for the sampler and both densities.
+/// Truncated exponentials on one medium segment `[a, b]`, one rate per channel, with their
+/// normalisations computed once per segment for the sampler and the densities: sun-aware
+/// distance sampling ([`Integrator::sun_rate`]) and the column's gather (rates σt).
 #[derive(Debug, Clone, Copy)]
-struct SunSeg {
+struct TruncExp {
     k: DVec3,
     a: f64,
     b: f64,
@@ -897,10 +897,10 @@ struct SunSeg {
     em1: DVec3,
 }
 
-impl SunSeg {
-    fn new(k: DVec3, a: f64, b: f64) -> SunSeg {
+impl TruncExp {
+    fn new(k: DVec3, a: f64, b: f64) -> TruncExp {
         let len = b - a;
-        SunSeg {
+        TruncExp {
             k,
             a,
             b,
@@ -912,8 +912,8 @@ impl SunSeg {
         }
     }
 
-    /// Density of sun-aware distance sampling at `t`: a channel picked uniformly, so the mean
-    /// of the three channels' truncated exponentials.
+    /// Density at `t` with a channel picked uniformly: the mean of the three channels'
+    /// truncated exponentials.
     #[inline]
     fn pdf(&self, t: f64) -> f64 {
         let (k, a, b, e) = (self.k, self.a, self.b, self.em1);

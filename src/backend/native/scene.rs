@@ -44,17 +44,12 @@ impl Scene {
         } else {
             None
         };
-        let column = if model.daylight_choice().0 {
-            // `column_input` succeeded in the choice; a solve can still refuse odd input, and
-            // then the scene is traced (the choice is re-checked by `explain`).
-            model
-                .column_input()
-                .ok()
-                .and_then(|i| crate::optics::column::solve(&i).ok())
-                .map(Arc::new)
-        } else {
-            None
-        };
+        // A solve can still refuse odd input; then the scene is traced (`explain` says why).
+        let column = model
+            .daylight_choice()
+            .0
+            .and_then(|i| crate::optics::column::solve(&i).ok())
+            .map(Arc::new);
         Scene {
             bvh,
             caustics,
