@@ -212,21 +212,11 @@ fn read_colmap(
             .map(String::from)
             .collect()
     };
-    let cams = data("cameras.txt")
-        .iter()
-        .map(|l| {
-            let w: Vec<&str> = l.split(' ').collect();
-            let refrac = w.iter().position(|x| *x == "REFRAC");
-            let end = refrac.unwrap_or(w.len());
-            let params = w[4..end].iter().map(|x| x.parse().unwrap()).collect();
-            let r = refrac.map(|i| {
-                (
-                    w[i + 1].to_string(),
-                    w[i + 2..].iter().map(|x| x.parse().unwrap()).collect(),
-                )
-            });
-            (w[1].to_string(), params, r)
-        })
+    let text = std::fs::read_to_string(dir.join("cameras.txt")).unwrap();
+    let cams = read_cameras_text(&text)
+        .unwrap_or_else(|e| panic!("the fork's reader refuses cameras.txt: {e}\n{text}"))
+        .into_iter()
+        .map(|c| (c.model, c.params, c.refrac))
         .collect();
     let lines = data("images.txt");
     let images = lines
@@ -265,9 +255,232 @@ fn read_colmap(
     (cams, images, points)
 }
 
+/// One camera as the Refractive COLMAP fork (`colmap_underwater`) reads it.
+#[derive(Debug)]
+struct ForkCamera {
+    id: u64,
+    model: String,
+    width: i64,
+    height: i64,
+    params: Vec<f64>,
+    refrac: Option<(String, Vec<f64>)>,
+}
+
+/// A Rust port of the fork's `Reconstruction::ReadCamerasText`
+/// (src/colmap/scene/reconstruction.cc): each line trimmed (`StringTrim`: space, `\n`, `\r`,
+/// `\t`), empty and `#` lines skipped; the rest read with `std::getline(line_stream, item, ' ')`
+/// word by word: ID, MODEL, WIDTH, HEIGHT, exactly the model's number of parameters, then — if
+/// the stream is not at its end — the refraction model's name and every remaining word as its
+/// parameters, whose count must be the model's (`VerifyRefracParams`). An unknown camera or
+/// refraction model name throws there (`…DOES_NOT_EXIST_EXCEPTION`); here it is an `Err`.
+/// Numbers must be whole words (`std::stold` would also take a numeric prefix: stricter).
+fn read_cameras_text(text: &str) -> Result<Vec<ForkCamera>, String> {
+    /// `std::getline(stream, item, ' ')` on a `std::stringstream`: reads up to the next
+    /// single space (consumed) or the end (sets eof); at eof it fails and leaves `item` as it
+    /// was, as the C++ does.
+    struct Stream<'a> {
+        rest: &'a str,
+        eof: bool,
+    }
+    impl Stream<'_> {
+        fn getline(&mut self, item: &mut String) {
+            if self.eof {
+                return;
+            }
+            match self.rest.find(' ') {
+                Some(i) => {
+                    *item = self.rest[..i].to_string();
+                    self.rest = &self.rest[i + 1..];
+                }
+                None => {
+                    *item = self.rest.to_string();
+                    self.rest = "";
+                    self.eof = true;
+                }
+            }
+        }
+    }
+    // The fork's camera models (src/colmap/sensor/models.h): name → number of parameters.
+    let camera_params = |name: &str| -> Option<usize> {
+        Some(match name {
+            "SIMPLE_PINHOLE" => 3,
+            "PINHOLE" => 4,
+            "SIMPLE_RADIAL" => 4,
+            "RADIAL" => 5,
+            "OPENCV" => 8,
+            "OPENCV_FISHEYE" => 8,
+            "FULL_OPENCV" => 12,
+            "FOV" => 5,
+            "SIMPLE_RADIAL_FISHEYE" => 4,
+            "RADIAL_FISHEYE" => 5,
+            "THIN_PRISM_FISHEYE" => 12,
+            "METASHAPE_FISHEYE" => 8,
+            _ => return None,
+        })
+    };
+    // Its refraction models (src/colmap/sensor/models_refrac.h).
+    let refrac_params = |name: &str| -> Option<usize> {
+        match name {
+            "FLATPORT" | "DOMEPORT" => Some(8),
+            _ => None,
+        }
+    };
+    let stold = |s: &str| -> Result<f64, String> {
+        s.parse::<f64>()
+            .map_err(|_| format!("std::stold(\"{s}\") throws"))
+    };
+    let mut out = Vec::new();
+    for line in text.split('\n') {
+        let line = line.trim_matches([' ', '\n', '\r', '\t']);
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let mut s = Stream {
+            rest: line,
+            eof: false,
+        };
+        let mut item = String::new();
+        s.getline(&mut item);
+        let id: u64 = item
+            .parse()
+            .map_err(|_| format!("std::stoul(\"{item}\") throws"))?;
+        s.getline(&mut item);
+        let model = item.clone();
+        let n = camera_params(&model).ok_or(format!("camera model `{model}` does not exist"))?;
+        s.getline(&mut item);
+        let width: i64 = item
+            .parse()
+            .map_err(|_| format!("std::stoll(\"{item}\") throws"))?;
+        s.getline(&mut item);
+        let height: i64 = item
+            .parse()
+            .map_err(|_| format!("std::stoll(\"{item}\") throws"))?;
+        let mut params = Vec::with_capacity(n);
+        for _ in 0..n {
+            s.getline(&mut item);
+            params.push(stold(&item)?);
+        }
+        let more_params = !s.eof;
+        s.getline(&mut item);
+        let mut refrac = None;
+        if more_params {
+            let name = item.clone();
+            let m = refrac_params(&name)
+                .ok_or(format!("refractive camera model `{name}` does not exist"))?;
+            let mut rp = Vec::with_capacity(m);
+            while !s.eof {
+                s.getline(&mut item);
+                rp.push(stold(&item)?);
+            }
+            if rp.len() != m {
+                return Err(format!(
+                    "{name}: {} parameters, VerifyRefracParams wants {m}",
+                    rp.len()
+                ));
+            }
+            refrac = Some((name, rp));
+        }
+        out.push(ForkCamera {
+            id,
+            model,
+            width,
+            height,
+            params,
+            refrac,
+        });
+    }
+    Ok(out)
+}
+
+/// `colmap_refractive/cameras.txt` reads in the Refractive COLMAP fork: its reader (ported
+/// above) takes the word after the camera parameters as the port model, so the port follows
+/// them directly, and the port's eight parameters come back exactly: the normal (flat) or
+/// centre (dome), the distance or inner radius, the glass thickness, and the G-channel
+/// indices of air, glass and water. The header line is the fork's.
+#[test]
+fn refractive_cameras_txt_reads_in_the_fork_and_the_port_round_trips() {
+    for port in ["flat", "dome"] {
+        let mut model = load("calibration_flat.toml");
+        if port == "dome" {
+            let glass = model.cameras[0].port.glass().unwrap().clone();
+            model.cameras[0].port = poser::model::Port::Dome {
+                center: DVec3::new(0.003, -0.002, 0.004),
+                inner_radius: 0.06,
+                thickness: 0.008,
+                glass,
+            };
+        }
+        let truth = poser::truth::compute(&model).unwrap();
+        let d = tempfile::tempdir().unwrap();
+        poser::truth::write(&model, d.path()).unwrap();
+        let text = std::fs::read_to_string(d.path().join("colmap_refractive/cameras.txt")).unwrap();
+        assert!(
+            text.lines().any(|l| l
+                == "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[] OPTIONAL[REFRAC_MODEL REFRAC_PARAMS[]]"),
+            "{text}"
+        );
+        assert!(text.contains("Pixel convention: COLMAP's"), "{text}");
+        let cams = read_cameras_text(&text).unwrap_or_else(|e| panic!("{port}: {e}\n{text}"));
+        assert_eq!(cams.len(), truth.cameras.len());
+        let (c, t) = (&cams[0], &truth.cameras[0]);
+        assert_eq!(c.id, 1);
+        assert_eq!(c.model, "PINHOLE");
+        assert_eq!((c.width, c.height), (t.width as i64, t.height as i64));
+        assert_eq!(c.params, vec![t.fx, t.fy, t.cx, t.cy]);
+        let (name, rp) = c.refrac.as_ref().expect("the port was not read");
+        let glass = t.ior_glass.expect("a glass port")[1];
+        let want = match &t.port {
+            poser::model::Port::Flat {
+                normal,
+                distance,
+                thickness,
+                ..
+            } => {
+                assert_eq!(name, "FLATPORT");
+                [normal.x, normal.y, normal.z, *distance, *thickness]
+            }
+            poser::model::Port::Dome {
+                center,
+                inner_radius,
+                thickness,
+                ..
+            } => {
+                assert_eq!(name, "DOMEPORT");
+                [center.x, center.y, center.z, *inner_radius, *thickness]
+            }
+            p => panic!("{port}: unexpected port {p:?}"),
+        };
+        let mut want = want.to_vec();
+        want.extend([t.ior_air[1], glass, t.ior_water[1]]);
+        assert_eq!(rp, &want, "{port}: the port parameters do not round-trip");
+        // The upstream export reads in the same reader, without a port.
+        let up = std::fs::read_to_string(d.path().join("colmap/cameras.txt")).unwrap();
+        let up = read_cameras_text(&up).unwrap();
+        assert!(up.iter().all(|c| c.refrac.is_none()));
+    }
+}
+
+/// The ported reader refuses what the fork refuses: an unknown port name where the port model
+/// stands (the old `… REFRAC FLATPORT …` line) and a wrong number of port parameters.
+#[test]
+fn the_ported_fork_reader_refuses_what_the_fork_refuses() {
+    let base = "1 PINHOLE 10 8 5 5 5 4";
+    assert!(read_cameras_text(base).unwrap()[0].refrac.is_none());
+    let e = read_cameras_text(&format!(
+        "{base} REFRAC FLATPORT 0 0 1 0.01 0.005 1 1.5 1.33"
+    ))
+    .unwrap_err();
+    assert!(e.contains("`REFRAC` does not exist"), "{e}");
+    assert!(read_cameras_text(&format!("{base} FLATPORT 0 0 1 0.01 0.005 1 1.5")).is_err());
+    assert!(read_cameras_text("1 PINHOLE 10 8 5  5 5 4").is_err());
+    let ok =
+        read_cameras_text(&format!("{base} DOMEPORT 0 0 0 0.05 0.005 1 1.5 1.33\r\n")).unwrap();
+    assert_eq!(ok[0].refrac.as_ref().unwrap().1[3], 0.05);
+}
+
 /// `colmap_refractive/` is Refractive COLMAP's format: every observation, traced back through
 /// the written camera and port by that format's own ray model, passes through its 3-D point;
-/// for a flat and a decentred dome port. `colmap/` (upstream COLMAP) has no `REFRAC` token,
+/// for a flat and a decentred dome port. `colmap/` (upstream COLMAP) has no port model,
 /// and its port-less camera misses the same observations by pixels.
 #[test]
 fn refractive_colmap_model_reprojects_every_observation() {

@@ -6,7 +6,7 @@
 //! | `colmap/cameras.txt` | one camera per line: PINHOLE, OPENCV, FULL_OPENCV or OPENCV_FISHEYE; the port in a comment (upstream COLMAP has no port) |
 //! | `colmap/images.txt` | true `camera_from_world` poses and the refracted target observations |
 //! | `colmap/points3D.txt` | every observed target point with its track |
-//! | `colmap_refractive/*` | the same, with `REFRAC FLATPORT …` / `REFRAC DOMEPORT …` after each camera's parameters |
+//! | `colmap_refractive/*` | the same, with `FLATPORT …` / `DOMEPORT …` after each camera's parameters |
 //!
 //! Pixel convention: COLMAP's, the same as poser's — the top-left pixel's centre is at
 //! (0.5, 0.5). The observations are refracted, so the upstream model, which has no port,
@@ -14,12 +14,15 @@
 //! model reprojects them exactly.
 //!
 //! Refractive COLMAP (She, Seegräber, Nakath & Köser, *Refractive COLMAP: Refractive
-//! Structure-from-Motion Revisited*, IROS 2024) writes a refractive camera as
-//! `ID MODEL W H PARAMS… REFRAC FLATPORT Nx Ny Nz int_dist int_thick na ng nw` (or `DOMEPORT
-//! Cx Cy Cz int_radius int_thick na ng nw`), in the camera frame, metres: the same geometry as
-//! poser's flat and dome ports (`docs/projection.md`). Cylinder ports have no Refractive COLMAP
-//! model; such a camera is written without `REFRAC` and with a comment saying so. The indices
-//! are the G channel's (550 nm).
+//! Structure-from-Motion Revisited*, IROS 2024; the `colmap_underwater` fork) writes and reads
+//! a refractive camera as `ID MODEL W H PARAMS… FLATPORT Nx Ny Nz int_dist int_thick na ng nw`
+//! (or `DOMEPORT Cx Cy Cz int_radius int_thick na ng nw`), single spaces, in the camera frame,
+//! metres: the same geometry as poser's flat and dome ports (`docs/projection.md`). Its
+//! `Reconstruction::ReadCamerasText` reads exactly the camera model's number of parameters,
+//! then takes the next word as the refraction model's name and every remaining word as its
+//! parameters (eight for both ports), so nothing may stand between the two. Cylinder ports have
+//! no Refractive COLMAP model; such a camera is written without a port and with a comment
+//! saying so. The indices are the G channel's (550 nm).
 
 use super::{CameraTruth, Truth, lens_name, port_params};
 use crate::model::{LensModel, Model, Port};
@@ -154,8 +157,9 @@ fn cameras_txt(truth: &Truth, refractive: bool) -> String {
     let mut cams = String::from(
         "# Camera list with one line of data per camera:\n#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]",
     );
+    // The fork's own header line (`Reconstruction::WriteCamerasText`).
     cams.push_str(if refractive {
-        " [REFRAC MODEL PARAMS[]]\n"
+        " OPTIONAL[REFRAC_MODEL REFRAC_PARAMS[]]\n"
     } else {
         "\n"
     });
@@ -183,7 +187,7 @@ fn cameras_txt(truth: &Truth, refractive: bool) -> String {
         );
         match refractive_port(c) {
             Ok(Some((model, pp))) if refractive => {
-                let _ = write!(line, " REFRAC {model} {}", join(&pp));
+                let _ = write!(line, " {model} {}", join(&pp));
             }
             Ok(Some((model, pp))) => {
                 let _ = writeln!(
