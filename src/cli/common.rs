@@ -68,3 +68,15 @@ pub fn apply_scale(model: Model, scale: Option<f64>) -> Result<Model, CliError> 
             .map_err(|e| CliError::Usage(format!("--{e}"))),
     }
 }
+
+/// `--samples N`: samples per pixel, at least one (a zero is refused, as `render.samples = 0`
+/// is in a scene, instead of silently rendering one).
+pub fn parse_samples(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(0) => Err("at least one sample per pixel is needed\n  help: use e.g. `--samples 64`, or leave it out to use the scene's `render.samples`".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!(
+            "`{s}` is not a whole number of samples per pixel\n  help: use e.g. `--samples 64`"
+        )),
+    }
+}

@@ -66,7 +66,7 @@ pub struct Args {
     #[arg(long, default_value = "native")]
     pub backend: Backend,
     /// Images mode: samples per pixel of the render.
-    #[arg(long)]
+    #[arg(long, value_parser = super::common::parse_samples)]
     pub samples: Option<u32>,
     /// Images mode: render at this fraction of the cameras' resolution.
     #[arg(long)]

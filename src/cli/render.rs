@@ -13,7 +13,7 @@ pub struct Args {
     #[arg(short, long)]
     pub out: PathBuf,
     /// Override samples per pixel.
-    #[arg(long)]
+    #[arg(long, value_parser = super::common::parse_samples)]
     pub samples: Option<u32>,
     /// Render only these pose indices (e.g. `0,3,5`).
     #[arg(long, value_delimiter = ',')]

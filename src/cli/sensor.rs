@@ -77,7 +77,7 @@ pub struct Args {
     #[arg(long)]
     pub variance: Option<PathBuf>,
     /// Samples per pixel of the render (for the noise report's hint).
-    #[arg(long)]
+    #[arg(long, value_parser = super::common::parse_samples)]
     pub samples: Option<u32>,
 }
 

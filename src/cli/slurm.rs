@@ -40,7 +40,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "native")]
     pub backend: Backend,
     /// Override samples per pixel.
-    #[arg(long)]
+    #[arg(long, value_parser = super::common::parse_samples)]
     pub samples: Option<u32>,
     /// Render at this fraction of the cameras' resolution.
     #[arg(long)]

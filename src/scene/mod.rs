@@ -83,7 +83,33 @@ impl Failure {
 
 /// Load, validate and resolve a scene file with `--set KEY=VALUE` overrides.
 pub fn load(path: &Path, sets: &[String]) -> Result<Loaded, Failure> {
-    let mut sources = source::Sources::default();
+    load_sources(path, sets, source::Sources::default())
+}
+
+/// [`load`] for a scene unpacked from a pack: every file it names (includes, meshes, point
+/// lists) must be inside `root` — a relative path without `..` that no link leads out of —
+/// or it is not read and error `E0012` names it. `root` must exist.
+pub fn load_within(path: &Path, sets: &[String], root: &Path) -> Result<Loaded, Failure> {
+    let root = root.canonicalize().map_err(|e| Failure {
+        diagnostics: vec![{
+            let mut d = Diagnostic::error("E0012", format!("{}: {e}", root.display()))
+                .help("unpack the pack again into a new folder");
+            d.finish(&source::Sources::default());
+            d
+        }],
+    })?;
+    let sources = source::Sources {
+        root: Some(root),
+        ..Default::default()
+    };
+    load_sources(path, sets, sources)
+}
+
+fn load_sources(
+    path: &Path,
+    sets: &[String],
+    mut sources: source::Sources,
+) -> Result<Loaded, Failure> {
     let mut diags = Vec::new();
     let root = source::load_file(path, &mut sources, &mut diags, &mut Vec::new(), None);
     let Some(mut root) = root else {

@@ -115,13 +115,39 @@ pub fn parse(text: &str) -> Result<Vec<FilePoint>, (usize, usize, String)> {
 /// the file, line and column.
 pub fn read(cx: &mut Cx, path: &Path, span: Span) -> Vec<FilePoint> {
     let shown = super::source::display(path);
-    let text = match std::fs::read(path) {
-        Ok(b) => String::from_utf8_lossy(&b).into_owned(),
-        Err(e) => {
+    // Read the front end's one way: a regular file, at most 16 MiB (10 000 points are far
+    // less), never a device or a named pipe.
+    let text = match super::source::read_capped(path, super::source::MAX_SCENE_BYTES) {
+        Ok(b) => match super::source::not_text(&b) {
+            None => String::from_utf8(b).expect("checked by not_text"),
+            Some((at, _)) => {
+                let line = 1 + b[..at].iter().filter(|&&c| c == b'\n').count();
+                let col = 1 + at
+                    - b[..at]
+                        .iter()
+                        .rposition(|&c| c == b'\n')
+                        .map_or(0, |i| i + 1);
+                cx.push(
+                    Diagnostic::error("E0293", format!("`{shown}` is not a text file"))
+                        .label(span, format!("a NUL or non-UTF-8 byte at {shown}:{line}:{col}"))
+                        .help("a points file is UTF-8 text, one `id x y z` per line: check that `file` names it and not an image or other binary file"),
+                );
+                return vec![];
+            }
+        },
+        Err(r) => {
+            let help = match r {
+                super::source::Refusal::Unreadable(_) => {
+                    "give the file relative to this scene file, e.g. `file = \"gcps.txt\"`"
+                }
+                _ => {
+                    "a points file is a regular text file of at most 16 MiB; folders, devices and named pipes are never read"
+                }
+            };
             cx.push(
                 Diagnostic::error("E0293", format!("cannot read the points file `{shown}`"))
-                    .label(span, e.to_string())
-                    .help("give the file relative to this scene file, e.g. `file = \"gcps.txt\"`"),
+                    .label(span, r.reason())
+                    .help(help),
             );
             return vec![];
         }

@@ -10,12 +10,24 @@ use toml::de::{DeTable, DeValue};
 /// Name of the pseudo-file holding the command-line overrides.
 pub const COMMAND_LINE: &str = "<command line>";
 
+/// Largest scene or included file the front end reads: 16 MiB. A scene is text that names its
+/// meshes and point lists; anything larger is not a scene, and reading it would only cost
+/// memory (the parsed tree takes tens of times the text).
+pub const MAX_SCENE_BYTES: u64 = 16 << 20;
+
+/// Largest other file a scene names (a glTF mesh, a point list): 256 MiB.
+pub const MAX_ASSET_BYTES: u64 = 256 << 20;
+
 /// All source texts a scene was read from (the scene, its includes, the command line).
 #[derive(Default)]
 pub struct Sources {
     pub files: Vec<(String, String)>,
     /// File-system path of each file (None for the command line).
     pub paths: Vec<Option<PathBuf>>,
+    /// When set (the canonical folder of an unpacked pack's scene), every file the scene names
+    /// must be inside it: a relative path without `..` that does not leave it through a link
+    /// ([`outside_root`]).
+    pub root: Option<PathBuf>,
 }
 
 impl Sources {
@@ -31,6 +43,177 @@ impl Sources {
             .and_then(|p| p.as_ref())
             .map(|p| p.parent().map(Path::to_path_buf).unwrap_or_default())
     }
+}
+
+/// Why a file a scene names was not read ([`read_capped`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Refusal {
+    /// It could not be looked at or opened (missing, permission denied, …): the reason.
+    Unreadable(String),
+    /// It is not a regular file: what it is ("a folder", "a named pipe (FIFO)", …).
+    NotAFile(&'static str),
+    /// It holds more than the cap allows.
+    TooLarge { bytes: u64, cap: u64 },
+}
+
+impl Refusal {
+    /// The reason, to follow "cannot read `file`: ".
+    pub fn reason(&self) -> String {
+        match self {
+            Refusal::Unreadable(r) => r.clone(),
+            Refusal::NotAFile(what) => format!("it is {what}, not a regular file"),
+            Refusal::TooLarge { bytes, cap } => format!(
+                "it is {}, more than the {} a scene may name",
+                size_text(*bytes),
+                size_text(*cap)
+            ),
+        }
+    }
+}
+
+/// `1.5 MiB`-style size.
+pub fn size_text(bytes: u64) -> String {
+    if bytes >= 1 << 30 {
+        format!("{:.1} GiB", bytes as f64 / (1u64 << 30) as f64)
+    } else if bytes >= 1 << 20 {
+        format!("{:.1} MiB", bytes as f64 / (1u64 << 20) as f64)
+    } else if bytes >= 1 << 10 {
+        format!("{:.1} KiB", bytes as f64 / 1024.0)
+    } else {
+        format!("{bytes} bytes")
+    }
+}
+
+/// What a non-regular file is.
+fn file_kind(t: std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a named pipe (FIFO)";
+        }
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_dir() {
+        "a folder"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// Read a file a scene names — the scene itself, an include, a mesh, a point list — the one way
+/// the front end reads files: only a regular file (a folder, device, socket or named pipe is
+/// refused from its metadata, before it is opened), opened non-blocking so that a named pipe
+/// swapped in meanwhile cannot block, and of at most `cap` bytes (checked on the metadata and
+/// again while reading, so a file that grows cannot exceed it).
+pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>, Refusal> {
+    use std::io::Read;
+    let meta = std::fs::metadata(path).map_err(|e| Refusal::Unreadable(io_reason(&e)))?;
+    if !meta.is_file() {
+        return Err(Refusal::NotAFile(file_kind(meta.file_type())));
+    }
+    if meta.len() > cap {
+        return Err(Refusal::TooLarge {
+            bytes: meta.len(),
+            cap,
+        });
+    }
+    let mut opts = std::fs::OpenOptions::new();
+    opts.read(true);
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        opts.custom_flags(libc::O_NONBLOCK);
+    }
+    let f = opts
+        .open(path)
+        .map_err(|e| Refusal::Unreadable(io_reason(&e)))?;
+    let meta = f
+        .metadata()
+        .map_err(|e| Refusal::Unreadable(io_reason(&e)))?;
+    if !meta.is_file() {
+        return Err(Refusal::NotAFile(file_kind(meta.file_type())));
+    }
+    let mut bytes = Vec::with_capacity(meta.len().min(cap) as usize);
+    f.take(cap + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Refusal::Unreadable(io_reason(&e)))?;
+    if bytes.len() as u64 > cap {
+        return Err(Refusal::TooLarge {
+            bytes: bytes.len() as u64,
+            cap,
+        });
+    }
+    Ok(bytes)
+}
+
+/// Where a file that should be text is not: the byte offset of its first NUL or invalid UTF-8
+/// byte, and that byte. `None` for text.
+pub fn not_text(bytes: &[u8]) -> Option<(usize, u8)> {
+    let nul = bytes.iter().position(|&b| b == 0);
+    let bad = std::str::from_utf8(bytes).err().map(|e| e.valid_up_to());
+    let at = match (nul, bad) {
+        (Some(a), Some(b)) => a.min(b),
+        (a, b) => a.or(b)?,
+    };
+    Some((at, bytes[at]))
+}
+
+/// The text before byte `at` (valid UTF-8 by [`not_text`]) with every control character but
+/// tab and newline replaced by `?` bytes of the same length, so that spans keep their offsets
+/// and a diagnostic quoting it cannot send escape sequences to the terminal.
+pub fn harmless_prefix(bytes: &[u8], at: usize) -> String {
+    let text = std::str::from_utf8(&bytes[..at]).unwrap_or("");
+    text.chars()
+        .map(|c| {
+            let bidi = matches!(c, '\u{200E}' | '\u{200F}' | '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}');
+            if (c.is_control() && c != '\n' && c != '\t') || bidi {
+                "?".repeat(c.len_utf8())
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
+}
+
+/// Inside a pack ([`Sources::root`] set), why `rel` — named in a scene file, `joined` once
+/// resolved against that file's folder — is not allowed: absolute, with `..`, or leaving the
+/// pack's folder through a link. `None` when it is allowed or there is no root.
+pub fn outside_root(sources: &Sources, rel: &str, joined: &Path) -> Option<String> {
+    let root = sources.root.as_ref()?;
+    let p = Path::new(rel);
+    if p.has_root()
+        || p.is_absolute()
+        || rel.starts_with('\\')
+        || matches!(p.components().next(), Some(std::path::Component::Prefix(_)))
+    {
+        return Some("an absolute path".into());
+    }
+    if p.components()
+        .any(|c| matches!(c, std::path::Component::ParentDir))
+        || rel.split(['/', '\\']).any(|c| c == "..")
+    {
+        return Some("a path with `..`".into());
+    }
+    match joined.canonicalize() {
+        Ok(c) if !c.starts_with(root) => Some("a link that leads out of the pack".into()),
+        _ => None,
+    }
+}
+
+/// The diagnostic of a file named at `span` that is outside the pack ([`outside_root`]).
+pub fn outside_diag(rel: &str, why: &str, span: Span) -> Diagnostic {
+    Diagnostic::error("E0012", format!("`{rel}` is outside the pack"))
+        .label(span, format!("{why}: a pack's scene reads only its own files"))
+        .help("name files packed with the scene by relative paths below its folder (`poser pack` does this for every file the scene reads)")
 }
 
 #[derive(Debug, Clone)]
@@ -258,44 +441,70 @@ pub fn load_file(
         ));
         return None;
     }
-    let text = match std::fs::read(path) {
-        Ok(bytes) => match String::from_utf8(bytes) {
-            Ok(t) => t,
-            Err(e) => {
-                let at = e.utf8_error().valid_up_to();
-                let lossy = String::from_utf8_lossy(e.as_bytes()).to_string();
-                let file = sources.add(display(path), lossy, Some(path.to_path_buf()));
-                let bad = Span {
-                    file,
-                    start: at,
-                    end: at + '\u{FFFD}'.len_utf8(),
-                };
-                let mut d =
-                    Diagnostic::error("E0010", format!("`{}` is not UTF-8 text", display(path)))
-                        .label(bad, "invalid UTF-8 byte here")
-                        .help("save the scene file as UTF-8");
-                if let Some(s) = included_from {
-                    d = d.also(s, "included here");
-                }
-                diags.push(d);
-                return None;
-            }
-        },
-        Err(e) => {
+    // Inside a pack, the scene file itself is in the pack's folder (its includes are checked
+    // where they are named, below).
+    if included_from.is_none()
+        && let (Ok(c), Some(root)) = (path.canonicalize(), sources.root.as_ref())
+        && !c.starts_with(root)
+    {
+        diags.push(
+            Diagnostic::error("E0012", format!("`{}` is outside the pack", display(path)))
+                .help("give the scene file inside the unpacked pack"),
+        );
+        return None;
+    }
+    let bytes = match read_capped(path, MAX_SCENE_BYTES) {
+        Ok(b) => b,
+        Err(r) => {
             let mut d = Diagnostic::error(
                 "E0010",
-                format!("cannot read `{}`: {}", display(path), io_reason(&e)),
+                format!("cannot read `{}`: {}", display(path), r.reason()),
             );
-            d = match included_from {
-                Some(s) => d.label(s, "included here").help(
-                    "include paths are relative to the file that includes them; check the spelling",
+            let help = match &r {
+                Refusal::Unreadable(_) => None,
+                Refusal::NotAFile(_) => Some(
+                    "a scene and its includes are TOML text files; folders, devices and named pipes are never read",
                 ),
-                None => d.help("check the path of the scene file"),
+                Refusal::TooLarge { .. } => Some(
+                    "a scene file is text of at most 16 MiB: keep large data in the meshes and point lists it names",
+                ),
+            };
+            d = match included_from {
+                Some(s) => d.label(s, "included here").help(help.unwrap_or(
+                    "include paths are relative to the file that includes them; check the spelling",
+                )),
+                None => d.help(help.unwrap_or("check the path of the scene file")),
             };
             diags.push(d);
             return None;
         }
     };
+    if let Some((at, byte)) = not_text(&bytes) {
+        // One diagnostic that quotes none of the file's bytes: only the text before the first
+        // bad byte, made harmless, and a replacement character where it is.
+        let mut shown = harmless_prefix(&bytes, at);
+        shown.push('\u{FFFD}');
+        let file = sources.add(display(path), shown, Some(path.to_path_buf()));
+        let bad = Span {
+            file,
+            start: at,
+            end: at + '\u{FFFD}'.len_utf8(),
+        };
+        let what = if byte == 0 {
+            "a NUL byte".to_string()
+        } else {
+            format!("byte 0x{byte:02x}, not UTF-8")
+        };
+        let mut d = Diagnostic::error("E0010", format!("`{}` is not a text file", display(path)))
+            .label(bad, format!("{what} here"))
+            .help("a scene is UTF-8 TOML text: check that the path names a scene and not an image or other binary file, or save the file as UTF-8");
+        if let Some(s) = included_from {
+            d = d.also(s, "included here");
+        }
+        diags.push(d);
+        return None;
+    }
+    let text = String::from_utf8(bytes).expect("checked by not_text");
     let file = sources.add(display(path), text, Some(path.to_path_buf()));
     let text = sources.files[file].1.clone();
     let mut node = parse_text(&text, file, diags)?;
@@ -331,6 +540,10 @@ pub fn load_file(
             continue;
         };
         let p = dir.join(rel);
+        if let Some(why) = outside_root(sources, rel, &p) {
+            diags.push(outside_diag(rel, &why, item.span));
+            continue;
+        }
         if let Some(n) = load_file(&p, sources, diags, stack, Some(item.span)) {
             match &mut merged {
                 Some(m) => merge(m, n),

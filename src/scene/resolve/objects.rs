@@ -210,8 +210,14 @@ fn boulders(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
 }
 
 /// The mesh file `rel`, relative to the scene file that names it: it must be a readable glTF
-/// file inside the scene's folder. Returns its canonical path (the joined path after an error).
+/// file inside the scene's folder, a regular file of at most
+/// [`MAX_ASSET_BYTES`](crate::scene::source::MAX_ASSET_BYTES) read the front end's one way
+/// ([`read_capped`]), and so must every file a `.gltf` refers to. Returns its canonical path
+/// (the joined path after an error).
 fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &Path) -> String {
+    use crate::scene::source::{
+        MAX_ASSET_BYTES, Refusal, display, outside_diag, outside_root, read_capped,
+    };
     if rel.is_empty() {
         return String::new();
     }
@@ -219,12 +225,16 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
         .dir_of(span.file)
         .unwrap_or_else(|| scene.parent().map(Path::to_path_buf).unwrap_or_default());
     let p = dir.join(rel);
-    match std::fs::metadata(&p) {
-        Ok(m) if m.is_file() => {
-            let ext = p
-                .extension()
-                .map(|e| e.to_string_lossy().to_lowercase())
-                .unwrap_or_default();
+    if let Some(why) = outside_root(sources, rel, &p) {
+        cx.push(outside_diag(rel, &why, span));
+        return display(&p);
+    }
+    let ext = p
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    match read_capped(&p, MAX_ASSET_BYTES) {
+        Ok(bytes) => {
             if ext != "glb" && ext != "gltf" {
                 cx.push(
                     Diagnostic::error("E0285", "meshes must be glTF files")
@@ -232,19 +242,15 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
                         .help("convert the mesh to glTF (`.glb` or `.gltf`), e.g. with Blender's exporter"),
                 );
             } else {
-                match std::fs::read(&p).map_err(|e| e.to_string()).and_then(|b| {
-                    gltf::Gltf::from_slice(&b)
-                        .map(|_| ())
-                        .map_err(|e| e.to_string())
-                }) {
+                let parsed = gltf::Gltf::from_slice(&bytes)
+                    .map_err(|e| e.to_string())
+                    .and_then(|g| gltf_side_files(&g, p.parent().unwrap_or(Path::new(".")), sources));
+                match parsed {
                     Ok(()) => cx.files.push(p.clone()),
                     Err(e) => cx.push(
                         Diagnostic::error(
                             "E0287",
-                            format!(
-                                "`{}` is not a readable glTF file",
-                                crate::scene::source::display(&p)
-                            ),
+                            format!("`{}` is not a readable glTF file", display(&p)),
                         )
                         .label(span, e)
                         .help("re-export the mesh as glTF 2.0 (`.glb`), e.g. from Blender"),
@@ -277,24 +283,20 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
             }
             return canon.to_string_lossy().to_string();
         }
-        Ok(_) => cx.push(
-            Diagnostic::error(
-                "E0284",
-                format!("`{}` is not a file", crate::scene::source::display(&p)),
-            )
-            .label(span, "a directory")
-            .help("give the path of the .glb/.gltf file itself"),
+        Err(Refusal::NotAFile(what)) => cx.push(
+            Diagnostic::error("E0284", format!("`{}` is not a file", display(&p)))
+                .label(span, what)
+                .help("give the path of the .glb/.gltf file itself; folders, devices and named pipes are never read"),
         ),
-        Err(_) => cx.push(
-            Diagnostic::error(
-                "E0284",
-                format!(
-                    "mesh file `{}` not found",
-                    crate::scene::source::display(&p)
-                ),
-            )
-            .label(span, "no such file")
-            .help("paths are relative to the scene file that names them"),
+        Err(r @ Refusal::TooLarge { .. }) => cx.push(
+            Diagnostic::error("E0284", format!("mesh file `{}` is too large", display(&p)))
+                .label(span, r.reason())
+                .help("decimate the mesh (e.g. Blender's Decimate modifier) and export it again as `.glb`"),
+        ),
+        Err(Refusal::Unreadable(why)) => cx.push(
+            Diagnostic::error("E0284", format!("mesh file `{}` not found", display(&p)))
+                .label(span, why)
+                .help("paths are relative to the scene file that names them"),
         ),
     }
     crate::scene::source::display(&p)
@@ -461,4 +463,71 @@ fn coral_colors(cx: &mut Cx, p: &mut Tab) -> Vec<crate::model::Rgb> {
         out.push([v[0], v[1], v[2]]);
     }
     out
+}
+
+/// Every file a `.gltf` refers to (buffers, images) must be a relative path to a regular file
+/// of at most [`MAX_ASSET_BYTES`](crate::scene::source::MAX_ASSET_BYTES) beside it, inside the
+/// pack when there is one: the mesh loader reads them later, and must never read a device, a
+/// named pipe or a file outside the scene.
+fn gltf_side_files(g: &gltf::Gltf, dir: &Path, sources: &Sources) -> Result<(), String> {
+    use crate::scene::source::{MAX_ASSET_BYTES, outside_root};
+    let uris = g
+        .buffers()
+        .filter_map(|b| match b.source() {
+            gltf::buffer::Source::Uri(u) => Some(u),
+            gltf::buffer::Source::Bin => None,
+        })
+        .chain(g.images().filter_map(|i| match i.source() {
+            gltf::image::Source::Uri { uri, .. } => Some(uri),
+            gltf::image::Source::View { .. } => None,
+        }));
+    for uri in uris {
+        if uri.starts_with("data:") {
+            continue;
+        }
+        let rel = percent_decoded(uri);
+        let path = Path::new(&rel);
+        if uri.contains(':') || path.is_absolute() || path.has_root() {
+            return Err(format!(
+                "refers to `{uri}`, which is not a path relative to the glTF file"
+            ));
+        }
+        let full = dir.join(path);
+        if let Some(why) = outside_root(sources, &rel, &full) {
+            return Err(format!("refers to `{uri}`: {why}, outside the pack"));
+        }
+        match std::fs::metadata(&full) {
+            Ok(m) if m.is_file() && m.len() <= MAX_ASSET_BYTES => {}
+            Ok(m) if m.is_file() => {
+                return Err(format!(
+                    "refers to `{uri}`, larger than {}",
+                    crate::scene::source::size_text(MAX_ASSET_BYTES)
+                ));
+            }
+            Ok(_) => return Err(format!("refers to `{uri}`, which is not a regular file")),
+            Err(_) => return Err(format!("refers to `{uri}`, which is missing")),
+        }
+    }
+    Ok(())
+}
+
+/// `%XX` escapes of a glTF URI decoded (as the glTF loader does); invalid escapes stay.
+fn percent_decoded(uri: &str) -> String {
+    let b = uri.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%'
+            && i + 2 < b.len()
+            && let Ok(v) =
+                u8::from_str_radix(std::str::from_utf8(&b[i + 1..i + 3]).unwrap_or("x"), 16)
+        {
+            out.push(v);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
 }

@@ -222,6 +222,10 @@ fn points_file(
         .dir_of(fspan.file)
         .unwrap_or_else(|| scene.parent().map(Path::to_path_buf).unwrap_or_default());
     let file = dir.join(&rel);
+    if let Some(why) = crate::scene::source::outside_root(sources, &rel, &file) {
+        cx.push(crate::scene::source::outside_diag(&rel, &why, fspan));
+        return vec![];
+    }
     let pts = crate::scene::points_file::read(cx, &file, fspan);
     if !pts.is_empty() {
         cx.files.push(file.clone());
