@@ -627,6 +627,10 @@ pub struct Diver {
     pub po2_bottom: f64,
     #[serde(default = "po2_deco_default")]
     pub po2_deco: f64,
+    /// Deepest equivalent narcotic depth a gas named by the planner may have, m (O₂ counted as
+    /// narcotic; default [`DEFAULT_END_LIMIT`]).
+    #[serde(default = "end_limit_default")]
+    pub end_limit: f64,
 }
 
 fn po2_bottom_default() -> f64 {
@@ -635,6 +639,13 @@ fn po2_bottom_default() -> f64 {
 fn po2_deco_default() -> f64 {
     1.6
 }
+fn end_limit_default() -> f64 {
+    DEFAULT_END_LIMIT
+}
+
+/// The END limit without `diver.end_limit`, m: 30 m, the customary narcosis limit of
+/// technical-diving agencies (GUE, TDI, IANTD).
+pub const DEFAULT_END_LIMIT: f64 = 30.0;
 
 /// What a cylinder is breathed for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]

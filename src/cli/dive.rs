@@ -1,6 +1,7 @@
 //! `poser dive`: dive profile, decompression, gas; Subsurface export.
 use super::{CliError, SceneArgs};
 use crate::plan::dive::{DiveReport, plan_dive};
+use crate::plan::gas::depth_limit;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -100,7 +101,10 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
             crate::model::CylinderRole::Bottom => "bottom".to_string(),
             crate::model::CylinderRole::Stage => "stage".to_string(),
             crate::model::CylinderRole::Deco => {
-                format!("deco from {:.0} m", t.switch_depth.unwrap_or(0.0))
+                format!(
+                    "deco from {:.0} m",
+                    depth_limit(t.switch_depth.unwrap_or(0.0))
+                )
             }
         };
         let mut flags = Vec::new();
@@ -118,7 +122,7 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
             "    '{}' {} ({role}, MOD {:.0} m): {:.1} l at {:.0} bar = {:.0} l, {:.0} l breathed, end {:.0} bar; max pO₂ {} → {}",
             u.name,
             u.gas,
-            u.mod_depth.max(0.0),
+            depth_limit(u.mod_depth),
             t.volume,
             t.fill,
             u.start,

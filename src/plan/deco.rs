@@ -76,6 +76,9 @@ pub struct Gas {
 }
 
 impl Gas {
+    /// Air: 20.9 % O₂, the rest narcotic N₂ (Subsurface's `O2_IN_AIR`, 209 ‰). poser's one
+    /// definition of air: the default diver, a cylinder without a gas and `gas = "air"` all
+    /// breathe this mix, so both spellings of the same dive give the same plan.
     pub const AIR: Gas = Gas { o2: 0.209, he: 0.0 };
     pub fn n2(&self) -> f64 {
         (1.0 - self.o2 - self.he).max(0.0)
@@ -88,6 +91,18 @@ impl Gas {
     /// Maximum operating depth for a pO₂ limit (bar), given the environment.
     pub fn mod_depth(&self, env: &Environment, po2_max: f64) -> f64 {
         env.depth_at(po2_max / self.o2)
+    }
+    /// Fraction of the mix that is narcotic: N₂ and O₂ (everything but He). poser counts O₂
+    /// as narcotic, as Subsurface's planner does by default and as GUE, TDI and IANTD teach:
+    /// O₂ is at least as narcotic as N₂ by its lipid solubility, and counting it asks for
+    /// more helium, never less — the conservative side.
+    pub fn narcotic(&self) -> f64 {
+        (1.0 - self.he).max(0.0)
+    }
+    /// Equivalent narcotic depth at `depth` m: the depth at which air is as narcotic as this
+    /// gas is here (O₂ narcotic, see [`Gas::narcotic`]; air is all narcotic on that count), m.
+    pub fn end(&self, env: &Environment, depth: f64) -> f64 {
+        env.depth_at(env.pressure(depth) * self.narcotic()).max(0.0)
     }
 }
 

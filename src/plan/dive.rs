@@ -10,6 +10,7 @@
 //! | `gf_low` / `gf_high` | fraction | 0.30 / 0.75 (Subsurface's default) |
 //! | `reserve` | Pa (shown bar) | 50 bar in every cylinder (poser's rule) |
 //! | `po2_bottom` / `po2_deco` | bar | 1.4 / 1.6 (Subsurface) |
+//! | `end_limit` | m | 30 (equivalent narcotic depth, O₂ counted as narcotic) |
 //! | `salt_water` | — | true (1030 kg/m³ as Subsurface) |
 //!
 //! Gases as Subsurface's planner handles them: every cylinder keeps its own gas and contents.
@@ -28,7 +29,8 @@
 
 use super::deco::{AscentPlan, Environment, Gas, GradientFactors, Ndl, Stop, Tissues};
 use super::gas::{
-    self, CylinderUse, GasCheck, HYPOXIC, PROBLEM_SOLVING, SAC_FACTOR, Supply, Tank, gas_label,
+    self, BottomGas, CylinderUse, GasCheck, HYPOXIC, PROBLEM_SOLVING, SAC_FACTOR, Supply, Tank,
+    bottom_gas, depth_limit, gas_label, hypoxic_limit,
 };
 use crate::model::{CylinderRole, Model};
 use serde::Serialize;
@@ -54,6 +56,8 @@ pub struct DiveConfig {
     /// pO₂ limits of bottom/stage and of deco gases, bar.
     pub po2_bottom: f64,
     pub po2_deco: f64,
+    /// Deepest equivalent narcotic depth a named gas may have, m (O₂ counted as narcotic).
+    pub end_limit: f64,
     /// Surface interval between split dives, s.
     pub surface_interval: f64,
     /// Whether defaults were used because the scene has no diver.
@@ -73,6 +77,7 @@ impl DiveConfig {
                     ("diver.sac", d.sac),
                     ("diver.po2_bottom", d.po2_bottom),
                     ("diver.po2_deco", d.po2_deco),
+                    ("diver.end_limit", d.end_limit),
                 ] {
                     if !(v.is_finite() && v > 0.0) {
                         return Err(format!("{name} must be a positive number (got {v})"));
@@ -123,6 +128,7 @@ impl DiveConfig {
                     reserve_bar: d.reserve / 1e5,
                     po2_bottom: d.po2_bottom,
                     po2_deco: d.po2_deco,
+                    end_limit: d.end_limit,
                     surface_interval: 3600.0,
                     defaulted: false,
                 })
@@ -153,6 +159,7 @@ impl DiveConfig {
                     reserve_bar: DEFAULT_RESERVE_BAR,
                     po2_bottom: 1.4,
                     po2_deco: 1.6,
+                    end_limit: crate::model::DEFAULT_END_LIMIT,
                     surface_interval: 3600.0,
                     defaulted: true,
                 })
@@ -406,6 +413,8 @@ struct Breathing<'a> {
     switches: Vec<Switch>,
     reserve_reached_at: Option<f64>,
     empty_at: Option<f64>,
+    /// Cylinders left on the ascent at their reserve: never taken again on this dive.
+    exhausted: Vec<bool>,
 }
 
 impl Breathing<'_> {
@@ -452,6 +461,56 @@ impl Breathing<'_> {
         {
             self.switch_to(next, t, depth);
         }
+    }
+    /// On the ascent: before breathing `need` litres, move on from a cylinder that would drop
+    /// below its reserve — to the richest deco gas allowed at this depth that keeps its
+    /// reserve (when `deco`: the ascent breathes deco gases), else to the first bottom
+    /// cylinder (stages, then back gas) that keeps it. The cylinder left is marked exhausted.
+    /// Returns whether the diver moved; with no cylinder above its reserve the diver stays on
+    /// this one (and the verdict reports the reserve broken).
+    fn pick_ascent(&mut self, need: f64, t: f64, depth: f64, deco: bool) -> bool {
+        let c = self.current;
+        if self.left(c) - need >= self.cfg.tanks[c].reserve {
+            return false;
+        }
+        let tanks = &self.cfg.tanks;
+        let keeps = |i: usize| {
+            i != c && !self.exhausted[i] && self.left(i) - need * 1.0001 >= tanks[i].reserve
+        };
+        let richest_deco = (0..tanks.len())
+            .filter(|&i| {
+                deco && tanks[i].role == CylinderRole::Deco
+                    && tanks[i].switch_depth.is_some_and(|sw| sw + 1e-6 >= depth)
+                    && keeps(i)
+            })
+            .max_by(|&a, &b| tanks[a].gas.o2.total_cmp(&tanks[b].gas.o2));
+        let next = richest_deco.or_else(|| self.cfg.bottom_order().into_iter().find(|&i| keeps(i)));
+        match next {
+            Some(n) => {
+                self.exhausted[c] = true;
+                self.switch_to(n, t, depth);
+                true
+            }
+            None => false,
+        }
+    }
+    /// The ascent's deco gases without the cylinders left at their reserve.
+    fn deco_gases(&self) -> Vec<(Gas, f64)> {
+        self.cfg
+            .tanks
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !self.exhausted[*i])
+            .filter_map(|(_, t)| t.switch_depth.map(|d| (t.gas, d)))
+            .collect()
+    }
+    /// The deco cylinder (not left at its reserve) holding `gas`.
+    fn deco_tank(&self, gas: Gas) -> Option<usize> {
+        self.cfg
+            .tanks
+            .iter()
+            .enumerate()
+            .position(|(i, k)| !self.exhausted[i] && k.role == CylinderRole::Deco && k.gas == gas)
     }
     fn breathe(&mut self, litres: f64, t: f64, depth: f64) {
         let i = self.current;
@@ -511,6 +570,7 @@ pub fn simulate(
         }],
         reserve_reached_at: None,
         empty_at: None,
+        exhausted: vec![false; n_tanks],
     };
     b.note_po2(0.0);
     let mut deco_from: Option<f64> = None;
@@ -525,7 +585,14 @@ pub fn simulate(
         *next += every;
         let in_deco = tissues.in_deco();
         let mut probe = tissues.clone();
-        let asc = probe.ascend_with(depth, b.gas(), if in_deco { &plan } else { &direct }, t);
+        // The time to surface on the gases still there (not the cylinders left at their reserve).
+        let asc = if in_deco {
+            let mut left = plan.clone();
+            left.deco_gases = b.deco_gases();
+            probe.ascend_with(depth, b.gas(), &left, t)
+        } else {
+            probe.ascend_with(depth, b.gas(), &direct, t)
+        };
         let stop = asc.stops.first().copied();
         let pressures = b.pressures();
         samples.push(Sample {
@@ -547,18 +614,30 @@ pub fn simulate(
         });
     };
 
-    // Integrate in ≤ 1 s steps; `gas_at(t_mid)` picks the deco cylinder on the ascent.
-    #[allow(clippy::too_many_arguments)]
+    /// How a stretch of the profile is breathed: the bottom (stages to their reserve, then
+    /// the back gas), or one leg of the ascent (the planned gas changes; a cylinder at its
+    /// reserve left for the next gas, and — when the stops depend on the gas, `replan` — the
+    /// leg cut there so that the rest of the ascent is planned again on the gas breathed).
+    enum Leg<'s> {
+        Bottom,
+        Ascent {
+            planned: &'s dyn Fn(f64) -> Option<usize>,
+            deco: bool,
+            replan: bool,
+        },
+    }
+
+    // Integrate in ≤ 1 s steps. Returns where an ascent leg was cut (runtime s, depth m):
+    // there the diver moved to another gas and the ascent must be planned again.
     fn integrate(
         env: &Environment,
         sac: f64,
         tissues: &mut Tissues,
         b: &mut Breathing,
         vertices: &[(f64, f64)],
-        bottom: bool,
-        ascent_switch: &dyn Fn(f64) -> Option<usize>,
+        leg: Leg,
         on_step: &mut dyn FnMut(f64, f64, &Tissues, &Breathing),
-    ) {
+    ) -> Option<(f64, f64)> {
         for w in vertices.windows(2) {
             let ((t0, a), (t1, d1)) = (w[0], w[1]);
             let dt = t1 - t0;
@@ -574,10 +653,21 @@ pub fn simulate(
                 let ts = t0 + i as f64 * h;
                 let need = gas::consumption(sac, p, h);
                 let ds = a + (d1 - a) * i as f64 / n as f64;
-                if bottom {
-                    b.pick_bottom(need, ts, ds);
-                } else if let Some(c) = ascent_switch(ts + 0.5 * h) {
-                    b.switch_to(c, ts, ds);
+                match &leg {
+                    Leg::Bottom => b.pick_bottom(need, ts, ds),
+                    Leg::Ascent {
+                        planned,
+                        deco,
+                        replan,
+                    } => {
+                        if let Some(c) = planned(ts + 0.5 * h) {
+                            b.switch_to(c, ts, ds);
+                        }
+                        let before = b.gas();
+                        if b.pick_ascent(need, ts, ds, *deco) && *replan && b.gas() != before {
+                            return Some((ts, ds));
+                        }
+                    }
                 }
                 tissues.expose_pressure(p, b.gas(), h);
                 let t = ts + h;
@@ -586,6 +676,7 @@ pub fn simulate(
                 on_step(t, de, tissues, b);
             }
         }
+        None
     }
 
     record(0.0, 0.0, tissues, &b, &mut next_sample);
@@ -595,8 +686,7 @@ pub fn simulate(
         tissues,
         &mut b,
         &profile,
-        true,
-        &|_| None,
+        Leg::Bottom,
         &mut |t, d, ts, b| {
             let c = ts.ceiling();
             max_ceiling = max_ceiling.max(c);
@@ -615,27 +705,23 @@ pub fn simulate(
     // The ascent the model requires, planned on a copy, then flown on the real state.
     // Within the NDL the ascent is direct (with a safety stop): deco gases are for
     // decompression, and a switch's hold is no decompression stop.
+    let in_deco_ascent = deco_from.is_some();
+    let base = if in_deco_ascent { &plan } else { &direct };
     let mut planned = tissues.clone();
-    let ascent = if deco_from.is_some() {
-        planned.ascend_with(last_depth, b.gas(), &plan, bottom_end)
-    } else {
-        planned.ascend_with(last_depth, b.gas(), &direct, bottom_end)
+    let ascent = planned.ascend_with(last_depth, b.gas(), base, bottom_end);
+    // A planned ascent's gas changes as (runtime, cylinder).
+    let changes = |a: &super::deco::Ascent, t0: f64, b: &Breathing| -> Vec<(f64, usize)> {
+        a.switches
+            .iter()
+            .filter_map(|&(t, _, g)| b.deco_tank(g).map(|i| (t0 + t, i)))
+            .collect()
     };
     let mut asc: Vec<(f64, f64)> = ascent
         .path
         .iter()
         .map(|&(t, d)| (bottom_end + t, d))
         .collect();
-    let mut gas_changes: Vec<(f64, usize)> = ascent
-        .switches
-        .iter()
-        .filter_map(|&(t, _, g)| {
-            cfg.tanks
-                .iter()
-                .position(|k| k.role == CylinderRole::Deco && k.gas == g)
-                .map(|i| (bottom_end + t, i))
-        })
-        .collect();
+    let mut gas_changes = changes(&ascent, bottom_end, &b);
     let max_depth = profile.iter().map(|p| p.1).fold(0.0, f64::max);
     let mut safety_stop = None;
     if ascent.stops.is_empty() && max_depth >= 10.0 && last_depth > 5.0 {
@@ -652,28 +738,58 @@ pub fn simulate(
             duration: 180.0,
         });
     }
-    let tts_at_end = asc.last().unwrap().0 - bottom_end;
-    let switch_at = |t: f64| {
-        gas_changes
-            .iter()
-            .rev()
-            .find(|c| c.0 <= t + 1e-9)
-            .map(|c| c.1)
+    // Fly it. A cylinder reaching its reserve is left for the next gas (the docs' order:
+    // every cylinder down to its reserve, then the next); when that changes the gas of a
+    // planned ascent, the rest is planned again from there on the gas now breathed, without
+    // the cylinders left, so the stops always match the gas breathed.
+    let mut flown: Vec<(f64, f64)> = vec![(bottom_end, last_depth)];
+    let mut replanned = false;
+    loop {
+        let switch_at = |t: f64| {
+            gas_changes
+                .iter()
+                .rev()
+                .find(|c| c.0 <= t + 1e-9)
+                .map(|c| c.1)
+        };
+        let cut = integrate(
+            &env,
+            cfg.sac_lpm,
+            tissues,
+            &mut b,
+            &asc,
+            Leg::Ascent {
+                planned: &switch_at,
+                deco: in_deco_ascent,
+                replan: safety_stop.is_none(),
+            },
+            &mut |t, d, ts, b| {
+                max_ceiling = max_ceiling.max(ts.ceiling());
+                record(t, d, ts, b, &mut next_sample);
+            },
+        );
+        let Some((t, d)) = cut else {
+            flown.extend(asc.iter().skip(1));
+            break;
+        };
+        flown.extend(asc.iter().skip(1).filter(|p| p.0 < t - 1e-9));
+        flown.push((t, d));
+        replanned = true;
+        let mut again = base.clone();
+        if in_deco_ascent {
+            again.deco_gases = b.deco_gases();
+        }
+        let a = tissues.clone().ascend_with(d, b.gas(), &again, t);
+        asc = a.path.iter().map(|&(x, y)| (t + x, y)).collect();
+        gas_changes = changes(&a, t, &b);
+    }
+    let stops = if replanned {
+        stops_of(&flown)
+    } else {
+        ascent.stops
     };
-    integrate(
-        &env,
-        cfg.sac_lpm,
-        tissues,
-        &mut b,
-        &asc,
-        false,
-        &switch_at,
-        &mut |t, d, ts, b| {
-            max_ceiling = max_ceiling.max(ts.ceiling());
-            record(t, d, ts, b, &mut next_sample);
-        },
-    );
-    profile.extend(asc.into_iter().skip(1));
+    let tts_at_end = flown.last().unwrap().0 - bottom_end;
+    profile.extend(flown.into_iter().skip(1));
     let runtime = profile.last().unwrap().0;
 
     let min_ndl = samples
@@ -700,7 +816,7 @@ pub fn simulate(
         runtime,
         max_depth,
         mean_depth,
-        stops: ascent.stops,
+        stops,
         safety_stop,
         min_ndl,
         deco_from,
@@ -710,6 +826,26 @@ pub fn simulate(
         switches: b.switches.clone(),
         gas,
     }
+}
+
+/// The stops of a flown ascent path: its level stretches below the surface, one per depth
+/// (consecutive stretches at one depth merged).
+fn stops_of(path: &[(f64, f64)]) -> Vec<Stop> {
+    let mut stops: Vec<Stop> = Vec::new();
+    for w in path.windows(2) {
+        let ((t0, d0), (t1, d1)) = (w[0], w[1]);
+        if t1 - t0 <= 1e-9 || (d1 - d0).abs() > 1e-6 || d0 <= 1e-6 {
+            continue;
+        }
+        match stops.last_mut() {
+            Some(s) if (s.depth - d0).abs() < 1e-6 => s.duration += t1 - t0,
+            _ => stops.push(Stop {
+                depth: d0,
+                duration: t1 - t0,
+            }),
+        }
+    }
+    stops
 }
 
 fn gas_check(cfg: &DiveConfig, b: &Breathing, used_bottom: f64, max_depth: f64) -> GasCheck {
@@ -725,7 +861,7 @@ fn gas_check(cfg: &DiveConfig, b: &Breathing, used_bottom: f64, max_depth: f64) 
             + used_ascent_bottom);
     let at_end_of_bottom = start - used_bottom;
     // Hypoxic limit: 0.16 bar, or air's own pO₂ at an altitude site's surface.
-    let hypoxic_limit = HYPOXIC.min(Gas::AIR.o2 * env.surface_pressure - 1e-6);
+    let hypoxic_limit = hypoxic_limit(&env);
     let cylinders: Vec<CylinderUse> = cfg
         .tanks
         .iter()
@@ -850,16 +986,16 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
         {
             problems.push(format!(
                 "cylinder '{}' ({}, {role}): pO₂ {p:.2} bar at {:.1} m, above the {:.1} bar limit \
-                 of a {role} gas (MOD {:.1} m){}",
+                 of a {role} gas (MOD {:.0} m){}",
                 c.name,
                 c.gas,
                 c.max_po2_depth,
                 c.po2_limit,
-                c.mod_depth.max(0.0),
+                depth_limit(c.mod_depth),
                 if cfg.tanks[i].role == CylinderRole::Deco {
                     format!(
                         "; its switch depth is {:.0} m",
-                        cfg.tanks[i].switch_depth.unwrap_or(0.0)
+                        depth_limit(cfg.tanks[i].switch_depth.unwrap_or(0.0))
                     )
                 } else {
                     String::new()
@@ -953,25 +1089,34 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
             ));
         }
     }
+    // Narcosis: a breathed gas whose END at its deepest is beyond the limit (advice: the END
+    // limit is a choice of the diver's agency, the pO₂ and hypoxic limits are physiology).
+    for (i, c) in dive.gas.cylinders.iter().enumerate() {
+        let t = &cfg.tanks[i];
+        if c.max_po2.is_none() {
+            continue;
+        }
+        let end = t.gas.end(&cfg.env, c.max_po2_depth);
+        if end > cfg.end_limit + 1e-6 {
+            let fit = bottom_gas(&cfg.env, c.max_po2_depth, cfg.po2_limit(t), cfg.end_limit)
+                .map(|b| format!("; e.g. {}", bottom_gas_phrase(&b)))
+                .unwrap_or_default();
+            advice.push(format!(
+                "narcosis: cylinder '{}' ({}) has an END of {end:.1} m at {:.1} m, deeper than \
+                 the {:.0} m END limit (O₂ counted as narcotic){fit}",
+                c.name,
+                c.gas,
+                c.max_po2_depth,
+                depth_limit(cfg.end_limit),
+            ));
+        }
+    }
     let mut suggestions = Vec::new();
     if !g.breathable() {
         // Every other remedy is moot while a gas is unfit: name the gas that would do.
-        let p = cfg.env.pressure(dive.max_depth);
-        let o2 = ((cfg.po2_bottom / p) * 100.0).floor().min(40.0) / 100.0;
         suggestions.push(Suggestion {
             kind: "gas".into(),
-            text: format!(
-                "breathable gases: at {:.1} m a bottom gas may hold at most {:.0} % O₂ \
-                 (pO₂ {:.1} bar), e.g. {}; deco gases only from their switch depth; no gas \
-                 below {HYPOXIC:.2} bar pO₂ at the surface",
-                dive.max_depth,
-                o2 * 100.0,
-                cfg.po2_bottom,
-                gas_label(Gas {
-                    o2: o2.max(0.21),
-                    he: 0.0
-                })
-            ),
+            text: gas_advice(&cfg.env, dive.max_depth, cfg.po2_bottom, cfg.end_limit),
             fixes_all: false,
         });
     } else if !problems.is_empty() {
@@ -998,6 +1143,52 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
         problems,
         advice,
         suggestions,
+    }
+}
+
+/// A [`BottomGas`] in words: `TX19/44`, or `TX10/70 (a bottom gas: hypoxic at the surface,
+/// breathed from 6 m down, EAN40 as travel gas above)`.
+pub fn bottom_gas_phrase(b: &BottomGas) -> String {
+    match b.travel {
+        None => gas_label(b.gas),
+        Some((travel, from)) => format!(
+            "{} (a bottom gas: hypoxic at the surface, breathed from {from:.0} m down, {} as \
+             travel gas above)",
+            gas_label(b.gas),
+            gas_label(travel)
+        ),
+    }
+}
+
+/// The "breathable gases" advice for a bottom at `depth` m: what [`bottom_gas`] names there
+/// under the pO₂ and END limits, in words. Never names a gas beyond either limit.
+pub fn gas_advice(env: &super::deco::Environment, depth: f64, po2: f64, end_limit: f64) -> String {
+    let rules = format!(
+        "deco gases only from their switch depth; no gas below {HYPOXIC:.2} bar pO₂ at the surface"
+    );
+    match bottom_gas(env, depth, po2, end_limit) {
+        Some(b) => {
+            let he = if b.gas.he > 0.0 {
+                format!(
+                    " and at least {:.0} % He for an END within {:.0} m (O₂ counted as narcotic)",
+                    b.gas.he * 100.0,
+                    depth_limit(end_limit)
+                )
+            } else {
+                String::new()
+            };
+            format!(
+                "breathable gases: at {depth:.1} m a bottom gas may hold at most {:.0} % O₂ \
+                 (pO₂ {po2:.1} bar){he}, e.g. {}; {rules}",
+                b.gas.o2 * 100.0,
+                bottom_gas_phrase(&b)
+            )
+        }
+        None => format!(
+            "breathable gases: no mix keeps pO₂ ≤ {po2:.1} bar and an END within {:.0} m at \
+             {depth:.1} m; {rules}",
+            depth_limit(end_limit)
+        ),
     }
 }
 
@@ -1107,11 +1298,12 @@ fn remedies(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Vec<Suggestio
         });
     }
 
-    // 5. Nitrox for the decompression part (gas quantity unchanged).
-    if dive.deco_required() {
+    // 5. Nitrox for the decompression part (gas quantity unchanged): only within the diver's
+    // pO₂ limit at the deepest point and within the END limit (nitrox's END is its depth).
+    if dive.deco_required() && dive.max_depth <= cfg.end_limit + 1e-9 {
         for o2 in [0.32, 0.36] {
             let mix = Gas { o2, he: 0.0 };
-            let mod_m = mix.mod_depth(&cfg.env, 1.4);
+            let mod_m = mix.mod_depth(&cfg.env, cfg.po2_bottom);
             if mod_m < dive.max_depth {
                 continue;
             }
@@ -1121,10 +1313,16 @@ fn remedies(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Vec<Suggestio
                 out.push(Suggestion {
                     kind: "nitrox".into(),
                     text: format!(
-                        "nitrox: EAN{:.0} (MOD {mod_m:.0} m at pO₂ 1.4) keeps the whole survey within \
+                        "nitrox: EAN{:.0} (MOD {:.0} m at pO₂ {:.1}) keeps the whole survey within \
                          the NDL{}",
                         o2 * 100.0,
-                        if r.gas.ok() { "" } else { " — the gas quantity problem remains" }
+                        depth_limit(mod_m),
+                        cfg.po2_bottom,
+                        if r.gas.ok() {
+                            ""
+                        } else {
+                            " — the gas quantity problem remains"
+                        }
                     ),
                     fixes_all: r.gas.ok(),
                 });

@@ -9,7 +9,7 @@
 //! | contents | l at 1 atm | `V·(p/1.01325)/Z(p)` |
 //! | `sac` | l/min at 1 atm | consumption at depth = SAC·P_amb/1.01325 |
 
-use super::deco::{ATM, Gas};
+use super::deco::{ATM, Environment, Gas};
 use crate::model::CylinderRole;
 use serde::Serialize;
 
@@ -204,6 +204,88 @@ pub struct CylinderUse {
 /// altitude the limit drops to air's own pO₂ so that air is never called hypoxic).
 pub const HYPOXIC: f64 = 0.16;
 
+/// The hypoxic limit at the surface of `env`, bar: [`HYPOXIC`], or just under air's own pO₂
+/// at an altitude site's surface.
+pub fn hypoxic_limit(env: &Environment) -> f64 {
+    HYPOXIC.min(Gas::AIR.o2 * env.surface_pressure - 1e-6)
+}
+
+/// A depth limit as it is shown to a diver — a MOD, a switch depth, the deepest depth of a
+/// gas — rounded *down* to whole metres, so that the number on the slate is never deeper than
+/// the limit (EAN50 at 1.6 bar: 21.6 m → 21 m; O₂: 5.8 m → 5 m). Below 0 shows as 0.
+pub fn depth_limit(m: f64) -> f64 {
+    m.floor().max(0.0)
+}
+
+/// Richest O₂ fraction poser names for a bottom gas: EAN40, beyond which a mix needs
+/// oxygen-clean equipment (the customary recreational nitrox limit).
+pub const MAX_BOTTOM_O2: f64 = 0.40;
+
+/// A bottom gas for one depth, from [`bottom_gas`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BottomGas {
+    /// The mix: O₂ rounded down and He rounded up to whole percent.
+    pub gas: Gas,
+    /// `None`: breathable from the surface. `Some((travel, depth))`: hypoxic at the surface —
+    /// a bottom gas only, breathed from `depth` m (its pO₂ reaches the hypoxic limit there,
+    /// rounded up to whole metres) down, with `travel` breathed from the surface to there.
+    pub travel: Option<(Gas, f64)>,
+}
+
+/// The gas to name for a bottom at `depth` m under a pO₂ limit (bar) and an END limit (m):
+/// the most O₂ the pO₂ limit allows (at most [`MAX_BOTTOM_O2`]), rounded down to whole
+/// percent, and the least He that keeps the equivalent narcotic depth within `end_limit`
+/// (O₂ counted as narcotic, [`Gas::narcotic`]), rounded up — nitrox when no He is needed,
+/// trimix otherwise. The O₂ also stays at most what the END leaves (`1 − He`), so the mix
+/// always adds up. A mix hypoxic at the surface comes with the travel gas for the way down
+/// (the same rule at the depth where the bottom gas becomes breathable). Pure: the verdict's
+/// advice and the property test both call it. `None` when no mix meets both limits there.
+pub fn bottom_gas(
+    env: &Environment,
+    depth: f64,
+    po2_limit: f64,
+    end_limit: f64,
+) -> Option<BottomGas> {
+    let gas = mix_for(env, depth, po2_limit, end_limit)?;
+    let hyp = hypoxic_limit(env);
+    if gas.o2 * env.surface_pressure >= hyp {
+        return Some(BottomGas { gas, travel: None });
+    }
+    // Hypoxic at the surface: breathed only from where its pO₂ reaches the limit.
+    let from = env.depth_at(hyp / gas.o2).max(0.0).ceil();
+    if from > depth || env.pressure(from) * gas.o2 < hyp {
+        return None;
+    }
+    let travel = mix_for(env, from, po2_limit, end_limit)?;
+    (travel.o2 * env.surface_pressure >= hyp).then_some(BottomGas {
+        gas,
+        travel: Some((travel, from)),
+    })
+}
+
+/// [`bottom_gas`]'s mix without the surface question.
+fn mix_for(env: &Environment, depth: f64, po2_limit: f64, end_limit: f64) -> Option<Gas> {
+    if !(depth.is_finite() && po2_limit > 0.0 && end_limit.is_finite()) {
+        return None;
+    }
+    let p = env.pressure(depth);
+    // Narcotic partial pressure allowed: air's (all narcotic) at the END limit.
+    let narcotic = env.pressure(end_limit.max(0.0));
+    let he = ((1.0 - narcotic / p) * 100.0).ceil().max(0.0) / 100.0;
+    let o2_cap = (po2_limit / p).min(narcotic / p).min(MAX_BOTTOM_O2);
+    let o2_pct = (o2_cap * 100.0).floor();
+    if o2_pct < 1.0 || o2_pct + he * 100.0 > 100.0 + 1e-9 {
+        return None;
+    }
+    // A mix that rounds to air is air itself (20.9 %, below the cap either way).
+    let o2 = if he == 0.0 && o2_pct == 21.0 {
+        Gas::AIR.o2
+    } else {
+        o2_pct / 100.0
+    };
+    Some(Gas { o2, he })
+}
+
 /// The three gas rules and what each allows.
 #[derive(Debug, Clone, Serialize)]
 pub struct GasCheck {
@@ -262,6 +344,23 @@ mod tests {
         // Inverse.
         let p = pressure_for(Gas::AIR, 12.0, 2287.0);
         assert!((p - 200.0).abs() < 0.05, "{p}");
+    }
+
+    #[test]
+    fn depth_limits_round_towards_safety() {
+        let env = Environment::SEA;
+        let ean50 = Gas { o2: 0.5, he: 0.0 }.mod_depth(&env, 1.6);
+        let o2 = Gas { o2: 1.0, he: 0.0 }.mod_depth(&env, 1.6);
+        assert!(
+            (ean50 - 21.6).abs() < 0.05 && (o2 - 5.8).abs() < 0.05,
+            "{ean50} {o2}"
+        );
+        assert_eq!(depth_limit(ean50), 21.0);
+        assert_eq!(depth_limit(o2), 5.0);
+        assert_eq!(depth_limit(-3.0), 0.0);
+        for m in [0.0, 0.4, 5.99, 21.6, 33.5, 56.27, 99.999] {
+            assert!(depth_limit(m) <= m && m - depth_limit(m) < 1.0, "{m}");
+        }
     }
 
     #[test]

@@ -836,6 +836,11 @@ pub struct Diver {
     /// Highest pO₂ of deco gases (sets their default switch depth). **Unit:** Pa (write
     /// `"1.6 bar"`). **Default:** 1.6 bar (Subsurface).
     pub po2_deco: Option<Pressure>,
+    /// Deepest equivalent narcotic depth (END) of a gas the planner names: its gas advice
+    /// adds helium (trimix) to keep the END within it, and the report flags a breathed gas
+    /// beyond it. O₂ counts as narcotic (Subsurface's default; GUE, TDI, IANTD), the
+    /// conservative choice. **Unit:** m (0 < END ≤ 100 m). **Default:** 30 m.
+    pub end_limit: Option<Length>,
     /// `"salt"` (1030 kg/m³, Subsurface's sea water) or `"fresh"` (1000 kg/m³).
     /// **Default:** `"salt"`.
     pub water: Option<String>,
@@ -853,8 +858,8 @@ pub struct CylinderTable {
     pub volume: Option<Volume>,
     /// Fill pressure. **Unit:** Pa (write `"232 bar"`). **Default:** 200 bar.
     pub pressure: Option<Pressure>,
-    /// Gas: `"air"`, `"EAN32"`/`"nitrox32"`, `"TX18/45"` (trimix O₂/He), `"O2"`.
-    /// **Default:** `"air"`.
+    /// Gas: `"air"` (20.9 % O₂, as Subsurface), `"EAN32"`/`"nitrox32"`, `"TX18/45"` (trimix
+    /// O₂/He), `"O2"`. **Default:** `"air"`.
     pub gas: Option<String>,
     /// O₂ fraction (overrides `gas`). **Unit:** fraction.
     pub o2: Option<Fraction>,

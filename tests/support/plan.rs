@@ -15,7 +15,7 @@ pub fn diver(cyl_l: f64, fill_bar: f64) -> Diver {
             name: "back".into(),
             volume: cyl_l / 1e3,
             pressure: fill_bar * 1e5,
-            o2: 0.21,
+            o2: poser::plan::deco::Gas::AIR.o2,
             he: 0.0,
             role: CylinderRole::Bottom,
             switch_depth: None,
@@ -26,6 +26,7 @@ pub fn diver(cyl_l: f64, fill_bar: f64) -> Diver {
         salt_water: true,
         po2_bottom: 1.4,
         po2_deco: 1.6,
+        end_limit: DEFAULT_END_LIMIT,
     }
 }
 

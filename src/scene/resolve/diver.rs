@@ -4,13 +4,16 @@
 //! fractions) and role. Dive planning itself is in [`crate::plan`].
 
 use crate::model::*;
+use crate::plan::deco::Gas;
 use crate::scene::check;
 use crate::scene::diag::{Diagnostic, Span, num};
 use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::Node;
 use crate::units::Dim;
 
-/// `[diver]`, when present; without cylinders the diver breathes one 12 l tank of air.
+/// `[diver]`, when present; without cylinders the diver breathes one 12 l tank of air. Air is
+/// [`Gas::AIR`] (20.9 % O₂) wherever it comes from: the default cylinder, a cylinder without a
+/// gas, `gas = "air"`.
 pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
     node?;
     let mut d = Tab::open(cx, node, "diver", fallback);
@@ -65,6 +68,15 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
             );
         }
     }
+    let end_limit = d.f64(cx, "end_limit", Dim::Length, DEFAULT_END_LIMIT);
+    if !(end_limit.is_finite() && end_limit > 0.0 && end_limit <= 100.0) {
+        let sp = d.span_of("end_limit");
+        cx.push(
+            Diagnostic::error("E0327", "`end_limit` must be a depth in (0, 100] m")
+                .label(sp, format!("{} m", num(end_limit)))
+                .help("the deepest equivalent narcotic depth a gas may have, customarily 30 m: `end_limit = \"30 m\"`"),
+        );
+    }
     let salt_water = !matches!(d.choice(cx, "water", &["salt", "fresh"]), Some("fresh"));
     let mut cylinders: Vec<Cylinder> = Vec::new();
     for (i, n) in d.tables(cx, "cylinders").into_iter().enumerate() {
@@ -76,7 +88,7 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
             name: "back".into(),
             volume: 0.012,
             pressure: 200e5,
-            o2: 0.21,
+            o2: Gas::AIR.o2,
             he: 0.0,
             role: CylinderRole::Bottom,
             switch_depth: None,
@@ -103,6 +115,7 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
         salt_water,
         po2_bottom,
         po2_deco,
+        end_limit,
     })
 }
 
@@ -119,7 +132,7 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
     check::positive(cx, &c, "pressure", pressure, "Pa");
     let gas_span = c.span_of("gas");
     let (mut o2, mut he) = match c.opt_str(cx, "gas") {
-        None => (0.21, 0.0),
+        None => (Gas::AIR.o2, 0.0),
         Some(g) => match parse_gas(&g) {
             Some(x) => x,
             None => {
@@ -128,7 +141,7 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
                         .label(gas_span, "not a gas name")
                         .help("write \"air\", \"EAN32\" (nitrox 32 % O₂), \"TX18/45\" (trimix), \"O2\", or give `o2`/`he` fractions"),
                 );
-                (0.21, 0.0)
+                (Gas::AIR.o2, 0.0)
             }
         },
     };
@@ -213,11 +226,12 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
     }
 }
 
-/// `"air"`, `"EAN32"`, `"nitrox32"`, `"TX18/45"`, `"O2"` → (O₂, He) fractions.
+/// `"air"` ([`Gas::AIR`], 20.9 % O₂), `"EAN32"`, `"nitrox32"`, `"TX18/45"`, `"O2"` → (O₂,
+/// He) fractions.
 pub fn parse_gas(s: &str) -> Option<(f64, f64)> {
     let u = s.trim().to_uppercase().replace(' ', "");
     if u == "AIR" {
-        return Some((0.21, 0.0));
+        return Some((Gas::AIR.o2, Gas::AIR.he));
     }
     if u == "O2" || u == "OXYGEN" {
         return Some((1.0, 0.0));
