@@ -1013,6 +1013,44 @@ pub fn is_safe_file_name(s: &str) -> bool {
 
 /// Photons per channel of the column solve ([`crate::optics::column`]).
 pub const COLUMN_PHOTONS: usize = 400_000;
+/// Photons per channel of the quick column solve that measures what a bounce limit cuts off
+/// ([`Model::bounce_cut`]): shares to a few tenths of a point, in tens of milliseconds.
+pub const BOUNCE_PHOTONS: usize = 64_000;
+/// The share of the cameras' daylight a bounce limit may cut off before `validate` warns
+/// (W0239).
+pub const BOUNCE_CUT_WARN: f64 = 0.01;
+
+/// What a bounce limit cuts off of traced daylight ([`Model::bounce_cut`]).
+#[derive(Debug, Clone)]
+pub struct BounceCut {
+    /// `render.bounces`.
+    pub bounces: u32,
+    /// Per channel, the share of the light the cameras see that the limit cuts off (0 in
+    /// channels that are black at the seabed).
+    pub share: [f64; 3],
+    /// The smallest limit cutting off at most [`BOUNCE_CUT_WARN`] (`None`: more than 254).
+    pub needed: Option<u32>,
+}
+
+impl BounceCut {
+    /// The largest share over the channels.
+    pub fn worst(&self) -> f64 {
+        self.share.iter().copied().fold(0.0, f64::max)
+    }
+
+    /// `"0.7 % / 6.7 % / 23.3 %"`.
+    pub fn shares_text(&self) -> String {
+        self.share
+            .map(|s| format!("{:.1} %", s * 100.0))
+            .join(" / ")
+    }
+
+    /// `"27"`, or `"more than 254"`.
+    pub fn needed_text(&self) -> String {
+        self.needed
+            .map_or("more than 254".to_string(), |n| n.to_string())
+    }
+}
 
 impl Model {
     /// The plane-parallel water column the scene's daylight comes through, or why the scene is
@@ -1020,6 +1058,19 @@ impl Model {
     /// every channel, lit by the sun or the sky, over a seabed at `site.depth`. The bottom's
     /// albedo is the largest horizontal plane or seabed's (else the mean of the objects').
     pub fn column_input(&self) -> Result<crate::optics::column::ColumnInput, String> {
+        let input = self.column_physics()?;
+        let above = (0..self.poses.len())
+            .flat_map(|p| (0..self.cameras.len()).map(move |c| (p, c)))
+            .any(|(p, c)| self.world_from_camera(p, c).translation.z >= 0.0);
+        if above {
+            return Err("a camera is above the water".into());
+        }
+        Ok(input)
+    }
+
+    /// The plane-parallel column of the scene's water and daylight, wherever its cameras are
+    /// ([`Model::column_input`] without the cameras' check).
+    pub fn column_physics(&self) -> Result<crate::optics::column::ColumnInput, String> {
         use crate::optics::column::{ColumnInput, ColumnSun};
         let w = self.water.as_ref().ok_or("the scene has no water")?;
         if !w.scattering.iter().any(|s| *s > 0.0) {
@@ -1056,12 +1107,6 @@ impl Model {
         if sun.is_none() && ambient.iter().all(|a| *a <= 0.0) {
             return Err("no daylight (sun or ambient sky) comes down the water".into());
         }
-        let above = (0..self.poses.len())
-            .flat_map(|p| (0..self.cameras.len()).map(move |c| (p, c)))
-            .any(|(p, c)| self.world_from_camera(p, c).translation.z >= 0.0);
-        if above {
-            return Err("a camera is above the water".into());
-        }
         if !(self.site.depth > 0.0) {
             return Err(format!(
                 "the site's depth is {} m: the column needs a seabed below the surface",
@@ -1078,6 +1123,44 @@ impl Model {
             bottom_albedo: self.bottom_albedo(),
             photons: COLUMN_PHOTONS,
             seed: self.render.seed,
+        })
+    }
+
+    /// What `render.bounces` cuts off of traced daylight, measured on the scene's water column
+    /// solved quickly ([`BOUNCE_PHOTONS`], one round): per channel, the worst share over the
+    /// cameras' depths of the light seen looking down
+    /// ([`crate::optics::column::Column::share_seen_beyond`]), and the bounces that would cut
+    /// off at most [`BOUNCE_CUT_WARN`]. `None` where the scene is not a column
+    /// ([`Model::column_physics`]) or the column cannot be solved.
+    pub fn bounce_cut(&self) -> Option<BounceCut> {
+        let mut input = self.column_physics().ok()?;
+        input.photons = BOUNCE_PHOTONS;
+        let col = crate::optics::column::solve_rounds(&input, 1).ok()?;
+        let mut depths: Vec<f64> = (0..self.poses.len())
+            .flat_map(|p| (0..self.cameras.len()).map(move |c| (p, c)))
+            .map(|(p, c)| {
+                let z = -self.world_from_camera(p, c).translation.z;
+                // one depth per layer of the table
+                let dz = col.depth / crate::optics::column::NZ as f64;
+                ((z.clamp(0.0, col.depth) / dz).floor() + 0.5) * dz
+            })
+            .collect();
+        depths.sort_by(f64::total_cmp);
+        depths.dedup();
+        let b = self.render.max_bounces;
+        let mut share = [0.0; 3];
+        for &z in &depths {
+            let s = col.share_seen_beyond(z, b);
+            for c in 0..3 {
+                if col.visible_at_bottom(c) {
+                    share[c] = f64::max(share[c], s[c]);
+                }
+            }
+        }
+        Some(BounceCut {
+            bounces: b,
+            share,
+            needed: col.bounces_for(&depths, BOUNCE_CUT_WARN),
         })
     }
 

@@ -301,12 +301,30 @@ pub fn explain(m: &Model) -> String {
         }
     }
     if column.is_none() && m.water.is_some() {
-        // What the bounce limit leaves out of the traced daylight (see docs/column.md).
-        let _ = writeln!(
-            s,
-            "  traced daylight ends paths after render.bounces = {} scatterings",
-            m.render.max_bounces
-        );
+        // What the bounce limit leaves out of the traced daylight (W0239, docs/column.md).
+        let b = m.render.max_bounces;
+        match m.bounce_cut() {
+            Some(cut) => {
+                let _ = writeln!(
+                    s,
+                    "  traced daylight ends paths after render.bounces = {b} scatterings: \
+                     cuts off {} of the daylight the cameras see (R / G / B){}",
+                    cut.shares_text(),
+                    match cut.needed {
+                        Some(n) if n > b => format!("; {n} bounces cut off ≤ 1 %"),
+                        Some(_) => String::new(),
+                        None => "; more than 254 bounces would be needed".into(),
+                    }
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    s,
+                    "  traced daylight ends paths after render.bounces = {b} scatterings \
+                     (the water is not a column: what the limit cuts off is not measured)"
+                );
+            }
+        }
     }
     if let Some(d) = &m.diver {
         let _ = writeln!(

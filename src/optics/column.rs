@@ -55,6 +55,12 @@ pub const TARGET_STDERR: f64 = 0.002;
 pub const VISIBLE: f64 = 1e-3;
 /// Scattering events after which a photon history is ended (its weight is counted as lost).
 const MAX_EVENTS: u32 = 200_000;
+/// Scattering orders the bottom's downward irradiance is split into ([`Column::bed_orders`]);
+/// the last bin holds this many events or more.
+pub const ORDERS: usize = 256;
+/// Cosine of the cone about the nadir whose radiance [`Column::share_seen_beyond`] splits by
+/// order (30°: the view of a survey camera looking down).
+pub const SEEN_CONE: f64 = 0.866;
 /// Flights a batch may spend per launched photon before it stops splitting (the weight
 /// window's estimate of the attenuation can be off; this bounds the work, never the light).
 const FLIGHT_BUDGET: usize = 60;
@@ -151,6 +157,18 @@ pub struct Column {
     /// entry the total.
     cdf: Vec<[Vec<f64>; 2]>,
     pub profiles: [Profile; 3],
+    /// Per channel, E_d at the bottom split by the number of events (scatterings in the water
+    /// and reflections at the bottom) the light met on its way, index `k < ORDERS`: exactly
+    /// `k`, index `ORDERS`: that many or more; W/m². Index 0 holds the sun's direct beam and
+    /// the sky's unscattered light. A path tracer limited to `B` scattering vertices per path
+    /// sees the seabed's daylight of orders `k < B` only (its first vertex is the seabed):
+    /// [`Column::share_beyond`].
+    pub bed_orders: [Vec<f64>; 3],
+    /// Per channel, the radiance seen looking down within [`SEEN_CONE`] of the nadir in every
+    /// layer, split the same way (index `k · (ORDERS + 1) + n`, unnormalised): light going up
+    /// that met `n` events, the last of them the first vertex of a camera path looking down
+    /// from layer `k` ([`Column::share_seen_beyond`]).
+    pub seen_orders: [Vec<f64>; 3],
     /// Share of the photons' weight lost to [`MAX_EVENTS`] (should be 0).
     pub truncated: f64,
     /// Photons of the channel that took the most rounds.
@@ -194,6 +212,11 @@ struct Tally {
     track: Vec<f64>,
     down: Vec<f64>,
     up: Vec<f64>,
+    /// Diffuse E_d at the bottom by events met ([`Column::bed_orders`]).
+    bed: Vec<f64>,
+    /// Track length going up within [`SEEN_CONE`] of the vertical, per layer and events met,
+    /// index `k · (ORDERS + 1) + n` ([`Column::seen_orders`]).
+    seen_ord: Vec<f64>,
     lost: f64,
     launched: f64,
 }
@@ -206,6 +229,8 @@ impl Tally {
             track: vec![0.0; NZ],
             down: vec![0.0; NZ + 1],
             up: vec![0.0; NZ + 1],
+            bed: vec![0.0; ORDERS + 1],
+            seen_ord: vec![0.0; NZ * (ORDERS + 1)],
             lost: 0.0,
             launched: 0.0,
         }
@@ -282,7 +307,14 @@ impl ColumnInput {
 
 /// Solve the column.
 pub fn solve(input: &ColumnInput) -> Result<Column, ColumnError> {
+    solve_rounds(input, MAX_ROUNDS)
+}
+
+/// Solve the column in at most `max_rounds` rounds (1: a quick look, e.g. at the shares of
+/// scattering orders, [`Column::share_beyond`], whose noise is far below what they decide).
+pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, ColumnError> {
     input.check()?;
+    let max_rounds = max_rounds.clamp(1, MAX_ROUNDS);
     let t0 = std::time::Instant::now();
     let az = input
         .sun
@@ -294,6 +326,8 @@ pub fn solve(input: &ColumnInput) -> Result<Column, ColumnError> {
     let mut table: [Vec<f32>; 3] = Default::default();
     let mut first: [Vec<f32>; 3] = Default::default();
     let mut profiles: [Profile; 3] = Default::default();
+    let mut bed_orders: [Vec<f64>; 3] = Default::default();
+    let mut seen_orders: [Vec<f64>; 3] = Default::default();
     let mut lost = 0.0;
     let mut launched = 0.0;
     for c in 0..3 {
@@ -332,6 +366,12 @@ pub fn solve(input: &ColumnInput) -> Result<Column, ColumnError> {
                     per_plane_down[j].push(t.down[j]);
                     per_plane_up[j].push(t.up[j]);
                 }
+                for (a, b) in sum.bed.iter_mut().zip(&t.bed) {
+                    *a += b;
+                }
+                for (a, b) in sum.seen_ord.iter_mut().zip(&t.seen_ord) {
+                    *a += b;
+                }
                 sum.lost += t.lost;
                 sum.launched += t.launched;
             }
@@ -340,7 +380,7 @@ pub fn solve(input: &ColumnInput) -> Result<Column, ColumnError> {
             let e_bottom = direct_bottom + sum.down[NZ] / n;
             let rel = stderr(&per_plane_down[NZ]) / e_bottom.max(1e-300);
             let visible = surface > 0.0 && e_bottom / surface >= VISIBLE;
-            if round >= MAX_ROUNDS || !visible || rel <= TARGET_STDERR {
+            if round >= max_rounds || !visible || rel <= TARGET_STDERR {
                 break;
             }
         }
@@ -393,6 +433,10 @@ pub fn solve(input: &ColumnInput) -> Result<Column, ColumnError> {
             };
             p.k_d.push(k);
         }
+        let mut orders: Vec<f64> = sum.bed.iter().map(|v| v / nb).collect();
+        orders[0] += direct_bottom;
+        bed_orders[c] = orders;
+        seen_orders[c] = sum.seen_ord.iter().map(|v| v / nb).collect();
         profiles[c] = p;
     }
     for t in table.iter_mut().chain(first.iter_mut()) {
@@ -410,6 +454,8 @@ pub fn solve(input: &ColumnInput) -> Result<Column, ColumnError> {
         first,
         cdf,
         profiles,
+        bed_orders,
+        seen_orders,
         truncated: if launched > 0.0 { lost / launched } else { 0.0 },
         photons: photons_max,
         sky: DVec3::from_array(input.ambient),
@@ -561,6 +607,9 @@ fn run_batch(input: &ColumnInput, c: usize, batch: usize, n: usize, az: DVec3) -
                 if at_bottom {
                     // (The direct beam's arrival is analytic in E_d; its reflection is light
                     // of the table.)
+                    if ph.order != Order::Beam {
+                        t.bed[(ph.events as usize).min(ORDERS)] += ph.w * w0;
+                    }
                     ph.w *= a_bottom;
                     ph.depth = h;
                     t.up[NZ] += ph.w * w0;
@@ -632,6 +681,9 @@ fn tally_track(t: &mut Tally, ph: &Photon, end: f64, len: f64, w0: f64, dz: f64,
             continue;
         }
         t.track[k] += w * l;
+        if ph.dir.z > SEEN_CONE {
+            t.seen_ord[k * (ORDERS + 1) + (ph.events as usize).min(ORDERS)] += w * l;
+        }
         let idx = (k * NMU + bi) * NPHI + bj;
         match ph.order {
             Order::Rest => t.table[idx] += w * l,
@@ -767,6 +819,68 @@ impl Column {
         }
         let b = (i - if up { NMU / 2 } else { 0 }) * NPHI + j;
         (cdf[b + 1] - cdf[b]) / total / bin_solid_angle(i)
+    }
+
+    /// Per channel, the share of E_d at the bottom that met `bounces` events or more on its
+    /// way: what a path tracer ending paths after `bounces` scattering vertices loses of the
+    /// daylight on the seabed (0 where the bottom is dark).
+    pub fn share_beyond(&self, bounces: u32) -> [f64; 3] {
+        let from = (bounces as usize).min(ORDERS);
+        [0, 1, 2].map(|c| {
+            let o = &self.bed_orders[c];
+            let total: f64 = o.iter().sum();
+            if total > 0.0 {
+                (o[from..].iter().sum::<f64>() / total).clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        })
+    }
+
+    /// Per channel, the share of the radiance seen looking down from depth `z` (within
+    /// [`SEEN_CONE`] of the nadir) that met more than `bounces` events: what a path tracer
+    /// ending paths after `bounces` scattering vertices loses of a down-looking camera's
+    /// image there (its seabed and the water between). Close to the seabed it is
+    /// [`Column::share_beyond`] (the seabed's light has met one event more than E_d);
+    /// higher up it grows, as the water's own light has met more events.
+    pub fn share_seen_beyond(&self, z: f64, bounces: u32) -> [f64; 3] {
+        // The layer holding `z` and its neighbours (a thin layer's cone holds few tracks).
+        let k = self.layer(z.clamp(0.0, self.depth));
+        let ks = k.saturating_sub(1)..(k + 2).min(NZ);
+        let from = (bounces as usize + 1).min(ORDERS);
+        [0, 1, 2].map(|c| {
+            let o = &self.seen_orders[c][ks.start * (ORDERS + 1)..ks.end * (ORDERS + 1)];
+            let total: f64 = o.iter().sum();
+            let beyond: f64 = o
+                .chunks(ORDERS + 1)
+                .map(|l| l[from..].iter().sum::<f64>())
+                .sum();
+            if total > 0.0 {
+                (beyond / total).clamp(0.0, 1.0)
+            } else {
+                0.0
+            }
+        })
+    }
+
+    /// Whether channel `c` keeps at least [`VISIBLE`] of the surface's daylight at the bottom
+    /// (darker channels are black in an image).
+    pub fn visible_at_bottom(&self, c: usize) -> bool {
+        let p = &self.profiles[c];
+        let surface = p.e_d(0);
+        surface > 0.0 && p.e_d(NZ) / surface >= VISIBLE
+    }
+
+    /// The smallest bounce limit losing at most `share` of the light seen looking down from
+    /// every depth in `depths`, in every channel visible at the bottom
+    /// ([`Column::share_seen_beyond`]); `None` beyond [`ORDERS`].
+    pub fn bounces_for(&self, depths: &[f64], share: f64) -> Option<u32> {
+        (1..ORDERS as u32 - 1).find(|&b| {
+            depths.iter().all(|&z| {
+                let s = self.share_seen_beyond(z, b);
+                (0..3).all(|c| !self.visible_at_bottom(c) || s[c] <= share)
+            })
+        })
     }
 
     /// Share of the downward irradiance at the bottom that is diffuse, per channel.

@@ -100,8 +100,8 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
     };
     let ior = water.as_ref().map(|w| w.ior).unwrap_or([1.0; 3]);
     let sun = environment::sun(cx, t.get("sun"), water.as_ref(), &site, top);
-    let mut daylight_at = None;
-    let render = render::render(cx, t.get("render"), top, &mut daylight_at);
+    let mut render_at = render::RenderSpans::default();
+    let render = render::render(cx, t.get("render"), top, &mut render_at);
     let cameras = camera::cameras(cx, &mut t, water.is_some(), &mut spans, top);
     let f_number = cameras.first().and_then(|c| c.f_number);
     let sensor = super::sensor::sensor(cx, t.get("sensor"), f_number, top);
@@ -156,7 +156,7 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
     };
     model.needs = needs(&model);
     if model.render.daylight == Daylight::Column
-        && let (Some(span), Err(why)) = (daylight_at, model.column_input())
+        && let (Some(span), Err(why)) = (render_at.daylight, model.column_input())
     {
         cx.push(
             Diagnostic::error("E0238", "the water column cannot light this scene")
@@ -164,7 +164,49 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
                 .help("use `daylight = \"traced\"` (or `\"auto\"`, which falls back to it)"),
         );
     }
+    if !cx.has_errors() {
+        bounce_limit(cx, &model, render_at.bounces.unwrap_or(spans.water));
+    }
     (model, spans)
+}
+
+/// W0239: traced daylight whose bounce limit cuts off more than
+/// [`crate::model::BOUNCE_CUT_WARN`] of the light the cameras see, in a channel that is not
+/// black at the seabed. The share is measured on the scene's own water column by a quick
+/// solve ([`Model::bounce_cut`]); scenes whose daylight comes from the column lose nothing to
+/// the limit, and scenes that are not a column (a water box, no scattering) get no estimate.
+fn bounce_limit(cx: &mut Cx, model: &Model, at: Span) {
+    if model.daylight_choice().0.is_some() {
+        return;
+    }
+    let Some(cut) = model.bounce_cut() else {
+        return;
+    };
+    if cut.worst() <= crate::model::BOUNCE_CUT_WARN {
+        return;
+    }
+    let b = cut.bounces;
+    cx.push(
+        Diagnostic::warning(
+            "W0239",
+            format!(
+                "render.bounces = {b} cuts off {} of the daylight the cameras see (R / G / B)",
+                cut.shares_text()
+            ),
+        )
+        .label(at, format!("paths end after {b} scatterings"))
+        .note(
+            "light scattered many times in the water is lost, not approximated: the images \
+             render darker than they are (measured on the scene's water column, \
+             docs/column.md)",
+        )
+        .help(format!(
+            "raise `render.bounces` to {} (cuts off ≤ {:.0} %), or set \
+             `render.daylight = \"column\"` (the column holds every order)",
+            cut.needed_text(),
+            crate::model::BOUNCE_CUT_WARN * 100.0
+        )),
+    );
 }
 
 // ------------------------------------------------------------------------------------------

@@ -9,13 +9,21 @@ use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::{Node, Val};
 use crate::units::Dim;
 
+/// Where `[render]` keys the whole-model checks point at were written (absent: defaulted).
+#[derive(Default)]
+pub(super) struct RenderSpans {
+    pub daylight: Option<Span>,
+    pub bounces: Option<Span>,
+}
+
 /// `[render]`, with every default filled in.
-/// `daylight_at`: where `daylight` was written, for the check that the column applies.
+/// `at`: where `daylight` and `bounces` were written, for the checks on the whole model
+/// (the column applies; the bounce limit keeps the daylight).
 pub(super) fn render(
     cx: &mut Cx,
     node: Option<&Node>,
     fallback: Span,
-    daylight_at: &mut Option<Span>,
+    at: &mut RenderSpans,
 ) -> RenderSettings {
     let mut r = Tab::open(cx, node, "render", fallback);
     let samples = r.u32(cx, "samples", 64);
@@ -157,9 +165,9 @@ pub(super) fn render(
         Some("auto") => Daylight::Auto,
         _ => Daylight::Traced,
     };
-    let daylight_span = r.has("daylight").then(|| r.span_of("daylight"));
+    at.daylight = r.has("daylight").then(|| r.span_of("daylight"));
+    at.bounces = r.has("bounces").then(|| r.span_of("bounces"));
     r.finish(cx);
-    *daylight_at = daylight_span;
     RenderSettings {
         samples,
         seed,
