@@ -393,3 +393,56 @@ fn deco_gas_at_its_reserve_hands_over_to_the_back_gas() {
         small.dive.gas
     );
 }
+
+#[test]
+fn stage_at_its_reserve_on_the_ascent_hands_over_to_the_back_gas() {
+    // An EAN32 stage sized (from a first run of the same dive) to reach its reserve halfway
+    // up a decompression ascent: the ascent goes on on the back gas (air), planned again on
+    // it, and the stage keeps its reserve.
+    let dive = |stage_bar: f64| {
+        let mut d = common::diver(24.0, 232.0);
+        d.cylinders.insert(
+            0,
+            cyl("stage", 20.0, stage_bar, 0.32, 0.0, CylinderRole::Stage),
+        );
+        plan_dive(&flat_dive(30.0, 30.0, d), 10.0).unwrap()
+    };
+    let full = dive(300.0);
+    assert!(full.verdict.deco_required && full.dive.gas.cylinders[0].reserve_ok);
+    let bottom_end = full.dive.descent_time + full.dive.bottom_time;
+    let at_end = full
+        .dive
+        .samples
+        .iter()
+        .find(|s| s.time >= bottom_end - 1e-6)
+        .unwrap();
+    // Litres the stage gives on the bottom and on the ascent, from the first run.
+    let ean32 = Gas { o2: 0.32, he: 0.0 };
+    let tank = &full.config.tanks[0];
+    let used_bottom = tank.start - poser::plan::gas::contents(ean32, 20.0, at_end.pressures[0]);
+    let used_ascent = full.dive.gas.cylinders[0].used - used_bottom;
+    assert!(used_ascent > 100.0, "{used_ascent}");
+    let reserve = poser::plan::gas::contents(ean32, 20.0, 50.0);
+    let bar =
+        poser::plan::gas::pressure_for(ean32, 20.0, reserve + used_bottom + 0.5 * used_ascent);
+    let r = dive(bar);
+    let stage = &r.dive.gas.cylinders[0];
+    assert!(stage.reserve_ok && stage.end_pressure >= 49.0, "{stage:?}");
+    let back = r
+        .dive
+        .switches
+        .iter()
+        .find(|s| s.cylinder == 1)
+        .expect("back gas breathed");
+    assert!(back.time > bottom_end, "{back:?} before the ascent");
+    assert!(r.dive.gas.cylinders[1].used > 0.0);
+    for s in r.dive.samples.iter().filter(|s| s.time > bottom_end) {
+        assert!(
+            s.ceiling <= s.depth + 0.05,
+            "ceiling {} above the diver at {} m, {} s",
+            s.ceiling,
+            s.depth,
+            s.time
+        );
+    }
+}

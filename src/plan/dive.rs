@@ -17,6 +17,10 @@
 //! Stage cylinders are breathed first on the bottom, each down to its reserve, then the back
 //! gas; deco cylinders from their switch depth on the ascent (the richest allowed, a 1 min
 //! hold at a switch except to O₂), and the ascent's stops are computed on the gas breathed.
+//! On the ascent too no cylinder is breathed below its reserve while another gas is left: a
+//! stage or deco cylinder at its reserve hands over to the richest other deco gas allowed
+//! there, else to the bottom cylinders (stages, then back gas), and the rest of the ascent is
+//! planned again on the gas now breathed (longer stops, never above the ceiling).
 //! Every gas is checked where it is breathed: pO₂ against its role's limit, and not hypoxic
 //! at the surface. "In decompression" has one meaning everywhere (report, verdict, `.ssrf`):
 //! the ceiling is below the surface.
