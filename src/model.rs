@@ -1028,6 +1028,9 @@ pub struct BounceCut {
     /// Per channel, the share of the light the cameras see that the limit cuts off (0 in
     /// channels that are black at the seabed).
     pub share: [f64; 3],
+    /// Per channel, whether it keeps enough light at the seabed to be seen (else its share is
+    /// not counted).
+    pub visible: [bool; 3],
     /// The smallest limit cutting off at most [`BOUNCE_CUT_WARN`] (`None`: more than 254).
     pub needed: Option<u32>,
 }
@@ -1038,10 +1041,16 @@ impl BounceCut {
         self.share.iter().copied().fold(0.0, f64::max)
     }
 
-    /// `"0.7 % / 6.7 % / 23.3 %"`.
+    /// `"0.7 % / 6.7 % / 23.3 %"` (`"black"` for a channel without light at the seabed).
     pub fn shares_text(&self) -> String {
-        self.share
-            .map(|s| format!("{:.1} %", s * 100.0))
+        [0, 1, 2]
+            .map(|c| {
+                if self.visible[c] {
+                    format!("{:.1} %", self.share[c] * 100.0)
+                } else {
+                    "black".to_string()
+                }
+            })
             .join(" / ")
     }
 
@@ -1160,6 +1169,7 @@ impl Model {
         Some(BounceCut {
             bounces: b,
             share,
+            visible: [0, 1, 2].map(|c| col.visible_at_bottom(c)),
             needed: col.bounces_for(&depths, BOUNCE_CUT_WARN),
         })
     }

@@ -165,10 +165,41 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
         );
     }
     if !cx.has_errors() {
-        bounce_limit(cx, &model, render_at.bounces.unwrap_or(spans.water));
+        match render_at.bounces {
+            Some(at) => bounce_limit(cx, &model, at),
+            None => default_bounces(cx, &mut model, spans.water),
+        }
     }
     (model, spans)
 }
+
+/// `render.bounces` not written: [`DEFAULT_BOUNCES`], raised where traced daylight through the
+/// scene's water column has scattered more often, to what cuts off at most
+/// [`crate::model::BOUNCE_CUT_WARN`] of the light the cameras see ([`Model::bounce_cut`]; at
+/// most [`MAX_DEFAULT_BOUNCES`], beyond which W0239 says what is still cut off).
+fn default_bounces(cx: &mut Cx, model: &mut Model, water: Span) {
+    if model.daylight_choice().0.is_some() {
+        return;
+    }
+    let Some(cut) = model.bounce_cut() else {
+        return;
+    };
+    let need = cut
+        .needed
+        .unwrap_or(MAX_DEFAULT_BOUNCES)
+        .min(MAX_DEFAULT_BOUNCES);
+    if need > model.render.max_bounces {
+        model.render.max_bounces = need;
+        if cut.needed.is_none() {
+            bounce_limit(cx, model, water);
+        }
+    }
+}
+
+/// `render.bounces` when the scene does not say (and its water column needs no more).
+pub const DEFAULT_BOUNCES: u32 = 8;
+/// The largest bounce limit the default rises to.
+pub const MAX_DEFAULT_BOUNCES: u32 = 254;
 
 /// W0239: traced daylight whose bounce limit cuts off more than
 /// [`crate::model::BOUNCE_CUT_WARN`] of the light the cameras see, in a channel that is not

@@ -36,7 +36,8 @@ pub(super) fn render(
         );
     }
     let seed = r.opt_u64(cx, "seed").unwrap_or(0);
-    let max_bounces = r.u32(cx, "bounces", 8);
+    // Raised to what the water column needs when not written (`super::default_bounces`).
+    let max_bounces = r.u32(cx, "bounces", super::DEFAULT_BOUNCES);
     let dispersion = r.bool(cx, "dispersion", false);
     let outputs = match r.get("outputs") {
         None => vec!["rgb".to_string(), "depth".into(), "truth".into()],
