@@ -18,6 +18,7 @@
 //! | [`Column::radiance`] | `L_m(z, ω)`: radiance seen at depth `z` looking along `ω` that was scattered in the water on its way, the sun's *first* scattering apart (the renderer traces it on camera rays, with shadows) |
 //! | [`Column::boundary`] | the sky's and the bottom's own radiance (analytic: `L_sky`, `A·E_d(H)/π`), seen through the water where a ray meets no geometry |
 //! | [`Profile`] | per channel, at `nz + 1` planes: E_d (direct, diffuse), E_u, E_0, K_d, with standard errors |
+//! | [`Column::bed_orders`], [`Column::seen_orders`] | E_d at the bottom, and the radiance seen looking down in every layer, split by the number of events the light met: what a bounce limit cuts off ([`Column::share_beyond`], [`Column::share_seen_beyond`]) |
 //!
 //! Method: photons are launched from the sun (its direct beam is analytic) and from the sky,
 //! flown with implicit capture, and tallied by track length into `nz` depth layers × `nmu`
