@@ -295,3 +295,294 @@ fn pack_refuses_commands_it_cannot_replay() {
         assert!(!pack.exists(), "{run}: a pack was written");
     }
 }
+
+/// Run `cmd`, killing it after `limit` (the test then fails: it hung or read without end).
+fn output_within(cmd: &mut Command, limit: std::time::Duration) -> (Output, std::time::Duration) {
+    use std::process::Stdio;
+    let t0 = std::time::Instant::now();
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    while child.try_wait().unwrap().is_none() {
+        if t0.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{cmd:?} still running after {limit:?}");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let took = t0.elapsed();
+    (child.wait_with_output().unwrap(), took)
+}
+
+/// `unpack` writes only into a new or empty folder that is not a link, as `rerun` does: a
+/// folder holding a link (`D/scene → elsewhere`) is refused and nothing reaches `elsewhere`;
+/// a folder that is itself a link is refused too; an empty folder is fine and keeps no
+/// temporary files.
+#[test]
+fn unpack_writes_only_into_a_new_or_empty_folder_never_through_a_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = make_pack(dir.path(), "good.poserpack", false);
+    let elsewhere = dir.path().join("elsewhere");
+    std::fs::create_dir(&elsewhere).unwrap();
+    // D/scene → elsewhere.
+    let d = dir.path().join("d");
+    std::fs::create_dir(&d).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, d.join("scene")).unwrap();
+    // E → elsewhere (the output folder itself is a link to an empty folder).
+    let e = dir.path().join("e");
+    std::os::unix::fs::symlink(&elsewhere, &e).unwrap();
+    // F holds an earlier file.
+    let f = dir.path().join("f");
+    std::fs::create_dir(&f).unwrap();
+    std::fs::write(f.join("notes.txt"), "mine").unwrap();
+    for (cmd, out, want) in [
+        ("unpack", &d, "is not empty"),
+        ("unpack", &e, "is a symbolic link"),
+        ("rerun", &e, "is a symbolic link"),
+        ("unpack", &f, "is not empty"),
+    ] {
+        let o = poser()
+            .arg(cmd)
+            .arg(&good)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .unwrap();
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{cmd} {}: {t}", out.display());
+        assert!(t.contains(want), "{cmd} {}: {t}", out.display());
+        assert_eq!(
+            std::fs::read_dir(&elsewhere).unwrap().count(),
+            0,
+            "{cmd} {}: wrote through the link",
+            out.display()
+        );
+    }
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1);
+    assert_eq!(
+        std::fs::read_to_string(f.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    assert_eq!(std::fs::read_dir(&f).unwrap().count(), 1);
+    // An existing empty folder is fine, and keeps no temporary folder.
+    let g = dir.path().join("g");
+    std::fs::create_dir(&g).unwrap();
+    let o = poser()
+        .arg("unpack")
+        .arg(&good)
+        .arg("-o")
+        .arg(&g)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(g.join("scene/common.toml").is_file());
+    let mut names: Vec<String> = std::fs::read_dir(&g)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["manifest.json", "scene"]);
+}
+
+/// A compression bomb — a valid pack (manifest, hashes) whose one extra entry is 1 GiB of
+/// zeros in about 1 MB — is refused by its compression ratio within a second, before more than
+/// a few MiB are decompressed, and writes nothing (it used to write the whole entry).
+#[test]
+fn a_compression_bomb_is_refused_within_a_second_and_writes_nothing() {
+    use sha2::Digest;
+    const N: u64 = 1 << 30;
+    let dir = tempfile::tempdir().unwrap();
+    let good = make_pack(dir.path(), "good.poserpack", false);
+    let list = entries(&good);
+    let mut h = sha2::Sha256::new();
+    let block = vec![0u8; 1 << 20];
+    for _ in 0..N >> 20 {
+        h.update(&block);
+    }
+    let sha: String = h.finalize().iter().map(|b| format!("{b:02x}")).collect();
+    let mut m: serde_json::Value = serde_json::from_slice(&list[0].2).unwrap();
+    m["files"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!({"path": "scene/zeros.bin", "sha256": sha, "bytes": N}));
+    let bomb = dir.path().join("bomb.poserpack");
+    {
+        let mut tar = tar::Builder::new(GzEncoder::new(
+            std::fs::File::create(&bomb).unwrap(),
+            Compression::best(),
+        ));
+        for (k, (name, _, data)) in list.iter().enumerate() {
+            let data = if k == 0 {
+                serde_json::to_vec_pretty(&m).unwrap()
+            } else {
+                data.clone()
+            };
+            let mut hd = tar::Header::new_gnu();
+            hd.set_size(data.len() as u64);
+            hd.set_mode(0o644);
+            hd.set_cksum();
+            tar.append_data(&mut hd, std::str::from_utf8(name).unwrap(), data.as_slice())
+                .unwrap();
+        }
+        let mut hd = tar::Header::new_gnu();
+        hd.set_size(N);
+        hd.set_mode(0o644);
+        hd.set_cksum();
+        tar.append_data(&mut hd, "scene/zeros.bin", std::io::repeat(0).take(N))
+            .unwrap();
+        tar.into_inner().unwrap().finish().unwrap();
+    }
+    let size = std::fs::metadata(&bomb).unwrap().len();
+    assert!(size < 4 << 20, "the bomb is {size} bytes");
+    for cmd in ["unpack", "rerun"] {
+        let out = dir.path().join(format!("bomb-{cmd}"));
+        let (o, took) = output_within(
+            poser().arg(cmd).arg(&bomb).arg("-o").arg(&out),
+            std::time::Duration::from_secs(60),
+        );
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{cmd}: {t}");
+        assert!(t.contains("compression bomb"), "{cmd}: {t}");
+        assert!(
+            took < std::time::Duration::from_secs(1),
+            "{cmd}: took {took:?}"
+        );
+        assert_eq!(files_below(&out), 0, "{cmd}: wrote files");
+    }
+}
+
+/// A pack whose scene names a file outside the pack — `/dev/zero`, or a `..` that climbs out
+/// of the unpacked folder — passes the archive's checks but is refused before anything is
+/// written (a rerun would otherwise read it); a `..` that stays inside the pack is fine.
+#[test]
+fn a_pack_whose_scene_reads_outside_the_pack_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = make_pack(dir.path(), "good.poserpack", false);
+    std::fs::write(dir.path().join("secret.toml"), "[water]\ntemperature = 3\n").unwrap();
+    let list = entries(&good);
+    let k = list
+        .iter()
+        .position(|e| e.0 == b"scene/pinhole_air.toml")
+        .unwrap();
+    for (name, include, want) in [
+        ("devzero", "/dev/zero", "an absolute path"),
+        ("dotdot", "../../secret.toml", "climbs out of the pack"),
+    ] {
+        let mut l: Vec<Raw> = list
+            .iter()
+            .cloned()
+            .map(|(n, t, d)| (n, t, d, None))
+            .collect();
+        let scene = String::from_utf8(l[k].2.clone()).unwrap().replacen(
+            "include = [\"common.toml\"]",
+            &format!("include = [\"common.toml\", \"{include}\"]"),
+            1,
+        );
+        assert!(scene.contains(include));
+        l[k].2 = scene.into_bytes();
+        let mut m: serde_json::Value = serde_json::from_slice(&l[0].2).unwrap();
+        for f in m["files"].as_array_mut().unwrap() {
+            if f["path"] == "scene/pinhole_air.toml" {
+                f["sha256"] = poser::pack::sha256(&l[k].2).into();
+                f["bytes"] = l[k].2.len().into();
+            }
+        }
+        l[0].2 = serde_json::to_vec_pretty(&m).unwrap();
+        let pack = dir.path().join(format!("{name}.poserpack"));
+        write_raw(&pack, &l);
+        for cmd in ["unpack", "rerun"] {
+            let out = dir.path().join(format!("{name}-{cmd}"));
+            let (o, _) = output_within(
+                poser().arg(cmd).arg(&pack).arg("-o").arg(&out),
+                std::time::Duration::from_secs(20),
+            );
+            let t = text(&o);
+            assert_eq!(o.status.code(), Some(1), "{name} {cmd}: {t}");
+            assert!(
+                t.contains(&format!("`{include}` is outside the pack")) && t.contains(want),
+                "{name} {cmd}: {t}"
+            );
+            assert!(t.contains("scene/pinhole_air.toml:2:"), "{name} {cmd}: {t}");
+            assert!(t.contains("help:"), "{name} {cmd}: {t}");
+            assert_eq!(files_below(&out), 0, "{name} {cmd}: wrote files");
+        }
+    }
+}
+
+/// The front end confined to a folder (how a pack's scene is read): a link that leads out of
+/// it is refused where it is named, a `..` that stays inside is fine.
+#[test]
+fn a_confined_scene_follows_no_link_out_and_may_climb_inside() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("pack/scene");
+    let canon = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/canonical");
+    std::fs::create_dir_all(root.join("main")).unwrap();
+    std::fs::create_dir_all(root.join("shared")).unwrap();
+    std::fs::copy(canon.join("common.toml"), root.join("shared/common.toml")).unwrap();
+    let own = std::fs::read_to_string(canon.join("pinhole_air.toml")).unwrap();
+    let scene = root.join("main/scene.toml");
+    std::fs::write(
+        &scene,
+        own.replacen("\"common.toml\"", "\"../shared/common.toml\"", 1),
+    )
+    .unwrap();
+    assert!(poser::scene::load_within(&scene, &[], &root).is_ok());
+    // A link inside the folder to a file outside it.
+    std::fs::write(dir.path().join("outside.toml"), "name = \"x\"\n").unwrap();
+    std::os::unix::fs::symlink(dir.path().join("outside.toml"), root.join("main/link.toml"))
+        .unwrap();
+    std::fs::write(
+        &scene,
+        own.replacen(
+            "\"common.toml\"",
+            "\"../shared/common.toml\", \"link.toml\"",
+            1,
+        ),
+    )
+    .unwrap();
+    let Err(f) = poser::scene::load_within(&scene, &[], &root) else {
+        panic!("a link out of the pack was followed");
+    };
+    let t = f.render();
+    assert!(
+        t.contains("`link.toml` is outside the pack") && t.contains("a link that leads out"),
+        "{t}"
+    );
+    // Not confined, the same scene loads (the link is the user's own).
+    assert!(poser::scene::load(&scene, &[]).is_ok());
+}
+
+/// `poser pack` refuses a scene whose packed copy would read files outside the pack (an
+/// absolute include reads the packer's own file on every rerun) and writes no pack.
+#[test]
+fn pack_refuses_a_scene_that_names_files_by_absolute_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let canon = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/canonical");
+    let own = std::fs::read_to_string(canon.join("pinhole_air.toml")).unwrap();
+    let common = canon.join("common.toml");
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(
+        &scene,
+        own.replacen("\"common.toml\"", &format!("\"{}\"", common.display()), 1),
+    )
+    .unwrap();
+    let pack = dir.path().join("x.poserpack");
+    let o = poser()
+        .arg("pack")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&pack)
+        .output()
+        .unwrap();
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(
+        t.contains("is outside the pack") && t.contains("an absolute path"),
+        "{t}"
+    );
+    assert!(!pack.exists());
+}

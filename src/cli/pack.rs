@@ -85,6 +85,27 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             .map_err(|e| CliError::Failed(format!("{}: {e}", dst.display())))?;
     }
     let scene = work.path().join("pack").join(&entries[0].1);
+    // Packed, the scene must read only packed files: an absolute include, or a `..` or link
+    // that leaves the packed folder, would read the packer's own files on every rerun.
+    if let Err(f) = crate::scene::load_within(
+        &scene,
+        &args.scene.sets,
+        &work.path().join("pack").join(pack::SCENE_DIR),
+    ) {
+        let prefix = format!("{}/", work.path().join("pack").display());
+        let outside: String = f
+            .diagnostics
+            .iter()
+            .filter(|d| d.code == "E0012")
+            .map(|d| d.rendered.replace(&prefix, ""))
+            .collect();
+        if !outside.is_empty() {
+            return Err(CliError::Failed(format!(
+                "the scene names files a pack cannot hold as they are named:\n{}",
+                outside.trim_end()
+            )));
+        }
+    }
     let mut recorded = Vec::new();
     let mut dirs = Vec::new();
     for (k, argv) in commands.iter().enumerate() {

@@ -31,12 +31,12 @@ struct CommandReport {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    if std::fs::read_dir(&args.out).is_ok_and(|mut d| d.next().is_some()) {
-        return Err(CliError::Usage(format!(
-            "{} is not empty; rerun into a new folder so that no earlier file is mistaken for an output",
-            args.out.display()
-        )));
-    }
+    // New or empty, and not a link (a rerun never writes through a link it did not create).
+    pack::fresh_folder(&args.out).map_err(|e| {
+        CliError::Usage(format!(
+            "{e}; rerun into a new folder so that no earlier file is mistaken for an output"
+        ))
+    })?;
     let m = pack::read(&args.pack, &args.out.join("pack")).map_err(CliError::Failed)?;
     let scene = args.out.join("pack").join(&m.scene);
     let mut commands = Vec::new();

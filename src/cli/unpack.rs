@@ -1,5 +1,6 @@
-//! `poser unpack`: check a reproducible pack (paths, entry types, sizes, every hash) and write
-//! its files into a folder; a pack that fails a check writes nothing (`src/pack`).
+//! `poser unpack`: check a reproducible pack (paths, entry types, sizes and compression ratio,
+//! every hash, a scene that names nothing outside the pack) and write its files into a new or
+//! empty folder that is not a link; a pack that fails a check writes nothing (`src/pack`).
 use super::CliError;
 use crate::pack::{self, Versions};
 use std::path::PathBuf;
@@ -9,12 +10,13 @@ use std::path::PathBuf;
 pub struct Args {
     /// The pack (`.poserpack`).
     pub pack: PathBuf,
-    /// The folder to write its files into.
+    /// The folder to write its files into: new, or empty (not a link).
     #[arg(short, long)]
     pub out: PathBuf,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
+    pack::fresh_folder(&args.out).map_err(CliError::Usage)?;
     let m = pack::read(&args.pack, &args.out).map_err(CliError::Failed)?;
     println!(
         "unpacked {} file(s) into {}; the scene is {}",

@@ -11,15 +11,23 @@
 //!
 //! The archive is a gzip-compressed tar, written atomically. Reading ([`read`]) checks the whole
 //! archive before it writes anything: only regular files and folders, relative paths without
-//! `..`, at most [`MAX_ENTRIES`] entries of at most [`MAX_ENTRY_BYTES`] each, every file listed
-//! in the manifest with the hash it has there, nothing unlisted. A pack that fails any check is
-//! refused with the entry named, and nothing is written.
+//! `..`, at most [`MAX_ENTRIES`] entries of at most [`MAX_ENTRY_BYTES`] each and
+//! [`MAX_TOTAL_BYTES`] in all, never expanding more than [`MAX_RATIO`] times its compressed size
+//! (both enforced while decompressing, so a compression bomb stops after a few MiB), every file
+//! listed in the manifest with the hash it has there, nothing unlisted. It then writes into a
+//! new or empty folder only (never through a link it did not create), into a temporary folder
+//! first, checks that the scene names no file outside the pack
+//! ([`crate::scene::load_within`]: no absolute path, no `..` out, no link out), and only then
+//! moves the files into place. A pack that fails any check is refused with the entry named, and
+//! nothing is written.
 
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
+use std::cell::{Cell, RefCell};
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Component, Path, PathBuf};
+use std::rc::Rc;
 
 /// The manifest's format tag.
 pub const FORMAT: &str = "poserpack/1";
@@ -33,6 +41,36 @@ pub const OUTPUTS_DIR: &str = "outputs";
 pub const MAX_ENTRIES: usize = 100_000;
 /// Largest entry a pack may hold (bytes).
 pub const MAX_ENTRY_BYTES: u64 = 2 << 30;
+/// Most bytes a whole pack may expand to (16 GiB).
+pub const MAX_TOTAL_BYTES: u64 = 16 << 30;
+/// Most a pack may expand relative to its compressed size: scene text, meshes and rendered
+/// images compress a few times, a compression bomb about a thousand times.
+pub const MAX_RATIO: u64 = 100;
+/// The ratio is enforced once this much has been decompressed (small packs of very regular
+/// text may compress better than [`MAX_RATIO`] without being a threat).
+pub const RATIO_GRACE_BYTES: u64 = 8 << 20;
+
+/// The size limits a pack is read with (the constants above; smaller in tests).
+#[derive(Debug, Clone, Copy)]
+pub struct Limits {
+    pub entries: usize,
+    pub entry_bytes: u64,
+    pub total_bytes: u64,
+    pub ratio: u64,
+    pub ratio_grace: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits {
+            entries: MAX_ENTRIES,
+            entry_bytes: MAX_ENTRY_BYTES,
+            total_bytes: MAX_TOTAL_BYTES,
+            ratio: MAX_RATIO,
+            ratio_grace: RATIO_GRACE_BYTES,
+        }
+    }
+}
 /// Commands a pack may record: each reads the scene and writes only into its `-o` folder.
 pub const COMMANDS: [&str; 3] = ["render", "truth", "compile"];
 
@@ -244,6 +282,21 @@ pub fn write(
             }
         }
     }
+    let total: u64 = entries.iter().map(|(_, b)| b.len() as u64).sum();
+    if let Some((p, b)) = entries
+        .iter()
+        .find(|(_, b)| b.len() as u64 > MAX_ENTRY_BYTES)
+    {
+        return Err(format!(
+            "`{p}` is {} bytes, more than the {MAX_ENTRY_BYTES} a pack entry may hold",
+            b.len()
+        ));
+    }
+    if total > MAX_TOTAL_BYTES {
+        return Err(format!(
+            "the pack would hold {total} bytes, more than the {MAX_TOTAL_BYTES} a pack may hold; pack without `--outputs`"
+        ));
+    }
     manifest.files = entries
         .iter()
         .map(|(p, b)| FileHash {
@@ -266,7 +319,18 @@ pub fn write(
             tar.into_inner()?.finish()?;
             Ok(())
         };
-        archive().map_err(|e| format!("{}: {e}", path.display()))
+        archive().map_err(|e| format!("{}: {e}", path.display()))?;
+        // A pack that unpacking would refuse as a compression bomb is not written.
+        let compressed = std::fs::metadata(tmp)
+            .map_err(|e| format!("{}: {e}", path.display()))?
+            .len();
+        if total > RATIO_GRACE_BYTES && total > MAX_RATIO.saturating_mul(compressed.max(1)) {
+            return Err(format!(
+                "{}: the files compress more than {MAX_RATIO} times ({total} bytes into {compressed}), which `poser unpack` refuses as a compression bomb",
+                path.display()
+            ));
+        }
+        Ok(())
     })
 }
 
@@ -298,25 +362,124 @@ fn safe_entry_path(raw: &[u8]) -> Result<String, String> {
     Ok(s.to_string())
 }
 
-fn open(pack: &Path) -> Result<tar::Archive<flate2::read::GzDecoder<std::fs::File>>, String> {
+/// Counts the compressed bytes the decompressor has taken from the pack file.
+struct Counted<R> {
+    inner: R,
+    n: Rc<Cell<u64>>,
+}
+
+impl<R: Read> Read for Counted<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let k = self.inner.read(buf)?;
+        self.n.set(self.n.get() + k as u64);
+        Ok(k)
+    }
+}
+
+/// The decompressed stream, stopped with an error (and the reason in `tripped`) as soon as it
+/// has given more than the total cap, or more than the ratio cap times the compressed bytes
+/// taken so far.
+struct Limited<R> {
+    inner: R,
+    out: u64,
+    compressed: Rc<Cell<u64>>,
+    limits: Limits,
+    tripped: Rc<RefCell<Option<String>>>,
+}
+
+impl<R: Read> Read for Limited<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let k = self.inner.read(buf)?;
+        self.out += k as u64;
+        let l = &self.limits;
+        let why = if self.out > l.total_bytes {
+            Some(format!(
+                "expands to more than {} bytes in all",
+                l.total_bytes
+            ))
+        } else if self.out > l.ratio_grace
+            && self.out > l.ratio.saturating_mul(self.compressed.get().max(1))
+        {
+            Some(format!(
+                "expands more than {} times its compressed size ({} bytes from {}): a compression bomb",
+                l.ratio,
+                self.out,
+                self.compressed.get()
+            ))
+        } else {
+            None
+        };
+        if let Some(why) = why {
+            *self.tripped.borrow_mut() = Some(why.clone());
+            return Err(std::io::Error::other(why));
+        }
+        Ok(k)
+    }
+}
+
+type PackReader = Limited<flate2::read::GzDecoder<Counted<std::fs::File>>>;
+
+/// Open a pack for reading under `limits`; the second item says which limit stopped it.
+fn open(
+    pack: &Path,
+    limits: &Limits,
+) -> Result<(tar::Archive<PackReader>, Rc<RefCell<Option<String>>>), String> {
     let f = std::fs::File::open(pack).map_err(|e| format!("{}: {e}", pack.display()))?;
-    Ok(tar::Archive::new(flate2::read::GzDecoder::new(f)))
+    let meta = f
+        .metadata()
+        .map_err(|e| format!("{}: {e}", pack.display()))?;
+    if !meta.is_file() {
+        return Err(format!("{}: not a regular file", pack.display()));
+    }
+    let compressed = Rc::new(Cell::new(0));
+    let tripped = Rc::new(RefCell::new(None));
+    let reader = Limited {
+        inner: flate2::read::GzDecoder::new(Counted {
+            inner: f,
+            n: compressed.clone(),
+        }),
+        out: 0,
+        compressed,
+        limits: *limits,
+        tripped: tripped.clone(),
+    };
+    Ok((tar::Archive::new(reader), tripped))
+}
+
+/// An I/O error while reading a pack: the limit that stopped it when one did.
+fn read_error(
+    shown: &std::path::Display,
+    what: &str,
+    e: std::io::Error,
+    tripped: &RefCell<Option<String>>,
+) -> String {
+    match tripped.borrow().as_ref() {
+        Some(why) => format!("{shown}: the pack {why}; refused"),
+        None => format!("{shown}: {what} ({e})"),
+    }
 }
 
 /// Check a pack completely (see the module's table) and return its manifest; nothing is
 /// written.
 pub fn check(pack: &Path) -> Result<Manifest, String> {
+    check_with(pack, &Limits::default())
+}
+
+/// [`check`] under other limits.
+pub fn check_with(pack: &Path, limits: &Limits) -> Result<Manifest, String> {
     let shown = pack.display();
-    let mut ar = open(pack)?;
+    let (mut ar, tripped) = open(pack, limits)?;
     let mut manifest: Option<Manifest> = None;
     let mut seen: BTreeMap<String, (String, u64)> = BTreeMap::new();
+    let mut declared: u64 = 0;
     let entries = ar
         .entries()
-        .map_err(|e| format!("{shown}: not a poser pack ({e})"))?;
+        .map_err(|e| read_error(&shown, "not a poser pack", e, &tripped))?;
     for (i, e) in entries.enumerate() {
-        let mut e = e.map_err(|e| format!("{shown}: unreadable entry {i} ({e})"))?;
-        if i >= MAX_ENTRIES {
-            return Err(format!("{shown}: more than {MAX_ENTRIES} entries"));
+        let mut e =
+            e.map_err(|e| read_error(&shown, &format!("unreadable entry {i}"), e, &tripped))?;
+        if i >= limits.entries {
+            return Err(format!("{shown}: more than {} entries", limits.entries));
         }
         let raw = e.path_bytes().into_owned();
         let path = safe_entry_path(&raw).map_err(|m| format!("{shown}: entry {i}: {m}"))?;
@@ -331,9 +494,17 @@ pub fn check(pack: &Path) -> Result<Manifest, String> {
             ));
         }
         let size = e.header().size().map_err(|e| format!("{shown}: {e}"))?;
-        if size > MAX_ENTRY_BYTES {
+        if size > limits.entry_bytes {
             return Err(format!(
-                "{shown}: `{path}` declares {size} bytes, more than the {MAX_ENTRY_BYTES} allowed"
+                "{shown}: `{path}` declares {size} bytes, more than the {} allowed",
+                limits.entry_bytes
+            ));
+        }
+        declared = declared.saturating_add(size);
+        if declared > limits.total_bytes {
+            return Err(format!(
+                "{shown}: the entries up to `{path}` declare {declared} bytes, more than the {} a pack may hold",
+                limits.total_bytes
             ));
         }
         if i == 0 {
@@ -343,7 +514,10 @@ pub fn check(pack: &Path) -> Result<Manifest, String> {
                 ));
             }
             let mut text = Vec::new();
-            e.read_to_end(&mut text).map_err(|e| e.to_string())?;
+            (&mut e)
+                .take(64 << 20)
+                .read_to_end(&mut text)
+                .map_err(|e| read_error(&shown, MANIFEST, e, &tripped))?;
             let m: Manifest =
                 serde_json::from_slice(&text).map_err(|e| format!("{shown}: {MANIFEST}: {e}"))?;
             if m.format != FORMAT {
@@ -356,8 +530,8 @@ pub fn check(pack: &Path) -> Result<Manifest, String> {
             continue;
         }
         let mut h = Sha256::new();
-        let n = std::io::copy(&mut (&mut e).take(MAX_ENTRY_BYTES + 1), &mut h)
-            .map_err(|e| format!("{shown}: `{path}`: {e}"))?;
+        let n = std::io::copy(&mut (&mut e).take(limits.entry_bytes + 1), &mut h)
+            .map_err(|e| read_error(&shown, &format!("`{path}`"), e, &tripped))?;
         if seen.insert(path.clone(), (hex(&h.finalize()), n)).is_some() {
             return Err(format!("{shown}: `{path}` appears twice"));
         }
@@ -414,23 +588,180 @@ pub fn check_command(argv: &[String]) -> Result<(), String> {
     Ok(())
 }
 
-/// Check `pack` (see [`check`]), then write its files below `dest`. Returns the manifest.
+/// A folder a pack may be written into: new, or an empty folder that is not a link. A link is
+/// refused even when it points at an empty folder: reading a pack never writes through a link
+/// it did not create.
+pub fn fresh_folder(dest: &Path) -> Result<(), String> {
+    match std::fs::symlink_metadata(dest) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(e) => Err(format!("{}: {e}", dest.display())),
+        Ok(m) if m.file_type().is_symlink() => Err(format!(
+            "{} is a symbolic link; unpack into a new folder (a pack never writes through a link)",
+            dest.display()
+        )),
+        Ok(m) if !m.is_dir() => Err(format!("{} exists and is not a folder", dest.display())),
+        Ok(_) => {
+            let mut rd = std::fs::read_dir(dest).map_err(|e| format!("{}: {e}", dest.display()))?;
+            if rd.next().is_some() {
+                Err(format!(
+                    "{} is not empty; unpack into a new or empty folder so that no earlier file is mixed with the pack's (or written through)",
+                    dest.display()
+                ))
+            } else {
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Check `pack` (see [`check`]), then write its files below `dest`, a new or empty folder
+/// ([`fresh_folder`]). The files are written into a temporary folder inside `dest` first, the
+/// scene is checked to name no file outside the pack, and only then are they moved into place:
+/// a pack that fails anything leaves `dest` as it was (a folder it created is removed).
+/// Returns the manifest.
 pub fn read(pack: &Path, dest: &Path) -> Result<Manifest, String> {
-    let m = check(pack)?;
-    let mut ar = open(pack)?;
-    for e in ar.entries().map_err(|e| e.to_string())? {
-        let mut e = e.map_err(|e| e.to_string())?;
+    read_with(pack, dest, &Limits::default())
+}
+
+/// [`read`] under other limits.
+pub fn read_with(pack: &Path, dest: &Path, limits: &Limits) -> Result<Manifest, String> {
+    fresh_folder(dest)?;
+    let m = check_with(pack, limits)?;
+    let created = !dest.exists();
+    if let Some(parent) = dest.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
+    }
+    if created {
+        std::fs::create_dir(dest).map_err(|e| format!("{}: {e}", dest.display()))?;
+    }
+    let result = (|| {
+        let staging = tempfile::Builder::new()
+            .prefix(crate::io::TEMP_PREFIX)
+            .tempdir_in(dest)
+            .map_err(|e| format!("{}: {e}", dest.display()))?;
+        extract(pack, &m, staging.path(), limits)?;
+        confined(&m, staging.path()).map_err(|e| format!("{}: {e}", pack.display()))?;
+        let rd = std::fs::read_dir(staging.path()).map_err(|e| e.to_string())?;
+        for e in rd {
+            let e = e.map_err(|e| e.to_string())?;
+            let to = dest.join(e.file_name());
+            if std::fs::symlink_metadata(&to).is_ok() {
+                return Err(format!(
+                    "{} appeared while unpacking; nothing more was written",
+                    to.display()
+                ));
+            }
+            std::fs::rename(e.path(), &to).map_err(|e| format!("{}: {e}", to.display()))?;
+        }
+        Ok(())
+    })();
+    if result.is_err() && created {
+        let _ = std::fs::remove_dir(dest);
+    }
+    result.map(|()| m)
+}
+
+/// Write the pack's files into `dir` (a fresh temporary folder: every folder below it is made
+/// here, files are created new, so nothing is written through a link), hashing each as it is
+/// written against the manifest `m` that [`check_with`] accepted (the pack file may have
+/// changed since).
+fn extract(pack: &Path, m: &Manifest, dir: &Path, limits: &Limits) -> Result<(), String> {
+    let shown = pack.display();
+    let want: BTreeMap<&str, &FileHash> = m.files.iter().map(|f| (f.path.as_str(), f)).collect();
+    let (mut ar, tripped) = open(pack, limits)?;
+    let entries = ar
+        .entries()
+        .map_err(|e| read_error(&shown, "not a poser pack", e, &tripped))?;
+    for e in entries {
+        let mut e = e.map_err(|e| read_error(&shown, "unreadable entry", e, &tripped))?;
         if !e.header().entry_type().is_file() {
             continue;
         }
-        let path = safe_entry_path(&e.path_bytes())?;
-        let mut bytes = Vec::new();
-        e.read_to_end(&mut bytes).map_err(|e| e.to_string())?;
-        let target = dest.join(&path);
-        crate::io::write_atomic(&target, &bytes)
+        let path = safe_entry_path(&e.path_bytes()).map_err(|m| format!("{shown}: {m}"))?;
+        let target = dir.join(&path);
+        let mut at = dir.to_path_buf();
+        let parts: Vec<&str> = path.split('/').collect();
+        for part in &parts[..parts.len() - 1] {
+            at.push(part);
+            match std::fs::symlink_metadata(&at) {
+                Ok(md) if md.is_dir() => {}
+                Ok(_) => {
+                    return Err(format!(
+                        "{shown}: `{path}`: a file stands where a folder should"
+                    ));
+                }
+                Err(_) => std::fs::create_dir(&at).map_err(|e| format!("{}: {e}", at.display()))?,
+            }
+        }
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&target)
             .map_err(|e| format!("{}: {e}", target.display()))?;
+        let mut w = HashingWriter {
+            inner: std::io::BufWriter::new(file),
+            h: Sha256::new(),
+        };
+        let n = std::io::copy(&mut (&mut e).take(limits.entry_bytes + 1), &mut w)
+            .map_err(|e| read_error(&shown, &format!("`{path}`"), e, &tripped))?;
+        std::io::Write::flush(&mut w.inner).map_err(|e| format!("{}: {e}", target.display()))?;
+        let hash = hex(&w.h.finalize());
+        let ok = if path == MANIFEST {
+            true
+        } else {
+            want.get(path.as_str())
+                .is_some_and(|f| f.sha256 == hash && f.bytes == n)
+        };
+        if !ok {
+            return Err(format!(
+                "{shown}: `{path}` changed while it was unpacked; nothing was written"
+            ));
+        }
     }
-    Ok(m)
+    Ok(())
+}
+
+/// Writes through and hashes what it writes.
+struct HashingWriter<W> {
+    inner: W,
+    h: Sha256,
+}
+
+impl<W: std::io::Write> std::io::Write for HashingWriter<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let k = self.inner.write(buf)?;
+        self.h.update(&buf[..k]);
+        Ok(k)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// The unpacked scene (in `dir`) names no file outside the pack's scene folder: read by the
+/// front end confined to it ([`crate::scene::load_within`]); any `E0012` refuses the pack.
+/// Other problems of the scene are left to the commands that run it.
+fn confined(m: &Manifest, dir: &Path) -> Result<(), String> {
+    let scene = dir.join(&m.scene);
+    let root = dir.join(SCENE_DIR);
+    let Err(f) = crate::scene::load_within(&scene, &m.sets, &root) else {
+        return Ok(());
+    };
+    let prefix = format!("{}/", dir.display());
+    let outside: Vec<String> = f
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == "E0012")
+        .map(|d| d.rendered.replace(&prefix, ""))
+        .collect();
+    if outside.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "the scene names files outside the pack; refused\n{}",
+            outside.join("").trim_end()
+        ))
+    }
 }
 
 /// How one output file of a rerun compares with the pack's record.
@@ -473,6 +804,139 @@ pub fn compare(then: &[FileHash], now: &[FileHash]) -> Vec<(String, Verdict)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A pack of `files` (path below `scene/`, bytes), written by [`write`].
+    fn pack_of(dir: &Path, files: &[(&str, Vec<u8>)]) -> PathBuf {
+        let mut entries = Vec::new();
+        for (rel, bytes) in files {
+            let p = dir.join(rel.replace('/', "_"));
+            std::fs::write(&p, bytes).unwrap();
+            entries.push((p, format!("{SCENE_DIR}/{rel}")));
+        }
+        let mut m = Manifest {
+            format: FORMAT.into(),
+            versions: Versions::current(),
+            scene: entries[0].1.clone(),
+            sets: vec![],
+            commands: vec![],
+            files: vec![],
+            outputs_included: false,
+        };
+        let pack = dir.join("p.poserpack");
+        write(&pack, &mut m, &entries, &[]).unwrap();
+        pack
+    }
+
+    /// Bytes that do not compress (xorshift).
+    fn noise(n: usize, seed: u64) -> Vec<u8> {
+        let mut x = seed | 1;
+        (0..n)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                x as u8
+            })
+            .collect()
+    }
+
+    /// The total cap and the ratio cap refuse a pack while it is decompressed, and reading it
+    /// then writes nothing (not even the folder); the default caps accept the same packs.
+    #[test]
+    fn total_and_ratio_caps_refuse_while_decompressing() {
+        let d = tempfile::tempdir().unwrap();
+        let a = d.path().join("a");
+        std::fs::create_dir(&a).unwrap();
+        let pack = pack_of(
+            &a,
+            &[
+                ("s.toml", b"name = \"x\"\n".to_vec()),
+                ("one.bin", noise(64 << 10, 1)),
+                ("two.bin", noise(64 << 10, 2)),
+            ],
+        );
+        let m = check(&pack).unwrap();
+        // What the entries declare; the stream is larger (headers, padding, the end blocks).
+        let declared = m.files.iter().map(|f| f.bytes).sum::<u64>()
+            + serde_json::to_vec_pretty(&m).unwrap().len() as u64;
+        let small = Limits {
+            total_bytes: 100 << 10,
+            ..Limits::default()
+        };
+        let e = check_with(&pack, &small).unwrap_err();
+        assert!(
+            e.contains("declare") && e.contains("more than the 102400"),
+            "{e}"
+        );
+        let just = Limits {
+            total_bytes: declared,
+            ..Limits::default()
+        };
+        let e = check_with(&pack, &just).unwrap_err();
+        assert!(
+            e.contains(&format!("expands to more than {declared} bytes")),
+            "{e}"
+        );
+        let out = d.path().join("out");
+        assert!(read_with(&pack, &out, &small).is_err());
+        assert!(!out.exists(), "a refused pack created its folder");
+
+        let b = d.path().join("b");
+        std::fs::create_dir(&b).unwrap();
+        let zeros = pack_of(
+            &b,
+            &[
+                ("s.toml", b"name = \"x\"\n".to_vec()),
+                ("zeros.bin", vec![0; 4 << 20]),
+            ],
+        );
+        assert!(check(&zeros).is_ok(), "4 MiB of zeros is under the grace");
+        let tight = Limits {
+            ratio: 10,
+            ratio_grace: 256 << 10,
+            ..Limits::default()
+        };
+        let e = check_with(&zeros, &tight).unwrap_err();
+        assert!(
+            e.contains("more than 10 times") && e.contains("compression bomb"),
+            "{e}"
+        );
+        // Stopped soon after the grace, not at the end of the 4 MiB.
+        let got: u64 = e
+            .split('(')
+            .nth(1)
+            .and_then(|x| x.split(' ').next())
+            .and_then(|x| x.parse().ok())
+            .unwrap();
+        assert!(got < 1 << 20, "decompressed {got} bytes before stopping");
+        assert!(read_with(&zeros, &out, &tight).is_err());
+        assert!(!out.exists());
+        assert!(read_with(&zeros, &out, &Limits::default()).is_ok());
+        assert_eq!(
+            std::fs::read(out.join("scene/zeros.bin")).unwrap().len(),
+            4 << 20
+        );
+    }
+
+    #[test]
+    fn writing_refuses_a_pack_that_reading_would_refuse_as_a_bomb() {
+        let d = tempfile::tempdir().unwrap();
+        let p = d.path().join("zeros.bin");
+        std::fs::write(&p, vec![0u8; (RATIO_GRACE_BYTES + (1 << 20)) as usize]).unwrap();
+        let mut m = Manifest {
+            format: FORMAT.into(),
+            versions: Versions::current(),
+            scene: "scene/zeros.bin".into(),
+            sets: vec![],
+            commands: vec![],
+            files: vec![],
+            outputs_included: false,
+        };
+        let pack = d.path().join("x.poserpack");
+        let e = write(&pack, &mut m, &[(p, "scene/zeros.bin".into())], &[]).unwrap_err();
+        assert!(e.contains("compression bomb"), "{e}");
+        assert!(!pack.exists());
+    }
 
     #[test]
     fn entry_paths_must_be_plain_and_relative() {

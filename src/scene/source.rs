@@ -185,24 +185,56 @@ pub fn harmless_prefix(bytes: &[u8], at: usize) -> String {
 }
 
 /// Inside a pack ([`Sources::root`] set), why `rel` — named in a scene file, `joined` once
-/// resolved against that file's folder — is not allowed: absolute, with `..`, or leaving the
-/// pack's folder through a link. `None` when it is allowed or there is no root.
+/// resolved against that file's folder — is not allowed: an absolute path, a `..` that climbs
+/// out of the pack's folder, or a link that leads out of it. `None` when it is allowed or there
+/// is no root. (`..` inside the pack is fine: `poser pack` keeps a scene that includes
+/// `../shared/rig.toml` at the same relative layout.)
 pub fn outside_root(sources: &Sources, rel: &str, joined: &Path) -> Option<String> {
+    use std::path::Component;
     let root = sources.root.as_ref()?;
     let p = Path::new(rel);
     if p.has_root()
         || p.is_absolute()
         || rel.starts_with('\\')
-        || matches!(p.components().next(), Some(std::path::Component::Prefix(_)))
+        || matches!(p.components().next(), Some(Component::Prefix(_)))
     {
         return Some("an absolute path".into());
     }
-    if p.components()
-        .any(|c| matches!(c, std::path::Component::ParentDir))
-        || rel.split(['/', '\\']).any(|c| c == "..")
-    {
-        return Some("a path with `..`".into());
+    // Lexically: `..` popped, the longest existing folder above it canonicalized.
+    let abs = if joined.is_absolute() {
+        joined.to_path_buf()
+    } else {
+        std::env::current_dir().unwrap_or_default().join(joined)
+    };
+    let mut norm = PathBuf::new();
+    for c in abs.components() {
+        match c {
+            Component::ParentDir => {
+                norm.pop();
+            }
+            Component::CurDir => {}
+            c => norm.push(c),
+        }
     }
+    // The folders only: the named file itself may be a link, judged below.
+    let mut base = norm.clone();
+    let mut rest: Vec<std::ffi::OsString> = base.file_name().into_iter().map(Into::into).collect();
+    base.pop();
+    while !base.exists() {
+        match base.file_name() {
+            Some(n) => {
+                rest.push(n.to_os_string());
+                base.pop();
+            }
+            None => break,
+        }
+    }
+    let mut lexical = base.canonicalize().unwrap_or(base);
+    lexical.extend(rest.iter().rev());
+    if !lexical.starts_with(root) {
+        return Some("a path that climbs out of the pack with `..`".into());
+    }
+    // As the file system resolves it (links followed).
     match joined.canonicalize() {
         Ok(c) if !c.starts_with(root) => Some("a link that leads out of the pack".into()),
         _ => None,
