@@ -292,3 +292,63 @@ fn zero_samples_on_the_command_line_is_refused_not_rendered_as_one() {
     );
     assert_eq!(code, Some(0), "{text}");
 }
+
+/// The Mitsuba importer (`poser import`), the second front end, reads the files a Mitsuba scene
+/// names the same way: an `<include>` or an `obj` mesh that is a named pipe, or an include of
+/// `/dev/zero` by a relative path, is refused at once where the XML names it.
+#[test]
+fn an_imported_mitsuba_scene_naming_a_pipe_or_device_is_refused_at_once() {
+    let d = tempfile::tempdir().unwrap();
+    mkfifo(&d.path().join("pipe.xml"));
+    mkfifo(&d.path().join("pipe.obj"));
+    std::os::unix::fs::symlink("/dev/zero", d.path().join("zero.xml")).unwrap();
+    let cases = [
+        (
+            "inc.xml",
+            "<include filename=\"pipe.xml\"/>",
+            "a named pipe (FIFO)",
+        ),
+        (
+            "zero.xml",
+            "<include filename=\"zero.xml\"/>",
+            "a character device",
+        ),
+        (
+            "mesh.xml",
+            "<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/></sensor>\n<shape type=\"obj\"><string name=\"filename\" value=\"pipe.obj\"/></shape>",
+            "a named pipe (FIFO)",
+        ),
+    ];
+    for (name, body, what) in cases {
+        let name = format!("s_{name}");
+        let xml = d.path().join(&name);
+        std::fs::write(
+            &xml,
+            format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n"),
+        )
+        .unwrap();
+        let out = d.path().join("out.toml");
+        let (code, text, took) = poser(
+            &[
+                "import".as_ref(),
+                xml.as_os_str(),
+                "-o".as_ref(),
+                out.as_os_str(),
+            ],
+            Duration::from_secs(5),
+        );
+        assert_eq!(code, Some(1), "{name}: {text}");
+        assert!(took < Duration::from_secs(1), "{name}: took {took:?}");
+        assert!(
+            text.contains(what) && text.contains("help:"),
+            "{name}: {text}"
+        );
+        // Where the XML names the file: the last line of the body.
+        let line = 1 + body.lines().count();
+        assert!(
+            text.contains(&format!("{name}:{line}:")),
+            "{name}: no location: {text}"
+        );
+        assert!(!out.exists());
+    }
+}

@@ -13,7 +13,9 @@
 //! | `default`, `$name`, `ref`/`id`, `include` | resolved while reading | |
 //!
 //! Safety: a document type declaration (and with it every entity) is refused; `include` and
-//! `filename` paths must stay inside the first file's folder; counts are bounded.
+//! `filename` paths must stay inside the first file's folder; counts are bounded; every file is
+//! read as the scene front end reads one (regular files only — never a device or a named pipe —
+//! of at most [`MAX_FILE`] bytes).
 
 use super::{
     Imported, Note, arr, euler_xyz, explicit_network, finish, meshes, safe_file_name, sun_table,
@@ -79,6 +81,19 @@ fn line_col(text: &str, at: usize) -> (usize, usize) {
 }
 
 /// A path named in the scene, resolved against `dir` and kept inside `root`.
+/// Read a file the Mitsuba scene names as the scene front end reads one
+/// ([`crate::scene::source::read_capped`]): regular files only, at most [`MAX_FILE`] bytes.
+fn read_capped(path: &Path) -> Result<Vec<u8>, String> {
+    crate::scene::source::read_capped(path, MAX_FILE).map_err(|r| {
+        format!(
+            "cannot read `{}`: {}\n  help: a Mitsuba scene names regular files (XML, meshes, images) of at most {} MiB",
+            shown(path),
+            r.reason(),
+            MAX_FILE >> 20
+        )
+    })
+}
+
 fn inside(root: &Path, dir: &Path, name: &str, loc: &str) -> Result<PathBuf, String> {
     let p = Path::new(name);
     if p.is_absolute() || p.components().any(|c| matches!(c, Component::Prefix(_))) {
@@ -119,11 +134,15 @@ struct Reader {
 impl Reader {
     fn parse_file(&mut self, path: &Path, depth: usize, included: bool) -> Result<X, String> {
         let shown = shown(path);
-        let meta = std::fs::metadata(path).map_err(|e| format!("{shown}: {e}"))?;
-        if meta.len() > MAX_FILE {
-            return Err(format!("{shown}: larger than {} MiB", MAX_FILE >> 20));
-        }
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{shown}: {e}"))?;
+        // The scene front end's one way to read a named file: a regular file (never a device
+        // or a named pipe, which would block), at most MAX_FILE bytes.
+        let bytes = read_capped(path)?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            format!(
+                "{shown}: not a text file (byte {} is not UTF-8)\n  help: name the Mitsuba scene's `.xml` file",
+                e.utf8_error().valid_up_to()
+            )
+        })?;
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         let mut r = quick_xml::Reader::from_str(&text);
         r.config_mut().trim_text(true);
@@ -251,7 +270,14 @@ impl Reader {
                     .attr("filename")
                     .ok_or_else(|| format!("{}: <include> needs `filename`", x.loc))?;
                 let path = inside(&self.root, &x.dir, name, &x.loc)?;
-                let inc = self.parse_file(&path, depth + 1, true)?;
+                // A file that cannot be read is reported at the <include> that names it.
+                let inc = self.parse_file(&path, depth + 1, true).map_err(|e| {
+                    if e.starts_with("cannot read `") {
+                        format!("{}: {e}", x.loc)
+                    } else {
+                        e
+                    }
+                })?;
                 parent.kids.extend(inc.kids);
             }
             _ => parent.kids.push(x),
@@ -403,7 +429,12 @@ impl Cx {
             .and_then(|f| f.attr("value"))
             .ok_or_else(|| format!("{}: a bitmap without `filename`", k.loc))?;
         let path = inside(&self.root, &k.dir, name, &k.loc)?;
-        let img = image::open(&path).map_err(|e| format!("{}: {}: {e}", k.loc, path.display()))?;
+        let bytes = read_capped(&path).map_err(|e| format!("{}: {e}", k.loc))?;
+        let img = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| e.to_string())
+            .and_then(|r| r.decode().map_err(|e| e.to_string()))
+            .map_err(|e| format!("{}: {}: {e}", k.loc, path.display()))?;
         let rgb = img.to_rgb32f();
         let srgb = !matches!(
             img,
@@ -805,7 +836,7 @@ fn file_mesh(cx: &Cx, k: &X, m: &DMat4) -> Result<TriMesh, String> {
         .and_then(|f| f.attr("value"))
         .ok_or_else(|| format!("{}: a `{kind}` shape without `filename`", k.loc))?;
     let path = inside(&cx.root, &k.dir, f, &k.loc)?;
-    let bytes = std::fs::read(&path).map_err(|e| format!("{}: {}: {e}", k.loc, path.display()))?;
+    let bytes = read_capped(&path).map_err(|e| format!("{}: {e}", k.loc))?;
     let shown = shown(&path);
     let mut w = if kind == "obj" {
         meshes::read_obj(&String::from_utf8_lossy(&bytes), &shown)
