@@ -384,7 +384,7 @@ struct Limited<R> {
     out: u64,
     compressed: Rc<Cell<u64>>,
     limits: Limits,
-    tripped: Rc<RefCell<Option<String>>>,
+    tripped: Tripped,
 }
 
 impl<R: Read> Read for Limited<R> {
@@ -418,12 +418,11 @@ impl<R: Read> Read for Limited<R> {
 }
 
 type PackReader = Limited<flate2::read::GzDecoder<Counted<std::fs::File>>>;
+/// Which limit stopped the reading, once one has.
+type Tripped = Rc<RefCell<Option<String>>>;
 
 /// Open a pack for reading under `limits`; the second item says which limit stopped it.
-fn open(
-    pack: &Path,
-    limits: &Limits,
-) -> Result<(tar::Archive<PackReader>, Rc<RefCell<Option<String>>>), String> {
+fn open(pack: &Path, limits: &Limits) -> Result<(tar::Archive<PackReader>, Tripped), String> {
     let f = std::fs::File::open(pack).map_err(|e| format!("{}: {e}", pack.display()))?;
     let meta = f
         .metadata()
