@@ -1130,6 +1130,7 @@ impl Model {
             sun,
             ambient,
             bottom_albedo: self.bottom_albedo(),
+            top: crate::optics::column::Top::Open,
             photons: COLUMN_PHOTONS,
             seed: self.render.seed,
         })
@@ -1172,6 +1173,33 @@ impl Model {
             visible: [0, 1, 2].map(|c| col.visible_at_bottom(c)),
             needed: col.bounces_for(&depths, BOUNCE_CUT_WARN),
         })
+    }
+
+    /// What the open sea surface leaves out: per channel, how much more daylight would reach
+    /// the seabed if the flat surface reflected the light coming up from below (Fresnel,
+    /// totally beyond the critical angle), as a share of today's E_d there. No backend models
+    /// that reflection yet; `explain` prints it (docs/column.md). `None` where the scene is
+    /// not a column.
+    /// A channel black at the seabed ([`crate::optics::column::Column::visible_at_bottom`]) is
+    /// `None`.
+    pub fn surface_reflection_gain(&self) -> Option<[Option<f64>; 3]> {
+        use crate::optics::column::{Top, solve_rounds};
+        let mut open = self.column_physics().ok()?;
+        open.photons = BOUNCE_PHOTONS;
+        let n = self.water.as_ref()?.ior;
+        let fresnel = crate::optics::column::ColumnInput {
+            top: Top::Fresnel(n),
+            ..open.clone()
+        };
+        let a = solve_rounds(&open, 4).ok()?;
+        let b = solve_rounds(&fresnel, 4).ok()?;
+        let nz = crate::optics::column::NZ;
+        // Both solves draw the same photons until the first reflection at the surface, so
+        // their difference is far less noisy than either (±0.5 points measured).
+        Some([0, 1, 2].map(|c| {
+            let (ea, eb) = (a.profiles[c].e_d(nz), b.profiles[c].e_d(nz));
+            (a.visible_at_bottom(c) && ea > 0.0).then(|| eb / ea - 1.0)
+        }))
     }
 
     /// The albedo of the column's bottom: the largest horizontal plane or seabed object's,

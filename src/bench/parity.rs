@@ -15,6 +15,8 @@
 //! mean of a difference of independent per-pixel noise, `3 · rms(b − a)/mean(a) / √N` over the
 //! `N` pixels (an upper bound, since the per-pixel RMS also holds any real difference). A scene
 //! whose images are black in every backend (nothing lit at the first pose) is reported `dark`.
+//! A channel darker than [`BLACK_CHANNEL`] of the brightest channel in both backends of a pair
+//! is black in any image of the scene (red under 30 m of water): it is shown, not compared.
 //! A backend that refuses a scene (caustics) is reported `refused`, with its reason.
 
 use crate::backend::{Backend, RenderOptions};
@@ -30,6 +32,11 @@ pub const TOLERANCE: f64 = 0.02;
 /// the camera at the first pose (a deep scene without lights). Dim is not dark: the relative
 /// comparison and its noise allowance hold at any exposure.
 const DARK: f64 = 1e-6;
+
+/// A channel whose mean is below this share of the image's brightest channel (in both
+/// backends of a pair) is not compared: at any exposure that shows the scene it is black, and
+/// its mean is made of the rare paths that reach it (two_gas_dive's red: 1e-5 of its green).
+pub const BLACK_CHANNEL: f64 = 1e-3;
 
 /// The parity runs compare the traced transport the three backends share.
 pub const PARITY_DAYLIGHT: &str = "render.daylight=\"traced\"";
@@ -79,6 +86,8 @@ pub struct PairRow {
     pub rel_diff: [f64; 3],
     /// The noise allowance added to [`TOLERANCE`] (relative).
     pub allowance: f64,
+    /// Channels black in both backends ([`BLACK_CHANNEL`]): not compared.
+    pub black: [bool; 3],
     pub agree: bool,
 }
 
@@ -157,15 +166,28 @@ pub fn run_scene(
         .iter()
         .map(|p| {
             let allowance = 3.0 * p.rms_rel_diff / pixels.sqrt();
-            let agree = p
-                .mean_rel_diff
-                .iter()
-                .all(|d| d.is_finite() && d.abs() <= TOLERANCE + allowance);
+            let mean_of = |name: &str| {
+                backends
+                    .iter()
+                    .find(|b| b.backend == name)
+                    .map_or([0.0; 3], |b| b.mean_rgb)
+            };
+            let (ma, mb) = (mean_of(&p.a), mean_of(&p.b));
+            let black = [0, 1, 2].map(|c| {
+                let dark =
+                    |m: [f64; 3]| m[c] < BLACK_CHANNEL * m.iter().copied().fold(0.0, f64::max);
+                dark(ma) && dark(mb)
+            });
+            let agree = (0..3).all(|c| {
+                let d = p.mean_rel_diff[c];
+                black[c] || (d.is_finite() && d.abs() <= TOLERANCE + allowance)
+            });
             PairRow {
                 a: p.a.clone(),
                 b: p.b.clone(),
                 rel_diff: p.mean_rel_diff,
                 allowance,
+                black,
                 agree,
             }
         })
@@ -220,13 +242,18 @@ pub fn run(
     Ok(rows)
 }
 
-fn pct(d: [f64; 3]) -> String {
-    format!(
-        "{:+.1} / {:+.1} / {:+.1}",
-        100.0 * d[0],
-        100.0 * d[1],
-        100.0 * d[2]
-    )
+/// Δmean R / G / B in %, with "black (±x)" for a channel not compared ([`BLACK_CHANNEL`]).
+fn pct_compared(p: &PairRow) -> String {
+    [0, 1, 2]
+        .map(|c| {
+            let v = format!("{:+.1}", 100.0 * p.rel_diff[c]);
+            if p.black[c] {
+                format!("black ({v})")
+            } else {
+                v
+            }
+        })
+        .join(" / ")
 }
 
 /// The rows as a Markdown table: per scene, each pair's difference of means (R / G / B, %)
@@ -262,7 +289,7 @@ pub fn table(rows: &[Row]) -> String {
                 r.scene,
                 p.b,
                 p.a,
-                pct(p.rel_diff),
+                pct_compared(p),
                 100.0 * (TOLERANCE + p.allowance),
                 if p.agree { "yes" } else { "**no**" }
             );

@@ -300,6 +300,15 @@ pub fn explain(m: &Model) -> String {
             }
         }
     }
+    if let Some(gain) = m.surface_reflection_gain() {
+        let _ = writeln!(
+            s,
+            "  the sea surface is open from below in every backend: reflecting the light that \
+             comes up (Fresnel, total beyond the critical angle) would add {} to E_d at the seabed (R / G / B)",
+            gain.map(|g| g.map_or("black".into(), |g| format!("{:+.1} %", g * 100.0)))
+                .join(" / ")
+        );
+    }
     if column.is_none() && m.water.is_some() {
         // What the bounce limit leaves out of the traced daylight (W0239, docs/column.md).
         let b = m.render.max_bounces;

@@ -11,7 +11,7 @@
 //! | `sun` | refracted beam: cosine of its zenith angle in the water, irradiance per channel on a plane normal to the beam just below the surface |
 //! | `ambient` | isotropic radiance arriving from every downward direction just below the surface |
 //! | `bottom_albedo` | per channel |
-//! | top | open: light reaching the surface from below leaves (the traced transport's model) |
+//! | `top` | [`Top::Open`]: light reaching the surface from below leaves (the renderers' model); [`Top::Fresnel`]: a flat water–air surface reflects it with the unpolarised Fresnel reflectance, wholly beyond the critical angle (total internal reflection) |
 //!
 //! | output ([`Column`]) | meaning |
 //! |---|---|
@@ -85,9 +85,32 @@ pub struct ColumnInput {
     pub sun: Option<ColumnSun>,
     pub ambient: [f64; 3],
     pub bottom_albedo: [f64; 3],
+    pub top: Top,
     /// Photons per channel per round (sun and sky together; see [`MAX_ROUNDS`]).
     pub photons: usize,
     pub seed: u64,
+}
+
+/// The sea surface seen from below.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Top {
+    /// Light reaching the surface from below leaves the water.
+    #[default]
+    Open,
+    /// A flat surface of water of this index (per channel) under air: light from below is
+    /// reflected with the unpolarised Fresnel reflectance, totally beyond the critical angle.
+    Fresnel([f64; 3]),
+}
+
+/// Unpolarised Fresnel reflectance of a flat water–air surface for light arriving from the
+/// water at `cos_w` (> 0) to the vertical; 1 beyond the critical angle.
+pub fn reflectance_from_below(n_water: f64, cos_w: f64) -> f64 {
+    let sin_a2 = n_water * n_water * (1.0 - cos_w * cos_w).max(0.0);
+    if sin_a2 >= 1.0 {
+        return 1.0;
+    }
+    let cos_a = (1.0 - sin_a2).sqrt();
+    1.0 - super::interface::fresnel_transmittance(n_water, 1.0, cos_w, cos_a)
 }
 
 /// Why a column cannot be solved.
@@ -294,6 +317,13 @@ impl ColumnInput {
             if !(self.sigma_a[c] > 0.0) {
                 return Err(ColumnError::NoAbsorption { channel: c });
             }
+        }
+        if let Top::Fresnel(n) = self.top
+            && n.iter().any(|v| !(v.is_finite() && *v >= 1.0))
+        {
+            return Err(ColumnError::BadInput(
+                "the water's index under a reflecting surface must be ≥ 1".into(),
+            ));
         }
         if let Some(s) = &self.sun
             && !(s.dir.is_finite() && s.dir.z < 0.0)
@@ -620,7 +650,17 @@ fn run_batch(input: &ColumnInput, c: usize, batch: usize, n: usize, az: DVec3) -
                     ph.dir = DVec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt());
                     ph.order = Order::Boundary;
                 } else if at_top {
-                    break; // open top: the light leaves
+                    let Top::Fresnel(n) = input.top else {
+                        break; // open top: the light leaves
+                    };
+                    // The surface's reflection: the share R(θ) comes back down mirrored (the
+                    // rest leaves). Reflected light is the table's (not analytic, not the
+                    // sun's first scattering, which the renderer traces in open water).
+                    ph.w *= reflectance_from_below(n[c], ph.dir.z);
+                    t.down[0] += ph.w * w0;
+                    ph.depth = 0.0;
+                    ph.dir.z = -ph.dir.z;
+                    ph.order = Order::Rest;
                 } else {
                     ph.depth = end;
                     ph.w *= albedo_ss;
@@ -956,6 +996,7 @@ mod tests {
             }),
             ambient: [ambient; 3],
             bottom_albedo: [0.5, 0.3, 0.2],
+            top: Top::Open,
             photons: 20_000,
             seed: 1,
         }
@@ -1091,6 +1132,54 @@ mod tests {
     }
 
     /// Bad input is an explicit error, never a hang or NaN.
+    /// A purely absorbing column under a reflecting surface: the Lambertian bottom's light
+    /// goes up, the surface sends back `ρ = 2∫ μ R(μ) e^(−2σH/μ) dμ` of it (Fresnel, total
+    /// beyond the critical angle), the bottom reflects that again: E_d at the bottom is the
+    /// direct beam's over `1 − A ρ`, a geometric series (quadrature here, independent of the
+    /// walk). The open top keeps the direct beam alone.
+    #[test]
+    fn reflecting_surface_returns_the_bottoms_light_as_a_geometric_series() {
+        let mut input = case(0.08, 0.0, 0.9, 6.0, true, 0.0);
+        input.bottom_albedo = [0.9, 0.6, 0.3];
+        input.top = Top::Fresnel([1.331, 1.334, 1.338]);
+        input.photons = 200_000;
+        let col = solve(&input).unwrap();
+        let open = solve(&ColumnInput {
+            top: Top::Open,
+            ..input.clone()
+        })
+        .unwrap();
+        for c in 0..3 {
+            let sa = input.sigma_a[c];
+            let h = input.depth;
+            let n = 200_000;
+            let rho: f64 = (0..n)
+                .map(|i| {
+                    let mu = (i as f64 + 0.5) / n as f64;
+                    2.0 * mu
+                        * reflectance_from_below([1.331, 1.334, 1.338][c], mu)
+                        * (-2.0 * sa * h / mu).exp()
+                        / n as f64
+                })
+                .sum();
+            let p = &col.profiles[c];
+            let direct = p.e_d_direct[NZ];
+            let want = direct / (1.0 - input.bottom_albedo[c] * rho);
+            let got = p.e_d(NZ);
+            let err = p.e_d_stderr[NZ];
+            eprintln!(
+                "channel {c}: ρ {rho:.4}, E_d {got:.4} ± {err:.4}, series {want:.4}, open {:.4}",
+                open.profiles[c].e_d(NZ)
+            );
+            assert!(
+                (got - want).abs() < 3.0 * err + 1e-3 * want,
+                "channel {c}: {got} vs {want}"
+            );
+            assert!(got > direct * (1.0 + 0.5 * input.bottom_albedo[c] * rho));
+            assert!((open.profiles[c].e_d(NZ) - direct).abs() < 1e-9 * direct);
+        }
+    }
+
     #[test]
     fn bad_input_is_an_error() {
         let mut inp = case(0.0, 0.3, 0.9, 10.0, true, 0.0);
