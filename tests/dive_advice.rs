@@ -4,7 +4,7 @@
 //! the scene spells it; a deco gas at its reserve hands over to the back gas and the rest of
 //! the ascent is planned on the gas breathed.
 mod support;
-use poser::model::{Cylinder, CylinderRole, Diver, Model};
+use poser::model::{CylinderRole, Model};
 use poser::plan::deco::{Environment, Gas};
 use poser::plan::dive::*;
 use poser::plan::gas::{MAX_BOTTOM_O2, bottom_gas, depth_limit, hypoxic_limit};
@@ -13,25 +13,7 @@ use proptest::prelude::*;
 use std::path::Path;
 use std::process::Command;
 use support::plan as common;
-
-fn cyl(name: &str, litres: f64, bar: f64, o2: f64, he: f64, role: CylinderRole) -> Cylinder {
-    Cylinder {
-        name: name.into(),
-        volume: litres / 1e3,
-        pressure: bar * 1e5,
-        o2,
-        he,
-        role,
-        switch_depth: None,
-    }
-}
-
-/// One straight strip at `depth` swum for `minutes` at 0.2 m/s.
-fn flat_dive(depth: f64, minutes: f64, diver: Diver) -> Model {
-    let length = minutes * 60.0 * 0.2;
-    let (poses, net) = common::lawnmower(1, length, 2.0, depth, 0.2, (length / 20.0).max(1.0));
-    common::model(poses, net, Some(diver), depth + 2.0)
-}
+use support::plan::{cyl, flat_dive};
 
 fn scenario(name: &str) -> String {
     format!("{}/scenarios/{name}.toml", env!("CARGO_MANIFEST_DIR"))

@@ -2,30 +2,12 @@
 //! switches, per-cylinder accounting), one criterion for "in decompression" (the ceiling), and
 //! a property test that a verdict never calls a dangerous plan OK.
 mod support;
-use poser::model::{Cylinder, CylinderRole, Diver, Model};
+use poser::model::CylinderRole;
 use poser::plan::deco::{Environment, Gas, GradientFactors, Tissues};
 use poser::plan::dive::*;
 use proptest::prelude::*;
 use support::plan as common;
-
-fn cyl(name: &str, litres: f64, bar: f64, o2: f64, he: f64, role: CylinderRole) -> Cylinder {
-    Cylinder {
-        name: name.into(),
-        volume: litres / 1e3,
-        pressure: bar * 1e5,
-        o2,
-        he,
-        role,
-        switch_depth: None,
-    }
-}
-
-/// One straight strip at `depth` swum for `minutes` at 0.2 m/s.
-fn flat_dive(depth: f64, minutes: f64, diver: Diver) -> Model {
-    let length = minutes * 60.0 * 0.2;
-    let (poses, net) = common::lawnmower(1, length, 2.0, depth, 0.2, (length / 20.0).max(1.0));
-    common::model(poses, net, Some(diver), depth + 2.0)
-}
+use support::plan::{cyl, flat_dive};
 
 #[test]
 fn ndl_verdict_agrees_with_the_ceiling() {

@@ -392,6 +392,21 @@ fn read_cameras_text(text: &str) -> Result<Vec<ForkCamera>, String> {
     Ok(out)
 }
 
+/// calibration_flat behind its flat port, or behind a decentred dome (`port = "dome"`).
+fn calibration_behind(port: &str) -> poser::model::Model {
+    let mut model = load("calibration_flat.toml");
+    if port == "dome" {
+        let glass = model.cameras[0].port.glass().unwrap().clone();
+        model.cameras[0].port = poser::model::Port::Dome {
+            center: DVec3::new(0.003, -0.002, 0.004),
+            inner_radius: 0.06,
+            thickness: 0.008,
+            glass,
+        };
+    }
+    model
+}
+
 /// `colmap_refractive/cameras.txt` reads in the Refractive COLMAP fork: its reader (ported
 /// above) takes the word after the camera parameters as the port model, so the port follows
 /// them directly, and the port's eight parameters come back exactly: the normal (flat) or
@@ -400,16 +415,7 @@ fn read_cameras_text(text: &str) -> Result<Vec<ForkCamera>, String> {
 #[test]
 fn refractive_cameras_txt_reads_in_the_fork_and_the_port_round_trips() {
     for port in ["flat", "dome"] {
-        let mut model = load("calibration_flat.toml");
-        if port == "dome" {
-            let glass = model.cameras[0].port.glass().unwrap().clone();
-            model.cameras[0].port = poser::model::Port::Dome {
-                center: DVec3::new(0.003, -0.002, 0.004),
-                inner_radius: 0.06,
-                thickness: 0.008,
-                glass,
-            };
-        }
+        let model = calibration_behind(port);
         let truth = poser::truth::compute(&model).unwrap();
         let d = tempfile::tempdir().unwrap();
         poser::truth::write(&model, d.path()).unwrap();
@@ -485,16 +491,7 @@ fn the_ported_fork_reader_refuses_what_the_fork_refuses() {
 #[test]
 fn refractive_colmap_model_reprojects_every_observation() {
     for port in ["flat", "dome"] {
-        let mut model = load("calibration_flat.toml");
-        if port == "dome" {
-            let glass = model.cameras[0].port.glass().unwrap().clone();
-            model.cameras[0].port = poser::model::Port::Dome {
-                center: DVec3::new(0.003, -0.002, 0.004),
-                inner_radius: 0.06,
-                thickness: 0.008,
-                glass,
-            };
-        }
+        let model = calibration_behind(port);
         let d = tempfile::tempdir().unwrap();
         poser::truth::write(&model, d.path()).unwrap();
         let (cams, images, points) = read_colmap(&d.path().join("colmap_refractive"));

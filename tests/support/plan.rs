@@ -149,3 +149,23 @@ pub fn paper_model(diver_: Option<Diver>) -> Model {
     let (poses, net) = lawnmower(20, 52.6, 2.0, 15.0, 0.2, 1.0);
     model(poses, net, diver_, 17.0)
 }
+
+/// A cylinder of `litres` water capacity filled to `bar` with O₂/He fractions `o2`, `he`.
+pub fn cyl(name: &str, litres: f64, bar: f64, o2: f64, he: f64, role: CylinderRole) -> Cylinder {
+    Cylinder {
+        name: name.into(),
+        volume: litres / 1e3,
+        pressure: bar * 1e5,
+        o2,
+        he,
+        role,
+        switch_depth: None,
+    }
+}
+
+/// One straight strip at `depth` swum for `minutes` at 0.2 m/s.
+pub fn flat_dive(depth: f64, minutes: f64, diver: Diver) -> Model {
+    let length = minutes * 60.0 * 0.2;
+    let (poses, net) = lawnmower(1, length, 2.0, depth, 0.2, (length / 20.0).max(1.0));
+    model(poses, net, Some(diver), depth + 2.0)
+}
