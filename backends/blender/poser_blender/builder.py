@@ -650,7 +650,7 @@ def _sun_layer_factor(desc, sun):
 
 # SEA_WALLS: material index of the sea box's sides and bottom, black. Under a sea surface
 # native's sea is unbounded: light that leaves sideways or downwards never comes back. Cycles'
-# box is finite (`bounds`: 5 extinction lengths, 5-100 m), and open sides would let the
+# box is finite (`bounds`: 5 absorption lengths, 5-400 m), and open sides would let the
 # ambient light in through the water left to them. Measured on calibration_by_port (a camera
 # looking horizontally through water absorbing 0.03/m in blue, 1/4 size, 64 spp): open sides
 # +4.2 % in B against native, black ones −0.1 %.
