@@ -647,3 +647,16 @@ fn noise_target_against_the_sensor_aims_at_the_sensors_own_noise() {
     let e = render_image(&m, &scene, 0, 0, 16, None).unwrap_err();
     assert!(e.contains("needs a sensor"), "{e}");
 }
+
+/// `samples = 0` asked of the library (the Python module's `Scene.render(samples=0)`) is an
+/// error, never one sample in silence.
+#[test]
+fn zero_samples_is_an_error_not_one_sample() {
+    let m = busy_model();
+    let e = match poser::backend::native::render_one(&m, 0, 0, Some(0)) {
+        Ok(_) => panic!("0 samples rendered"),
+        Err(e) => e,
+    };
+    assert!(e.contains("0 samples"), "{e}");
+    assert!(poser::backend::native::render_one(&m, 0, 0, Some(1)).is_ok());
+}

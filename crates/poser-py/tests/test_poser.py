@@ -206,6 +206,12 @@ def test_render_equals_the_cli_exr(tmp_path):
         s.render(len(s.poses))
 
 
+def test_render_refuses_zero_samples():
+    s = poser.load(DOME)
+    with pytest.raises(poser.PoserError, match="0 samples"):
+        s.render(0, samples=0, scale=0.05)
+
+
 def test_render_releases_the_gil():
     s = poser.load(DOME)
     done = threading.Event()

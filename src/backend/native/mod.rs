@@ -53,6 +53,16 @@ pub struct Image {
     pub noise: Option<adaptive::Report>,
 }
 
+/// At least one sample per pixel: 0 is an error, never one sample in silence (a scene's
+/// `samples = 0` is E0220 and the command line refuses `--samples 0`; this guards the library,
+/// the Python module's `Scene.render(samples=0)` included).
+fn checked_samples(samples: u32) -> Result<u32, String> {
+    if samples == 0 {
+        return Err("0 samples per pixel: at least one is needed (e.g. samples = 16)".into());
+    }
+    Ok(samples)
+}
+
 /// Render one image in memory (rig pose `pose`, camera `cam`; `samples` per pixel, else the
 /// scene's): the linear radiance `poser render` writes as `<image>.exr`, before any
 /// denoising. What the Python module's `Scene.render` returns.
@@ -74,8 +84,8 @@ pub fn render_one(
             model.cameras.len()
         ));
     }
+    let samples = checked_samples(samples.unwrap_or(model.render.samples))?;
     let scene = scene::Scene::build(model)?;
-    let samples = samples.unwrap_or(model.render.samples).max(1);
     render_image(model, &scene, pose, cam, samples, None)
 }
 
@@ -355,7 +365,7 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     if poses.is_empty() {
         return Err("no rig pose to render".into());
     }
-    let samples = opts.samples.unwrap_or(model.render.samples).max(1);
+    let samples = checked_samples(opts.samples.unwrap_or(model.render.samples))?;
     let scene = scene::Scene::build(model)?;
     let rows_total: u64 =
         poses.len() as u64 * model.cameras.iter().map(|c| c.height as u64).sum::<u64>();
