@@ -19,7 +19,7 @@
 //! file, line, column, message and help of each), `ValueError` (a bad argument), and
 //! `poser.PoserError` (a run that failed). Long computations release the GIL.
 
-use numpy::{IntoPyArray, PyArray1, PyArrayLike2, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{IntoPyArray, PyArray1, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods};
 use poser::backend::Backend;
 use poser::model::{Model, Pose};
 use poser::optics::project::Projector;
@@ -289,7 +289,8 @@ impl Scene {
         to_py(py, &self.model)
     }
 
-    /// Project 3D points (metres; an `(N, 3)` array) through the camera and its port.
+    /// Project 3D points (metres; an `(N, 3)` array, or one point as `(3,)`, which gives
+    /// `N = 1`) through the camera and its port.
     ///
     /// `frame="camera"` (default) or `"world"` at rig pose `pose`. Returns `(uv, status)`:
     /// `uv` an `(N, 2)` float64 array of pixels (centres at +0.5, COLMAP's convention;
@@ -300,7 +301,7 @@ impl Scene {
     fn project<'py>(
         &self,
         py: Python<'py>,
-        points: PyArrayLike2<'py, f64, numpy::AllowTypeChange>,
+        points: PyArrayLikeDyn<'py, f64, numpy::AllowTypeChange>,
         camera: Option<&str>,
         frame: &str,
         pose: usize,
@@ -318,15 +319,16 @@ impl Scene {
             }
         };
         let shape = points.shape();
-        if shape.len() != 2 || shape[1] != 3 {
+        if !(shape.len() == 2 && shape[1] == 3 || shape == [3]) {
             return Err(PyValueError::new_err(format!(
-                "points: expected an (N, 3) array of metres, got shape {shape:?}"
+                "points: expected an (N, 3) array of metres (or one point as (3,)), got \
+                 shape {shape:?}"
             )));
         }
-        let view = points.as_array();
-        let pts: Vec<glam::DVec3> = view
-            .rows()
-            .into_iter()
+        // Row-major logical order whatever the memory layout: x, y, z of each point in turn.
+        let flat: Vec<f64> = points.as_array().iter().copied().collect();
+        let pts: Vec<glam::DVec3> = flat
+            .chunks_exact(3)
             .map(|r| glam::DVec3::new(r[0], r[1], r[2]))
             .collect();
         if let Some(i) = pts.iter().position(|p| !p.is_finite()) {

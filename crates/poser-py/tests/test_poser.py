@@ -148,6 +148,18 @@ def test_project_refuses_bad_input():
     uv2, _ = s.project([[0, 0, 2]])
     uv3, _ = s.project(np.array([[0.0, 0.0, 2.0]]))
     assert np.array_equal(uv2, uv3)
+    # One point as a 1-D array is N = 1 (it used to raise numpy's "dimensionality mismatch").
+    uv4, st4 = s.project(np.array([0.0, 0.0, 2.0]))
+    assert uv4.shape == (1, 2) and st4.shape == (1,) and np.array_equal(uv4, uv3)
+    with pytest.raises(ValueError, match=r"\(N, 3\)"):
+        s.project(np.zeros(4))
+    with pytest.raises(ValueError, match=r"\(N, 3\)"):
+        s.project(np.zeros((2, 3, 3)))
+    # A transposed (non-contiguous) view keeps each point's x, y, z together.
+    pts = np.array([[0.0, 0.1], [0.0, -0.1], [2.0, 3.0]]).T
+    uv5, _ = s.project(pts)
+    uv6, _ = s.project(np.ascontiguousarray(pts))
+    assert np.array_equal(uv5, uv6, equal_nan=True)
 
 
 def test_truth_matches_truth_json(tmp_path):

@@ -68,7 +68,8 @@ class Scene:
         pose: int = 0,
         channel: Literal["r", "g", "b"] = "g",
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.str_]]:
-        """(N, 3) metres → ((N, 2) pixels, NaN where none; (N,) status: "ok", "off_sensor", …)."""
+        """(N, 3) metres, or one point as (3,) → ((N, 2) pixels, NaN where none; (N,) status:
+        "ok", "off_sensor", …)."""
     def truth(self) -> dict[str, Any]:
         """Ground truth of every image (truth.json), point columns as numpy arrays."""
     def plan(self) -> dict[str, Any]:
