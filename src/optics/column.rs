@@ -18,7 +18,7 @@
 //! | [`Column::radiance`] | `L_m(z, ω)`: radiance seen at depth `z` looking along `ω` that was scattered in the water on its way, the sun's *first* scattering apart (the renderer traces it on camera rays, with shadows) |
 //! | [`Column::boundary`] | the sky's and the bottom's own radiance (analytic: `L_sky`, `A·E_d(H)/π`), seen through the water where a ray meets no geometry |
 //! | [`Profile`] | per channel, at `nz + 1` planes: E_d (direct, diffuse), E_u, E_0, K_d, with standard errors |
-//! | [`Column::bed_orders`], [`Column::seen_orders`] | E_d at the bottom, and the radiance seen looking down in every layer, split by the number of events the light met: what a bounce limit cuts off ([`Column::share_beyond`], [`Column::share_seen_beyond`]) |
+//! | [`Column::seen_orders`] | the radiance seen looking down in every layer, split by the number of events the light met: what a bounce limit cuts off ([`Column::share_seen_beyond`]) |
 //!
 //! Method: photons are launched from the sun (its direct beam is analytic) and from the sky,
 //! flown with implicit capture, and tallied by track length into `nz` depth layers × `nmu`
@@ -56,7 +56,7 @@ pub const TARGET_STDERR: f64 = 0.002;
 pub const VISIBLE: f64 = 1e-3;
 /// Scattering events after which a photon history is ended (its weight is counted as lost).
 const MAX_EVENTS: u32 = 200_000;
-/// Scattering orders the bottom's downward irradiance is split into ([`Column::bed_orders`]);
+/// Scattering orders the radiance seen looking down is split into ([`Column::seen_orders`]);
 /// the last bin holds this many events or more.
 pub const ORDERS: usize = 256;
 /// Cosine of the cone about the nadir whose radiance [`Column::share_seen_beyond`] splits by
@@ -181,15 +181,9 @@ pub struct Column {
     /// entry the total.
     cdf: Vec<[Vec<f64>; 2]>,
     pub profiles: [Profile; 3],
-    /// Per channel, E_d at the bottom split by the number of events (scatterings in the water
-    /// and reflections at the bottom) the light met on its way, index `k < ORDERS`: exactly
-    /// `k`, index `ORDERS`: that many or more; W/m². Index 0 holds the sun's direct beam and
-    /// the sky's unscattered light. A path tracer limited to `B` scattering vertices per path
-    /// sees the seabed's daylight of orders `k < B` only (its first vertex is the seabed):
-    /// [`Column::share_beyond`].
-    pub bed_orders: [Vec<f64>; 3],
     /// Per channel, the radiance seen looking down within [`SEEN_CONE`] of the nadir in every
-    /// layer, split the same way (index `k · (ORDERS + 1) + n`, unnormalised): light going up
+    /// layer, split by the number of events (scatterings in the water, reflections at the
+    /// bottom) the light met (index `k · (ORDERS + 1) + n`, unnormalised): light going up
     /// that met `n` events, the last of them the first vertex of a camera path looking down
     /// from layer `k` ([`Column::share_seen_beyond`]).
     pub seen_orders: [Vec<f64>; 3],
@@ -236,8 +230,6 @@ struct Tally {
     track: Vec<f64>,
     down: Vec<f64>,
     up: Vec<f64>,
-    /// Diffuse E_d at the bottom by events met ([`Column::bed_orders`]).
-    bed: Vec<f64>,
     /// Track length going up within [`SEEN_CONE`] of the vertical, per layer and events met,
     /// index `k · (ORDERS + 1) + n` ([`Column::seen_orders`]).
     seen_ord: Vec<f64>,
@@ -253,7 +245,6 @@ impl Tally {
             track: vec![0.0; NZ],
             down: vec![0.0; NZ + 1],
             up: vec![0.0; NZ + 1],
-            bed: vec![0.0; ORDERS + 1],
             seen_ord: vec![0.0; NZ * (ORDERS + 1)],
             lost: 0.0,
             launched: 0.0,
@@ -342,7 +333,7 @@ pub fn solve(input: &ColumnInput) -> Result<Column, ColumnError> {
 }
 
 /// Solve the column in at most `max_rounds` rounds (1: a quick look, e.g. at the shares of
-/// scattering orders, [`Column::share_beyond`], whose noise is far below what they decide).
+/// scattering orders, [`Column::share_seen_beyond`], whose noise is far below what they decide).
 pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, ColumnError> {
     input.check()?;
     let max_rounds = max_rounds.clamp(1, MAX_ROUNDS);
@@ -357,7 +348,6 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
     let mut table: [Vec<f32>; 3] = Default::default();
     let mut first: [Vec<f32>; 3] = Default::default();
     let mut profiles: [Profile; 3] = Default::default();
-    let mut bed_orders: [Vec<f64>; 3] = Default::default();
     let mut seen_orders: [Vec<f64>; 3] = Default::default();
     let mut lost = 0.0;
     let mut launched = 0.0;
@@ -396,9 +386,6 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
                     sum.up[j] += t.up[j];
                     per_plane_down[j].push(t.down[j]);
                     per_plane_up[j].push(t.up[j]);
-                }
-                for (a, b) in sum.bed.iter_mut().zip(&t.bed) {
-                    *a += b;
                 }
                 for (a, b) in sum.seen_ord.iter_mut().zip(&t.seen_ord) {
                     *a += b;
@@ -464,9 +451,6 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
             };
             p.k_d.push(k);
         }
-        let mut orders: Vec<f64> = sum.bed.iter().map(|v| v / nb).collect();
-        orders[0] += direct_bottom;
-        bed_orders[c] = orders;
         seen_orders[c] = sum.seen_ord.iter().map(|v| v / nb).collect();
         profiles[c] = p;
     }
@@ -485,7 +469,6 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
         first,
         cdf,
         profiles,
-        bed_orders,
         seen_orders,
         truncated: if launched > 0.0 { lost / launched } else { 0.0 },
         photons: photons_max,
@@ -638,9 +621,6 @@ fn run_batch(input: &ColumnInput, c: usize, batch: usize, n: usize, az: DVec3) -
                 if at_bottom {
                     // (The direct beam's arrival is analytic in E_d; its reflection is light
                     // of the table.)
-                    if ph.order != Order::Beam {
-                        t.bed[(ph.events as usize).min(ORDERS)] += ph.w * w0;
-                    }
                     ph.w *= a_bottom;
                     ph.depth = h;
                     t.up[NZ] += ph.w * w0;
@@ -862,27 +842,11 @@ impl Column {
         (cdf[b + 1] - cdf[b]) / total / bin_solid_angle(i)
     }
 
-    /// Per channel, the share of E_d at the bottom that met `bounces` events or more on its
-    /// way: what a path tracer ending paths after `bounces` scattering vertices loses of the
-    /// daylight on the seabed (0 where the bottom is dark).
-    pub fn share_beyond(&self, bounces: u32) -> [f64; 3] {
-        let from = (bounces as usize).min(ORDERS);
-        [0, 1, 2].map(|c| {
-            let o = &self.bed_orders[c];
-            let total: f64 = o.iter().sum();
-            if total > 0.0 {
-                (o[from..].iter().sum::<f64>() / total).clamp(0.0, 1.0)
-            } else {
-                0.0
-            }
-        })
-    }
-
     /// Per channel, the share of the radiance seen looking down from depth `z` (within
     /// [`SEEN_CONE`] of the nadir) that met more than `bounces` events: what a path tracer
     /// ending paths after `bounces` scattering vertices loses of a down-looking camera's
-    /// image there (its seabed and the water between). Close to the seabed it is
-    /// [`Column::share_beyond`] (the seabed's light has met one event more than E_d);
+    /// image there (its seabed and the water between). Close to the seabed it is the share of
+    /// E_d there that met `bounces` events or more (the seabed's reflection is one more);
     /// higher up it grows, as the water's own light has met more events.
     pub fn share_seen_beyond(&self, z: f64, bounces: u32) -> [f64; 3] {
         // The layer holding `z` and its neighbours (a thin layer's cone holds few tracks).
