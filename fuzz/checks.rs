@@ -93,7 +93,7 @@ pub fn compile_at(p: &Path) {
 /// Parse a points file and project what it holds through a tilted flat port.
 pub fn project_csv(data: &[u8]) {
     let text = String::from_utf8_lossy(data);
-    let Ok(points) = poser::cli::project::parse_points(&text, "points.csv") else {
+    let Ok(points) = poser::points::parse_points(&text, "points.csv") else {
         return;
     };
     static PROJECTOR: std::sync::OnceLock<poser::optics::project::Projector> =

@@ -227,6 +227,17 @@ impl Projector {
     }
 }
 
+/// Parse a colour channel name (`r`, `g`, `b`, `red`, …, or `0`, `1`, `2`) into the channel
+/// index a [`Projector`] takes (`poser project --channel`, Python's `Scene.project(channel=)`).
+pub fn parse_channel(s: &str) -> Result<usize, String> {
+    match s.to_ascii_lowercase().as_str() {
+        "r" | "red" | "0" => Ok(0),
+        "g" | "green" | "1" => Ok(1),
+        "b" | "blue" | "2" => Ok(2),
+        _ => Err(format!("--channel `{s}`: expected r, g or b")),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

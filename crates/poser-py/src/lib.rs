@@ -5,7 +5,7 @@
 //! | Python | library | CLI twin |
 //! |---|---|---|
 //! | `poser.load(path, set={...})` → `Scene` | `scene::load` | every command's `SCENE --set` |
-//! | `Scene.explain()` | `cli::explain::explain` | `poser explain` |
+//! | `Scene.explain()` | `explain::explain` | `poser explain` |
 //! | `Scene.to_dict()` | the resolved model, serialised | `poser explain --json` |
 //! | `Scene.poses`, `Scene.cameras` | `Model::poses`, `truth::camera_truth` | `truth.json` |
 //! | `Scene.project(points, camera=, frame=, pose=, channel=)` | `Projector::project_points` | `poser project` |
@@ -281,7 +281,7 @@ impl Scene {
 
     /// The resolved model's key numbers for a person (what `poser explain` prints).
     fn explain(&self) -> String {
-        poser::cli::explain::explain(&self.model)
+        poser::explain::explain(&self.model)
     }
 
     /// The whole resolved model as a dict (what `poser explain --json` prints).
@@ -307,7 +307,7 @@ impl Scene {
         pose: usize,
         channel: &str,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let ch = poser::cli::project::parse_channel(channel).map_err(PyValueError::new_err)?;
+        let ch = poser::optics::project::parse_channel(channel).map_err(PyValueError::new_err)?;
         let cam = self.camera(camera)?;
         let world_pose = match frame {
             "camera" => None,
