@@ -254,3 +254,151 @@ file = "gcps.csv"
         "the error points at the `file` key: {text}"
     );
 }
+
+/// One point-list parser: the same GCP file (a comment, a header naming the columns, rows
+/// separated by tabs, blanks and commas) given to `poser project --points` and as a
+/// `points_file` target gives the same points, ids and pixels.
+#[test]
+fn project_and_a_points_file_target_read_the_same_gcp_file() {
+    let gcps = "# a lab's GCP list\nid\tx\ty\tz\nGCP1\t0.0\t0.0\t-10\nGCP7 0.6 -0.4 -10  # corner\nA-12, -0.5, 0.45, -10\n";
+    let tmp = tempfile::tempdir().unwrap();
+    let p = write(
+        tmp.path(),
+        r#"
+[[targets]]
+name = "gcp"
+type = "points_file"
+file = "gcps.csv"
+diameter = "5 cm"
+"#,
+        gcps,
+    );
+    let m = load(&p);
+    let from_target: Vec<(String, DVec3)> = m
+        .targets
+        .iter()
+        .map(|t| {
+            let id = t.points[0].id.strip_prefix("gcp/").unwrap().to_string();
+            (id, t.points[0].world)
+        })
+        .collect();
+    let from_project = poser::points::parse_points(gcps, "gcps.csv").unwrap();
+    assert_eq!(from_project, from_target);
+    assert_eq!(from_project.len(), 3);
+    // The command itself takes the file, and projects the target's points.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
+        .args(["project", "--frame", "world", "--pose", "0"])
+        .arg(&p)
+        .arg("--points")
+        .arg(tmp.path().join("gcps.csv"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let pr = poser::optics::project::Projector::new(&m, 0, 1).unwrap();
+    assert_eq!(
+        stdout,
+        poser::cli::project::project_csv(&pr, &from_target, Some(0))
+    );
+    assert!(
+        stdout.lines().skip(1).all(|l| l.ends_with(",ok")),
+        "{stdout}"
+    );
+}
+
+/// The point-list parser on `poser project`'s CSV: quotes, header order, located errors.
+#[test]
+fn csv_point_lists_read_by_header_with_located_errors() {
+    use poser::points::parse_points;
+    let pts = parse_points("id,x,y,z\n\"a,1\",1,2,3\nb, 4 ,5,6\n", "f.csv").unwrap();
+    assert_eq!(pts[0].0, "a,1");
+    assert_eq!(pts[1].1, DVec3::new(4.0, 5.0, 6.0));
+    let e = parse_points("id,x,y,z\na,1,2\n", "f.csv").unwrap_err();
+    assert!(e.starts_with("f.csv:2:"), "{e}");
+    let e = parse_points("id,x,y,z\na,1,zz,3\n", "f.csv").unwrap_err();
+    assert!(
+        e.starts_with("f.csv:2:5: `zz` is not a finite number"),
+        "{e}"
+    );
+    assert!(
+        parse_points("name,x,y\n", "f.csv")
+            .unwrap_err()
+            .contains("help:")
+    );
+    assert!(
+        parse_points("", "f.csv")
+            .unwrap_err()
+            .contains("empty file")
+    );
+    assert!(parse_points("id,x,y,z\na,NaN,1,1\n", "f.csv").is_err());
+    assert!(parse_points("id,x,y,z\n\"a,1,2,3\n", "f.csv").is_err());
+    // Column order is taken from the header, extra columns are ignored.
+    let p = parse_points("z,y,x,id,note\n3,2,1,p,x\n", "f.csv").unwrap();
+    assert_eq!(p[0], ("p".into(), DVec3::new(1.0, 2.0, 3.0)));
+    // A header only: no points (`poser project` writes its header alone).
+    assert!(parse_points("id,x,y,z\n", "f.csv").unwrap().is_empty());
+    // `#` inside an id is not a comment; spaces inside a comma-separated id are kept; a line
+    // that mixes separators and a trailing comma are read.
+    let p = parse_points("id,x,y,z\nGCP#2;4;5;6 # a note\n", "f.csv").unwrap();
+    assert_eq!(p[0], ("GCP#2".into(), DVec3::new(4.0, 5.0, 6.0)));
+    let p = parse_points("id,x,y,z\nGCP 1,1,2,3\nA1 0.5,1,2\nB,1,2,3,\n", "f.csv").unwrap();
+    assert_eq!(p[0].0, "GCP 1");
+    assert_eq!(p[1], ("A1".into(), DVec3::new(0.5, 1.0, 2.0)));
+    assert_eq!(p[2].0, "B");
+}
+
+/// The point-list parser on published lists (`points_file`): blanks, commas, comments, an
+/// optional header; errors with line and column.
+#[test]
+fn whitespace_csv_header_and_comments() {
+    use poser::scene::points_file::parse;
+    let t = "\u{feff}# test field\nid,x,y,z\nA1, 0.5, -1.25, -10\n\nB2\t1e-1 2 -9.5  # a note\n";
+    let v = parse(t).unwrap();
+    assert_eq!(v.len(), 2);
+    assert_eq!(v[0].id, "A1");
+    assert_eq!(v[0].p, DVec3::new(0.5, -1.25, -10.0));
+    assert_eq!(v[1].p, DVec3::new(0.1, 2.0, -9.5));
+    // No header at all; a header by position.
+    assert_eq!(parse("7 1 2 3").unwrap()[0].id, "7");
+    assert_eq!(
+        parse("name east north up\nP 1 2 3").unwrap()[0].p,
+        DVec3::new(1.0, 2.0, 3.0)
+    );
+}
+
+#[test]
+fn points_file_errors_name_line_and_column() {
+    use poser::scene::points_file::parse;
+    assert_eq!(
+        parse("id x y z\nA 1 2 3\nB 1 zz 3\n").unwrap_err(),
+        (
+            3,
+            5,
+            "`zz` is not a finite number (column `y`, in metres)".into()
+        )
+    );
+    assert_eq!(
+        parse("A 1 2 3\nA 4 5 6").unwrap_err(),
+        (2, 1, "the id `A` appears twice".into())
+    );
+    assert_eq!(parse("A 1 2 3 4").unwrap_err().1, 9);
+    assert_eq!(parse("A 1 2").unwrap_err().0, 1);
+    assert!(parse("# nothing\n\n").is_err());
+    assert!(parse("id x y z\n").is_err());
+    assert!(parse("A 1 2 inf").is_err());
+    // A header is only the first data line: a later non-numeric line is an error.
+    assert_eq!(parse("A 1 2 3\nid x y z").unwrap_err().0, 2);
+}
+
+#[test]
+fn channel_names() {
+    use poser::optics::project::parse_channel;
+    assert_eq!(parse_channel("R"), Ok(0));
+    assert_eq!(parse_channel("green"), Ok(1));
+    assert_eq!(parse_channel("b"), Ok(2));
+    assert!(parse_channel("x").is_err());
+}

@@ -8,10 +8,11 @@
 //! | `surface` | `"given"`: at the file's coordinates, facing the target's +z; `"seabed"`: dropped straight down onto the scene's objects, facing the surface it lands on |
 //! | `position`, `rotation`, `look_at` | the file's frame in the world |
 //!
-//! The file: one point per line, `id x y z` in metres, separated by spaces, tabs, commas or
-//! semicolons; `#` starts a comment; a first line whose coordinates are not numbers is a
-//! header and is skipped. Ids are kept: the point of line `GCP7 …` in target `gcp` has the id
-//! `gcp/GCP7`. Every problem names the file, line and column.
+//! The file: one point per line, `id x y z` in metres, read by the one point-list parser
+//! ([`crate::points`], the same as `poser project --points`): separated by commas, semicolons,
+//! spaces or tabs; `#` starts a comment; an optional header line. Ids are kept and unique:
+//! the point of line `GCP7 …` in target `gcp` has the id `gcp/GCP7`. Every problem names the
+//! file, line and column.
 
 use super::diag::{Diagnostic, Span};
 use super::reader::Cx;
@@ -22,88 +23,25 @@ use std::path::Path;
 /// Most points one file may hold (each becomes a printed disk in every backend).
 pub const MAX_POINTS: usize = 10_000;
 
-/// One parsed line.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FilePoint {
-    pub id: String,
-    pub p: DVec3,
-}
+/// One point of the file (the shared point-list parser's [`crate::points::Point`]).
+pub type FilePoint = crate::points::Point;
 
-/// Parse a points file's text. Errors are `(line, column, message)`, 1-based.
+/// Parse a points file's text ([`crate::points::parse`]), refusing what a target list may not
+/// hold: no point, the same id twice, more than [`MAX_POINTS`]. Errors are `(line, column,
+/// message)`, 1-based.
 pub fn parse(text: &str) -> Result<Vec<FilePoint>, (usize, usize, String)> {
-    let mut out: Vec<FilePoint> = Vec::new();
-    let mut seen_data = false;
-    for (k, raw) in text.lines().enumerate() {
-        let line = raw.split('#').next().unwrap_or("");
-        // Fields with their 1-based start columns (in characters).
-        let mut fields: Vec<(usize, &str)> = Vec::new();
-        let mut start: Option<(usize, usize)> = None; // (byte, column)
-        let mut col = 0;
-        for (b, ch) in line.char_indices() {
-            col += 1;
-            let sep = ch.is_whitespace() || ch == ',' || ch == ';';
-            match (sep, start) {
-                (true, Some((s, c))) => {
-                    fields.push((c, &line[s..b]));
-                    start = None;
-                }
-                (false, None) => start = Some((b, col)),
-                _ => {}
-            }
-        }
-        if let Some((s, c)) = start {
-            fields.push((c, &line[s..]));
-        }
-        if fields.is_empty() {
-            continue;
-        }
-        let nums: Vec<Option<f64>> = fields
-            .iter()
-            .skip(1)
-            .map(|(_, f)| f.parse::<f64>().ok())
-            .collect();
-        if !seen_data && fields.len() >= 4 && nums.iter().take(3).all(Option::is_none) {
-            seen_data = true; // a header line
-            continue;
-        }
-        seen_data = true;
-        if fields.len() != 4 {
-            let c = fields.get(4).map(|f| f.0).unwrap_or(fields[0].0);
+    let out = crate::points::parse(text).map_err(|e| (e.line, e.col, e.message))?;
+    for (i, q) in out.iter().enumerate() {
+        if i == MAX_POINTS {
             return Err((
-                k + 1,
-                c,
-                format!("expected 4 fields `id x y z`, found {}", fields.len()),
-            ));
-        }
-        let mut xyz = [0.0; 3];
-        for (i, v) in nums.iter().enumerate() {
-            let (c, f) = fields[i + 1];
-            match v {
-                Some(v) if v.is_finite() => xyz[i] = *v,
-                _ => {
-                    return Err((
-                        k + 1,
-                        c,
-                        format!("`{f}` is not a finite number (coordinates are in metres)"),
-                    ));
-                }
-            }
-        }
-        let id = fields[0].1.to_string();
-        if out.iter().any(|q| q.id == id) {
-            return Err((k + 1, fields[0].0, format!("the id `{id}` appears twice")));
-        }
-        if out.len() == MAX_POINTS {
-            return Err((
-                k + 1,
+                q.line,
                 1,
                 format!("more than {MAX_POINTS} points (each is a printed disk)"),
             ));
         }
-        out.push(FilePoint {
-            id,
-            p: DVec3::from_array(xyz),
-        });
+        if out[..i].iter().any(|o| o.id == q.id) {
+            return Err((q.line, q.col, format!("the id `{}` appears twice", q.id)));
+        }
     }
     if out.is_empty() {
         return Err((1, 1, "the file holds no points".into()));
@@ -158,7 +96,7 @@ pub fn read(cx: &mut Cx, path: &Path, span: Span) -> Vec<FilePoint> {
             cx.push(
                 Diagnostic::error("E0294", format!("{shown}:{line}:{col}: {msg}"))
                     .label(span, "in this points file")
-                    .help("one point per line: `id x y z` in metres (spaces or commas; `#` comments; one optional header line)"),
+                    .help(crate::points::HELP),
             );
             vec![]
         }
@@ -268,41 +206,5 @@ fn disk(name: &str, id: &str, diameter: f64, pose: Pose) -> Target {
         name: tname,
         kind,
         pose,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn whitespace_csv_header_and_comments() {
-        let t = "# test field\nid,x,y,z\nA1, 0.5, -1.25, -10\n\nB2\t1e-1 2 -9.5  # a note\n";
-        let v = parse(t).unwrap();
-        assert_eq!(v.len(), 2);
-        assert_eq!(v[0].id, "A1");
-        assert_eq!(v[0].p, DVec3::new(0.5, -1.25, -10.0));
-        assert_eq!(v[1].p, DVec3::new(0.1, 2.0, -9.5));
-        // No header at all.
-        assert_eq!(parse("7 1 2 3").unwrap()[0].id, "7");
-    }
-
-    #[test]
-    fn errors_name_line_and_column() {
-        assert_eq!(
-            parse("id x y z\nA 1 2 3\nB 1 zz 3\n").unwrap_err(),
-            (
-                3,
-                5,
-                "`zz` is not a finite number (coordinates are in metres)".into()
-            )
-        );
-        assert_eq!(parse("A 1 2 3\nA 4 5 6").unwrap_err().0, 2);
-        assert_eq!(parse("A 1 2 3 4").unwrap_err().1, 9);
-        assert_eq!(parse("A 1 2").unwrap_err().0, 1);
-        assert!(parse("# nothing\n\n").is_err());
-        assert!(parse("A 1 2 inf").is_err());
-        // A header is only the first data line: a later non-numeric line is an error.
-        assert_eq!(parse("A 1 2 3\nid x y z").unwrap_err().0, 2);
     }
 }
