@@ -1,11 +1,18 @@
-//! The layering rules of poser's tree, checked on the source text (a small scan of `crate::…`
-//! and `super::…` paths in code, comments skipped):
+//! The layering rules of poser's tree, checked on the source text: a small scan of the
+//! `crate::…`, `super::…` and `self::…` paths in code (comments skipped), each resolved to
+//! the module it names from the file's module and the inline `mod … {}` around it, and every
+//! `use` group expanded, nested groups included (`use crate::{optics::{glass, water},
+//! model::Model};` names `optics::glass`, `optics::water` and `model::Model`).
 //!
 //! | rule | why |
 //! |---|---|
 //! | `src/optics` imports nothing of `crate::scene` or `crate::model` | the optics is pure math on its own value types (`optics::types`, re-exported by the model) |
 //! | no backend imports another (`backend/native`, `backend/mitsuba`, `backend/blender`) | backends are peers; `compare`, `bench` and the commands reach them through `backend::Backend` |
 //! | nothing outside `src/scene` names `scene::format` | only the front end reads the raw scene format; everything else uses the resolved model |
+//! | no backend names the front end's insides (`scene::reader`, `resolve`, `check`, `format`, `source`) | a backend works from the resolved model; it may load a scene (`scene::load`, in its tests) and format numbers as diagnostics do (`scene::diag`) |
+//! | nothing outside `src/cli` (and `src/main.rs`) imports `crate::cli` | the library sits under the CLI: `explain`, point lists and channel names live in the library, for the CLI, Python and the fuzz targets alike |
+//!
+//! Each hole a scan can have is planted in a probe test below, which expects the violation.
 
 use std::path::{Path, PathBuf};
 
@@ -51,39 +58,159 @@ fn sources() -> Vec<(String, String)> {
         .collect()
 }
 
-/// The `crate::a::b…` paths of a file (the module chain after `crate::`), including the
-/// members of `use crate::{a::…, b::…}` groups.
-fn crate_paths(code: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let bytes = code.as_bytes();
+/// The module path of a source file (`optics/port/mod.rs` → `optics::port`; `lib.rs` → root).
+fn module_of(rel: &str) -> Vec<String> {
+    let rel = rel.trim_end_matches(".rs");
+    let mut m: Vec<String> = rel.split('/').map(str::to_string).collect();
+    if matches!(m.last().map(String::as_str), Some("mod" | "lib" | "main")) {
+        m.pop();
+    }
+    m
+}
+
+fn is_ident(c: u8) -> bool {
+    c.is_ascii_alphanumeric() || c == b'_'
+}
+
+/// Expand a use tree at the start of `s` (`a::b`, `a::{b, c::{d, e}}`, `{a, b}`, `a::*`,
+/// `a as b`) into its paths; returns them and the bytes read.
+fn use_tree(s: &str) -> (Vec<Vec<String>>, usize) {
+    let b = s.as_bytes();
     let mut i = 0;
-    while let Some(k) = code[i..].find("crate::") {
-        let start = i + k;
-        let before_ok =
-            start == 0 || !(bytes[start - 1].is_ascii_alphanumeric() || bytes[start - 1] == b'_');
-        let mut j = start + "crate::".len();
-        if before_ok {
-            if code[j..].starts_with('{') {
-                // A group: take its top-level members.
-                let end = code[j..].find('}').map_or(code.len(), |e| j + e);
-                for m in code[j + 1..end].split(',') {
-                    let m: String = m.split_whitespace().collect();
-                    if !m.is_empty() {
-                        out.push(m);
-                    }
+    let skip_ws = |i: &mut usize| {
+        while *i < b.len() && b[*i].is_ascii_whitespace() {
+            *i += 1;
+        }
+    };
+    let mut prefix: Vec<String> = Vec::new();
+    loop {
+        skip_ws(&mut i);
+        if i < b.len() && b[i] == b'{' {
+            // A group: each member is a tree of its own.
+            let mut out = Vec::new();
+            i += 1;
+            loop {
+                skip_ws(&mut i);
+                if i >= b.len() {
+                    return (out, i);
                 }
-                j = end;
-            } else {
-                let end = code[j..]
-                    .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == ':'))
-                    .map_or(code.len(), |e| j + e);
-                out.push(code[j..end].trim_end_matches(':').to_string());
-                j = end;
+                if b[i] == b'}' {
+                    i += 1;
+                    break;
+                }
+                if b[i] == b',' {
+                    i += 1;
+                    continue;
+                }
+                let (members, n) = use_tree(&s[i..]);
+                i += n;
+                // Past the member's tail (`as name`, or what is not a path) to `,` or `}`.
+                while i < b.len() && b[i] != b',' && b[i] != b'}' {
+                    i += 1;
+                }
+                for m in members {
+                    out.push(prefix.iter().cloned().chain(m).collect());
+                }
+            }
+            return (out, i);
+        }
+        let start = i;
+        while i < b.len() && (is_ident(b[i]) || b[i] == b'*') {
+            i += 1;
+        }
+        if i == start {
+            break;
+        }
+        prefix.push(s[start..i].to_string());
+        let mut j = i;
+        skip_ws(&mut j);
+        if s[j..].starts_with("::") {
+            i = j + 2;
+        } else {
+            break;
+        }
+    }
+    if prefix.is_empty() {
+        return (vec![], i);
+    }
+    (vec![prefix], i)
+}
+
+/// Every path of a file (`rel`, relative to `src/`) that starts at `crate::`, `super::` or
+/// `self::`, resolved to the module chain it names from the crate root (`super::model::Model`
+/// in `optics/mod.rs` is `model::Model`; inline `mod tests { … }` add a level), use groups
+/// expanded, `self` members and globs folded into their parent. Braces are counted to know
+/// the inline modules; braces in string literals can only shift, never invent, a module.
+fn paths_of(rel: &str, code: &str) -> Vec<String> {
+    let module = module_of(rel);
+    let b = code.as_bytes();
+    let mut out = Vec::new();
+    // One entry per open brace: the name of the inline module it opens, if it does.
+    let mut braces: Vec<Option<String>> = Vec::new();
+    let mut pending: Option<String> = None;
+    let mut i = 0;
+    while i < b.len() {
+        let boundary = i == 0 || !(is_ident(b[i - 1]) || b[i - 1] == b':');
+        match b[i] {
+            b'{' => braces.push(pending.take()),
+            b'}' => {
+                braces.pop();
+            }
+            b';' => pending = None,
+            _ => {}
+        }
+        if boundary && b[i..].starts_with(b"mod ") {
+            let name: String = code[i + 4..]
+                .trim_start()
+                .bytes()
+                .take_while(|&c| is_ident(c))
+                .map(char::from)
+                .collect();
+            pending = Some(name);
+            i += 4;
+            continue;
+        }
+        let starts = [&b"crate::"[..], b"super::", b"self::"]
+            .iter()
+            .any(|k| b[i..].starts_with(k));
+        if !(starts && boundary) {
+            i += 1;
+            continue;
+        }
+        let (trees, n) = use_tree(&code[i..]);
+        let mut here: Vec<String> = module.clone();
+        here.extend(braces.iter().flatten().cloned());
+        for tree in trees {
+            let mut base = here.clone();
+            let mut segs = tree.into_iter().peekable();
+            match segs.peek().map(String::as_str) {
+                Some("crate") => {
+                    base.clear();
+                    segs.next();
+                }
+                Some("self") => {
+                    segs.next();
+                }
+                _ => {}
+            }
+            while segs.peek().map(String::as_str) == Some("super") {
+                segs.next();
+                base.pop();
+            }
+            let mut full: Vec<String> = base;
+            full.extend(segs.filter(|s| s != "self" && s != "*"));
+            if !full.is_empty() {
+                out.push(full.join("::"));
             }
         }
-        i = j.max(start + 1);
+        i += n.max(1);
     }
     out
+}
+
+/// The `crate::…` paths of code at the crate root (what [`paths_of`] gives for `lib.rs`).
+fn crate_paths(code: &str) -> Vec<String> {
+    paths_of("lib.rs", code)
 }
 
 /// The backend a source file belongs to, if any.
@@ -96,48 +223,72 @@ fn backend_of(rel: &str) -> Option<&'static str> {
     None
 }
 
-fn violations() -> Vec<String> {
+/// `p` is module `m` or inside it.
+fn under(p: &str, m: &str) -> bool {
+    p == m || p.starts_with(&format!("{m}::"))
+}
+
+/// The front end's insides, which no backend names.
+const FRONT_END_INSIDES: [&str; 5] = [
+    "scene::reader",
+    "scene::resolve",
+    "scene::check",
+    "scene::format",
+    "scene::source",
+];
+
+/// The rules broken by `files` (path relative to `src/`, code without comments).
+fn violations_in(files: &[(String, String)]) -> Vec<String> {
     let mut bad = Vec::new();
-    for (rel, code) in sources() {
-        let paths = crate_paths(&code);
-        if rel.starts_with("optics/") {
-            for p in &paths {
-                if p == "scene"
-                    || p.starts_with("scene::")
-                    || p == "model"
-                    || p.starts_with("model::")
-                {
-                    bad.push(format!("src/{rel}: optics imports crate::{p}"));
-                }
+    for (rel, code) in files {
+        let paths = paths_of(rel, code);
+        if rel.starts_with("optics/") || rel == "optics.rs" {
+            for p in paths
+                .iter()
+                .filter(|p| under(p, "scene") || under(p, "model"))
+            {
+                bad.push(format!("src/{rel}: optics imports crate::{p}"));
             }
         }
-        if let Some(me) = backend_of(&rel) {
+        if let Some(me) = backend_of(rel) {
             for other in ["native", "mitsuba", "blender"]
                 .into_iter()
                 .filter(|&b| b != me)
             {
-                let hit = paths.iter().any(|p| {
-                    p == &format!("backend::{other}")
-                        || p.starts_with(&format!("backend::{other}::"))
-                }) || code.contains(&format!("super::{other}"));
-                if hit {
+                if paths.iter().any(|p| under(p, &format!("backend::{other}"))) {
                     bad.push(format!(
                         "src/{rel}: backend `{me}` imports backend `{other}`"
                     ));
                 }
             }
-        }
-        if !rel.starts_with("scene/") {
             for p in &paths {
-                if p == "scene::format" || p.starts_with("scene::format::") {
+                if FRONT_END_INSIDES.iter().any(|m| under(p, m)) {
                     bad.push(format!(
-                        "src/{rel}: reads the raw scene format (crate::{p})"
+                        "src/{rel}: backend `{me}` reaches into the front end (crate::{p})"
                     ));
                 }
             }
         }
+        if !rel.starts_with("scene/") {
+            for p in paths.iter().filter(|p| under(p, "scene::format")) {
+                bad.push(format!(
+                    "src/{rel}: reads the raw scene format (crate::{p})"
+                ));
+            }
+        }
+        if !rel.starts_with("cli/") && rel != "cli.rs" && rel != "main.rs" {
+            for p in paths.iter().filter(|p| under(p, "cli")) {
+                bad.push(format!(
+                    "src/{rel}: the library imports the CLI (crate::{p})"
+                ));
+            }
+        }
     }
     bad
+}
+
+fn violations() -> Vec<String> {
+    violations_in(&sources())
 }
 
 #[test]
@@ -155,7 +306,8 @@ fn the_scan_sees_imports() {
     assert_eq!(
         p,
         [
-            "model",
+            "model::Camera",
+            "model::Port",
             "optics::phase::hg_eval",
             "backend::mitsuba",
             "scene::format::Scene"
@@ -164,7 +316,7 @@ fn the_scan_sees_imports() {
     let all = sources();
     let uses_model = all
         .iter()
-        .filter(|(_, c)| crate_paths(c).iter().any(|p| p.starts_with("model")))
+        .filter(|(rel, c)| paths_of(rel, c).iter().any(|p| under(p, "model")))
         .count();
     assert!(
         uses_model > 10,
@@ -173,4 +325,157 @@ fn the_scan_sees_imports() {
     assert_eq!(backend_of("backend/mitsuba.rs"), Some("mitsuba"));
     assert_eq!(backend_of("backend/native/integrator.rs"), Some("native"));
     assert_eq!(backend_of("backend/mod.rs"), None);
+    assert_eq!(module_of("optics/port/mod.rs"), ["optics", "port"]);
+    assert_eq!(module_of("optics/glass.rs"), ["optics", "glass"]);
+    assert!(module_of("lib.rs").is_empty());
+}
+
+/// The violations found in one planted file.
+fn planted(rel: &str, code: &str) -> Vec<String> {
+    violations_in(&[(rel.to_string(), code.to_string())])
+}
+
+/// Assert that planting `code` in `rel` breaks a rule, with a message containing `what`.
+fn expect_caught(rel: &str, code: &str, what: &str) {
+    let bad = planted(rel, code);
+    assert!(
+        bad.iter().any(|b| b.contains(what)),
+        "`{code}` in src/{rel} was not caught ({what}): {bad:?}"
+    );
+}
+
+#[test]
+fn probe_super_path_to_the_model() {
+    expect_caught(
+        "optics/mod.rs",
+        "use super::model::Model;",
+        "optics imports crate::model::Model",
+    );
+    // `super` of a file module is its parent, not the root.
+    expect_caught(
+        "optics.rs",
+        "use super::model::Model;",
+        "optics imports crate::model::Model",
+    );
+}
+
+#[test]
+fn probe_super_super_from_a_nested_module() {
+    expect_caught(
+        "optics/port/mod.rs",
+        "use super::super::model::Port;",
+        "optics imports crate::model::Port",
+    );
+    expect_caught(
+        "optics/port/flat.rs",
+        "use super::super::super::scene::load;",
+        "optics imports crate::scene::load",
+    );
+    // An inline module adds a level: `super` in `mod tests` is the file's module.
+    expect_caught(
+        "optics/glass.rs",
+        "pub fn f() {}\n#[cfg(test)]\nmod tests {\n    use super::super::super::model::Model;\n}",
+        "optics imports crate::model::Model",
+    );
+    // …and resolves correctly: these name `optics::model`, `optics::glass`, not the model.
+    assert!(planted("optics/port/flat.rs", "use super::super::model::X;").is_empty());
+    assert!(
+        planted(
+            "optics/glass.rs",
+            "mod tests {\n    use super::f;\n}\nuse super::model;"
+        )
+        .is_empty()
+    );
+}
+
+#[test]
+fn probe_nested_use_groups() {
+    expect_caught(
+        "optics/water.rs",
+        "use crate::{optics::{glass, water}, model::Model};",
+        "optics imports crate::model::Model",
+    );
+    expect_caught(
+        "optics/water.rs",
+        "use crate::{\n    optics::{glass::{self, Glass}, water},\n    scene::{diag::{Span}},\n};",
+        "optics imports crate::scene::diag::Span",
+    );
+    expect_caught(
+        "optics/water.rs",
+        "use super::{glass, super::model::{self}};",
+        "optics imports crate::model",
+    );
+    assert_eq!(
+        crate_paths("use crate::{optics::{glass, water as w}, model::*};"),
+        ["optics::glass", "optics::water", "model"]
+    );
+}
+
+#[test]
+fn probe_front_end_insides_from_a_backend() {
+    expect_caught(
+        "backend/native/mod.rs",
+        "use crate::scene::reader::Cx;",
+        "reaches into the front end (crate::scene::reader::Cx)",
+    );
+    expect_caught(
+        "backend/mitsuba/view.rs",
+        "fn f() { let t = crate::scene::reader::Tab::new(); }",
+        "crate::scene::reader::Tab::new",
+    );
+    expect_caught(
+        "backend/blender/data.rs",
+        "use super::super::super::scene::{resolve, diag};",
+        "crate::scene::resolve",
+    );
+    // A backend may load a scene (in its tests) and format numbers like the diagnostics.
+    assert!(
+        planted(
+            "backend/native/mod.rs",
+            "let m = crate::scene::load(p, &[]);\nlet s = crate::scene::diag::num(1.0);"
+        )
+        .is_empty()
+    );
+}
+
+#[test]
+fn probe_backends_are_peers() {
+    expect_caught(
+        "backend/native/integrator.rs",
+        "use super::super::mitsuba::view;",
+        "backend `native` imports backend `mitsuba`",
+    );
+    expect_caught(
+        "backend/blender/mod.rs",
+        "use crate::backend::{native::{render_one}, Backend};",
+        "backend `blender` imports backend `native`",
+    );
+}
+
+#[test]
+fn probe_the_library_under_the_cli() {
+    expect_caught(
+        "export/gltf.rs",
+        "use crate::cli::project::parse_points;",
+        "the library imports the CLI (crate::cli::project::parse_points)",
+    );
+    expect_caught(
+        "bench/mod.rs",
+        "fn f() { super::super::cli::explain::explain(m) }",
+        "the library imports the CLI (crate::cli::explain::explain)",
+    );
+    expect_caught(
+        "lib.rs",
+        "use self::cli::CliError;",
+        "the library imports the CLI",
+    );
+    // The CLI's own modules and the binary may.
+    assert!(
+        planted(
+            "cli/render.rs",
+            "use super::{CliError, SceneArgs};\nuse crate::cli::common;"
+        )
+        .is_empty()
+    );
+    assert!(planted("main.rs", "use crate::cli::main;").is_empty());
 }
