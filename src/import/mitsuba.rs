@@ -47,8 +47,10 @@ struct X {
     loc: String,
     /// The element comes from an included file (the shared world of a set of views).
     included: bool,
-    /// Folder its `filename`s are relative to.
+    /// Folder of the file it is written in (the first place its `filename`s are looked for).
     dir: PathBuf,
+    /// Which input file (of `import`'s list) it belongs to, includes included.
+    doc: usize,
 }
 
 impl X {
@@ -66,21 +68,55 @@ impl X {
     }
 }
 
-fn line_col(text: &str, at: usize) -> (usize, usize) {
-    let mut at = at.min(text.len());
-    while at < text.len() && text.as_bytes()[at].is_ascii_whitespace() {
-        at += 1;
-    }
-    while !text.is_char_boundary(at) {
-        at -= 1;
-    }
-    let before = &text[..at];
-    let line = before.matches('\n').count() + 1;
-    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-    (line, col)
+/// Line and column of byte offsets in one file, in linear time over a parse: the line starts
+/// are found once and binary-searched; the column is counted from the last position asked
+/// for when it is on the same line (a parse asks in increasing order), else from the line's
+/// start. (Recounting from the file's start for each element made parsing quadratic.)
+struct Lines<'a> {
+    text: &'a str,
+    starts: Vec<usize>,
+    /// The last answer: byte offset, its line index (0-based) and column (1-based, in chars).
+    last: std::cell::Cell<(usize, usize, usize)>,
 }
 
-/// A path named in the scene, resolved against `dir` and kept inside `root`.
+impl<'a> Lines<'a> {
+    fn new(text: &'a str) -> Lines<'a> {
+        let mut starts = vec![0];
+        starts.extend(
+            text.bytes()
+                .enumerate()
+                .filter(|&(_, b)| b == b'\n')
+                .map(|(i, _)| i + 1),
+        );
+        Lines {
+            text,
+            starts,
+            last: std::cell::Cell::new((0, 0, 1)),
+        }
+    }
+
+    /// 1-based line and column (in characters) of the first non-blank byte at or after `at`.
+    fn line_col(&self, at: usize) -> (usize, usize) {
+        let text = self.text;
+        let mut at = at.min(text.len());
+        while at < text.len() && text.as_bytes()[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        while !text.is_char_boundary(at) {
+            at -= 1;
+        }
+        let line = self.starts.partition_point(|&s| s <= at) - 1;
+        let (l_at, l_line, l_col) = self.last.get();
+        let col = if l_line == line && l_at <= at {
+            l_col + text[l_at..at].chars().count()
+        } else {
+            1 + text[self.starts[line]..at].chars().count()
+        };
+        self.last.set((at, line, col));
+        (line + 1, col)
+    }
+}
+
 /// Read a file the Mitsuba scene names as the scene front end reads one
 /// ([`crate::scene::source::read_capped`]): regular files only, at most [`MAX_FILE`] bytes.
 fn read_capped(path: &Path) -> Result<Vec<u8>, String> {
@@ -94,7 +130,16 @@ fn read_capped(path: &Path) -> Result<Vec<u8>, String> {
     })
 }
 
+/// A path named in the scene, resolved against `dir` and kept inside `root`.
+#[cfg(test)]
 fn inside(root: &Path, dir: &Path, name: &str, loc: &str) -> Result<PathBuf, String> {
+    resolve(root, &[dir], name, loc)
+}
+
+/// `name` as Mitsuba's file resolver finds it: the first of `dirs` (in order) where it exists,
+/// else the first one's (for the error of reading it). The path is resolved on disk (symbolic
+/// links included) and must stay inside `root`, the first file's folder (canonical).
+fn resolve(root: &Path, dirs: &[&Path], name: &str, loc: &str) -> Result<PathBuf, String> {
     let p = Path::new(name);
     if p.is_absolute() || p.components().any(|c| matches!(c, Component::Prefix(_))) {
         return Err(format!(
@@ -102,33 +147,74 @@ fn inside(root: &Path, dir: &Path, name: &str, loc: &str) -> Result<PathBuf, Str
              relative to the scene's folder"
         ));
     }
-    let joined = dir.join(p);
-    let mut norm = PathBuf::new();
-    for c in joined.components() {
-        match c {
-            Component::ParentDir => {
-                if !norm.pop() {
-                    return Err(format!("{loc}: `{name}` leaves the scene's folder"));
-                }
-            }
-            Component::CurDir => {}
-            c => norm.push(c),
-        }
-    }
-    if !norm.starts_with(root) {
-        return Err(format!(
+    let leaves = || {
+        format!(
             "{loc}: `{name}` leaves the scene's folder ({})\n  help: copy the file into that \
              folder",
             root.display()
-        ));
+        )
+    };
+    // The path's text, `..` taken away (None: it leaves the root of the file system).
+    let lexical = |dir: &Path| -> Option<PathBuf> {
+        let mut norm = PathBuf::new();
+        for c in dir.join(p).components() {
+            match c {
+                Component::ParentDir => {
+                    if !norm.pop() {
+                        return None;
+                    }
+                }
+                Component::CurDir => {}
+                c => norm.push(c),
+            }
+        }
+        Some(norm)
+    };
+    let mut first: Option<Option<PathBuf>> = None;
+    for d in dirs {
+        let norm = lexical(d);
+        if first.is_none() {
+            first = Some(norm.clone());
+        }
+        let Some(norm) = norm else { continue };
+        // A candidate that exists (a dangling link too) is the one Mitsuba takes.
+        if norm.symlink_metadata().is_err() {
+            continue;
+        }
+        if !norm.starts_with(root) {
+            return Err(leaves());
+        }
+        return match std::fs::canonicalize(&norm) {
+            Ok(real) if real.starts_with(root) => Ok(real),
+            Ok(real) => Err(format!(
+                "{loc}: `{name}` is a symbolic link (or passes through one) to `{}`, outside \
+                 the scene's folder ({})\n  help: copy the file into that folder instead of \
+                 linking to it",
+                real.display(),
+                root.display()
+            )),
+            Err(e) => Err(format!(
+                "{loc}: `{name}` cannot be resolved: {e}\n  help: a dangling symbolic link? \
+                 name a file inside the scene's folder"
+            )),
+        };
     }
-    Ok(norm)
+    match first.flatten() {
+        Some(norm) if norm.starts_with(root) => Ok(norm),
+        _ => Err(leaves()),
+    }
 }
 
 struct Reader {
     root: PathBuf,
     elements: usize,
     params: HashMap<String, String>,
+    /// The input file's index.
+    doc: usize,
+    /// The input file's folder (canonical).
+    main: PathBuf,
+    /// `<path>` folders (canonical), the latest first: Mitsuba prepends each to its resolver.
+    paths: Vec<PathBuf>,
 }
 
 impl Reader {
@@ -144,6 +230,7 @@ impl Reader {
             )
         })?;
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        let lines = Lines::new(&text);
         let mut r = quick_xml::Reader::from_str(&text);
         r.config_mut().trim_text(true);
         let mut stack: Vec<X> = vec![X {
@@ -154,15 +241,16 @@ impl Reader {
             loc: shown.clone(),
             included,
             dir: dir.clone(),
+            doc: self.doc,
         }];
         loop {
             let at = r.buffer_position() as usize;
             let ev = r.read_event().map_err(|e| {
-                let (l, c) = line_col(&text, r.error_position() as usize);
+                let (l, c) = lines.line_col(r.error_position() as usize);
                 format!("{shown}:{l}:{c}: not well-formed XML: {e}")
             })?;
             let loc = || {
-                let (l, c) = line_col(&text, at);
+                let (l, c) = lines.line_col(at);
                 format!("{shown}:{l}:{c}")
             };
             match ev {
@@ -210,6 +298,7 @@ impl Reader {
                         loc: loc(),
                         included,
                         dir: dir.clone(),
+                        doc: self.doc,
                     };
                     if empty {
                         self.close(&mut stack, x, depth)?;
@@ -269,7 +358,7 @@ impl Reader {
                 let name = x
                     .attr("filename")
                     .ok_or_else(|| format!("{}: <include> needs `filename`", x.loc))?;
-                let path = inside(&self.root, &x.dir, name, &x.loc)?;
+                let path = resolve(&self.root, &self.search(&x.dir), name, &x.loc)?;
                 // A file that cannot be read is reported at the <include> that names it.
                 let inc = self.parse_file(&path, depth + 1, true).map_err(|e| {
                     if e.starts_with("cannot read `") {
@@ -280,9 +369,37 @@ impl Reader {
                 })?;
                 parent.kids.extend(inc.kids);
             }
+            // A folder for Mitsuba's file resolver: relative to the file that names it.
+            "path" => {
+                if stack.len() != 2 {
+                    return Err(format!(
+                        "{}: <path> must be a child of <scene>\n  help: Mitsuba reads it there only",
+                        x.loc
+                    ));
+                }
+                let v = x
+                    .attr("value")
+                    .ok_or_else(|| format!("{}: <path> needs `value`", x.loc))?;
+                let p = resolve(&self.root, &self.search(&x.dir), v, &x.loc)?;
+                if !p.is_dir() {
+                    return Err(format!(
+                        "{}: <path> folder `{v}` not found\n  help: name a folder inside the \
+                         scene's folder, relative to the file",
+                        x.loc
+                    ));
+                }
+                self.paths.retain(|q| q != &p);
+                self.paths.insert(0, p);
+            }
             _ => parent.kids.push(x),
         }
         Ok(())
+    }
+
+    /// Where Mitsuba looks for a file named in a file of folder `dir`: that folder, the
+    /// `<path>` folders (the latest first), the input file's folder.
+    fn search<'a>(&'a self, dir: &'a Path) -> Vec<&'a Path> {
+        search_dirs(dir, &self.paths, &self.main)
     }
 
     fn substitute(&self, v: &str) -> String {
@@ -297,6 +414,16 @@ impl Reader {
         }
         out
     }
+}
+
+fn search_dirs<'a>(dir: &'a Path, paths: &'a [PathBuf], main: &'a Path) -> Vec<&'a Path> {
+    let mut v: Vec<&Path> = vec![dir];
+    for p in paths.iter().map(PathBuf::as_path).chain([main]) {
+        if !v.contains(&p) {
+            v.push(p);
+        }
+    }
+    v
 }
 
 // ---- values ---------------------------------------------------------------------------
@@ -319,9 +446,17 @@ struct Cx {
     targets: Vec<String>,
     ids: HashMap<String, X>,
     root: PathBuf,
+    /// Per input file: its folder and its `<path>` folders (the resolver's state at the end).
+    search: Vec<(PathBuf, Vec<PathBuf>)>,
 }
 
 impl Cx {
+    /// A file named by element `k` (a `filename`), found as Mitsuba's file resolver finds it.
+    fn file(&self, k: &X, name: &str) -> Result<PathBuf, String> {
+        let (main, paths) = &self.search[k.doc];
+        resolve(&self.root, &search_dirs(&k.dir, paths, main), name, &k.loc)
+    }
+
     fn note(&mut self, x: &X, msg: impl Into<String>, help: Option<&str>) {
         let mut n = Note::new(Some(x.loc.clone()), msg);
         if let Some(h) = help {
@@ -424,11 +559,11 @@ impl Cx {
 
     /// The mean colour of a `bitmap` texture (8-bit images decoded from sRGB).
     fn bitmap_mean(&mut self, k: &X) -> Result<[f64; 3], String> {
-        let name = k
+        let (fk, name) = k
             .named("filename")
-            .and_then(|f| f.attr("value"))
+            .and_then(|f| Some((f, f.attr("value")?)))
             .ok_or_else(|| format!("{}: a bitmap without `filename`", k.loc))?;
-        let path = inside(&self.root, &k.dir, name, &k.loc)?;
+        let path = self.file(fk, name)?;
         let bytes = read_capped(&path).map_err(|e| format!("{}: {e}", k.loc))?;
         let img = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
@@ -831,11 +966,11 @@ fn albedo(cx: &mut Cx, shape: &X) -> Result<Result<[f64; 3], &'static str>, Stri
 /// The triangles of an `obj`/`ply` shape, in the world (`m` applied).
 fn file_mesh(cx: &Cx, k: &X, m: &DMat4) -> Result<TriMesh, String> {
     let kind = k.ty();
-    let f = k
+    let (fk, f) = k
         .named("filename")
-        .and_then(|f| f.attr("value"))
+        .and_then(|f| Some((f, f.attr("value")?)))
         .ok_or_else(|| format!("{}: a `{kind}` shape without `filename`", k.loc))?;
-    let path = inside(&cx.root, &k.dir, f, &k.loc)?;
+    let path = cx.file(fk, f)?;
     let bytes = read_capped(&path).map_err(|e| format!("{}: {e}", k.loc))?;
     let shown = shown(&path);
     let mut w = if kind == "obj" {
@@ -906,7 +1041,8 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
     let root = std::fs::canonicalize(first.parent().unwrap_or(Path::new(".")).join("."))
         .map_err(|e| format!("{}: {e}", first.display()))?;
     let mut docs = Vec::new();
-    for f in files {
+    let mut search = Vec::new();
+    for (di, f) in files.iter().enumerate() {
         let abs = std::fs::canonicalize(f).map_err(|e| format!("{}: {e}", f.display()))?;
         if !abs.starts_with(&root) {
             return Err(format!(
@@ -915,10 +1051,14 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
                 root.display()
             ));
         }
+        let main = abs.parent().unwrap_or(&root).to_path_buf();
         let mut r = Reader {
             root: root.clone(),
             elements: 0,
             params: HashMap::new(),
+            doc: di,
+            main: main.clone(),
+            paths: Vec::new(),
         };
         let mut doc = r.parse_file(&abs, 0, false)?;
         // Keep the given spelling of the path in locations.
@@ -931,12 +1071,14 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
             ));
         }
         docs.push(doc);
+        search.push((main, r.paths));
     }
     let mut cx = Cx {
         notes: Vec::new(),
         targets: Vec::new(),
         ids: HashMap::new(),
         root: root.clone(),
+        search,
     };
     for d in &docs {
         collect_ids(d, &mut cx.ids);
@@ -1695,6 +1837,7 @@ mod tests {
             loc: "t.xml:1:1".into(),
             included: false,
             dir: PathBuf::from("."),
+            doc: 0,
         }
     }
 
