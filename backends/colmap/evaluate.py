@@ -241,6 +241,10 @@ def bundle(pycolmap, req: dict) -> dict:
     adjuster = pycolmap.create_default_bundle_adjuster(opts, config, rec)
     summary = adjuster.solve()
     rec.update_point_3d_errors()
+    # The focal probe, when the adjustment calibrated the camera itself (not a calibrated rig).
+    sensitivity = (
+        focal_sensitivity(pycolmap, rec, req) if req.get("rig") is None else None
+    )
     result = export(rec, ids)
     result["summary"] = {
         "initial_reprojection_error": initial_error,
@@ -251,6 +255,7 @@ def bundle(pycolmap, req: dict) -> dict:
         "images": len(req["images"]),
         "mean_track_length": rec.compute_mean_track_length(),
         "observations": rec.compute_num_observations(),
+        "focal_sensitivity": sensitivity,
         "colmap": pycolmap.COLMAP_version,
     }
     return result

@@ -6,7 +6,9 @@
 //! | `--model` | opencv (observations), radial (images) | camera model COLMAP self-calibrates (the port is ignored, as practitioners do) |
 //! | `--noise` | 0.3 px | Gaussian pixel noise on every observation (observations mode) |
 //! | `--density` | 20 /m² | tie points per m² of surface (observations mode) |
-//! | `--gcp` | off | align on the targets' points (GCPs); the default aligns on all points |
+//! | `--gcp [IDS]` | off | align on the targets' points (GCPs); with IDS (comma-separated target names) only those are control points and the other targets are check points; the default aligns on all points |
+//! | `--check IDS` | – | with `--gcp`: these targets are check points, held out of the alignment |
+//! | `--strict` | off | a health warning (images dropped, focal length not determined, outlier-driven RMS) is an error: exit status 1 after the report is written |
 //! | `--rig` | off | observations mode: the rig is calibrated beforehand — intrinsics held at the in-water-equivalent values, the cameras' poses in the rig held at the truth; the bundle adjuster solves one pose per rig position (its baseline sets the scale) |
 //! | `--images DIR` | render | images mode: use the images already rendered in DIR (any backend) |
 //! | `--samples`, `--scale` | scene's | images mode: the native render's samples and resolution scale |
@@ -38,9 +40,18 @@ pub struct Args {
     /// Tie points per m² of surface (observations mode).
     #[arg(long, default_value_t = 20.0)]
     pub density: f64,
-    /// Align on the scene's targets as ground control points instead of on all points.
+    /// Align on the scene's targets as ground control points instead of on all points. With
+    /// IDS (comma-separated target names, as in errors.csv), only those are control points and
+    /// the other targets are check points.
+    #[arg(long, value_name = "IDS", num_args = 0..=1, default_missing_value = "")]
+    pub gcp: Option<String>,
+    /// With --gcp: these targets (comma-separated) are check points, held out of the
+    /// alignment; the others are control points unless --gcp names its own.
+    #[arg(long, value_name = "IDS")]
+    pub check: Option<String>,
+    /// Exit with status 1 when a health warning is given (the report is still written).
     #[arg(long)]
-    pub gcp: bool,
+    pub strict: bool,
     /// Let the bundle adjustment refine the principal point too.
     #[arg(long)]
     pub refine_principal_point: bool,
@@ -103,11 +114,35 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--images and --samples belong to `--mode images`".into(),
         ));
     }
+    let ids = |v: &Option<String>| -> Vec<String> {
+        v.as_deref()
+            .unwrap_or("")
+            .split(',')
+            .map(str::trim)
+            .filter(|s| !s.is_empty())
+            .map(str::to_string)
+            .collect()
+    };
+    if args.check.is_some() && args.gcp.is_none() {
+        return Err(CliError::Usage(
+            "--check holds targets out of a GCP alignment: give --gcp too (without IDS, every \
+             other target is a control point)"
+                .into(),
+        ));
+    }
+    if args.gcp.is_some() && args.mode == Mode::Images {
+        return Err(CliError::Usage(
+            "--gcp belongs to `--mode observations` (images mode aligns on the camera centres)"
+                .into(),
+        ));
+    }
     let opts = Options {
         model: args.model.unwrap_or(args.mode.default_model()),
         noise: args.noise,
         density: args.density,
-        gcp: args.gcp,
+        gcp: args.gcp.is_some(),
+        control: ids(&args.gcp),
+        check: ids(&args.check),
         seed: args.seed,
         refine_principal_point: args.refine_principal_point,
         rig: args.rig,
@@ -189,6 +224,23 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         ))
         .unwrap_or_default()
     );
+    let r = &ev.tie_errors.robust_z;
+    eprintln!(
+        "height error: median {:+.2} mm, NMAD {:.2} mm, LE90 {:.2} mm ({:.1} % beyond 3 NMAD)",
+        r.median * 1e3,
+        r.nmad * 1e3,
+        r.le90 * 1e3,
+        100.0 * r.outliers
+    );
+    if let (Some(c), "gcp") = (&ev.check_errors, ev.alignment.as_str()) {
+        eprintln!(
+            "check points: {}, RMSE X/Y/Z {:.2}/{:.2}/{:.2} mm",
+            c.count,
+            c.rms[0] * 1e3,
+            c.rms[1] * 1e3,
+            c.rms[2] * 1e3
+        );
+    }
     eprintln!(
         "tie-point RMS error X/Y/Z {:.2}/{:.2}/{:.2} mm{}; report in {}",
         ev.tie_errors.rms[0] * 1e3,
@@ -203,5 +255,20 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             .unwrap_or_default(),
         args.out.join("report.md").display()
     );
+    for w in &ev.warnings {
+        eprintln!("warning: {w}");
+    }
+    if args.strict && !ev.warnings.is_empty() {
+        return Err(CliError::Failed(format!(
+            "--strict: {} health warning(s) above ({}); the report is written but its figures \
+             do not describe a sound block",
+            ev.warnings.len(),
+            ev.warnings
+                .iter()
+                .map(|w| w.code)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
     Ok(())
 }

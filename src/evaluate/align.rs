@@ -5,7 +5,8 @@
 //! | item | meaning |
 //! |---|---|
 //! | [`Similarity`] | `truth ≈ s·R·x + t`, estimated by [`Similarity::estimate`] |
-//! | [`AxisStats`] | RMS and max |error| in X, Y, Z (and 3D) |
+//! | [`AxisStats`] | RMS and max |error| in X, Y, Z (and 3D), and [`Robust`] figures of the height error |
+//! | [`Robust`] | median, NMAD, LE90 and the share of outliers (Höhle & Höhle 2009): what RMS hides when a few points are far off |
 //! | [`Bowl`] | `dz ≈ a + b·x + c·y + d·x² + e·x·y + f·y²` over the plot, and the share of the height-error variance it explains |
 
 use glam::{DMat3, DVec3};
@@ -97,6 +98,59 @@ pub struct AxisStats {
     pub max: [f64; 3],
     pub rms_3d: f64,
     pub max_3d: f64,
+    /// Robust figures of the Z errors.
+    pub robust_z: Robust,
+}
+
+/// Robust accuracy figures of one error component, m (Höhle & Höhle 2009, "Accuracy
+/// assessment of digital elevation models by means of robust statistical methods", ISPRS
+/// J. 64(4)): they hold when a few points are far off, where RMS does not.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Robust {
+    /// Median of the signed errors (the systematic shift).
+    pub median: f64,
+    /// Normalized median absolute deviation, `1.4826 · median(|e − median|)`: the σ of the
+    /// errors' core (equal to σ for normally distributed errors).
+    pub nmad: f64,
+    /// The 90 % quantile of |e| ("linear error at 90 %").
+    pub le90: f64,
+    /// Share of errors beyond `median ± 3 · NMAD`.
+    pub outliers: f64,
+}
+
+/// The `q`-quantile of sorted values (linear interpolation between order statistics).
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let x = q.clamp(0.0, 1.0) * (sorted.len() - 1) as f64;
+    let (i, f) = (x.floor() as usize, x.fract());
+    let j = (i + 1).min(sorted.len() - 1);
+    sorted[i] + f * (sorted[j] - sorted[i])
+}
+
+impl Robust {
+    /// Of finite `errors` (non-finite values are skipped); all zero for none.
+    pub fn of(errors: impl IntoIterator<Item = f64>) -> Robust {
+        let mut e: Vec<f64> = errors.into_iter().filter(|v| v.is_finite()).collect();
+        if e.is_empty() {
+            return Robust::default();
+        }
+        e.sort_by(f64::total_cmp);
+        let median = quantile(&e, 0.5);
+        let mut dev: Vec<f64> = e.iter().map(|v| (v - median).abs()).collect();
+        dev.sort_by(f64::total_cmp);
+        let nmad = 1.4826 * quantile(&dev, 0.5);
+        let mut abs: Vec<f64> = e.iter().map(|v| v.abs()).collect();
+        abs.sort_by(f64::total_cmp);
+        let outliers = dev.iter().filter(|&&d| d > 3.0 * nmad).count() as f64 / e.len() as f64;
+        Robust {
+            median,
+            nmad,
+            le90: quantile(&abs, 0.9),
+            outliers,
+        }
+    }
 }
 
 impl AxisStats {
@@ -121,6 +175,7 @@ impl AxisStats {
         }
         s.rms = sq.map(|v| (v / n as f64).sqrt());
         s.rms_3d = (sq3 / n as f64).sqrt();
+        s.robust_z = Robust::of(errors.iter().map(|e| e.z));
         s
     }
 }
@@ -189,6 +244,49 @@ impl Bowl {
 mod tests {
     use super::*;
     use glam::DQuat;
+
+    #[test]
+    fn robust_figures_ignore_a_few_far_points_where_rms_does_not() {
+        // 96 errors normally spread (σ = 1 mm, by the inverse CDF at stratified levels), plus
+        // 4 points a metre off: RMS blows up, the robust figures keep the core.
+        let inv = |p: f64| {
+            // Acklam's rational approximation is overkill here: bisect erf.
+            let (mut lo, mut hi) = (-10.0f64, 10.0f64);
+            for _ in 0..200 {
+                let m = 0.5 * (lo + hi);
+                let cdf = 0.5 * (1.0 + libm_erf(m / 2f64.sqrt()));
+                if cdf < p { lo = m } else { hi = m }
+            }
+            0.5 * (lo + hi)
+        };
+        let mut e: Vec<f64> = (0..96)
+            .map(|i| 1e-3 * inv((i as f64 + 0.5) / 96.0))
+            .collect();
+        e.extend([1.0, -1.0, 1.2, 0.9]);
+        let r = Robust::of(e.iter().copied());
+        assert!(r.median.abs() < 1e-4, "median {}", r.median);
+        assert!((r.nmad - 1e-3).abs() < 0.1e-3, "NMAD {}", r.nmad);
+        // LE90 of |N(0, 1 mm)| is 1.645 mm; four outliers of 100 shift the quantile a little.
+        assert!(r.le90 > 1.5e-3 && r.le90 < 2.0e-3, "LE90 {}", r.le90);
+        assert!((r.outliers - 0.04).abs() < 0.011, "outliers {}", r.outliers);
+        let rms = (e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64).sqrt();
+        assert!(rms > 100.0 * r.nmad);
+        // Empty and non-finite input: zeros, no NaN.
+        let z = Robust::of([f64::NAN]);
+        assert_eq!((z.median, z.nmad, z.le90, z.outliers), (0.0, 0.0, 0.0, 0.0));
+    }
+
+    /// erf by its Abramowitz–Stegun 7.1.26 approximation (|error| < 1.5e-7), for the test.
+    fn libm_erf(x: f64) -> f64 {
+        let t = 1.0 / (1.0 + 0.327_591_1 * x.abs());
+        let y = 1.0
+            - (((((1.061_405_429 * t - 1.453_152_027) * t) + 1.421_413_741) * t - 0.284_496_736)
+                * t
+                + 0.254_829_592)
+                * t
+                * (-x * x).exp();
+        y.copysign(x)
+    }
 
     #[test]
     fn recovers_a_known_similarity() {

@@ -11,6 +11,7 @@
 //! | [`Options`] | the knobs of one evaluation |
 //! | [`evaluate_observations`], [`evaluate_images`] | run one mode, return an [`Evaluation`] |
 //! | [`Evaluation`] | registered images, track length, reprojection error, recovered intrinsics against the in-water-equivalent truth, 3D errors, the fitted bowl |
+//! | [`health`] | the checks that flag a degenerate block (images dropped, a focal length the block does not determine, an RMS driven by outliers) |
 //! | [`report`] | `report.json`, `report.md`, `errors.csv`, `deformation.png`, `profile.svg` |
 //!
 //! The *in-water-equivalent* intrinsics are what a pinhole camera model would need to match the
@@ -20,6 +21,7 @@
 
 pub mod align;
 pub mod colmap;
+pub mod health;
 pub mod observe;
 pub mod report;
 
@@ -73,6 +75,11 @@ pub struct Options {
     pub density: f64,
     /// Align on the targets' points (GCPs) instead of all points.
     pub gcp: bool,
+    /// With `gcp`: the targets that are control points (empty: every target not in `check`).
+    /// A target is named as in `errors.csv` (`name`, `name/point` or a points file's id).
+    pub control: Vec<String>,
+    /// With `gcp`: the targets held out as check points (empty: those not in `control`).
+    pub check: Vec<String>,
     pub seed: u64,
     /// Let the bundle adjustment refine the principal point (COLMAP's default: no).
     pub refine_principal_point: bool,
@@ -95,6 +102,8 @@ impl Default for Options {
             noise: 0.3,
             density: 20.0,
             gcp: false,
+            control: Vec::new(),
+            check: Vec::new(),
             seed: 1,
             refine_principal_point: false,
             rig: false,
@@ -156,11 +165,18 @@ pub struct Evaluation {
     pub tie_errors: AxisStats,
     /// Errors of target points not used for the alignment (check points), if any.
     pub check_errors: Option<AxisStats>,
+    /// Errors of the control points (the GCPs the alignment used), with `--gcp`.
+    pub control_errors: Option<AxisStats>,
     /// Camera-centre errors after alignment.
     pub camera_errors: AxisStats,
     pub bowl: Option<Bowl>,
     /// COLMAP's own summary (version, iterations, …).
     pub colmap: serde_json::Value,
+    /// Images of the network that are not in the result: too few tie points to enter the
+    /// adjustment (observations mode) or not registered (images mode).
+    pub dropped: Vec<String>,
+    /// What makes the figures above less than they seem ([`health`]).
+    pub warnings: Vec<health::Warning>,
     pub seconds: f64,
     #[serde(skip)]
     pub point_errors: Vec<PointError>,
@@ -562,16 +578,23 @@ pub fn evaluate_observations(
         .iter()
         .filter(|(k, _)| points[*k].kind == PointKind::Target)
         .collect();
+    let role = |k: usize| target_role(&points[k].label, opts);
     let (alignment, fit_set): (&str, Vec<&(usize, DVec3)>) = if opts.gcp {
-        if targets.len() < 3 {
+        check_target_names(&points, opts)?;
+        let control: Vec<&(usize, DVec3)> = targets
+            .iter()
+            .copied()
+            .filter(|(k, _)| role(*k) == Role::Control)
+            .collect();
+        if control.len() < 3 {
             return Err(format!(
-                "--gcp: only {} target point(s) were reconstructed; at least 3 are needed\n  \
-                 help: add targets (coded targets, a points file) inside the surveyed area, or \
-                 drop --gcp to align on all points",
-                targets.len()
+                "--gcp: only {} control point(s) were reconstructed; at least 3 are needed\n  \
+                 help: add targets (coded targets, a points file) inside the surveyed area, \
+                 name more of them as control points, or drop --gcp to align on all points",
+                control.len()
             ));
         }
-        ("gcp", targets.clone())
+        ("gcp", control)
     } else {
         ("all points", pairs.iter().collect())
     };
@@ -582,21 +605,28 @@ pub fn evaluate_observations(
     let mut point_errors = Vec::new();
     let mut tie = Vec::new();
     let mut check = Vec::new();
+    let mut control = Vec::new();
     let mut bowl_samples = Vec::new();
     for (k, x) in &pairs {
         let p: &SurveyPoint = &points[*k];
         let e = sim.apply(*x) - p.world;
         let kind = match (&p.kind, opts.gcp) {
             (PointKind::Tie, _) => "tie",
-            (PointKind::Target, true) => "gcp",
+            (PointKind::Target, true) => match role(*k) {
+                Role::Control => "gcp",
+                Role::Check => "check",
+                Role::Unused => "target",
+            },
             (PointKind::Target, false) => "target",
         };
-        match p.kind {
-            PointKind::Tie => {
+        match kind {
+            "tie" => {
                 tie.push(e);
                 bowl_samples.push((p.world.x, p.world.y, e.z));
             }
-            PointKind::Target if !opts.gcp => check.push(e),
+            "gcp" => control.push(e),
+            "check" => check.push(e),
+            "target" if !opts.gcp => check.push(e),
             _ => {}
         }
         point_errors.push(PointError {
@@ -609,40 +639,148 @@ pub fn evaluate_observations(
         });
     }
     let (camera_errors, centres) = camera_centre_errors(model, &rec, &sim, &used_names(&used));
-    Ok(Evaluation {
-        scene: model.name.clone(),
-        mode: Mode::Observations,
-        camera_model: opts.model,
-        conventions: CONVENTIONS,
-        settings: serde_json::json!({
-            "noise_px": opts.noise,
-            "density_per_m2": opts.density,
-            "seed": opts.seed,
-            "refine_principal_point": opts.refine_principal_point,
-            "calibrated_rig": opts.rig,
-            "perturb_position_m": sigma_pos,
-            "perturb_rotation_deg": opts.perturb_rotation.to_degrees(),
-            "tie_points_sampled": points.len(),
-        }),
-        images: images.len(),
-        registered: rec.images.len(),
-        points: rec.points.len(),
-        observations: summary_f64(&rec, "observations") as usize,
-        mean_track_length: summary_f64(&rec, "mean_track_length"),
-        reprojection_error: summary_f64(&rec, "reprojection_error"),
-        cameras: camera_evals(model, &rec, distance)?,
-        alignment: alignment.into(),
-        alignment_count: fit_set.len(),
-        similarity: sim,
-        tie_errors: AxisStats::of(&tie),
-        check_errors: (!check.is_empty()).then(|| AxisStats::of(&check)),
-        camera_errors,
-        bowl: Bowl::fit(&bowl_samples),
-        colmap: rec.summary.clone(),
-        seconds: t0.elapsed().as_secs_f64(),
-        point_errors,
-        centres,
-    })
+    let dropped = dropped(images.iter().map(|im| im.name.as_str()), &rec);
+    finish(
+        model,
+        Evaluation {
+            scene: model.name.clone(),
+            mode: Mode::Observations,
+            camera_model: opts.model,
+            conventions: CONVENTIONS,
+            settings: serde_json::json!({
+                "noise_px": opts.noise,
+                "density_per_m2": opts.density,
+                "seed": opts.seed,
+                "refine_principal_point": opts.refine_principal_point,
+                "calibrated_rig": opts.rig,
+                "perturb_position_m": sigma_pos,
+                "perturb_rotation_deg": opts.perturb_rotation.to_degrees(),
+                "tie_points_sampled": points.len(),
+            }),
+            images: images.len(),
+            registered: rec.images.len(),
+            points: rec.points.len(),
+            observations: summary_f64(&rec, "observations") as usize,
+            mean_track_length: summary_f64(&rec, "mean_track_length"),
+            reprojection_error: summary_f64(&rec, "reprojection_error"),
+            cameras: camera_evals(model, &rec, distance)?,
+            alignment: alignment.into(),
+            alignment_count: fit_set.len(),
+            similarity: sim,
+            tie_errors: AxisStats::of(&tie),
+            check_errors: (!check.is_empty()).then(|| AxisStats::of(&check)),
+            control_errors: (!control.is_empty()).then(|| AxisStats::of(&control)),
+            camera_errors,
+            bowl: Bowl::fit(&bowl_samples),
+            colmap: rec.summary.clone(),
+            dropped,
+            warnings: Vec::new(),
+            seconds: t0.elapsed().as_secs_f64(),
+            point_errors,
+            centres,
+        },
+        !opts.rig,
+    )
+}
+
+/// The evaluation with its [`health`] checks run.
+fn finish(model: &Model, mut ev: Evaluation, self_calibrated: bool) -> Result<Evaluation, String> {
+    ev.warnings = health::check(model, &ev, self_calibrated);
+    Ok(ev)
+}
+
+/// The network's images (in order) that are not in COLMAP's result.
+fn dropped<'a>(all: impl Iterator<Item = &'a str>, rec: &Reconstruction) -> Vec<String> {
+    let registered: std::collections::HashSet<&str> =
+        rec.images.iter().map(|im| im.name.as_str()).collect();
+    all.filter(|n| !registered.contains(n))
+        .map(str::to_string)
+        .collect()
+}
+
+/// What a target point does in a `--gcp` evaluation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Control,
+    Check,
+    Unused,
+}
+
+/// Whether a target point's `label` (`name`, `name/point` or `file/id`) is named by `id`: the
+/// whole label, its target (`name` of `name/…`), or its point (`…/id`).
+fn names(label: &str, id: &str) -> bool {
+    label == id
+        || label.strip_prefix(id).is_some_and(|r| r.starts_with('/'))
+        || label.rsplit('/').next() == Some(id)
+}
+
+/// A target point's role under `opts.control` and `opts.check` (see [`Options::control`]).
+fn target_role(label: &str, opts: &Options) -> Role {
+    let in_control = opts.control.iter().any(|id| names(label, id));
+    let in_check = opts.check.iter().any(|id| names(label, id));
+    match (opts.control.is_empty(), opts.check.is_empty()) {
+        (true, true) => Role::Control,
+        (true, false) => {
+            if in_check {
+                Role::Check
+            } else {
+                Role::Control
+            }
+        }
+        (false, true) => {
+            if in_control {
+                Role::Control
+            } else {
+                Role::Check
+            }
+        }
+        (false, false) => {
+            if in_control {
+                Role::Control
+            } else if in_check {
+                Role::Check
+            } else {
+                Role::Unused
+            }
+        }
+    }
+}
+
+/// Every id of `--gcp IDS` and `--check IDS` names a target, and none is in both.
+fn check_target_names(points: &[SurveyPoint], opts: &Options) -> Result<(), String> {
+    let labels: Vec<&str> = points
+        .iter()
+        .filter(|p| p.kind == PointKind::Target)
+        .map(|p| p.label.as_str())
+        .collect();
+    for (flag, ids) in [("--gcp", &opts.control), ("--check", &opts.check)] {
+        for id in ids {
+            if !labels.iter().any(|l| names(l, id)) {
+                let known: Vec<&str> = labels.iter().take(8).copied().collect();
+                return Err(format!(
+                    "{flag}: no target is named `{id}`\n  help: the scene's target points are \
+                     {}{} (a target's name selects all of its points)",
+                    known.join(", "),
+                    if labels.len() > known.len() {
+                        ", …"
+                    } else {
+                        ""
+                    }
+                ));
+            }
+        }
+    }
+    if let Some(id) = opts.control.iter().find(|id| {
+        labels
+            .iter()
+            .any(|l| names(l, id) && opts.check.iter().any(|c| names(l, c)))
+    }) {
+        return Err(format!(
+            "`{id}` is both a control point (--gcp) and a check point (--check)\n  help: a \
+             check point must stay out of the alignment to measure it"
+        ));
+    }
+    Ok(())
 }
 
 const CONVENTIONS: &str = "world z up, metres; errors = aligned reconstruction − truth; pixel \
@@ -856,37 +994,45 @@ pub fn evaluate_images(
             .collect(),
     );
     let distance = if distance.is_finite() { distance } else { 2.0 };
-    Ok(Evaluation {
-        scene: model.name.clone(),
-        mode: Mode::Images,
-        camera_model: opts.model,
-        conventions: CONVENTIONS,
-        settings: serde_json::json!({
-            "image_dir": image_dir.display().to_string(),
-            "seed": opts.seed,
-            "refine_principal_point": opts.refine_principal_point,
-            "matcher": req.matcher,
-            "keypoints_per_image": rec.summary.get("keypoints_per_image"),
-        }),
-        images: files.len(),
-        registered: rec.images.len(),
-        points: rec.points.len(),
-        observations: summary_f64(&rec, "observations") as usize,
-        mean_track_length: summary_f64(&rec, "mean_track_length"),
-        reprojection_error: summary_f64(&rec, "reprojection_error"),
-        cameras: camera_evals(model, &rec, distance)?,
-        alignment: "camera centres".into(),
-        alignment_count: rec_centres.len(),
-        similarity: sim,
-        tie_errors: AxisStats::of(&tie),
-        check_errors: None,
-        camera_errors,
-        bowl: Bowl::fit(&bowl_samples),
-        colmap: rec.summary.clone(),
-        seconds: t0.elapsed().as_secs_f64(),
-        point_errors,
-        centres,
-    })
+    let dropped = dropped(files.iter().map(|(f, _, _)| f.as_str()), &rec);
+    finish(
+        model,
+        Evaluation {
+            scene: model.name.clone(),
+            mode: Mode::Images,
+            camera_model: opts.model,
+            conventions: CONVENTIONS,
+            settings: serde_json::json!({
+                "image_dir": image_dir.display().to_string(),
+                "seed": opts.seed,
+                "refine_principal_point": opts.refine_principal_point,
+                "matcher": req.matcher,
+                "keypoints_per_image": rec.summary.get("keypoints_per_image"),
+            }),
+            images: files.len(),
+            registered: rec.images.len(),
+            points: rec.points.len(),
+            observations: summary_f64(&rec, "observations") as usize,
+            mean_track_length: summary_f64(&rec, "mean_track_length"),
+            reprojection_error: summary_f64(&rec, "reprojection_error"),
+            cameras: camera_evals(model, &rec, distance)?,
+            alignment: "camera centres".into(),
+            alignment_count: rec_centres.len(),
+            similarity: sim,
+            tie_errors: AxisStats::of(&tie),
+            check_errors: None,
+            control_errors: None,
+            camera_errors,
+            bowl: Bowl::fit(&bowl_samples),
+            colmap: rec.summary.clone(),
+            dropped,
+            warnings: Vec::new(),
+            seconds: t0.elapsed().as_secs_f64(),
+            point_errors,
+            centres,
+        },
+        true,
+    )
 }
 
 #[cfg(test)]

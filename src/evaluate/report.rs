@@ -71,6 +71,18 @@ pub fn markdown(ev: &Evaluation) -> String {
         ev.reprojection_error
     );
     let _ = writeln!(s, "| run time | {:.1} s |\n", ev.seconds);
+    health(&mut s, ev);
+    let r = &ev.tie_errors.robust_z;
+    let _ = writeln!(
+        s,
+        "**Height error of the tie points:** median {:+.2} mm, NMAD {} mm, LE90 {} mm \
+         (robust); RMS {} mm; {:.1} % of the points beyond 3 NMAD.\n",
+        1e3 * r.median,
+        mm(r.nmad),
+        mm(r.le90),
+        mm(ev.tie_errors.rms[2]),
+        100.0 * r.outliers
+    );
 
     let _ = writeln!(s, "## Intrinsics against the in-water-equivalent truth\n");
     let _ = writeln!(
@@ -137,10 +149,53 @@ pub fn markdown(ev: &Evaluation) -> String {
         );
     };
     row("tie points", &ev.tie_errors);
+    if let Some(c) = &ev.control_errors {
+        row("control points (GCPs)", c);
+    }
     if let Some(c) = &ev.check_errors {
         row("targets (check points)", c);
     }
     row("camera centres", &ev.camera_errors);
+    let _ = writeln!(
+        s,
+        "\nRobust figures of the height error (mm): the median is the systematic shift, NMAD \
+         (1.4826 × the median absolute deviation) the spread of the core, LE90 the 90 % \
+         quantile of |dz|.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| points | median Z | NMAD Z | LE90 Z | beyond 3 NMAD |\n|---|---|---|---|---|"
+    );
+    let mut robust = |name: &str, a: &super::AxisStats| {
+        let r = &a.robust_z;
+        let _ = writeln!(
+            s,
+            "| {name} | {:+.2} | {} | {} | {:.1} % |",
+            1e3 * r.median,
+            mm(r.nmad),
+            mm(r.le90),
+            100.0 * r.outliers
+        );
+    };
+    robust("tie points", &ev.tie_errors);
+    if let Some(c) = &ev.check_errors {
+        robust("targets (check points)", c);
+    }
+    points_table(
+        &mut s,
+        ev,
+        "gcp",
+        "Control points (GCPs, used by the alignment)",
+    );
+    points_table(
+        &mut s,
+        ev,
+        "check",
+        "Check points (held out of the alignment)",
+    );
+    if ev.alignment != "gcp" {
+        points_table(&mut s, ev, "target", "Targets (not used by the alignment)");
+    }
     let _ = writeln!(s, "\n## The systematic part (\"bowl\")\n");
     match &ev.bowl {
         Some(b) => {
@@ -165,6 +220,63 @@ pub fn markdown(ev: &Evaluation) -> String {
         m = mm(color_scale(ev))
     );
     s
+}
+
+/// The health warnings, or a line saying there are none.
+fn health(s: &mut String, ev: &Evaluation) {
+    if ev.warnings.is_empty() {
+        let _ = writeln!(
+            s,
+            "Health: no warning (images registered, focal length determined where \
+             self-calibrated, no outlier-driven RMS).\n"
+        );
+        return;
+    }
+    let _ = writeln!(s, "## ⚠ Warnings\n");
+    for w in &ev.warnings {
+        let _ = writeln!(s, "- **{}** — {} *Help:* {}.", w.code, w.message, w.help);
+    }
+    s.push('\n');
+}
+
+/// One row per point of `kind`, and their RMSE, as Metashape's marker tables give them (mm).
+fn points_table(s: &mut String, ev: &Evaluation, kind: &str, title: &str) {
+    let pts: Vec<&super::PointError> = ev.point_errors.iter().filter(|p| p.kind == kind).collect();
+    if pts.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "\n### {title}\n\n| point | X error | Y error | Z error | 3D error | images |\n|---|---|---|---|---|---|"
+    );
+    let mut sq = [0.0; 4];
+    for p in &pts {
+        let e = DVec3::from_array(p.error);
+        for i in 0..3 {
+            sq[i] += e[i] * e[i];
+        }
+        sq[3] += e.length_squared();
+        let _ = writeln!(
+            s,
+            "| {} | {:+.2} | {:+.2} | {:+.2} | {} | {} |",
+            p.label.replace('|', "\\|"),
+            1e3 * e.x,
+            1e3 * e.y,
+            1e3 * e.z,
+            mm(e.length()),
+            p.track
+        );
+    }
+    let n = pts.len() as f64;
+    let _ = writeln!(
+        s,
+        "| **RMSE** ({}) | {} | {} | {} | {} | |",
+        pts.len(),
+        mm((sq[0] / n).sqrt()),
+        mm((sq[1] / n).sqrt()),
+        mm((sq[2] / n).sqrt()),
+        mm((sq[3] / n).sqrt())
+    );
 }
 
 fn csv(ev: &Evaluation) -> String {

@@ -7,6 +7,8 @@
 //! | images, points, reprojection | COLMAP's bundle adjustment |
 //! | focal error | recovered focal length against the in-water-equivalent truth |
 //! | RMS Z | tie-point height error after the similarity |
+//! | NMAD Z | its robust spread (1.4826 × the median absolute deviation: what RMS would be without outliers) |
+//! | warnings | `poser evaluate`'s health checks (images dropped, focal length not determined, outlier-driven RMS), shown under the table |
 //! | bowl, bowl share | the quadratic surface fitted to the height errors |
 
 use super::Case;
@@ -25,9 +27,12 @@ pub struct Row {
     pub reprojection_px: f64,
     pub focal_error_percent: f64,
     pub rms_z_mm: f64,
+    pub nmad_z_mm: f64,
     pub bowl_mm: f64,
     pub bowl_share: f64,
     pub seconds: f64,
+    /// `poser evaluate`'s health warnings, one line each.
+    pub warnings: Vec<String>,
     /// `deformation.png` of `poser evaluate`.
     #[serde(skip)]
     pub map_png: Vec<u8>,
@@ -64,9 +69,11 @@ pub fn run(
                 .first()
                 .map_or(f64::NAN, |c| 100.0 * c.focal_error),
             rms_z_mm: 1e3 * ev.tie_errors.rms[2],
+            nmad_z_mm: 1e3 * ev.tie_errors.robust_z.nmad,
             bowl_mm: ev.bowl.map_or(f64::NAN, |b| 1e3 * b.peak_to_peak),
             bowl_share: ev.bowl.map_or(f64::NAN, |b| b.explained),
             seconds: ev.seconds,
+            warnings: ev.warnings.iter().map(|w| w.message.clone()).collect(),
             map_png: evaluate::report::deformation_png(&ev)?,
             profile_svg: evaluate::report::profile_svg(&ev)?,
         });

@@ -64,7 +64,8 @@ color:#1b2a33;background:#fbfdfe}h1{color:#0b4f6c}.q{font-size:1.3em;font-style:
 table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #b9c9d3;padding:.3em .6em}\
 th{background:#dcebf3}td.num{text-align:right;font-variant-numeric:tabular-nums}\
 code{background:#eef3f6;padding:.1em .3em}figure{display:inline-block;margin:.5em;vertical-align:top}\
-figure img,figure svg{max-width:520px;height:auto;border:1px solid #ccd}.small{color:#567;font-size:.9em}";
+figure img,figure svg{max-width:520px;height:auto;border:1px solid #ccd}.small{color:#567;font-size:.9em}\
+.warn{background:#fff4d6;border-left:4px solid #d08a00;padding:.4em .8em;margin:.5em 0}";
 
 /// The page as a string.
 pub fn page(r: &Report) -> String {
@@ -90,14 +91,14 @@ pub fn page(r: &Report) -> String {
                  bundle adjustment of exact refractive observations with 0.3 px noise, an \
                  OpenCV camera model that ignores the port) and compared with the truth.</p>\n\
                  <table><tr><th>case</th><th>images</th><th>reprojection, px</th>\
-                 <th>focal error, %</th><th>RMS Z, mm</th><th>bowl peak-to-peak, mm</th>\
+                 <th>focal error, %</th><th>RMS Z, mm</th><th>NMAD Z, mm</th><th>bowl peak-to-peak, mm</th>\
                  <th>bowl share, %</th></tr>\n",
             );
             for row in rows {
                 let k = slug(&row.label);
                 let _ = writeln!(
                     s,
-                    "<tr><th>{}</th>{}{}{}{}{}{}</tr>",
+                    "<tr><th>{}</th>{}{}{}{}{}{}{}</tr>",
                     escape(&row.label),
                     num(&format!("{k}.images"), row.images.to_string()),
                     num(
@@ -109,6 +110,7 @@ pub fn page(r: &Report) -> String {
                         format!("{:+.2}", row.focal_error_percent)
                     ),
                     num(&format!("{k}.rms_z_mm"), format!("{:.1}", row.rms_z_mm)),
+                    num(&format!("{k}.nmad_z_mm"), format!("{:.1}", row.nmad_z_mm)),
                     num(&format!("{k}.bowl_mm"), format!("{:.1}", row.bowl_mm)),
                     num(
                         &format!("{k}.bowl_share"),
@@ -118,9 +120,22 @@ pub fn page(r: &Report) -> String {
             }
             s.push_str(
                 "</table>\n<p class=\"small\">Bowl: a quadratic surface fitted to the height \
-                 errors; its share is the part of their variance it explains.</p>\n\
-                 <h2>Where the error is</h2>\n",
+                 errors; its share is the part of their variance it explains. NMAD: the robust \
+                 spread of the height errors (what RMS would be without outliers).</p>\n",
             );
+            for row in rows.iter().filter(|r| !r.warnings.is_empty()) {
+                let _ = writeln!(
+                    s,
+                    "<div class=\"warn\"><b>⚠ {}:</b> {}</div>",
+                    escape(&row.label),
+                    row.warnings
+                        .iter()
+                        .map(|w| escape(w))
+                        .collect::<Vec<_>>()
+                        .join("; ")
+                );
+            }
+            s.push_str("<h2>Where the error is</h2>\n");
             for row in rows {
                 let _ = write!(
                     s,
@@ -292,9 +307,11 @@ mod page_tests {
                     reprojection_px: 0.5,
                     focal_error_percent: 1.12,
                     rms_z_mm: 30.46,
+                    nmad_z_mm: 21.0,
                     bowl_mm: 115.9,
                     bowl_share: 0.998,
                     seconds: 6.0,
+                    warnings: vec!["only 25 of 330 images registered <x>".into()],
                     map_png: vec![0x89, b'P', b'N', b'G'],
                     profile_svg: "<?xml version=\"1.0\"?><svg></svg>".into(),
                 }],
@@ -308,6 +325,10 @@ mod page_tests {
         let p = page(&r);
         assert!(p.contains("<h1>T &lt;1&gt;</h1>"));
         assert!(p.contains("data-key=\"flat_pupil_3_cm.rms_z_mm\">30.5<"));
+        assert!(p.contains("data-key=\"flat_pupil_3_cm.nmad_z_mm\">21.0<"));
+        assert!(p.contains(
+            "class=\"warn\"><b>⚠ flat, pupil 3 cm:</b> only 25 of 330 images registered &lt;x&gt;"
+        ));
         assert!(p.contains("data-key=\"flat_pupil_3_cm.focal_error_percent\">+1.12<"));
         assert!(p.contains("data-key=\"flat_pupil_3_cm.bowl_share\">100<"));
         assert!(p.contains("src=\"data:image/png;base64,iVBORw==\""));
