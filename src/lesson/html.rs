@@ -84,6 +84,24 @@ pub fn page(r: &Report) -> String {
         cmd = escape(&r.command),
         secs = r.seconds,
     );
+    if let Some(full) = &r.full_command {
+        let sets = if r.form_sets.is_empty() {
+            "the scene as written".to_string()
+        } else {
+            r.form_sets
+                .iter()
+                .map(|s| format!("<code>{}</code>", escape(s)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let _ = writeln!(
+            s,
+            "<div class=\"warn\"><b>Quick form.</b> This page ran the lesson with {sets}: \
+             smaller and faster than the set-up above describes, so its numbers are not the \
+             full lesson's. The full form: <code>{}</code>.</div>",
+            escape(full)
+        );
+    }
     match &r.results {
         Results::Deformation { rows } => {
             s.push_str(
@@ -296,7 +314,9 @@ mod page_tests {
             question: "Q?".into(),
             setup: "S".into(),
             form: "quick",
+            form_sets: vec!["network.length=10".into()],
             command: "poser lesson s.toml -o o".into(),
+            full_command: Some("poser lesson s.toml -o o --full".into()),
             results: Results::Deformation {
                 rows: vec![Row {
                     label: "flat, pupil 3 cm".into(),
@@ -324,6 +344,10 @@ mod page_tests {
         };
         let p = page(&r);
         assert!(p.contains("<h1>T &lt;1&gt;</h1>"));
+        assert!(p.contains(
+            "<b>Quick form.</b> This page ran the lesson with <code>network.length=10</code>"
+        ));
+        assert!(p.contains("The full form: <code>poser lesson s.toml -o o --full</code>"));
         assert!(p.contains("data-key=\"flat_pupil_3_cm.rms_z_mm\">30.5<"));
         assert!(p.contains("data-key=\"flat_pupil_3_cm.nmad_z_mm\">21.0<"));
         assert!(p.contains(

@@ -95,7 +95,11 @@ pub struct Report {
     pub setup: String,
     /// `"quick"` or `"full"`.
     pub form: &'static str,
+    /// The form's `--set` overrides (`lesson.quick` or `lesson.full`).
+    pub form_sets: Vec<String>,
     pub command: String,
+    /// The quick form's run: the command of the full form, for the page to say how to get it.
+    pub full_command: Option<String>,
     pub results: Results,
     pub try_next: Vec<Next>,
     pub seconds: f64,
@@ -210,13 +214,17 @@ pub fn run(
             rows: surface::run(&cases, out, progress)?,
         },
     };
-    let mut command = format!("poser lesson {} -o {}", scene.display(), out.display());
-    if opts.full {
-        command.push_str(" --full");
-    }
-    for s in &opts.sets {
-        command.push_str(&format!(" --set '{s}'"));
-    }
+    let command_of = |full: bool| {
+        let mut command = format!("poser lesson {} -o {}", scene.display(), out.display());
+        if full {
+            command.push_str(" --full");
+        }
+        for s in &opts.sets {
+            command.push_str(&format!(" --set '{s}'"));
+        }
+        command
+    };
+    let command = command_of(opts.full);
     let try_next = lesson
         .try_next
         .iter()
@@ -237,7 +245,13 @@ pub fn run(
         question: lesson.question,
         setup: lesson.setup,
         form: if opts.full { "full" } else { "quick" },
+        form_sets: if opts.full {
+            lesson.full.clone()
+        } else {
+            lesson.quick.clone()
+        },
         command,
+        full_command: (!opts.full).then(|| command_of(true)),
         results,
         try_next,
         seconds: t0.elapsed().as_secs_f64(),
