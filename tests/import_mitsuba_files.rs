@@ -215,3 +215,256 @@ fn files_are_found_as_mitsubas_resolver_finds_them() {
         "{err}"
     );
 }
+
+/// The value of `key` in the scene text's table `[table]` (first match).
+fn value_in(text: &str, table: &str, key: &str) -> Option<String> {
+    let start = text.find(&format!("\n[{table}]\n"))?;
+    let body = &text[start + table.len() + 4..];
+    let body = &body[..body.find("\n[").unwrap_or(body.len())];
+    body.lines()
+        .find_map(|l| l.strip_prefix(&format!("{key} = ")))
+        .map(str::to_string)
+}
+
+fn float_in(text: &str, table: &str, key: &str) -> f64 {
+    value_in(text, table, key)
+        .unwrap_or_else(|| panic!("no {table}.{key} in\n{text}"))
+        .parse()
+        .unwrap()
+}
+
+/// A perspective sensor without `fov`: Mitsuba's `parse_fov` (src/render/sensor.cpp) gives a
+/// 50 mm lens on 35 mm film along the diagonal; `focal_length = "28mm"` likewise; the film is
+/// 768 × 576 when it gives no size.
+#[test]
+fn the_sensor_gets_mitsubas_defaults() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let body = |sensor: &str| {
+        format!(
+            "<?xml version=\"1.0\"?>\n<scene version=\"3.0.0\">\n{sensor}\n    <shape type=\"rectangle\"/>\n</scene>\n"
+        )
+    };
+    let diag_fx = |mm: f64, w: f64, h: f64| {
+        let fov = 2.0 * (36f64.hypot(24.0) / (2.0 * mm)).atan();
+        w.hypot(h) / 2.0 / (fov / 2.0).tan()
+    };
+    write(
+        &d.join("bare.xml"),
+        &body("    <sensor type=\"perspective\"/>"),
+    );
+    let text = imported(d, &["bare.xml"]);
+    assert_eq!(value_in(&text, "camera", "width").as_deref(), Some("768"));
+    assert_eq!(value_in(&text, "camera", "height").as_deref(), Some("576"));
+    let fx = float_in(&text, "camera", "fx");
+    assert!(
+        (fx / diag_fx(50.0, 768.0, 576.0) - 1.0).abs() < 1e-12,
+        "{fx}"
+    );
+    assert!(text.contains("neither `fov` nor `focal_length`"), "{text}");
+
+    // focal_length as a string, with fov_axis (not read with a focal length).
+    write(
+        &d.join("f28.xml"),
+        &body(
+            "    <sensor type=\"perspective\"><string name=\"focal_length\" value=\"28mm\"/><string name=\"fov_axis\" value=\"y\"/>\n        <film type=\"hdrfilm\"><integer name=\"width\" value=\"300\"/><integer name=\"height\" value=\"200\"/><rfilter type=\"box\"/></film></sensor>",
+        ),
+    );
+    let text = imported(d, &["f28.xml"]);
+    let fx = float_in(&text, "camera", "fx");
+    assert!(
+        (fx / diag_fx(28.0, 300.0, 200.0) - 1.0).abs() < 1e-12,
+        "{fx}"
+    );
+    assert!(
+        !text.contains("reconstruction filter"),
+        "a box filter is poser's: {text}"
+    );
+
+    // Both, or a focal length that is not one: refused with the place and a hint.
+    write(
+        &d.join("both.xml"),
+        &body(
+            "    <sensor type=\"perspective\"><float name=\"fov\" value=\"40\"/><string name=\"focal_length\" value=\"28mm\"/></sensor>",
+        ),
+    );
+    let err = stderr(&import(d, &["both.xml"]));
+    assert!(
+        err.contains("both.xml:3:")
+            && err.contains("both `fov` and `focal_length`")
+            && err.contains("help:"),
+        "{err}"
+    );
+    write(
+        &d.join("bad.xml"),
+        &body(
+            "    <sensor type=\"perspective\"><string name=\"focal_length\" value=\"wide\"/></sensor>",
+        ),
+    );
+    let err = stderr(&import(d, &["bad.xml"]));
+    assert!(
+        err.contains("bad.xml:3:") && err.contains("focal_length `wide`"),
+        "{err}"
+    );
+}
+
+/// Emitters (and BSDFs, media) referenced by id come in wherever they are referenced: an area
+/// emitter defined at the top level and referenced in a rectangle lights the scene, a
+/// top-level reference to an emitter defined inside another element is read, and an unknown
+/// id is refused where it is named.
+#[test]
+fn references_are_followed_wherever_an_element_is_expected() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(
+        &d.join("refs.xml"),
+        &scene(
+            r#"    <emitter type="area" id="lamp"><rgb name="radiance" value="7, 8, 9"/></emitter>
+    <bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0.1, 0.1"/></bsdf>
+    <shape type="rectangle" id="panel">
+        <transform name="to_world"><translate z="2"/></transform>
+        <ref id="lamp"/>
+    </shape>
+    <shape type="rectangle"><ref id="red"/></shape>
+    <shape type="sphere">
+        <bsdf type="diffuse"/>
+        <emitter type="point" id="inner"><point name="position" value="0, 0, 1"/><rgb name="intensity" value="3"/></emitter>
+    </shape>
+    <ref id="inner"/>"#,
+        ),
+    );
+    let text = imported(d, &["refs.xml"]);
+    assert!(text.contains("type = \"area\""), "{text}");
+    assert!(text.contains("radiance = [7.0, 8.0, 9.0]"), "{text}");
+    assert!(text.contains("albedo = [0.8, 0.1, 0.1]"), "{text}");
+    assert!(text.contains("intensity = [3.0, 3.0, 3.0]"), "{text}");
+    assert!(!text.contains("emitter is not imported"), "{text}");
+    assert!(!text.contains("BSDF is imported as diffuse"), "{text}");
+
+    write(
+        &d.join("unknown.xml"),
+        &scene("    <shape type=\"rectangle\"><ref id=\"nope\"/></shape>"),
+    );
+    let err = stderr(&import(d, &["unknown.xml"]));
+    assert!(
+        err.contains("unknown.xml:8:29")
+            && err.contains("no element has id `nope`")
+            && err.contains("help:"),
+        "{err}"
+    );
+    // A cycle is refused, not followed for ever.
+    write(
+        &d.join("cycle.xml"),
+        &scene(
+            "    <bsdf type=\"twosided\" id=\"a\"><ref id=\"a\"/></bsdf>\n    <shape type=\"rectangle\"><ref id=\"a\"/></shape>",
+        ),
+    );
+    let out = import(d, &["cycle.xml"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("cycle"), "{}", stderr(&out));
+}
+
+/// No glass at the camera: the scene says `[camera.port] type = "none"`, so poser's default
+/// flat port (in water) does not appear. A `port = none` scene compiled to Mitsuba and
+/// imported back keeps no port.
+#[test]
+fn no_housing_when_there_is_none() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(
+        &d.join("sea.xml"),
+        &format!(
+            "<?xml version=\"1.0\"?>\n<scene version=\"3.0.0\">\n{}\n</scene>\n",
+            r#"    <sensor type="perspective"><float name="fov" value="45"/><ref id="sea"/>
+        <transform name="to_world"><lookat origin="0, 0, -5" target="0, 0, -7" up="0, 1, 0"/></transform></sensor>
+    <medium type="homogeneous" id="sea"><rgb name="sigma_t" value="0.2"/><float name="albedo" value="0.5"/></medium>
+    <shape type="rectangle"><transform name="to_world"><translate z="-7"/></transform></shape>"#,
+        ),
+    );
+    let text = imported(d, &["sea.xml"]);
+    assert_eq!(
+        value_in(&text, "camera.port", "type").as_deref(),
+        Some("\"none\""),
+        "{text}"
+    );
+
+    // poser → Mitsuba → poser with port = none: no glass is written, none comes back.
+    write(
+        &d.join("rt/none.toml"),
+        r#"name = "none"
+[site]
+depth = "10 m"
+surface = "none"
+[water]
+ior = 1.34
+absorption = [0.05, 0.04, 0.03]
+scattering = [0.0, 0.0, 0.0]
+[camera]
+width = 80
+height = 60
+fx = 70.0
+[camera.port]
+type = "none"
+[[lights]]
+type = "ambient"
+radiance = 1.0
+[[objects]]
+name = "floor"
+shape = "plane"
+width = 4.0
+height = 4.0
+position = [0.0, 0.0, -8.0]
+albedo = 0.5
+[network]
+type = "explicit"
+[[network.poses]]
+position = [0.0, 0.0, -5.0]
+look_at = [0.0, 0.0, -8.0]
+up = [0.0, 1.0, 0.0]
+"#,
+    );
+    let model = poser::scene::load(&d.join("rt/none.toml"), &[])
+        .map_err(|e| e.render())
+        .unwrap()
+        .model;
+    assert!(matches!(
+        model.cameras[0].port,
+        poser::optics::types::Port::None
+    ));
+    let out = poser()
+        .args(["compile", "--backend", "mitsuba", "-o"])
+        .arg(d.join("rt/mi"))
+        .arg(d.join("rt/none.toml"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("rt/mi/manifest.json")).unwrap()).unwrap();
+    let xml = manifest["views"][0]["passes"][0]["xml"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let out = poser()
+        .current_dir(d.join("rt"))
+        .arg("import")
+        .arg(Path::new("mi").join(&xml))
+        .args(["-o", "back.toml"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(d.join("rt/back.toml")).unwrap();
+    assert_eq!(
+        value_in(&text, "camera.port", "type").as_deref(),
+        Some("\"none\""),
+        "{text}"
+    );
+    let back = poser::scene::load(&d.join("rt/back.toml"), &[])
+        .map_err(|e| e.render())
+        .unwrap()
+        .model;
+    assert!(
+        matches!(back.cameras[0].port, poser::optics::types::Port::None),
+        "the port came back as {:?}",
+        back.cameras[0].port
+    );
+}

@@ -448,6 +448,8 @@ struct Cx {
     root: PathBuf,
     /// Per input file: its folder and its `<path>` folders (the resolver's state at the end).
     search: Vec<(PathBuf, Vec<PathBuf>)>,
+    /// Ids that a `<ref>` names.
+    referenced: std::collections::HashSet<String>,
 }
 
 impl Cx {
@@ -790,46 +792,101 @@ fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
         }
     };
     let film = x.kids.iter().find(|k| k.tag == "film");
+    // Mitsuba's film defaults: 768 × 576 pixels, a Gaussian reconstruction filter.
     let (width, height) = match film {
         Some(f) => (cx.int(f, "width", 768)?, cx.int(f, "height", 576)?),
         None => (768, 576),
     };
+    let rfilter = film.and_then(|f| f.kids.iter().find(|k| k.tag == "rfilter"));
+    let filter = rfilter.map_or("gaussian", |r| r.ty());
+    if filter != "box" {
+        let at = rfilter.or(film).unwrap_or(x).clone();
+        cx.note(
+            &at,
+            format!(
+                "the film's `{filter}` reconstruction filter{} is not imported: poser's pixels \
+                 are one-pixel boxes (docs/render-conventions.md)",
+                if rfilter.is_none() {
+                    " (Mitsuba's default)"
+                } else {
+                    ""
+                }
+            ),
+            Some("images come out a little sharper than Mitsuba's"),
+        );
+    }
     if !(1..=100_000).contains(&width) || !(1..=100_000).contains(&height) {
         return Err(format!("{}: film of {width}×{height} pixels", x.loc));
     }
     let (w, h) = (width as f64, height as f64);
-    let fov = if let Some(_f) = x.named("focal_length") {
-        let s = x
-            .named("focal_length")
-            .and_then(|f| f.attr("value"))
-            .unwrap_or("");
-        let mm: f64 = s
-            .trim_end_matches("mm")
-            .trim()
-            .parse()
-            .map_err(|_| format!("{}: focal_length `{s}`", x.loc))?;
-        // Mitsuba: a 35 mm-equivalent focal length on the film's diagonal.
-        2.0 * (36f64.hypot(24.0) / (2.0 * mm)).atan().to_degrees()
-    } else {
-        cx.float(x, "fov", f64::NAN)?
+    // Mitsuba 3's `parse_fov` (src/render/sensor.cpp): `fov` along `fov_axis` (default x),
+    // or else `focal_length` (default "50mm"), a 35 mm-film equivalent on the diagonal
+    // (fov_axis is then not read).
+    let (fov, axis) = match (x.named("fov"), x.named("focal_length")) {
+        (Some(_), Some(f)) => {
+            return Err(format!(
+                "{}: the sensor gives both `fov` and `focal_length`\n  help: Mitsuba refuses \
+                 this; keep one",
+                f.loc
+            ));
+        }
+        (Some(_), None) => (
+            cx.float(x, "fov", f64::NAN)?,
+            x.named("fov_axis")
+                .and_then(|a| a.attr("value"))
+                .unwrap_or("x")
+                .to_ascii_lowercase(),
+        ),
+        (None, f) => {
+            let s = f.and_then(|f| f.attr("value")).unwrap_or("50mm");
+            let mm: f64 = s
+                .trim()
+                .strip_suffix("mm")
+                .unwrap_or(s.trim())
+                .trim()
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite() && *v > 0.0)
+                .ok_or_else(|| {
+                    format!(
+                        "{}: focal_length `{s}` is not a length in millimetres\n  help: write it \
+                         as Mitsuba does, e.g. \"50mm\"",
+                        f.map_or(&x.loc, |f| &f.loc)
+                    )
+                })?;
+            if f.is_none() {
+                cx.note(
+                    x,
+                    "the sensor has neither `fov` nor `focal_length`: Mitsuba's default, a 50 mm \
+                     lens on 35 mm film (a 46.8° diagonal field of view), is imported",
+                    None,
+                );
+            }
+            (
+                2.0 * (36f64.hypot(24.0) / (2.0 * mm)).atan().to_degrees(),
+                "diagonal".to_string(),
+            )
+        }
     };
     if !(fov > 0.0 && fov < 180.0) {
         return Err(format!(
-            "{}: the sensor needs a `fov` in (0, 180) degrees",
+            "{}: the sensor's field of view is {fov}°, not in (0, 180)\n  help: give `fov` in \
+             degrees, or `focal_length` such as \"50mm\"",
             x.loc
         ));
     }
-    let axis_px = match x
-        .named("fov_axis")
-        .and_then(|a| a.attr("value"))
-        .unwrap_or("x")
-    {
+    let axis_px = match axis.as_str() {
         "x" => w,
         "y" => h,
         "diagonal" => w.hypot(h),
         "smaller" => w.min(h),
         "larger" => w.max(h),
-        other => return Err(format!("{}: unknown fov_axis `{other}`", x.loc)),
+        other => {
+            return Err(format!(
+                "{}: unknown fov_axis `{other}`\n  help: x, y, diagonal, smaller or larger",
+                x.loc
+            ));
+        }
     };
     let fx = axis_px / 2.0 / (fov.to_radians() / 2.0).tan();
     let cxp = w * (0.5 - cx.float(x, "principal_point_offset_x", 0.0)?);
@@ -1079,9 +1136,14 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         ids: HashMap::new(),
         root: root.clone(),
         search,
+        referenced: Default::default(),
     };
     for d in &docs {
         collect_ids(d, &mut cx.ids);
+    }
+    let mut budget = MAX_ELEMENTS;
+    for d in &mut docs {
+        expand_refs(d, &cx.ids, &mut cx.referenced, &mut budget, 0)?;
     }
 
     // Sensors → camera and poses.
@@ -1276,6 +1338,13 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         cam.remove("fx");
         cam.insert("focal_length".into(), Value::Float(s0.fx * pitch));
     }
+    if port_faces.is_empty() {
+        // No glass at the camera: no housing, said explicitly (poser's default in water is
+        // a 10 mm flat port).
+        let mut port = Table::new();
+        port.insert("type".into(), Value::String("none".into()));
+        cam.insert("port".into(), Value::Table(port));
+    }
     t.insert("camera".into(), Value::Table(cam));
     if !port_faces.is_empty() {
         port_note(&mut cx, s0, &port_faces);
@@ -1454,6 +1523,78 @@ fn collect_ids(x: &X, ids: &mut HashMap<String, X>) {
         }
         collect_ids(k, ids);
     }
+}
+
+/// Every `<ref id>` replaced by (a copy of) the element it names, with the ref's `name`:
+/// Mitsuba lets a reference stand wherever an element is expected (a BSDF, an emitter on a
+/// shape, a medium, a texture, a top-level emitter). A top-level reference to an element that
+/// is itself at the top level is dropped (the element is read once). `budget` bounds the
+/// elements copied (with the parse's, [`MAX_ELEMENTS`]); `depth` the nesting (a reference
+/// cycle).
+fn expand_refs(
+    x: &mut X,
+    ids: &HashMap<String, X>,
+    referenced: &mut std::collections::HashSet<String>,
+    budget: &mut usize,
+    depth: usize,
+) -> Result<(), String> {
+    if depth > MAX_DEPTH {
+        return Err(format!(
+            "{}: references nested deeper than {MAX_DEPTH}\n  help: a reference cycle? an \
+             element cannot contain a reference to itself",
+            x.loc
+        ));
+    }
+    let top = x.tag == "scene";
+    let top_ids: Vec<String> = if top {
+        x.kids
+            .iter()
+            .filter(|k| k.tag != "ref")
+            .filter_map(|k| k.attr("id").map(str::to_string))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut kids = Vec::with_capacity(x.kids.len());
+    for mut k in std::mem::take(&mut x.kids) {
+        if k.tag == "ref" {
+            let id = k.attr("id").unwrap_or("").to_string();
+            referenced.insert(id.clone());
+            if top && top_ids.contains(&id) {
+                continue;
+            }
+            let target = ids.get(&id).ok_or_else(|| {
+                format!(
+                    "{}: no element has id `{id}`\n  help: define the element with `id=\"{id}\"` \
+                     (in this file or one it includes)",
+                    k.loc
+                )
+            })?;
+            let size = count(target);
+            if size > *budget {
+                return Err(format!(
+                    "{}: references copy more than {MAX_ELEMENTS} elements in all",
+                    k.loc
+                ));
+            }
+            *budget -= size;
+            let mut c = target.clone();
+            c.attrs.retain(|(a, _)| a != "name");
+            if let Some(n) = k.attr("name") {
+                c.attrs.push(("name".into(), n.to_string()));
+            }
+            k = c;
+        }
+        expand_refs(&mut k, ids, referenced, budget, depth + 1)?;
+        kids.push(k);
+    }
+    x.kids = kids;
+    Ok(())
+}
+
+/// Elements in `x`, itself included.
+fn count(x: &X) -> usize {
+    1 + x.kids.iter().map(count).sum::<usize>()
 }
 
 fn port_note(cx: &mut Cx, s: &Sensor, faces: &[(X, DMat4, f64, f64)]) {
@@ -1709,6 +1850,17 @@ fn emitter(
     sun: &mut Option<(X, DVec3, [f64; 3])>,
     unique: &mut dyn FnMut(String) -> String,
 ) -> Result<(), String> {
+    if k.ty() == "area" {
+        // An area emitter defined apart, for the shapes that reference it.
+        if !k.attr("id").is_some_and(|id| cx.referenced.contains(id)) {
+            cx.note(
+                k,
+                "an `area` emitter outside a shape is not imported",
+                Some("an area emitter lights the shape it is in (or that references it)"),
+            );
+        }
+        return Ok(());
+    }
     let m = cx.to_world(k)?;
     let name = comment_name(k, "light").or_else(|| k.attr("id").map(str::to_string));
     let mut l = Table::new();
