@@ -6,7 +6,10 @@
 //! that [`truth`] and every back end are checked against, the [`geometry`] service (meshes,
 //! targets, BVH) shared by the truth, the planner and the native renderer, [`plan`] for survey
 //! and dive planning, [`compare`] / [`bench`] driving the back ends from outside, and
-//! [`export`] writing the model for other tools (a glTF preview of the whole scene).
+//! [`export`] writing the model for other tools (a glTF preview of the whole scene). The
+//! [`cli`] sits on top and nothing in the library imports it: [`explain`] (the model for a
+//! person), [`points`] (the one point-list parser) and [`image`] (linear images, the EXR
+//! reader) serve the CLI, the Python module and the fuzz targets alike.
 
 // `!(x > 0.0)` is how poser rejects NaN together with the values out of range.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -20,6 +23,7 @@ pub mod evaluate;
 pub mod explain;
 pub mod export;
 pub mod geometry;
+pub mod image;
 pub mod import;
 pub mod io;
 pub mod lesson;

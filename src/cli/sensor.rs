@@ -138,8 +138,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             model.poses.len()
         )));
     }
-    let img = crate::sensor::files::read_exr(input)?;
-    let var = variance.map(crate::sensor::files::read_exr).transpose()?;
+    let img = crate::image::read_exr(input)?;
+    let var = variance.map(crate::image::read_exr).transpose()?;
     let pitch = crate::sensor::files::pixel_pitch(cam, img.width);
     let seed = crate::sensor::image_seed(model.render.seed, pose, c);
     let dir = match out.parent() {

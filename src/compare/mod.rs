@@ -16,16 +16,13 @@ pub struct LinearImage {
 }
 
 impl LinearImage {
+    /// Read an EXR ([`crate::image::read_exr`], the one reader).
     pub fn read(path: &Path) -> Result<Self, String> {
-        let img = image::open(path)
-            .map_err(|e| format!("{}: {e}", path.display()))?
-            .into_rgb32f();
-        let (w, h) = img.dimensions();
-        let rgb = img.pixels().map(|p| p.0).collect();
+        let img = crate::image::read_exr(path)?;
         Ok(LinearImage {
-            width: w as usize,
-            height: h as usize,
-            rgb,
+            width: img.width as usize,
+            height: img.height as usize,
+            rgb: img.rgb,
         })
     }
     /// One channel as a flat vector.

@@ -11,6 +11,7 @@
 //! sees only them (the backends' sRGB previews `OUT/<image>.png` stay where they were).
 
 use super::{Exposure, Linear, RenderNoise};
+use crate::image::read_exr;
 use crate::model::{Model, Sensor};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -47,18 +48,6 @@ pub struct Done {
     pub sidecar: Sidecar,
     /// A one-line warning when the render noise exceeds the sensor noise.
     pub warning: Option<String>,
-}
-
-/// Read a linear RGB EXR.
-pub fn read_exr(path: &Path) -> Result<Linear, String> {
-    let img = image::open(path)
-        .map_err(|e| format!("{}: {e}", path.display()))?
-        .into_rgb32f();
-    Ok(Linear {
-        width: img.width(),
-        height: img.height(),
-        rgb: img.pixels().map(|p| p.0).collect(),
-    })
 }
 
 /// Run the sensor on one linear image and write `<dir>/<stem>.<ext>` and

@@ -35,13 +35,8 @@ pub const GREY_WORLD_MAX_GAIN: f64 = 8.0;
 /// Rec. 709 / sRGB luminance weights (IEC 61966-2-1), for average metering.
 const LUMA: Rgb = [0.2126, 0.7152, 0.0722];
 
-/// A linear RGB image (row-major, row 0 at the top), radiance in W/(m²·sr) per channel.
-#[derive(Debug, Clone)]
-pub struct Linear {
-    pub width: u32,
-    pub height: u32,
-    pub rgb: Vec<[f32; 3]>,
-}
+/// The linear RGB image the sensor takes (the media layer's one type).
+pub use crate::image::Linear;
 
 /// The exposure and white balance chosen for one image.
 #[derive(Debug, Clone, Serialize)]
