@@ -152,8 +152,7 @@ fn gsd_distance(m: &Model) -> Option<f64> {
     m.network.altitude.or_else(|| {
         let mut sum = 0.0;
         let mut n = 0usize;
-        for (pi, p) in m.poses.iter().enumerate() {
-            let _ = pi;
+        for p in &m.poses {
             for t in &m.targets {
                 sum += (t.pose.translation - p.world_from_rig.translation).length();
                 n += 1;

@@ -1,6 +1,8 @@
 //! `poser project`: project CSV points through the camera and port.
 //!
-//! Reads `id,x,y,z` (header required, metres; camera or world frame), writes `id,u,v,status`
+//! Reads a point list, `id x y z` in metres (camera or world frame; [`crate::points`], the
+//! same parser as a `points_file` target: CSV with a header naming the columns, or a published
+//! GCP list separated by blanks, commas or semicolons), writes `id,u,v,status`
 //! with status `ok` or the reason there is no pixel (`behind_camera`, `inside_glass`, …; for
 //! `off_sensor` the pixel is still written). Pixel centres at +0.5 (COLMAP's
 //! convention; OpenCV's = this − 0.5).
@@ -33,7 +35,8 @@ pub fn project_csv(p: &Projector, pts: &[(String, DVec3)], world_pose: Option<us
 pub struct Args {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// CSV file with header `id,x,y,z` (metres).
+    /// Point list: `id x y z` in metres per line (CSV with a header `id,x,y,z` in any order,
+    /// or blanks, commas or semicolons; `#` comments).
     #[arg(long)]
     pub points: PathBuf,
     /// Camera of the rig (default: the first).
