@@ -51,11 +51,28 @@ fn deformation_lesson_quick_form_bends_behind_a_flat_port_and_shows_it() {
         assert_eq!(r["registered"], r["images"]);
     }
     let dom = check_page(&out, &json);
+    // The quick form says so, and how to run the full one.
+    assert!(dom.contains("Quick form.") && dom.contains("--full"));
+    // One colour scale for every map: the largest case's (the flat port's, not the dome's
+    // fraction of a millimetre), printed on the page.
+    let scale = rows(&json)
+        .iter()
+        .map(|r| f(&r["own_scale_mm"]))
+        .fold(0.0, f64::max);
+    assert!(scale > 10.0 * f(&dome["own_scale_mm"]), "{scale}");
+    for r in rows(&json) {
+        assert_eq!(f(&r["map_scale_mm"]), scale);
+    }
+    assert_eq!(cell(&dom, "map_scale_mm"), format!("{scale:.1}"));
     for r in rows(&json) {
         let k = slug(r["label"].as_str().unwrap());
         assert_eq!(
             cell(&dom, &format!("{k}.rms_z_mm")),
             format!("{:.1}", f(&r["rms_z_mm"]))
+        );
+        assert_eq!(
+            cell(&dom, &format!("{k}.nmad_z_mm")),
+            format!("{:.1}", f(&r["nmad_z_mm"]))
         );
         assert_eq!(
             cell(&dom, &format!("{k}.bowl_mm")),

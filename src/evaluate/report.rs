@@ -300,8 +300,8 @@ fn csv(ev: &Evaluation) -> String {
     s
 }
 
-/// The colour scale of the map: the 99th percentile of |dz| (outliers saturate).
-fn color_scale(ev: &Evaluation) -> f64 {
+/// The colour scale of the map, m: the 99th percentile of |dz| (outliers saturate).
+pub fn color_scale(ev: &Evaluation) -> f64 {
     let mut v: Vec<f64> = ev.point_errors.iter().map(|p| p.error[2].abs()).collect();
     if v.is_empty() {
         return 1e-3;
@@ -322,11 +322,24 @@ fn diverging(t: f64) -> [u8; 3] {
     [r, g, b].map(|c| (c * 255.0).round() as u8)
 }
 
-/// Top view of the plot coloured by height error.
+/// Top view of the plot coloured by height error, on its own scale ([`color_scale`]).
 pub fn deformation_png(ev: &Evaluation) -> Result<Vec<u8>, String> {
+    deformation_png_scaled(ev, color_scale(ev))
+}
+
+/// Top view of the plot coloured by height error, blue at −`scale` and red at +`scale` (m),
+/// so that several maps can share one scale. Target points (control, check) are ringed in
+/// black; camera centres are black dots.
+pub fn deformation_png_scaled(ev: &Evaluation, scale: f64) -> Result<Vec<u8>, String> {
     let pts: Vec<(DVec3, f64)> = ev
         .point_errors
         .iter()
+        .map(|p| (DVec3::from_array(p.truth), p.error[2]))
+        .collect();
+    let targets: Vec<(DVec3, f64)> = ev
+        .point_errors
+        .iter()
+        .filter(|p| p.kind != "tie")
         .map(|p| (DVec3::from_array(p.truth), p.error[2]))
         .collect();
     let all = pts.iter().map(|p| p.0).chain(ev.centres.iter().copied());
@@ -349,7 +362,11 @@ pub fn deformation_png(ev: &Evaluation) -> Result<Vec<u8>, String> {
         let y = (hi.y - p.y) / (hi.y - lo.y).max(1e-9) * (h_px - 1) as f64;
         (x, y)
     };
-    let scale = color_scale(ev);
+    let scale = if scale.is_finite() && scale > 0.0 {
+        scale
+    } else {
+        1e-3
+    };
     let r = (2.0 + 800.0 / (pts.len() as f64).sqrt().max(1.0) * 0.3).min(6.0);
     let dot = |img: &mut image::RgbImage, x: f64, y: f64, r: f64, c: [u8; 3]| {
         let (x0, x1) = ((x - r).floor() as i64, (x + r).ceil() as i64);
@@ -372,6 +389,11 @@ pub fn deformation_png(ev: &Evaluation) -> Result<Vec<u8>, String> {
     for c in &ev.centres {
         let (x, y) = to_px(*c);
         dot(&mut img, x, y, 1.5, [0, 0, 0]);
+    }
+    for (p, dz) in &targets {
+        let (x, y) = to_px(*p);
+        dot(&mut img, x, y, 7.0, [0, 0, 0]);
+        dot(&mut img, x, y, 4.5, diverging(dz / scale));
     }
     for yy in 0..h_px {
         let t = 1.0 - 2.0 * yy as f64 / (h_px - 1).max(1) as f64;

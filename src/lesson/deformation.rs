@@ -8,6 +8,7 @@
 //! | focal error | recovered focal length against the in-water-equivalent truth |
 //! | RMS Z | tie-point height error after the similarity |
 //! | NMAD Z | its robust spread (1.4826 × the median absolute deviation: what RMS would be without outliers) |
+//! | maps | `deformation.png` on one colour scale for the whole page (the largest case's 99th percentile of \|dz\|), targets ringed |
 //! | warnings | `poser evaluate`'s health checks (images dropped, focal length not determined, outlier-driven RMS), shown under the table |
 //! | bowl, bowl share | the quadratic surface fitted to the height errors |
 
@@ -33,6 +34,10 @@ pub struct Row {
     pub seconds: f64,
     /// `poser evaluate`'s health warnings, one line each.
     pub warnings: Vec<String>,
+    /// The colour scale shared by every map of the page: ± this many mm.
+    pub map_scale_mm: f64,
+    /// This case's own range (the 99th percentile of |dz|), mm.
+    pub own_scale_mm: f64,
     /// `deformation.png` of `poser evaluate`.
     #[serde(skip)]
     pub map_png: Vec<u8>,
@@ -47,7 +52,7 @@ pub fn run(
     out: &Path,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Vec<Row>, String> {
-    let mut rows = Vec::new();
+    let mut evs = Vec::new();
     for c in cases {
         progress(&format!(
             "evaluating `{}` ({} images)",
@@ -57,6 +62,16 @@ pub fn run(
         let ev = evaluate::evaluate_observations(&c.model, &Options::default(), &|_, _, _| {})
             .map_err(|e| format!("variant `{}`: {e}", c.label))?;
         evaluate::report::write(&ev, &out.join(&c.slug))?;
+        evs.push(ev);
+    }
+    // One colour scale for every map of the page, so that a bowl of millimetres and one of
+    // decimetres do not look alike.
+    let scale = evs
+        .iter()
+        .map(evaluate::report::color_scale)
+        .fold(1e-6, f64::max);
+    let mut rows = Vec::new();
+    for (c, ev) in cases.iter().zip(evs) {
         rows.push(Row {
             label: c.label.clone(),
             command: c.command("evaluate"),
@@ -74,7 +89,9 @@ pub fn run(
             bowl_share: ev.bowl.map_or(f64::NAN, |b| b.explained),
             seconds: ev.seconds,
             warnings: ev.warnings.iter().map(|w| w.message.clone()).collect(),
-            map_png: evaluate::report::deformation_png(&ev)?,
+            map_scale_mm: 1e3 * scale,
+            own_scale_mm: 1e3 * evaluate::report::color_scale(&ev),
+            map_png: evaluate::report::deformation_png_scaled(&ev, scale)?,
             profile_svg: evaluate::report::profile_svg(&ev)?,
         });
     }

@@ -153,18 +153,28 @@ pub fn page(r: &Report) -> String {
                         .join("; ")
                 );
             }
-            s.push_str("<h2>Where the error is</h2>\n");
+            let scale = rows.first().map_or(f64::NAN, |r| r.map_scale_mm);
+            let _ = writeln!(
+                s,
+                "<h2>Where the error is</h2>\n<p>Every map below uses one colour scale: \
+                 <span style=\"color:#3366ff\">blue</span> <span data-key=\"map_scale_mm\">\
+                 {scale:.1}</span> mm low, white on the truth, <span style=\"color:#e0302f\">red\
+                 </span> {scale:.1} mm high. Black dots are the cameras; ringed dots are the \
+                 targets.</p>"
+            );
             for row in rows {
                 let _ = write!(
                     s,
-                    "<h3>{l}</h3>\n<figure>{img}<figcaption>Height error per tie point (blue \
-                     low, red high); black dots: cameras.</figcaption></figure>\n<figure>{svg}\
+                    "<h3>{l}</h3>\n<figure>{img}<figcaption>Height error per tie point, on the \
+                     page's scale (this case alone spans ±{own:.1} mm).</figcaption></figure>\n\
+                     <figure>{svg}\
                      <figcaption>Mean height error along and across the plot.</figcaption>\
                      </figure>\n<p class=\"small\">Alone: <code>{cmd}</code></p>\n",
                     l = escape(&row.label),
                     img = png(&row.map_png, &format!("deformation map, {}", row.label)),
                     svg = svg(&row.profile_svg),
                     cmd = escape(&row.command),
+                    own = row.own_scale_mm,
                 );
             }
         }
@@ -332,6 +342,8 @@ mod page_tests {
                     bowl_share: 0.998,
                     seconds: 6.0,
                     warnings: vec!["only 25 of 330 images registered <x>".into()],
+                    map_scale_mm: 65.0,
+                    own_scale_mm: 65.0,
                     map_png: vec![0x89, b'P', b'N', b'G'],
                     profile_svg: "<?xml version=\"1.0\"?><svg></svg>".into(),
                 }],
@@ -350,6 +362,8 @@ mod page_tests {
         assert!(p.contains("The full form: <code>poser lesson s.toml -o o --full</code>"));
         assert!(p.contains("data-key=\"flat_pupil_3_cm.rms_z_mm\">30.5<"));
         assert!(p.contains("data-key=\"flat_pupil_3_cm.nmad_z_mm\">21.0<"));
+        assert!(p.contains("<span data-key=\"map_scale_mm\">65.0</span> mm low"));
+        assert!(p.contains("this case alone spans ±65.0 mm"));
         assert!(p.contains(
             "class=\"warn\"><b>⚠ flat, pupil 3 cm:</b> only 25 of 330 images registered &lt;x&gt;"
         ));
