@@ -468,3 +468,135 @@ up = [0.0, 1.0, 0.0]
         back.cameras[0].port
     );
 }
+
+/// Elements with non-default values that poser cannot hold exactly: each is honoured or
+/// named in the notes (with its file, line and column).
+#[test]
+fn every_approximation_is_named_in_the_notes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(
+        &d.join("parts/settings.xml"),
+        "<scene version=\"3.0.0\">\n    <integrator type=\"volpath\"><integer name=\"max_depth\" value=\"9\"/></integrator>\n</scene>\n",
+    );
+    write(
+        &d.join("approx.xml"),
+        r#"<?xml version="1.0"?>
+<scene version="3.0.0">
+    <include filename="parts/settings.xml"/>
+    <sensor type="perspective">
+        <float name="fov" value="45"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm">
+            <integer name="width" value="64"/><integer name="height" value="48"/>
+            <rfilter type="gaussian"><float name="stddev" value="0.7"/></rfilter>
+        </film>
+    </sensor>
+    <shape type="rectangle">
+        <bsdf type="diffuse">
+            <texture type="checkerboard" name="reflectance">
+                <rgb name="color0" value="0.8, 0.2, 0.2"/>
+                <rgb name="color1" value="0.2, 0.2, 0.8"/>
+            </texture>
+        </bsdf>
+    </shape>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="0.05"/><translate z="4.9"/></transform>
+        <bsdf type="dielectric">
+            <rgb name="int_ior" value="1.51, 1.52, 1.53"/>
+            <string name="ext_ior" value="water"/>
+        </bsdf>
+    </shape>
+</scene>
+"#,
+    );
+    let text = imported(d, &["approx.xml"]);
+    // The Gaussian filter, where it is written.
+    assert!(
+        text.contains("approx.xml:9:13: the film's `gaussian` reconstruction filter"),
+        "{text}"
+    );
+    // The checkerboard: the mean of its colours, noted.
+    assert!(text.contains("albedo = [0.5, 0.2, 0.5]"), "{text}");
+    assert!(
+        text.contains("approx.xml:14:13: a checkerboard texture is imported as the mean"),
+        "{text}"
+    );
+    // The index per channel: one constant, noted.
+    assert!(
+        text.contains("approx.xml:23:13: `int_ior` per channel (1.5100, 1.5200, 1.5300) is imported as one constant, their mean 1.5200"),
+        "{text}"
+    );
+    // The port note gives the index it read (the mean).
+    assert!(text.contains("glass and housing"), "{text}");
+    // max_depth of the included file: 9 vertices = the camera, 2 glass faces, 6 bounces.
+    assert_eq!(
+        value_in(&text, "render", "bounces").as_deref(),
+        Some("6"),
+        "{text}"
+    );
+    // A named index that Mitsuba does not know is refused, named.
+    std::fs::write(
+        d.join("approx.xml"),
+        std::fs::read_to_string(d.join("approx.xml"))
+            .unwrap()
+            .replace("value=\"water\"", "value=\"unobtainium\""),
+    )
+    .unwrap();
+    let err = stderr(&import(d, &["approx.xml"]));
+    assert!(
+        err.contains("approx.xml:24:13") && err.contains("`unobtainium`"),
+        "{err}"
+    );
+}
+
+/// A sampled spectrum becomes the colour Mitsuba 3's RGB variants give it, not its grey mean:
+/// a red wall stays red, a flat 0.5 stays 0.5, and the conversion is noted.
+#[test]
+fn sampled_spectra_keep_their_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(&d.join("flat.spd"), "# a flat spectrum\n360 0.5\n830 0.5\n");
+    write(
+        &d.join("spectra.xml"),
+        &scene(
+            r#"    <shape type="rectangle" id="red">
+        <bsdf type="diffuse"><spectrum name="reflectance" value="400:0.04, 500:0.05, 550:0.06, 600:0.55, 650:0.62, 700:0.63"/></bsdf>
+    </shape>
+    <shape type="rectangle" id="grey">
+        <bsdf type="diffuse"><spectrum name="reflectance" filename="flat.spd"/></bsdf>
+    </shape>"#,
+        ),
+    );
+    let text = imported(d, &["spectra.xml"]);
+    let t: toml::Table = toml::from_str(&text).unwrap();
+    let albedo = |name: &str| -> Vec<f64> {
+        let o = t["objects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|o| o["name"].as_str() == Some(name))
+            .unwrap();
+        o["albedo"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_float().unwrap())
+            .collect()
+    };
+    let red = albedo("red");
+    assert!(
+        red[0] > red[1] && red[0] > red[2] && red[0] > 0.3,
+        "{red:?}"
+    );
+    let grey = albedo("grey");
+    for c in &grey {
+        assert!((c - 0.5).abs() < 1e-3, "{grey:?}");
+    }
+    assert!(
+        text.contains(
+            "spectra.xml:9:30: a sampled spectrum (6 samples) is imported as linear sRGB"
+        ),
+        "{text}"
+    );
+}

@@ -2,18 +2,24 @@
 //!
 //! | Mitsuba 3 | poser | notes |
 //! |---|---|---|
-//! | `perspective`, `thinlens` sensor: `fov`, `fov_axis`, `principal_point_offset_x/y`, film `width`/`height`, `to_world` | `[camera]` `fx`, `principal_point`, size; one `[[network.poses]]` per sensor (in file order, then file by file) | Mitsuba's camera looks along +Z with +X left: `R_poser = R · diag(−1, −1, 1)`; `thinlens` gives `f_number`/`focus_distance` |
+//! | `perspective`, `thinlens` sensor: `fov`, `fov_axis`, or `focal_length` (default `"50mm"`, on the diagonal), `principal_point_offset_x/y`, film `width`/`height` (default 768 × 576), `to_world` | `[camera]` `fx`, `principal_point`, size; one `[[network.poses]]` per sensor (in file order, then file by file) | Mitsuba's camera looks along +Z with +X left: `R_poser = R · diag(−1, −1, 1)`; `thinlens` gives `f_number`/`focus_distance`; a non-box `rfilter` (Mitsuba's default Gaussian) is noted |
 //! | `rectangle`, `cube`, `sphere`, `cylinder` | `plane`, `box`, `sphere`, `cylinder` objects | `to_world` split into position, rotation (x, y, z angles) and size |
 //! | `disk`, `obj`, `ply` | `mesh` objects, written as `.glb` assets | `to_world` baked into the vertices |
-//! | `diffuse` BSDF (`rgb`, `spectrum`, `bitmap` reflectance), `twosided` | `albedo` | a bitmap gives its mean albedo; other BSDFs their diffuse reflectance, noted |
-//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write |
+//! | `diffuse` BSDF (`rgb`, `spectrum`, `bitmap`, `checkerboard` reflectance), `twosided` | `albedo` | a bitmap gives its mean albedo, a checkerboard the mean of its colours (noted); other BSDFs their diffuse reflectance, noted |
+//! | `spectrum` (one value, wavelength:value pairs, `.spd` file) | linear sRGB | as Mitsuba 3's RGB variants (`spectrum_list_to_srgb`): CIE 1931 2° observer, D65 for reflectances; noted |
+//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted |
+//! | no glass at a sensor | `[camera.port] type = "none"` | |
 //! | `point`, `spot`, `directional`, `constant`, `area` on a `rectangle` | `point`, `spot`, `[sun]`, `ambient`, `area` lights | lights of a per-image file (not of an included world) are rig-mounted |
 //! | `homogeneous` medium (`sigma_t`, `albedo`, `scale`, `hg`/`isotropic`) | `[water]` `absorption`, `scattering`, `g` | the glass's `ext_ior` gives the water's index |
 //! | a `null` `cube` holding the water, top at z = 0 | `site.surface = "flat"` | the sun is refracted back into the air |
-//! | `default`, `$name`, `ref`/`id`, `include` | resolved while reading | |
+//! | `integrator` `max_depth` (the file's, else an included file's) | `render.bounces` | |
+//! | `default`, `$name`, `include`, `<path>` | resolved while reading | files are found as Mitsuba's resolver finds them: the naming file's folder, the `<path>` folders (latest first), the main file's folder |
+//! | `ref`/`id` | the element referenced, wherever an element is expected | an unknown id or a cycle is refused |
 //!
-//! Safety: a document type declaration (and with it every entity) is refused; `include` and
-//! `filename` paths must stay inside the first file's folder; counts are bounded; every file is
+//! Safety: a document type declaration (and with it every entity) is refused; `include`,
+//! `filename` and `<path>` paths, resolved on disk (symbolic links included), must stay inside
+//! the first file's folder; counts are bounded (elements, references copied, depth); lines
+//! and columns are found in linear time; every file is
 //! read as the scene front end reads one (regular files only — never a device or a named pipe —
 //! of at most [`MAX_FILE`] bytes).
 
@@ -515,27 +521,60 @@ impl Cx {
                 }
             }
             "spectrum" => {
-                let s = k.attr("value").unwrap_or("");
-                if s.contains(':') {
-                    let pairs: Vec<f64> = s
-                        .split(',')
-                        .filter_map(|p| p.split(':').nth(1))
-                        .filter_map(|v| v.trim().parse().ok())
-                        .collect();
-                    if pairs.is_empty() {
-                        return Err(format!("{}: an empty spectrum", k.loc));
+                // As Mitsuba 3's RGB variants read a spectrum (src/core/properties.cpp): an
+                // emitter's is integrated without D65 and not bounded above, a reflectance's
+                // under D65 and clipped to [0, 1], a medium's not bounded.
+                let prop = k.attr("name").unwrap_or("");
+                let emitter = matches!(prop, "radiance" | "intensity" | "irradiance");
+                let unbounded = matches!(prop, "sigma_t" | "sigma_a" | "sigma_s" | "scale");
+                let (wl, v) = match (k.attr("value"), k.attr("filename")) {
+                    (Some(s), None) if s.contains(':') => spectrum_pairs(s, &k.loc)?,
+                    (Some(s), None) => {
+                        let v = nums(s, &k.loc)?;
+                        let Some(&c) = v.first().filter(|_| v.len() == 1) else {
+                            return Err(format!(
+                                "{}: a spectrum of one value, or of wavelength:value pairs\n  \
+                                 help: e.g. value=\"0.5\" or value=\"400:0.1, 700:0.8\"",
+                                k.loc
+                            ));
+                        };
+                        // A uniform spectrum; on an emitter Mitsuba's RGB variants give it
+                        // the colour of equal energy in sRGB (slightly purple).
+                        return Ok(Some(if emitter {
+                            xyz_to_srgb([1.0; 3]).map(|x| x * c)
+                        } else {
+                            [c; 3]
+                        }));
                     }
-                    let mean = pairs.iter().sum::<f64>() / pairs.len() as f64;
-                    self.note(
-                        k,
-                        "a sampled spectrum is imported as its mean (grey)",
-                        Some("give an `rgb` value for colour"),
-                    );
-                    Ok(Some([mean; 3]))
-                } else {
-                    let v = nums(s, &k.loc)?;
-                    Ok(v.first().map(|&x| [x; 3]))
-                }
+                    (None, Some(f)) => {
+                        let path = self.file(k, f)?;
+                        let bytes = read_capped(&path).map_err(|e| format!("{}: {e}", k.loc))?;
+                        spectrum_pairs(
+                            &String::from_utf8_lossy(&bytes),
+                            &format!("{}: {f}", k.loc),
+                        )?
+                    }
+                    _ => {
+                        return Err(format!(
+                            "{}: a <spectrum> needs either `value` or `filename`",
+                            k.loc
+                        ));
+                    }
+                };
+                let rgb = spectrum_to_srgb(&wl, &v, !(emitter || unbounded), !emitter);
+                self.note(
+                    k,
+                    format!(
+                        "a sampled spectrum ({} samples) is imported as linear sRGB ({:.4}, \
+                         {:.4}, {:.4}), as Mitsuba 3's RGB variants convert it",
+                        wl.len(),
+                        rgb[0],
+                        rgb[1],
+                        rgb[2]
+                    ),
+                    Some("CIE 1931 2° observer, D65 for reflectances (docs/import.md)"),
+                );
+                Ok(Some(rgb))
             }
             "volume" | "texture" => match k.ty() {
                 "constvolume" | "uniform" => match k.named("value").or(k.kids.first()) {
@@ -546,6 +585,22 @@ impl Cx {
                     None => Ok(None),
                 },
                 "bitmap" => self.bitmap_mean(k).map(Some),
+                "checkerboard" => {
+                    // Mitsuba's defaults: color0 0.4, color1 0.2; half the texture is each.
+                    let c0 = self.colour(k, "color0")?.unwrap_or([0.4; 3]);
+                    let c1 = self.colour(k, "color1")?.unwrap_or([0.2; 3]);
+                    let m = [0, 1, 2].map(|i| 0.5 * (c0[i] + c1[i]));
+                    self.note(
+                        k,
+                        format!(
+                            "a checkerboard texture is imported as the mean of its two colours \
+                             ({:.3}, {:.3}, {:.3})",
+                            m[0], m[1], m[2]
+                        ),
+                        Some("poser's own patterns include checkerboards (docs/textures.md)"),
+                    );
+                    Ok(Some(m))
+                }
                 t => {
                     self.note(
                         k,
@@ -742,6 +797,190 @@ fn decompose(m: &DMat4) -> (DVec3, DMat3, bool, bool) {
     let sheared =
         u[0].dot(u[1]).abs() > 1e-9 || u[0].dot(u[2]).abs() > 1e-9 || u[1].dot(u[2]).abs() > 1e-9;
     (len, DMat3::from_cols(u[0], u[1], z), mirror, sheared)
+}
+
+// ---- spectra ----------------------------------------------------------------------------
+
+/// The CIE 1931 2° standard observer's colour matching functions x̄, ȳ, z̄ (95 samples each,
+/// 360–830 nm every 5 nm), as Mitsuba 3 tabulates them (`cie1931_tbl`, src/core/spectrum.cpp;
+/// from the CIE's tables).
+#[rustfmt::skip]
+const CIE1931: [f64; 285] = [
+    0.0001299, 0.0002321, 0.0004149, 0.0007416, 0.001368, 0.002236,
+    0.004243, 0.00765, 0.01431, 0.02319, 0.04351, 0.07763,
+    0.13438, 0.21477, 0.2839, 0.3285, 0.34828, 0.34806,
+    0.3362, 0.3187, 0.2908, 0.2511, 0.19536, 0.1421,
+    0.09564, 0.05795001, 0.03201, 0.0147, 0.0049, 0.0024,
+    0.0093, 0.0291, 0.06327, 0.1096, 0.1655, 0.2257499,
+    0.2904, 0.3597, 0.4334499, 0.5120501, 0.5945, 0.6784,
+    0.7621, 0.8425, 0.9163, 0.9786, 1.0263, 1.0567,
+    1.0622, 1.0456, 1.0026, 0.9384, 0.8544499, 0.7514,
+    0.6424, 0.5419, 0.4479, 0.3608, 0.2835, 0.2187,
+    0.1649, 0.1212, 0.0874, 0.0636, 0.04677, 0.0329,
+    0.0227, 0.01584, 0.01135916, 0.008110916, 0.005790346, 0.004109457,
+    0.002899327, 0.00204919, 0.001439971, 0.0009999493, 0.0006900786, 0.0004760213,
+    0.0003323011, 0.0002348261, 0.0001661505, 0.000117413, 0.00008307527, 0.00005870652,
+    0.00004150994, 0.00002935326, 0.00002067383, 0.00001455977, 0.00001025398, 0.000007221456,
+    0.000005085868, 0.000003581652, 0.000002522525, 0.000001776509, 0.000001251141, 0.000003917,
+    0.000006965, 0.00001239, 0.00002202, 0.000039, 0.000064, 0.00012,
+    0.000217, 0.000396, 0.00064, 0.00121, 0.00218, 0.004,
+    0.0073, 0.0116, 0.01684, 0.023, 0.0298, 0.038,
+    0.048, 0.06, 0.0739, 0.09098, 0.1126, 0.13902,
+    0.1693, 0.20802, 0.2586, 0.323, 0.4073, 0.503,
+    0.6082, 0.71, 0.7932, 0.862, 0.9148501, 0.954,
+    0.9803, 0.9949501, 1.0, 0.995, 0.9786, 0.952,
+    0.9154, 0.87, 0.8163, 0.757, 0.6949, 0.631,
+    0.5668, 0.503, 0.4412, 0.381, 0.321, 0.265,
+    0.217, 0.175, 0.1382, 0.107, 0.0816, 0.061,
+    0.04458, 0.032, 0.0232, 0.017, 0.01192, 0.00821,
+    0.005723, 0.004102, 0.002929, 0.002091, 0.001484, 0.001047,
+    0.00074, 0.00052, 0.0003611, 0.0002492, 0.0001719, 0.00012,
+    0.0000848, 0.00006, 0.0000424, 0.00003, 0.0000212, 0.00001499,
+    0.0000106, 0.0000074657, 0.0000052578, 0.0000037029, 0.0000026078, 0.0000018366,
+    0.0000012934, 0.00000091093, 0.00000064153, 0.00000045181, 0.0006061, 0.001086,
+    0.001946, 0.003486, 0.006450001, 0.01054999, 0.02005001, 0.03621,
+    0.06785001, 0.1102, 0.2074, 0.3713, 0.6456, 1.0390501,
+    1.3856, 1.62296, 1.74706, 1.7826, 1.77211, 1.7441,
+    1.6692, 1.5281, 1.28764, 1.0419, 0.8129501, 0.6162,
+    0.46518, 0.3533, 0.272, 0.2123, 0.1582, 0.1117,
+    0.07824999, 0.05725001, 0.04216, 0.02984, 0.0203, 0.0134,
+    0.008749999, 0.005749999, 0.0039, 0.002749999, 0.0021, 0.0018,
+    0.001650001, 0.0014, 0.0011, 0.001, 0.0008, 0.0006,
+    0.00034, 0.00024, 0.00019, 0.0001, 0.00004999999, 0.00003,
+    0.00002, 0.00001, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+    0.0, 0.0, 0.0,
+];
+
+/// The CIE standard illuminant D65, relative to its power at 560 nm, on the same grid
+/// (Mitsuba 3's `d65_table`, include/mitsuba/core/spectrum.h).
+#[rustfmt::skip]
+const D65: [f64; 95] = [
+    46.6383, 49.3637, 52.0891, 51.0323, 49.9755, 52.3118,
+    54.6482, 68.7015, 82.7549, 87.1204, 91.486, 92.4589,
+    93.4318, 90.057, 86.6823, 95.7736, 104.865, 110.936,
+    117.008, 117.41, 117.812, 116.336, 114.861, 115.392,
+    115.923, 112.367, 108.811, 109.082, 109.354, 108.578,
+    107.802, 106.296, 104.79, 106.239, 107.689, 106.047,
+    104.405, 104.225, 104.046, 102.023, 100.0, 98.1671,
+    96.3342, 96.0611, 95.788, 92.2368, 88.6856, 89.3459,
+    90.0062, 89.8026, 89.5991, 88.6489, 87.6987, 85.4936,
+    83.2886, 83.4939, 83.6992, 81.863, 80.0268, 80.1207,
+    80.2146, 81.2462, 82.2778, 80.281, 78.2842, 74.0027,
+    69.7213, 70.6652, 71.6091, 72.979, 74.349, 67.9765,
+    61.604, 65.7448, 69.8856, 72.4863, 75.087, 69.3398,
+    63.5927, 55.0054, 46.4182, 56.6118, 66.8054, 65.0941,
+    63.3828, 63.8434, 64.304, 61.8779, 59.4519, 55.7054,
+    51.959, 54.6998, 57.4406, 58.8765, 60.3125,
+];
+
+/// Linear interpolation in a table on the 360–830 nm grid (0 outside), as Mitsuba's
+/// `cie1931_xyz` and `cie_d65` do.
+fn on_grid(table: &[f64], offset: usize, w: f64) -> f64 {
+    if !(360.0..=830.0).contains(&w) {
+        return 0.0;
+    }
+    let t = (w - 360.0) * (94.0 / 470.0);
+    let i0 = (t as usize).min(93);
+    let w1 = t - i0 as f64;
+    (1.0 - w1) * table[offset + i0] + w1 * table[offset + i0 + 1]
+}
+
+/// linear sRGB (Rec. 709 primaries, D65 white) of a sampled spectrum, as Mitsuba 3's RGB
+/// variants convert one (`spectrum_list_to_srgb`, src/core/spectrum.cpp): the spectrum, linear
+/// between its samples and 0 outside them, is integrated against the CIE 1931 2° observer
+/// (times D65 for a reflectance, `d65`) at 1000 points over 360–830 nm, normalised so that a
+/// unit spectrum has luminance 1, and taken from XYZ to linear sRGB. A `bounded` value
+/// (a reflectance) is clipped to [0, 1], another one at 0.
+fn spectrum_to_srgb(wl: &[f64], v: &[f64], bounded: bool, d65: bool) -> [f64; 3] {
+    let steps = 1000;
+    let mut xyz = [0.0f64; 3];
+    for i in 0..steps {
+        let w = 360.0 + (i as f64 / (steps - 1) as f64) * (830.0 - 360.0);
+        if w < wl[0] || w > wl[wl.len() - 1] {
+            continue;
+        }
+        // The interval [wl[k], wl[k+1]] holding w.
+        let k = wl[..wl.len() - 1]
+            .partition_point(|&x| x <= w)
+            .saturating_sub(1)
+            .min(wl.len().saturating_sub(2));
+        let val = if wl.len() == 1 {
+            v[0]
+        } else {
+            let (w0, w1, v0, v1) = (wl[k], wl[k + 1], v[k], v[k + 1]);
+            ((w - w1) * v0 + (w0 - w) * v1) / (w0 - w1)
+        };
+        let light = if d65 {
+            on_grid(&D65, 0, w) / 98.99741751876255
+        } else {
+            1.0
+        };
+        for (c, x) in xyz.iter_mut().enumerate() {
+            *x += on_grid(&CIE1931, 95 * c, w) * val * light;
+        }
+    }
+    let scale = (830.0 - 360.0) / 106.7502593994140625 / steps as f64;
+    let rgb = xyz_to_srgb(xyz.map(|x| x * scale));
+    if bounded {
+        rgb.map(|c| c.clamp(0.0, 1.0))
+    } else {
+        rgb.map(|c| c.max(0.0))
+    }
+}
+
+/// CIE XYZ → linear sRGB (Mitsuba 3's `xyz_to_srgb`).
+fn xyz_to_srgb(x: [f64; 3]) -> [f64; 3] {
+    [
+        3.240479 * x[0] - 1.537150 * x[1] - 0.498535 * x[2],
+        -0.969256 * x[0] + 1.875991 * x[1] + 0.041556 * x[2],
+        0.055648 * x[0] - 0.204043 * x[1] + 1.057311 * x[2],
+    ]
+}
+
+/// Wavelength:value pairs (`"400:0.1, 500:0.3"`), or the lines of a `.spd` file
+/// (`wavelength value`, `#` comments): wavelengths in nm, increasing.
+fn spectrum_pairs(s: &str, loc: &str) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let mut wl = Vec::new();
+    let mut v = Vec::new();
+    let items: Vec<&str> = if s.contains(':') {
+        s.split(',').collect()
+    } else {
+        s.lines()
+            .map(|l| l.split('#').next().unwrap_or(""))
+            .collect()
+    };
+    for item in items.iter().map(|i| i.trim()).filter(|i| !i.is_empty()) {
+        let mut parts = item
+            .split(|c: char| c == ':' || c.is_whitespace())
+            .filter(|p| !p.is_empty());
+        let (Some(a), Some(b), None) = (parts.next(), parts.next(), parts.next()) else {
+            return Err(format!(
+                "{loc}: `{item}` is not a wavelength:value pair\n  help: write a sampled \
+                 spectrum as \"400:0.1, 500:0.3, …\" (nm:value)"
+            ));
+        };
+        let num = |t: &str| t.parse::<f64>().ok().filter(|x| x.is_finite());
+        let (Some(a), Some(b)) = (num(a), num(b)) else {
+            return Err(format!("{loc}: `{item}` is not a pair of finite numbers"));
+        };
+        if wl.last().is_some_and(|&l| a <= l) {
+            return Err(format!(
+                "{loc}: the spectrum's wavelengths must increase (`{item}`)\n  help: list the \
+                 samples from short to long wavelengths"
+            ));
+        }
+        wl.push(a);
+        v.push(b);
+    }
+    if wl.is_empty() {
+        return Err(format!("{loc}: an empty spectrum"));
+    }
+    Ok((wl, v))
 }
 
 // ---- the scene ------------------------------------------------------------------------
@@ -1020,6 +1259,75 @@ fn albedo(cx: &mut Cx, shape: &X) -> Result<Result<[f64; 3], &'static str>, Stri
     }
 }
 
+/// Mitsuba's named indices (include/mitsuba/render/ior.h), for `int_ior`/`ext_ior` strings.
+const IOR_NAMES: [(&str, f64); 23] = [
+    ("vacuum", 1.0),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
+    ("carbon dioxide", 1.00045),
+    ("water", 1.3330),
+    ("acetone", 1.36),
+    ("ethanol", 1.361),
+    ("carbon tetrachloride", 1.461),
+    ("glycerol", 1.4729),
+    ("benzene", 1.501),
+    ("silicone oil", 1.52045),
+    ("bromine", 1.661),
+    ("water ice", 1.31),
+    ("fused quartz", 1.458),
+    ("pyrex", 1.470),
+    ("acrylic glass", 1.49),
+    ("polypropylene", 1.49),
+    ("bk7", 1.5046),
+    ("sodium chloride", 1.544),
+    ("amber", 1.55),
+    ("pet", 1.5750),
+    ("diamond", 2.419),
+];
+
+/// A dielectric's index `name`: a number, one of Mitsuba's named materials, or (not Mitsuba's,
+/// but written by hand) a colour or spectrum per channel, imported as its mean with a note.
+fn ior(cx: &mut Cx, b: &X, name: &str, default: f64) -> Result<f64, String> {
+    let Some(k) = b.named(name) else {
+        return Ok(default);
+    };
+    let k = k.clone();
+    match k.tag.as_str() {
+        "string" => {
+            let v = k.attr("value").unwrap_or("").trim().to_ascii_lowercase();
+            if let Some(&(_, n)) = IOR_NAMES.iter().find(|(m, _)| *m == v) {
+                return Ok(n);
+            }
+            match v.parse::<f64>() {
+                Ok(n) if n.is_finite() && n > 0.0 => Ok(n),
+                _ => Err(format!(
+                    "{}: `{name}` = `{v}` is not a number nor one of Mitsuba's named materials\n  \
+                     help: give the index as a <float>, or a name such as \"water\" or \"bk7\"",
+                    k.loc
+                )),
+            }
+        }
+        "rgb" | "spectrum" => {
+            let c = cx.colour_of(&k)?.unwrap_or([default; 3]);
+            let n = (c[0] + c[1] + c[2]) / 3.0;
+            if (c[0] - c[2]).abs() > 1e-12 || (c[0] - c[1]).abs() > 1e-12 {
+                cx.note(
+                    &k,
+                    format!(
+                        "`{name}` per channel ({:.4}, {:.4}, {:.4}) is imported as one constant, \
+                         their mean {n:.4}",
+                        c[0], c[1], c[2]
+                    ),
+                    Some("the glass's and water's indices are read as one number here"),
+                );
+            }
+            Ok(n)
+        }
+        _ => cx.float(b, name, default),
+    }
+}
+
 /// The triangles of an `obj`/`ply` shape, in the world (`m` applied).
 fn file_mesh(cx: &Cx, k: &X, m: &DMat4) -> Result<TriMesh, String> {
     let kind = k.ty();
@@ -1290,8 +1598,12 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
                     emitter(&mut cx, k, None, &mut lights, &mut sun, &mut unique)?;
                 }
                 "shape" | "emitter" | "sensor" | "medium" | "bsdf" | "texture" => {}
-                "integrator" if di == 0 && !k.included => {
-                    max_depth = Some((k.clone(), cx.int(k, "max_depth", -1)?));
+                // The file's own integrator; else the one of a file it includes.
+                "integrator" if di == 0 && (!k.included || max_depth.is_none()) => {
+                    let own = max_depth.as_ref().is_some_and(|(x, _)| !x.included);
+                    if !own {
+                        max_depth = Some((k.clone(), cx.int(k, "max_depth", -1)?));
+                    }
                 }
                 other if di == 0 => cx.note(k, format!("<{other}> is not imported"), None),
                 _ => {}
@@ -1713,14 +2025,10 @@ fn shape(
         Err("null") => return Ok(()), // a medium boundary (the sea box)
         Err(_) => {
             let bsdf = k.kids.iter().find(|c| c.tag == "bsdf").cloned();
-            let (ni, ne) = bsdf
-                .map(|b| {
-                    (
-                        cx.float(&b, "int_ior", 1.5).unwrap_or(1.5),
-                        cx.float(&b, "ext_ior", 1.0).unwrap_or(1.0),
-                    )
-                })
-                .unwrap_or((1.5, 1.0));
+            let (ni, ne) = match bsdf {
+                Some(b) => (ior(cx, &b, "int_ior", 1.5)?, ior(cx, &b, "ext_ior", 1.0)?),
+                None => (1.5, 1.0),
+            };
             // Glass is the camera's housing port, near the camera or (a mesh in world
             // coordinates) anywhere: poser declares ports, it does not model them.
             port_faces.push((k.clone(), m, ni, ne));
@@ -2048,6 +2356,48 @@ mod tests {
                 .contains("absolute")
         );
         assert!(inside(root, &root.join("sub"), "../x.ply", "l").is_ok());
+    }
+
+    #[test]
+    fn spectra_become_srgb_as_in_mitsubas_rgb_variants() {
+        // A flat reflectance of 0.5 under D65 is grey 0.5 (sRGB's white is D65's).
+        let (wl, v) = spectrum_pairs("360:0.5, 830:0.5", "l").unwrap();
+        let rgb = spectrum_to_srgb(&wl, &v, true, true);
+        for c in rgb {
+            assert!((c - 0.5).abs() < 1e-3, "{rgb:?}");
+        }
+        // Mitsuba's sampled spectra: values over a part of the range only count there.
+        let (wl, v) = spectrum_pairs("400:0.05, 500:0.05, 560:0.1, 600:0.6, 700:0.7", "l").unwrap();
+        let rgb = spectrum_to_srgb(&wl, &v, true, true);
+        assert!(rgb[0] > rgb[1] && rgb[0] > rgb[2], "{rgb:?}");
+        assert!(rgb[0] > 0.3 && rgb[1] < 0.15, "{rgb:?}");
+        // An emitter's uniform spectrum is equal energy in sRGB: slightly purple.
+        let e = xyz_to_srgb([1.0; 3]);
+        assert!(e[0] > 1.2 && e[1] < 0.95 && e[2] < 0.95, "{e:?}");
+        // A unit spectrum has luminance 1 without D65.
+        let (wl, v) = spectrum_pairs("360:1, 830:1", "l").unwrap();
+        let rgb = spectrum_to_srgb(&wl, &v, false, false);
+        let y = 0.212671 * rgb[0] + 0.715160 * rgb[1] + 0.072169 * rgb[2];
+        assert!((y - 1.0).abs() < 2e-3, "{y}");
+        // Malformed spectra are refused with their place.
+        assert!(
+            spectrum_pairs("500:0.1, 400:0.2", "f.xml:3:4")
+                .unwrap_err()
+                .contains("f.xml:3:4")
+        );
+        assert!(spectrum_pairs("500-0.1", "l").is_err());
+    }
+
+    #[test]
+    fn line_and_column_are_found_once_per_position() {
+        let text = "ab\ncdé f\n\n  x";
+        let l = Lines::new(text);
+        assert_eq!(l.line_col(0), (1, 1));
+        assert_eq!(l.line_col(3), (2, 1));
+        assert_eq!(l.line_col(text.find('f').unwrap()), (2, 5));
+        assert_eq!(l.line_col(text.find('x').unwrap() - 2), (4, 3));
+        // Backwards (an error position) is found from the line's start.
+        assert_eq!(l.line_col(1), (1, 2));
     }
 
     #[test]
