@@ -73,6 +73,8 @@ pub struct Lesson {
     pub title: String,
     pub question: String,
     pub setup: String,
+    /// "What this shows": the answer in plain words (may be empty).
+    pub shows: String,
     pub kind: LessonKind,
     /// Kinds `contrast` and `gsd`: the GSD (m/px) at the first target the camera is placed for.
     pub gsd: Option<f64>,

@@ -36,6 +36,18 @@ fn every_example_scene_validates() {
                     p.display(),
                     l.render_warnings()
                 );
+                if let Some(lesson) = &l.model.lesson {
+                    // A lesson page opens with its answer in plain words: two or three
+                    // sentences.
+                    let sentences = lesson.shows.matches(". ").count() + 1;
+                    assert!(
+                        lesson.shows.ends_with('.') && (2..=4).contains(&sentences),
+                        "{}: `lesson.shows` must say what the page shows in two or three \
+                         sentences, found {sentences}: {:?}",
+                        p.display(),
+                        lesson.shows
+                    );
+                }
                 assert!(!l.model.cameras.is_empty(), "{}: no cameras", p.display());
                 assert!(!l.model.poses.is_empty(), "{}: no poses", p.display());
             }

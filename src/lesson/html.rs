@@ -65,6 +65,7 @@ table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #b9c9d3;paddi
 th{background:#dcebf3}td.num{text-align:right;font-variant-numeric:tabular-nums}\
 code{background:#eef3f6;padding:.1em .3em}figure{display:inline-block;margin:.5em;vertical-align:top}\
 figure img,figure svg{max-width:520px;height:auto;border:1px solid #ccd}.small{color:#567;font-size:.9em}\
+.shows{background:#e6f3ea;border-left:4px solid #2e8b57;padding:.1em 1em;margin:1em 0}\
 .warn{background:#fff4d6;border-left:4px solid #d08a00;padding:.4em .8em;margin:.5em 0}";
 
 /// The page as a string.
@@ -74,10 +75,18 @@ pub fn page(r: &Report) -> String {
         s,
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\
          <style>{STYLE}</style></head><body>\n<h1>{t}</h1>\n<p class=\"q\">{q}</p>\n\
-         <h2>Set-up</h2><p>{setup}</p>\n<p class=\"small\">Form: <b>{form}</b>. Scene \
+         {shows}<h2>Set-up</h2><p>{setup}</p>\n<p class=\"small\">Form: <b>{form}</b>. Scene \
          <code>{scene}</code>; run with <code>{cmd}</code> ({secs:.0} s).</p>\n",
         t = escape(&r.title),
         q = escape(&r.question),
+        shows = if r.shows.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "<div class=\"shows\"><h2>What this shows</h2><p>{}</p></div>\n",
+                escape(&r.shows)
+            )
+        },
         setup = escape(&r.setup),
         form = r.form,
         scene = escape(&r.scene),
@@ -323,6 +332,7 @@ mod page_tests {
             title: "T <1>".into(),
             question: "Q?".into(),
             setup: "S".into(),
+            shows: "A & B.".into(),
             form: "quick",
             form_sets: vec!["network.length=10".into()],
             command: "poser lesson s.toml -o o".into(),
@@ -356,6 +366,7 @@ mod page_tests {
         };
         let p = page(&r);
         assert!(p.contains("<h1>T &lt;1&gt;</h1>"));
+        assert!(p.contains("<h2>What this shows</h2><p>A &amp; B.</p>"));
         assert!(p.contains(
             "<b>Quick form.</b> This page ran the lesson with <code>network.length=10</code>"
         ));

@@ -93,6 +93,8 @@ pub struct Report {
     pub title: String,
     pub question: String,
     pub setup: String,
+    /// "What this shows" (`lesson.shows`).
+    pub shows: String,
     /// `"quick"` or `"full"`.
     pub form: &'static str,
     /// The form's `--set` overrides (`lesson.quick` or `lesson.full`).
@@ -244,6 +246,7 @@ pub fn run(
         title: lesson.title,
         question: lesson.question,
         setup: lesson.setup,
+        shows: lesson.shows,
         form: if opts.full { "full" } else { "quick" },
         form_sets: if opts.full {
             lesson.full.clone()

@@ -1000,6 +1000,9 @@ pub struct LessonTable {
     pub question: Option<String>,
     /// The set-up in a sentence or two. **Default:** the scene description.
     pub setup: Option<String>,
+    /// What this shows: the lesson's answer in two or three plain sentences, opening the page
+    /// (every shipped lesson has one). **Default:** none.
+    pub shows: Option<String>,
     /// What is measured: `"deformation"` (`poser evaluate` on each variant: the bowl),
     /// `"calibration"` (native renders of a board, OpenCV calibration per variant),
     /// `"contrast"` (native renders of the first target at `gsd`: contrast, colour cast,

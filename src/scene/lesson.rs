@@ -3,7 +3,7 @@
 //!
 //! | key | resolved to | check |
 //! |---|---|---|
-//! | `title`, `question`, `setup` | text of the page | `question` required |
+//! | `title`, `question`, `setup`, `shows` | text of the page | `question` required |
 //! | `kind` | [`LessonKind`] | `deformation`, `calibration`, `contrast`, `gsd`, `dive`, `survey`, `completeness`, `metrology` or `surface` |
 //! | `gsd` | m/px (kinds `contrast`, `gsd`) | positive |
 //! | `quick`, `full` | `--set` overrides of the quick and full forms | strings |
@@ -81,6 +81,7 @@ pub fn lesson(
     let setup = t
         .opt_str(cx, "setup")
         .unwrap_or_else(|| description.to_string());
+    let shows = t.opt_str(cx, "shows").unwrap_or_default();
     let kind = match t.choice(
         cx,
         "kind",
@@ -151,6 +152,7 @@ pub fn lesson(
         title,
         question,
         setup,
+        shows,
         kind,
         gsd,
         quick,

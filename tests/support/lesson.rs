@@ -157,6 +157,11 @@ pub fn check_page(out: &Path, json: &serde_json::Value) -> String {
         assert!(cmd.contains("--set"), "{cmd}");
     }
     assert!(dom.contains("Try next"));
+    // Every shipped lesson opens with its answer in plain words.
+    assert!(
+        dom.contains("What this shows"),
+        "no `What this shows` on the page"
+    );
     let var = screenshot_variance(&page, out);
     assert!(
         var > 200.0,
