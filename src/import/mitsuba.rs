@@ -123,6 +123,29 @@ impl<'a> Lines<'a> {
     }
 }
 
+/// What a file that is not a regular file or folder is (a device, a pipe, a socket).
+fn special_kind(path: &Path) -> Option<&'static str> {
+    let t = std::fs::metadata(path).ok()?.file_type();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return Some("a named pipe (FIFO)");
+        }
+        if t.is_char_device() {
+            return Some("a character device");
+        }
+        if t.is_block_device() {
+            return Some("a block device");
+        }
+        if t.is_socket() {
+            return Some("a socket");
+        }
+    }
+    let _ = t;
+    None
+}
+
 /// Read a file the Mitsuba scene names as the scene front end reads one
 /// ([`crate::scene::source::read_capped`]): regular files only, at most [`MAX_FILE`] bytes.
 fn read_capped(path: &Path) -> Result<Vec<u8>, String> {
@@ -193,10 +216,11 @@ fn resolve(root: &Path, dirs: &[&Path], name: &str, loc: &str) -> Result<PathBuf
         return match std::fs::canonicalize(&norm) {
             Ok(real) if real.starts_with(root) => Ok(real),
             Ok(real) => Err(format!(
-                "{loc}: `{name}` is a symbolic link (or passes through one) to `{}`, outside \
+                "{loc}: `{name}` is a symbolic link (or passes through one) to `{}`{}, outside \
                  the scene's folder ({})\n  help: copy the file into that folder instead of \
                  linking to it",
                 real.display(),
+                special_kind(&real).map_or(String::new(), |k| format!(" ({k})")),
                 root.display()
             )),
             Err(e) => Err(format!(
