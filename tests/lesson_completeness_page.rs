@@ -41,13 +41,14 @@ fn completeness_lesson_page_shows_every_number_and_map_in_chromium() {
             format!("{:.1}", f("mean_images"))
         );
     }
-    // Two maps per case, each a PNG that decodes and holds more than one colour.
+    // Two maps per case and the camera's view, each a PNG that decodes and holds more than
+    // one colour.
     let maps: Vec<&str> = dom
         .split("src=\"data:image/png;base64,")
         .skip(1)
         .map(|s| &s[..s.find('"').unwrap()])
         .collect();
-    assert_eq!(maps.len(), 2 * rows.len());
+    assert_eq!(maps.len(), 2 * rows.len() + 1);
     for m in maps {
         let bytes = base64::engine::general_purpose::STANDARD
             .decode(m)

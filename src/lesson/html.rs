@@ -75,10 +75,20 @@ pub fn page(r: &Report) -> String {
         s,
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{t}</title>\
          <style>{STYLE}</style></head><body>\n<h1>{t}</h1>\n<p class=\"q\">{q}</p>\n\
-         {shows}<h2>Set-up</h2><p>{setup}</p>\n<p class=\"small\">Form: <b>{form}</b>. Scene \
+         {shows}<h2>Set-up</h2><p>{setup}</p>\n{view}<p class=\"small\">Form: <b>{form}</b>. Scene \
          <code>{scene}</code>; run with <code>{cmd}</code> ({secs:.0} s).</p>\n",
         t = escape(&r.title),
         q = escape(&r.question),
+        view = if r.view_png.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "<figure class=\"view\">{}<figcaption>What the camera sees: the first image of \
+                 “{}”, a quick native preview.</figcaption></figure>\n",
+                png(&r.view_png, &format!("camera view, {}", r.view_label)),
+                escape(&r.view_label)
+            )
+        },
         shows = if r.shows.is_empty() {
             String::new()
         } else {
@@ -333,6 +343,8 @@ mod page_tests {
             question: "Q?".into(),
             setup: "S".into(),
             shows: "A & B.".into(),
+            view_label: "flat".into(),
+            view_png: vec![0x89, b'P', b'N', b'G'],
             form: "quick",
             form_sets: vec!["network.length=10".into()],
             command: "poser lesson s.toml -o o".into(),
@@ -367,6 +379,7 @@ mod page_tests {
         let p = page(&r);
         assert!(p.contains("<h1>T &lt;1&gt;</h1>"));
         assert!(p.contains("<h2>What this shows</h2><p>A &amp; B.</p>"));
+        assert!(p.contains("What the camera sees: the first image of “flat”"));
         assert!(p.contains(
             "<b>Quick form.</b> This page ran the lesson with <code>network.length=10</code>"
         ));

@@ -15,6 +15,10 @@
 //! | [`metrology`] | kind `metrology`: a stereo rig's backscatter and contrast (native renders), and its accuracy (`poser evaluate --rig --gcp`) |
 //! | [`html`] | `index.html` (images inline, works offline) and `lesson.json` |
 //!
+//! Every page also shows one camera image of the scene: the first case's first image, rendered
+//! by the native backend at most [`VIEW_WIDTH`] px wide and [`VIEW_SAMPLES`] samples per pixel
+//! into `OUT/view/`.
+//!
 //! Overrides are applied in this order, the later winning: the form's (`lesson.quick`, or
 //! `lesson.full` with `--full`), the variant's `set`, the command line's `--set`.
 
@@ -31,6 +35,41 @@ pub mod surface;
 use crate::model::{Lesson, LessonKind, Model};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+
+/// Width of the page's camera image, px (smaller cameras keep their own).
+pub const VIEW_WIDTH: u32 = 320;
+/// Samples per pixel of the page's camera image: a preview, not a measurement.
+pub const VIEW_SAMPLES: u32 = 8;
+
+/// One camera image of the scene for the page: `case`'s first image, rendered natively (through
+/// [`crate::backend::Backend`]) into `out/view/`; an auto-exposed sRGB PNG of it.
+pub fn view(case: &Case, out: &Path) -> Result<Vec<u8>, String> {
+    use crate::backend::{Backend, RenderOptions};
+    let Some(cam) = case.model.cameras.first() else {
+        return Err(format!("variant `{}` has no camera", case.label));
+    };
+    let scale = (VIEW_WIDTH as f64 / cam.width.max(1) as f64).min(1.0);
+    let mut model = case.model.clone().with_resolution_scale(scale);
+    // The solved water column where it applies: several times less noise at a preview's
+    // samples in a deep, sky-lit scene (docs/column.md).
+    model.render.daylight = crate::model::Daylight::Auto;
+    let dir = out.join("view");
+    Backend::Native
+        .render(
+            &model,
+            &dir,
+            &RenderOptions {
+                samples: Some(VIEW_SAMPLES),
+                poses: Some(vec![0]),
+                progress: false,
+                resume: false,
+            },
+        )
+        .map_err(|e| format!("the page's camera image: {e}"))?;
+    // Auto-exposed: a deep scene's radiance is far below the preview's fixed exposure.
+    let exr = dir.join(format!("{}.exr", model.image_name(0, 0)));
+    crate::image::preview_png(&crate::image::read_exr(&exr)?)
+}
 
 /// The knobs of one `poser lesson` run.
 #[derive(Debug, Clone, Default)]
@@ -95,6 +134,10 @@ pub struct Report {
     pub setup: String,
     /// "What this shows" (`lesson.shows`).
     pub shows: String,
+    /// One camera image of the scene ([`view`]): the label of its case and the PNG.
+    pub view_label: String,
+    #[serde(skip)]
+    pub view_png: Vec<u8>,
     /// `"quick"` or `"full"`.
     pub form: &'static str,
     /// The form's `--set` overrides (`lesson.quick` or `lesson.full`).
@@ -191,6 +234,12 @@ pub fn run(
 ) -> Result<Report, String> {
     let t0 = std::time::Instant::now();
     let (lesson, cases) = cases(scene, opts)?;
+    progress("rendering the page's camera image");
+    let view_png = match cases.first() {
+        Some(c) => view(c, out)?,
+        None => Vec::new(),
+    };
+    let view_label = cases.first().map(|c| c.label.clone()).unwrap_or_default();
     let results = match lesson.kind {
         LessonKind::Deformation => Results::Deformation {
             rows: deformation::run(&cases, out, progress)?,
@@ -247,6 +296,8 @@ pub fn run(
         question: lesson.question,
         setup: lesson.setup,
         shows: lesson.shows,
+        view_label,
+        view_png,
         form: if opts.full { "full" } else { "quick" },
         form_sets: if opts.full {
             lesson.full.clone()

@@ -325,20 +325,7 @@ pub fn write_exr(path: &Path, width: u32, height: u32, data: &[[f32; 3]]) -> Res
     })
 }
 
-/// sRGB transfer of a linear value in [0, 1].
-fn srgb(x: f64) -> u8 {
-    let x = if x.is_finite() {
-        x.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let v = if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    };
-    (v * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
-}
+use crate::image::srgb8 as srgb;
 
 /// PNG preview (sRGB of `exposure × radiance`), atomic.
 pub fn write_png(path: &Path, img: &Image, exposure: f64) -> Result<(), String> {
