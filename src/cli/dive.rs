@@ -145,6 +145,32 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
         if g.thirds_ok { "kept" } else { "BROKEN" },
         if g.min_gas_ok { "kept" } else { "not kept" }
     );
+    let ox = &d.oxygen;
+    let cns_flag = if ox.cns_percent > crate::plan::oxygen::CNS_LIMIT {
+        "NOT SAFE (> 100 %)"
+    } else if ox.cns_percent > crate::plan::oxygen::CNS_WARN {
+        "WARNING (> 80 %)"
+    } else {
+        "OK"
+    };
+    let otu_flag = if ox.otu > crate::plan::oxygen::OTU_WARN {
+        "WARNING (> 300)"
+    } else {
+        "OK"
+    };
+    let _ = writeln!(
+        o,
+        "  oxygen      CNS {:.1} % → {cns_flag} · OTU {:.1} → {otu_flag} · max pO₂ {:.2} bar at {:.1} m{}",
+        ox.cns_percent,
+        ox.otu,
+        ox.max_po2,
+        ox.max_po2_depth,
+        if ox.max_po2 > crate::plan::oxygen::PO2_TABLE_MAX + 1e-9 {
+            " — BEYOND THE 1.6 bar NOAA TABLE"
+        } else {
+            ""
+        }
+    );
     let _ = writeln!(
         o,
         "\nVerdict: {} — {}, {}, {}",

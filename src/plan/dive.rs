@@ -24,6 +24,9 @@
 //! Every gas is checked where it is breathed: pO₂ against its role's limit, and not hypoxic
 //! at the surface. "In decompression" has one meaning everywhere (report, verdict, `.ssrf`):
 //! the ceiling is below the surface.
+//! Oxygen toxicity (CNS % against the NOAA limits, OTU) is summed in the same ≤ 1 s steps, each
+//! a pO₂ ramp of the gas breathed ([`super::oxygen`]); CNS above 100 % or any pO₂ above the
+//! table's 1.6 bar is a problem, CNS above 80 % or OTU above 300 advice.
 //!
 //! The profile: descent from the surface to the first pose at the descent rate, then the rig
 //! poses in time order (depth = −z of the rig; linear between poses, which follows the terrain
@@ -36,6 +39,7 @@ use super::gas::{
     self, BottomGas, CylinderUse, GasCheck, HYPOXIC, PROBLEM_SOLVING, SAC_FACTOR, Supply, Tank,
     bottom_gas, depth_limit, gas_label, hypoxic_limit,
 };
+use super::oxygen::{self, OxygenExposure};
 use crate::model::{CylinderRole, Model};
 use serde::Serialize;
 
@@ -393,6 +397,8 @@ pub struct DiveResult {
     /// Cylinder changes (the first entry is the cylinder breathed from the start).
     pub switches: Vec<Switch>,
     pub gas: GasCheck,
+    /// Oxygen toxicity: CNS % and OTU of the dive (see [`super::oxygen`]).
+    pub oxygen: OxygenExposure,
 }
 
 impl DiveResult {
@@ -401,9 +407,13 @@ impl DiveResult {
     pub fn deco_required(&self) -> bool {
         self.deco_from.is_some() || !self.stops.is_empty()
     }
-    /// Within the NDL, the gas rules, and every gas breathable where it is breathed.
+    /// Within the NDL, the gas rules, every gas breathable where it is breathed, CNS within
+    /// 100 % and no pO₂ beyond the NOAA table (1.6 bar).
     pub fn ok(&self) -> bool {
-        !self.deco_required() && self.gas.ok() && self.gas.breathable()
+        !self.deco_required()
+            && self.gas.ok()
+            && self.gas.breathable()
+            && self.oxygen.within_limits()
     }
 }
 
@@ -419,6 +429,8 @@ struct Breathing<'a> {
     empty_at: Option<f64>,
     /// Cylinders left on the ascent at their reserve: never taken again on this dive.
     exhausted: Vec<bool>,
+    /// CNS % and OTU so far.
+    oxygen: OxygenExposure,
 }
 
 impl Breathing<'_> {
@@ -575,6 +587,7 @@ pub fn simulate(
         reserve_reached_at: None,
         empty_at: None,
         exhausted: vec![false; n_tanks],
+        oxygen: OxygenExposure::default(),
     };
     b.note_po2(0.0);
     let mut deco_from: Option<f64> = None;
@@ -676,6 +689,13 @@ pub fn simulate(
                 tissues.expose_pressure(p, b.gas(), h);
                 let t = ts + h;
                 let de = a + (d1 - a) * (i + 1) as f64 / n as f64;
+                let o2 = b.gas().o2;
+                b.oxygen.breathe(
+                    ts,
+                    h,
+                    (ds, env.pressure(ds) * o2),
+                    (de, env.pressure(de) * o2),
+                );
                 b.breathe(need, t, d.max(de));
                 on_step(t, de, tissues, b);
             }
@@ -829,6 +849,7 @@ pub fn simulate(
         tts_at_end,
         switches: b.switches.clone(),
         gas,
+        oxygen: b.oxygen,
     }
 }
 
@@ -1014,6 +1035,43 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
                 cfg.tanks[i].gas.o2 * cfg.env.surface_pressure
             ));
         }
+    }
+    // Oxygen toxicity (CNS % against the NOAA limits, OTU against a single-dive figure).
+    let ox = &dive.oxygen;
+    // Beyond the table even within the diver's own limits (a cylinder above its own limit is
+    // reported above already).
+    if ox.max_po2 > oxygen::PO2_TABLE_MAX + 1e-9 && dive.gas.cylinders.iter().all(|c| c.po2_ok) {
+        problems.push(format!(
+            "pO₂ {:.2} bar at {:.1} m ({} runtime), beyond the 1.6 bar end of the NOAA oxygen \
+             limits whatever the diver's own limits; {:.1} min breathed above it (CNS there \
+             extrapolated steeply: ×2.7 per 0.1 bar)",
+            ox.max_po2,
+            ox.max_po2_depth,
+            mmss(ox.max_po2_time),
+            ox.minutes_above_table
+        ));
+    }
+    if ox.cns_percent > oxygen::CNS_LIMIT {
+        problems.push(format!(
+            "CNS oxygen toxicity {:.1} %: above 100 % of the NOAA single-exposure limits \
+             (highest pO₂ {:.2} bar at {:.1} m); breathe a leaner gas or shorten the exposure",
+            ox.cns_percent, ox.max_po2, ox.max_po2_depth
+        ));
+    } else if ox.cns_percent > oxygen::CNS_WARN {
+        advice.push(format!(
+            "CNS oxygen toxicity {:.1} %: above the 80 % warning level of the NOAA \
+             single-exposure limits (highest pO₂ {:.2} bar at {:.1} m); no repetitive dive \
+             on oxygen-rich gas until it has come down (half-time 90 min)",
+            ox.cns_percent, ox.max_po2, ox.max_po2_depth
+        ));
+    }
+    if ox.otu > oxygen::OTU_WARN {
+        advice.push(format!(
+            "pulmonary oxygen exposure {:.0} OTU: above the {:.0} OTU single-dive planning \
+             figure (REPEX: at most 850 OTU in one day)",
+            ox.otu,
+            oxygen::OTU_WARN
+        ));
     }
     if deco && dive.stops.is_empty() {
         problems.push(format!(

@@ -4,6 +4,7 @@ pub mod deco;
 pub mod dive;
 pub mod gas;
 pub mod network;
+pub mod oxygen;
 pub mod plot;
 pub mod ssrf;
 pub mod survey;

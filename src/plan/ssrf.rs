@@ -12,6 +12,7 @@
 //! | `sample@time`, `@ndl`, `@tts`, `@stoptime` | `m:ss min` |
 //! | `sample@depth`, `@stopdepth` | `15.0 m` |
 //! | `sample@pressure` | `187.3 bar` |
+//! | `dive@otu`, `@cns` | `42`, `17%` (whole numbers, only when not zero, as Subsurface saves its computed OTU and max CNS) |
 
 use super::deco::Ndl;
 use super::dive::DiveReport;
@@ -77,16 +78,25 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
         &[("program", "subsurface".into()), ("version", "3".into())],
     )?;
     start(&mut w, "dives", &[])?;
-    start(
-        &mut w,
-        "dive",
-        &[
-            ("number", "1".into()),
-            ("date", "2026-01-01".into()),
-            ("time", "09:00:00".into()),
-            ("duration", min_sec(dive.runtime)),
-        ],
-    )?;
+    let mut dive_attrs = vec![
+        ("number", "1".to_string()),
+        ("date", "2026-01-01".into()),
+        ("time", "09:00:00".into()),
+        ("duration", min_sec(dive.runtime)),
+    ];
+    // Subsurface's computed `otu` and `cns` (its `maxcns`), written as it saves them: whole
+    // numbers, only when not zero.
+    let (otu, cns) = (
+        dive.oxygen.otu.round() as i64,
+        dive.oxygen.cns_percent.round() as i64,
+    );
+    if otu != 0 {
+        dive_attrs.push(("otu", otu.to_string()));
+    }
+    if cns > 0 {
+        dive_attrs.push(("cns", format!("{cns}%")));
+    }
+    start(&mut w, "dive", &dive_attrs)?;
     let mut notes = format!(
         "Planned by poser from scene '{}': {} poses, survey {} at up to {} m. ",
         model.name,
