@@ -948,7 +948,7 @@ fn spectrum_to_srgb(wl: &[f64], v: &[f64], bounded: bool, d65: bool) -> [f64; 3]
             *x += on_grid(&CIE1931, 95 * c, w) * val * light;
         }
     }
-    let scale = (830.0 - 360.0) / 106.7502593994140625 / steps as f64;
+    let scale = (830.0 - 360.0) / 106.750_259_399_414_06 / steps as f64;
     let rgb = xyz_to_srgb(xyz.map(|x| x * scale));
     if bounded {
         rgb.map(|c| c.clamp(0.0, 1.0))
