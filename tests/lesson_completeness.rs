@@ -117,9 +117,10 @@ fn quick_form_measures_coral_completeness_in_the_physical_bands_and_shows_it() {
         assert_eq!(cell("area_m2"), format!("{:.3}", f(&r["area_m2"])));
         assert_eq!(cell("mean_images"), format!("{:.1}", f(&r["mean_images"])));
     }
+    // Two maps per case, and the camera's view.
     assert_eq!(
         html.matches("src=\"data:image/png;base64,").count(),
-        2 * rows.len()
+        2 * rows.len() + 1
     );
     for bad in ["src=\"http", "href=\"http", "<script", "url("] {
         assert!(!html.contains(bad), "not self-contained: {bad}");
