@@ -144,6 +144,33 @@ fn a_self_calibration_without_jitter_warns_that_the_focal_length_is_not_determin
 }
 
 #[test]
+fn a_pinhole_held_behind_a_flat_port_is_flagged_as_not_fitting() {
+    // The flat port's quick form with the intrinsics held at their paraxial in-water values
+    // (`--rig`, no distortion): a flat port is no central projection (measured 31.5 px).
+    let ev = run(
+        "flat_port_deformation",
+        &[],
+        &Options {
+            rig: true,
+            ..Options::default()
+        },
+    );
+    assert!(ev.reprojection_error > 10.0, "{}", ev.reprojection_error);
+    assert!(
+        ev.warnings.iter().any(|w| w.code == "fit"),
+        "{:?}",
+        ev.warnings
+    );
+    // Self-calibrated, the same block fits (0.5 px) and gives no such warning.
+    let free = run("flat_port_deformation", &[], &Options::default());
+    assert!(
+        free.warnings.iter().all(|w| w.code != "fit"),
+        "{:?}",
+        free.warnings
+    );
+}
+
+#[test]
 fn a_seabed_the_strips_mostly_miss_is_flagged_and_strict_makes_it_an_error() {
     // The strips moved 9 m east of the plot: 25 of 330 images see the seabed (measured).
     let dir = tempfile::tempdir().unwrap();

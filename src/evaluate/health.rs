@@ -6,6 +6,7 @@
 //! |---|---|---|
 //! | `registered` | images that dropped out: not seen to have tie points (observations mode) or not registered by COLMAP | fewer than [`MIN_REGISTERED`] of the images |
 //! | `focal` | a self-calibrated focal length the block does not determine ([`super::Evaluation::focal_sensitivity`]) | a rise below [`super::FOCAL_DETERMINED`] |
+//! | `fit` | a camera model that does not fit the images | a mean reprojection error above [`MAX_REPROJECTION_PX`] |
 //! | `outliers` | a height RMS driven by a few far points, not by the block | more than [`MAX_OUTLIERS`] of the tie points beyond 3 NMAD, and RMS Z over twice the NMAD |
 //!
 //! A perfectly regular network (every image at one height, looking one way: no hand-held
@@ -17,6 +18,9 @@ use serde::Serialize;
 
 /// Below this share of registered images a block is reported as degenerate.
 pub const MIN_REGISTERED: f64 = 0.95;
+/// Above this mean reprojection error, px, the camera model does not describe the images (the
+/// simulated noise is 0.3 px; a flat port self-calibrated fits to about 0.5–0.7 px).
+pub const MAX_REPROJECTION_PX: f64 = 2.0;
 /// Above this share of outliers (beyond 3 NMAD) the RMS is not the block's accuracy.
 pub const MAX_OUTLIERS: f64 = 0.02;
 
@@ -104,6 +108,20 @@ pub fn check(model: &Model, ev: &Evaluation, self_calibrated: bool) -> Vec<Warni
             } else {
                 "add obliques, relief or a second height, or calibrate beforehand (`--rig`)".into()
             },
+        });
+    }
+    if ev.reprojection_error > MAX_REPROJECTION_PX {
+        out.push(Warning {
+            code: "fit",
+            message: format!(
+                "the camera model does not fit the images: mean reprojection error {:.2} px \
+                 (above {MAX_REPROJECTION_PX} px)",
+                ev.reprojection_error
+            ),
+            help: "a pinhole model held at fixed intrinsics cannot describe a flat port's \
+                   projection (it is no central projection): let the adjustment calibrate the \
+                   camera, or use a dome centred on the lens"
+                .into(),
         });
     }
     let z = &ev.tie_errors;
