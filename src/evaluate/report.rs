@@ -249,13 +249,8 @@ fn points_table(s: &mut String, ev: &Evaluation, kind: &str, title: &str) {
         s,
         "\n### {title}\n\n| point | X error | Y error | Z error | 3D error | images |\n|---|---|---|---|---|---|"
     );
-    let mut sq = [0.0; 4];
-    for p in &pts {
-        let e = DVec3::from_array(p.error);
-        for i in 0..3 {
-            sq[i] += e[i] * e[i];
-        }
-        sq[3] += e.length_squared();
+    let errors: Vec<DVec3> = pts.iter().map(|p| DVec3::from_array(p.error)).collect();
+    for (p, e) in pts.iter().zip(&errors) {
         let _ = writeln!(
             s,
             "| {} | {:+.2} | {:+.2} | {:+.2} | {} | {} |",
@@ -267,15 +262,15 @@ fn points_table(s: &mut String, ev: &Evaluation, kind: &str, title: &str) {
             p.track
         );
     }
-    let n = pts.len() as f64;
+    let rmse = super::AxisStats::of(&errors);
     let _ = writeln!(
         s,
         "| **RMSE** ({}) | {} | {} | {} | {} | |",
-        pts.len(),
-        mm((sq[0] / n).sqrt()),
-        mm((sq[1] / n).sqrt()),
-        mm((sq[2] / n).sqrt()),
-        mm((sq[3] / n).sqrt())
+        rmse.count,
+        mm(rmse.rms[0]),
+        mm(rmse.rms[1]),
+        mm(rmse.rms[2]),
+        mm(rmse.rms_3d)
     );
 }
 
