@@ -658,8 +658,38 @@ pub enum CylinderRole {
     Bottom,
     /// Carried bottom gas, breathed before the back gas down to its reserve.
     Stage,
+    /// Travel gas: breathed on the descent from the surface down to its switch depth (where
+    /// the bottom gas takes over), and on the ascent from its switch depth up. It carries a
+    /// bottom gas that is hypoxic at the surface, or too narcotic or too rich in O₂ for the
+    /// shallow part, to where it is breathable.
+    Travel,
     /// Breathed only on the ascent, from its switch depth up.
     Deco,
+    /// Not breathed in the plan: carried for the loss of the bottom gas. Its plan is the
+    /// ascent from the end of the bottom time on it (and the travel and deco gases from their
+    /// switch depths), checked like the plan itself.
+    Bailout,
+}
+
+impl CylinderRole {
+    /// The role as the scene writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CylinderRole::Bottom => "bottom",
+            CylinderRole::Stage => "stage",
+            CylinderRole::Travel => "travel",
+            CylinderRole::Deco => "deco",
+            CylinderRole::Bailout => "bailout",
+        }
+    }
+    /// Back gas or stage: breathed on the bottom, pooled for the gas rules.
+    pub fn is_bottom(self) -> bool {
+        matches!(self, CylinderRole::Bottom | CylinderRole::Stage)
+    }
+    /// Has a switch depth: travel and deco gases.
+    pub fn switched(self) -> bool {
+        matches!(self, CylinderRole::Travel | CylinderRole::Deco)
+    }
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -674,8 +704,10 @@ pub struct Cylinder {
     pub he: f64,
     #[serde(default)]
     pub role: CylinderRole,
-    /// Deco gas: depth (m) from which it is breathed on the ascent; `None` = its MOD at the
-    /// diver's deco pO₂.
+    /// Travel or deco gas: depth (m) to which a travel gas is breathed on the descent and from
+    /// which a travel or deco gas is breathed on the ascent; `None` = the planner's default
+    /// (a deco gas: its MOD at the diver's deco pO₂; a travel gas: the deepest depth within
+    /// its bottom pO₂ and the END limit), rounded down to whole metres.
     #[serde(default)]
     pub switch_depth: Option<f64>,
 }

@@ -7,7 +7,7 @@ use poser::plan::deco::{Environment, Gas, GradientFactors, Tissues};
 use poser::plan::dive::*;
 use proptest::prelude::*;
 use support::plan as common;
-use support::plan::{cyl, flat_dive};
+use support::plan::{breathed, cyl, flat_dive};
 
 #[test]
 fn ndl_verdict_agrees_with_the_ceiling() {
@@ -134,6 +134,7 @@ proptest! {
         litres in 3.0f64..24.0,
         bar in 60.0f64..300.0,
         deco in proptest::option::of((0.3f64..1.0, 0.0f64..36.0, proptest::bool::ANY)),
+        travel in proptest::option::of((0.18f64..0.6, 0.0f64..45.0, proptest::bool::ANY)),
         gf_high in 0.5f64..1.0,
         po2_bottom in 1.2f64..1.6,
     ) {
@@ -149,6 +150,11 @@ proptest! {
             c.switch_depth = given.then_some(sw);
             d.cylinders.push(c);
         }
+        if let Some((travel_o2, sw, given)) = travel {
+            let mut c = cyl("travel", 11.0, 200.0, travel_o2, 0.0, CylinderRole::Travel);
+            c.switch_depth = given.then_some(sw);
+            d.cylinders.push(c);
+        }
         let m = flat_dive(depth, minutes, d.clone());
         let cfg = DiveConfig::from_model(&m).unwrap();
         let track = Track::from_model(&m).unwrap();
@@ -159,22 +165,45 @@ proptest! {
 
         // Independent checks, from the inputs and physics, not from the simulator's flags.
         let po2_deep = env.pressure(depth) * o2 > po2_bottom + 1e-6;
-        let hypoxic = o2 * env.surface_pressure < 0.16_f64.min(0.209 * env.surface_pressure);
+        let hyp = 0.16_f64.min(0.209 * env.surface_pressure);
+        // Without a travel gas the bottom gas is breathed from the surface.
+        let hypoxic = travel.is_none() && o2 * env.surface_pressure < hyp;
+        // Every gas where it is breathed, from the profile and the switches alone: within the
+        // pO₂ limit of its role and not hypoxic.
+        let report = DiveReport { config: cfg.clone(), dive: dive.clone(), verdict: v.clone() };
+        let unfit = breathed(&report).into_iter().any(|(c, at)| {
+            let t = &cfg.tanks[c];
+            let p = env.pressure(at) * t.gas.o2;
+            let limit = if t.role == CylinderRole::Deco { d.po2_deco } else { po2_bottom };
+            p > limit + 1e-6 || p < hyp - 1e-9
+        });
         let deco_po2 = dive.switches.iter().any(|s| {
             let t = &cfg.tanks[s.cylinder];
             t.role == CylinderRole::Deco && env.pressure(s.depth) * t.gas.o2 > d.po2_deco + 1e-6
         });
         let mut t = Tissues::surface(env, cfg.gf);
-        t.travel(0.0, depth, bottom, depth / cfg.descent_rate, 1.0);
+        // The descent: on the travel gas down to its switch depth, if there is one.
+        let sw = cfg
+            .tanks
+            .iter()
+            .find(|t| t.role == CylinderRole::Travel)
+            .and_then(|t| t.switch_depth.map(|s| (t.gas, s.min(depth))));
+        match sw {
+            Some((tg, s)) => {
+                t.travel(0.0, s, tg, s / cfg.descent_rate, 1.0);
+                t.travel(s, depth, bottom, (depth - s) / cfg.descent_rate, 1.0);
+            }
+            None => t.travel(0.0, depth, bottom, depth / cfg.descent_rate, 1.0),
+        }
         t.travel(depth, depth, bottom, track.duration(), 1.0);
         let ceiling = t.ceiling() > 1e-6;
         let bottom_gas = 20.0 * (env.pressure(depth) / 1.01325) * track.duration() / 60.0;
         let tank = &cfg.tanks[0];
         let short = tank.start - bottom_gas < tank.reserve - 1e-6;
 
-        if po2_deep || hypoxic || deco_po2 || ceiling || short {
+        if po2_deep || hypoxic || deco_po2 || ceiling || short || unfit {
             prop_assert!(!v.ok, "OK despite po2 {po2_deep} hypoxic {hypoxic} deco {deco_po2} \
-                ceiling {ceiling} short {short}: {:?}", v.problems);
+                ceiling {ceiling} short {short} unfit {unfit}: {:?}", v.problems);
             prop_assert!(!v.problems.is_empty());
             prop_assert!(!dive.ok());
         }

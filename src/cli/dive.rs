@@ -97,15 +97,12 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
         c.sac_lpm, g.reserve_bar, c.po2_bottom, c.po2_deco
     );
     for (t, u) in c.tanks.iter().zip(&g.cylinders) {
+        let sw = depth_limit(t.switch_depth.unwrap_or(0.0));
         let role = match t.role {
-            crate::model::CylinderRole::Bottom => "bottom".to_string(),
-            crate::model::CylinderRole::Stage => "stage".to_string(),
-            crate::model::CylinderRole::Deco => {
-                format!(
-                    "deco from {:.0} m",
-                    depth_limit(t.switch_depth.unwrap_or(0.0))
-                )
-            }
+            crate::model::CylinderRole::Deco => format!("deco from {sw:.0} m"),
+            crate::model::CylinderRole::Travel => format!("travel to and from {sw:.0} m"),
+            crate::model::CylinderRole::Bailout => "bailout, not breathed in the plan".into(),
+            r => r.name().to_string(),
         };
         let mut flags = Vec::new();
         if !u.po2_ok {

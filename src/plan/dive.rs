@@ -14,9 +14,11 @@
 //! | `salt_water` | — | true (1030 kg/m³ as Subsurface) |
 //!
 //! Gases as Subsurface's planner handles them: every cylinder keeps its own gas and contents.
-//! Stage cylinders are breathed first on the bottom, each down to its reserve, then the back
-//! gas; deco cylinders from their switch depth on the ascent (the richest allowed, a 1 min
-//! hold at a switch except to O₂), and the ascent's stops are computed on the gas breathed.
+//! Travel cylinders are breathed on the descent from the surface to their switch depth; then
+//! stage cylinders, each down to its reserve, then the back gas; travel and deco cylinders
+//! from their switch depth on the ascent (the richest allowed, a 1 min hold at a switch
+//! except to O₂; within the NDL only travel gases, without a hold), and the ascent's stops are
+//! computed on the gas breathed. Bailout cylinders are not breathed in the plan.
 //! On the ascent too no cylinder is breathed below its reserve while another gas is left: a
 //! stage or deco cylinder at its reserve hands over to the richest other deco gas allowed
 //! there, else to the bottom cylinders (stages, then back gas), and the rest of the ascent is
@@ -104,10 +106,23 @@ impl DiveConfig {
                     if !(c.o2 > 0.0 && c.he >= 0.0 && c.o2 + c.he <= 1.0 + 1e-9) {
                         return Err(format!("cylinder '{}': impossible gas mix", c.name));
                     }
-                    let sw = (c.role == CylinderRole::Deco).then(|| {
-                        c.switch_depth
-                            .unwrap_or_else(|| gas.mod_depth(&env, d.po2_deco).floor().max(0.0))
-                    });
+                    // Switch depths, rounded down to whole metres (toward safety): a deco gas
+                    // at its MOD at the deco pO₂; a travel gas as deep as both its bottom pO₂
+                    // and the END limit allow.
+                    let sw = match c.role {
+                        CylinderRole::Deco => Some(
+                            c.switch_depth
+                                .unwrap_or_else(|| depth_limit(gas.mod_depth(&env, d.po2_deco))),
+                        ),
+                        CylinderRole::Travel => Some(c.switch_depth.unwrap_or_else(|| {
+                            depth_limit(gas.mod_depth(&env, d.po2_bottom).min(gas::end_depth(
+                                &env,
+                                gas,
+                                d.end_limit,
+                            )))
+                        })),
+                        _ => None,
+                    };
                     tanks.push(Tank::new(
                         &c.name,
                         c.volume * 1e3,
@@ -189,7 +204,8 @@ impl DiveConfig {
         v
     }
 
-    /// pO₂ limit of a cylinder's role, bar.
+    /// pO₂ limit of a cylinder's role, bar: `po2_deco` for a deco gas, `po2_bottom` for
+    /// every other (back gas, stage, travel, bailout).
     pub fn po2_limit(&self, tank: &Tank) -> f64 {
         if tank.role == CylinderRole::Deco {
             self.po2_deco
@@ -198,7 +214,8 @@ impl DiveConfig {
         }
     }
 
-    /// How the ascent is flown: one rate, 3 m stops, the deco cylinders' gases.
+    /// How a decompression ascent is flown: one rate, 3 m stops, the travel and deco
+    /// cylinders' gases from their switch depths.
     pub fn ascent_plan(&self) -> AscentPlan {
         let mut plan = AscentPlan::simple(self.ascent_rate);
         plan.deco_gases = self
@@ -207,6 +224,41 @@ impl DiveConfig {
             .filter_map(|t| t.switch_depth.map(|d| (t.gas, d)))
             .collect();
         plan
+    }
+
+    /// How an ascent within the NDL is flown: direct, on the travel gases from their switch
+    /// depths (a bottom gas hypoxic in the shallows must not be breathed there) without a
+    /// hold at the switch; deco gases are not breathed.
+    pub fn direct_plan(&self) -> AscentPlan {
+        let mut plan = AscentPlan::simple(self.ascent_rate);
+        plan.switch_time = 0.0;
+        plan.deco_gases = self
+            .tanks
+            .iter()
+            .filter(|t| t.role == CylinderRole::Travel)
+            .filter_map(|t| t.switch_depth.map(|d| (t.gas, d)))
+            .collect();
+        plan
+    }
+
+    /// The travel cylinder breathed on the descent at `depth` m: of the travel gases whose
+    /// switch depth is at or below `depth`, the one with the shallowest switch depth (the
+    /// richest on a tie). `None` past every travel gas's switch depth: the bottom gas.
+    pub fn descent_travel(&self, depth: f64) -> Option<usize> {
+        (0..self.tanks.len())
+            .filter(|&i| self.tanks[i].role == CylinderRole::Travel)
+            .filter(|&i| {
+                self.tanks[i]
+                    .switch_depth
+                    .is_some_and(|s| s + 1e-9 >= depth)
+            })
+            .min_by(|&a, &b| {
+                let (ta, tb) = (&self.tanks[a], &self.tanks[b]);
+                ta.switch_depth
+                    .unwrap_or(0.0)
+                    .total_cmp(&tb.switch_depth.unwrap_or(0.0))
+                    .then(tb.gas.o2.total_cmp(&ta.gas.o2))
+            })
     }
 
     /// The same diver with every bottom cylinder filled with `mix`.
@@ -235,6 +287,7 @@ impl DiveConfig {
 pub const DEFAULT_RESERVE_BAR: f64 = 50.0;
 
 fn pooled(tanks: &[Tank], reserve_bar: f64) -> Option<Supply> {
+    // Back gas and stages: travel, deco and bailout cylinders keep their own gas.
     let cyl: Vec<(String, f64, f64, Gas)> = tanks
         .iter()
         .filter(|t| t.bottom_phase())
@@ -423,7 +476,7 @@ struct Breathing<'a> {
     used: Vec<f64>,
     current: usize,
     max_po2: Vec<Option<(f64, f64)>>,
-    min_po2: Vec<Option<f64>>,
+    min_po2: Vec<Option<(f64, f64)>>,
     switches: Vec<Switch>,
     reserve_reached_at: Option<f64>,
     empty_at: Option<f64>,
@@ -431,6 +484,9 @@ struct Breathing<'a> {
     exhausted: Vec<bool>,
     /// CNS % and OTU so far.
     oxygen: OxygenExposure,
+    /// Where the ascent falls back when no travel or deco gas is left: the bottom cylinders
+    /// (stages, then back gas).
+    fallback: Vec<usize>,
 }
 
 impl Breathing<'_> {
@@ -448,59 +504,105 @@ impl Breathing<'_> {
                 depth,
                 cylinder: i,
             });
-            self.note_po2(depth);
+            self.note_po2(depth, depth);
         }
     }
-    fn note_po2(&mut self, depth: f64) {
+    /// Note the pO₂ of the gas breathed between `shallow` and `deep` m.
+    fn note_po2(&mut self, shallow: f64, deep: f64) {
         let i = self.current;
-        let p = self.cfg.env.pressure(depth) * self.cfg.tanks[i].gas.o2;
-        if self.max_po2[i].is_none_or(|m| p > m.0) {
-            self.max_po2[i] = Some((p, depth));
+        let o2 = self.cfg.tanks[i].gas.o2;
+        let hi = self.cfg.env.pressure(deep) * o2;
+        let lo = self.cfg.env.pressure(shallow) * o2;
+        if self.max_po2[i].is_none_or(|m| hi > m.0) {
+            self.max_po2[i] = Some((hi, deep));
         }
-        if self.min_po2[i].is_none_or(|m| p < m) {
-            self.min_po2[i] = Some(p);
+        if self.min_po2[i].is_none_or(|m| lo < m.0) {
+            self.min_po2[i] = Some((lo, shallow));
+        }
+    }
+    fn keeps(&self, i: usize, need: f64) -> bool {
+        i != self.current
+            && !self.exhausted[i]
+            && self.left(i) - need * 1.0001 >= self.cfg.tanks[i].reserve
+    }
+    /// On the descent (`descent`: the step from `from` to `depth` m is before the first
+    /// pose; a change is made, and noted, at `from`): the
+    /// travel gas for this depth ([`DiveConfig::descent_travel`]) while there is one, then the
+    /// bottom gas. On the bottom a travel gas is left for the bottom gas.
+    fn pick_descent(&mut self, need: f64, t: f64, from: f64, depth: f64, descent: bool) {
+        let c = self.current;
+        let travel = if descent {
+            self.cfg.descent_travel(depth)
+        } else {
+            None
+        };
+        match travel {
+            Some(i) if i != c && self.keeps(i, need) => self.switch_to(i, t, from),
+            None if self.cfg.tanks[c].role == CylinderRole::Travel => {
+                let order = self.cfg.bottom_order();
+                let next = order
+                    .iter()
+                    .copied()
+                    .find(|&i| self.keeps(i, need))
+                    .unwrap_or(order[0]);
+                self.switch_to(next, t, from);
+            }
+            _ => {}
         }
     }
     /// On the bottom: before breathing `need` litres, move on from a cylinder that would drop
-    /// below its reserve to the next bottom cylinder that keeps it.
+    /// below its reserve to the next bottom cylinder that keeps it (a travel gas on the
+    /// descent: another travel gas allowed here first).
     fn pick_bottom(&mut self, need: f64, t: f64, depth: f64) {
         let c = self.current;
-        if self.cfg.tanks[c].role == CylinderRole::Deco
+        let role = self.cfg.tanks[c].role;
+        if !(role.is_bottom() || role == CylinderRole::Travel)
             || self.left(c) - need >= self.cfg.tanks[c].reserve
         {
             return;
         }
-        let order = self.cfg.bottom_order();
-        if let Some(&next) = order
-            .iter()
-            .find(|&&i| i != c && self.left(i) - need * 1.0001 >= self.cfg.tanks[i].reserve)
-        {
+        let tanks = &self.cfg.tanks;
+        let other_travel = (role == CylinderRole::Travel)
+            .then(|| {
+                (0..tanks.len()).find(|&i| {
+                    tanks[i].role == CylinderRole::Travel
+                        && tanks[i].switch_depth.is_some_and(|s| s + 1e-9 >= depth)
+                        && self.keeps(i, need)
+                })
+            })
+            .flatten();
+        let next = other_travel.or_else(|| {
+            self.cfg
+                .bottom_order()
+                .into_iter()
+                .find(|&i| self.keeps(i, need))
+        });
+        if let Some(next) = next {
             self.switch_to(next, t, depth);
         }
     }
     /// On the ascent: before breathing `need` litres, move on from a cylinder that would drop
-    /// below its reserve — to the richest deco gas allowed at this depth that keeps its
-    /// reserve (when `deco`: the ascent breathes deco gases), else to the first bottom
-    /// cylinder (stages, then back gas) that keeps it. The cylinder left is marked exhausted.
-    /// Returns whether the diver moved; with no cylinder above its reserve the diver stays on
-    /// this one (and the verdict reports the reserve broken).
+    /// below its reserve — to the richest travel or deco gas allowed at this depth that keeps
+    /// its reserve (deco gases only when `deco`: the ascent breathes them), else to the first
+    /// bottom cylinder (stages, then back gas) that keeps it. The cylinder left is marked
+    /// exhausted. Returns whether the diver moved; with no cylinder above its reserve the
+    /// diver stays on this one (and the verdict reports the reserve broken).
     fn pick_ascent(&mut self, need: f64, t: f64, depth: f64, deco: bool) -> bool {
         let c = self.current;
         if self.left(c) - need >= self.cfg.tanks[c].reserve {
             return false;
         }
         let tanks = &self.cfg.tanks;
-        let keeps = |i: usize| {
-            i != c && !self.exhausted[i] && self.left(i) - need * 1.0001 >= tanks[i].reserve
-        };
         let richest_deco = (0..tanks.len())
             .filter(|&i| {
-                deco && tanks[i].role == CylinderRole::Deco
+                (tanks[i].role == CylinderRole::Travel
+                    || (deco && tanks[i].role == CylinderRole::Deco))
                     && tanks[i].switch_depth.is_some_and(|sw| sw + 1e-6 >= depth)
-                    && keeps(i)
+                    && self.keeps(i, need)
             })
             .max_by(|&a, &b| tanks[a].gas.o2.total_cmp(&tanks[b].gas.o2));
-        let next = richest_deco.or_else(|| self.cfg.bottom_order().into_iter().find(|&i| keeps(i)));
+        let next =
+            richest_deco.or_else(|| self.fallback.iter().copied().find(|&i| self.keeps(i, need)));
         match next {
             Some(n) => {
                 self.exhausted[c] = true;
@@ -510,28 +612,30 @@ impl Breathing<'_> {
             None => false,
         }
     }
-    /// The ascent's deco gases without the cylinders left at their reserve.
-    fn deco_gases(&self) -> Vec<(Gas, f64)> {
+    /// The ascent's travel gases and (when `deco`) deco gases, without the cylinders left at
+    /// their reserve or lost.
+    fn ascent_gases(&self, deco: bool) -> Vec<(Gas, f64)> {
         self.cfg
             .tanks
             .iter()
             .enumerate()
-            .filter(|(i, _)| !self.exhausted[*i])
+            .filter(|(i, t)| !self.exhausted[*i] && (t.role == CylinderRole::Travel || deco))
             .filter_map(|(_, t)| t.switch_depth.map(|d| (t.gas, d)))
             .collect()
     }
-    /// The deco cylinder (not left at its reserve) holding `gas`.
+    /// The travel or deco cylinder (not left at its reserve) holding `gas`.
     fn deco_tank(&self, gas: Gas) -> Option<usize> {
         self.cfg
             .tanks
             .iter()
             .enumerate()
-            .position(|(i, k)| !self.exhausted[i] && k.role == CylinderRole::Deco && k.gas == gas)
+            .position(|(i, k)| !self.exhausted[i] && k.role.switched() && k.gas == gas)
     }
-    fn breathe(&mut self, litres: f64, t: f64, depth: f64) {
+    /// Breathe `litres` between `shallow` and `deep` m, ending at runtime `t`.
+    fn breathe(&mut self, litres: f64, t: f64, shallow: f64, deep: f64) {
         let i = self.current;
         self.used[i] += litres;
-        self.note_po2(depth);
+        self.note_po2(shallow, deep);
         if self.reserve_reached_at.is_none() && self.left(i) < self.cfg.tanks[i].reserve {
             self.reserve_reached_at = Some(t);
         }
@@ -557,11 +661,24 @@ pub fn simulate(
 ) -> DiveResult {
     let env = cfg.env;
     let plan = cfg.ascent_plan();
-    let direct = AscentPlan::simple(cfg.ascent_rate);
-    // Descent and bottom vertices.
+    let direct = cfg.direct_plan();
+    // Descent and bottom vertices; the descent gets a vertex at each travel gas's switch
+    // depth, so that no step breathes a travel gas past it.
     let d0 = track.points.first().map(|p| p.1).unwrap_or(0.0);
     let descent_time = d0 / cfg.descent_rate;
     let mut profile: Vec<(f64, f64)> = vec![(0.0, 0.0)];
+    let mut cuts: Vec<f64> = cfg
+        .tanks
+        .iter()
+        .filter(|t| t.role == CylinderRole::Travel)
+        .filter_map(|t| t.switch_depth)
+        .filter(|&s| s > 1e-9 && s < d0 - 1e-9)
+        .collect();
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    for s in cuts {
+        profile.push((s / cfg.descent_rate, s));
+    }
     for p in &track.points {
         profile.push((descent_time + p.0, p.1));
     }
@@ -571,7 +688,11 @@ pub fn simulate(
         profile.push((bottom_end, last_depth));
     }
 
-    let first = cfg.bottom_order()[0];
+    // From the surface: the travel gas for the shallows, else the first bottom cylinder.
+    let first = cfg
+        .descent_travel(0.0)
+        .filter(|_| d0 > 0.0)
+        .unwrap_or(cfg.bottom_order()[0]);
     let n_tanks = cfg.tanks.len();
     let mut b = Breathing {
         cfg,
@@ -588,8 +709,9 @@ pub fn simulate(
         empty_at: None,
         exhausted: vec![false; n_tanks],
         oxygen: OxygenExposure::default(),
+        fallback: cfg.bottom_order(),
     };
-    b.note_po2(0.0);
+    b.note_po2(0.0, 0.0);
     let mut deco_from: Option<f64> = None;
     let mut max_ceiling: f64 = 0.0;
     let mut samples = Vec::new();
@@ -603,13 +725,13 @@ pub fn simulate(
         let in_deco = tissues.in_deco();
         let mut probe = tissues.clone();
         // The time to surface on the gases still there (not the cylinders left at their reserve).
-        let asc = if in_deco {
-            let mut left = plan.clone();
-            left.deco_gases = b.deco_gases();
-            probe.ascend_with(depth, b.gas(), &left, t)
+        let mut left = if in_deco {
+            plan.clone()
         } else {
-            probe.ascend_with(depth, b.gas(), &direct, t)
+            direct.clone()
         };
+        left.deco_gases = b.ascent_gases(in_deco);
+        let asc = probe.ascend_with(depth, b.gas(), &left, t);
         let stop = asc.stops.first().copied();
         let pressures = b.pressures();
         samples.push(Sample {
@@ -636,7 +758,8 @@ pub fn simulate(
     /// reserve left for the next gas, and — when the stops depend on the gas, `replan` — the
     /// leg cut there so that the rest of the ascent is planned again on the gas breathed).
     enum Leg<'s> {
-        Bottom,
+        /// The descent ends at `descent_end` s runtime.
+        Bottom { descent_end: f64 },
         Ascent {
             planned: &'s dyn Fn(f64) -> Option<usize>,
             deco: bool,
@@ -671,7 +794,11 @@ pub fn simulate(
                 let need = gas::consumption(sac, p, h);
                 let ds = a + (d1 - a) * i as f64 / n as f64;
                 match &leg {
-                    Leg::Bottom => b.pick_bottom(need, ts, ds),
+                    Leg::Bottom { descent_end } => {
+                        let de = a + (d1 - a) * (i + 1) as f64 / n as f64;
+                        b.pick_descent(need, ts, ds, de, ts + 1e-9 < *descent_end);
+                        b.pick_bottom(need, ts, ds);
+                    }
                     Leg::Ascent {
                         planned,
                         deco,
@@ -696,7 +823,7 @@ pub fn simulate(
                     (ds, env.pressure(ds) * o2),
                     (de, env.pressure(de) * o2),
                 );
-                b.breathe(need, t, d.max(de));
+                b.breathe(need, t, ds.min(de), ds.max(de));
                 on_step(t, de, tissues, b);
             }
         }
@@ -710,7 +837,9 @@ pub fn simulate(
         tissues,
         &mut b,
         &profile,
-        Leg::Bottom,
+        Leg::Bottom {
+            descent_end: descent_time,
+        },
         &mut |t, d, ts, b| {
             let c = ts.ceiling();
             max_ceiling = max_ceiling.max(c);
@@ -756,7 +885,8 @@ pub fn simulate(
             (t5 + 180.0, 5.0),
             (t5 + 180.0 + 5.0 / cfg.ascent_rate, 0.0),
         ];
-        gas_changes.clear();
+        // The travel gases from their switch depths (a vertex at each), as on any ascent.
+        gas_changes = travel_changes(cfg, &b, &mut asc);
         safety_stop = Some(Stop {
             depth: 5.0,
             duration: 180.0,
@@ -800,9 +930,7 @@ pub fn simulate(
         flown.push((t, d));
         replanned = true;
         let mut again = base.clone();
-        if in_deco_ascent {
-            again.deco_gases = b.deco_gases();
-        }
+        again.deco_gases = b.ascent_gases(in_deco_ascent);
         let a = tissues.clone().ascend_with(d, b.gas(), &again, t);
         asc = a.path.iter().map(|&(x, y)| (t + x, y)).collect();
         gas_changes = changes(&a, t, &b);
@@ -851,6 +979,60 @@ pub fn simulate(
         gas,
         oxygen: b.oxygen,
     }
+}
+
+/// The travel-gas changes along an ascent `path` flown without the planner (the direct ascent
+/// with its safety stop): where the path first reaches a travel gas's switch depth (a vertex
+/// is inserted there), the diver takes the richest travel gas allowed there if it is richer
+/// than the gas breathed. As (runtime s, cylinder).
+fn travel_changes(
+    cfg: &DiveConfig,
+    b: &Breathing,
+    path: &mut Vec<(f64, f64)>,
+) -> Vec<(f64, usize)> {
+    let travel: Vec<(usize, f64)> = (0..cfg.tanks.len())
+        .filter(|&i| cfg.tanks[i].role == CylinderRole::Travel && !b.exhausted[i])
+        .filter_map(|i| cfg.tanks[i].switch_depth.map(|s| (i, s)))
+        .collect();
+    let mut points: Vec<(f64, usize)> = Vec::new();
+    for &(i, sw) in &travel {
+        // First time the path is at or above the switch depth.
+        let mut at = None;
+        for k in 0..path.len() {
+            let (t, d) = path[k];
+            if d <= sw + 1e-9 {
+                if k > 0 && path[k - 1].1 > sw + 1e-9 {
+                    let (t0, d0) = path[k - 1];
+                    let tc = t0 + (t - t0) * (d0 - sw) / (d0 - d);
+                    if tc > t0 + 1e-9 && tc < t - 1e-9 {
+                        path.insert(k, (tc, sw));
+                    }
+                    at = Some(tc.max(t0));
+                } else {
+                    at = Some(t);
+                }
+                break;
+            }
+        }
+        if let Some(t) = at {
+            points.push((t, i));
+        }
+    }
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut o2 = b.gas().o2;
+    let mut out = Vec::new();
+    for (k, &(t, _)) in points.iter().enumerate() {
+        // Every travel gas allowed by then; the richest, if richer than the gas breathed.
+        if let Some(&(_, i)) = points[..=k]
+            .iter()
+            .max_by(|a, b| cfg.tanks[a.1].gas.o2.total_cmp(&cfg.tanks[b.1].gas.o2))
+            && cfg.tanks[i].gas.o2 > o2
+        {
+            o2 = cfg.tanks[i].gas.o2;
+            out.push((t, i));
+        }
+    }
+    out
 }
 
 /// The stops of a flown ascent path: its level stretches below the surface, one per depth
@@ -909,11 +1091,12 @@ fn gas_check(cfg: &DiveConfig, b: &Breathing, used_bottom: f64, max_depth: f64) 
                 reserve_ok: left >= t.reserve - 1e-9,
                 max_po2: max.map(|m| m.0),
                 max_po2_depth: max.map(|m| m.1).unwrap_or(0.0),
-                min_po2: b.min_po2[i],
+                min_po2: b.min_po2[i].map(|m| m.0),
+                min_po2_depth: b.min_po2[i].map(|m| m.1).unwrap_or(0.0),
                 po2_limit: limit,
                 mod_depth: t.gas.mod_depth(&env, limit),
                 po2_ok: max.is_none_or(|m| m.0 <= limit + 1e-9),
-                hypoxic: b.min_po2[i].is_some() && t.gas.o2 * env.surface_pressure < hypoxic_limit,
+                hypoxic: b.min_po2[i].is_some_and(|m| m.0 < hypoxic_limit),
             }
         })
         .collect();
@@ -986,11 +1169,7 @@ const CYLINDERS: [(f64, &str); 8] = [
 ];
 
 fn role_name(r: CylinderRole) -> &'static str {
-    match r {
-        CylinderRole::Bottom => "bottom",
-        CylinderRole::Stage => "stage",
-        CylinderRole::Deco => "deco",
-    }
+    r.name()
 }
 
 fn mmss(s: f64) -> String {
@@ -1017,7 +1196,7 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
                 c.max_po2_depth,
                 c.po2_limit,
                 depth_limit(c.mod_depth),
-                if cfg.tanks[i].role == CylinderRole::Deco {
+                if cfg.tanks[i].role.switched() {
                     format!(
                         "; its switch depth is {:.0} m",
                         depth_limit(cfg.tanks[i].switch_depth.unwrap_or(0.0))
@@ -1028,11 +1207,25 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
             ));
         }
         if c.hypoxic {
+            let from = gas::breathable_from(&cfg.env, cfg.tanks[i].gas);
             problems.push(format!(
-                "cylinder '{}' ({}, {role}): hypoxic at the surface — pO₂ {:.2} bar, below {HYPOXIC:.2} bar",
+                "cylinder '{}' ({}, {role}): hypoxic where it is breathed — pO₂ {:.2} bar at \
+                 {:.1} m, below {:.2} bar; it is breathable only from {:.0} m down{}",
                 c.name,
                 c.gas,
-                cfg.tanks[i].gas.o2 * cfg.env.surface_pressure
+                c.min_po2.unwrap_or(0.0),
+                c.min_po2_depth,
+                hypoxic_limit(&cfg.env).min(HYPOXIC),
+                from.ceil(),
+                if cfg.tanks[i].role.is_bottom() {
+                    format!(
+                        ": carry a travel gas (`role = \"travel\"`) with a switch depth of at \
+                         least {:.0} m",
+                        from.ceil()
+                    )
+                } else {
+                    String::new()
+                }
             ));
         }
     }
@@ -1159,7 +1352,21 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
             continue;
         }
         let end = t.gas.end(&cfg.env, c.max_po2_depth);
-        if end > cfg.end_limit + 1e-6 {
+        if end > cfg.end_limit + 1e-6 && t.role == CylinderRole::Travel {
+            // A travel gas is chosen for the shallows: breathed past its END, its switch is
+            // too deep, and switching shallower costs nothing.
+            problems.push(format!(
+                "travel gas '{}' ({}) is breathed to {:.1} m, where its END is {end:.1} m, deeper \
+                 than the {:.0} m END limit (O₂ counted as narcotic); its switch depth is {:.0} m, \
+                 at most {:.0} m keeps it within the limit",
+                c.name,
+                c.gas,
+                c.max_po2_depth,
+                depth_limit(cfg.end_limit),
+                depth_limit(t.switch_depth.unwrap_or(0.0)),
+                depth_limit(gas::end_depth(&cfg.env, t.gas, cfg.end_limit)),
+            ));
+        } else if end > cfg.end_limit + 1e-6 {
             let fit = bottom_gas(&cfg.env, c.max_po2_depth, cfg.po2_limit(t), cfg.end_limit)
                 .map(|b| format!("; e.g. {}", bottom_gas_phrase(&b)))
                 .unwrap_or_default();
@@ -1209,13 +1416,13 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
 }
 
 /// A [`BottomGas`] in words: `TX19/44`, or `TX10/70 (a bottom gas: hypoxic at the surface,
-/// breathed from 6 m down, EAN40 as travel gas above)`.
+/// breathed from 6 m down, EAN40 as travel gas above, a cylinder with role = "travel")`.
 pub fn bottom_gas_phrase(b: &BottomGas) -> String {
     match b.travel {
         None => gas_label(b.gas),
         Some((travel, from)) => format!(
             "{} (a bottom gas: hypoxic at the surface, breathed from {from:.0} m down, {} as \
-             travel gas above)",
+             travel gas above, a cylinder with `role = \"travel\"`)",
             gas_label(b.gas),
             gas_label(travel)
         ),

@@ -115,7 +115,8 @@ pub struct Tank {
     pub fill: f64,
     pub gas: Gas,
     pub role: CylinderRole,
-    /// Deco gas: the depth (m) from which the ascent breathes it.
+    /// Travel or deco gas: the depth (m) from which the ascent breathes it (and, a travel
+    /// gas, down to which the descent breathes it).
     pub switch_depth: Option<f64>,
     /// Free gas at fill, l.
     pub start: f64,
@@ -150,7 +151,7 @@ impl Tank {
     }
     /// Whether the tank is breathed on the bottom (back gas or stage).
     pub fn bottom_phase(&self) -> bool {
-        self.role != CylinderRole::Deco
+        self.role.is_bottom()
     }
 }
 
@@ -192,11 +193,14 @@ pub struct CylinderUse {
     pub max_po2: Option<f64>,
     pub max_po2_depth: f64,
     pub min_po2: Option<f64>,
+    /// Depth of the lowest pO₂ breathed from it, m.
+    pub min_po2_depth: f64,
     pub po2_limit: f64,
     /// The gas's MOD at that limit, m.
     pub mod_depth: f64,
     pub po2_ok: bool,
-    /// Breathed at the surface with a pO₂ below [`HYPOXIC`] bar.
+    /// Breathed somewhere with a pO₂ below the hypoxic limit ([`hypoxic_limit`]): at the
+    /// surface, or above the depth where a bottom gas becomes breathable.
     pub hypoxic: bool,
 }
 
@@ -215,6 +219,26 @@ pub fn hypoxic_limit(env: &Environment) -> f64 {
 /// the limit (EAN50 at 1.6 bar: 21.6 m → 21 m; O₂: 5.8 m → 5 m). Below 0 shows as 0.
 pub fn depth_limit(m: f64) -> f64 {
     m.floor().max(0.0)
+}
+
+/// The deepest depth (m) at which `gas` keeps an equivalent narcotic depth within
+/// `end_limit` m (O₂ counted as narcotic): where its narcotic partial pressure equals air's at
+/// the END limit. Infinite for a gas with no narcotic part.
+pub fn end_depth(env: &Environment, gas: Gas, end_limit: f64) -> f64 {
+    let n = gas.narcotic();
+    if n <= 0.0 {
+        return f64::INFINITY;
+    }
+    env.depth_at(env.pressure(end_limit.max(0.0)) / n)
+}
+
+/// The shallowest depth (m) at which `gas` is not hypoxic ([`hypoxic_limit`]): 0 for a gas
+/// breathable at the surface.
+pub fn breathable_from(env: &Environment, gas: Gas) -> f64 {
+    if gas.o2 <= 0.0 {
+        return f64::INFINITY;
+    }
+    env.depth_at(hypoxic_limit(env) / gas.o2).max(0.0)
 }
 
 /// Richest O₂ fraction poser names for a bottom gas: EAN40, beyond which a mix needs

@@ -124,7 +124,7 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
         if t.gas.he > 0.0 {
             attrs.push(("he", pct(t.gas.he)));
         }
-        if t.role == crate::model::CylinderRole::Deco {
+        if t.role.switched() {
             attrs.push(("use", "OC-gas".into()));
             if let Some(d) = t.switch_depth {
                 attrs.push(("depth", format!("{} m", milli(d))));

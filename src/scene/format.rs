@@ -865,13 +865,19 @@ pub struct CylinderTable {
     pub o2: Option<Fraction>,
     /// He fraction (overrides `gas`). **Unit:** fraction.
     pub he: Option<Fraction>,
-    /// `"bottom"` (back gas, breathed from the surface), `"stage"` (bottom gas breathed
-    /// first, down to the reserve) or `"deco"` (breathed on the ascent from `switch_depth`).
+    /// `"bottom"` (back gas, breathed on the bottom; from the surface unless a travel gas
+    /// carries the diver down), `"stage"` (bottom gas breathed first, down to the reserve),
+    /// `"travel"` (breathed on the descent from the surface to `switch_depth`, where the
+    /// bottom gas takes over, and on the ascent from `switch_depth` up), `"deco"` (breathed on
+    /// the ascent from `switch_depth`) or `"bailout"` (not breathed in the plan: carried for
+    /// the loss of the bottom gas, and checked by the plan of that ascent).
     /// **Default:** `"bottom"` for the first cylinder; later ones `"deco"` when richer in O₂
     /// than the first, else `"bottom"`.
     pub role: Option<String>,
-    /// Deco gas: depth from which it is breathed on the ascent. **Unit:** m. **Default:** its
-    /// MOD at `diver.po2_deco`, rounded down to whole metres.
+    /// Travel or deco gas: the depth down to which a travel gas is breathed on the descent,
+    /// and from which a travel or deco gas is breathed on the ascent. **Unit:** m.
+    /// **Default:** a deco gas's MOD at `diver.po2_deco`; a travel gas's deepest depth within
+    /// `diver.po2_bottom` and `diver.end_limit`; both rounded down to whole metres.
     pub switch_depth: Option<Length>,
 }
 

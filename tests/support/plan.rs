@@ -169,3 +169,40 @@ pub fn flat_dive(depth: f64, minutes: f64, diver: Diver) -> Model {
     let (poses, net) = lawnmower(1, length, 2.0, depth, 0.2, (length / 20.0).max(1.0));
     model(poses, net, Some(diver), depth + 2.0)
 }
+
+/// The gas breathed at each profile vertex and switch, from `dive.switches` and
+/// `dive.profile` alone: (cylinder, depth) pairs, for checks independent of the simulator's
+/// per-cylinder flags.
+pub fn breathed(r: &poser::plan::dive::DiveReport) -> Vec<(usize, f64)> {
+    let d = &r.dive;
+    let at = |t: f64| {
+        d.switches
+            .iter()
+            .rev()
+            .find(|s| s.time <= t + 1e-6)
+            .map(|s| s.cylinder)
+            .unwrap_or(d.switches[0].cylinder)
+    };
+    let depth_at = |t: f64| {
+        for w in d.profile.windows(2) {
+            if t >= w[0].0 - 1e-9 && t <= w[1].0 + 1e-9 {
+                let f = if w[1].0 > w[0].0 {
+                    (t - w[0].0) / (w[1].0 - w[0].0)
+                } else {
+                    0.0
+                };
+                return w[0].1 + (w[1].1 - w[0].1) * f.clamp(0.0, 1.0);
+            }
+        }
+        d.profile.last().unwrap().1
+    };
+    let mut out: Vec<(usize, f64)> = d.profile.iter().map(|&(t, depth)| (at(t), depth)).collect();
+    // At a switch the new gas is breathed from that depth (and the old one up to it).
+    for (k, s) in d.switches.iter().enumerate().skip(1) {
+        let prev = d.switches[k - 1].cylinder;
+        let depth = depth_at(s.time);
+        out.push((s.cylinder, depth));
+        out.push((prev, depth));
+    }
+    out
+}

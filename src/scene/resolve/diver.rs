@@ -94,12 +94,15 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
             switch_depth: None,
         });
     }
-    if !cylinders.iter().any(|c| c.role != CylinderRole::Deco) {
+    if !cylinders.iter().any(|c| c.role.is_bottom()) {
         let sp = d.span_of("cylinders");
         cx.push(
-            Diagnostic::error("E0326", "no bottom gas: every cylinder is a deco gas")
-                .label(sp, "no cylinder with role \"bottom\" or \"stage\"")
-                .help("mark the back gas `role = \"bottom\"`"),
+            Diagnostic::error(
+                "E0326",
+                "no bottom gas: every cylinder is a travel, deco or bailout gas",
+            )
+            .label(sp, "no cylinder with role \"bottom\" or \"stage\"")
+            .help("mark the back gas `role = \"bottom\"`"),
         );
     }
     d.finish(cx);
@@ -186,10 +189,16 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
                 .help("the fractions of O₂ and He must add up to at most 1 (the rest is N₂), e.g. TX18/45: `o2 = 0.18`, `he = 0.45`"),
         );
     }
-    let role_given = c.choice(cx, "role", &["bottom", "stage", "deco"]);
+    let role_given = c.choice(
+        cx,
+        "role",
+        &["bottom", "stage", "travel", "deco", "bailout"],
+    );
     let role = match role_given {
         Some("stage") => CylinderRole::Stage,
+        Some("travel") => CylinderRole::Travel,
         Some("deco") => CylinderRole::Deco,
+        Some("bailout") => CylinderRole::Bailout,
         Some(_) => CylinderRole::Bottom,
         // No role given: the first cylinder is the back gas; a later richer gas is for deco.
         None => match first {
@@ -206,11 +215,14 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
                     .label(sw_span, format!("{} m", num(sw)))
                     .help("the depth from which the deco gas is breathed, e.g. `switch_depth = \"21 m\"` for EAN50"),
             );
-        } else if role != CylinderRole::Deco {
+        } else if !role.switched() {
             cx.push(
-                Diagnostic::error("E0325", "`switch_depth` is only for deco cylinders")
-                    .label(sw_span, "this cylinder is not a deco gas")
-                    .help("add `role = \"deco\"` or remove `switch_depth`"),
+                Diagnostic::error(
+                    "E0325",
+                    "`switch_depth` is only for travel and deco cylinders",
+                )
+                .label(sw_span, "this cylinder is neither a travel nor a deco gas")
+                .help("add `role = \"deco\"` or `role = \"travel\"`, or remove `switch_depth`"),
             );
         }
     }
