@@ -586,3 +586,194 @@ fn pack_refuses_a_scene_that_names_files_by_absolute_paths() {
     );
     assert!(!pack.exists());
 }
+
+/// Signed packs. `poser keygen` makes a key pair (PEM files OpenSSL reads); `pack --sign`
+/// signs deterministically; `rerun --trust` runs a pack signed by that key, and refuses,
+/// writing nothing, an unsigned pack, a pack signed by another key, and a pack changed after it
+/// was signed — even with the changed file's hash rewritten in the manifest, with the
+/// signature removed, or re-signed by another key. A changed signed pack is refused without
+/// `--trust` too. An unsigned pack, run without `--trust`, says plainly that it is unsigned.
+#[test]
+fn signed_packs_run_only_unchanged_and_by_the_trusted_key() {
+    use poser::pack::sign;
+    let dir = tempfile::tempdir().unwrap();
+    let key = |name: &str| {
+        let k = dir.path().join(name);
+        let o = poser().arg("keygen").arg("-o").arg(&k).output().unwrap();
+        assert!(o.status.success(), "{}", text(&o));
+        k
+    };
+    let (a, b) = (key("alice.key"), key("bob.key"));
+    let pubkey = |k: &Path| sign::pub_path(k);
+    let print = |k: &Path| sign::fingerprint(&sign::read_verifying_key(k).unwrap());
+    let signed_pack = |name: &str| {
+        let pack = dir.path().join(name);
+        let o = poser()
+            .args(["pack", "tests/canonical/pinhole_air.toml", "-o"])
+            .arg(&pack)
+            .args(["--run", "truth", "--sign"])
+            .arg(&a)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", text(&o));
+        assert!(text(&o).contains(&format!("signed with key {}", print(&a))));
+        pack
+    };
+    let signed = signed_pack("signed.poserpack");
+    assert_eq!(
+        std::fs::read(&signed).unwrap(),
+        std::fs::read(signed_pack("again.poserpack")).unwrap(),
+        "a signed pack is not byte-stable"
+    );
+    let list = entries(&signed);
+    assert_eq!(list[1].0, b"manifest.sig");
+    let run = |pack: &Path, trust: Option<&Path>, out: &str| {
+        let mut c = poser();
+        c.arg("rerun").arg(pack).arg("-o").arg(dir.path().join(out));
+        if let Some(k) = trust {
+            c.arg("--trust").arg(k);
+        }
+        let o = c.output().unwrap();
+        (
+            o.status.code(),
+            text(&o),
+            files_below(&dir.path().join(out)),
+        )
+    };
+
+    let (code, t, _) = run(&signed, Some(&pubkey(&a)), "ok");
+    assert_eq!(code, Some(0), "{t}");
+    assert!(
+        t.contains(&format!("signed by trusted key {}", print(&a))),
+        "{t}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("ok/rerun.json")).unwrap()).unwrap();
+    assert_eq!(report["signed_by"], print(&a).as_str());
+    assert_eq!(report["trusted"], true);
+    let (code, t, _) = run(&signed, None, "untrusted");
+    assert_eq!(code, Some(0), "{t}");
+    assert!(t.contains("not checked against a key you trust"), "{t}");
+
+    // Unsigned: said plainly, and refused under --trust.
+    let unsigned = make_pack(dir.path(), "unsigned.poserpack", false);
+    let (code, t, _) = run(&unsigned, None, "unsigned-plain");
+    assert_eq!(code, Some(0), "{t}");
+    assert!(
+        t.contains("unsigned: nothing shows who made this pack"),
+        "{t}"
+    );
+    let mut refused: Vec<(&str, PathBuf, Option<PathBuf>, String)> = vec![(
+        "unsigned",
+        unsigned,
+        Some(pubkey(&a)),
+        "the pack is unsigned, and --trust asks for a signature by".into(),
+    )];
+    refused.push((
+        "other-key",
+        signed.clone(),
+        Some(pubkey(&b)),
+        format!(
+            "signed by key {}, not by key {} that --trust names",
+            print(&a),
+            print(&b)
+        ),
+    ));
+
+    // Changed after signing: a scene file edited and its hash rewritten in the manifest.
+    let mut l: Vec<Raw> = list
+        .iter()
+        .cloned()
+        .map(|(n, t, d)| (n, t, d, None))
+        .collect();
+    let k = l.iter().position(|e| e.0 == b"scene/common.toml").unwrap();
+    l[k].2.extend_from_slice(b"\n# changed\n");
+    let mut m: serde_json::Value = serde_json::from_slice(&l[0].2).unwrap();
+    for f in m["files"].as_array_mut().unwrap() {
+        if f["path"] == "scene/common.toml" {
+            f["sha256"] = poser::pack::sha256(&l[k].2).into();
+            f["bytes"] = l[k].2.len().into();
+        }
+    }
+    l[0].2 = serde_json::to_vec_pretty(&m).unwrap();
+    let rehashed = dir.path().join("rehashed.poserpack");
+    write_raw(&rehashed, &l);
+    let changed = format!(
+        "does not match `manifest.json`: the pack was changed after it was signed (by key {})",
+        print(&a)
+    );
+    refused.push((
+        "rehashed",
+        rehashed.clone(),
+        Some(pubkey(&a)),
+        changed.clone(),
+    ));
+    refused.push(("rehashed-no-trust", rehashed, None, changed));
+    // ... and the signature removed.
+    let mut stripped = l.clone();
+    stripped.remove(1);
+    let p = dir.path().join("stripped.poserpack");
+    write_raw(&p, &stripped);
+    refused.push((
+        "stripped",
+        p,
+        Some(pubkey(&a)),
+        "the pack is unsigned".into(),
+    ));
+    // ... and signed again by another key.
+    let mut resigned = l.clone();
+    resigned[1].2 = sign::sign(&sign::read_signing_key(&b).unwrap(), &l[0].2);
+    let p = dir.path().join("resigned.poserpack");
+    write_raw(&p, &resigned);
+    refused.push((
+        "resigned",
+        p,
+        Some(pubkey(&a)),
+        format!("signed by key {}, not by key {}", print(&b), print(&a)),
+    ));
+    // A signature that is not the second entry.
+    let mut moved: Vec<Raw> = list
+        .iter()
+        .cloned()
+        .map(|(n, t, d)| (n, t, d, None))
+        .collect();
+    let sig = moved.remove(1);
+    moved.push(sig);
+    let p = dir.path().join("moved.poserpack");
+    write_raw(&p, &moved);
+    refused.push((
+        "moved",
+        p,
+        Some(pubkey(&a)),
+        "a signature is the second entry".into(),
+    ));
+
+    for (name, pack, trust, want) in refused {
+        let (code, t, written) = run(&pack, trust.as_deref(), &format!("{name}-rerun"));
+        assert_eq!(code, Some(1), "{name}: {t}");
+        assert!(t.contains(&want), "{name}: {t}");
+        assert_eq!(written, 0, "{name}: wrote files");
+        let mut c = poser();
+        c.arg("unpack")
+            .arg(&pack)
+            .arg("-o")
+            .arg(dir.path().join(format!("{name}-unpack")));
+        if let Some(k) = &trust {
+            c.arg("--trust").arg(k);
+        }
+        let o = c.output().unwrap();
+        assert_eq!(o.status.code(), Some(1), "{name} unpack: {}", text(&o));
+        assert!(text(&o).contains(&want), "{name} unpack: {}", text(&o));
+    }
+
+    // A key file that is not a key is a usage error before anything runs.
+    let o = poser()
+        .args(["pack", "tests/canonical/pinhole_air.toml", "-o"])
+        .arg(dir.path().join("x.poserpack"))
+        .arg("--sign")
+        .arg(pubkey(&a))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("a public key; signing needs the private key"));
+}

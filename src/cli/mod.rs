@@ -17,6 +17,7 @@ mod evaluate;
 pub mod explain;
 mod export;
 mod import;
+mod keygen;
 mod lesson;
 mod pack;
 mod plan;
@@ -51,6 +52,7 @@ Examples:
   poser export scenarios/reef_strip.toml -o reef.glb         # glTF preview for any viewer
   poser pack scenarios/dome_orbit.toml -o orbit.poserpack --run \"render --scale 0.1 --poses 0\"
   poser rerun orbit.poserpack -o out/rerun
+  poser keygen -o me.key                                      # then pack --sign me.key, rerun --trust me.key.pub
   poser slurm scenarios/reef_strip.toml -o /scratch/reef --shards 32 --cpus 8
   poser schema";
 
@@ -124,6 +126,8 @@ pub enum Command {
     Unpack(unpack::Args),
     /// Rerun a pack's commands and report, file by file, whether the outputs are identical.
     Rerun(rerun::Args),
+    /// Make an ed25519 key pair to sign packs with (`pack --sign KEY`, `rerun --trust KEY.pub`).
+    Keygen(keygen::Args),
     /// Write the scene as a glTF 2.0 binary preview (.glb): site, targets, water surface, ports,
     /// every camera pose, the swim path and the lights, for any glTF viewer.
     Export(export::Args),
@@ -175,6 +179,7 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
         Command::Pack(args) => pack::run(&args),
         Command::Unpack(args) => unpack::run(&args),
         Command::Rerun(args) => rerun::run(&args),
+        Command::Keygen(args) => keygen::run(&args),
         Command::Slurm(args) => slurm::run(&args),
         Command::Export(args) => export::run(&args),
         Command::Import(args) => import::run(&args),

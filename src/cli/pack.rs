@@ -23,6 +23,10 @@ pub struct Args {
     /// Put the outputs themselves into the pack too (default: only their hashes).
     #[arg(long)]
     pub outputs: bool,
+    /// Sign the pack with this ed25519 private key (PKCS #8 PEM, from `poser keygen` or
+    /// `openssl genpkey -algorithm ed25519`); a reader checks it with `--trust KEY.pub`.
+    #[arg(long, value_name = "KEY")]
+    pub sign: Option<PathBuf>,
 }
 
 /// Run a recorded command on `scene` with `sets`, writing into `out`.
@@ -55,6 +59,13 @@ pub(super) fn run_recorded(
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
+    // The key first: a wrong key file should not cost the commands' run time.
+    let key = args
+        .sign
+        .as_deref()
+        .map(pack::sign::read_signing_key)
+        .transpose()
+        .map_err(CliError::Usage)?;
     let loaded = load_scene(&args.scene)?;
     for f in &loaded.files {
         if f.extension()
@@ -128,7 +139,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         files: Vec::new(),
         outputs_included: args.outputs,
     };
-    pack::write(&args.out, &mut manifest, &entries, &dirs).map_err(CliError::Failed)?;
+    pack::write(&args.out, &mut manifest, &entries, &dirs, key.as_ref())
+        .map_err(CliError::Failed)?;
     let outputs: usize = manifest.commands.iter().map(|c| c.outputs.len()).sum();
     eprintln!(
         "wrote {}: {} scene file(s), {} command(s), {} output hash(es){}; poser {} ({})",
@@ -144,5 +156,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         manifest.versions.poser,
         manifest.versions.commit
     );
+    match &key {
+        Some(k) => eprintln!(
+            "signed with key {}",
+            pack::sign::fingerprint(&k.verifying_key())
+        ),
+        None => eprintln!("unsigned (sign with --sign KEY; make a key with `poser keygen`)"),
+    }
     Ok(())
 }

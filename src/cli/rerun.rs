@@ -15,11 +15,20 @@ pub struct Args {
     /// An empty (or new) folder for the scene, the outputs and the report.
     #[arg(short, long)]
     pub out: PathBuf,
+    /// Run the pack only if it is signed by this ed25519 public key (PEM, `KEY.pub` from
+    /// `poser keygen`); an unsigned pack, or one signed by another key, is refused.
+    /// Repeatable: any of the keys.
+    #[arg(long, value_name = "KEY")]
+    pub trust: Vec<PathBuf>,
 }
 
 #[derive(Serialize)]
 struct Report {
     identical: bool,
+    /// `unsigned`, or the signing key's fingerprint.
+    signed_by: String,
+    /// Whether the signing key was one of `--trust`'s.
+    trusted: bool,
     version_differences: Vec<String>,
     commands: Vec<CommandReport>,
 }
@@ -37,7 +46,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "{e}; rerun into a new folder so that no earlier file is mistaken for an output"
         ))
     })?;
-    let m = pack::read(&args.pack, &args.out.join("pack")).map_err(CliError::Failed)?;
+    let trusted = super::unpack::trusted_keys(&args.trust)?;
+    let checked =
+        pack::read(&args.pack, &args.out.join("pack"), &trusted).map_err(CliError::Failed)?;
+    let signature = pack::sign::judge(&checked.signed_by, &trusted).unwrap_or_default();
+    println!("{}: {signature}", args.pack.display());
+    let m = &checked.manifest;
     let scene = args.out.join("pack").join(&m.scene);
     let mut commands = Vec::new();
     for (k, c) in m.commands.iter().enumerate() {
@@ -55,6 +69,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         .all(|c| c.files.iter().all(|(_, v)| *v == Verdict::Identical));
     let report = Report {
         identical,
+        signed_by: match &checked.signed_by {
+            pack::SignedBy::Unsigned => "unsigned".into(),
+            pack::SignedBy::Signed(k) => pack::sign::fingerprint(k),
+        },
+        trusted: !trusted.is_empty(),
         version_differences: m.versions.differences(&Versions::current()),
         commands,
     };

@@ -13,11 +13,28 @@ pub struct Args {
     /// The folder to write its files into: new, or empty (not a link).
     #[arg(short, long)]
     pub out: PathBuf,
+    /// Unpack only if the pack is signed by this ed25519 public key (PEM, `KEY.pub` from
+    /// `poser keygen`); repeatable: any of the keys.
+    #[arg(long, value_name = "KEY")]
+    pub trust: Vec<PathBuf>,
+}
+
+/// The public keys `--trust` names.
+pub(super) fn trusted_keys(
+    paths: &[PathBuf],
+) -> Result<Vec<ed25519_dalek::VerifyingKey>, CliError> {
+    paths
+        .iter()
+        .map(|p| pack::sign::read_verifying_key(p))
+        .collect::<Result<_, _>>()
+        .map_err(CliError::Usage)
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
     pack::fresh_folder(&args.out).map_err(CliError::Usage)?;
-    let m = pack::read(&args.pack, &args.out).map_err(CliError::Failed)?;
+    let trusted = trusted_keys(&args.trust)?;
+    let checked = pack::read(&args.pack, &args.out, &trusted).map_err(CliError::Failed)?;
+    let m = &checked.manifest;
     println!(
         "unpacked {} file(s) into {}; the scene is {}",
         m.files.len(),
@@ -30,6 +47,10 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     for c in &m.commands {
         println!("recorded: poser {}", c.argv.join(" "));
     }
+    println!(
+        "{}",
+        pack::sign::judge(&checked.signed_by, &trusted).unwrap_or_default()
+    );
     for d in m.versions.differences(&Versions::current()) {
         println!("version: {d}");
     }

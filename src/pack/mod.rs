@@ -6,6 +6,7 @@
 //! | entry | content |
 //! |---|---|
 //! | `manifest.json` | always the first entry: format, poser's version and git commit, the pinned backend versions, the scene's entry, the `--set` list, the commands with the hashes of what each wrote, the hash of every packed file |
+//! | `manifest.sig` | only in a signed pack, always the second entry: an ed25519 signature of `manifest.json` ([`sign`]) |
 //! | `scene/…` | the scene file, its includes and its assets, at their paths below their common folder |
 //! | `outputs/<k>/…` | with `--outputs`: the files that command `k` wrote |
 //!
@@ -14,7 +15,9 @@
 //! `..`, at most [`MAX_ENTRIES`] entries of at most [`MAX_ENTRY_BYTES`] each and
 //! [`MAX_TOTAL_BYTES`] in all, never expanding more than [`MAX_RATIO`] times its compressed size
 //! (both enforced while decompressing, so a compression bomb stops after a few MiB), every file
-//! listed in the manifest with the hash it has there, nothing unlisted. It then writes into a
+//! listed in the manifest with the hash it has there, nothing unlisted, and a signature, when
+//! there is one, that matches the manifest (and, when the reader names keys it trusts, was made
+//! by one of them; an unsigned pack is then refused). It then writes into a
 //! new or empty folder only (never through a link it did not create), into a temporary folder
 //! first, checks that the scene names no file outside the pack
 //! ([`crate::scene::load_within`]: no absolute path, no `..` out, no link out), and only then
@@ -28,6 +31,9 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Component, Path, PathBuf};
 use std::rc::Rc;
+
+pub mod sign;
+pub use sign::SignedBy;
 
 /// The manifest's format tag.
 pub const FORMAT: &str = "poserpack/1";
@@ -263,11 +269,13 @@ pub fn scene_entries(files: &[PathBuf]) -> Result<Vec<(PathBuf, String)>, String
 
 /// Write a pack: the manifest (its `files` are filled in here), the scene files, and with
 /// `outputs` the folder each command wrote (`outputs[k]` for `manifest.commands[k]`).
+/// With `key`, the pack is signed ([`sign`]).
 pub fn write(
     path: &Path,
     manifest: &mut Manifest,
     scene_files: &[(PathBuf, String)],
     outputs: &[PathBuf],
+    key: Option<&ed25519_dalek::SigningKey>,
 ) -> Result<(), String> {
     let mut entries: Vec<(String, Vec<u8>)> = Vec::new();
     for (file, rel) in scene_files {
@@ -306,6 +314,7 @@ pub fn write(
         })
         .collect();
     let json = serde_json::to_vec_pretty(manifest).map_err(|e| e.to_string())?;
+    let signature = key.map(|k| sign::sign(k, &json));
     crate::io::write_atomic_with(path, |tmp| {
         let archive = || -> std::io::Result<()> {
             let file = std::fs::File::create(tmp)?;
@@ -313,6 +322,9 @@ pub fn write(
             let mut tar = tar::Builder::new(gz);
             tar.mode(tar::HeaderMode::Deterministic);
             append(&mut tar, MANIFEST, &json)?;
+            if let Some(sig) = &signature {
+                append(&mut tar, sign::SIGNATURE, sig)?;
+            }
             for (p, b) in &entries {
                 append(&mut tar, p, b)?;
             }
@@ -458,17 +470,30 @@ fn read_error(
     }
 }
 
-/// Check a pack completely (see the module's table) and return its manifest; nothing is
-/// written.
-pub fn check(pack: &Path) -> Result<Manifest, String> {
+/// A pack that passed [`check`]: its manifest, and who signed it (a signature found is one
+/// that matches the manifest; whether its key is trusted is the reader's to say, [`sign::judge`]).
+#[derive(Debug, Clone)]
+pub struct Checked {
+    pub manifest: Manifest,
+    pub signed_by: SignedBy,
+    /// SHA-256 of the `manifest.json` and `manifest.sig` entries that were checked, so that
+    /// unpacking can tell when the pack file changed since.
+    manifest_sha256: String,
+    signature_sha256: Option<String>,
+}
+
+/// Check a pack completely (see the module's table); nothing is written.
+pub fn check(pack: &Path) -> Result<Checked, String> {
     check_with(pack, &Limits::default())
 }
 
 /// [`check`] under other limits.
-pub fn check_with(pack: &Path, limits: &Limits) -> Result<Manifest, String> {
+pub fn check_with(pack: &Path, limits: &Limits) -> Result<Checked, String> {
     let shown = pack.display();
     let (mut ar, tripped) = open(pack, limits)?;
     let mut manifest: Option<Manifest> = None;
+    let mut manifest_bytes = Vec::new();
+    let mut signature: Option<Vec<u8>> = None;
     let mut seen: BTreeMap<String, (String, u64)> = BTreeMap::new();
     let mut declared: u64 = 0;
     let entries = ar
@@ -526,6 +551,22 @@ pub fn check_with(pack: &Path, limits: &Limits) -> Result<Manifest, String> {
                 ));
             }
             manifest = Some(m);
+            manifest_bytes = text;
+            continue;
+        }
+        if path == sign::SIGNATURE {
+            if i != 1 {
+                return Err(format!(
+                    "{shown}: `{}` is entry {i}; a signature is the second entry",
+                    sign::SIGNATURE
+                ));
+            }
+            let mut sig = Vec::new();
+            (&mut e)
+                .take(64 << 10)
+                .read_to_end(&mut sig)
+                .map_err(|e| read_error(&shown, sign::SIGNATURE, e, &tripped))?;
+            signature = Some(sig);
             continue;
         }
         let mut h = Sha256::new();
@@ -560,7 +601,18 @@ pub fn check_with(pack: &Path, limits: &Limits) -> Result<Manifest, String> {
     for c in &m.commands {
         check_command(&c.argv).map_err(|e| format!("{shown}: {e}"))?;
     }
-    Ok(m)
+    let signed_by = match &signature {
+        None => SignedBy::Unsigned,
+        Some(sig) => SignedBy::Signed(
+            sign::verify(sig, &manifest_bytes).map_err(|e| format!("{shown}: {e}; refused"))?,
+        ),
+    };
+    Ok(Checked {
+        manifest: m,
+        signed_by,
+        manifest_sha256: sha256(&manifest_bytes),
+        signature_sha256: signature.as_deref().map(sha256),
+    })
 }
 
 /// A recorded command must be one of [`COMMANDS`], with no scene, `--set` or output of its
@@ -617,15 +669,27 @@ pub fn fresh_folder(dest: &Path) -> Result<(), String> {
 /// ([`fresh_folder`]). The files are written into a temporary folder inside `dest` first, the
 /// scene is checked to name no file outside the pack, and only then are they moved into place:
 /// a pack that fails anything leaves `dest` as it was (a folder it created is removed).
-/// Returns the manifest.
-pub fn read(pack: &Path, dest: &Path) -> Result<Manifest, String> {
-    read_with(pack, dest, &Limits::default())
+/// With `trusted` keys, the pack must be signed by one of them ([`sign::judge`]); without, any
+/// pack whose signature, if it has one, matches its manifest is read. Returns the checked pack.
+pub fn read(
+    pack: &Path,
+    dest: &Path,
+    trusted: &[ed25519_dalek::VerifyingKey],
+) -> Result<Checked, String> {
+    read_with(pack, dest, trusted, &Limits::default())
 }
 
 /// [`read`] under other limits.
-pub fn read_with(pack: &Path, dest: &Path, limits: &Limits) -> Result<Manifest, String> {
+pub fn read_with(
+    pack: &Path,
+    dest: &Path,
+    trusted: &[ed25519_dalek::VerifyingKey],
+    limits: &Limits,
+) -> Result<Checked, String> {
     fresh_folder(dest)?;
-    let m = check_with(pack, limits)?;
+    let checked = check_with(pack, limits)?;
+    sign::judge(&checked.signed_by, trusted).map_err(|e| format!("{}: {e}", pack.display()))?;
+    let m = &checked.manifest;
     let created = !dest.exists();
     if let Some(parent) = dest.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
@@ -638,8 +702,8 @@ pub fn read_with(pack: &Path, dest: &Path, limits: &Limits) -> Result<Manifest, 
             .prefix(crate::io::TEMP_PREFIX)
             .tempdir_in(dest)
             .map_err(|e| format!("{}: {e}", dest.display()))?;
-        extract(pack, &m, staging.path(), limits)?;
-        confined(&m, staging.path()).map_err(|e| format!("{}: {e}", pack.display()))?;
+        extract(pack, &checked, staging.path(), limits)?;
+        confined(m, staging.path()).map_err(|e| format!("{}: {e}", pack.display()))?;
         let rd = std::fs::read_dir(staging.path()).map_err(|e| e.to_string())?;
         for e in rd {
             let e = e.map_err(|e| e.to_string())?;
@@ -657,15 +721,16 @@ pub fn read_with(pack: &Path, dest: &Path, limits: &Limits) -> Result<Manifest, 
     if result.is_err() && created {
         let _ = std::fs::remove_dir(dest);
     }
-    result.map(|()| m)
+    result.map(|()| checked)
 }
 
 /// Write the pack's files into `dir` (a fresh temporary folder: every folder below it is made
 /// here, files are created new, so nothing is written through a link), hashing each as it is
-/// written against the manifest `m` that [`check_with`] accepted (the pack file may have
-/// changed since).
-fn extract(pack: &Path, m: &Manifest, dir: &Path, limits: &Limits) -> Result<(), String> {
+/// written against what [`check_with`] accepted (the pack file may have changed since): the
+/// manifest and signature entries by their own hashes, every other file by the manifest's.
+fn extract(pack: &Path, checked: &Checked, dir: &Path, limits: &Limits) -> Result<(), String> {
     let shown = pack.display();
+    let m = &checked.manifest;
     let want: BTreeMap<&str, &FileHash> = m.files.iter().map(|f| (f.path.as_str(), f)).collect();
     let (mut ar, tripped) = open(pack, limits)?;
     let entries = ar
@@ -706,7 +771,9 @@ fn extract(pack: &Path, m: &Manifest, dir: &Path, limits: &Limits) -> Result<(),
         std::io::Write::flush(&mut w.inner).map_err(|e| format!("{}: {e}", target.display()))?;
         let hash = hex(&w.h.finalize());
         let ok = if path == MANIFEST {
-            true
+            hash == checked.manifest_sha256
+        } else if path == sign::SIGNATURE {
+            checked.signature_sha256.as_ref() == Some(&hash)
         } else {
             want.get(path.as_str())
                 .is_some_and(|f| f.sha256 == hash && f.bytes == n)
@@ -822,7 +889,7 @@ mod tests {
             outputs_included: false,
         };
         let pack = dir.join("p.poserpack");
-        write(&pack, &mut m, &entries, &[]).unwrap();
+        write(&pack, &mut m, &entries, &[], None).unwrap();
         pack
     }
 
@@ -854,7 +921,7 @@ mod tests {
                 ("two.bin", noise(64 << 10, 2)),
             ],
         );
-        let m = check(&pack).unwrap();
+        let m = check(&pack).unwrap().manifest;
         // What the entries declare; the stream is larger (headers, padding, the end blocks).
         let declared = m.files.iter().map(|f| f.bytes).sum::<u64>()
             + serde_json::to_vec_pretty(&m).unwrap().len() as u64;
@@ -877,7 +944,7 @@ mod tests {
             "{e}"
         );
         let out = d.path().join("out");
-        assert!(read_with(&pack, &out, &small).is_err());
+        assert!(read_with(&pack, &out, &[], &small).is_err());
         assert!(!out.exists(), "a refused pack created its folder");
 
         let b = d.path().join("b");
@@ -908,9 +975,9 @@ mod tests {
             .and_then(|x| x.parse().ok())
             .unwrap();
         assert!(got < 1 << 20, "decompressed {got} bytes before stopping");
-        assert!(read_with(&zeros, &out, &tight).is_err());
+        assert!(read_with(&zeros, &out, &[], &tight).is_err());
         assert!(!out.exists());
-        assert!(read_with(&zeros, &out, &Limits::default()).is_ok());
+        assert!(read_with(&zeros, &out, &[], &Limits::default()).is_ok());
         assert_eq!(
             std::fs::read(out.join("scene/zeros.bin")).unwrap().len(),
             4 << 20
@@ -932,7 +999,7 @@ mod tests {
             outputs_included: false,
         };
         let pack = d.path().join("x.poserpack");
-        let e = write(&pack, &mut m, &[(p, "scene/zeros.bin".into())], &[]).unwrap_err();
+        let e = write(&pack, &mut m, &[(p, "scene/zeros.bin".into())], &[], None).unwrap_err();
         assert!(e.contains("compression bomb"), "{e}");
         assert!(!pack.exists());
     }
