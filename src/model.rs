@@ -633,6 +633,10 @@ pub struct Diver {
     /// narcotic; default [`DEFAULT_END_LIMIT`]).
     #[serde(default = "end_limit_default")]
     pub end_limit: f64,
+    /// Whether decompression is planned (`diver.deco = "planned"`) or the dive must stay
+    /// within the NDL (`"none"`, the default).
+    #[serde(default, skip_serializing_if = "deco_mode_is_none")]
+    pub deco: DecoMode,
 }
 
 fn po2_bottom_default() -> f64 {
@@ -648,6 +652,23 @@ fn end_limit_default() -> f64 {
 /// The END limit without `diver.end_limit`, m: 30 m, the customary narcosis limit of
 /// technical-diving agencies (GUE, TDI, IANTD).
 pub const DEFAULT_END_LIMIT: f64 = 30.0;
+
+/// `diver.deco`: whether the dive may need decompression stops.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum DecoMode {
+    /// A no-decompression dive: a dive that needs stops is NOT SAFE AS PLANNED.
+    #[default]
+    None,
+    /// Decompression is planned and accepted: a dive whose whole plan holds (stops on the
+    /// gases carried, every gas where it is breathed, the gas rules, CNS and pO₂, the
+    /// lost-gas plans) is "OK, decompression planned".
+    Planned,
+}
+
+fn deco_mode_is_none(m: &DecoMode) -> bool {
+    *m == DecoMode::None
+}
 
 /// What a cylinder is breathed for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]

@@ -171,9 +171,17 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
     let _ = writeln!(
         o,
         "\nVerdict: {} — {}, {}, {}",
-        if v.ok { "OK" } else { "NOT SAFE AS PLANNED" },
+        if v.deco_planned {
+            "OK, decompression planned"
+        } else if v.ok {
+            "OK"
+        } else {
+            "NOT SAFE AS PLANNED"
+        },
         if v.within_ndl {
             "within the NDL"
+        } else if v.deco_planned {
+            "the decompression plan holds"
         } else {
             "decompression required"
         },
@@ -204,6 +212,11 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
             }
         }
     );
+    if v.deco_planned
+        && let Some(plan) = &v.deco_plan
+    {
+        let _ = writeln!(o, "  ✓ {plan}");
+    }
     for p in &v.problems {
         let _ = writeln!(o, "  ✗ {p}");
     }

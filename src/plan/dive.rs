@@ -42,7 +42,7 @@ use super::gas::{
     bottom_gas, depth_limit, gas_label, hypoxic_limit,
 };
 use super::oxygen::{self, OxygenExposure};
-use crate::model::{CylinderRole, Model};
+use crate::model::{CylinderRole, DecoMode, Model};
 use serde::Serialize;
 
 /// Everything the simulation needs about the diver and the water.
@@ -70,6 +70,8 @@ pub struct DiveConfig {
     pub end_limit: f64,
     /// Surface interval between split dives, s.
     pub surface_interval: f64,
+    /// Whether decompression is planned and accepted (`diver.deco`).
+    pub deco: DecoMode,
     /// Whether defaults were used because the scene has no diver.
     pub defaulted: bool,
 }
@@ -153,6 +155,7 @@ impl DiveConfig {
                     po2_deco: d.po2_deco,
                     end_limit: d.end_limit,
                     surface_interval: 3600.0,
+                    deco: d.deco,
                     defaulted: false,
                 })
             }
@@ -184,6 +187,7 @@ impl DiveConfig {
                     po2_deco: 1.6,
                     end_limit: crate::model::DEFAULT_END_LIMIT,
                     surface_interval: 3600.0,
+                    deco: DecoMode::None,
                     defaulted: true,
                 })
             }
@@ -447,6 +451,9 @@ pub struct DiveResult {
     pub ceiling_at_end: f64,
     /// Time to surface at the end of the bottom time, s.
     pub tts_at_end: f64,
+    /// Most the ceiling was ever below the diver on the ascent, m (ceiling − depth, at every
+    /// ≤ 1 s step; ≤ 0 when the ascent never breaks the ceiling).
+    pub ascent_ceiling_excess: f64,
     /// Cylinder changes (the first entry is the cylinder breathed from the start).
     pub switches: Vec<Switch>,
     pub gas: GasCheck,
@@ -898,6 +905,7 @@ pub fn simulate(
     // the cylinders left, so the stops always match the gas breathed.
     let mut flown: Vec<(f64, f64)> = vec![(bottom_end, last_depth)];
     let mut replanned = false;
+    let mut excess = f64::NEG_INFINITY;
     loop {
         let switch_at = |t: f64| {
             gas_changes
@@ -918,7 +926,9 @@ pub fn simulate(
                 replan: safety_stop.is_none(),
             },
             &mut |t, d, ts, b| {
-                max_ceiling = max_ceiling.max(ts.ceiling());
+                let c = ts.ceiling();
+                max_ceiling = max_ceiling.max(c);
+                excess = excess.max(c - d);
                 record(t, d, ts, b, &mut next_sample);
             },
         );
@@ -975,6 +985,7 @@ pub fn simulate(
         max_ceiling,
         ceiling_at_end,
         tts_at_end,
+        ascent_ceiling_excess: excess,
         switches: b.switches.clone(),
         gas,
         oxygen: b.oxygen,
@@ -1147,6 +1158,10 @@ pub struct Verdict {
     pub ok: bool,
     pub within_ndl: bool,
     pub deco_required: bool,
+    /// OK as a planned-decompression dive (`diver.deco = "planned"`): the stops are the plan.
+    pub deco_planned: bool,
+    /// The decompression plan in words (stops, gases, runtime) when decompression is required.
+    pub deco_plan: Option<String>,
     pub gas_ok: bool,
     /// Every gas within its pO₂ limit where it is breathed and none hypoxic at the surface.
     pub gases_ok: bool,
@@ -1155,6 +1170,11 @@ pub struct Verdict {
     pub advice: Vec<String>,
     pub suggestions: Vec<Suggestion>,
 }
+
+/// How far (m) the flown ascent may put the ceiling below the diver before a planned
+/// decompression is NOT SAFE: 1 cm, the rounding of the 1 s steps against the planner's 2 s
+/// trial ascents.
+pub const CEILING_TOLERANCE: f64 = 0.01;
 
 /// Standard back-gas configurations (l water volume, label) for the "bigger cylinder" remedy.
 const CYLINDERS: [(f64, &str); 8] = [
@@ -1266,8 +1286,12 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
             oxygen::OTU_WARN
         ));
     }
+    let planned = cfg.deco == DecoMode::Planned;
+    // With decompression planned, the stops are the plan, not a problem; everything else
+    // still is. The plan in words, for the report, either way.
+    let mut deco_lines: Vec<String> = Vec::new();
     if deco && dive.stops.is_empty() {
-        problems.push(format!(
+        deco_lines.push(format!(
             "decompression dive: the ceiling leaves the surface at {} runtime ({} into the \
              survey; ceiling {:.1} m at the end of the bottom time) at GF {:.0}/{:.0}; the ascent \
              itself clears it without a stop, but the no-decompression limit is exceeded",
@@ -1286,7 +1310,7 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
             .map(|s| format!("{:.0} m {}", s.depth, mmss(s.duration)))
             .collect::<Vec<_>>()
             .join(", ");
-        problems.push(format!(
+        deco_lines.push(format!(
             "decompression obligation: the NDL runs out at {} runtime ({} into the survey); \
              {} of mandatory stops ({stops}) at GF {:.0}/{:.0}",
             mmss(dive.deco_from.unwrap_or(0.0)),
@@ -1294,6 +1318,41 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
             mmss(total),
             cfg.gf.low * 100.0,
             cfg.gf.high * 100.0
+        ));
+    }
+    let deco_plan = deco.then(|| {
+        let switches: Vec<String> = dive
+            .switches
+            .iter()
+            .skip(1)
+            .filter(|s| s.time > dive.descent_time + dive.bottom_time - 1e-6)
+            .map(|s| {
+                format!(
+                    "{} at {:.0} m",
+                    gas_label(cfg.tanks[s.cylinder].gas),
+                    s.depth
+                )
+            })
+            .collect();
+        format!(
+            "{}; gas switches on the ascent: {}; runtime {}",
+            deco_lines.join("; "),
+            if switches.is_empty() {
+                "none".to_string()
+            } else {
+                switches.join(", ")
+            },
+            mmss(dive.runtime)
+        )
+    });
+    if !planned {
+        problems.extend(deco_lines);
+    } else if deco && dive.ascent_ceiling_excess > CEILING_TOLERANCE {
+        // The planner's own trial ascents keep the diver below the ceiling; the flown profile is
+        // checked again, step by step, so that a planned dive is never OK above its ceiling.
+        problems.push(format!(
+            "the ascent breaks the ceiling by {:.2} m: the decompression plan does not hold",
+            dive.ascent_ceiling_excess
         ));
     }
     let g = &dive.gas;
@@ -1400,13 +1459,25 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
             mmss(n)
         ));
     }
-    if !dive.ok() && problems.is_empty() {
+    // The simulator's own rules (the NDL aside when decompression is planned) back the list.
+    let rules_ok = if planned {
+        dive.gas.ok() && dive.gas.breathable() && dive.oxygen.within_limits()
+    } else {
+        dive.ok()
+    };
+    if !rules_ok && problems.is_empty() {
         problems.push("the plan breaks a rule of the dive".into());
     }
+    let ok = rules_ok && problems.is_empty();
+    if ok {
+        suggestions.clear();
+    }
     Verdict {
-        ok: dive.ok() && problems.is_empty(),
+        ok,
         within_ndl: !deco,
         deco_required: deco,
+        deco_planned: ok && deco,
+        deco_plan,
         gas_ok: g.ok(),
         gases_ok: g.breathable(),
         problems,

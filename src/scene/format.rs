@@ -841,6 +841,11 @@ pub struct Diver {
     /// beyond it. O₂ counts as narcotic (Subsurface's default; GUE, TDI, IANTD), the
     /// conservative choice. **Unit:** m (0 < END ≤ 100 m). **Default:** 30 m.
     pub end_limit: Option<Length>,
+    /// `"none"`: a no-decompression dive, one that needs stops is NOT SAFE AS PLANNED;
+    /// `"planned"`: decompression is planned and accepted, and a dive whose whole plan holds
+    /// (the stops on the gases carried, every gas where it is breathed, the gas rules, CNS and
+    /// pO₂, the lost-gas plans) is "OK, decompression planned". **Default:** `"none"`.
+    pub deco: Option<String>,
     /// `"salt"` (1030 kg/m³, Subsurface's sea water) or `"fresh"` (1000 kg/m³).
     /// **Default:** `"salt"`.
     pub water: Option<String>,

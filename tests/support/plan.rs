@@ -27,6 +27,7 @@ pub fn diver(cyl_l: f64, fill_bar: f64) -> Diver {
         po2_bottom: 1.4,
         po2_deco: 1.6,
         end_limit: DEFAULT_END_LIMIT,
+        deco: DecoMode::None,
     }
 }
 

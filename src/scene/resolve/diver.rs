@@ -78,6 +78,10 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
         );
     }
     let salt_water = !matches!(d.choice(cx, "water", &["salt", "fresh"]), Some("fresh"));
+    let deco = match d.choice(cx, "deco", &["none", "planned"]) {
+        Some("planned") => DecoMode::Planned,
+        _ => DecoMode::None,
+    };
     let mut cylinders: Vec<Cylinder> = Vec::new();
     for (i, n) in d.tables(cx, "cylinders").into_iter().enumerate() {
         let c = cylinder(cx, i, n, cylinders.first());
@@ -119,6 +123,7 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
         po2_bottom,
         po2_deco,
         end_limit,
+        deco,
     })
 }
 
