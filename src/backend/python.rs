@@ -3,8 +3,84 @@
 //! Lookup order for the interpreter: `$POSER_PYTHON`; the repository's `.venv` (created by
 //! `backends/setup.sh` from `backends/requirements.txt`); `python3` on `PATH`.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::Mutex;
+
+/// The interpreters started in this process, so that `poser pack` and `poser rerun` can
+/// record the packages installed where a run used Python ([`take_used`]).
+static USED: Mutex<BTreeSet<PathBuf>> = Mutex::new(BTreeSet::new());
+
+fn mark_used(py: &Path) {
+    USED.lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .insert(py.to_path_buf());
+}
+
+/// The interpreters started (by [`command`] or [`require_module`]) since the last call, and
+/// forget them.
+pub fn take_used() -> Vec<PathBuf> {
+    std::mem::take(&mut *USED.lock().unwrap_or_else(|e| e.into_inner()))
+        .into_iter()
+        .collect()
+}
+
+/// The Python distributions whose installed versions a pack records (the backends' packages;
+/// OpenCV under each of its wheel names).
+pub const RECORDED_PACKAGES: [&str; 8] = [
+    "mitsuba",
+    "bpy",
+    "pycolmap",
+    "numpy",
+    "opencv-python-headless",
+    "opencv-python",
+    "opencv-contrib-python",
+    "opencv-contrib-python-headless",
+];
+
+/// Ask `py` (with the backends' `PYTHONPATH`, as the backends run it) which of
+/// [`RECORDED_PACKAGES`] are installed and at which version (`importlib.metadata`, the
+/// version pip reports; nothing is imported), and its own version as `python`. Packages not
+/// installed are left out.
+pub fn installed_versions(py: &Path) -> Result<BTreeMap<String, String>, String> {
+    let names = RECORDED_PACKAGES
+        .iter()
+        .map(|n| format!("{n:?}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    const SCRIPT: &str = r#"import json, sys
+from importlib import metadata
+out = {"python": "%d.%d.%d" % sys.version_info[:3]}
+for d in [NAMES]:
+    try:
+        out[d] = metadata.version(d)
+    except metadata.PackageNotFoundError:
+        pass
+print(json.dumps(out))
+"#;
+    let script = SCRIPT.replace("NAMES", &names);
+    let out = Command::new(py)
+        .args(["-c", &script])
+        .env("PYTHONPATH", backends_dir())
+        .env("PYTHONDONTWRITEBYTECODE", "1")
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", py.display()))?;
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        return Err(format!(
+            "{} could not list its packages: {}",
+            py.display(),
+            err.lines().last().unwrap_or("no message")
+        ));
+    }
+    serde_json::from_slice(&out.stdout).map_err(|e| {
+        format!(
+            "{} listed its packages in a form poser does not read ({e})",
+            py.display()
+        )
+    })
+}
 
 /// Root of the poser source tree (where `backends/` lives).
 pub fn repo_root() -> PathBuf {
@@ -30,7 +106,9 @@ pub fn interpreter() -> PathBuf {
 
 /// A `Command` running `script` with the pinned interpreter, with `backends/` on `PYTHONPATH`.
 pub fn command(script: &Path) -> Command {
-    let mut c = Command::new(interpreter());
+    let py = interpreter();
+    mark_used(&py);
+    let mut c = Command::new(py);
     c.arg(script);
     c.env("PYTHONPATH", backends_dir());
     c.env("PYTHONDONTWRITEBYTECODE", "1");
@@ -40,6 +118,7 @@ pub fn command(script: &Path) -> Command {
 /// Check that a module can be imported; the error tells the user how to set the environment up.
 pub fn require_module(module: &str) -> Result<(), String> {
     let py = interpreter();
+    mark_used(&py);
     let ok = Command::new(&py)
         .args(["-c", &format!("import {module}")])
         .output()
@@ -113,4 +192,56 @@ pub fn run_json<T: serde::de::DeserializeOwned>(
     }
     let text = std::fs::read(&res_path).map_err(|e| format!("{}: {e}", res_path.display()))?;
     serde_json::from_slice(&text).map_err(|e| format!("{}: {e}", res_path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A stand-in interpreter: a shell script that prints `stdout` and exits with `code`.
+    #[cfg(unix)]
+    fn fake(dir: &Path, name: &str, stdout: &str, code: i32) -> PathBuf {
+        use std::os::unix::fs::PermissionsExt;
+        let p = dir.join(name);
+        std::fs::write(
+            &p,
+            format!("#!/bin/sh\ncat <<'EOF'\n{stdout}\nEOF\necho oops >&2\nexit {code}\n"),
+        )
+        .unwrap();
+        std::fs::set_permissions(&p, std::fs::Permissions::from_mode(0o755)).unwrap();
+        p
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn installed_versions_are_read_from_the_interpreter() {
+        let d = tempfile::tempdir().unwrap();
+        let ok = fake(
+            d.path(),
+            "ok",
+            r#"{"python": "3.11.2", "mitsuba": "3.8.0", "numpy": "1.26.4"}"#,
+            0,
+        );
+        let v = installed_versions(&ok).unwrap();
+        assert_eq!(v["mitsuba"], "3.8.0");
+        assert_eq!(v.len(), 3);
+        let bad = fake(d.path(), "bad", "", 1);
+        let e = installed_versions(&bad).unwrap_err();
+        assert!(e.contains("could not list its packages: oops"), "{e}");
+        let junk = fake(d.path(), "junk", "hello", 0);
+        assert!(installed_versions(&junk).is_err());
+        assert!(
+            installed_versions(&d.path().join("missing"))
+                .unwrap_err()
+                .starts_with("cannot run")
+        );
+    }
+
+    #[test]
+    fn starting_python_is_remembered_until_taken() {
+        let _ = take_used();
+        let _ = command(Path::new("x.py"));
+        // Other tests may start Python meanwhile: only this one's interpreter is certain.
+        assert!(take_used().contains(&interpreter()));
+    }
 }

@@ -58,6 +58,27 @@ pub(super) fn run_recorded(
     }
 }
 
+/// The Python packages installed where the commands just run used Python (the interpreter they
+/// started), or, with `fallback`, where they would have; empty when none did.
+pub(super) fn installed_where_used(
+    fallback: Option<std::path::PathBuf>,
+) -> Result<std::collections::BTreeMap<String, String>, String> {
+    use crate::backend::python;
+    let Some(py) = python::take_used().into_iter().next().or(fallback) else {
+        return Ok(Default::default());
+    };
+    let v = python::installed_versions(&py)?;
+    eprintln!(
+        "Python used by the commands ({}): {}",
+        py.display(),
+        v.iter()
+            .map(|(n, v)| format!("{n} {v}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(v)
+}
+
 pub fn run(args: &Args) -> Result<(), CliError> {
     // The key first: a wrong key file should not cost the commands' run time.
     let key = args
@@ -119,6 +140,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     }
     let mut recorded = Vec::new();
     let mut dirs = Vec::new();
+    let _ = crate::backend::python::take_used();
     for (k, argv) in commands.iter().enumerate() {
         let dir = work.path().join("outputs").join(k.to_string());
         eprintln!("pack: running `poser {}`", argv.join(" "));
@@ -130,9 +152,16 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         });
         dirs.push(dir);
     }
+    let mut versions = Versions::current();
+    versions.installed = installed_where_used(None).map_err(CliError::Failed)?;
+    for n in versions.unpinned() {
+        eprintln!(
+            "pack: note: {n} (backends/requirements.txt); a rerun compares with the installed version"
+        );
+    }
     let mut manifest = Manifest {
         format: pack::FORMAT.into(),
-        versions: Versions::current(),
+        versions,
         scene: entries[0].1.clone(),
         sets: args.scene.sets.clone(),
         commands: recorded,

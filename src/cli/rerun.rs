@@ -54,6 +54,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let m = &checked.manifest;
     let scene = args.out.join("pack").join(&m.scene);
     let mut commands = Vec::new();
+    let _ = crate::backend::python::take_used();
     for (k, c) in m.commands.iter().enumerate() {
         let dir = args.out.join("outputs").join(k.to_string());
         eprintln!("rerun: `poser {}`", c.argv.join(" "));
@@ -67,6 +68,17 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let identical = commands
         .iter()
         .all(|c| c.files.iter().all(|(_, v)| *v == Verdict::Identical));
+    // The installed Python packages, asked where this rerun used Python (or, when the pack
+    // recorded some, of the interpreter it would use).
+    let mut now = Versions::current();
+    let fallback = (!m.versions.installed.is_empty()).then(crate::backend::python::interpreter);
+    let mut asked = Vec::new();
+    match super::pack::installed_where_used(fallback) {
+        Ok(v) => now.installed = v,
+        Err(e) => asked.push(format!("installed Python packages not known here: {e}")),
+    }
+    let mut version_differences = m.versions.differences(&now);
+    version_differences.extend(asked);
     let report = Report {
         identical,
         signed_by: match &checked.signed_by {
@@ -74,7 +86,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             pack::SignedBy::Signed(k) => pack::sign::fingerprint(k),
         },
         trusted: !trusted.is_empty(),
-        version_differences: m.versions.differences(&Versions::current()),
+        version_differences,
         commands,
     };
     let json = serde_json::to_vec_pretty(&report).map_err(|e| CliError::Failed(e.to_string()))?;

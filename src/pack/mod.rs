@@ -102,6 +102,11 @@ pub struct Versions {
     pub commit: String,
     /// The pinned Python packages (`backends/requirements.txt`): name → version.
     pub backends: BTreeMap<String, String>,
+    /// The Python packages installed where the commands ran Python, asked of the interpreter
+    /// they ran with ([`crate::backend::python::installed_versions`]): distribution name →
+    /// version, and `python` itself. Empty (and not written) when no command used Python.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub installed: BTreeMap<String, String>,
 }
 
 impl Versions {
@@ -121,6 +126,7 @@ impl Versions {
                 .unwrap_or("unknown")
                 .to_string(),
             backends,
+            installed: BTreeMap::new(),
         }
     }
 
@@ -148,7 +154,35 @@ impl Versions {
                 out.push(format!("{n} {} (pack) vs {} (here)", show(a), show(b)));
             }
         }
+        // Installed packages are compared when both sides asked their interpreter.
+        if !self.installed.is_empty() && !now.installed.is_empty() {
+            let names: std::collections::BTreeSet<&String> =
+                self.installed.keys().chain(now.installed.keys()).collect();
+            for n in names {
+                let (a, b) = (self.installed.get(n), now.installed.get(n));
+                if a != b {
+                    let show =
+                        |v: Option<&String>| v.map_or("not installed".to_string(), |v| v.clone());
+                    out.push(format!(
+                        "installed {n} {} (pack) vs {} (here)",
+                        show(a),
+                        show(b)
+                    ));
+                }
+            }
+        }
         out
+    }
+
+    /// Installed packages whose version is not the pinned one, one line each.
+    pub fn unpinned(&self) -> Vec<String> {
+        self.installed
+            .iter()
+            .filter_map(|(n, v)| {
+                let pinned = self.backends.get(n)?;
+                (pinned != v).then(|| format!("{n} {v} is installed, {pinned} is pinned"))
+            })
+            .collect()
     }
 }
 
@@ -1048,6 +1082,37 @@ mod tests {
         let d = a.differences(&b);
         assert_eq!(d.len(), 2, "{d:?}");
         assert!(d.iter().any(|l| l.starts_with("mitsuba ")));
+        // Installed versions: compared when both sides have them.
+        let mut p = a.clone();
+        p.installed = [
+            ("mitsuba", "3.9.1"),
+            ("numpy", "1.26.4"),
+            ("python", "3.11.2"),
+        ]
+        .map(|(n, v)| (n.to_string(), v.to_string()))
+        .into();
+        assert!(p.differences(&a).is_empty(), "here did not ask");
+        assert!(p.unpinned().is_empty());
+        let mut q = p.clone();
+        q.installed.insert("mitsuba".into(), "3.8.0".into());
+        q.installed.remove("numpy");
+        q.installed.insert("pycolmap".into(), "4.2.1".into());
+        assert_eq!(
+            p.differences(&q),
+            [
+                "installed mitsuba 3.9.1 (pack) vs 3.8.0 (here)",
+                "installed numpy 1.26.4 (pack) vs not installed (here)",
+                "installed pycolmap not installed (pack) vs 4.2.1 (here)",
+            ]
+        );
+        assert_eq!(
+            q.unpinned(),
+            ["mitsuba 3.8.0 is installed, 3.9.1 is pinned"]
+        );
+        // A pack without the field reads as one that used no Python, and writes none.
+        let json = serde_json::to_string(&a).unwrap();
+        assert!(!json.contains("installed"));
+        assert_eq!(serde_json::from_str::<Versions>(&json).unwrap(), a);
     }
 
     #[test]
