@@ -1,11 +1,12 @@
-//! The truth as COLMAP text models: `colmap/` for upstream COLMAP and pycolmap, and
-//! `colmap_refractive/` for Refractive COLMAP, which also reads the housing port.
+//! The truth as COLMAP models: `colmap/` for upstream COLMAP and pycolmap (text and binary),
+//! and `colmap_refractive/` for Refractive COLMAP, which also reads the housing port (text).
 //!
 //! | file | contents |
 //! |---|---|
 //! | `colmap/cameras.txt` | one camera per line: PINHOLE, OPENCV, FULL_OPENCV or OPENCV_FISHEYE; the port in a comment (upstream COLMAP has no port) |
 //! | `colmap/images.txt` | true `camera_from_world` poses and the refracted target observations |
 //! | `colmap/points3D.txt` | every observed target point with its track |
+//! | `colmap/cameras.bin`, `images.bin`, `points3D.bin` | the same model in COLMAP's binary format ([`Bin`]), which COLMAP reads in preference to the text when both are present |
 //! | `colmap_refractive/*` | the same, with `FLATPORT …` / `DOMEPORT …` after each camera's parameters |
 //!
 //! Pixel convention: COLMAP's, the same as poser's — the top-left pixel's centre is at
@@ -146,6 +147,65 @@ pub fn refractive_port(c: &CameraTruth) -> Result<Option<(&'static str, Vec<f64>
     Ok(Some((name, pp)))
 }
 
+/// COLMAP's binary model format (`Reconstruction::WriteBinary`; little-endian, no padding):
+///
+/// | file | layout |
+/// |---|---|
+/// | `cameras.bin` | u64 count; per camera: u32 id, i32 model id, u64 width, u64 height, f64 params… |
+/// | `images.bin` | u64 count; per image: u32 id, f64 qw qx qy qz, f64 tx ty tz, u32 camera id, name bytes and a NUL, u64 count, per observation f64 x, f64 y, u64 point id |
+/// | `points3D.bin` | u64 count; per point: u64 id, f64 x y z, u8 r g b, f64 error, u64 track length, per element u32 image id, u32 observation index |
+///
+/// The same f64 values as the text model, which writes each with the digits that read back to
+/// it exactly, so both read to the same model.
+#[derive(Default)]
+struct Bin(Vec<u8>);
+
+impl Bin {
+    fn u8(&mut self, v: u8) {
+        self.0.push(v);
+    }
+    fn u32(&mut self, v: usize) {
+        self.0
+            .extend_from_slice(&u32::try_from(v).unwrap_or(u32::MAX).to_le_bytes());
+    }
+    fn i32(&mut self, v: i32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn u64(&mut self, v: usize) {
+        self.0.extend_from_slice(&(v as u64).to_le_bytes());
+    }
+    fn f64(&mut self, v: f64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+}
+
+/// COLMAP's id of a camera model this export writes (`colmap/sensor/models.h`).
+fn model_id(name: &str) -> i32 {
+    match name {
+        "PINHOLE" => 1,
+        "OPENCV" => 4,
+        "OPENCV_FISHEYE" => 5,
+        "FULL_OPENCV" => 6,
+        other => unreachable!("camera_model returned {other}"),
+    }
+}
+
+fn cameras_bin(truth: &Truth) -> Vec<u8> {
+    let mut b = Bin::default();
+    b.u64(truth.cameras.len());
+    for (i, c) in truth.cameras.iter().enumerate() {
+        let (name, params, _) = camera_model(c);
+        b.u32(i + 1);
+        b.i32(model_id(name));
+        b.u64(c.width as usize);
+        b.u64(c.height as usize);
+        for p in params {
+            b.f64(p);
+        }
+    }
+    b.0
+}
+
 fn join(xs: &[f64]) -> String {
     xs.iter()
         .map(|x| x.to_string())
@@ -234,6 +294,8 @@ pub(super) fn files(model: &Model, truth: &Truth) -> Vec<(String, Vec<u8>)> {
     }
     let mut tracks: Vec<Vec<(usize, usize)>> = vec![Vec::new(); point_list.len()];
 
+    let mut ims_bin = Bin::default();
+    ims_bin.u64(truth.images.len());
     let mut ims = String::from(
         "# Image list with two lines of data per image:\n#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n#   POINTS2D[] as (X, Y, POINT3D_ID)\n",
     );
@@ -254,11 +316,24 @@ pub(super) fn files(model: &Model, truth: &Truth) -> Vec<(String, Vec<u8>)> {
             im.camera_index + 1,
             im.name
         );
+        ims_bin.u32(k + 1);
+        for x in p.quaternion.iter().chain(&p.translation) {
+            ims_bin.f64(*x);
+        }
+        ims_bin.u32(im.camera_index + 1);
+        ims_bin
+            .0
+            .extend_from_slice(format!("{}.png", im.name).as_bytes());
+        ims_bin.u8(0);
+        ims_bin.u64(im.points.len());
         let mut line = Vec::new();
         for (j, o) in im.points.iter().enumerate() {
             let pid = ids[&(o.target.as_str(), o.id.as_str())];
             tracks[pid - 1].push((k + 1, j));
             line.push(format!("{} {} {}", o.u, o.v, pid));
+            ims_bin.f64(o.u);
+            ims_bin.f64(o.v);
+            ims_bin.u64(pid);
         }
         let _ = writeln!(ims, "{}", line.join(" "));
     }
@@ -289,6 +364,23 @@ pub(super) fn files(model: &Model, truth: &Truth) -> Vec<(String, Vec<u8>)> {
             tr.join(" ")
         );
     }
+    let mut p3_bin = Bin::default();
+    p3_bin.u64(point_list.len());
+    for (i, (_, _, w)) in point_list.iter().enumerate() {
+        p3_bin.u64(i + 1);
+        for x in [w.x, w.y, w.z] {
+            p3_bin.f64(x);
+        }
+        for _ in 0..3 {
+            p3_bin.u8(255);
+        }
+        p3_bin.f64(0.0);
+        p3_bin.u64(tracks[i].len());
+        for &(im, j) in &tracks[i] {
+            p3_bin.u32(im);
+            p3_bin.u32(j);
+        }
+    }
     let (ims, p3) = (ims.into_bytes(), p3.into_bytes());
     vec![
         (
@@ -297,6 +389,9 @@ pub(super) fn files(model: &Model, truth: &Truth) -> Vec<(String, Vec<u8>)> {
         ),
         ("colmap/images.txt".into(), ims.clone()),
         ("colmap/points3D.txt".into(), p3.clone()),
+        ("colmap/cameras.bin".into(), cameras_bin(truth)),
+        ("colmap/images.bin".into(), ims_bin.0),
+        ("colmap/points3D.bin".into(), p3_bin.0),
         (
             "colmap_refractive/cameras.txt".into(),
             cameras_txt(truth, true).into_bytes(),
