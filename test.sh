@@ -17,6 +17,6 @@ cargo build --release --locked --features backends --bin poser
 OPENCV_IO_ENABLE_OPENEXR=1 POSER_BIN="$PWD/target/release/poser" \
   .venv/bin/python -m pytest -q -p no:cacheprovider backends crates/poser-py/tests
 cargo test --release --locked --features backends
-# Each fuzz target for a minute, when a nightly toolchain is available (fuzz/run.sh says so and
+# Each fuzz target for 30 s, when a nightly toolchain is available (fuzz/run.sh says so and
 # skips otherwise; the stable replay of the corpus ran above as `fuzz_replay`).
-fuzz/run.sh 60
+fuzz/run.sh 30

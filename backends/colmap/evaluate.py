@@ -47,6 +47,7 @@ Usage: python evaluate.py REQUEST.json RESULT.json
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 import tempfile
@@ -355,13 +356,18 @@ def images(pycolmap, req: dict) -> dict:
     return result
 
 
-def focal_sensitivity(pycolmap, rec, req: dict) -> float:
+# The largest focal-probe rise reported (1000 %): beyond it the number says only "determined".
+RISE_CAP = 10.0
+
+
+def focal_sensitivity(pycolmap, rec, req: dict) -> float | None:
     """How well the block determines the focal length: the relative rise of the mean
     reprojection error when the focal length is held 10 % above its estimate and everything
     else (poses, points, distortion) is adjusted again. A flat nadir block barely notices
     (focal length and height trade against each other); a block with relief or obliques does.
     A model with two focal lengths (fx, fy) is probed one axis at a time and the smaller rise
-    returned: obliques tilted only forward determine fy and leave fx free."""
+    returned: obliques tilted only forward determine fy and leave fx free. Rises are capped at
+    RISE_CAP; None when no probe converged to a finite error."""
     base = rec.compute_mean_reprojection_error()
     axes = max((len(c.focal_length_idxs()) for c in rec.cameras.values()), default=0)
     rises = []
@@ -375,8 +381,12 @@ def focal_sensitivity(pycolmap, rec, req: dict) -> float:
         opts = ba_options(pycolmap, req)
         opts.refine_focal_length = False
         pycolmap.bundle_adjustment(probe, opts)
-        rises.append((probe.compute_mean_reprojection_error() - base) / max(base, 1e-12))
-    return min(rises) if rises else 0.0
+        rise = (probe.compute_mean_reprojection_error() - base) / max(base, 1e-12)
+        # A probe whose adjustment diverged (NaN or infinite error) measures nothing; one that
+        # ran away (seen: 1e150 on crossed strips) only says the focal length is held firmly.
+        if math.isfinite(rise):
+            rises.append(min(rise, RISE_CAP))
+    return min(rises) if rises else None
 
 
 def export(rec, ids: dict[int, int] | None = None) -> dict:

@@ -189,6 +189,9 @@ pub struct Evaluation {
 /// estimate, the block does not determine the focal length (images mode; see
 /// [`Evaluation::focal_sensitivity`]).
 pub const FOCAL_DETERMINED: f64 = 0.005;
+/// The largest focal-probe rise `backends/colmap/evaluate.py` reports (`RISE_CAP`, 1000 %): a
+/// probe that ran away says only that the block holds the focal length firmly.
+pub const FOCAL_RISE_CAP: f64 = 10.0;
 
 impl Evaluation {
     /// Images mode: the relative rise of the mean reprojection error when the focal length is

@@ -117,8 +117,12 @@ pub fn markdown(ev: &Evaluation) -> String {
         let _ = writeln!(
             s,
             "\nHolding the focal length 10 % off its estimate raises the mean reprojection error by \
-             {:.3} %: {}",
-            100.0 * sens,
+             {}: {}",
+            if sens >= super::FOCAL_RISE_CAP {
+                format!("more than {:.0} %", 100.0 * super::FOCAL_RISE_CAP)
+            } else {
+                format!("{:.3} %", 100.0 * sens)
+            },
             if sens >= super::FOCAL_DETERMINED {
                 "the images determine the focal length."
             } else {

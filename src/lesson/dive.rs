@@ -199,6 +199,7 @@ pub fn run(
     cases: &[Case],
     out: &Path,
     evaluate: bool,
+    full: bool,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Results, String> {
     let mut rows = Vec::new();
@@ -252,7 +253,12 @@ pub fn run(
         };
         let view_png = if evaluate {
             progress(&format!("rendering a view of `{}`", c.label));
-            view(m, &out.join(&c.slug).join("view")).map_err(err)?
+            let (scale, samples) = if full {
+                (VIEW_SCALE, VIEW_SAMPLES)
+            } else {
+                (VIEW_SCALE_QUICK, VIEW_SAMPLES_QUICK)
+            };
+            view(m, &out.join(&c.slug).join("view"), scale, samples).map_err(err)?
         } else {
             Vec::new()
         };
@@ -377,13 +383,25 @@ pub fn accuracy(m: &crate::model::Model, opts: &Options, dir: &Path) -> Result<A
     })
 }
 
-/// Scale of the rendered view against the camera's resolution, and its samples per pixel.
+/// Scale of the rendered view against the camera's resolution, and its samples per pixel in the
+/// full form.
 pub const VIEW_SCALE: f64 = 0.05;
 pub const VIEW_SAMPLES: u32 = 32;
+/// The quick form's views: half the scale and a quarter of the samples, a sixteenth of the
+/// cost (a turbid variant's view, strobes random-walking 114 scatterings, took 30 s of CPU at
+/// the full form's size; the views were three quarters of the archaeology lesson's quick form).
+pub const VIEW_SCALE_QUICK: f64 = 0.025;
+pub const VIEW_SAMPLES_QUICK: u32 = 8;
 
 /// Render the pose nearest the site's centre (xy) with the native renderer at
-/// [`VIEW_SCALE`] into `dir` (through the scene's sensor, if any); return the PNG.
-pub fn view(model: &crate::model::Model, dir: &Path) -> Result<Vec<u8>, String> {
+/// `scale` of its resolution and `samples` per pixel into `dir` (through the scene's sensor, if
+/// any); return the PNG.
+pub fn view(
+    model: &crate::model::Model,
+    dir: &Path,
+    scale: f64,
+    samples: u32,
+) -> Result<Vec<u8>, String> {
     use crate::backend::{Backend, RenderOptions};
     let centre = model
         .poses
@@ -400,19 +418,22 @@ pub fn view(model: &crate::model::Model, dir: &Path) -> Result<Vec<u8>, String> 
             d(a).total_cmp(&d(b))
         })
         .ok_or("the network has no poses")?;
-    let small = model.clone().with_resolution_scale(VIEW_SCALE);
+    let mut small = model.clone().with_resolution_scale(scale);
+    // The solved water column where it applies, as for the page's image ([`super::view`]):
+    // a turbid variant's many-times-scattered daylight is what makes a traced preview slow.
+    small.render.daylight = crate::model::Daylight::Auto;
     Backend::Native.render(
         &small,
         dir,
         &RenderOptions {
-            samples: Some(VIEW_SAMPLES),
+            samples: Some(samples),
             poses: Some(vec![pose]),
             progress: false,
             resume: false,
         },
     )?;
     if let Some(sensor) = &small.sensor {
-        crate::sensor::files::apply(&small, sensor, dir, &[pose], VIEW_SAMPLES)?;
+        crate::sensor::files::apply(&small, sensor, dir, &[pose], samples)?;
     }
     // The camera's own file when the scene has a [sensor] (auto exposure, white balance),
     // else the renderer's preview.

@@ -36,19 +36,29 @@ use crate::model::{Lesson, LessonKind, Model};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
-/// Width of the page's camera image, px (smaller cameras keep their own).
+/// Width of the page's camera image in the full form, px (smaller cameras keep their own).
 pub const VIEW_WIDTH: u32 = 320;
-/// Samples per pixel of the page's camera image: a preview, not a measurement.
+/// Samples per pixel of the page's camera image in the full form: a preview, not a measurement.
 pub const VIEW_SAMPLES: u32 = 8;
+/// The quick form's camera image: half as wide, half the samples (an eighth of the cost; a
+/// turbid survey's previews took three quarters of its quick lesson at the full form's size).
+pub const VIEW_WIDTH_QUICK: u32 = 160;
+pub const VIEW_SAMPLES_QUICK: u32 = 4;
 
 /// One camera image of the scene for the page: `case`'s first image, rendered natively (through
-/// [`crate::backend::Backend`]) into `out/view/`; an auto-exposed sRGB PNG of it.
-pub fn view(case: &Case, out: &Path) -> Result<Vec<u8>, String> {
+/// [`crate::backend::Backend`]) into `out/view/`; an auto-exposed sRGB PNG of it. `full`: the
+/// full form's size ([`VIEW_WIDTH`], [`VIEW_SAMPLES`]), else the quick form's.
+pub fn view(case: &Case, out: &Path, full: bool) -> Result<Vec<u8>, String> {
     use crate::backend::{Backend, RenderOptions};
     let Some(cam) = case.model.cameras.first() else {
         return Err(format!("variant `{}` has no camera", case.label));
     };
-    let scale = (VIEW_WIDTH as f64 / cam.width.max(1) as f64).min(1.0);
+    let (width, samples) = if full {
+        (VIEW_WIDTH, VIEW_SAMPLES)
+    } else {
+        (VIEW_WIDTH_QUICK, VIEW_SAMPLES_QUICK)
+    };
+    let scale = (width as f64 / cam.width.max(1) as f64).min(1.0);
     let mut model = case.model.clone().with_resolution_scale(scale);
     // The solved water column where it applies: several times less noise at a preview's
     // samples in a deep, sky-lit scene (docs/column.md).
@@ -59,7 +69,7 @@ pub fn view(case: &Case, out: &Path) -> Result<Vec<u8>, String> {
             &model,
             &dir,
             &RenderOptions {
-                samples: Some(VIEW_SAMPLES),
+                samples: Some(samples),
                 poses: Some(vec![0]),
                 progress: false,
                 resume: false,
@@ -236,7 +246,7 @@ pub fn run(
     let (lesson, cases) = cases(scene, opts)?;
     progress("rendering the page's camera image");
     let view_png = match cases.first() {
-        Some(c) => view(c, out)?,
+        Some(c) => view(c, out, opts.full)?,
         None => Vec::new(),
     };
     let view_label = cases.first().map(|c| c.label.clone()).unwrap_or_default();
@@ -253,8 +263,8 @@ pub fn run(
         LessonKind::Gsd => Results::Gsd {
             rows: gsd::run(&cases, out, progress)?,
         },
-        LessonKind::Dive => Results::Dive(dive::run(&cases, out, false, progress)?),
-        LessonKind::Survey => Results::Survey(dive::run(&cases, out, true, progress)?),
+        LessonKind::Dive => Results::Dive(dive::run(&cases, out, false, opts.full, progress)?),
+        LessonKind::Survey => Results::Survey(dive::run(&cases, out, true, opts.full, progress)?),
         LessonKind::Completeness => Results::Completeness {
             rows: completeness::run(&cases, opts.full, progress)?,
         },
