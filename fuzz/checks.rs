@@ -6,6 +6,7 @@
 //! | `scene` | a scene file's bytes | load + validate + resolve never panics; a failure always carries an error diagnostic with a file:line:col location |
 //! | `compile` | a scene file's bytes | a scene that loads compiles to Mitsuba XML and to the Blender script without a panic, writing only inside the output folder |
 //! | `project_csv` | a `poser project` points file | parsing never panics; every parsed point projects through a flat-port camera to a finite pixel or an explicit no-solution |
+//! | `import` | a kind byte, then a Mitsuba 3 XML scene, an OBJ or PLY mesh a fixed scene names, or the `.glb` mesh asset of an imported scene | `poser import` never panics; what it imports is written only into its output folder, and the scene it wrote loads or fails with located errors, never a panic |
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
@@ -142,4 +143,88 @@ pub fn project_csv(data: &[u8]) {
             );
         }
     }
+}
+
+/// The fixed Mitsuba scene of the mesh kinds of [`import`]: one camera and one mesh file.
+fn import_scene(kind: &str, file: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="45"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="48"/></film>
+    </sensor>
+    <shape type="{kind}"><string name="filename" value="{file}"/></shape>
+</scene>
+"#
+    )
+}
+
+/// A one-rectangle OBJ (the mesh whose `.glb` the glTF kind replaces).
+const QUAD_OBJ: &[u8] = b"v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n";
+
+/// `poser import` on fuzzed input. The first byte picks what the rest is (modulo 4):
+///
+/// | kind | the rest of the input |
+/// |---|---|
+/// | 0 | a Mitsuba 3 XML scene file |
+/// | 1 | an OBJ mesh, named by a fixed scene (`<shape type="obj">`) |
+/// | 2 | a PLY mesh (ASCII or binary), named the same way |
+/// | 3 | a glTF binary (`.glb`) standing in for the mesh asset the importer wrote for a one-rectangle OBJ |
+///
+/// The import must not panic. What it imports is written (scene file and assets) only below
+/// its output folder, and the scene file it wrote is read by the scene front end, which must
+/// load it or fail with error diagnostics, never panic.
+pub fn import(data: &[u8]) {
+    let Some((&kind, body)) = data.split_first() else {
+        return;
+    };
+    let dir = workdir().join("import");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("import folder");
+    let xml = dir.join("scene.xml");
+    let write = |p: &Path, b: &[u8]| std::fs::write(p, b).expect("write an input");
+    match kind % 4 {
+        0 => write(&xml, body),
+        1 => {
+            write(&dir.join("mesh.obj"), body);
+            write(&xml, import_scene("obj", "mesh.obj").as_bytes());
+        }
+        2 => {
+            write(&dir.join("mesh.ply"), body);
+            write(&xml, import_scene("ply", "mesh.ply").as_bytes());
+        }
+        _ => {
+            write(&dir.join("mesh.obj"), QUAD_OBJ);
+            write(&xml, import_scene("obj", "mesh.obj").as_bytes());
+        }
+    }
+    let Ok(imported) = poser::import::mitsuba::import(std::slice::from_ref(&xml), "assets") else {
+        assert!(kind % 4 != 3, "the one-rectangle scene did not import");
+        return;
+    };
+    let out = dir.join("out");
+    let scene = out.join("scene.toml");
+    let written = poser::import::write(&imported, &scene, &out.join("assets"))
+        .expect("an import's files are written");
+    let mut all = Vec::new();
+    files_under(&dir, &mut all);
+    for f in &all {
+        assert!(
+            f.starts_with(&out) || f.parent() == Some(dir.as_path()),
+            "import wrote {} outside its output folder",
+            f.display()
+        );
+    }
+    if kind % 4 == 3 {
+        let glbs: Vec<&PathBuf> = written
+            .iter()
+            .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+            .collect();
+        assert!(!glbs.is_empty(), "the one-rectangle scene wrote no mesh");
+        for g in glbs {
+            write(g, body);
+        }
+    }
+    scene_at(&scene);
 }

@@ -1,7 +1,8 @@
 //! The fuzz targets' checks (`fuzz/checks.rs`) replayed on stable over the committed corpus:
 //! the invalid-scene corpus and every scenario (scene target), the invalid corpus (compile
 //! target: none of them may compile, and nothing may be written outside the output folder),
-//! and `fuzz/corpus/<target>/` (seeds and whatever fuzzing found and was kept). The nightly
+//! and `fuzz/corpus/<target>/` (seeds and whatever fuzzing found and was kept; the `import`
+//! target has only its own corpus). The nightly
 //! libFuzzer runs are `fuzz/run.sh`.
 #[path = "../fuzz/checks.rs"]
 mod checks;
@@ -59,4 +60,17 @@ fn project_csv_target_replays_the_corpus() {
     for p in seeds {
         checks::project_csv(&std::fs::read(&p).unwrap());
     }
+}
+
+#[test]
+fn import_target_replays_the_corpus() {
+    let seeds = files(&root().join("fuzz/corpus/import"), None);
+    assert!(seeds.len() >= 5, "import seeds missing");
+    let mut kinds = std::collections::BTreeSet::new();
+    for p in seeds {
+        let data = std::fs::read(&p).unwrap();
+        kinds.insert(data.first().map(|k| k % 4));
+        checks::import(&data);
+    }
+    assert_eq!(kinds.len(), 4, "a seed of every kind: {kinds:?}");
 }
