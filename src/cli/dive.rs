@@ -168,6 +168,18 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
             ""
         }
     );
+    for (k, p) in v.lost_gas.iter().enumerate() {
+        let _ = writeln!(
+            o,
+            "  {}{}",
+            if k == 0 {
+                "lost gas    "
+            } else {
+                "            "
+            },
+            crate::plan::dive::lost_gas_line(p)
+        );
+    }
     let _ = writeln!(
         o,
         "\nVerdict: {} — {}, {}, {}",

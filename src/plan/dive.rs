@@ -666,6 +666,20 @@ pub fn simulate(
     tissues: &mut Tissues,
     sample_every: Option<f64>,
 ) -> DiveResult {
+    simulate_losing(cfg, track, tissues, sample_every, &[])
+}
+
+/// [`simulate`] with the cylinders `lost` gone at the end of the bottom time (the worst
+/// moment: deepest, most gas loaded): the ascent is planned and flown on the others. When the
+/// gas breathed is lost, the diver takes a bailout cylinder, else the first bottom cylinder
+/// left; the bailout cylinders are then also where the ascent falls back.
+pub fn simulate_losing(
+    cfg: &DiveConfig,
+    track: &Track,
+    tissues: &mut Tissues,
+    sample_every: Option<f64>,
+    lost: &[usize],
+) -> DiveResult {
     let env = cfg.env;
     let plan = cfg.ascent_plan();
     let direct = cfg.direct_plan();
@@ -866,7 +880,28 @@ pub fn simulate(
     // Within the NDL the ascent is direct (with a safety stop): deco gases are for
     // decompression, and a switch's hold is no decompression stop.
     let in_deco_ascent = deco_from.is_some();
-    let base = if in_deco_ascent { &plan } else { &direct };
+    if !lost.is_empty() {
+        for &i in lost {
+            b.exhausted[i] = true;
+        }
+        let bailouts: Vec<usize> = (0..n_tanks)
+            .filter(|&i| cfg.tanks[i].role == CylinderRole::Bailout && !b.exhausted[i])
+            .collect();
+        b.fallback.retain(|i| !b.exhausted[*i]);
+        b.fallback.extend(bailouts.iter().copied());
+        if b.exhausted[b.current]
+            && let Some(&next) = bailouts.first().or(b.fallback.first())
+        {
+            b.switch_to(next, bottom_end, last_depth);
+        }
+    }
+    let mut base = if in_deco_ascent {
+        plan.clone()
+    } else {
+        direct.clone()
+    };
+    base.deco_gases = b.ascent_gases(in_deco_ascent);
+    let base = &base;
     let mut planned = tissues.clone();
     let ascent = planned.ascend_with(last_depth, b.gas(), base, bottom_end);
     // A planned ascent's gas changes as (runtime, cylinder).
@@ -1169,6 +1204,150 @@ pub struct Verdict {
     /// Not failing the plan, but worth knowing (Subsurface's minimum gas, a thin NDL margin).
     pub advice: Vec<String>,
     pub suggestions: Vec<Suggestion>,
+    /// The lost-gas plans ([`lost_gas_plans`]): each must hold for the verdict to be OK.
+    pub lost_gas: Vec<LostGasPlan>,
+}
+
+/// A lost-gas plan: the ascent when cylinders are lost at the end of the bottom time.
+#[derive(Debug, Clone, Serialize)]
+pub struct LostGasPlan {
+    /// What is lost: `deco` (a travel or deco gas) or `bottom` (every bottom cylinder: the
+    /// bailout's plan).
+    pub kind: String,
+    /// Names of the cylinders lost.
+    pub lost: Vec<String>,
+    /// Runtime of this plan and the planned dive's, s.
+    pub runtime: f64,
+    pub planned_runtime: f64,
+    /// Its stops.
+    pub stops: Vec<Stop>,
+    /// Every cylinder: (name, gas, litres breathed, bar left); the lost ones breathe nothing
+    /// after the loss.
+    pub cylinders: Vec<(String, String, f64, f64)>,
+    /// CNS % and OTU of the whole dive with this ascent.
+    pub cns_percent: f64,
+    pub otu: f64,
+    /// Whether it holds: no cylinder breathed empty (the reserve is what it may spend), every
+    /// gas within its pO₂ limit and not hypoxic where breathed, CNS within 100 %, no pO₂
+    /// beyond the NOAA table, the ceiling never above the diver.
+    pub holds: bool,
+    /// Why not, when it does not.
+    pub faults: Vec<String>,
+}
+
+/// The lost-gas plans of a dive: for each travel or deco cylinder breathed on the ascent,
+/// the ascent without it (on the back gas and the gases left); with bailout cylinders, the
+/// ascent on them (and the travel and deco gases) after losing every bottom cylinder.
+pub fn lost_gas_plans(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Vec<LostGasPlan> {
+    let ascent_start = dive.descent_time + dive.bottom_time;
+    let breathed_up = |i: usize| {
+        dive.switches
+            .iter()
+            .any(|s| s.cylinder == i && s.time >= ascent_start - 1e-6)
+    };
+    let mut cases: Vec<(String, Vec<usize>)> = (0..cfg.tanks.len())
+        .filter(|&i| cfg.tanks[i].role.switched() && breathed_up(i))
+        .map(|i| ("deco".to_string(), vec![i]))
+        .collect();
+    if cfg.tanks.iter().any(|t| t.role == CylinderRole::Bailout) {
+        let bottom: Vec<usize> = (0..cfg.tanks.len())
+            .filter(|&i| cfg.tanks[i].bottom_phase())
+            .collect();
+        cases.push(("bottom".to_string(), bottom));
+    }
+    cases
+        .into_iter()
+        .map(|(kind, lost)| {
+            let mut t = Tissues::surface(cfg.env, cfg.gf);
+            let r = simulate_losing(cfg, track, &mut t, None, &lost);
+            let mut faults = Vec::new();
+            for c in &r.gas.cylinders {
+                if c.end_pressure <= 0.0 && c.used > 0.0 {
+                    faults.push(format!("'{}' ({}) is breathed empty", c.name, c.gas));
+                }
+                if !c.po2_ok {
+                    faults.push(format!(
+                        "'{}' ({}) pO₂ {:.2} bar at {:.1} m",
+                        c.name,
+                        c.gas,
+                        c.max_po2.unwrap_or(0.0),
+                        c.max_po2_depth
+                    ));
+                }
+                if c.hypoxic {
+                    faults.push(format!(
+                        "'{}' ({}) hypoxic at {:.1} m",
+                        c.name, c.gas, c.min_po2_depth
+                    ));
+                }
+            }
+            if !r.oxygen.within_limits() {
+                faults.push(format!(
+                    "CNS {:.0} %, highest pO₂ {:.2} bar",
+                    r.oxygen.cns_percent, r.oxygen.max_po2
+                ));
+            }
+            if r.ascent_ceiling_excess > CEILING_TOLERANCE {
+                faults.push(format!(
+                    "the ascent breaks the ceiling by {:.2} m",
+                    r.ascent_ceiling_excess
+                ));
+            }
+            LostGasPlan {
+                kind,
+                lost: lost.iter().map(|&i| cfg.tanks[i].name.clone()).collect(),
+                runtime: r.runtime,
+                planned_runtime: dive.runtime,
+                stops: r.stops.clone(),
+                cylinders: r
+                    .gas
+                    .cylinders
+                    .iter()
+                    .map(|c| (c.name.clone(), c.gas.clone(), c.used, c.end_pressure))
+                    .collect(),
+                cns_percent: r.oxygen.cns_percent,
+                otu: r.oxygen.otu,
+                holds: faults.is_empty(),
+                faults,
+            }
+        })
+        .collect()
+}
+
+/// A lost-gas plan in one line.
+pub fn lost_gas_line(p: &LostGasPlan) -> String {
+    let stops: f64 = p.stops.iter().map(|s| s.duration).sum();
+    let left: Vec<String> = p
+        .cylinders
+        .iter()
+        .filter(|c| !p.lost.contains(&c.0))
+        .map(|c| format!("'{}' {:.0} bar", c.0, c.3))
+        .collect();
+    format!(
+        "{} lost at the end of the bottom time: runtime {} ({}{} against the plan), {} of stops; \
+         left {}; CNS {:.1} %, OTU {:.0} → {}",
+        p.lost
+            .iter()
+            .map(|n| format!("'{n}'"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        mmss(p.runtime),
+        if p.runtime >= p.planned_runtime {
+            "+"
+        } else {
+            "−"
+        },
+        mmss((p.runtime - p.planned_runtime).abs()),
+        mmss(stops),
+        left.join(", "),
+        p.cns_percent,
+        p.otu,
+        if p.holds {
+            "holds".to_string()
+        } else {
+            format!("DOES NOT HOLD ({})", p.faults.join("; "))
+        }
+    )
 }
 
 /// How far (m) the flown ascent may put the ceiling below the diver before a planned
@@ -1459,6 +1638,18 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
             mmss(n)
         ));
     }
+    // Lost-gas plans: a decompression plan (or a bailout) is only as good as its fallback.
+    // (Without `deco = "planned"` a dive that needs stops fails anyway: its deco gases are a
+    // contingency, and their loss is planned only when decompression is.)
+    let lost_gas = if (deco && planned) || cfg.tanks.iter().any(|t| t.role == CylinderRole::Bailout)
+    {
+        lost_gas_plans(cfg, track, dive)
+    } else {
+        Vec::new()
+    };
+    for p in lost_gas.iter().filter(|p| !p.holds) {
+        problems.push(format!("lost-gas plan: {}", lost_gas_line(p)));
+    }
     // The simulator's own rules (the NDL aside when decompression is planned) back the list.
     let rules_ok = if planned {
         dive.gas.ok() && dive.gas.breathable() && dive.oxygen.within_limits()
@@ -1478,6 +1669,7 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
         deco_required: deco,
         deco_planned: ok && deco,
         deco_plan,
+        lost_gas,
         gas_ok: g.ok(),
         gases_ok: g.breathable(),
         problems,
