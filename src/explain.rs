@@ -309,6 +309,28 @@ fn contents(s: &mut String, m: &Model) {
     }
 }
 
+/// The share of the cameras' view that hits no object under water: it looks past the scene's
+/// objects (a seabed patch smaller than the network's footprint, an oblique view over its edge)
+/// into water without a bottom. The solved column lights that water as if the seabed went on at
+/// the site's depth, traced daylight leaves it bottomless: where the share is not zero the two
+/// estimators differ (docs/column.md, "Views past the seabed").
+fn bottomless(s: &mut String, m: &Model) {
+    let Ok(scene) = crate::geometry::Bvh::of_model(m) else {
+        return;
+    };
+    let seen = crate::evaluate::texture_seen(m, &scene);
+    if seen.bottomless >= 0.0005 {
+        let _ = writeln!(
+            s,
+            "  {:.1} % of the cameras' view (16 × 12 rays through up to 64 images) looks down past \
+             every object into water without a bottom, which the column lights as if \
+             the seabed went on at the site's depth and traced daylight leaves bottomless (help: \
+             widen the seabed past the network's footprint, or add one)",
+            100.0 * seen.bottomless
+        );
+    }
+}
+
 /// Daylight in the native renderer: the water column, or traced, and why.
 fn daylight(s: &mut String, m: &Model) {
     let (column, why) = m.daylight_choice();
@@ -324,6 +346,9 @@ fn daylight(s: &mut String, m: &Model) {
                 let _ = writeln!(s, "  the column cannot be solved: {e}; daylight is traced");
             }
         }
+    }
+    if m.water.is_some() {
+        bottomless(s, m);
     }
     if let Some(gain) = m.surface_reflection_gain() {
         let _ = writeln!(

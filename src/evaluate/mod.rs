@@ -243,6 +243,9 @@ pub struct TextureSeen {
     /// Pixels whose ray hits a textured surface: an object with a pattern or colour variation,
     /// or a printed target.
     pub textured: f64,
+    /// Pixels whose ray heads downward and hits nothing: past the scene's seabed into water
+    /// without a bottom.
+    pub bottomless: f64,
 }
 
 /// Images mode's pre-check (before rendering): the images must see enough texture for SIFT.
@@ -271,7 +274,7 @@ fn check_texture_seen(seen: TextureSeen) -> Result<TextureSeen, String> {
 pub fn texture_seen(model: &Model, scene: &Scene) -> TextureSeen {
     let n_poses = model.poses.len();
     let step = n_poses.div_ceil(64).max(1);
-    let (mut rays, mut hit, mut textured) = (0usize, 0usize, 0usize);
+    let (mut rays, mut hit, mut textured, mut bottomless) = (0usize, 0usize, 0usize, 0usize);
     for (ci, cam) in model.cameras.iter().enumerate() {
         let Ok(pr) = Projector::new(model, ci, 1) else {
             continue;
@@ -286,6 +289,7 @@ pub fn texture_seen(model: &Model, scene: &Scene) -> TextureSeen {
                         continue;
                     };
                     let Some(h) = scene.intersect(&Ray { origin: o, dir: d }, f64::INFINITY) else {
+                        bottomless += (d.z < 0.0) as usize;
                         continue;
                     };
                     hit += 1;
@@ -306,6 +310,7 @@ pub fn texture_seen(model: &Model, scene: &Scene) -> TextureSeen {
     TextureSeen {
         surface: hit as f64 / r,
         textured: textured as f64 / r,
+        bottomless: bottomless as f64 / r,
     }
 }
 
