@@ -28,7 +28,10 @@ fn two_gas(sets: &[&str]) -> (String, bool) {
 #[test]
 fn the_readme_two_gas_dive_is_ok_when_its_decompression_is_planned() {
     let (text, ok) = two_gas(&[]);
-    assert!(ok && text.contains("Verdict: NOT SAFE AS PLANNED"), "{text}");
+    assert!(
+        ok && text.contains("Verdict: NOT SAFE AS PLANNED"),
+        "{text}"
+    );
     assert!(text.contains("✗ decompression obligation"), "{text}");
     let (text, ok) = two_gas(&["diver.deco=\"planned\""]);
     assert!(ok, "{text}");
@@ -43,7 +46,10 @@ fn the_readme_two_gas_dive_is_ok_when_its_decompression_is_planned() {
             && text.contains("runtime 23:20"),
         "{text}"
     );
-    assert!(!text.contains('✗') && !text.contains("What would fix it"), "{text}");
+    assert!(
+        !text.contains('✗') && !text.contains("What would fix it"),
+        "{text}"
+    );
 }
 
 fn deco_diver() -> poser::model::Diver {
@@ -58,16 +64,31 @@ fn deco_diver() -> poser::model::Diver {
 fn planned_decompression_with_every_rule_kept_is_ok_with_its_plan() {
     let r = plan_dive(&flat_dive(30.0, 30.0, deco_diver()), 10.0).unwrap();
     assert!(r.dive.deco_required() && !r.dive.stops.is_empty());
-    assert!(r.verdict.ok && r.verdict.deco_planned, "{:?}", r.verdict.problems);
+    assert!(
+        r.verdict.ok && r.verdict.deco_planned,
+        "{:?}",
+        r.verdict.problems
+    );
     assert!(r.verdict.problems.is_empty() && r.verdict.suggestions.is_empty());
-    assert!(r.verdict.deco_plan.as_deref().unwrap().contains("EAN50 at 21 m"));
+    assert!(
+        r.verdict
+            .deco_plan
+            .as_deref()
+            .unwrap()
+            .contains("EAN50 at 21 m")
+    );
     assert!(r.dive.ascent_ceiling_excess <= CEILING_TOLERANCE);
     // The same dive without the key is NOT SAFE, as before.
     let mut d = deco_diver();
     d.deco = DecoMode::None;
     let r = plan_dive(&flat_dive(30.0, 30.0, d), 10.0).unwrap();
     assert!(!r.verdict.ok && !r.verdict.deco_planned);
-    assert!(r.verdict.problems.iter().any(|p| p.contains("decompression")));
+    assert!(
+        r.verdict
+            .problems
+            .iter()
+            .any(|p| p.contains("decompression"))
+    );
 }
 
 #[test]
@@ -77,7 +98,12 @@ fn planned_decompression_stays_not_safe_for_every_other_fault() {
     d.cylinders[0].volume = 0.010;
     let r = plan_dive(&flat_dive(30.0, 30.0, d), 10.0).unwrap();
     assert!(!r.verdict.ok && !r.verdict.deco_planned, "{:?}", r.verdict);
-    assert!(r.verdict.problems.iter().any(|p| p.contains("not enough gas")));
+    assert!(
+        r.verdict
+            .problems
+            .iter()
+            .any(|p| p.contains("not enough gas"))
+    );
 
     // A deco gas switched past its MOD (EAN50 at 27 m: pO₂ 1.88 bar).
     let mut d = deco_diver();
@@ -93,7 +119,11 @@ fn planned_decompression_stays_not_safe_for_every_other_fault() {
     d.cylinders[1].volume = 0.030;
     d.po2_bottom = 1.5;
     let r = plan_dive(&flat_dive(30.0, 150.0, d), 10.0).unwrap();
-    assert!(r.dive.oxygen.cns_percent > 100.0, "{}", r.dive.oxygen.cns_percent);
+    assert!(
+        r.dive.oxygen.cns_percent > 100.0,
+        "{}",
+        r.dive.oxygen.cns_percent
+    );
     assert!(!r.verdict.ok && !r.verdict.deco_planned);
 
     // A hypoxic bottom gas without a travel gas.
