@@ -62,6 +62,19 @@ fn entries(pack: &Path) -> Vec<(Vec<u8>, tar::EntryType, Vec<u8>)> {
 
 /// Write a pack from raw entries: names are put into the header as given (no checks), so that
 /// hostile names can be built.
+/// Rewrite the manifest (entry 0) so that `path`'s hash and size match entry `k` again: an
+/// attacker's edit that a hash check alone would not catch.
+fn rehash(l: &mut [Raw], k: usize, path: &str) {
+    let mut m: serde_json::Value = serde_json::from_slice(&l[0].2).unwrap();
+    for f in m["files"].as_array_mut().unwrap() {
+        if f["path"] == path {
+            f["sha256"] = poser::pack::sha256(&l[k].2).into();
+            f["bytes"] = l[k].2.len().into();
+        }
+    }
+    l[0].2 = serde_json::to_vec_pretty(&m).unwrap();
+}
+
 fn write_raw(pack: &Path, list: &[Raw]) {
     let mut tar = tar::Builder::new(GzEncoder::new(
         std::fs::File::create(pack).unwrap(),
@@ -490,14 +503,7 @@ fn a_pack_whose_scene_reads_outside_the_pack_is_refused() {
         );
         assert!(scene.contains(include));
         l[k].2 = scene.into_bytes();
-        let mut m: serde_json::Value = serde_json::from_slice(&l[0].2).unwrap();
-        for f in m["files"].as_array_mut().unwrap() {
-            if f["path"] == "scene/pinhole_air.toml" {
-                f["sha256"] = poser::pack::sha256(&l[k].2).into();
-                f["bytes"] = l[k].2.len().into();
-            }
-        }
-        l[0].2 = serde_json::to_vec_pretty(&m).unwrap();
+        rehash(&mut l, k, "scene/pinhole_air.toml");
         let pack = dir.path().join(format!("{name}.poserpack"));
         write_raw(&pack, &l);
         for cmd in ["unpack", "rerun"] {
@@ -694,14 +700,7 @@ fn signed_packs_run_only_unchanged_and_by_the_trusted_key() {
         .collect();
     let k = l.iter().position(|e| e.0 == b"scene/common.toml").unwrap();
     l[k].2.extend_from_slice(b"\n# changed\n");
-    let mut m: serde_json::Value = serde_json::from_slice(&l[0].2).unwrap();
-    for f in m["files"].as_array_mut().unwrap() {
-        if f["path"] == "scene/common.toml" {
-            f["sha256"] = poser::pack::sha256(&l[k].2).into();
-            f["bytes"] = l[k].2.len().into();
-        }
-    }
-    l[0].2 = serde_json::to_vec_pretty(&m).unwrap();
+    rehash(&mut l, k, "scene/common.toml");
     let rehashed = dir.path().join("rehashed.poserpack");
     write_raw(&rehashed, &l);
     let changed = format!(

@@ -8,8 +8,11 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Scene files.
-    #[arg(required = true)]
+    #[arg(required_unless_present = "explain")]
     pub scenes: Vec<PathBuf>,
+    /// Print what a diagnostic code means, with an example (the error index, docs/errors.md).
+    #[arg(long, value_name = "CODE")]
+    pub explain: Option<String>,
     /// Override values in every scene (`KEY=VALUE`).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
@@ -19,6 +22,18 @@ pub struct Args {
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
+    if let Some(code) = &args.explain {
+        return match crate::scene::diag::explain(code) {
+            Some(text) => {
+                println!("{text}");
+                Ok(())
+            }
+            None => Err(CliError::Usage(format!(
+                "no diagnostic code `{code}` (help: the codes are listed in docs/errors.md; a \
+                 code is E or W and four digits, e.g. E0290)"
+            ))),
+        };
+    }
     let (scenes, sets, deny_warnings) = (&args.scenes, &args.sets, args.deny_warnings);
     let mut bad = 0usize;
     for scene in scenes {

@@ -737,7 +737,7 @@ mod tests {
         .unwrap();
         assert_eq!(lesson.kind, crate::model::LessonKind::Dive);
         let out = tempfile::tempdir().unwrap();
-        let res = run(&cs, out.path(), false, &|_| {}).unwrap();
+        let res = run(&cs, out.path(), false, false, &|_| {}).unwrap();
         let row = |l: &str| res.rows.iter().find(|r| r.label.starts_with(l)).unwrap();
         let planned = row("as planned");
         // ≈ 1100 m at 15 m in ≈ 104 min: decompression and not enough gas; never OK.
