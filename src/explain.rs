@@ -288,6 +288,23 @@ fn contents(s: &mut String, m: &Model) {
         m.lights.len()
     );
     for i in 0..m.objects.len() {
+        match crate::texture::mapped::plan_object(m, i) {
+            Ok(Some(p)) => {
+                for (k, line) in p.lines().into_iter().enumerate() {
+                    if k == 0 {
+                        let _ = writeln!(s, "textured mesh `{}`: {line}", m.objects[i].name);
+                    } else {
+                        let _ = writeln!(s, "{line}");
+                    }
+                }
+                continue;
+            }
+            Ok(None) => {}
+            Err(e) => {
+                let _ = writeln!(s, "textured mesh `{}`: {e}", m.objects[i].name);
+                continue;
+            }
+        }
         match crate::texture::bake::plan(m, i) {
             Ok(Some(t)) => {
                 let _ = writeln!(s, "texture of `{}`: {t}", m.objects[i].name);

@@ -348,10 +348,16 @@ pub struct Object {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum Shape {
-    /// Triangle mesh from a glTF file (path resolved, relative to the scene file, and checked
-    /// to stay inside the scene's directory tree).
+    /// Triangle mesh from a glTF, OBJ or PLY file (path resolved, relative to the scene file,
+    /// and checked to stay inside the scene's directory tree; see
+    /// [`crate::geometry::meshfile`]).
     Mesh {
         path: String,
+        /// The albedo comes from the file: its image textures, material colours and vertex
+        /// colours ([`crate::texture::mapped`]); faces the file gives no colour take the
+        /// object's `albedo`. `false`: the object's `albedo` everywhere.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        textured: bool,
     },
     /// Rectangle in the object's xy plane, centred, normal +z.
     Plane {

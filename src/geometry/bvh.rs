@@ -6,8 +6,9 @@
 //! |---|---|
 //! | [`SurfaceId`] | which object or target a triangle belongs to (for its material) |
 //! | [`Bvh::of_model`] | objects via [`super::mesh::object_mesh`]; targets as planes of their printed extent |
-//! | [`Bvh::textured`] | the same, with baked objects as their baked mesh with UVs and texture ([`crate::texture::bake`]) |
+//! | [`Bvh::textured`] | the same, with baked objects as their baked mesh with UVs and texture ([`crate::texture::bake`]) and textured meshes with their file's colours ([`crate::texture::mapped`]) |
 //! | [`Bvh::uv_at`] | texture coordinates at a hit |
+//! | [`Bvh::mapped_albedo`] | albedo at a hit on a textured mesh ([`crate::texture::mapped`]) |
 //! | [`Bvh::intersect`] | closest hit with `t ∈ (RAY_EPSILON, tmax)` |
 //! | [`Bvh::occluded`] | is the open segment between two points blocked? |
 //!
@@ -101,6 +102,11 @@ pub struct Bvh {
     uv: Vec<[[f32; 2]; 3]>,
     /// The baked texture of each object ([`crate::texture::bake`]), by object index.
     pub textures: Vec<Option<std::sync::Arc<crate::texture::bake::Baked>>>,
+    /// The prepared textured mesh of each object ([`crate::texture::mapped`]), by object index.
+    pub meshes: Vec<Option<std::sync::Arc<crate::texture::mapped::Prepared>>>,
+    /// Index of each triangle in its surface's mesh (empty when no object is a textured mesh:
+    /// only those look up per-triangle materials and vertex colours).
+    source: Vec<u32>,
     nodes: Vec<FNode>,
 }
 
@@ -122,30 +128,45 @@ impl Bvh {
         Bvh::assemble(model, true)
     }
 
-    /// The geometry, with the baked textures when `textured`.
+    /// The geometry, with the baked textures and the textured meshes when `textured`.
     fn assemble(model: &Model, textured: bool) -> Result<Bvh, String> {
         let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
         let mut meshes = Vec::new();
         let mut textures = Vec::new();
+        let mut prepared = Vec::new();
         for (i, o) in model.objects.iter().enumerate() {
-            // Baked objects use the baked mesh (same triangles, vertices split at UV seams).
-            let baked = if textured {
+            // Textured meshes keep their file's triangles (the geometry `object_mesh` reads);
+            // baked objects use the baked mesh (same triangles, vertices split at UV seams).
+            let mapped = if textured {
+                crate::texture::mapped::prepare_object(model, i)?
+            } else {
+                None
+            };
+            let baked = if textured && mapped.is_none() {
                 crate::texture::bake::bake_object(model, i)?
             } else {
                 None
             };
-            let (mesh, uv) = match &baked {
-                Some(b) => (b.mesh.transformed(&o.pose, o.scale), Some(b.uv.clone())),
-                None => (object_mesh(o, base)?, None),
+            let (mesh, uv) = match (&mapped, &baked) {
+                (Some(p), _) => {
+                    let f = &p.plan.file;
+                    let uv = (!f.uv.is_empty()).then(|| f.uv.clone());
+                    (f.mesh.transformed(&o.pose, o.scale), uv)
+                }
+                (None, Some(b)) => (b.mesh.transformed(&o.pose, o.scale), Some(b.uv.clone())),
+                (None, None) => (object_mesh(o, base)?, None),
             };
             meshes.push((SurfaceId::Object(i as u32), mesh, uv));
             textures.push(baked);
+            prepared.push(mapped);
         }
         for (i, t) in model.targets.iter().enumerate() {
             meshes.push((SurfaceId::Target(i as u32), target_mesh(t), None));
         }
-        let mut s = Bvh::from_meshes_uv(meshes);
+        let any_mapped = prepared.iter().any(Option::is_some);
+        let mut s = Bvh::build(meshes, any_mapped);
         s.textures = textures;
+        s.meshes = prepared;
         Ok(s)
     }
 
@@ -156,12 +177,18 @@ impl Bvh {
 
     /// Build from world-frame meshes, some with per-vertex texture coordinates.
     pub fn from_meshes_uv(meshes: Vec<UvMesh>) -> Bvh {
+        Bvh::build(meshes, false)
+    }
+
+    /// [`Bvh::from_meshes_uv`], keeping each triangle's index in its mesh when `keep_source`.
+    fn build(meshes: Vec<UvMesh>, keep_source: bool) -> Bvh {
         let mut tris = Vec::new();
         let mut surface = Vec::new();
         let mut uvs = Vec::new();
+        let mut source = Vec::new();
         let any_uv = meshes.iter().any(|m| m.2.is_some());
         for (id, m, uv) in &meshes {
-            for t in &m.triangles {
+            for (k, t) in m.triangles.iter().enumerate() {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
                 let e1 = b - a;
                 let e2 = c - a;
@@ -170,6 +197,9 @@ impl Bvh {
                 }
                 tris.push(Tri { v0: a, e1, e2 });
                 surface.push(*id);
+                if keep_source {
+                    source.push(k as u32);
+                }
                 if any_uv {
                     uvs.push(match uv {
                         Some(uv) => t.map(|i| uv[i as usize]),
@@ -183,31 +213,49 @@ impl Bvh {
             surface,
             uv: uvs,
             textures: Vec::new(),
+            meshes: Vec::new(),
+            source,
             nodes: Vec::new(),
         };
         s.build_bvh();
         s
     }
 
-    /// Texture coordinates at a hit (barycentric interpolation of the triangle's corner UVs);
-    /// `None` when the scene has none.
-    pub fn uv_at(&self, h: &Hit) -> Option<[f64; 2]> {
-        let uv = self.uv.get(h.triangle as usize)?;
+    /// Barycentric weights of a hit's point on its triangle's corners (`[1, 0, 0]` for a
+    /// degenerate triangle).
+    pub fn barycentric(&self, h: &Hit) -> [f64; 3] {
         let t = &self.tris[h.triangle as usize];
         let d = h.point - t.v0;
         let (d11, d12, d22) = (t.e1.dot(t.e1), t.e1.dot(t.e2), t.e2.dot(t.e2));
         let (r1, r2) = (d.dot(t.e1), d.dot(t.e2));
         let den = d11 * d22 - d12 * d12;
         if den.is_nan() || den <= 0.0 {
-            return Some(uv[0].map(f64::from));
+            return [1.0, 0.0, 0.0];
         }
         let b1 = (d22 * r1 - d12 * r2) / den;
         let b2 = (d11 * r2 - d12 * r1) / den;
-        let f = |k: usize| {
-            let (a, b, c) = (uv[0][k] as f64, uv[1][k] as f64, uv[2][k] as f64);
-            a + b1 * (b - a) + b2 * (c - a)
-        };
+        [1.0 - b1 - b2, b1, b2]
+    }
+
+    /// Texture coordinates at a hit (barycentric interpolation of the triangle's corner UVs);
+    /// `None` when the scene has none.
+    pub fn uv_at(&self, h: &Hit) -> Option<[f64; 2]> {
+        let uv = self.uv.get(h.triangle as usize)?;
+        let w = self.barycentric(h);
+        let f = |k: usize| w[0] * uv[0][k] as f64 + w[1] * uv[1][k] as f64 + w[2] * uv[2][k] as f64;
         Some([f(0), f(1)])
+    }
+
+    /// Albedo at a hit on a textured mesh ([`crate::texture::mapped`]): its material's image,
+    /// colour or vertex colours there; `None` for every other surface.
+    pub fn mapped_albedo(&self, h: &Hit) -> Option<[f64; 3]> {
+        let SurfaceId::Object(i) = h.surface else {
+            return None;
+        };
+        let p = self.meshes.get(i as usize)?.as_ref()?;
+        let src = *self.source.get(h.triangle as usize)?;
+        let k = *p.plan.file.material.get(src as usize)?;
+        Some(p.albedo(k, self.uv_at(h), src, self.barycentric(h)))
     }
 
     /// Number of (non-degenerate) triangles.
@@ -354,6 +402,9 @@ impl Bvh {
         self.surface = order.iter().map(|&i| self.surface[i as usize]).collect();
         if !self.uv.is_empty() {
             self.uv = order.iter().map(|&i| self.uv[i as usize]).collect();
+        }
+        if !self.source.is_empty() {
+            self.source = order.iter().map(|&i| self.source[i as usize]).collect();
         }
         self.nodes = nodes.iter().map(FNode::from_node).collect();
     }

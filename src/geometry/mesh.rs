@@ -5,7 +5,7 @@
 //!
 //! | shape | parameters (object frame, metres) | tessellation |
 //! |---|---|---|
-//! | `Mesh` | glTF 2.0 file (`.glb`/`.gltf`); every triangle primitive of the default scene | node transforms applied; glTF's +Y-up is turned into poser's +Z-up: `(x, y, z)_gltf → (x, -z, y)` |
+//! | `Mesh` | a glTF 2.0 (`.glb`/`.gltf`), OBJ or PLY file ([`super::meshfile`]) | glTF: every triangle primitive of the default scene, node transforms applied, glTF's +Y-up turned into poser's +Z-up: `(x, y, z)_gltf → (x, -z, y)`; OBJ, PLY: as written (+Z up) |
 //! | `Plane` | `width` (x) × `height` (y), centred, normal +z | 2 triangles |
 //! | `Box` | `size` (x, y, z), centred | 12 triangles, outward normals |
 //! | `Sphere` | `radius`, centred | UV sphere, [`SPHERE_SEGMENTS`] × [`SPHERE_SEGMENTS`]/2 |
@@ -20,7 +20,7 @@
 //! parameters and seed: the same scene gives the same bytes.
 
 use crate::model::{Object, Pattern, Pose, Shape};
-use glam::{DMat4, DVec3};
+use glam::DVec3;
 use std::path::Path;
 
 /// Longitude segments of a tessellated sphere (latitude rings: half of it).
@@ -112,14 +112,14 @@ pub fn shape_mesh(shape: &Shape, base_dir: &Path) -> Result<TriMesh, String> {
         }
     };
     match *shape {
-        Shape::Mesh { ref path } => {
+        Shape::Mesh { ref path, .. } => {
             let p = Path::new(path);
             let full = if p.is_absolute() {
                 p.to_path_buf()
             } else {
                 base_dir.join(p)
             };
-            load_gltf(&full)
+            super::meshfile::load_geometry(&full, &[base_dir.to_path_buf()])
         }
         Shape::Plane { width, height } => {
             positive("plane width", width)?;
@@ -500,72 +500,12 @@ pub fn boulders(width: f64, length: f64, count: u32, radius: f64, seed: u64) -> 
 // ------------------------------------------------------------------------------------------
 
 /// Load every triangle primitive of a glTF 2.0 file (default scene, or the first), with node
-/// transforms applied, converted from glTF's Y-up to poser's Z-up.
+/// transforms applied, converted from glTF's Y-up to poser's Z-up: the geometry of
+/// [`super::meshfile::read_gltf`].
 pub fn load_gltf(path: &Path) -> Result<TriMesh, String> {
-    let shown = path.display();
-    let gltf = gltf::Gltf::open(path).map_err(|e| format!("cannot read glTF `{shown}`: {e}"))?;
-    let base = path.parent();
-    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
-        .map_err(|e| format!("cannot load the buffers of `{shown}`: {e}"))?;
-    let doc = &gltf.document;
-    let scene = doc
-        .default_scene()
-        .or_else(|| doc.scenes().next())
-        .ok_or_else(|| format!("glTF `{shown}` has no scene"))?;
-    let mut out = TriMesh::default();
-    let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
-    stack.reverse();
-    while let Some((node, parent)) = stack.pop() {
-        let local = node.transform().matrix();
-        let local = DMat4::from_cols_array_2d(&local.map(|c| c.map(f64::from)));
-        let world = parent * local;
-        if let Some(mesh) = node.mesh() {
-            for prim in mesh.primitives() {
-                if prim.mode() != gltf::mesh::Mode::Triangles {
-                    continue;
-                }
-                let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-                let Some(pos) = reader.read_positions() else {
-                    continue;
-                };
-                let base = out.positions.len() as u32;
-                let n0 = out.positions.len();
-                for p in pos {
-                    let p =
-                        world.transform_point3(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64));
-                    out.positions.push(DVec3::new(p.x, -p.z, p.y));
-                }
-                let nv = (out.positions.len() - n0) as u32;
-                let idx: Vec<u32> = match reader.read_indices() {
-                    Some(i) => i.into_u32().collect(),
-                    None => (0..nv).collect(),
-                };
-                if let Some(&bad) = idx.iter().find(|&&i| i >= nv) {
-                    return Err(format!("glTF `{shown}`: vertex index {bad} out of range"));
-                }
-                let flip = world.determinant() < 0.0;
-                for t in idx.chunks_exact(3) {
-                    let tri = if flip {
-                        [t[0], t[2], t[1]]
-                    } else {
-                        [t[0], t[1], t[2]]
-                    };
-                    out.triangles.push(tri.map(|i| i + base));
-                }
-            }
-        }
-        let kids: Vec<_> = node.children().collect();
-        for k in kids.into_iter().rev() {
-            stack.push((k, world));
-        }
-    }
-    if out.triangles.is_empty() {
-        return Err(format!("glTF `{shown}` contains no triangles"));
-    }
-    if out.positions.iter().any(|p| !p.is_finite()) {
-        return Err(format!("glTF `{shown}` has non-finite vertex positions"));
-    }
-    Ok(out)
+    let bytes = super::meshfile::read(path)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    Ok(super::meshfile::read_gltf(&bytes, path, &[dir], false)?.mesh)
 }
 
 // ------------------------------------------------------------------------------------------

@@ -5,6 +5,7 @@
 //! | module | owns |
 //! |---|---|
 //! | [`mesh`] | triangle meshes of every scene shape (glTF, primitives, seabed, boulders), patterns, PLY |
+//! | [`meshfile`] | mesh files with their colours: OBJ + MTL, PLY with vertex colours, glTF with base-colour textures |
 //! | [`coral`] | procedural coral colonies (branching, massive) as closed meshes |
 //! | [`targets`] | calibration targets: 3D points, printed reflectance, textures |
 //! | [`bvh`] | [`Bvh`]: every triangle of a model in one BVH; [`Ray`], [`Hit`], [`SurfaceId`] |
@@ -12,6 +13,7 @@
 pub mod bvh;
 pub mod coral;
 pub mod mesh;
+pub mod meshfile;
 pub mod targets;
 
 pub use bvh::{Bvh, Hit, RAY_EPSILON, Ray, SurfaceId};

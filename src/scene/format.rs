@@ -509,8 +509,17 @@ pub struct Object {
     pub name: Option<String>,
     /// Shape. **Default:** `"box"`.
     pub shape: Option<ShapeKind>,
-    /// Mesh: glTF file (`.glb`/`.gltf`), relative to the file that names it.
+    /// Mesh: glTF (`.glb`/`.gltf`), OBJ (with its MTL files) or PLY file, relative to the file
+    /// that names it. Every file it names (MTL, images, buffers) must be beside it or elsewhere
+    /// inside the scene's folder. See `docs/textures.md`, "Textured meshes".
     pub path: Option<String>,
+    /// Mesh: take the albedo from the file, its image textures (glTF `baseColorTexture`, MTL
+    /// `map_Kd`), material colours (`baseColorFactor`, `Kd`) and vertex colours (PLY); faces
+    /// it gives no colour take `albedo`. Images are sRGB, sampled bilinearly at the mipmap
+    /// level whose texel is at most half the finest ground sample distance, in every backend.
+    /// `false`: one plain `albedo`. **Default:** true when the file has an image texture or
+    /// vertex colours.
+    pub texture: Option<bool>,
     /// Plane width / seabed and boulder field extent along x. **Unit:** m. **Default:** 1 m
     /// (plane), 20 m (seabed, boulders).
     pub width: Option<Length>,

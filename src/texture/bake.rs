@@ -670,28 +670,68 @@ fn bake_from(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side:
 /// PLY readers take), binary little-endian; `flip_t` writes t = 1 - v (Blender's image rows
 /// run bottom-up). Deterministic bytes.
 pub fn ply_bytes(mesh: &TriMesh, uv: &[[f32; 2]], flip_t: bool) -> Vec<u8> {
-    let mut out = format!(
-        "ply\nformat binary_little_endian 1.0\ncomment poser textured mesh; t = {}\n\
-         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
-         property float s\nproperty float t\nelement face {}\n\
-         property list uchar int vertex_indices\nend_header\n",
-        if flip_t {
-            "1 - v (image row 0 at t = 1)"
-        } else {
-            "v (image row 0 at t = 0)"
-        },
-        mesh.positions.len(),
+    ply_bytes_with(mesh, Some(uv), None, flip_t)
+}
+
+/// [`ply_bytes`] with optional texture coordinates and optional per-vertex linear colours
+/// (`float red, green, blue`: Mitsuba's `vertex_color` attribute, Blender's `Col` when imported
+/// with linear colours).
+pub fn ply_bytes_with(
+    mesh: &TriMesh,
+    uv: Option<&[[f32; 2]]>,
+    colors: Option<&[[f32; 3]]>,
+    flip_t: bool,
+) -> Vec<u8> {
+    use std::fmt::Write;
+    let mut head = String::from("ply\nformat binary_little_endian 1.0\n");
+    if uv.is_some() {
+        let _ = writeln!(
+            head,
+            "comment poser textured mesh; t = {}",
+            if flip_t {
+                "1 - v (image row 0 at t = 1)"
+            } else {
+                "v (image row 0 at t = 0)"
+            }
+        );
+    }
+    if colors.is_some() {
+        head.push_str("comment poser mesh; vertex colours are linear\n");
+    }
+    let _ = write!(
+        head,
+        "element vertex {}\nproperty float x\nproperty float y\nproperty float z\n",
+        mesh.positions.len()
+    );
+    if uv.is_some() {
+        head.push_str("property float s\nproperty float t\n");
+    }
+    if colors.is_some() {
+        head.push_str("property float red\nproperty float green\nproperty float blue\n");
+    }
+    let _ = write!(
+        head,
+        "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
         mesh.triangles.len()
-    )
-    .into_bytes();
-    out.reserve(mesh.positions.len() * 20 + mesh.triangles.len() * 13);
-    for (p, q) in mesh.positions.iter().zip(uv) {
+    );
+    let mut out = head.into_bytes();
+    let per_vertex = 12 + if uv.is_some() { 8 } else { 0 } + if colors.is_some() { 12 } else { 0 };
+    out.reserve(mesh.positions.len() * per_vertex + mesh.triangles.len() * 13);
+    for (k, p) in mesh.positions.iter().enumerate() {
         for c in p.to_array() {
             out.extend_from_slice(&(c as f32).to_le_bytes());
         }
-        let t = if flip_t { 1.0 - q[1] } else { q[1] };
-        out.extend_from_slice(&q[0].to_le_bytes());
-        out.extend_from_slice(&t.to_le_bytes());
+        if let Some(uv) = uv {
+            let q = uv[k];
+            let t = if flip_t { 1.0 - q[1] } else { q[1] };
+            out.extend_from_slice(&q[0].to_le_bytes());
+            out.extend_from_slice(&t.to_le_bytes());
+        }
+        if let Some(colors) = colors {
+            for c in colors[k] {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
     }
     for t in &mesh.triangles {
         out.push(3);

@@ -21,6 +21,7 @@
 //! thread count. Formulas and sources: `docs/textures.md`.
 
 pub mod bake;
+pub mod mapped;
 
 use crate::model::{Pattern, Rgb};
 

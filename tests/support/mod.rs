@@ -6,6 +6,7 @@
 //! | [`canonical`] | the canonical scenes of `tests/canonical/`, the analytic radiance oracle, and the geometry / radiometry checks every backend runs |
 //! | [`lesson`] | running a lesson's quick form; its page in headless Chromium |
 //! | [`mitsuba`], [`blender`], [`native`], [`plan`] | each suite's preset models, built with [`model`] |
+//! | [`textured`] | the textured-mesh site: loading it, the disk printed in its texture against the truth |
 #![allow(dead_code)]
 
 pub mod blender;
@@ -16,6 +17,7 @@ pub mod mitsuba;
 pub mod model;
 pub mod native;
 pub mod plan;
+pub mod textured;
 
 /// Every shipped scenario and lesson scene (`scenarios/*.toml`, `scenarios/lessons/*.toml`),
 /// sorted.

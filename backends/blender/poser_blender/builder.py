@@ -184,17 +184,18 @@ def _diffuse_material(name, material, scale=(1.0, 1.0, 1.0)):
     return mat
 
 
-def _texture_material(name, path, interpolation="Closest"):
+def _texture_material(name, path, interpolation="Closest", extension="EXTEND"):
     """Diffuse BSDF whose colour is an image of linear values (Non-Color) at the mesh's UVs.
     Baked object textures use "Linear" with "EXTEND": bilinear between texel centres, edges
-    repeated, as Mitsuba's bitmap (bilinear, clamp) and poser's native sampler."""
+    repeated, as Mitsuba's bitmap (bilinear, clamp) and poser's native sampler. Textured meshes
+    use "Linear" with their material's wrap (REPEAT, EXTEND or MIRROR)."""
     mat = bpy.data.materials.new(name)
     nt, out = _nodes(mat)
     d = nt.nodes.new("ShaderNodeBsdfDiffuse")
     d.inputs["Roughness"].default_value = 0.0
     tex = nt.nodes.new("ShaderNodeTexImage")
     tex.interpolation = interpolation
-    tex.extension = "EXTEND"
+    tex.extension = extension
     img = bpy.data.images.load(path, check_existing=True)
     img.colorspace_settings.name = "Non-Color"
     tex.image = img
@@ -203,6 +204,50 @@ def _texture_material(name, path, interpolation="Closest"):
     nt.links.new(tex.outputs["Color"], d.inputs["Color"])
     nt.links.new(d.outputs[0], out.inputs["Surface"])
     return mat
+
+
+def _vertex_color_material(name):
+    """Diffuse BSDF whose colour is the mesh's linear vertex colours (`Col`), interpolated
+    across each triangle as the native renderer and Mitsuba's mesh_attribute do."""
+    mat = bpy.data.materials.new(name)
+    nt, out = _nodes(mat)
+    d = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    d.inputs["Roughness"].default_value = 0.0
+    vc = nt.nodes.new("ShaderNodeVertexColor")
+    vc.layer_name = "Col"
+    nt.links.new(vc.outputs["Color"], d.inputs["Color"])
+    nt.links.new(d.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def _import_parts(base_dir, parts, name):
+    """A textured mesh from its per-material PLY files (src/texture/mapped.rs): joined into one
+    mesh, one material slot per part."""
+    import bmesh
+
+    bm = bmesh.new()
+    mats = []
+    for k, part in enumerate(parts):
+        pm = _import_ply(os.path.join(base_dir, part["path"]), f"{name}#{k}")
+        before = len(bm.faces)
+        bm.from_mesh(pm)
+        bm.faces.ensure_lookup_table()
+        for f in bm.faces[before:]:
+            f.material_index = k
+        bpy.data.meshes.remove(pm)
+        if part.get("texture"):
+            path = os.path.join(base_dir, part["texture"])
+            mats.append(_texture_material(f"{name}#{k}", path, "Linear", part["extension"]))
+        elif part.get("vertex_colors"):
+            mats.append(_vertex_color_material(f"{name}#{k}"))
+        else:
+            mats.append(_diffuse_material(f"{name}#{k}", {"albedo": part["color"]}))
+    me = bpy.data.meshes.new(name)
+    bm.to_mesh(me)
+    bm.free()
+    for m in mats:
+        me.materials.append(m)
+    return me
 
 
 # ------------------------------------------------------------------------------------------
@@ -906,6 +951,8 @@ def _build_objects(built, coll, desc, base_dir):
             me = _import_ply(os.path.join(base_dir, shape["path"]), name)
             if shape.get("smooth"):
                 me.polygons.foreach_set("use_smooth", [True] * len(me.polygons))
+        elif kind == "ply_parts":
+            me = _import_parts(base_dir, shape["parts"], name)
         else:
             me = bpy.data.meshes.new(name)
             bm = bmesh.new()
@@ -920,7 +967,9 @@ def _build_objects(built, coll, desc, base_dir):
                 raise ValueError(f"object {ob['name']!r}: shape {kind!r} has no Blender form")
             bm.to_mesh(me)
             bm.free()
-        if shape.get("texture"):
+        if kind == "ply_parts":
+            pass  # one material per part, set by _import_parts
+        elif shape.get("texture"):
             path = os.path.join(base_dir, shape["texture"])
             me.materials.append(_texture_material(name, path, "Linear"))
         else:
@@ -940,7 +989,8 @@ def _caustics_receiver(obj, desc):
 
 def _import_ply(path, name):
     before = set(bpy.data.objects)
-    bpy.ops.wm.ply_import(filepath=path)
+    # Vertex colours (textured meshes' PLY files) are written linear.
+    bpy.ops.wm.ply_import(filepath=path, import_colors="LINEAR")
     new = [o for o in bpy.data.objects if o not in before]
     if not new:
         raise ValueError(f"could not import mesh {path}")

@@ -202,6 +202,17 @@ pub fn describe(model: &Model) -> Result<Description, String> {
 
     let mut objects = Vec::new();
     for (i, o) in model.objects.iter().enumerate() {
+        if let Some(p) = crate::texture::mapped::prepare_object(model, i)? {
+            let m = pose_mat(&o.pose) * DMat4::from_scale(o.scale);
+            objects.push(json!({
+                "name": o.name,
+                "shape": mapped_parts(&p, i, &mut assets).map_err(|e| format!("object `{}`: {e}", o.name))?,
+                "scale": o.scale,
+                "matrix": mat_rows(&m),
+                "material": o.material,
+            }));
+            continue;
+        }
         let baked = crate::texture::bake::bake_object(model, i)?;
         let shape = match (&o.shape, baked) {
             (_, Some(b)) => {
@@ -455,6 +466,59 @@ fn bounds(model: &Model) -> Value {
         })
         .unwrap_or(5.0);
     json!({"min": lo - DVec3::splat(margin), "max": hi + DVec3::splat(margin)})
+}
+
+/// A textured mesh ([`crate::texture::mapped`]) for Cycles: one object-frame PLY per material
+/// (`s`, `t` with t = 1 − v, linear vertex colours where it has them) and its look: the chosen
+/// mipmap level as a 16-bit linear PNG (Image Texture, `Non-Color`, `Linear`, the material's
+/// wrap), the vertex colours (`Col`), or one colour.
+fn mapped_parts(
+    p: &crate::texture::mapped::Prepared,
+    index: usize,
+    assets: &mut Vec<Asset>,
+) -> Result<Value, String> {
+    use crate::geometry::meshfile::Wrap;
+    use crate::texture::mapped::Look;
+    let mut parts = Vec::new();
+    let mut written: Vec<(*const crate::texture::mapped::Image16, String)> = Vec::new();
+    for part in p.parts() {
+        let k = part.material as usize;
+        let look = &p.looks[k];
+        let path = format!("assets/object_{index}_{k}.ply");
+        let colors = matches!(look, Look::VertexColors).then_some(&part.colors[..]);
+        let uv = (!part.uv.is_empty()).then_some(&part.uv[..]);
+        assets.push(Asset {
+            path: path.clone(),
+            bytes: crate::texture::bake::ply_bytes_with(&part.mesh, uv, colors, true),
+        });
+        let v = match look {
+            Look::Color(c) => json!({"path": path, "color": c}),
+            Look::VertexColors => json!({"path": path, "vertex_colors": true}),
+            Look::Image(img) => {
+                let key = std::sync::Arc::as_ptr(img);
+                let texture = match written.iter().find(|(p, _)| *p == key) {
+                    Some((_, f)) => f.clone(),
+                    None => {
+                        let f = format!("assets/object_{index}_{k}.png");
+                        assets.push(Asset {
+                            path: f.clone(),
+                            bytes: img.png()?,
+                        });
+                        written.push((key, f.clone()));
+                        f
+                    }
+                };
+                let extension = match img.wrap {
+                    Wrap::Repeat => "REPEAT",
+                    Wrap::Clamp => "EXTEND",
+                    Wrap::Mirror => "MIRROR",
+                };
+                json!({"path": path, "texture": texture, "extension": extension})
+            }
+        };
+        parts.push(v);
+    }
+    Ok(json!({"type": "ply_parts", "parts": parts}))
 }
 
 #[cfg(test)]

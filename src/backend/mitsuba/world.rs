@@ -252,6 +252,9 @@ fn object_shapes(
     index: usize,
     warnings: &mut Vec<String>,
 ) -> Result<Vec<El>, String> {
+    if let Some(p) = crate::texture::mapped::prepare_object(model, index)? {
+        return mapped_shapes(o, &p, files, index);
+    }
     if let Some(b) = crate::texture::bake::bake_object(model, index)? {
         return Ok(vec![textured_shape(o, &b, files, index, warnings)?]);
     }
@@ -390,6 +393,92 @@ fn textured_shape(
                 ),
             ),
         ))
+}
+
+/// A textured mesh ([`crate::texture::mapped`]): one world-frame PLY per material (with `s`, `t`
+/// and linear vertex colours where it has them) and its look: the chosen mipmap level as a
+/// 16-bit linear PNG in a `bitmap` (`raw`, bilinear between texel centres, the material's wrap:
+/// the native renderer's [`crate::texture::mapped::Image16::sample`]), the vertex colours
+/// through a `mesh_attribute` texture, or one colour.
+fn mapped_shapes(
+    o: &Object,
+    p: &crate::texture::mapped::Prepared,
+    files: &mut BTreeMap<String, Vec<u8>>,
+    index: usize,
+) -> Result<Vec<El>, String> {
+    use crate::geometry::meshfile::Wrap;
+    use crate::texture::mapped::Look;
+    let mut out = Vec::new();
+    let mut written: Vec<(*const crate::texture::mapped::Image16, String)> = Vec::new();
+    for part in p.parts() {
+        let k = part.material as usize;
+        let world = part.mesh.transformed(&o.pose, o.scale);
+        let mesh_file = format!("meshes/{index:03}-{}-{k}.ply", slug(&o.name));
+        let look = &p.looks[k];
+        let colors = matches!(look, Look::VertexColors).then_some(&part.colors[..]);
+        let uv = (!part.uv.is_empty()).then_some(&part.uv[..]);
+        files.insert(
+            mesh_file.clone(),
+            crate::texture::bake::ply_bytes_with(&world, uv, colors, false),
+        );
+        let name = &p.plan.file.materials[k].name;
+        let reflectance = match look {
+            Look::Color(c) => El::typed("bsdf", "diffuse").rgb("reflectance", *c),
+            Look::VertexColors => El::typed("bsdf", "diffuse").child(
+                El::typed("texture", "mesh_attribute")
+                    .attr("name", "reflectance")
+                    .string("name", "vertex_color"),
+            ),
+            Look::Image(img) => {
+                let key = std::sync::Arc::as_ptr(img);
+                let tex_file = match written.iter().find(|(p, _)| *p == key) {
+                    Some((_, f)) => f.clone(),
+                    None => {
+                        let f = format!("textures/object-{index:03}-{}-{k}.png", slug(&o.name));
+                        files.insert(
+                            f.clone(),
+                            img.png().map_err(|e| format!("object `{}`: {e}", o.name))?,
+                        );
+                        written.push((key, f.clone()));
+                        f
+                    }
+                };
+                let plan = &p.plan.materials[k];
+                El::typed("bsdf", "diffuse").child(
+                    El::typed("texture", "bitmap")
+                        .attr("name", "reflectance")
+                        .string("filename", &tex_file)
+                        .comment(format!(
+                            "mipmap level {} of {}: linear 16-bit values, colour factor applied",
+                            plan.level,
+                            plan.image.as_deref().unwrap_or("")
+                        ))
+                        .boolean("raw", true)
+                        .string("filter_type", "bilinear")
+                        .string(
+                            "wrap_mode",
+                            match img.wrap {
+                                Wrap::Repeat => "repeat",
+                                Wrap::Clamp => "clamp",
+                                Wrap::Mirror => "mirror",
+                            },
+                        ),
+                )
+            }
+        };
+        out.push(
+            El::typed("shape", "ply")
+                .comment(format!(
+                    "object `{}`, material `{name}`: {} triangles, world frame",
+                    o.name,
+                    world.triangles.len()
+                ))
+                .string("filename", &mesh_file)
+                .boolean("face_normals", true)
+                .child(El::typed("bsdf", "twosided").child(reflectance)),
+        );
+    }
+    Ok(out)
 }
 
 /// Texture resolution for a target: at least [`TEXELS_PER_PIXEL`] texels per image pixel at

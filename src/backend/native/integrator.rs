@@ -154,6 +154,9 @@ impl<'a> Integrator<'a> {
         match h.surface {
             SurfaceId::Object(i) => {
                 let o = &self.model.objects[i as usize];
+                if let Some(a) = self.scene.mapped_albedo(h) {
+                    return DVec3::from_array(a);
+                }
                 if let Some(Some(b)) = self.scene.textures.get(i as usize)
                     && let Some([u, v]) = self.scene.uv_at(h)
                 {

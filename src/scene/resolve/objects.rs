@@ -100,11 +100,26 @@ fn shape(
                 cx.push(
                     Diagnostic::error("E0280", "a mesh object needs a `path`")
                         .label(o.span, "no `path`")
-                        .help("give the glTF file relative to this scene file: `path = \"assets/amphora.glb\"`"),
+                        .help("give the mesh file relative to this scene file: `path = \"assets/amphora.glb\"`"),
                 );
             }
-            let resolved = resolve_asset(cx, &rel, sp, sources, scene);
-            Shape::Mesh { path: resolved }
+            // `texture = false`: the file's colours are never read, nor the files they name.
+            let want = o.has("texture").then(|| o.bool(cx, "texture", true));
+            let (resolved, has_texture) =
+                resolve_asset(cx, &rel, sp, sources, scene, want != Some(false));
+            let textured = want.unwrap_or(has_texture);
+            if textured && o.has("pattern") {
+                let at = o.key_span("pattern");
+                cx.push(
+                    Diagnostic::error("E0295", "a textured mesh cannot take a pattern")
+                        .label(at, "the mesh's file gives its colours")
+                        .help("remove `pattern`, or set `texture = false` to draw the pattern over one plain albedo"),
+                );
+            }
+            Shape::Mesh {
+                path: resolved,
+                textured,
+            }
         }
         "plane" => {
             let w = o.f64(cx, "width", Dim::Length, 1.0);
@@ -209,17 +224,27 @@ fn boulders(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
     }
 }
 
-/// The mesh file `rel`, relative to the scene file that names it: it must be a readable glTF
-/// file inside the scene's folder, a regular file of at most
+/// The mesh file `rel`, relative to the scene file that names it: it must be a readable glTF,
+/// OBJ or PLY file inside the scene's folder, a regular file of at most
 /// [`MAX_ASSET_BYTES`](crate::scene::source::MAX_ASSET_BYTES) read the front end's one way
-/// ([`read_capped`]), and so must every file a `.gltf` refers to. Returns its canonical path
-/// (the joined path after an error).
-fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &Path) -> String {
+/// ([`read_capped`]), and so must every file it names (a `.gltf`'s buffers and images, an OBJ's
+/// MTL files and their images: [`crate::geometry::meshfile::probe`]); every image's header is
+/// read and its size checked (unless `colours` is false: then only the geometry will be read).
+/// Returns its canonical path (the joined path after an error) and whether the file carries
+/// colours of its own (an image texture or vertex colours).
+fn resolve_asset(
+    cx: &mut Cx,
+    rel: &str,
+    span: Span,
+    sources: &Sources,
+    scene: &Path,
+    colours: bool,
+) -> (String, bool) {
     use crate::scene::source::{
         MAX_ASSET_BYTES, Refusal, display, outside_diag, outside_root, read_capped,
     };
     if rel.is_empty() {
-        return String::new();
+        return (String::new(), false);
     }
     let dir = sources
         .dir_of(span.file)
@@ -227,36 +252,16 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
     let p = dir.join(rel);
     if let Some(why) = outside_root(sources, rel, &p) {
         cx.push(outside_diag(rel, &why, span));
-        return display(&p);
+        return (display(&p), false);
     }
+    let format = crate::geometry::meshfile::Format::of(&p);
     let ext = p
         .extension()
         .map(|e| e.to_string_lossy().to_lowercase())
         .unwrap_or_default();
+    let mut textured = false;
     match read_capped(&p, MAX_ASSET_BYTES) {
         Ok(bytes) => {
-            if ext != "glb" && ext != "gltf" {
-                cx.push(
-                    Diagnostic::error("E0285", "meshes must be glTF files")
-                        .label(span, format!("`.{ext}` file"))
-                        .help("convert the mesh to glTF (`.glb` or `.gltf`), e.g. with Blender's exporter"),
-                );
-            } else {
-                let parsed = gltf::Gltf::from_slice(&bytes)
-                    .map_err(|e| e.to_string())
-                    .and_then(|g| gltf_side_files(&g, p.parent().unwrap_or(Path::new(".")), sources));
-                match parsed {
-                    Ok(()) => cx.files.push(p.clone()),
-                    Err(e) => cx.push(
-                        Diagnostic::error(
-                            "E0287",
-                            format!("`{}` is not a readable glTF file", display(&p)),
-                        )
-                        .label(span, e)
-                        .help("re-export the mesh as glTF 2.0 (`.glb`), e.g. from Blender"),
-                    ),
-                }
-            }
             // The model carries the canonical path, so every backend finds the file
             // wherever it runs from; it must stay inside the scene's directory tree.
             let canon = p.canonicalize().unwrap_or_else(|_| p.clone());
@@ -274,19 +279,61 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
                         .ok()
                     })
                     .collect();
-            if !roots.iter().any(|r| canon.starts_with(r)) {
+            let inside = roots.iter().any(|r| canon.starts_with(r));
+            if format.is_none() {
+                cx.push(
+                    Diagnostic::error("E0285", "meshes must be glTF, OBJ or PLY files")
+                        .label(span, format!("`.{ext}` file"))
+                        .help("convert the mesh to glTF (`.glb` or `.gltf`), OBJ or PLY, e.g. with Blender's exporters"),
+                );
+            } else if format == Some(crate::geometry::meshfile::Format::Gltf)
+                && let Err(e) = gltf::Gltf::from_slice(&bytes)
+                    .map_err(|e| e.to_string())
+                    .and_then(|g| {
+                        gltf_side_files(&g, p.parent().unwrap_or(Path::new(".")), sources)
+                    })
+                    .map(|files| cx.files.extend(files))
+            {
+                cx.push(
+                    Diagnostic::error(
+                        "E0287",
+                        format!("`{}` is not a readable glTF file", display(&p)),
+                    )
+                    .label(span, e)
+                    .help("re-export the mesh as glTF 2.0 (`.glb`), e.g. from Blender"),
+                );
+            } else if inside && !colours {
+                cx.files.push(p.clone());
+            } else if inside {
+                match side_files(&bytes, &canon, &roots, sources) {
+                    Ok((files, t)) => {
+                        cx.files.push(p.clone());
+                        cx.files.extend(files);
+                        textured = t;
+                    }
+                    Err(e) => cx.push(
+                        Diagnostic::error(
+                            "E0289",
+                            format!("a file the mesh `{}` names is refused", display(&p)),
+                        )
+                        .label(span, e)
+                        .help("keep the mesh's MTL files and images beside it, named by relative paths inside the scene's folder, as PNG, JPEG or OpenEXR of at most 16384 pixels a side"),
+                    ),
+                }
+            }
+            if !inside {
                 cx.push(
                     Diagnostic::error("E0286", "the mesh file is outside the scene's directory")
                         .label(span, "this path leaves the directory of the scene")
                         .help("keep assets next to the scene (e.g. `assets/wreck.glb`) so the scene can be shared as one folder"),
                 );
             }
-            return canon.to_string_lossy().to_string();
+            return (canon.to_string_lossy().to_string(), textured);
         }
         Err(Refusal::NotAFile(what)) => cx.push(
             Diagnostic::error("E0284", format!("`{}` is not a file", display(&p)))
                 .label(span, what)
-                .help("give the path of the .glb/.gltf file itself; folders, devices and named pipes are never read"),
+                .help("give the path of the mesh file itself; folders, devices and named pipes are never read"),
         ),
         Err(r @ Refusal::TooLarge { .. }) => cx.push(
             Diagnostic::error("E0284", format!("mesh file `{}` is too large", display(&p)))
@@ -299,7 +346,40 @@ fn resolve_asset(cx: &mut Cx, rel: &str, span: Span, sources: &Sources, scene: &
                 .help("paths are relative to the scene file that names them"),
         ),
     }
-    crate::scene::source::display(&p)
+    (crate::scene::source::display(&p), textured)
+}
+
+/// The files a mesh names ([`crate::geometry::meshfile::probe`]), each inside the pack when
+/// there is one, and every image's header read and its size checked
+/// ([`crate::texture::mapped::probe`]); returns them and whether the mesh carries colours of
+/// its own.
+fn side_files(
+    bytes: &[u8],
+    mesh: &Path,
+    roots: &[std::path::PathBuf],
+    sources: &Sources,
+) -> Result<(Vec<std::path::PathBuf>, bool), String> {
+    use crate::geometry::meshfile::ImageSource;
+    let probe = crate::geometry::meshfile::probe(bytes, mesh, roots)?;
+    // Side files are canonical paths: inside a pack they must be below its folder.
+    if let Some(root) = &sources.root
+        && let Some(f) = probe.side_files.iter().find(|f| !f.starts_with(root))
+    {
+        return Err(format!("`{}` is outside the pack", f.display()));
+    }
+    for img in &probe.images {
+        let shown = img.shown();
+        match &img.source {
+            ImageSource::File(f) => {
+                let b = crate::geometry::meshfile::read(f)?;
+                crate::texture::mapped::probe(&b, &shown)?;
+            }
+            ImageSource::Bytes(b) => {
+                crate::texture::mapped::probe(b, &shown)?;
+            }
+        }
+    }
+    Ok((probe.side_files, probe.textured))
 }
 
 /// `albedo` and an optional `[….pattern]` texture (checker, noise, fbm, sand, rock, coral)
@@ -468,8 +548,12 @@ fn coral_colors(cx: &mut Cx, p: &mut Tab) -> Vec<crate::model::Rgb> {
 /// Every file a `.gltf` refers to (buffers, images) must be a relative path to a regular file
 /// of at most [`MAX_ASSET_BYTES`](crate::scene::source::MAX_ASSET_BYTES) beside it, inside the
 /// pack when there is one: the mesh loader reads them later, and must never read a device, a
-/// named pipe or a file outside the scene.
-fn gltf_side_files(g: &gltf::Gltf, dir: &Path, sources: &Sources) -> Result<(), String> {
+/// named pipe or a file outside the scene. Returns them (a pack carries them with the scene).
+fn gltf_side_files(
+    g: &gltf::Gltf,
+    dir: &Path,
+    sources: &Sources,
+) -> Result<Vec<std::path::PathBuf>, String> {
     use crate::scene::source::{MAX_ASSET_BYTES, outside_root};
     let uris = g
         .buffers()
@@ -481,11 +565,12 @@ fn gltf_side_files(g: &gltf::Gltf, dir: &Path, sources: &Sources) -> Result<(), 
             gltf::image::Source::Uri { uri, .. } => Some(uri),
             gltf::image::Source::View { .. } => None,
         }));
+    let mut files = Vec::new();
     for uri in uris {
         if uri.starts_with("data:") {
             continue;
         }
-        let rel = percent_decoded(uri);
+        let rel = crate::geometry::meshfile::percent_decoded(uri);
         let path = Path::new(&rel);
         if uri.contains(':') || path.is_absolute() || path.has_root() {
             return Err(format!(
@@ -497,7 +582,7 @@ fn gltf_side_files(g: &gltf::Gltf, dir: &Path, sources: &Sources) -> Result<(), 
             return Err(format!("refers to `{uri}`: {why}, outside the pack"));
         }
         match std::fs::metadata(&full) {
-            Ok(m) if m.is_file() && m.len() <= MAX_ASSET_BYTES => {}
+            Ok(m) if m.is_file() && m.len() <= MAX_ASSET_BYTES => files.push(full),
             Ok(m) if m.is_file() => {
                 return Err(format!(
                     "refers to `{uri}`, larger than {}",
@@ -508,26 +593,5 @@ fn gltf_side_files(g: &gltf::Gltf, dir: &Path, sources: &Sources) -> Result<(), 
             Err(_) => return Err(format!("refers to `{uri}`, which is missing")),
         }
     }
-    Ok(())
-}
-
-/// `%XX` escapes of a glTF URI decoded (as the glTF loader does); invalid escapes stay.
-fn percent_decoded(uri: &str) -> String {
-    let b = uri.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        if b[i] == b'%'
-            && i + 2 < b.len()
-            && let Ok(v) =
-                u8::from_str_radix(std::str::from_utf8(&b[i + 1..i + 3]).unwrap_or("x"), 16)
-        {
-            out.push(v);
-            i += 3;
-        } else {
-            out.push(b[i]);
-            i += 1;
-        }
-    }
-    String::from_utf8_lossy(&out).into_owned()
+    Ok(files)
 }
