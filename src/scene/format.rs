@@ -1527,7 +1527,11 @@ mod tests {
             ],
             &["lights.0.type=\"point\"", "lights.1.type=\"area\""],
             &["lights.0.type=\"ambient\""],
-            &["objects.0.shape=\"mesh\"", "objects.1.shape=\"plane\""],
+            &[
+                "objects.0.shape=\"mesh\"",
+                "objects.0.texture=false",
+                "objects.1.shape=\"plane\"",
+            ],
             &["objects.0.shape=\"box\"", "objects.1.shape=\"sphere\""],
             &[
                 "objects.0.shape=\"cylinder\"",
