@@ -62,21 +62,7 @@ impl Image16 {
     /// [`Image16::wrap`]: Mitsuba's `bitmap` (`filter_type = bilinear`) and Cycles' Image
     /// Texture (`Linear`) with the same wrap.
     pub fn sample(&self, u: f64, v: f64) -> [f64; 3] {
-        let x = u * self.width as f64 - 0.5;
-        let y = v * self.height as f64 - 0.5;
-        if !(x.is_finite() && y.is_finite()) {
-            return self.texel(0, 0);
-        }
-        let (fx, fy) = (super::floor(x), super::floor(y));
-        let (i, j) = (fx as i64, fy as i64);
-        let (a, b) = (x - fx, y - fy);
-        let t00 = self.texel(i, j);
-        let t10 = self.texel(i + 1, j);
-        let t01 = self.texel(i, j + 1);
-        let t11 = self.texel(i + 1, j + 1);
-        [0, 1, 2].map(|c| {
-            (1.0 - b) * ((1.0 - a) * t00[c] + a * t10[c]) + b * ((1.0 - a) * t01[c] + a * t11[c])
-        })
+        super::bilinear(self.width, self.height, u, v, |i, j| self.texel(i, j))
     }
 
     /// Mean of every texel, per channel.

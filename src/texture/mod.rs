@@ -55,6 +55,34 @@ fn white(h: u64) -> f64 {
     (2.0 * unit(h) - 1.0) * 3f64.sqrt()
 }
 
+/// Bilinear interpolation on a `width × height` image at (u, v), texel centres at
+/// ((i + ½)/W, (j + ½)/H): Mitsuba's `bitmap` (`filter_type = bilinear`) and Cycles' Image
+/// Texture (`Linear`). `texel(i, j)` handles the edges (clamp or wrap); a non-finite (u, v)
+/// reads texel (0, 0).
+pub fn bilinear(
+    width: u32,
+    height: u32,
+    u: f64,
+    v: f64,
+    texel: impl Fn(i64, i64) -> [f64; 3],
+) -> [f64; 3] {
+    let x = u * width as f64 - 0.5;
+    let y = v * height as f64 - 0.5;
+    if !(x.is_finite() && y.is_finite()) {
+        return texel(0, 0);
+    }
+    let (fx, fy) = (floor(x), floor(y));
+    let (i, j) = (fx as i64, fy as i64);
+    let (a, b) = (x - fx, y - fy);
+    let t00 = texel(i, j);
+    let t10 = texel(i + 1, j);
+    let t01 = texel(i, j + 1);
+    let t11 = texel(i + 1, j + 1);
+    [0, 1, 2].map(|c| {
+        (1.0 - b) * ((1.0 - a) * t00[c] + a * t10[c]) + b * ((1.0 - a) * t01[c] + a * t11[c])
+    })
+}
+
 /// Hash of a string (FNV-1a), for per-object seeds.
 pub fn name_hash(s: &str) -> u64 {
     s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
