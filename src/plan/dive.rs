@@ -1873,18 +1873,23 @@ pub fn max_strips(cfg: &DiveConfig, track: &Track) -> usize {
     (1..=n).rev().find(|&k| fits(k)).unwrap_or(0)
 }
 
-/// One dive of a split survey: strips `first..=last` (1-based) and the simulated dive.
+/// One dive of a split survey: strips `first..=last` (1-based) and the simulated dive, whose
+/// `oxygen.cns_percent` includes the CNS carried in from the dives before it.
 #[derive(Debug, Clone, Serialize)]
 pub struct SplitDive {
     pub first_strip: usize,
     pub last_strip: usize,
     pub dive: DiveResult,
+    /// OTU of the day up to the end of this dive (this dive's and every earlier one's).
+    pub otu_day: f64,
 }
 
 /// Split the strips into the fewest dives (≤ `max_per_dive` strips each, as even as possible;
 /// a full cylinder each; repetitive tissues across `cfg.surface_interval`) where every dive
-/// is [`DiveResult::ok`]. `None` when no split of up to six more dives fits. `sample_every`
-/// as in [`simulate`].
+/// is [`DiveResult::ok`] with the CNS carried over the surface intervals (halved every 90 min,
+/// [`oxygen::cns_after_surface_interval`]) and the day's OTU within
+/// [`oxygen::OTU_DAY_LIMIT`]. `None` when no split of up to six more dives fits.
+/// `sample_every` as in [`simulate`].
 pub fn split(
     cfg: &DiveConfig,
     track: &Track,
@@ -1900,21 +1905,27 @@ pub fn split(
         let mut tissues = Tissues::surface(cfg.env, cfg.gf);
         let mut parts = Vec::new();
         let mut start = 0;
+        let mut cns = 0.0; // CNS % at the start of the next dive
+        let mut otu_day = 0.0;
         for i in 0..dives {
             let end = (n * (i + 1)).div_ceil(dives);
-            let r = simulate(
+            let mut r = simulate(
                 cfg,
                 &track.strip_range(start, end),
                 &mut tissues,
                 sample_every,
             );
-            if !r.ok() {
+            r.oxygen.carry_in(cns);
+            otu_day += r.oxygen.otu;
+            if !r.ok() || otu_day > oxygen::OTU_DAY_LIMIT {
                 continue 'count;
             }
+            cns = oxygen::cns_after_surface_interval(r.oxygen.cns_percent, cfg.surface_interval);
             parts.push(SplitDive {
                 first_strip: start + 1,
                 last_strip: end,
                 dive: r,
+                otu_day,
             });
             tissues.expose(0.0, Gas::AIR, cfg.surface_interval);
             // New dive: a fresh GF-low anchor, as Subsurface starts each dive.
@@ -1941,13 +1952,21 @@ fn split_plan(cfg: &DiveConfig, track: &Track, max_per_dive: usize) -> Option<Su
             )
         })
         .collect();
+    let cns: Vec<String> = parts
+        .iter()
+        .map(|p| format!("{:.0} %", p.dive.oxygen.cns_percent))
+        .collect();
     Some(Suggestion {
         kind: "split_dives".into(),
         text: format!(
-            "two or more dives: {} dives with {} surface intervals and a full cylinder each: {}",
+            "two or more dives: {} dives with {} surface intervals and a full cylinder each: {}; \
+             CNS at the end of each dive {} (carried over the intervals, halved every 90 min), \
+             OTU of the day {:.0}",
             parts.len(),
             mmss(cfg.surface_interval),
-            text.join("; ")
+            text.join("; "),
+            cns.join(", "),
+            parts.last().map_or(0.0, |p| p.otu_day)
         ),
         fixes_all: true,
     })

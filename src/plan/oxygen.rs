@@ -20,6 +20,11 @@
 //! **OTU** (oxygen tolerance units, Lambertsen's UPTD as used for REPEX, Hamilton 1989):
 //! `((pO₂ − 0.5) / 0.5)^0.83` per minute above 0.5 bar, none below. Over a linear ramp of pO₂
 //! the exact integral is used. (Subsurface uses the exponent 5/6 in its approximation.)
+//!
+//! **Across surface intervals** (the dives of a split survey, the same day): CNS % halves every
+//! 90 min at the surface (NOAA; Subsurface's `core/divelist.cpp` does the same) and does not
+//! decay during a dive, so a dive ends at the CNS carried in plus its own. OTU is summed over
+//! the day and held to REPEX's single-day limit, 850 OTU (Hamilton 1989).
 
 use serde::Serialize;
 
@@ -51,6 +56,19 @@ pub const CNS_LIMIT: f64 = 100.0;
 /// OTU of one dive above which the report warns (a common single-dive planning figure; REPEX's
 /// single-day limit is 850).
 pub const OTU_WARN: f64 = 300.0;
+/// REPEX's limit on the OTU of one day's dives (Hamilton 1989; also the NOAA Diving Manual).
+pub const OTU_DAY_LIMIT: f64 = 850.0;
+/// Half-time of CNS % at the surface between dives, s: 90 min.
+pub const CNS_SURFACE_HALF_TIME: f64 = 90.0 * 60.0;
+
+/// The CNS % left after `seconds` at the surface: halved every 90 min (a negative or
+/// non-finite interval leaves it as it was).
+pub fn cns_after_surface_interval(cns_percent: f64, seconds: f64) -> f64 {
+    if !(seconds > 0.0) {
+        return cns_percent;
+    }
+    cns_percent * 0.5_f64.powf(seconds / CNS_SURFACE_HALF_TIME)
+}
 
 /// CNS loading at a constant pO₂, % per minute.
 pub fn cns_rate(po2: f64) -> f64 {
@@ -132,8 +150,11 @@ impl Exposure {
 /// The oxygen exposure of a simulated dive.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct OxygenExposure {
-    /// CNS % at the end of the dive (from 0 at its start).
+    /// CNS % at the end of the dive: the CNS carried in (`cns_carried`) plus the dive's own.
     pub cns_percent: f64,
+    /// CNS % carried in from earlier dives of the day, decayed over the surface interval (0
+    /// for a single dive).
+    pub cns_carried: f64,
     /// OTU of the dive.
     pub otu: f64,
     /// Highest pO₂ breathed, bar, and where (runtime s, depth m).
@@ -168,6 +189,13 @@ impl OxygenExposure {
             };
             self.minutes_above_table += seconds / 60.0 * frac;
         }
+    }
+
+    /// Start this dive with `cns_percent` carried in from earlier dives (already decayed):
+    /// CNS does not decay during a dive, so it adds to the dive's own.
+    pub fn carry_in(&mut self, cns_percent: f64) {
+        self.cns_percent += cns_percent - self.cns_carried;
+        self.cns_carried = cns_percent;
     }
 
     /// CNS within 100 % and no pO₂ beyond the NOAA table.
