@@ -1,5 +1,6 @@
 //! The truth as COLMAP models: `colmap/` for upstream COLMAP and pycolmap (text and binary),
-//! and `colmap_refractive/` for Refractive COLMAP, which also reads the housing port (text).
+//! and `colmap_refractive/` for Refractive COLMAP, which also reads the housing port (text and
+//! binary).
 //!
 //! | file | contents |
 //! |---|---|
@@ -7,7 +8,8 @@
 //! | `colmap/images.txt` | true `camera_from_world` poses and the refracted target observations |
 //! | `colmap/points3D.txt` | every observed target point with its track |
 //! | `colmap/cameras.bin`, `images.bin`, `points3D.bin` | the same model in COLMAP's binary format ([`Bin`]), which COLMAP reads in preference to the text when both are present |
-//! | `colmap_refractive/*` | the same, with `FLATPORT …` / `DOMEPORT …` after each camera's parameters |
+//! | `colmap_refractive/*.txt` | the same, with `FLATPORT …` / `DOMEPORT …` after each camera's parameters |
+//! | `colmap_refractive/*.bin` | the same in the fork's binary format: its `cameras.bin` adds each camera's port ([`refractive_cameras_bin`]); `images.bin` and `points3D.bin` are upstream's |
 //!
 //! Pixel convention: COLMAP's, the same as poser's — the top-left pixel's centre is at
 //! (0.5, 0.5). The observations are refracted, so the upstream model, which has no port,
@@ -206,6 +208,37 @@ fn cameras_bin(truth: &Truth) -> Vec<u8> {
     b.0
 }
 
+/// The Refractive COLMAP fork's `cameras.bin` (`Reconstruction::WriteCamerasBinary` /
+/// `ReadCamerasBinary` in its src/colmap/scene/reconstruction.cc): upstream's camera record,
+/// then an i32 refraction model id (`CameraRefracModelId`: −1 none, 0 `FLATPORT`, 1 `DOMEPORT`)
+/// and, unless −1, its eight f64 parameters in the text model's order. Upstream COLMAP cannot
+/// read this file (the extra i32), so it is written only in `colmap_refractive/`. A camera whose
+/// port has no Refractive COLMAP model is written with −1, as the text writes it without a port.
+pub fn refractive_cameras_bin(truth: &Truth) -> Vec<u8> {
+    let mut b = Bin::default();
+    b.u64(truth.cameras.len());
+    for (i, c) in truth.cameras.iter().enumerate() {
+        let (name, params, _) = camera_model(c);
+        b.u32(i + 1);
+        b.i32(model_id(name));
+        b.u64(c.width as usize);
+        b.u64(c.height as usize);
+        for p in params {
+            b.f64(p);
+        }
+        match refractive_port(c) {
+            Ok(Some((model, pp))) => {
+                b.i32(if model == "FLATPORT" { 0 } else { 1 });
+                for p in pp {
+                    b.f64(p);
+                }
+            }
+            Ok(None) | Err(_) => b.i32(-1),
+        }
+    }
+    b.0
+}
+
 fn join(xs: &[f64]) -> String {
     xs.iter()
         .map(|x| x.to_string())
@@ -390,13 +423,19 @@ pub(super) fn files(model: &Model, truth: &Truth) -> Vec<(String, Vec<u8>)> {
         ("colmap/images.txt".into(), ims.clone()),
         ("colmap/points3D.txt".into(), p3.clone()),
         ("colmap/cameras.bin".into(), cameras_bin(truth)),
-        ("colmap/images.bin".into(), ims_bin.0),
-        ("colmap/points3D.bin".into(), p3_bin.0),
+        ("colmap/images.bin".into(), ims_bin.0.clone()),
+        ("colmap/points3D.bin".into(), p3_bin.0.clone()),
         (
             "colmap_refractive/cameras.txt".into(),
             cameras_txt(truth, true).into_bytes(),
         ),
         ("colmap_refractive/images.txt".into(), ims),
         ("colmap_refractive/points3D.txt".into(), p3),
+        (
+            "colmap_refractive/cameras.bin".into(),
+            refractive_cameras_bin(truth),
+        ),
+        ("colmap_refractive/images.bin".into(), ims_bin.0),
+        ("colmap_refractive/points3D.bin".into(), p3_bin.0),
     ]
 }

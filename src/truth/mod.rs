@@ -8,7 +8,7 @@
 //! | `points.csv` | `image,camera,pose,target,id,u,v,u_r,v_r,u_b,v_b,x,y,z,x_cam,y_cam,z_cam` — one row per visible target point; (u, v) is the G channel, pixel centres at +0.5 (COLMAP's convention; OpenCV's is this − 0.5, see `opencv/`) |
 //! | `cameras.csv` | one row per camera: intrinsics, lens, distortion, port |
 //! | `images.csv` | one row per image: `world_from_camera` as quaternion (w, x, y, z) + translation |
-//! | `colmap/…`, `colmap_refractive/…` | COLMAP text models of the true poses and the visible target points, without and with the port ([`colmap`]) |
+//! | `colmap/…`, `colmap_refractive/…` | COLMAP models (text and binary) of the true poses and the visible target points, without and with the port ([`colmap`]) |
 //! | `opencv/…` | `cv::FileStorage` calibration files and the observations in OpenCV's pixel convention ([`opencv`]) |
 //!
 //! Pixel convention: poser's, which is COLMAP's — the top-left pixel's centre is at (0.5,
