@@ -886,6 +886,7 @@ mod fork_binary {
     }
 
     /// Points: id → position (colour, error and track read and checked for length).
+    #[allow(clippy::type_complexity)]
     pub fn points(bytes: &[u8]) -> Result<HashMap<u64, (DVec3, Vec<(u32, u32)>)>, String> {
         let mut r = Reader(bytes);
         let n = r.u64()?;
