@@ -600,3 +600,155 @@ fn sampled_spectra_keep_their_colour() {
         "{text}"
     );
 }
+
+/// A 64 × 32 sRGB PNG: the top half red, the bottom half blue, the 8 left columns green.
+fn three_colour_png(path: &Path) {
+    let img = image::RgbImage::from_fn(64, 32, |x, y| {
+        if x < 8 {
+            image::Rgb([30, 220, 30])
+        } else if y < 16 {
+            image::Rgb([220, 30, 30])
+        } else {
+            image::Rgb([30, 30, 220])
+        }
+    });
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    img.save(path).unwrap();
+}
+
+/// The dominant channel of the rendered image's pixel (x, y).
+fn dominant(img: &poser::image::Linear, x: u32, y: u32) -> usize {
+    let p = img.rgb[(y * img.width + x) as usize];
+    (0..3).max_by(|&a, &b| p[a].total_cmp(&p[b])).unwrap()
+}
+
+/// A bitmap reflectance on an OBJ with `vt`, on a PLY with `u v` and on a rectangle becomes the
+/// mesh's image texture: the image is copied beside the `.glb`, the texture coordinates are
+/// read as Mitsuba reads them (OBJ's v from the bottom row; a rectangle's uv = (x + 1)/2,
+/// (y + 1)/2), and the native render shows the image the way Mitsuba 3 renders the same file
+/// (red on top on the meshes, at the bottom on the rectangle; green at the left). A mesh without texture coordinates keeps the
+/// mean colour, noted; an image whose header claims 100 000 pixels a side is refused.
+#[test]
+fn bitmaps_become_image_textures_on_meshes() {
+    let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+               property float z\nproperty float u\nproperty float v\nelement face 2\n\
+               property list uchar int vertex_indices\nend_header\n\
+               -1 -1 0 0 1\n1 -1 0 1 1\n1 1 0 1 0\n-1 1 0 0 0\n3 0 1 2\n3 0 2 3\n";
+    let obj = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+               f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+    let bitmap = r#"<bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename" value="tex/three.png"/></texture></bsdf>"#;
+    let light = r#"<emitter type="constant"><rgb name="radiance" value="1"/></emitter>"#;
+    for (shape, extra) in [
+        (
+            r#"<shape type="obj"><string name="filename" value="quad.obj"/>"#,
+            ("quad.obj", obj),
+        ),
+        (
+            r#"<shape type="ply"><string name="filename" value="quad.ply"/>"#,
+            ("quad.ply", ply),
+        ),
+        (r#"<shape type="rectangle">"#, ("unused.txt", "")),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        three_colour_png(&dir.path().join("tex/three.png"));
+        write(&dir.path().join(extra.0), extra.1);
+        write(
+            &dir.path().join("s.xml"),
+            &scene(&format!("{light}\n{shape}{bitmap}</shape>")),
+        );
+        let text = imported(dir.path(), &["s.xml"]);
+        assert!(text.contains("shape = \"mesh\""), "{text}");
+        assert!(
+            text.contains("is imported as the image texture of"),
+            "{text}"
+        );
+        assert!(!text.contains("mean albedo"), "{text}");
+        let png = std::fs::read_dir(dir.path().join("out/scene_assets"))
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .find(|e| e.path().extension().is_some_and(|x| x == "png"))
+            .expect("the image beside the mesh");
+        assert_eq!(
+            std::fs::read(png.path()).unwrap(),
+            std::fs::read(dir.path().join("tex/three.png")).unwrap(),
+            "an 8-bit sRGB PNG is copied as it is"
+        );
+        let out = poser()
+            .current_dir(dir.path())
+            .args(["render", "out/scene.toml", "-o", "r", "--quiet"])
+            .args(["--set", "render.daylight=\"traced\"", "--samples", "4"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        let img = poser::image::read_exr(&dir.path().join("r/img_0001.exr")).unwrap();
+        // The camera, 5 m away, looks down −z with +y up: the quad spans x 17–47, y 9–39 of the
+        // 64 × 48 view; the green columns are x 17–20.
+        // Mitsuba's rectangle has v = 0 at its bottom edge (local y = −1), where the image's
+        // first (red) row lands; the meshes' coordinates put it on top. Mitsuba 3 renders both
+        // so (checked with scalar_rgb).
+        let (top, below) = if shape.contains("rectangle") {
+            (2, 0)
+        } else {
+            (0, 2)
+        };
+        assert_eq!(dominant(&img, 32, 14), top, "{shape}: top");
+        assert_eq!(dominant(&img, 32, 34), below, "{shape}: below");
+        assert_eq!(dominant(&img, 18, 24), 1, "{shape}: green at the left");
+    }
+
+    // No texture coordinates: the mean colour, noted.
+    let dir = tempfile::tempdir().unwrap();
+    three_colour_png(&dir.path().join("tex/three.png"));
+    write(&dir.path().join("quad.obj"), QUAD);
+    write(
+        &dir.path().join("s.xml"),
+        &scene(&format!(
+            "{light}\n<shape type=\"obj\"><string name=\"filename\" value=\"quad.obj\"/>{bitmap}</shape>"
+        )),
+    );
+    let text = imported(dir.path(), &["s.xml"]);
+    assert!(text.contains("has no texture coordinates"), "{text}");
+    assert!(text.contains("mean albedo"), "{text}");
+
+    // A header claiming 100 000 pixels a side: refused before decoding.
+    let dir = tempfile::tempdir().unwrap();
+    let mut bomb = Vec::new();
+    image::RgbImage::new(1, 1)
+        .write_to(
+            &mut std::io::Cursor::new(&mut bomb),
+            image::ImageFormat::Png,
+        )
+        .unwrap();
+    bomb[16..20].copy_from_slice(&100_000u32.to_be_bytes());
+    bomb[20..24].copy_from_slice(&100_000u32.to_be_bytes());
+    let crc = crc32(&bomb[12..29]);
+    bomb[29..33].copy_from_slice(&crc.to_be_bytes());
+    std::fs::create_dir_all(dir.path().join("tex")).unwrap();
+    std::fs::write(dir.path().join("tex/three.png"), &bomb).unwrap();
+    write(&dir.path().join("quad.obj"), obj);
+    write(
+        &dir.path().join("s.xml"),
+        &scene(&format!(
+            "{light}\n<shape type=\"obj\"><string name=\"filename\" value=\"quad.obj\"/>{bitmap}</shape>"
+        )),
+    );
+    let out = import(dir.path(), &["s.xml"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("100000"), "{}", stderr(&out));
+}
+
+/// CRC-32 (ISO 3309, as PNG chunks carry it).
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut c = 0xffff_ffffu32;
+    for &b in bytes {
+        c ^= b as u32;
+        for _ in 0..8 {
+            c = if c & 1 != 0 {
+                0xedb8_8320 ^ (c >> 1)
+            } else {
+                c >> 1
+            };
+        }
+    }
+    !c
+}

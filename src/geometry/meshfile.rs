@@ -6,7 +6,7 @@
 //! | format | geometry | colour |
 //! |---|---|---|
 //! | OBJ | `v`, `vt`, `f` (polygons fan-triangulated; `v`, `v/vt`, `v//vn`, `v/vt/vn`; negative indices count back from the last vertex) | `mtllib`, `usemtl`; MTL `newmtl`, `Kd`, `map_Kd` with `-clamp`, `-o`, `-s` (other options skipped) |
-//! | PLY | `ascii`, `binary_little_endian`, `binary_big_endian`; vertex `x y z`; face `vertex_indices`/`vertex_index` lists | vertex `red green blue` (or `r g b`): 8/16-bit values are sRGB, floats linear |
+//! | PLY | `ascii`, `binary_little_endian`, `binary_big_endian`; vertex `x y z` and texture coordinates (`u v`, `s t`, `texture_u texture_v` or `texture_s texture_t`, taken as they are); face `vertex_indices`/`vertex_index` lists | vertex `red green blue` (or `r g b`): 8/16-bit values are sRGB, floats linear |
 //! | glTF | every triangle primitive of the default scene, node transforms applied, +Y up turned into +Z up: `(x, y, z)_gltf → (x, −z, y)` | `baseColorFactor`, `baseColorTexture` (its `texCoord` set, sampler wrap, `KHR_texture_transform`), embedded (`.glb`, data URI) or external images |
 //!
 //! Texture coordinates follow poser's convention: v = 0 at the image's first stored row (glTF's
@@ -825,12 +825,29 @@ pub fn read_ply(bytes: &[u8], file: &str) -> Result<MeshFile, String> {
         enc,
         file,
     };
+    // Per-vertex texture coordinates, under the names Mitsuba's PLY reader takes (taken as
+    // they are: v = 0 at the image's first row, as Mitsuba's bitmap reads them).
+    let uv_axis = |name: &str| match name {
+        "u" | "s" | "texture_u" | "texture_s" => Some(0),
+        "v" | "t" | "texture_v" | "texture_t" => Some(1),
+        _ => None,
+    };
+    let has_uv = elements.iter().any(|e| {
+        e.name == "vertex"
+            && (0..2).all(|a| {
+                e.props
+                    .iter()
+                    .any(|p| matches!(p, Prop::Scalar(_, n) if uv_axis(n) == Some(a)))
+            })
+    });
     let mut m = TriMesh::default();
     let mut colors: Vec<[f32; 3]> = Vec::new();
+    let mut uvs: Vec<[f32; 2]> = Vec::new();
     for e in &elements {
         for k in 0..e.count {
             let mut xyz = [f64::NAN; 3];
             let mut rgb = [0.0f32; 3];
+            let mut uv = [0.0f32; 2];
             for p in &e.props {
                 match p {
                     Prop::Scalar(ty, name) => {
@@ -840,6 +857,14 @@ pub fn read_ply(bytes: &[u8], file: &str) -> Result<MeshFile, String> {
                                 "x" => xyz[0] = v,
                                 "y" => xyz[1] = v,
                                 "z" => xyz[2] = v,
+                                n if has_uv && uv_axis(n).is_some() => {
+                                    if !v.is_finite() {
+                                        return Err(format!(
+                                            "{file}: vertex {k} has a texture coordinate that is not a number"
+                                        ));
+                                    }
+                                    uv[uv_axis(n).unwrap_or(0)] = v as f32;
+                                }
                                 n => {
                                     if let Some(ch) = channel(n) {
                                         let lin = match color_scale(ty) {
@@ -896,6 +921,9 @@ pub fn read_ply(bytes: &[u8], file: &str) -> Result<MeshFile, String> {
                 if has_colors {
                     colors.push(rgb);
                 }
+                if has_uv {
+                    uvs.push(uv);
+                }
             }
         }
     }
@@ -907,7 +935,7 @@ pub fn read_ply(bytes: &[u8], file: &str) -> Result<MeshFile, String> {
     material.vertex_colors = has_colors;
     Ok(MeshFile {
         mesh: m,
-        uv: Vec::new(),
+        uv: uvs,
         colors,
         material: vec![0; n],
         materials: vec![material],

@@ -5,7 +5,7 @@
 //! |---|---|---|
 //! | OBJ | `v` and `f` (polygons fan-triangulated; `v/vt/vn` and negative indices) | other statements ignored |
 //! | PLY | `ascii`, `binary_little_endian`, `binary_big_endian`; vertex `x y z` (float or double, any other properties skipped); face `vertex_indices`/`vertex_index` lists | counts checked against the file's size before anything is allocated |
-//! | GLB | written: one mesh, POSITION (f32) and u32 indices; glTF's +Y up (`(x, y, z)_poser → (x, z, −y)_gltf`, the inverse of the mesh loader's) | |
+//! | GLB | written: one mesh, POSITION (f32) and u32 indices, and for an image texture TEXCOORD_0 and one material naming the image beside it; glTF's +Y up (`(x, y, z)_poser → (x, z, −y)_gltf`, the inverse of the mesh loader's) | |
 
 use crate::geometry::mesh::TriMesh;
 
@@ -29,8 +29,23 @@ fn pad4(v: &mut Vec<u8>, with: u8) {
     }
 }
 
+/// An image texture for [`glb_textured`]: per-vertex texture coordinates (v = 0 at the
+/// image's first row, glTF's and poser's convention), the image's file name beside the `.glb`
+/// and its wrap.
+pub struct MeshTexture<'a> {
+    pub uv: &'a [[f32; 2]],
+    pub image: &'a str,
+    pub wrap: crate::geometry::meshfile::Wrap,
+}
+
 /// A glTF 2.0 binary file holding `mesh` (poser's +Z-up frame turned into glTF's +Y-up).
 pub fn glb(mesh: &TriMesh, name: &str) -> Vec<u8> {
+    glb_textured(mesh, None, name)
+}
+
+/// [`glb`] with, when `tex` is given, a `TEXCOORD_0` set and one material whose base colour is
+/// the external image `tex.image` (factor 1).
+pub fn glb_textured(mesh: &TriMesh, tex: Option<&MeshTexture>, name: &str) -> Vec<u8> {
     let mut bin = Vec::new();
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
@@ -49,7 +64,7 @@ pub fn glb(mesh: &TriMesh, name: &str) -> Vec<u8> {
         }
     }
     let idx_len = bin.len() - pos_len;
-    let json = serde_json::json!({
+    let mut json = serde_json::json!({
         "asset": {"version": "2.0", "generator": "poser import"},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
@@ -67,6 +82,36 @@ pub fn glb(mesh: &TriMesh, name: &str) -> Vec<u8> {
              "type": "SCALAR"}
         ]
     });
+    if let Some(t) = tex.filter(|t| t.uv.len() == mesh.positions.len()) {
+        use crate::geometry::meshfile::Wrap;
+        let uv_at = bin.len();
+        for q in t.uv {
+            bin.extend_from_slice(&q[0].to_le_bytes());
+            bin.extend_from_slice(&q[1].to_le_bytes());
+        }
+        let wrap = match t.wrap {
+            Wrap::Repeat => 10497,
+            Wrap::Clamp => 33071,
+            Wrap::Mirror => 33648,
+        };
+        if let Some(v) = json["bufferViews"].as_array_mut() {
+            v.push(serde_json::json!({"buffer": 0, "byteOffset": uv_at,
+                "byteLength": bin.len() - uv_at, "target": 34962}));
+        }
+        if let Some(v) = json["accessors"].as_array_mut() {
+            v.push(serde_json::json!({"bufferView": 2, "componentType": 5126,
+                "count": t.uv.len(), "type": "VEC2"}));
+        }
+        json["buffers"][0]["byteLength"] = serde_json::json!(bin.len());
+        json["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = serde_json::json!(2);
+        json["meshes"][0]["primitives"][0]["material"] = serde_json::json!(0);
+        json["materials"] = serde_json::json!([{"name": name, "pbrMetallicRoughness": {
+            "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "baseColorTexture": {"index": 0},
+            "metallicFactor": 0.0}}]);
+        json["textures"] = serde_json::json!([{"source": 0, "sampler": 0}]);
+        json["samplers"] = serde_json::json!([{"wrapS": wrap, "wrapT": wrap}]);
+        json["images"] = serde_json::json!([{"uri": t.image}]);
+    }
     let mut js = serde_json::to_vec(&json).unwrap_or_default();
     pad4(&mut js, b' ');
     pad4(&mut bin, 0);

@@ -5,7 +5,7 @@
 //! | `perspective`, `thinlens` sensor: `fov`, `fov_axis`, or `focal_length` (default `"50mm"`, on the diagonal), `principal_point_offset_x/y`, film `width`/`height` (default 768 × 576), `to_world` | `[camera]` `fx`, `principal_point`, size; one `[[network.poses]]` per sensor (in file order, then file by file) | Mitsuba's camera looks along +Z with +X left: `R_poser = R · diag(−1, −1, 1)`; `thinlens` gives `f_number`/`focus_distance`; a non-box `rfilter` (Mitsuba's default Gaussian) is noted |
 //! | `rectangle`, `cube`, `sphere`, `cylinder` | `plane`, `box`, `sphere`, `cylinder` objects | `to_world` split into position, rotation (x, y, z angles) and size |
 //! | `disk`, `obj`, `ply` | `mesh` objects, written as `.glb` assets | `to_world` baked into the vertices |
-//! | `diffuse` BSDF (`rgb`, `spectrum`, `bitmap`, `checkerboard` reflectance), `twosided` | `albedo` | a bitmap gives its mean albedo, a checkerboard the mean of its colours (noted); other BSDFs their diffuse reflectance, noted |
+//! | `diffuse` BSDF (`rgb`, `spectrum`, `bitmap`, `checkerboard` reflectance), `twosided` | `albedo` | a bitmap on an `obj`/`ply` with texture coordinates or on a `rectangle` becomes the mesh's image texture, elsewhere its mean albedo; a checkerboard the mean of its colours (noted); other BSDFs their diffuse reflectance, noted |
 //! | `spectrum` (one value, wavelength:value pairs, `.spd` file) | linear sRGB | as Mitsuba 3's RGB variants (`spectrum_list_to_srgb`): CIE 1931 2° observer, D65 for reflectances; noted |
 //! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted |
 //! | no glass at a sensor | `[camera.port] type = "none"` | |
@@ -480,6 +480,9 @@ struct Cx {
     search: Vec<(PathBuf, Vec<PathBuf>)>,
     /// Ids that a `<ref>` names.
     referenced: std::collections::HashSet<String>,
+    /// Locations of the bitmaps the shape being read carries as its image texture (their
+    /// mean colour is then not noted as what was imported).
+    mapped: std::collections::HashSet<String>,
 }
 
 impl Cx {
@@ -640,12 +643,17 @@ impl Cx {
 
     /// The mean colour of a `bitmap` texture (8-bit images decoded from sRGB).
     fn bitmap_mean(&mut self, k: &X) -> Result<[f64; 3], String> {
+        let mapped = self.mapped.contains(&k.loc);
         let (fk, name) = k
             .named("filename")
             .and_then(|f| Some((f, f.attr("value")?)))
             .ok_or_else(|| format!("{}: a bitmap without `filename`", k.loc))?;
         let path = self.file(fk, name)?;
         let bytes = read_capped(&path).map_err(|e| format!("{}: {e}", k.loc))?;
+        // The header first, with the textured-mesh code's limits: a damaged file or a
+        // decompression bomb is refused before anything is decoded.
+        crate::texture::mapped::probe(&bytes, &format!("`{}`", shown(&path)))
+            .map_err(|e| format!("{}: {e}", k.loc))?;
         let img = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| e.to_string())
@@ -664,6 +672,9 @@ impl Cx {
                 *acc += if srgb { srgb_to_linear(v) } else { v };
             }
         }
+        if mapped {
+            return Ok(sum.map(|s| s / n));
+        }
         self.note(
             k,
             format!(
@@ -672,7 +683,10 @@ impl Cx {
                 sum[1] / n,
                 sum[2] / n
             ),
-            Some("poser textures are its own patterns (docs/textures.md)"),
+            Some(
+                "a bitmap on an `obj` or `ply` with texture coordinates, or on a `rectangle`, \
+                 becomes the mesh's image texture (docs/import.md)",
+            ),
         );
         Ok(sum.map(|s| s / n))
     }
@@ -1248,11 +1262,12 @@ fn medium(cx: &mut Cx, x: &X) -> Result<Option<Water>, String> {
 
 /// The albedo of a shape's BSDF (Mitsuba's default: diffuse 0.5), or `None` for a BSDF that
 /// is not a surface poser can hold (null, dielectric).
-fn albedo(cx: &mut Cx, shape: &X) -> Result<Result<[f64; 3], &'static str>, String> {
+/// The BSDF of a shape, references followed and `twosided`/`mask` wrappers opened.
+fn shape_bsdf(cx: &Cx, shape: &X) -> Result<Option<X>, String> {
     let Some(b) = shape.kids.iter().find(|k| {
         k.tag == "bsdf" || (k.tag == "ref" && k.attr("name").is_none_or(|n| n == "bsdf"))
     }) else {
-        return Ok(Ok([0.5; 3]));
+        return Ok(None);
     };
     let mut b = cx.deref(b)?.clone();
     while b.ty() == "twosided" || b.ty() == "mask" {
@@ -1261,6 +1276,135 @@ fn albedo(cx: &mut Cx, shape: &X) -> Result<Result<[f64; 3], &'static str>, Stri
             None => break,
         }
     }
+    Ok(Some(b))
+}
+
+/// The `bitmap` texture that gives a shape's diffuse colour (a diffuse `reflectance`, another
+/// BSDF's `diffuse_reflectance`, a principled `base_color`), if any.
+fn bitmap_of(cx: &Cx, shape: &X) -> Result<Option<X>, String> {
+    let Some(b) = shape_bsdf(cx, shape)? else {
+        return Ok(None);
+    };
+    let names: &[&str] = match b.ty() {
+        "diffuse" => &["reflectance"],
+        "null" | "dielectric" | "thindielectric" | "roughdielectric" => &[],
+        _ => &["diffuse_reflectance", "base_color", "reflectance"],
+    };
+    for n in names {
+        if let Some(t) = b.named(n) {
+            let t = cx.deref(t)?;
+            return Ok((t.tag == "texture" && t.ty() == "bitmap").then(|| t.clone()));
+        }
+    }
+    Ok(None)
+}
+
+/// A bitmap texture as a file beside the imported mesh (`stem` + its extension): an 8-bit or
+/// 16-bit sRGB PNG or JPEG is copied as it is; a float image (OpenEXR) or one Mitsuba reads
+/// `raw` becomes a 16-bit sRGB PNG of the same linear values. The image is decoded first, with
+/// the textured-mesh code's limits (a damaged file or a decompression bomb is refused).
+fn bitmap_asset(
+    cx: &mut Cx,
+    b: &X,
+    stem: &str,
+) -> Result<(String, Vec<u8>, crate::geometry::meshfile::Wrap), String> {
+    use crate::geometry::meshfile::Wrap;
+    let (fk, name) = b
+        .named("filename")
+        .and_then(|f| Some((f, f.attr("value")?)))
+        .ok_or_else(|| format!("{}: a bitmap without `filename`", b.loc))?;
+    let path = cx.file(fk, name)?;
+    let bytes = read_capped(&path).map_err(|e| format!("{}: {e}", b.loc))?;
+    let shown = format!("`{}`", shown(&path));
+    crate::texture::mapped::decode(&bytes, &shown, Wrap::Repeat)
+        .map_err(|e| format!("{}: {e}", b.loc))?;
+    let wrap = match b.named("wrap_mode").and_then(|w| w.attr("value")) {
+        None | Some("repeat") => Wrap::Repeat,
+        Some("clamp") => Wrap::Clamp,
+        Some("mirror") => Wrap::Mirror,
+        Some(other) => {
+            return Err(format!(
+                "{}: unknown wrap_mode `{other}` (Mitsuba's are repeat, mirror, clamp)",
+                b.loc
+            ));
+        }
+    };
+    let raw = b
+        .named("raw")
+        .and_then(|r| r.attr("value"))
+        .is_some_and(|v| v == "true");
+    if b.named("to_uv").is_some() {
+        cx.note(
+            b,
+            "the bitmap's `to_uv` transform is not imported: the image is laid on the mesh's own \
+             texture coordinates",
+            Some("bake the transform into the mesh's texture coordinates"),
+        );
+    }
+    if b.named("filter_type").and_then(|f| f.attr("value")) == Some("nearest") {
+        cx.note(
+            b,
+            "the bitmap's `nearest` filter becomes poser's bilinear lookup",
+            None,
+        );
+    }
+    let reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
+        .with_guessed_format()
+        .map_err(|e| format!("{}: {e}", b.loc))?;
+    let format = reader.format();
+    let img = reader
+        .decode()
+        .map_err(|e| format!("{}: {shown}: {e}", b.loc))?;
+    use image::DynamicImage as D;
+    let float = matches!(img, D::ImageRgb32F(_) | D::ImageRgba32F(_));
+    let ext = match format {
+        Some(image::ImageFormat::Png) => Some("png"),
+        Some(image::ImageFormat::Jpeg) => Some("jpg"),
+        _ => None,
+    };
+    if let (Some(ext), false, false) = (ext, float, raw) {
+        return Ok((safe_file_name(&format!("{stem}.{ext}")), bytes, wrap));
+    }
+    // Linear values (as Mitsuba reads them) → 16-bit sRGB-encoded PNG.
+    let lin = img.to_rgb32f();
+    let mut out = image::ImageBuffer::<image::Rgb<u16>, Vec<u16>>::new(lin.width(), lin.height());
+    for (o, p) in out.pixels_mut().zip(lin.pixels()) {
+        o.0 = p.0.map(|v| {
+            let v = if v.is_finite() {
+                v.clamp(0.0, 1.0) as f64
+            } else {
+                0.0
+            };
+            (linear_to_srgb(v) * 65535.0).round() as u16
+        });
+    }
+    let mut png = Vec::new();
+    out.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .map_err(|e| format!("{}: re-encoding {shown}: {e}", b.loc))?;
+    cx.note(
+        b,
+        format!(
+            "texture `{name}` ({}) is written as a 16-bit sRGB PNG of its linear values",
+            if float { "a float image" } else { "read `raw`" }
+        ),
+        None,
+    );
+    Ok((safe_file_name(&format!("{stem}.png")), png, wrap))
+}
+
+/// The sRGB transfer function (linear → encoded).
+fn linear_to_srgb(v: f64) -> f64 {
+    if v <= 0.0031308 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+fn albedo(cx: &mut Cx, shape: &X) -> Result<Result<[f64; 3], &'static str>, String> {
+    let Some(b) = shape_bsdf(cx, shape)? else {
+        return Ok(Ok([0.5; 3]));
+    };
     match b.ty() {
         "null" => Ok(Err("null")),
         "dielectric" | "thindielectric" | "roughdielectric" => Ok(Err("dielectric")),
@@ -1268,7 +1412,10 @@ fn albedo(cx: &mut Cx, shape: &X) -> Result<Result<[f64; 3], &'static str>, Stri
         t => {
             let c = match cx.colour(&b, "diffuse_reflectance")? {
                 Some(c) => c,
-                None => cx.colour(&b, "reflectance")?.unwrap_or([0.5; 3]),
+                None => match cx.colour(&b, "base_color")? {
+                    Some(c) => c,
+                    None => cx.colour(&b, "reflectance")?.unwrap_or([0.5; 3]),
+                },
             };
             cx.note(
                 &b,
@@ -1354,6 +1501,12 @@ fn ior(cx: &mut Cx, b: &X, name: &str, default: f64) -> Result<f64, String> {
 
 /// The triangles of an `obj`/`ply` shape, in the world (`m` applied).
 fn file_mesh(cx: &Cx, k: &X, m: &DMat4) -> Result<TriMesh, String> {
+    Ok(file_mesh_uv(cx, k, m)?.0)
+}
+
+/// [`file_mesh`] with the file's per-vertex texture coordinates (empty when it has none; OBJ's
+/// `vt` turned to v = 0 at the image's first row, as Mitsuba reads them).
+fn file_mesh_uv(cx: &Cx, k: &X, m: &DMat4) -> Result<(TriMesh, Vec<[f32; 2]>), String> {
     let kind = k.ty();
     let (fk, f) = k
         .named("filename")
@@ -1362,10 +1515,11 @@ fn file_mesh(cx: &Cx, k: &X, m: &DMat4) -> Result<TriMesh, String> {
     let path = cx.file(fk, f)?;
     let bytes = read_capped(&path).map_err(|e| format!("{}: {e}", k.loc))?;
     let shown = shown(&path);
-    let mut w = if kind == "obj" {
-        meshes::read_obj(&String::from_utf8_lossy(&bytes), &shown)
+    let (mut w, uv) = if kind == "obj" {
+        crate::geometry::meshfile::parse_obj(&String::from_utf8_lossy(&bytes), &shown)
+            .map(|o| (o.mesh, o.uv))
     } else {
-        meshes::read_ply(&bytes, &shown)
+        crate::geometry::meshfile::read_ply(&bytes, &shown).map(|f| (f.mesh, f.uv))
     }
     .map_err(|e| format!("{}: {e}", k.loc))?;
     for p in &mut w.positions {
@@ -1376,7 +1530,7 @@ fn file_mesh(cx: &Cx, k: &X, m: &DMat4) -> Result<TriMesh, String> {
             t.swap(1, 2);
         }
     }
-    Ok(w)
+    Ok((w, uv))
 }
 
 /// A mesh that is one planar rectangle (four corners, two triangles): its centre, edge
@@ -1469,6 +1623,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         root: root.clone(),
         search,
         referenced: Default::default(),
+        mapped: Default::default(),
     };
     for d in &docs {
         collect_ids(d, &mut cx.ids);
@@ -2043,8 +2198,49 @@ fn shape(
             Some("poser's area lights are rectangles (a `rectangle`, or a mesh of one)"),
         );
     }
-    let alb = albedo(cx, k)?;
-    let alb = match alb {
+    // A bitmap that becomes the mesh's image texture: on an `obj`/`ply` with texture
+    // coordinates, or on a `rectangle` (Mitsuba's uv: (x + 1)/2, (y + 1)/2 of its local square).
+    let bitmap = if matches!(kind.as_str(), "obj" | "ply" | "rectangle") {
+        bitmap_of(cx, k)?
+    } else {
+        None
+    };
+    let uv_mesh = match (&bitmap, kind.as_str()) {
+        (Some(b), "obj" | "ply") => {
+            let (mesh, uv) = file_mesh_uv(cx, k, &m)?;
+            if uv.is_empty() {
+                cx.note(
+                    b,
+                    format!("the `{kind}` has no texture coordinates for its bitmap"),
+                    Some("the bitmap's mean colour is used (noted below)"),
+                );
+                None
+            } else {
+                Some((mesh, uv))
+            }
+        }
+        (Some(_), "rectangle") => {
+            let mut w = TriMesh {
+                positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                    .map(|(x, y)| m.transform_point3(DVec3::new(x, y, 0.0)))
+                    .to_vec(),
+                triangles: vec![[0, 1, 2], [0, 2, 3]],
+            };
+            if m.determinant() < 0.0 {
+                for t in &mut w.triangles {
+                    t.swap(1, 2);
+                }
+            }
+            Some((w, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]))
+        }
+        _ => None,
+    };
+    if let (Some(b), Some(_)) = (&bitmap, &uv_mesh) {
+        cx.mapped.insert(b.loc.clone());
+    }
+    let alb = albedo(cx, k);
+    cx.mapped.clear();
+    let alb = match alb? {
         Ok(a) => a,
         Err("null") => return Ok(()), // a medium boundary (the sea box)
         Err(_) => {
@@ -2091,6 +2287,34 @@ fn shape(
         o.insert("rotation".into(), arr(euler_xyz(frame)));
     };
     let analytic = !sheared && !mirror;
+    if let (Some(b), Some((mesh, uv))) = (&bitmap, &uv_mesh) {
+        let (image, bytes, wrap) = bitmap_asset(cx, b, &format!("{name}-texture"))?;
+        let file = safe_file_name(&format!("{}.glb", name));
+        let tex = meshes::MeshTexture {
+            uv,
+            image: &image,
+            wrap,
+        };
+        assets_out.push((file.clone(), meshes::glb_textured(mesh, Some(&tex), &name)));
+        assets_out.push((image.clone(), bytes));
+        o.insert("shape".into(), Value::String("mesh".into()));
+        o.insert("path".into(), Value::String(format!("{assets}/{file}")));
+        o.insert("albedo".into(), arr(alb));
+        objects.push(Value::Table(o));
+        let src = b
+            .named("filename")
+            .and_then(|f| f.attr("value"))
+            .unwrap_or("");
+        cx.note(
+            b,
+            format!(
+                "texture `{src}` is imported as the image texture of `{name}` \
+                 ({assets}/{image}, sampled bilinearly at the mipmap level the cameras' GSD asks for)"
+            ),
+            Some("docs/textures.md, \"Textured meshes\""),
+        );
+        return Ok(());
+    }
     match kind.as_str() {
         "rectangle" if analytic => {
             o.insert("shape".into(), Value::String("plane".into()));
