@@ -11,6 +11,7 @@
 //! | nothing outside `src/scene` names `scene::format` | only the front end reads the raw scene format; everything else uses the resolved model |
 //! | no backend names the front end's insides (`scene::reader`, `resolve`, `check`, `format`, `source`) | a backend works from the resolved model; it may load a scene (`scene::load`, in its tests) and format numbers as diagnostics do (`scene::diag`) |
 //! | nothing outside `src/cli` (and `src/main.rs`) imports `crate::cli` | the library sits under the CLI: `explain`, point lists and channel names live in the library, for the CLI, Python and the fuzz targets alike |
+//! | no function in `src/` is over 150 lines, but for a commented allowlist that may only shrink | a long function is a list of steps that wants names |
 //!
 //! Each hole a scan can have is planted in a probe test below, which expects the violation.
 
@@ -478,4 +479,304 @@ fn probe_the_library_under_the_cli() {
         .is_empty()
     );
     assert!(planted("main.rs", "use crate::cli::main;").is_empty());
+}
+
+// ---- Function length ----------------------------------------------------------------------
+
+/// The longest a function in `src/` may be, in lines from its `fn` line to its closing brace.
+/// A longer function is a list of steps that wants names; split it.
+const MAX_FN_LINES: usize = 150;
+
+/// The functions still over [`MAX_FN_LINES`], as `file::name` with their line count when the
+/// check was written. The list may only shrink: a function not on it may not grow past the
+/// limit, and one on it may not grow past its count (split it instead). Delete an entry once its
+/// function is split; the check fails on an entry that is no longer over the limit.
+const LONG_FNS: &[(&str, usize)] = &[
+    ("import/mitsuba.rs::import", 408),
+    ("plan/dive.rs::simulate_losing", 353),
+    ("import/blender.rs::convert", 329),
+    ("plan/dive.rs::verdict", 300),
+    ("evaluate/mod.rs::evaluate_observations", 276),
+    ("backend/mitsuba/view.rs::port_shapes", 275),
+    ("backend/blender/data.rs::describe", 271),
+    ("lesson/dive.rs::html", 240),
+    ("plan/network.rs::expand", 239),
+    ("cli/dive.rs::text_report", 232),
+    ("backend/native/mod.rs::render_image", 222),
+    ("lesson/html.rs::page", 221),
+    ("backend/native/integrator.rs::li", 207),
+    ("import/mitsuba.rs::shape", 270),
+    ("export/gltf.rs::export", 192),
+    ("scene/check.rs::scene", 190),
+    ("evaluate/mod.rs::evaluate_images", 187),
+    ("cli/evaluate.rs::run", 185),
+    ("evaluate/report.rs::markdown", 183),
+    ("geometry/meshfile.rs::read_ply", 203),
+    ("plan/survey.rs::survey", 175),
+    ("compare/report.rs::plot_svg", 174),
+    ("plan/ssrf.rs::to_ssrf", 169),
+    ("lesson/dive.rs::run", 165),
+    ("scene/resolve/render.rs::render", 162),
+    ("scene/source.rs::load_file", 157),
+    ("import/mitsuba.rs::sensor", 155),
+    ("optics/column.rs::run_batch", 152),
+];
+
+/// `code` with the insides of comments, strings and character literals blanked to spaces (line
+/// breaks kept), so that braces can be counted and `fn` found in code only.
+fn blank_non_code(code: &str) -> Vec<u8> {
+    let b = code.as_bytes();
+    let mut out = b.to_vec();
+    let blank = |out: &mut Vec<u8>, from: usize, to: usize| {
+        for c in &mut out[from..to.min(b.len())] {
+            if *c != b'\n' {
+                *c = b' ';
+            }
+        }
+    };
+    let mut i = 0;
+    while i < b.len() {
+        let prev_ident = i > 0 && is_ident(b[i - 1]);
+        if b[i..].starts_with(b"//") {
+            let end = b[i..]
+                .iter()
+                .position(|&c| c == b'\n')
+                .map_or(b.len(), |e| i + e);
+            blank(&mut out, i, end);
+            i = end;
+        } else if b[i..].starts_with(b"/*") {
+            let (mut depth, mut j) = (1, i + 2);
+            while j < b.len() && depth > 0 {
+                if b[j..].starts_with(b"/*") {
+                    depth += 1;
+                    j += 2;
+                } else if b[j..].starts_with(b"*/") {
+                    depth -= 1;
+                    j += 2;
+                } else {
+                    j += 1;
+                }
+            }
+            blank(&mut out, i, j);
+            i = j;
+        } else if !prev_ident && (b[i] == b'r' || b[i..].starts_with(b"br")) && {
+            let k = i + if b[i] == b'b' { 2 } else { 1 };
+            let h = b[k..].iter().take_while(|&&c| c == b'#').count();
+            b.get(k + h) == Some(&b'"')
+        } {
+            // A raw string: r"…", r#"…"#, br"…".
+            let k = i + if b[i] == b'b' { 2 } else { 1 };
+            let h = b[k..].iter().take_while(|&&c| c == b'#').count();
+            let mut close = vec![b'"'];
+            close.extend(std::iter::repeat_n(b'#', h));
+            let body = k + h + 1;
+            let end = b[body..]
+                .windows(close.len())
+                .position(|w| w == close.as_slice())
+                .map_or(b.len(), |e| body + e + close.len());
+            blank(&mut out, body, end - close.len().min(end - body));
+            i = end;
+        } else if b[i] == b'"' {
+            let mut j = i + 1;
+            while j < b.len() && b[j] != b'"' {
+                j += if b[j] == b'\\' { 2 } else { 1 };
+            }
+            blank(&mut out, i + 1, j);
+            i = j + 1;
+        } else if b[i] == b'\'' {
+            // A character literal ('x', '\n', '\u{7f}', 'é'), or else a lifetime ('a).
+            if b.get(i + 1) == Some(&b'\\') {
+                let mut j = i + 2;
+                while j < b.len() && b[j] != b'\'' {
+                    j += 1;
+                }
+                blank(&mut out, i + 1, j);
+                i = j + 1;
+            } else {
+                let ch = code[i + 1..].chars().next().map_or(1, char::len_utf8);
+                if b.get(i + 1 + ch) == Some(&b'\'') {
+                    blank(&mut out, i + 1, i + 1 + ch);
+                    i += 2 + ch;
+                } else {
+                    i += 1;
+                }
+            }
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// Every function with a body in `code`, as (name, length in lines), nested ones included.
+fn fn_lengths(code: &str) -> Vec<(String, usize)> {
+    let b = blank_non_code(code);
+    let line_at = |i: usize| b[..i].iter().filter(|&&c| c == b'\n').count();
+    let mut found = Vec::new();
+    let mut i = 0;
+    while let Some(at) = b[i..].windows(3).position(|w| w == b"fn ") {
+        let start = i + at;
+        i = start + 3;
+        if start > 0 && is_ident(b[start - 1]) {
+            continue;
+        }
+        let name_from = start
+            + 3
+            + b[start + 3..]
+                .iter()
+                .take_while(|c| c.is_ascii_whitespace())
+                .count();
+        let name_len = b[name_from..].iter().take_while(|&&c| is_ident(c)).count();
+        if name_len == 0 {
+            continue;
+        }
+        let name = String::from_utf8_lossy(&b[name_from..name_from + name_len]).into_owned();
+        // The body opens at the first `{` outside the signature's brackets; a `;` first means
+        // a declaration without a body (in a trait or an `extern` block).
+        let mut depth = 0i32;
+        let mut j = name_from + name_len;
+        let open = loop {
+            match b.get(j) {
+                None => break None,
+                Some(b'(' | b'[' | b'<') => depth += 1,
+                Some(b')' | b']') => depth -= 1,
+                Some(b'>') if b[j - 1] != b'-' && b[j - 1] != b'=' => depth -= 1,
+                Some(b';') if depth <= 0 => break None,
+                Some(b'{') if depth <= 0 => break Some(j),
+                _ => {}
+            }
+            j += 1;
+        };
+        let Some(open) = open else { continue };
+        let mut depth = 0usize;
+        let mut k = open;
+        while k < b.len() {
+            match b[k] {
+                b'{' => depth += 1,
+                b'}' => {
+                    depth -= 1;
+                    if depth == 0 {
+                        break;
+                    }
+                }
+                _ => {}
+            }
+            k += 1;
+        }
+        found.push((name, line_at(k) - line_at(start) + 1));
+    }
+    found
+}
+
+/// Every function in `src/` as (`file::name`, lines).
+fn all_fn_lengths() -> Vec<(String, usize)> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let mut all = Vec::new();
+    for p in files {
+        let rel = p
+            .strip_prefix(&src)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        for (name, n) in fn_lengths(&std::fs::read_to_string(&p).unwrap()) {
+            all.push((format!("{rel}::{name}"), n));
+        }
+    }
+    all
+}
+
+/// The breaches of the length rule in `fns` against `allowed`.
+fn length_violations(fns: &[(String, usize)], allowed: &[(&str, usize)]) -> Vec<String> {
+    let mut bad = Vec::new();
+    for (name, n) in fns {
+        match allowed.iter().find(|(a, _)| a == name) {
+            None if *n > MAX_FN_LINES => bad.push(format!(
+                "{name} is {n} lines, over the limit of {MAX_FN_LINES}: split it into named steps"
+            )),
+            Some((_, cap)) if n > cap => bad.push(format!(
+                "{name} grew to {n} lines, past its allowlisted {cap}: split it"
+            )),
+            _ => {}
+        }
+    }
+    for (a, _) in allowed {
+        if !fns.iter().any(|(name, n)| name == a && *n > MAX_FN_LINES) {
+            bad.push(format!(
+                "{a} is allowlisted but no longer over {MAX_FN_LINES} lines (or gone): drop it from LONG_FNS"
+            ));
+        }
+    }
+    bad
+}
+
+#[test]
+fn no_function_is_over_the_length_limit() {
+    let fns = all_fn_lengths();
+    assert!(fns.len() > 500, "found only {} functions", fns.len());
+    let mut long: Vec<_> = fns.iter().filter(|(_, n)| *n > MAX_FN_LINES).collect();
+    long.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    let bad = length_violations(&fns, LONG_FNS);
+    assert!(
+        bad.is_empty(),
+        "function length:\n{}\n\nall over the limit now:\n{}",
+        bad.join("\n"),
+        long.iter()
+            .map(|(f, n)| format!("    (\"{f}\", {n}),"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+}
+
+/// The scan measures what it must: strings, comments and character literals holding braces do
+/// not end a body early, nested functions and methods are measured, bodiless declarations are not.
+#[test]
+fn the_length_scan_measures_functions() {
+    let code = "fn a() {\n    let s = \"}}}\";\n    let c = '}';\n    // }\n    /* } */\n    let r = r#\"}\"#;\n    fn inner<'a>(x: &'a str) -> &'a str {\n        x\n    }\n}\ntrait T {\n    fn decl(&self) -> Vec<u8>;\n    fn with_body(&self) where Self: Sized { }\n}\n";
+    assert_eq!(
+        fn_lengths(code),
+        [
+            ("a".to_string(), 10),
+            ("inner".to_string(), 3),
+            ("with_body".to_string(), 1)
+        ]
+    );
+}
+
+/// A planted long function is caught; an allowlisted one may not grow, and an allowlist entry
+/// that is no longer long must go, so the list can only shrink.
+#[test]
+fn probe_a_long_function() {
+    let body = "    step();\n".repeat(MAX_FN_LINES);
+    let code = format!("fn long_one() {{\n{body}}}\nfn short() {{}}\n");
+    let fns: Vec<_> = fn_lengths(&code)
+        .into_iter()
+        .map(|(n, l)| (format!("planted.rs::{n}"), l))
+        .collect();
+    assert_eq!(
+        fns[0],
+        ("planted.rs::long_one".to_string(), MAX_FN_LINES + 2)
+    );
+    let bad = length_violations(&fns, &[]);
+    assert!(
+        bad.len() == 1 && bad[0].contains("planted.rs::long_one is 152 lines, over the limit"),
+        "{bad:?}"
+    );
+    assert!(length_violations(&fns, &[("planted.rs::long_one", MAX_FN_LINES + 2)]).is_empty());
+    let grew = length_violations(&fns, &[("planted.rs::long_one", MAX_FN_LINES + 1)]);
+    assert!(
+        grew.len() == 1 && grew[0].contains("grew to 152 lines"),
+        "{grew:?}"
+    );
+    let stale = length_violations(
+        &fns,
+        &[("planted.rs::long_one", 152), ("planted.rs::short", 200)],
+    );
+    assert!(
+        stale.len() == 1
+            && stale[0].contains("planted.rs::short is allowlisted but no longer over"),
+        "{stale:?}"
+    );
 }
