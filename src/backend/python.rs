@@ -115,12 +115,20 @@ pub fn command(script: &Path) -> Command {
     c
 }
 
-/// Check that a module can be imported; the error tells the user how to set the environment up.
+/// Check that a module is installed; the error tells the user how to set the environment up.
+/// The module is found (`importlib.util.find_spec`), not imported: importing `bpy` takes
+/// seconds, and every render and import checked it before starting the script that imports it
+/// anyway (a module that is installed but fails to import fails there, with its traceback).
 pub fn require_module(module: &str) -> Result<(), String> {
     let py = interpreter();
     mark_used(&py);
     let ok = Command::new(&py)
-        .args(["-c", &format!("import {module}")])
+        .args([
+            "-c",
+            &format!(
+                "import importlib.util, sys\nsys.exit(importlib.util.find_spec({module:?}) is None)"
+            ),
+        ])
         .output()
         .map(|o| o.status.success())
         .unwrap_or(false);
