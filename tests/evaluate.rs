@@ -1,8 +1,10 @@
 //! `poser evaluate` with the real COLMAP (pycolmap, pinned in `backends/`) on the quick forms
 //! of the deformation lessons: the numbers each lesson is about, and clear failures.
 use poser::evaluate::{self, Evaluation, Options};
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::Command;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// The quick form of a lesson: a 10 × 5 m corner of the plot.
 fn quick(lesson: &str, extra: &[&str]) -> poser::model::Model {
@@ -15,7 +17,25 @@ fn quick(lesson: &str, extra: &[&str]) -> poser::model::Model {
     }
 }
 
+/// The evaluation of a lesson's quick form, computed once per process: several tests read the
+/// same one (the flat port's default run three times, in_air's and the dome's twice each), and
+/// each is a COLMAP bundle adjustment in Python. The evaluation is deterministic (seeded), so a
+/// shared result is the one each test would compute.
 fn run(lesson: &str, extra: &[&str], opts: &Options) -> Evaluation {
+    type Cell = Arc<OnceLock<Evaluation>>;
+    static DONE: Mutex<BTreeMap<String, Cell>> = Mutex::new(BTreeMap::new());
+    let key = format!("{lesson} {extra:?} {opts:?}");
+    let cell = DONE
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .entry(key)
+        .or_default()
+        .clone();
+    cell.get_or_init(|| evaluate_quick(lesson, extra, opts))
+        .clone()
+}
+
+fn evaluate_quick(lesson: &str, extra: &[&str], opts: &Options) -> Evaluation {
     let model = quick(lesson, extra);
     let ev = evaluate::evaluate_observations(&model, opts, &|_, _, _| {})
         .unwrap_or_else(|e| panic!("{lesson}: {e}"));
