@@ -12,6 +12,8 @@
 mod support;
 use poser::backend::Backend;
 use poser::bench::parity::{Row, run_scene};
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// At a tenth of the resolution and 16 spp, disk centroids are located to about 0.1–0.6 px
 /// RMS (measured: calibration_flat 0.14 native, 0.16 Cycles, 0.62 Mitsuba, whose images are
@@ -37,20 +39,7 @@ fn check(name: &str, skip: &[(&str, &str)]) -> Row {
 /// [`check`], where the backends in `refuse` must refuse the scene with a message containing
 /// the given words (a refusal is part of a backend's contract, as in `tests/out/`).
 fn check_refusing(name: &str, skip: &[(&str, &str)], refuse: &[(&str, &str)]) -> Row {
-    require_python();
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let scene = poser::bench::parity::shipped_scenes(root)
-        .into_iter()
-        .find(|p| p.file_stem().is_some_and(|s| s == name))
-        .unwrap_or_else(|| panic!("no shipped scene `{name}`"));
-    let out = tempfile::tempdir().unwrap();
-    let row = run_scene(
-        &scene,
-        &Backend::ALL,
-        poser::bench::parity::Form::new(true),
-        out.path(),
-    )
-    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let row = rendered(name);
     let mut failures = Vec::new();
     for b in &row.backends {
         let expected = refuse.iter().find(|(r, _)| *r == b.backend);
@@ -100,6 +89,83 @@ fn check_refusing(name: &str, skip: &[(&str, &str)], refuse: &[(&str, &str)]) ->
     assert!(row.status != "dark", "{name}: black in every backend");
     assert!(failures.is_empty(), "{name}:\n  {}", failures.join("\n  "));
     row
+}
+
+fn scene(name: &str) -> std::path::PathBuf {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    poser::bench::parity::shipped_scenes(root)
+        .into_iter()
+        .find(|p| p.file_stem().is_some_and(|s| s == name))
+        .unwrap_or_else(|| panic!("no shipped scene `{name}`"))
+}
+
+/// `poser bench parity --quick`'s row of `name`, rendered once per process (a test of a scene
+/// that renders as another, [`check_like`], reads that scene's row).
+fn rendered(name: &str) -> Row {
+    type Cell = Arc<OnceLock<Row>>;
+    static DONE: Mutex<BTreeMap<String, Cell>> = Mutex::new(BTreeMap::new());
+    let cell = DONE
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .entry(name.to_string())
+        .or_default()
+        .clone();
+    cell.get_or_init(|| {
+        require_python();
+        let out = tempfile::tempdir().unwrap();
+        let row = run_scene(
+            &scene(name),
+            &Backend::ALL,
+            poser::bench::parity::Form::new(true),
+            out.path(),
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        for b in &row.backends {
+            eprintln!("{name}: {} {:.1} s", b.backend, b.seconds);
+        }
+        row
+    })
+    .clone()
+}
+
+/// The model the parity run renders of `name` (quick form, first pose), as JSON, without what
+/// does not reach an image: the name, description, source, lesson, dive plan and network.
+fn first_pose_model(name: &str) -> serde_json::Value {
+    let model = poser::scene::load(
+        &scene(name),
+        &[poser::bench::parity::PARITY_DAYLIGHT.to_string()],
+    )
+    .unwrap_or_else(|f| panic!("{name}: {}", f.render()))
+    .model
+    .with_resolution_scale(poser::bench::parity::Form::new(true).scale);
+    let mut v = serde_json::to_value(&model).unwrap();
+    let m = v.as_object_mut().unwrap();
+    for key in [
+        "name",
+        "description",
+        "source",
+        "lesson",
+        "diver",
+        "network",
+    ] {
+        m.remove(key);
+    }
+    m["poses"].as_array_mut().unwrap().truncate(1);
+    v
+}
+
+/// [`check`] of a scene whose parity run renders exactly what `like`'s does (the same model at
+/// the first pose, [`first_pose_model`]): the models are compared and `like`'s renders checked
+/// (shared with `like`'s own test, [`rendered`]).
+fn check_like(name: &str, like: &str, skip: &[(&str, &str)]) {
+    let (a, b) = (first_pose_model(name), first_pose_model(like));
+    assert!(
+        a == b,
+        "{name} no longer renders as {like} at its first pose: give it its own renders\n{}\n{}",
+        serde_json::to_string(&a).unwrap(),
+        serde_json::to_string(&b).unwrap()
+    );
+    check(like, skip);
 }
 
 #[test]
@@ -217,8 +283,8 @@ fn coral_self_occlusion() {
 
 #[test]
 fn scuba_survey() {
-    // paper_survey's scene with a different dive plan: the same renders.
-    check("scuba_survey", &[]);
+    // paper_survey's scene with a different dive plan: the same renders, checked once.
+    check_like("scuba_survey", "paper_survey", &[]);
 }
 
 #[test]
@@ -236,8 +302,13 @@ fn flat_port_deformation() {
 
 #[test]
 fn flat_port_deformation_obliques() {
-    // The same scene and first pose as flat_port_deformation: the same Mitsuba housing shadow.
-    check("flat_port_deformation_obliques", &[("native", "mitsuba")]);
+    // The same scene and first pose as flat_port_deformation: the same renders (and Mitsuba
+    // housing shadow), checked once.
+    check_like(
+        "flat_port_deformation_obliques",
+        "flat_port_deformation",
+        &[("native", "mitsuba")],
+    );
 }
 
 #[test]
