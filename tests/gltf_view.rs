@@ -94,7 +94,7 @@ fn synthetic(dir: &Path) -> Vec<PathBuf> {
 fn khronos_validator_finds_no_error_in_any_scenario() {
     let tools = tools();
     let tmp = tempfile::tempdir().unwrap();
-    let mut files: Vec<PathBuf> = scenarios().iter().map(|s| export(s, tmp.path())).collect();
+    let mut files: Vec<PathBuf> = support::map_parallel(&scenarios(), |s| export(s, tmp.path()));
     files.extend(synthetic(tmp.path()));
     let o = Command::new("node")
         .arg(tools.join("validate.mjs"))

@@ -94,10 +94,15 @@ fn save_blend_then_import_gives_back_every_shipped_scene() {
     let mut done = Vec::new();
     let mut skipped = Vec::new();
     let mut failed = Vec::new();
-    for scene in support::shipped_scenes() {
+    // The scenes side by side, one per core (each Blender process is mostly single-threaded).
+    let scenes = support::shipped_scenes();
+    let results = support::map_parallel(&scenes, |scene| {
         let dir = tempfile::tempdir().unwrap();
+        round_trip(scene, dir.path())
+    });
+    for (scene, result) in scenes.iter().zip(results) {
         let name = scene.file_stem().unwrap().to_string_lossy().into_owned();
-        match round_trip(&scene, dir.path()) {
+        match result {
             Ok(None) => done.push(name),
             Ok(Some(why)) => skipped.push(format!("{name}: {why}")),
             Err(e) => failed.push(format!("{name}: {e}")),
@@ -316,7 +321,15 @@ fn a_scene_built_in_blender_imports_and_renders_as_cycles_renders_it() {
     // Rendered natively, the imported scene has Cycles' channel means (the Principled BSDF's
     // specular layer is the known difference).
     let out = poser()
-        .args(["render", "--samples", "256", "-o"])
+        // Like for like: daylight traced through any water, as Cycles does.
+        .args([
+            "render",
+            "--samples",
+            "256",
+            "--set",
+            r#"render.daylight="traced""#,
+            "-o",
+        ])
         .arg(d.join("native"))
         .arg(&toml)
         .output()

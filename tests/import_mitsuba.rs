@@ -86,10 +86,14 @@ fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<Strin
 fn round_trip_all(sub: &str) -> (Vec<String>, Vec<String>) {
     let mut done = Vec::new();
     let mut skipped = Vec::new();
-    for scene in scenes(sub) {
+    let scenes = scenes(sub);
+    let results = support::map_parallel(&scenes, |scene| {
         let dir = tempfile::tempdir().unwrap();
+        round_trip(scene, dir.path(), 6)
+    });
+    for (scene, result) in scenes.iter().zip(results) {
         let name = scene.file_stem().unwrap().to_string_lossy().into_owned();
-        match round_trip(&scene, dir.path(), 6) {
+        match result {
             Ok(None) => done.push(name),
             Ok(Some(why)) => skipped.push(format!("{name}: {why}")),
             Err(e) => panic!("{name}: {e}"),

@@ -59,3 +59,30 @@ pub fn pinned_scenes() -> Vec<std::path::PathBuf> {
     }
     out
 }
+
+/// `f` over every item, on as many threads as the machine has cores; the results in the items'
+/// order. For suites that run one external process (Blender, a `poser` command) per shipped
+/// scene in a single test: the processes are mostly single-threaded, so running them one at a
+/// time left all but one core idle.
+pub fn map_parallel<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    use std::sync::Mutex;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let next = AtomicUsize::new(0);
+    let out: Vec<Mutex<Option<R>>> = items.iter().map(|_| Mutex::new(None)).collect();
+    let workers = std::thread::available_parallelism().map_or(2, |n| n.get());
+    std::thread::scope(|s| {
+        for _ in 0..workers.min(items.len()) {
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(item) = items.get(i) else { break };
+                    let r = f(item);
+                    *out[i].lock().unwrap() = Some(r);
+                }
+            });
+        }
+    });
+    out.into_iter()
+        .map(|m| m.into_inner().unwrap().expect("every item was done"))
+        .collect()
+}
