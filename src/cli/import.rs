@@ -18,6 +18,20 @@ pub struct Args {
     /// Folder for the mesh assets (default: `<scene name>_assets` beside the scene file).
     #[arg(long)]
     pub assets: Option<PathBuf>,
+    /// Render the source in its own renderer (Mitsuba 3 for `.xml`) and the imported scene
+    /// natively (daylight traced), at a small size, print the difference per channel and per
+    /// region, and fail when a channel's mean differs by more than `--tolerance`.
+    #[arg(long)]
+    pub verify: bool,
+    /// `--verify`'s tolerance on each channel's mean, in per cent.
+    #[arg(long, default_value_t = 2.0, requires = "verify")]
+    pub tolerance: f64,
+    /// `--verify`'s image width in pixels (the height follows the camera's aspect).
+    #[arg(long, default_value_t = 64, requires = "verify")]
+    pub verify_width: u32,
+    /// `--verify`'s samples per pixel, in both renderers.
+    #[arg(long, default_value_t = 64, requires = "verify")]
+    pub verify_samples: u32,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
@@ -82,6 +96,72 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         if m.water.is_some() { ", water" } else { "" },
         args.out.display(),
         imported.notes.len()
+    );
+    if args.verify {
+        verify(args, m, &out_dir, &stem, blend)?;
+    }
+    Ok(())
+}
+
+/// `--verify`: the source against the imported scene ([`crate::import::verify`]).
+fn verify(
+    args: &Args,
+    m: &crate::model::Model,
+    out_dir: &std::path::Path,
+    stem: &str,
+    blend: bool,
+) -> Result<(), CliError> {
+    if blend {
+        return Err(CliError::Failed(
+            "--verify: a Blender source is not verified yet (only Mitsuba 3 files are rendered \
+             by their own renderer)\n  help: render both with `poser render` and `poser compare`"
+                .into(),
+        ));
+    }
+    if !(args.tolerance.is_finite() && args.tolerance > 0.0) || args.verify_width == 0 {
+        return Err(CliError::Usage(
+            "--tolerance and --verify-width must be positive".into(),
+        ));
+    }
+    let width = m.cameras.first().map(|c| c.width).unwrap_or(1).max(1);
+    let scale = (args.verify_width as f64 / width as f64).min(1.0);
+    // The same light transport in both: the water column's daylight is native-only.
+    let traced = super::load_scene(&super::SceneArgs {
+        scene: args.out.clone(),
+        sets: vec!["render.daylight=\"traced\"".into()],
+    })?
+    .model;
+    let model = super::common::apply_scale(traced, Some(scale))?;
+    let work = out_dir.join(format!("{}_verify", crate::import::safe_file_name(stem)));
+    std::fs::create_dir_all(&work)
+        .map_err(|e| CliError::Failed(format!("{}: {e}", work.display())))?;
+    let c =
+        crate::import::verify::verify_mitsuba(&args.files[0], &model, args.verify_samples, &work)
+            .map_err(|e| CliError::Failed(format!("--verify: {e}")))?;
+    let cam = &model.cameras[0];
+    eprintln!(
+        "verify: {} rendered by Mitsuba 3 and the imported scene natively, {}×{} px, {} spp \
+         (images in {})",
+        args.files[0].display(),
+        cam.width,
+        cam.height,
+        args.verify_samples,
+        work.display()
+    );
+    for l in c.lines() {
+        eprintln!("{l}");
+    }
+    let worst = 100.0 * c.worst();
+    if worst > args.tolerance {
+        return Err(CliError::Failed(format!(
+            "--verify: a channel's mean differs by {worst:.2} %, beyond the tolerance of {} %\n  \
+             help: the notes at the top of the scene file list what was dropped or approximated",
+            args.tolerance
+        )));
+    }
+    eprintln!(
+        "verify: ok, every channel within {} % (worst {worst:.2} %)",
+        args.tolerance
     );
     Ok(())
 }

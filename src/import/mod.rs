@@ -7,6 +7,7 @@
 //! | [`mitsuba`] | Mitsuba 3 XML (quick-xml; no DOCTYPE, no entities; `include`, `default`, `ref`) | cameras, poses, objects, lights, water |
 //! | [`blender`] | Blender `.blend` files, read by the pinned `bpy` with scripts off (`backends/blender/read_blend.py`) | cameras, rig, poses, objects, lights, water |
 //! | [`meshes`] | Wavefront OBJ, PLY (ASCII and binary) | glTF 2.0 binary (`.glb`) assets |
+//! | [`verify`] | the source rendered by Mitsuba, the imported scene rendered natively | the per-channel and per-region differences (`poser import --verify`) |
 //!
 //! Whatever the poser format cannot express is dropped with a [`Note`] naming the element, its
 //! file, line and column, and a hint; the notes go to the terminal and, as comments, to the top
@@ -16,6 +17,7 @@
 pub mod blender;
 pub mod meshes;
 pub mod mitsuba;
+pub mod verify;
 
 use glam::{DMat3, DVec3, EulerRot};
 use std::path::{Path, PathBuf};
