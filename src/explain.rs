@@ -3,7 +3,7 @@
 //! [`Model`] (read-only, no I/O), what `poser explain` prints and Python's `Scene.explain()`
 //! returns; it owns no computation of its own beyond the nadir GSD, calling the planner's
 //! footprint, the texture budget and the water column for the rest.
-use crate::model::{IorSource, LensModel, Model, Phase, Port, SeaSurface};
+use crate::model::{Daylight, IorSource, LensModel, Model, Phase, Port, SeaSurface};
 use crate::optics::project::Projector;
 use std::fmt::Write;
 
@@ -331,26 +331,28 @@ fn contents(s: &mut String, m: &Model) {
 /// into water without a bottom. The solved column lights that water as if the seabed went on at
 /// the site's depth, traced daylight leaves it bottomless: where the share is not zero the two
 /// estimators differ (docs/column.md, "Views past the seabed").
-fn bottomless(s: &mut String, m: &Model) {
-    let Ok(scene) = crate::geometry::Bvh::of_model(m) else {
+fn bottomless(s: &mut String, past: Option<f64>) {
+    let Some(past) = past else {
         return;
     };
-    let seen = crate::evaluate::texture_seen(m, &scene);
-    if seen.bottomless >= 0.0005 {
+    if past > 0.0 {
         let _ = writeln!(
             s,
-            "  {:.1} % of the cameras' view (16 × 12 rays through up to 64 images) looks down past \
+            "  {:.2} % of the cameras' view (16 × 12 rays through up to 64 images) looks down past \
              every object into water without a bottom, which the column lights as if \
              the seabed went on at the site's depth and traced daylight leaves bottomless (help: \
              widen the seabed past the network's footprint, or add one)",
-            100.0 * seen.bottomless
+            100.0 * past
         );
     }
 }
 
 /// Daylight in the native renderer: the water column, or traced, and why.
 fn daylight(s: &mut String, m: &Model) {
-    let (column, why) = m.daylight_choice();
+    let past = crate::geometry::Bvh::of_model(m)
+        .ok()
+        .map(|b| crate::geometry::seen::texture_seen(m, &b).bottomless);
+    let (column, why) = m.daylight_choice(past);
     let _ = writeln!(s, "daylight (native): {why}");
     if let Some(input) = &column {
         match crate::optics::column::solve(input) {
@@ -364,8 +366,9 @@ fn daylight(s: &mut String, m: &Model) {
             }
         }
     }
-    if m.water.is_some() {
-        bottomless(s, m);
+    // Under "auto" the choice above already names views past the seabed.
+    if m.column_input().is_ok() && (column.is_some() || m.render.daylight == Daylight::Traced) {
+        bottomless(s, past);
     }
     if let Some(gain) = m.surface_reflection_gain() {
         let _ = writeln!(

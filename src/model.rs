@@ -343,6 +343,10 @@ pub struct Object {
     pub pose: Pose,
     pub scale: DVec3,
     pub material: Material,
+    /// Scenery, not site (`backdrop = true`): rendered everywhere, left out of the planner's
+    /// coverage, the evaluation's tie points and the texture checks.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub backdrop: bool,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -769,13 +773,13 @@ pub struct RenderSettings {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Daylight {
-    /// The column where it applies ([`Model::column_input`]), else traced.
+    /// The default: the column where it applies ([`Model::column_input`]) and every view ends
+    /// on the scene's seabed ([`Model::daylight_choice`]), else traced.
+    #[default]
     Auto,
     /// Light the scene with the solved water column ([`crate::optics::column`]).
     Column,
-    /// Random walks through the water, as Mitsuba and Cycles do (the default until the
-    /// column's bias on strong relief is measured, docs/column.md).
-    #[default]
+    /// Random walks through the water, as Mitsuba and Cycles do.
     Traced,
 }
 
@@ -1298,8 +1302,15 @@ impl Model {
     }
 
     /// The column the native renderer lights this scene with (`None`: daylight is traced), and
-    /// why.
-    pub fn daylight_choice(&self) -> (Option<crate::optics::column::ColumnInput>, String) {
+    /// why. `past_seabed` is the share of the cameras' view that heads down and hits nothing
+    /// ([`crate::geometry::seen`]; `None`: not measured, taken as none): under `"auto"` any such
+    /// view keeps daylight traced, because the column lights that water as if the seabed went on
+    /// while Mitsuba, Cycles and traced daylight leave it bottomless (docs/column.md, "Views past
+    /// the seabed").
+    pub fn daylight_choice(
+        &self,
+        past_seabed: Option<f64>,
+    ) -> (Option<crate::optics::column::ColumnInput>, String) {
         if self.render.daylight == Daylight::Traced {
             return (
                 None,
@@ -1307,6 +1318,21 @@ impl Model {
             );
         }
         match self.column_input() {
+            Ok(_)
+                if self.render.daylight == Daylight::Auto
+                    && past_seabed.is_some_and(|p| p > 0.0) =>
+            {
+                (
+                    None,
+                    format!(
+                        "traced: {:.1} % of the cameras' view looks past the seabed into water \
+                         without a bottom, which the column would light as if the seabed went on \
+                         (help: widen the seabed past the network's footprint, or set \
+                         render.daylight = \"column\" to light it so)",
+                        100.0 * past_seabed.unwrap_or(0.0)
+                    ),
+                )
+            }
             Ok(input) => (
                 Some(input),
                 format!(
@@ -1316,7 +1342,7 @@ impl Model {
                     if self.render.daylight == Daylight::Column {
                         " (render.daylight = \"column\")"
                     } else {
-                        ""
+                        " (render.daylight = \"auto\", the default)"
                     }
                 ),
             ),

@@ -205,7 +205,7 @@ fn a_bounce_limit_that_drops_light_is_a_warning_with_its_share() {
     let text = SCENE
         .replace("LIGHT", SUN)
         .replace("jerlov = \"IB\"", "jerlov = \"3C\"")
-        + "[render]\nbounces = 4\n";
+        + "[render]\nbounces = 4\ndaylight = \"traced\"\n";
     std::fs::write(&p, &text).unwrap();
     let l = poser::scene::load(&p, &[]).unwrap();
     let w = l.render_warnings();
@@ -229,7 +229,8 @@ fn a_bounce_limit_that_drops_light_is_a_warning_with_its_share() {
 /// A seabed patch smaller than the view: the camera looks down past it into water without a
 /// bottom, which the column lights as if the seabed went on and traced daylight leaves
 /// bottomless. `explain` says how much of the view does (measured on the shipped archaeology
-/// scene, whose first pose sees 1 m past its 16 m seabed: column +14 % (G) against traced;
+/// scene before its backdrop plane, whose first pose saw 1 m past its 16 m seabed: column +14 %
+/// (G) against traced;
 /// with a 200 m seabed +0.5 %, docs/column.md).
 #[test]
 fn explain_names_views_past_the_seabed() {
@@ -242,18 +243,34 @@ fn explain_names_views_past_the_seabed() {
         );
         std::fs::write(&p, scene).unwrap();
         let m = poser::scene::load(&p, &[]).map(|l| l.model).unwrap();
-        poser::explain::explain(&m)
+        let text = poser::explain::explain(&m);
+        let daylight = text
             .lines()
-            .find(|l| l.contains("looks down past every object"))
+            .find(|l| l.starts_with("daylight (native):"))
             .map(str::to_string)
+            .unwrap();
+        let past = text
+            .lines()
+            .find(|l| l.contains("looks past the seabed") || l.contains("looks down past every"))
+            .map(str::to_string);
+        (daylight, past)
     };
     // 2 m above the seabed, a 16 mm lens on 24 × 16 px of 3.76 µm: a footprint of 11 × 8 mm.
-    let small = line("2 mm").expect("a 2 mm seabed seen from 2 m must be named");
-    let share: f64 = small.trim().split(' ').next().unwrap().parse().unwrap();
-    assert!(share > 20.0 && share < 100.0, "{small}");
-    assert_eq!(
-        line("400 m"),
-        None,
-        "a seabed wider than the view is not named"
+    // Under "auto" (the default) such views keep daylight traced, and the line says why.
+    let (daylight, small) = line("2 mm");
+    let small = small.expect("a 2 mm seabed seen from 2 m must be named");
+    assert!(
+        daylight.contains("daylight (native): traced:"),
+        "{daylight}"
     );
+    let share: f64 = small
+        .split(" % of the cameras' view")
+        .next()
+        .and_then(|h| h.rsplit(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no share in {small}"));
+    assert!(share > 20.0 && share < 100.0, "{small}");
+    let (daylight, wide) = line("400 m");
+    assert_eq!(wide, None, "a seabed wider than the view is not named");
+    assert!(daylight.contains("daylight (native): column"), "{daylight}");
 }

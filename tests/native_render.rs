@@ -95,6 +95,7 @@ fn busy_model() -> Model {
         contrast: 0.3,
     });
     m.objects.push(Object {
+        backdrop: false,
         name: "rock".into(),
         shape: Shape::Boulders {
             width: 2.0,
@@ -335,6 +336,8 @@ fn aureole_sampling_is_unbiased_and_cuts_sunlit_seabed_noise() {
     let dir = DVec3::new(0.3, 0.1, -1.0).normalize();
     m.sun = Some(sun_along(dir, [800.0; 3], [600.0; 3]));
     m.render.max_bounces = 2;
+    // These estimators trace daylight through the water (the column would replace them).
+    m.render.daylight = poser::model::Daylight::Traced;
     // The sea ends at z = 0 under a sun: sink the floor and the camera 10 m.
     m.poses[0].world_from_rig.translation.z -= 10.0;
     for o in &mut m.objects {
@@ -399,6 +402,8 @@ fn sun_distance_sampling_and_roulette_policy_are_unbiased_and_cut_sunlit_water_n
     }
     let dir = DVec3::new(0.3, 0.1, -1.0).normalize();
     m.sun = Some(sun_along(dir, [800.0; 3], [600.0; 3]));
+    // These estimators trace daylight through the water (the column would replace them).
+    m.render.daylight = poser::model::Daylight::Traced;
     m.poses[0].world_from_rig.translation.z -= 10.0;
     for o in &mut m.objects {
         o.pose.translation.z -= 10.0;

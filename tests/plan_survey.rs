@@ -8,6 +8,7 @@ use support::plan as common;
 
 fn seabed(depth: f64) -> Object {
     Object {
+        backdrop: false,
         name: "seabed".into(),
         // 12 × 16 m: small enough that coverage evaluates every (refined) face.
         shape: Shape::Plane {
@@ -92,6 +93,7 @@ fn coverage_sees_occlusion_under_a_box() {
     let mut m = survey_model(common::camera().port);
     // A 1 m cube standing on the seabed in the middle of the survey hides the seabed under it.
     m.objects.push(Object {
+        backdrop: false,
         name: "box".into(),
         shape: Shape::Box {
             size: DVec3::splat(1.0),

@@ -44,6 +44,7 @@ fn occluded_and_back_facing_points_are_left_out() {
     let n0 = count(&before);
     // A large opaque box between every camera and the targets.
     model.objects.push(Object {
+        backdrop: false,
         name: "wall".into(),
         shape: Shape::Box {
             size: DVec3::new(10.0, 0.05, 10.0),

@@ -114,6 +114,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
         },
         scale: DVec3::ONE,
         material: lambert(a),
+        backdrop: false,
     };
     Model {
         name: "strobe_backscatter".into(),
@@ -181,6 +182,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
                 },
                 scale: DVec3::ONE,
                 material: lambert([0.5; 3]),
+                backdrop: false,
             },
             boxed("box_a", DVec3::new(-0.6, 1.5, -5.4), 0.4, [0.8, 0.3, 0.2]),
             boxed("box_b", DVec3::new(0.5, 2.0, -4.8), 0.5, [0.2, 0.7, 0.3]),

@@ -27,6 +27,7 @@ pub mod report;
 
 use crate::geometry::bvh::target_mesh;
 use crate::geometry::mesh::{TriMesh, object_mesh};
+use crate::geometry::seen::{TextureSeen, texture_seen};
 use crate::geometry::{Bvh as Scene, Ray, SurfaceId};
 use crate::model::{Model, Pose};
 use crate::optics::project::Projector;
@@ -210,43 +211,30 @@ impl Evaluation {
     }
 }
 
-/// World-frame meshes of every object and target, labelled, and the occlusion scene built
-/// from them.
+/// World-frame meshes of every object and target of the site, labelled (tie points are sampled
+/// on them; backdrop objects are scenery and left out), and the occlusion scene built from
+/// every surface, backdrop included.
 fn surfaces(model: &Model) -> Result<(Vec<(String, TriMesh)>, Scene), String> {
     let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
     let mut labelled = Vec::new();
-    let mut ids = Vec::new();
+    let mut all = Vec::new();
     for (i, o) in model.objects.iter().enumerate() {
-        labelled.push((o.name.clone(), object_mesh(o, base)?));
-        ids.push(SurfaceId::Object(i as u32));
+        let mesh = object_mesh(o, base)?;
+        all.push((SurfaceId::Object(i as u32), mesh.clone()));
+        if !o.backdrop {
+            labelled.push((o.name.clone(), mesh));
+        }
     }
     for (i, t) in model.targets.iter().enumerate() {
-        labelled.push((t.name.clone(), target_mesh(t)));
-        ids.push(SurfaceId::Target(i as u32));
+        let mesh = target_mesh(t);
+        all.push((SurfaceId::Target(i as u32), mesh.clone()));
+        labelled.push((t.name.clone(), mesh));
     }
-    let scene = Scene::from_meshes(
-        ids.into_iter()
-            .zip(labelled.iter().map(|(_, m)| m.clone()))
-            .collect(),
-    );
-    Ok((labelled, scene))
+    Ok((labelled, Scene::from_meshes(all)))
 }
 
 /// Below this share of textured pixels, images mode refuses before running COLMAP.
 pub const MIN_TEXTURED_SHARE: f64 = 0.2;
-
-/// What the cameras see, as shares of a grid of sampled pixels over the network's images.
-#[derive(Debug, Clone, Copy)]
-pub struct TextureSeen {
-    /// Pixels whose ray hits any surface.
-    pub surface: f64,
-    /// Pixels whose ray hits a textured surface: an object with a pattern or colour variation,
-    /// or a printed target.
-    pub textured: f64,
-    /// Pixels whose ray heads downward and hits nothing: past the scene's seabed into water
-    /// without a bottom.
-    pub bottomless: f64,
-}
 
 /// Images mode's pre-check (before rendering): the images must see enough texture for SIFT.
 pub fn check_images_texture(model: &Model) -> Result<TextureSeen, String> {
@@ -267,51 +255,6 @@ fn check_texture_seen(seen: TextureSeen) -> Result<TextureSeen, String> {
         ));
     }
     Ok(seen)
-}
-
-/// Cast a 16 × 12 grid of exact camera rays through up to 64 evenly spread images of the
-/// network (every camera of the rig) and classify what each ray hits first.
-pub fn texture_seen(model: &Model, scene: &Scene) -> TextureSeen {
-    let n_poses = model.poses.len();
-    let step = n_poses.div_ceil(64).max(1);
-    let (mut rays, mut hit, mut textured, mut bottomless) = (0usize, 0usize, 0usize, 0usize);
-    for (ci, cam) in model.cameras.iter().enumerate() {
-        let Ok(pr) = Projector::new(model, ci, 1) else {
-            continue;
-        };
-        for pi in (0..n_poses).step_by(step) {
-            for j in 0..12 {
-                for i in 0..16 {
-                    let u = (i as f64 + 0.5) / 16.0 * cam.width as f64;
-                    let v = (j as f64 + 0.5) / 12.0 * cam.height as f64;
-                    rays += 1;
-                    let Ok((o, d, _)) = pr.pixel_ray_world(pi, u, v) else {
-                        continue;
-                    };
-                    let Some(h) = scene.intersect(&Ray { origin: o, dir: d }, f64::INFINITY) else {
-                        bottomless += (d.z < 0.0) as usize;
-                        continue;
-                    };
-                    hit += 1;
-                    let tex = match h.surface {
-                        SurfaceId::Object(k) => model.objects.get(k as usize).is_some_and(|o| {
-                            o.material.pattern.is_some() || o.material.variation > 0.0
-                        }),
-                        SurfaceId::Target(_) => true,
-                        #[allow(unreachable_patterns)]
-                        _ => false,
-                    };
-                    textured += tex as usize;
-                }
-            }
-        }
-    }
-    let r = rays.max(1) as f64;
-    TextureSeen {
-        surface: hit as f64 / r,
-        textured: textured as f64 / r,
-        bottomless: bottomless as f64 / r,
-    }
 }
 
 /// The request's cameras at their in-water-equivalent intrinsics at distance `d`: what a

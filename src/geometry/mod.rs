@@ -9,11 +9,13 @@
 //! | [`coral`] | procedural coral colonies (branching, massive) as closed meshes |
 //! | [`targets`] | calibration targets: 3D points, printed reflectance, textures |
 //! | [`bvh`] | [`Bvh`]: every triangle of a model in one BVH; [`Ray`], [`Hit`], [`SurfaceId`] |
+//! | [`seen`] | what the cameras see: a grid of exact camera rays classified by what they hit (texture, nothing below: views past the seabed) |
 
 pub mod bvh;
 pub mod coral;
 pub mod mesh;
 pub mod meshfile;
+pub mod seen;
 pub mod targets;
 
 pub use bvh::{Bvh, Hit, RAY_EPSILON, Ray, SurfaceId};

@@ -412,7 +412,8 @@ pub fn coverage(model: &Model, site: &Site) -> Result<Coverage, String> {
         .parent()
         .unwrap_or(std::path::Path::new("."));
     let mut mesh = TriMesh::default();
-    for o in &model.objects {
+    // Backdrop objects are scenery, not the site (their faces would swamp the counts).
+    for o in model.objects.iter().filter(|o| !o.backdrop) {
         if let Ok(m) = crate::geometry::mesh::object_mesh(o, base) {
             mesh.append(&m);
         }

@@ -509,6 +509,11 @@ pub struct Object {
     pub name: Option<String>,
     /// Shape. **Default:** `"box"`.
     pub shape: Option<ShapeKind>,
+    /// Scenery around the site, not part of it: the sand beyond the modelled seabed, a far
+    /// wall. Every backend renders it; the survey planner's coverage, the tie points of
+    /// `poser evaluate` and the texture checks leave it out. A 2 km plane under the site keeps
+    /// every view on a bottom (docs/column.md, "Views past the seabed"). **Default:** false.
+    pub backdrop: Option<bool>,
     /// Mesh: glTF (`.glb`/`.gltf`), OBJ (with its MTL files) or PLY file, relative to the file
     /// that names it. Every file it names (MTL, images, buffers) must be beside it or elsewhere
     /// inside the scene's folder. See `docs/textures.md`, "Textured meshes".
@@ -941,9 +946,10 @@ pub struct Render {
     /// scene with it, tracing only the scene's own geometry, strobes and the sun's first
     /// scattering: far less noise for the same samples. `"traced"` random-walks the light
     /// through the water, as Mitsuba and Cycles do. `"auto"` takes the column where it applies
-    /// (water everywhere below the surface, absorbing and scattering, lit by sun or sky; see
-    /// `poser explain`). **Default:** `"traced"` (until the column's bias on strong relief is
-    /// measured against converged references, `docs/column.md`).
+    /// (water everywhere below the surface, absorbing and scattering, lit by sun or sky) and
+    /// every camera's view ends on the scene's seabed (a view past its edge into bottomless
+    /// water keeps daylight traced: give the site a `backdrop` plane); `poser explain` says
+    /// which, and why. **Default:** `"auto"` (`docs/column.md`).
     pub daylight: Option<String>,
 }
 

@@ -762,6 +762,7 @@ mod tests {
 
     fn object(shape: Shape, pattern: Pattern) -> Object {
         Object {
+            backdrop: false,
             name: "o".into(),
             shape,
             pose: Pose::IDENTITY,

@@ -116,6 +116,7 @@ pub fn showcase() -> Model {
     m.objects = vec![
         plane("seabed", -10.0, 20.0, [0.4, 0.35, 0.3]),
         Object {
+            backdrop: false,
             name: "rock".into(),
             shape: Shape::Sphere { radius: 0.3 },
             pose: Pose {
@@ -132,6 +133,7 @@ pub fn showcase() -> Model {
             },
         },
         Object {
+            backdrop: false,
             name: "crate".into(),
             shape: Shape::Box {
                 size: DVec3::new(0.4, 0.3, 0.2),
@@ -150,6 +152,7 @@ pub fn showcase() -> Model {
             },
         },
         Object {
+            backdrop: false,
             name: "pipe".into(),
             shape: Shape::Cylinder {
                 radius: 0.1,

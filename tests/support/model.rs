@@ -96,6 +96,7 @@ pub fn water(ior: Rgb, absorption: Rgb, scattering: Rgb, phase: Phase) -> Water 
 /// A horizontal Lambertian square of side `size` at height `z`, normal +z.
 pub fn plane(name: &str, z: f64, size: f64, albedo: Rgb) -> Object {
     Object {
+        backdrop: false,
         name: name.into(),
         shape: Shape::Plane {
             width: size,

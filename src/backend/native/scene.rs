@@ -45,8 +45,11 @@ impl Scene {
             None
         };
         // A solve can still refuse odd input; then the scene is traced (`explain` says why).
+        // Under "auto", a view past the seabed keeps daylight traced (Model::daylight_choice).
+        let past = (model.render.daylight == crate::model::Daylight::Auto)
+            .then(|| crate::geometry::seen::texture_seen(model, &bvh).bottomless);
         let column = model
-            .daylight_choice()
+            .daylight_choice(past)
             .0
             .and_then(|i| crate::optics::column::solve(&i).ok())
             .map(Arc::new);

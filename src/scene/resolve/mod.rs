@@ -178,7 +178,9 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
 /// [`crate::model::BOUNCE_CUT_WARN`] of the light the cameras see ([`Model::bounce_cut`]; at
 /// most [`MAX_DEFAULT_BOUNCES`], beyond which W0239 says what is still cut off).
 fn default_bounces(cx: &mut Cx, model: &mut Model, water: Span) {
-    if model.daylight_choice().0.is_some() {
+    // Under "auto" the renderer may still trace (views past the seabed, which only the
+    // renderer's geometry can tell): the limit is set for that case too.
+    if model.render.daylight == Daylight::Column && model.daylight_choice(None).0.is_some() {
         return;
     }
     let Some(cut) = model.bounce_cut() else {
@@ -207,7 +209,7 @@ pub const MAX_DEFAULT_BOUNCES: u32 = 254;
 /// solve ([`Model::bounce_cut`]); scenes whose daylight comes from the column lose nothing to
 /// the limit, and scenes that are not a column (a water box, no scattering) get no estimate.
 fn bounce_limit(cx: &mut Cx, model: &Model, at: Span) {
-    if model.daylight_choice().0.is_some() {
+    if model.daylight_choice(None).0.is_some() {
         return;
     }
     let Some(cut) = model.bounce_cut() else {

@@ -43,6 +43,7 @@ pub(super) fn objects(
             .opt_u64(cx, "seed")
             .unwrap_or(seed0.wrapping_add(i as u64));
         let shape = shape(cx, &mut o, shape_kind, seed, sources, scene);
+        let backdrop = o.bool(cx, "backdrop", false);
         let default_pos = if matches!(shape, Shape::Seabed { .. } | Shape::Boulders { .. }) {
             DVec3::new(0.0, 0.0, -site.depth)
         } else {
@@ -77,6 +78,7 @@ pub(super) fn objects(
             pose,
             scale,
             material,
+            backdrop,
         });
     }
     out

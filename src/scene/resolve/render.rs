@@ -163,8 +163,8 @@ pub(super) fn render(
     }
     let daylight = match r.choice(cx, "daylight", &["auto", "column", "traced"]) {
         Some("column") => Daylight::Column,
-        Some("auto") => Daylight::Auto,
-        _ => Daylight::Traced,
+        Some("traced") => Daylight::Traced,
+        _ => Daylight::Auto,
     };
     at.daylight = r.has("daylight").then(|| r.span_of("daylight"));
     at.bounces = r.has("bounces").then(|| r.span_of("bounces"));
