@@ -52,15 +52,10 @@ impl Comparison {
         let name = ["R", "G", "B"];
         let mut out = Vec::new();
         let mut l = String::from("mean per channel (source → imported):");
-        for c in 0..3 {
-            let (s, n) = self.means[c];
+        for (c, (name, (s, n))) in name.iter().zip(self.means).enumerate() {
             match self.channel(c) {
-                Some(d) => l.push_str(&format!(
-                    "  {} {s:.4} → {n:.4} ({:+.2} %)",
-                    name[c],
-                    100.0 * d
-                )),
-                None => l.push_str(&format!("  {} black", name[c])),
+                Some(d) => l.push_str(&format!("  {name} {s:.4} → {n:.4} ({:+.2} %)", 100.0 * d)),
+                None => l.push_str(&format!("  {name} black")),
             }
         }
         out.push(l);
