@@ -497,7 +497,6 @@ const LONG_FNS: &[(&str, usize)] = &[
     ("import/blender.rs::convert", 329),
     ("plan/dive.rs::verdict", 300),
     ("evaluate/mod.rs::evaluate_observations", 276),
-    ("backend/mitsuba/view.rs::port_shapes", 275),
     ("backend/blender/data.rs::describe", 271),
     ("lesson/dive.rs::html", 240),
     ("plan/network.rs::expand", 239),
