@@ -196,16 +196,21 @@ fn cameras_bin(truth: &Truth) -> Vec<u8> {
     let mut b = Bin::default();
     b.u64(truth.cameras.len());
     for (i, c) in truth.cameras.iter().enumerate() {
-        let (name, params, _) = camera_model(c);
-        b.u32(i + 1);
-        b.i32(model_id(name));
-        b.u64(c.width as usize);
-        b.u64(c.height as usize);
-        for p in params {
-            b.f64(p);
-        }
+        camera_record(&mut b, i, c);
     }
     b.0
+}
+
+/// Upstream COLMAP's binary camera record: id, model id, width, height, parameters.
+fn camera_record(b: &mut Bin, i: usize, c: &CameraTruth) {
+    let (name, params, _) = camera_model(c);
+    b.u32(i + 1);
+    b.i32(model_id(name));
+    b.u64(c.width as usize);
+    b.u64(c.height as usize);
+    for p in params {
+        b.f64(p);
+    }
 }
 
 /// The Refractive COLMAP fork's `cameras.bin` (`Reconstruction::WriteCamerasBinary` /
@@ -218,14 +223,7 @@ pub fn refractive_cameras_bin(truth: &Truth) -> Vec<u8> {
     let mut b = Bin::default();
     b.u64(truth.cameras.len());
     for (i, c) in truth.cameras.iter().enumerate() {
-        let (name, params, _) = camera_model(c);
-        b.u32(i + 1);
-        b.i32(model_id(name));
-        b.u64(c.width as usize);
-        b.u64(c.height as usize);
-        for p in params {
-            b.f64(p);
-        }
+        camera_record(&mut b, i, c);
         match refractive_port(c) {
             Ok(Some((model, pp))) => {
                 b.i32(if model == "FLATPORT" { 0 } else { 1 });
