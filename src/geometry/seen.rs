@@ -21,6 +21,16 @@ pub struct TextureSeen {
     pub bottomless: f64,
 }
 
+/// The share of the cameras' view that looks past the seabed into water without a bottom,
+/// where it matters for the daylight choice ([`Model::daylight_choice`]): `None` when the scene
+/// is no water column, whose daylight is traced whatever the views (no rays are cast then).
+pub fn past_seabed(model: &Model, scene: &Bvh) -> Option<f64> {
+    model
+        .column_input()
+        .is_ok()
+        .then(|| texture_seen(model, scene).bottomless)
+}
+
 /// Cast a 16 × 12 grid of exact camera rays through up to 64 evenly spread images of the
 /// network (every camera of the rig) and classify what each ray hits first.
 pub fn texture_seen(model: &Model, scene: &Bvh) -> TextureSeen {

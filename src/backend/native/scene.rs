@@ -47,7 +47,8 @@ impl Scene {
         // A solve can still refuse odd input; then the scene is traced (`explain` says why).
         // Under "auto", a view past the seabed keeps daylight traced (Model::daylight_choice).
         let past = (model.render.daylight == crate::model::Daylight::Auto)
-            .then(|| crate::geometry::seen::texture_seen(model, &bvh).bottomless);
+            .then(|| crate::geometry::seen::past_seabed(model, &bvh))
+            .flatten();
         let column = model
             .daylight_choice(past)
             .0
