@@ -303,6 +303,24 @@ fn control_and_check_points_are_split_and_tabled_as_metashape_does() {
     assert_eq!(report["alignment_count"], 4);
     assert_eq!(report["check_errors"]["count"], 3);
     assert!(err.contains("check points: 3, RMSE"), "{err}");
+    // report.md says which RMSE is the accuracy; report.json has every target with its role,
+    // and the check points' errors there give the check RMSE of the table.
+    assert!(md.contains("**The check points' RMSE is the honest accuracy figure**"));
+    let targets = report["target_points"].as_array().unwrap();
+    let role = |r: &str| -> Vec<f64> {
+        targets
+            .iter()
+            .filter(|t| t["role"] == r)
+            .map(|t| t["error"][2].as_f64().unwrap())
+            .collect()
+    };
+    assert_eq!((role("control").len(), role("check").len()), (4, 3));
+    assert!((k - rmse(&role("check"))).abs() < 0.006);
+    assert!(
+        targets
+            .iter()
+            .all(|t| t["images"].as_u64().unwrap() >= 2 && t["label"].as_str().is_some())
+    );
 
     // Names that are not targets, a point in both lists, --check alone: clear errors.
     for (args, words) in [

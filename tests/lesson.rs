@@ -74,6 +74,11 @@ fn deformation_lesson_quick_form_bends_behind_a_flat_port_and_shows_it() {
             cell(&dom, &format!("{k}.nmad_z_mm")),
             format!("{:.1}", f(&r["nmad_z_mm"]))
         );
+        // Each map's colour-bar range is printed beside it, the page's one scale.
+        assert_eq!(
+            cell(&dom, &format!("{k}.map_range_mm")),
+            format!("−{scale:.1} … +{scale:.1}")
+        );
         assert_eq!(
             cell(&dom, &format!("{k}.bowl_mm")),
             format!("{:.1}", f(&r["bowl_mm"]))

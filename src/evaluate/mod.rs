@@ -12,6 +12,7 @@
 //! | [`evaluate_observations`], [`evaluate_images`] | run one mode, return an [`Evaluation`] |
 //! | [`Evaluation`] | registered images, track length, reprojection error, recovered intrinsics against the in-water-equivalent truth, 3D errors, the fitted bowl |
 //! | [`health`] | the checks that flag a degenerate block (images dropped, a focal length the block does not determine, an RMS driven by outliers) |
+//! | [`gcp`] | the control/check split of `--gcp`: the similarity fitted on the control points, every point's error after it |
 //! | [`report`] | `report.json`, `report.md`, `errors.csv`, `deformation.png`, `profile.svg` |
 //!
 //! The *in-water-equivalent* intrinsics are what a pinhole camera model would need to match the
@@ -21,6 +22,7 @@
 
 pub mod align;
 pub mod colmap;
+pub mod gcp;
 pub mod health;
 pub mod observe;
 pub mod report;
@@ -35,7 +37,7 @@ use crate::rng::SplitMix64;
 use align::{AxisStats, Bowl, Similarity};
 use colmap::{CameraModel, Reconstruction, Request, RequestCamera, RequestImage, RequestPoint};
 use glam::{DQuat, DVec3};
-use observe::{ImageObservations, PointKind, SurveyPoint, gauss};
+use observe::{ImageObservations, gauss};
 use serde::Serialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -525,70 +527,11 @@ pub fn evaluate_observations(
         .iter()
         .map(|p| ((p.id - 1) as usize, DVec3::from_array(p.xyz)))
         .collect();
-    let targets: Vec<&(usize, DVec3)> = pairs
-        .iter()
-        .filter(|(k, _)| points[*k].kind == PointKind::Target)
-        .collect();
-    let role = |k: usize| target_role(&points[k].label, opts);
-    let (alignment, fit_set): (&str, Vec<&(usize, DVec3)>) = if opts.gcp {
-        check_target_names(&points, opts)?;
-        let control: Vec<&(usize, DVec3)> = targets
-            .iter()
-            .copied()
-            .filter(|(k, _)| role(*k) == Role::Control)
-            .collect();
-        if control.len() < 3 {
-            return Err(format!(
-                "--gcp: only {} control point(s) were reconstructed; at least 3 are needed\n  \
-                 help: add targets (coded targets, a points file) inside the surveyed area, \
-                 name more of them as control points, or drop --gcp to align on all points",
-                control.len()
-            ));
-        }
-        ("gcp", control)
-    } else {
-        ("all points", pairs.iter().collect())
-    };
-    let from: Vec<DVec3> = fit_set.iter().map(|(_, x)| *x).collect();
-    let to: Vec<DVec3> = fit_set.iter().map(|(k, _)| points[*k].world).collect();
-    let sim = Similarity::estimate(&from, &to)
-        .ok_or("the reconstructed points are degenerate (collinear); no similarity to the truth")?;
-    let mut point_errors = Vec::new();
-    let mut tie = Vec::new();
-    let mut check = Vec::new();
-    let mut control = Vec::new();
-    let mut bowl_samples = Vec::new();
-    for (k, x) in &pairs {
-        let p: &SurveyPoint = &points[*k];
-        let e = sim.apply(*x) - p.world;
-        let kind = match (&p.kind, opts.gcp) {
-            (PointKind::Tie, _) => "tie",
-            (PointKind::Target, true) => match role(*k) {
-                Role::Control => "gcp",
-                Role::Check => "check",
-                Role::Unused => "target",
-            },
-            (PointKind::Target, false) => "target",
-        };
-        match kind {
-            "tie" => {
-                tie.push(e);
-                bowl_samples.push((p.world.x, p.world.y, e.z));
-            }
-            "gcp" => control.push(e),
-            "check" => check.push(e),
-            "target" if !opts.gcp => check.push(e),
-            _ => {}
-        }
-        point_errors.push(PointError {
-            id: *k as u64 + 1,
-            label: p.label.clone(),
-            kind,
-            truth: p.world.to_array(),
-            error: e.to_array(),
-            track: by_id.get(&(*k as u64 + 1)).map_or(0, |r| r.track),
-        });
-    }
+    let aligned = gcp::align(&points, &pairs, opts)?;
+    let sim = aligned.sim;
+    let res = gcp::residuals(&points, &pairs, &sim, opts, |id| {
+        by_id.get(&id).map_or(0, |r| r.track)
+    });
     let (camera_errors, centres) = camera_centre_errors(model, &rec, &sim, &used_names(&used));
     let dropped = dropped(images.iter().map(|im| im.name.as_str()), &rec);
     finish(
@@ -615,19 +558,19 @@ pub fn evaluate_observations(
             mean_track_length: summary_f64(&rec, "mean_track_length"),
             reprojection_error: summary_f64(&rec, "reprojection_error"),
             cameras: camera_evals(model, &rec, distance)?,
-            alignment: alignment.into(),
-            alignment_count: fit_set.len(),
+            alignment: aligned.name.into(),
+            alignment_count: aligned.count,
             similarity: sim,
-            tie_errors: AxisStats::of(&tie),
-            check_errors: (!check.is_empty()).then(|| AxisStats::of(&check)),
-            control_errors: (!control.is_empty()).then(|| AxisStats::of(&control)),
+            tie_errors: AxisStats::of(&res.tie),
+            check_errors: (!res.check.is_empty()).then(|| AxisStats::of(&res.check)),
+            control_errors: (!res.control.is_empty()).then(|| AxisStats::of(&res.control)),
             camera_errors,
-            bowl: Bowl::fit(&bowl_samples),
+            bowl: Bowl::fit(&res.bowl_samples),
             colmap: rec.summary.clone(),
             dropped,
             warnings: Vec::new(),
             seconds: t0.elapsed().as_secs_f64(),
-            point_errors,
+            point_errors: res.point_errors,
             centres,
         },
         !opts.rig,
@@ -647,91 +590,6 @@ fn dropped<'a>(all: impl Iterator<Item = &'a str>, rec: &Reconstruction) -> Vec<
     all.filter(|n| !registered.contains(n))
         .map(str::to_string)
         .collect()
-}
-
-/// What a target point does in a `--gcp` evaluation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Role {
-    Control,
-    Check,
-    Unused,
-}
-
-/// Whether a target point's `label` (`name`, `name/point` or `file/id`) is named by `id`: the
-/// whole label, its target (`name` of `name/…`), or its point (`…/id`).
-fn names(label: &str, id: &str) -> bool {
-    label == id
-        || label.strip_prefix(id).is_some_and(|r| r.starts_with('/'))
-        || label.rsplit('/').next() == Some(id)
-}
-
-/// A target point's role under `opts.control` and `opts.check` (see [`Options::control`]).
-fn target_role(label: &str, opts: &Options) -> Role {
-    let in_control = opts.control.iter().any(|id| names(label, id));
-    let in_check = opts.check.iter().any(|id| names(label, id));
-    match (opts.control.is_empty(), opts.check.is_empty()) {
-        (true, true) => Role::Control,
-        (true, false) => {
-            if in_check {
-                Role::Check
-            } else {
-                Role::Control
-            }
-        }
-        (false, true) => {
-            if in_control {
-                Role::Control
-            } else {
-                Role::Check
-            }
-        }
-        (false, false) => {
-            if in_control {
-                Role::Control
-            } else if in_check {
-                Role::Check
-            } else {
-                Role::Unused
-            }
-        }
-    }
-}
-
-/// Every id of `--gcp IDS` and `--check IDS` names a target, and none is in both.
-fn check_target_names(points: &[SurveyPoint], opts: &Options) -> Result<(), String> {
-    let labels: Vec<&str> = points
-        .iter()
-        .filter(|p| p.kind == PointKind::Target)
-        .map(|p| p.label.as_str())
-        .collect();
-    for (flag, ids) in [("--gcp", &opts.control), ("--check", &opts.check)] {
-        for id in ids {
-            if !labels.iter().any(|l| names(l, id)) {
-                let known: Vec<&str> = labels.iter().take(8).copied().collect();
-                return Err(format!(
-                    "{flag}: no target is named `{id}`\n  help: the scene's target points are \
-                     {}{} (a target's name selects all of its points)",
-                    known.join(", "),
-                    if labels.len() > known.len() {
-                        ", …"
-                    } else {
-                        ""
-                    }
-                ));
-            }
-        }
-    }
-    if let Some(id) = opts.control.iter().find(|id| {
-        labels
-            .iter()
-            .any(|l| names(l, id) && opts.check.iter().any(|c| names(l, c)))
-    }) {
-        return Err(format!(
-            "`{id}` is both a control point (--gcp) and a check point (--check)\n  help: a \
-             check point must stay out of the alignment to measure it"
-        ));
-    }
-    Ok(())
 }
 
 const CONVENTIONS: &str = "world z up, metres; errors = aligned reconstruction − truth; pixel \

@@ -3,10 +3,10 @@
 //!
 //! | file | contents |
 //! |---|---|
-//! | `report.json` | the whole [`Evaluation`] (numbers, settings, COLMAP's summary) |
+//! | `report.json` | the whole [`Evaluation`] (numbers, settings, COLMAP's summary), and `target_points`: each target point's label, role (`control`, `check`, `target`), truth, error and images |
 //! | `report.md` | the same numbers as tables a person reads |
 //! | `errors.csv` | `id,kind,label,x,y,z,dx,dy,dz,track`: one row per reconstructed point (truth frame, m) |
-//! | `deformation.png` | top view of the plot, each point coloured by its height error (blue low, red high, white zero; the scale is ± the largest |dz| in `report.md`); black dots are the camera centres |
+//! | `deformation.png` | top view of the plot, each point coloured by its height error (blue low, red high, white zero; the colour bar is labelled with its range, ± the 99th percentile of |dz|, also in `report.md`); black dots are the camera centres |
 //! | `profile.svg` | mean height error along and across the plot, in bins |
 
 use super::Evaluation;
@@ -32,7 +32,11 @@ pub fn write(ev: &Evaluation, dir: &Path) -> Result<(), String> {
 }
 
 fn json(ev: &Evaluation) -> Result<Vec<u8>, String> {
-    let mut v = serde_json::to_vec_pretty(ev).map_err(|e| e.to_string())?;
+    let mut doc = serde_json::to_value(ev).map_err(|e| e.to_string())?;
+    if let Some(o) = doc.as_object_mut() {
+        o.insert("target_points".into(), target_points(ev));
+    }
+    let mut v = serde_json::to_vec_pretty(&doc).map_err(|e| e.to_string())?;
     v.push(b'\n');
     Ok(v)
 }
@@ -185,21 +189,7 @@ pub fn markdown(ev: &Evaluation) -> String {
     if let Some(c) = &ev.check_errors {
         robust("targets (check points)", c);
     }
-    points_table(
-        &mut s,
-        ev,
-        "gcp",
-        "Control points (GCPs, used by the alignment)",
-    );
-    points_table(
-        &mut s,
-        ev,
-        "check",
-        "Check points (held out of the alignment)",
-    );
-    if ev.alignment != "gcp" {
-        points_table(&mut s, ev, "target", "Targets (not used by the alignment)");
-    }
+    target_tables(&mut s, ev);
     let _ = writeln!(s, "\n## The systematic part (\"bowl\")\n");
     match &ev.bowl {
         Some(b) => {
@@ -241,6 +231,54 @@ fn health(s: &mut String, ev: &Evaluation) {
         let _ = writeln!(s, "- **{}** — {} *Help:* {}.", w.code, w.message, w.help);
     }
     s.push('\n');
+}
+
+/// The control and check tables of a `--gcp` evaluation (the targets' table otherwise), and
+/// which RMSE is the accuracy: the check points', since the alignment fitted the control points.
+fn target_tables(s: &mut String, ev: &Evaluation) {
+    let n = |kind: &str| ev.point_errors.iter().filter(|p| p.kind == kind).count();
+    if ev.alignment != "gcp" {
+        points_table(s, ev, "target", "Targets (not used by the alignment)");
+        return;
+    }
+    points_table(s, ev, "gcp", "Control points (GCPs, used by the alignment)");
+    points_table(s, ev, "check", "Check points (held out of the alignment)");
+    let _ = if n("check") > 0 {
+        writeln!(
+            s,
+            "\n**The check points' RMSE is the honest accuracy figure**: the alignment was fitted \
+             to the {} control point(s), so their RMSE shows how well a similarity fits them, not \
+             how right the model is.",
+            n("gcp")
+        )
+    } else {
+        writeln!(
+            s,
+            "\n**No check points: the control RMSE above is a fit, not an accuracy.** The \
+             alignment was fitted to these {} point(s); hold some targets out with `--check IDS` \
+             (or name the control points with `--gcp IDS`) to measure the model's accuracy.",
+            n("gcp")
+        )
+    };
+}
+
+/// The target points of `report.json`: label, role (`control`, `check` or `target`: not used
+/// by the alignment), error (m) and images, one per reconstructed target point.
+fn target_points(ev: &Evaluation) -> serde_json::Value {
+    ev.point_errors
+        .iter()
+        .filter(|p| p.kind != "tie")
+        .map(|p| {
+            serde_json::json!({
+                "label": p.label,
+                "role": if p.kind == "gcp" { "control" } else { p.kind },
+                "truth": p.truth,
+                "error": p.error,
+                "error_3d": DVec3::from_array(p.error).length(),
+                "images": p.track,
+            })
+        })
+        .collect()
 }
 
 /// One row per point of `kind`, and their RMSE, as Metashape's marker tables give them (mm).
@@ -354,7 +392,7 @@ pub fn deformation_png_scaled(ev: &Evaluation, scale: f64) -> Result<Vec<u8>, St
     } else {
         (100, 100)
     };
-    let bar = 30u32;
+    let bar = 30u32 + BAR_LABELS;
     let mut img = image::RgbImage::from_pixel(w_px + bar, h_px, image::Rgb([96, 96, 96]));
     let to_px = |p: DVec3| {
         let x = (p.x - lo.x) / (hi.x - lo.x).max(1e-9) * (w_px - 1) as f64;
@@ -396,14 +434,47 @@ pub fn deformation_png_scaled(ev: &Evaluation, scale: f64) -> Result<Vec<u8>, St
     }
     for yy in 0..h_px {
         let t = 1.0 - 2.0 * yy as f64 / (h_px - 1).max(1) as f64;
-        for xx in w_px + 8..w_px + bar - 4 {
+        for xx in w_px + 8..w_px + 26 {
             img.put_pixel(xx, yy, image::Rgb(diverging(t)));
         }
     }
+    label_bar(&mut img, w_px + 30, scale)?;
     let mut out = std::io::Cursor::new(Vec::new());
     img.write_to(&mut out, image::ImageFormat::Png)
         .map_err(|e| e.to_string())?;
     Ok(out.into_inner())
+}
+
+/// Width of the colour bar's labels in `deformation.png`, px.
+const BAR_LABELS: u32 = 90;
+
+/// The colour bar's range written beside it, so that a map read alone says its scale:
+/// `+S mm` at the top, `0` in the middle, `−S mm` at the bottom (`scale` in m).
+fn label_bar(img: &mut image::RgbImage, x: u32, scale: f64) -> Result<(), String> {
+    crate::plan::plot::register_font()?;
+    use plotters::prelude::*;
+    let (w, h) = img.dimensions();
+    let v = 1e3 * scale;
+    let num = if v >= 100.0 {
+        format!("{v:.0}")
+    } else if v >= 10.0 {
+        format!("{v:.1}")
+    } else {
+        format!("{v:.2}")
+    };
+    let size = (h / 50).clamp(11, 18);
+    let root = BitMapBackend::with_buffer(&mut **img, (w, h)).into_drawing_area();
+    let style = ("sans-serif", size).into_font().color(&WHITE);
+    let (x, h, sz) = (x as i32, h as i32, size as i32);
+    for (text, y) in [
+        (format!("+{num} mm"), 3),
+        ("0".to_string(), h / 2 - sz / 2),
+        (format!("−{num} mm"), h - sz - 3),
+    ] {
+        root.draw_text(&text, &style, (x, y))
+            .map_err(|e| e.to_string())?;
+    }
+    root.present().map_err(|e| e.to_string())
 }
 
 /// Binned means of the height error along x and along y, as an SVG chart.
@@ -497,4 +568,39 @@ pub fn profile_svg(ev: &Evaluation) -> Result<String, String> {
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The labels drawn beside the colour bar of a 300 px tall map: white text in the label
+    /// column at the top, middle and bottom, and a different text for a different range.
+    #[test]
+    fn the_colour_bar_is_labelled_with_its_range() {
+        let (w, h) = (40 + BAR_LABELS, 300u32);
+        let labelled = |scale: f64| {
+            let mut img = image::RgbImage::from_pixel(w, h, image::Rgb([96, 96, 96]));
+            label_bar(&mut img, 40, scale).unwrap();
+            img
+        };
+        let a = labelled(0.254);
+        let bright = |img: &image::RgbImage, y0: u32, y1: u32| {
+            (y0..y1)
+                .flat_map(|y| (40..w).map(move |x| (x, y)))
+                .filter(|&(x, y)| img.get_pixel(x, y)[0] > 200)
+                .count()
+        };
+        for (y0, y1) in [(0, 30), (h / 2 - 15, h / 2 + 15), (h - 30, h)] {
+            assert!(bright(&a, y0, y1) > 5, "no label in rows {y0}..{y1}");
+        }
+        // Nothing drawn left of the label column (the map) nor between the labels.
+        assert_eq!(bright(&a, 40, h / 2 - 20), 0);
+        assert!((0..40).all(|x| (0..h).all(|y| a.get_pixel(x, y)[0] == 96)));
+        assert_ne!(
+            a,
+            labelled(0.00062),
+            "the range is written, not a fixed label"
+        );
+    }
 }

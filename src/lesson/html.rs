@@ -172,30 +172,7 @@ pub fn page(r: &Report) -> String {
                         .join("; ")
                 );
             }
-            let scale = rows.first().map_or(f64::NAN, |r| r.map_scale_mm);
-            let _ = writeln!(
-                s,
-                "<h2>Where the error is</h2>\n<p>Every map below uses one colour scale: \
-                 <span style=\"color:#3366ff\">blue</span> <span data-key=\"map_scale_mm\">\
-                 {scale:.1}</span> mm low, white on the truth, <span style=\"color:#e0302f\">red\
-                 </span> {scale:.1} mm high. Black dots are the cameras; ringed dots are the \
-                 targets.</p>"
-            );
-            for row in rows {
-                let _ = write!(
-                    s,
-                    "<h3>{l}</h3>\n<figure>{img}<figcaption>Height error per tie point, on the \
-                     page's scale (this case alone spans ±{own:.1} mm).</figcaption></figure>\n\
-                     <figure>{svg}\
-                     <figcaption>Mean height error along and across the plot.</figcaption>\
-                     </figure>\n<p class=\"small\">Alone: <code>{cmd}</code></p>\n",
-                    l = escape(&row.label),
-                    img = png(&row.map_png, &format!("deformation map, {}", row.label)),
-                    svg = svg(&row.profile_svg),
-                    cmd = escape(&row.command),
-                    own = row.own_scale_mm,
-                );
-            }
+            deformation_maps(&mut s, rows);
         }
         Results::Contrast { rows } => s.push_str(&super::contrast::html(rows)),
         Results::Gsd { rows } => s.push_str(&super::gsd::html(rows)),
@@ -302,6 +279,40 @@ pub fn write(r: &Report, dir: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// The deformation lesson's maps, each with its colour bar's range beside it: one scale for the
+/// whole page, so that a bowl of millimetres and one of decimetres do not look alike.
+fn deformation_maps(s: &mut String, rows: &[super::deformation::Row]) {
+    let scale = rows.first().map_or(f64::NAN, |r| r.map_scale_mm);
+    let _ = writeln!(
+        s,
+        "<h2>Where the error is</h2>\n<p>Every map below uses one colour scale: \
+         <span style=\"color:#3366ff\">blue</span> <span data-key=\"map_scale_mm\">\
+         {scale:.1}</span> mm low, white on the truth, <span style=\"color:#e0302f\">red\
+         </span> {scale:.1} mm high. Black dots are the cameras; ringed dots are the \
+         targets. One scale, so that cases of millimetres and of decimetres do not look \
+         alike; each caption gives the case's own range too.</p>"
+    );
+    for row in rows {
+        let _ = write!(
+            s,
+            "<h3>{l}</h3>\n<figure>{img}<figcaption>Height error per tie point. Colour \
+             bar <span data-key=\"{k}.map_range_mm\">−{scale:.1} … +{scale:.1}</span> \
+             mm, the page's one scale (this case alone spans ±{own:.1} mm).</figcaption>\
+             </figure>\n\
+             <figure>{svg}\
+             <figcaption>Mean height error along and across the plot.</figcaption>\
+             </figure>\n<p class=\"small\">Alone: <code>{cmd}</code></p>\n",
+            l = escape(&row.label),
+            img = png(&row.map_png, &format!("deformation map, {}", row.label)),
+            svg = svg(&row.profile_svg),
+            cmd = escape(&row.command),
+            own = row.own_scale_mm,
+            scale = row.map_scale_mm,
+            k = slug(&row.label),
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -388,6 +399,9 @@ mod page_tests {
         assert!(p.contains("data-key=\"flat_pupil_3_cm.nmad_z_mm\">21.0<"));
         assert!(p.contains("<span data-key=\"map_scale_mm\">65.0</span> mm low"));
         assert!(p.contains("this case alone spans ±65.0 mm"));
+        assert!(p.contains(
+            "Colour bar <span data-key=\"flat_pupil_3_cm.map_range_mm\">−65.0 … +65.0</span> mm"
+        ));
         assert!(p.contains(
             "class=\"warn\"><b>⚠ flat, pupil 3 cm:</b> only 25 of 330 images registered &lt;x&gt;"
         ));
