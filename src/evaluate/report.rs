@@ -463,7 +463,7 @@ fn label_bar(img: &mut image::RgbImage, x: u32, scale: f64) -> Result<(), String
         format!("{v:.2}")
     };
     let size = (h / 50).clamp(11, 18);
-    let root = BitMapBackend::with_buffer(&mut **img, (w, h)).into_drawing_area();
+    let root = BitMapBackend::with_buffer(img, (w, h)).into_drawing_area();
     let style = ("sans-serif", size).into_font().color(&WHITE);
     let (x, h, sz) = (x as i32, h as i32, size as i32);
     for (text, y) in [
