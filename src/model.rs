@@ -767,6 +767,28 @@ pub struct RenderSettings {
     /// How the native renderer carries daylight through the water (`render.daylight`).
     #[serde(default)]
     pub daylight: Daylight,
+    /// How the native renderer reads textures at the camera ray's first hit
+    /// (`render.texture_filter`).
+    #[serde(default, skip_serializing_if = "TextureFilter::is_footprint")]
+    pub texture_filter: TextureFilter,
+}
+
+/// `render.texture_filter`: the native renderer's texture lookup at the camera ray's first hit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TextureFilter {
+    /// The default: the texture averaged over the pixel's footprint on the surface (mip
+    /// levels, [`crate::texture::mip`]).
+    #[default]
+    Footprint,
+    /// One bilinear lookup at the hit per sample (the samples average the pixel).
+    Point,
+}
+
+impl TextureFilter {
+    pub fn is_footprint(&self) -> bool {
+        *self == TextureFilter::Footprint
+    }
 }
 
 /// `render.daylight`: the native renderer's estimator for daylight in the water.

@@ -503,7 +503,7 @@ const LONG_FNS: &[(&str, usize)] = &[
     ("cli/dive.rs::text_report", 232),
     ("backend/native/mod.rs::render_image", 222),
     ("lesson/html.rs::page", 198),
-    ("backend/native/integrator.rs::li", 207),
+    ("backend/native/integrator.rs::li_spread", 214),
     ("import/mitsuba.rs::shape", 270),
     ("export/gltf.rs::export", 192),
     ("scene/check.rs::scene", 190),

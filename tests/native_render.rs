@@ -665,3 +665,59 @@ fn zero_samples_is_an_error_not_one_sample() {
     assert!(e.contains("0 samples"), "{e}");
     assert!(poser::backend::native::render_one(&m, 0, 0, Some(1)).is_ok());
 }
+
+/// A textured seabed (fractal albedo, texels ~2.7 to a pixel's footprint) under a spot, one
+/// bounce: the only randomness is where each sample lands in its pixel, so a pixel's variance is
+/// the texture's (and the light's) variation over its footprint. Reading the texture averaged
+/// over the footprint (`render.texture_filter = "footprint"`, the default) must cut that
+/// variance and keep the image's mean per channel within 0.5 % of point lookups.
+#[test]
+fn footprint_texture_filter_cuts_pixel_variance_and_keeps_the_mean() {
+    let mut m = nadir_model(2.0);
+    m.water.as_mut().unwrap().absorption = [0.4, 0.1, 0.05];
+    m.lights.push(rig_spot(DVec3::new(0.3, 0.0, 0.0), 25.0));
+    m.render.max_bounces = 1;
+    m.objects[0].material.pattern = Some(Pattern::Fbm {
+        size: 0.1,
+        smallest: 0.0,
+        gain: 0.7,
+        contrast: 0.45,
+        seed: 11,
+    });
+    assert!(m.objects[0].material.is_baked());
+    let scene = Scene::build(&m).unwrap();
+    let b = scene.textures[0].as_ref().unwrap();
+    assert!(b.mips.depth() >= 3, "a one-chart bake has its levels");
+    let stats = |f: TextureFilter| {
+        let mut m = m.clone();
+        m.render.texture_filter = f;
+        let img = render_image(&m, &scene, 0, 0, 16, None).unwrap();
+        let n = img.rgb.len() as f64;
+        let mut mean = [0.0; 3];
+        let mut var = [0.0; 3];
+        for (p, v) in img.rgb.iter().zip(&img.variance) {
+            for c in 0..3 {
+                mean[c] += p[c] as f64 / n;
+                var[c] += v[c] as f64 / n;
+            }
+        }
+        (mean, var)
+    };
+    let (mf, vf) = stats(TextureFilter::Footprint);
+    let (mp, vp) = stats(TextureFilter::Point);
+    eprintln!("footprint: mean {mf:?}, variance {vf:?}; point: mean {mp:?}, variance {vp:?}");
+    for c in 0..3 {
+        assert!(
+            (mf[c] / mp[c] - 1.0).abs() < 0.005,
+            "channel {c}: mean {} vs {}",
+            mf[c],
+            mp[c]
+        );
+        assert!(
+            vf[c] < 0.25 * vp[c],
+            "channel {c}: variance {} vs {}",
+            vf[c],
+            vp[c]
+        );
+    }
+}

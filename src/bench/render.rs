@@ -208,6 +208,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
             noise: None,
             // The benchmark isolates the traced estimators.
             daylight: crate::model::Daylight::Traced,
+            texture_filter: Default::default(),
         },
         sensor: None,
         lesson: None,

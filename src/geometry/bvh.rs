@@ -249,13 +249,19 @@ impl Bvh {
     /// Albedo at a hit on a textured mesh ([`crate::texture::mapped`]): its material's image,
     /// colour or vertex colours there; `None` for every other surface.
     pub fn mapped_albedo(&self, h: &Hit) -> Option<[f64; 3]> {
+        self.mapped_albedo_over(h, 0.0)
+    }
+
+    /// [`Bvh::mapped_albedo`] with the image averaged over a footprint `width` metres wide
+    /// ([`crate::texture::mapped::Prepared::albedo_over`]).
+    pub fn mapped_albedo_over(&self, h: &Hit, width: f64) -> Option<[f64; 3]> {
         let SurfaceId::Object(i) = h.surface else {
             return None;
         };
         let p = self.meshes.get(i as usize)?.as_ref()?;
         let src = *self.source.get(h.triangle as usize)?;
         let k = *p.plan.file.material.get(src as usize)?;
-        Some(p.albedo(k, self.uv_at(h), src, self.barycentric(h)))
+        Some(p.albedo_over(k, self.uv_at(h), src, self.barycentric(h), width))
     }
 
     /// Number of (non-degenerate) triangles.

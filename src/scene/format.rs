@@ -951,6 +951,13 @@ pub struct Render {
     /// water keeps daylight traced: give the site a `backdrop` plane); `poser explain` says
     /// which, and why. **Default:** `"auto"` (`docs/column.md`).
     pub daylight: Option<String>,
+    /// Native renderer: how textures are read where a camera ray first meets a surface.
+    /// `"footprint"` averages the texture over the patch the pixel sees there (mip levels,
+    /// trilinear), so the texture adds no noise within a pixel and cannot alias;
+    /// `"point"` reads it at the hit, one bilinear lookup per sample (the samples average the
+    /// pixel, as Mitsuba and Cycles do). Same image mean; `"point"` is for comparison.
+    /// **Default:** `"footprint"` (`docs/textures.md`).
+    pub texture_filter: Option<String>,
 }
 
 /// `[sensor]` — the camera after the lens: exposure, photon shot noise, read noise, ADC, white

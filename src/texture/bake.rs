@@ -34,6 +34,10 @@ pub const MAX_SIDE: u32 = 8192;
 pub const TEXEL_BUDGET: u64 = 1 << 24;
 /// Border of every chart, texels (bilinear filtering reads one).
 pub const MARGIN: u32 = 2;
+/// Deepest mip level of an atlas of several charts ([`super::mip`]): level 1's boxes (2
+/// texels) stay within the charts' [`MARGIN`] of baked border, so a filtered lookup near a
+/// chart's edge reads (almost) only its own chart. A single chart has no cap.
+pub const ATLAS_MAX_LEVEL: u32 = 1;
 /// Texel size when no camera position is known, m.
 pub const FALLBACK_TEXEL: f64 = 0.002;
 
@@ -101,6 +105,8 @@ pub struct Baked {
     /// Per vertex; v = 0 at the texture's row 0.
     pub uv: Vec<[f32; 2]>,
     pub texture: Texture,
+    /// Mip levels of [`Baked::texture`] for footprint-filtered lookups ([`Baked::sample_footprint`]).
+    pub mips: super::mip::Pyramid,
     /// Texel size used, m.
     pub texel: f64,
     /// Texel size wanted (before the scene budget and the [`MAX_SIDE`] cap), m, and how it
@@ -115,6 +121,15 @@ pub struct Baked {
 }
 
 impl Baked {
+    /// The texture at (u, v) averaged over a footprint `width` metres wide on the surface
+    /// ([`super::mip::Pyramid::sample`]); [`Texture::sample`] when the footprint is below a
+    /// texel (or not finite).
+    pub fn sample_footprint(&self, u: f64, v: f64, width: f64) -> [f64; 3] {
+        let texels = width / self.texel;
+        self.mips
+            .sample(u, v, texels, |u, v| self.texture.sample(u, v))
+    }
+
     /// Whether the size cap made the texture coarser than wanted.
     pub fn coarsened(&self) -> bool {
         self.texel > self.wanted * 1.000_001
@@ -638,14 +653,17 @@ fn bake_from(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side:
                 }
             }
         });
+    let texture = Texture {
+        width: w,
+        height: h,
+        rgb,
+    };
+    let mips = pyramid(&texture, &charts);
     Baked {
         mesh,
         uv,
-        texture: Texture {
-            width: w,
-            height: h,
-            rgb,
-        },
+        texture,
+        mips,
         texel,
         wanted,
         reason,
@@ -653,6 +671,33 @@ fn bake_from(o: &Object, local: &TriMesh, wanted: f64, reason: String, max_side:
         limit: String::new(),
         seconds: t0.elapsed().as_secs_f64(),
     }
+}
+
+/// The mip levels of a baked atlas: coverage 1 inside every chart (with its border), 0 in the
+/// gaps between them; capped at [`ATLAS_MAX_LEVEL`] when there are several charts.
+fn pyramid(t: &Texture, charts: &[Chart]) -> super::mip::Pyramid {
+    let (w, h) = (t.width as usize, t.height as usize);
+    let mut cover = vec![false; w * h];
+    for c in charts {
+        for j in c.oy as usize..(c.oy + c.h) as usize {
+            for i in c.ox as usize..(c.ox + c.w) as usize {
+                if let Some(x) = cover.get_mut(j * w + i) {
+                    *x = true;
+                }
+            }
+        }
+    }
+    let max_level = if charts.len() > 1 {
+        ATLAS_MAX_LEVEL
+    } else {
+        u32::MAX
+    };
+    let wrap = crate::geometry::meshfile::Wrap::Clamp;
+    super::mip::Pyramid::build(t.width, t.height, wrap, max_level, |i, j| {
+        let k = 3 * (j * w + i);
+        let c = [0, 1, 2].map(|c| t.rgb[k + c] as f64 / 255.0);
+        (c, if cover[j * w + i] { 1.0 } else { 0.0 })
+    })
 }
 
 /// PLY with per-vertex texture coordinates `s`, `t` (the names both Mitsuba's and Blender's

@@ -518,6 +518,9 @@ pub fn plan_object(model: &Model, index: usize) -> Result<Option<MeshPlan>, Stri
 pub struct Prepared {
     pub plan: MeshPlan,
     pub looks: Vec<Look>,
+    /// Mip levels of each image look ([`super::mip`]) for the native renderer's footprint
+    /// lookups; `None` for other looks and for images above [`MIP_MAX_TEXELS`].
+    pub mips: Vec<Option<super::mip::Pyramid>>,
 }
 
 impl Prepared {
@@ -528,10 +531,32 @@ impl Prepared {
     /// Albedo of material `k` at texture coordinates `uv` and barycentric weights `w` of
     /// triangle `tri` (for vertex colours).
     pub fn albedo(&self, k: u32, uv: Option<[f64; 2]>, tri: u32, w: [f64; 3]) -> [f64; 3] {
+        self.albedo_over(k, uv, tri, w, 0.0)
+    }
+
+    /// [`Prepared::albedo`] with an image averaged over a footprint `width` metres wide on
+    /// the surface ([`super::mip::Pyramid::sample`], the material's mean texel size on the
+    /// surface converting metres to texels); 0: a point lookup.
+    pub fn albedo_over(
+        &self,
+        k: u32,
+        uv: Option<[f64; 2]>,
+        tri: u32,
+        w: [f64; 3],
+        width: f64,
+    ) -> [f64; 3] {
         match self.looks.get(k as usize) {
             Some(Look::Color(c)) => *c,
             Some(Look::Image(img)) => match uv {
-                Some([u, v]) => img.sample(u, v),
+                Some([u, v]) => {
+                    let texel = self.plan.materials.get(k as usize).map_or(0.0, |m| m.texel);
+                    match self.mips.get(k as usize) {
+                        Some(Some(p)) if texel > 0.0 && width > 0.0 => {
+                            p.sample(u, v, width / texel, |u, v| img.sample(u, v))
+                        }
+                        _ => img.sample(u, v),
+                    }
+                }
                 None => img.mean(),
             },
             Some(Look::VertexColors) => {
@@ -636,11 +661,41 @@ pub fn prepare_object(model: &Model, index: usize) -> Result<Option<Arc<Prepared
     for (m, p) in plan.file.materials.iter().zip(&plan.materials) {
         looks.push(look(m, p, o.material.albedo, &mut decoded).map_err(err)?);
     }
-    let p = Arc::new(Prepared { plan, looks });
+    let mips = looks.iter().map(pyramid).collect();
+    let p = Arc::new(Prepared { plan, looks, mips });
     let mut g = CACHE.lock().unwrap_or_else(|e| e.into_inner());
     g.get_or_insert_with(HashMap::new)
         .insert(key, Arc::downgrade(&p));
     Ok(Some(p))
+}
+
+/// Largest image (texels) given mip levels: the levels cost 4 bytes per texel of the image
+/// (f32 RGB and coverage, a quarter of the texels at level 1 and [`MIP_MAX_LEVEL`] levels); a
+/// larger image keeps point lookups.
+pub const MIP_MAX_TEXELS: u64 = 1 << 24;
+/// Deepest mip level of a mesh file's image: its texture atlas's charts have a padding the file
+/// does not state, so the filter stays within a few texels (4-texel boxes).
+pub const MIP_MAX_LEVEL: u32 = 2;
+
+/// The mip levels of an image look (`None` for other looks and too large images).
+fn pyramid(l: &Look) -> Option<super::mip::Pyramid> {
+    let Look::Image(img) = l else {
+        return None;
+    };
+    if img.width as u64 * img.height as u64 > MIP_MAX_TEXELS {
+        return None;
+    }
+    let w = img.width as usize;
+    Some(super::mip::Pyramid::build(
+        img.width,
+        img.height,
+        img.wrap,
+        MIP_MAX_LEVEL,
+        |i, j| {
+            let k = 3 * (j * w + i);
+            ([0, 1, 2].map(|c| img.rgb[k + c] as f64 / 65535.0), 1.0)
+        },
+    ))
 }
 
 /// The look of one material: its image at the planned level times its colour, its vertex

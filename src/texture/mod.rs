@@ -22,6 +22,7 @@
 
 pub mod bake;
 pub mod mapped;
+pub mod mip;
 
 use crate::model::{Pattern, Rgb};
 

@@ -139,6 +139,7 @@ pub fn render_settings(samples: u32) -> RenderSettings {
         denoise_radius: None,
         noise: None,
         daylight: Default::default(),
+        texture_filter: Default::default(),
     }
 }
 

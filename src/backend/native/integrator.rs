@@ -43,6 +43,7 @@
 //!   Russian roulette after three, except in sunlit, scattering water
 //!   ([`Integrator::roulette_from`]).
 
+use super::footprint::{Footprint, PixelSpread};
 use super::lights::Lights;
 use super::medium::{Medium, tr};
 use super::sampler::Sampler;
@@ -160,16 +161,33 @@ impl<'a> Integrator<'a> {
 
     /// Albedo per channel at a hit.
     pub fn albedo(&self, h: &Hit) -> DVec3 {
+        self.albedo_over(h, None)
+    }
+
+    /// Albedo per channel at a hit, textures averaged over the pixel's footprint `fp` there
+    /// (its centre and width, [`super::footprint`]; `None`: a point lookup at the hit).
+    pub fn albedo_over(&self, h: &Hit, fp: Option<Footprint>) -> DVec3 {
         match h.surface {
             SurfaceId::Object(i) => {
                 let o = &self.model.objects[i as usize];
-                if let Some(a) = self.scene.mapped_albedo(h) {
+                // Textures are read at the footprint's centre, on the hit's triangle's plane.
+                let (th, width) = match fp {
+                    Some(f) => (
+                        &Hit {
+                            point: f.centre,
+                            ..*h
+                        },
+                        f.width,
+                    ),
+                    None => (h, 0.0),
+                };
+                if let Some(a) = self.scene.mapped_albedo_over(th, width) {
                     return DVec3::from_array(a);
                 }
                 if let Some(Some(b)) = self.scene.textures.get(i as usize)
-                    && let Some([u, v]) = self.scene.uv_at(h)
+                    && let Some([u, v]) = self.scene.uv_at(th)
                 {
-                    return DVec3::from_array(b.texture.sample(u, v));
+                    return DVec3::from_array(b.sample_footprint(u, v, width));
                 }
                 let a = DVec3::from_array(o.material.albedo);
                 match &o.material.pattern {
@@ -327,7 +345,38 @@ impl<'a> Integrator<'a> {
     }
 
     /// Radiance along the ray `o + t·d` (unit `d`), towards `o`.
-    pub fn li(&self, mut o: DVec3, mut d: DVec3, rng: &mut Sampler) -> DVec3 {
+    pub fn li(&self, o: DVec3, d: DVec3, rng: &mut Sampler) -> DVec3 {
+        self.li_spread(o, d, None, rng)
+    }
+
+    /// The pixel's footprint at the camera ray's first hit `h` (`depth` 0, with the pixel's
+    /// differentials `spread`), for the texture lookup there; `None` (a point lookup) at deeper
+    /// vertices: a bounce's light already averages the surface over its lobe, and the first
+    /// hit carries the texture's variance within the pixel.
+    fn footprint(
+        &self,
+        spread: Option<PixelSpread>,
+        depth: u32,
+        o: DVec3,
+        d: DVec3,
+        h: &Hit,
+    ) -> Option<Footprint> {
+        match spread {
+            Some(s) if depth == 0 => Some(s.at_hit(o, d, h.point, h.normal)),
+            _ => None,
+        }
+    }
+
+    /// [`Integrator::li`] of a camera ray with its pixel's differentials (`spread`): the
+    /// textures at its first hit are averaged over the pixel's footprint
+    /// ([`super::footprint`]).
+    pub fn li_spread(
+        &self,
+        mut o: DVec3,
+        mut d: DVec3,
+        spread: Option<PixelSpread>,
+        rng: &mut Sampler,
+    ) -> DVec3 {
         let mut l = DVec3::ZERO;
         let mut beta = DVec3::ONE;
         // Density of the direction sampled at the previous vertex (0: camera ray, no MIS).
@@ -409,7 +458,8 @@ impl<'a> Integrator<'a> {
                         if area_hit.is_none()
                             && let Some(h) = &hit
                         {
-                            let albedo = self.albedo(h);
+                            let albedo =
+                                self.albedo_over(h, self.footprint(spread, depth, o, d, h));
                             l += beta
                                 * tr(m.sigma_t, b - a)
                                 * self.surface_direct(h, d, albedo, day, rng);
@@ -499,7 +549,7 @@ impl<'a> Integrator<'a> {
             } else {
                 h.normal
             };
-            let albedo = self.albedo(&h);
+            let albedo = self.albedo_over(&h, self.footprint(spread, depth, o, d, &h));
             if albedo == DVec3::ZERO {
                 break;
             }

@@ -21,6 +21,7 @@ pub mod adaptive;
 pub mod camera;
 pub mod caustics;
 pub mod denoise;
+pub mod footprint;
 pub mod integrator;
 pub mod lights;
 pub mod medium;
@@ -127,9 +128,9 @@ pub fn render_image(
     // variance of that mean; the first-hit albedo is added to `alb`.
     let run = |i: u32, j: u32, k: usize, from: u32, n: u32, alb: &mut DVec3| {
         let r = &rays[k];
+        let spread = footprint::PixelSpread::of(model, scene, r, i, j);
         let pixel = j as u64 * w as u64 + i as u64;
-        let mut acc = DVec3::ZERO;
-        let mut acc2 = DVec3::ZERO;
+        let (mut acc, mut acc2) = (DVec3::ZERO, DVec3::ZERO);
         for s in from..from + n {
             let mut rng = sampler::Sampler::new(seed, image_id, k as u64, pixel, s as u64);
             let (du, dv) = rng.next2();
@@ -140,7 +141,7 @@ pub fn render_image(
                         *alb += integ.albedo(&hit);
                     }
                 }
-                let v = integ.li(o, d, &mut rng) * wgt;
+                let v = integ.li_spread(o, d, spread.map(|s| s.shifted(du, dv)), &mut rng) * wgt;
                 if v.is_finite() {
                     acc += v;
                     acc2 += v * v;

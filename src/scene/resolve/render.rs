@@ -161,11 +161,7 @@ pub(super) fn render(
                 )),
         );
     }
-    let daylight = match r.choice(cx, "daylight", &["auto", "column", "traced"]) {
-        Some("column") => Daylight::Column,
-        Some("traced") => Daylight::Traced,
-        _ => Daylight::Auto,
-    };
+    let (daylight, texture_filter) = estimators(cx, &mut r);
     at.daylight = r.has("daylight").then(|| r.span_of("daylight"));
     at.bounces = r.has("bounces").then(|| r.span_of("bounces"));
     r.finish(cx);
@@ -179,5 +175,20 @@ pub(super) fn render(
         denoise_radius,
         noise,
         daylight,
+        texture_filter,
     }
+}
+
+/// `daylight` and `texture_filter`: the native renderer's choices of estimator.
+fn estimators(cx: &mut Cx, r: &mut Tab) -> (Daylight, TextureFilter) {
+    let daylight = match r.choice(cx, "daylight", &["auto", "column", "traced"]) {
+        Some("column") => Daylight::Column,
+        Some("traced") => Daylight::Traced,
+        _ => Daylight::Auto,
+    };
+    let texture_filter = match r.choice(cx, "texture_filter", &["footprint", "point"]) {
+        Some("point") => TextureFilter::Point,
+        _ => TextureFilter::Footprint,
+    };
+    (daylight, texture_filter)
 }
