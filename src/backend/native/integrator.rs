@@ -64,6 +64,13 @@ const AUREOLE_MIN_PEAK: f64 = 4.0 / (4.0 * PI);
 /// analytic transmittance and keep their daylight.
 pub const COLUMN_FREE_FLIGHT: f64 = 0.25;
 
+/// Share of the directions gathered along the camera ray drawn from the column's table (the
+/// rest from the phase function, [`Integrator::column_gather`]). Measured on the first pose
+/// of paper_survey and two_gas_dive (sky only, 15–18 m; 10 % of full size, 24 spp): 0 → 0.05
+/// cuts the relative noise of the image mean per pixel from 6.2 to 2.3 % (G); 0.1 gives
+/// 3.4 %, 0.2 gives 6.0 % (larger shares are noisier as measured; why was not isolated).
+pub const GATHER_TABLE: f64 = 0.05;
+
 /// Share of the column's next-event directions at surfaces drawn from the cosine lobe (the
 /// rest from the column's table, [`Integrator::column_nee`]).
 pub const COLUMN_NEE_COSINE: f64 = 0.02;
@@ -601,7 +608,8 @@ impl<'a> Integrator<'a> {
 
     /// The column's daylight scattered towards `o` along the camera ray `o + t d` up to
     /// `t_end`, gathered: one distance drawn ∝ the transmittance (spectral one-sample MIS),
-    /// one direction from the phase function, and the column's whole diffuse radiance there
+    /// one direction from the phase function mixed with the table ([`GATHER_TABLE`]), and
+    /// the column's whole diffuse radiance there
     /// (the table with the sun's first scattering, plus the boundary through the water). It
     /// estimates the same integral as [`Integrator::column_segment`], but averages the table
     /// over the phase function instead of reading two of its bins, so the table's noise does
@@ -640,16 +648,31 @@ impl<'a> Integrator<'a> {
             return beyond;
         }
         let x = o + t * d;
-        let (w, _) = m.phase.sample(d, u2, u3);
-        let lw = col.radiance(-x.z, w, true);
-        let sb = col.to_boundary(-x.z, w);
+        let z = -x.z;
+        // One direction from the mixture of the phase function about the ray and, for
+        // [`GATHER_TABLE`] of them, the table's upper half: a down-looking ray sees the bright
+        // light from above by backscatter, which the phase function alone draws rarely and
+        // then with a weight 10–30× the mean.
+        let (u4, u5) = (rng.next(), rng.next());
+        let w = if u4 < GATHER_TABLE {
+            col.sample(z, true, u2, u3, u5).map(|s| s.0)
+        } else {
+            Some(m.phase.sample(d, u2, u3).0)
+        };
+        let Some(w) = w else { return beyond };
+        let ph = m.phase.eval(d.dot(w));
+        let pw = GATHER_TABLE * col.pdf(z, true, w) + (1.0 - GATHER_TABLE) * ph;
+        if !(pw > 0.0) {
+            return beyond;
+        }
+        let lw = col.radiance(z, w, true);
+        let sb = col.to_boundary(z, w);
         let lb = if sb.is_finite() {
             tr(m.sigma_t, sb) * col.boundary(w)
         } else {
             DVec3::ZERO
         };
-        // Phase sampled exactly: its value over its density is 1.
-        m.sigma_s * tr(m.sigma_t, t - a) * (lw + lb) / pdf + beyond
+        m.sigma_s * tr(m.sigma_t, t - a) * (lw + lb) * (ph / pw) / pdf + beyond
     }
 
     /// Next-event estimate of the light reflected at surface hit `h` (of albedo `albedo`,
