@@ -110,7 +110,8 @@ fn column_lit_flat_seabed_matches_brute_force_under_the_sky() {
 }
 
 /// At equal samples the column's image is at least twice as close to its converged self as
-/// the traced one is (four times less variance); measured 9.7 % against 32.6 % at 4 spp.
+/// the traced one is (16 times less variance); measured 5.8 % against 32.6 % at 4 spp (9.7 %
+/// before the surfaces' column estimate read the table's bins, which this bound would fail).
 #[test]
 fn column_is_far_less_noisy_at_equal_samples() {
     let col = model(SUN, "column");
@@ -121,7 +122,7 @@ fn column_is_far_less_noisy_at_equal_samples() {
     let (_, t4) = render(&traced, 4);
     let (ec, et) = (rel_rmse(&c4, &refc, mc), rel_rmse(&t4, &reft, mt));
     eprintln!("relative RMSE at 4 spp: column {ec:.3}, traced {et:.3}");
-    assert!(ec * 2.0 < et, "column {ec} vs traced {et}");
+    assert!(ec * 4.0 < et, "column {ec} vs traced {et}");
 }
 
 /// `daylight = "column"` where the column cannot apply is an error at the key.
