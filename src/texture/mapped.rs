@@ -40,15 +40,7 @@ pub struct Image16 {
 
 impl Image16 {
     fn index(&self, i: i64, n: u32) -> usize {
-        let n = n as i64;
-        (match self.wrap {
-            Wrap::Clamp => i.clamp(0, n - 1),
-            Wrap::Repeat => i.rem_euclid(n),
-            Wrap::Mirror => {
-                let k = i.rem_euclid(2 * n);
-                if k >= n { 2 * n - 1 - k } else { k }
-            }
-        }) as usize
+        super::mip::wrapped(self.wrap, i, n)
     }
 
     fn texel(&self, i: i64, j: i64) -> [f64; 3] {

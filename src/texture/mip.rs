@@ -34,7 +34,7 @@ pub struct Pyramid {
 }
 
 /// Index of texel `i` on a side of `n` texels under `wrap`.
-fn wrapped(wrap: Wrap, i: i64, n: u32) -> usize {
+pub(crate) fn wrapped(wrap: Wrap, i: i64, n: u32) -> usize {
     let n = n as i64;
     (match wrap {
         Wrap::Clamp => i.clamp(0, n - 1),

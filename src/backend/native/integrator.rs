@@ -592,7 +592,21 @@ impl<'a> Integrator<'a> {
         t_end: f64,
         with_first: bool,
     ) -> DVec3 {
-        let near = col.radiance(-o.z, d, with_first);
+        self.column_between(col, o, d, t_end, |z, w| col.radiance(z, w, with_first))
+    }
+
+    /// `read(z_o, d) − T(o→q) · read(z_q, d)` up to a surface at `q = o + t_end d`, or
+    /// `read(z_o, d)` plus the column's boundary through the water when nothing is hit: the
+    /// column's light reaching `o` along `d`, with the column's radiance read by `read`.
+    fn column_between(
+        &self,
+        col: &crate::optics::column::Column,
+        o: DVec3,
+        d: DVec3,
+        t_end: f64,
+        read: impl Fn(f64, DVec3) -> DVec3,
+    ) -> DVec3 {
+        let near = read(-o.z, d);
         if !t_end.is_finite() {
             // Nothing in the way: the sky or the column's bottom through the water.
             let s = col.to_boundary(-o.z, d);
@@ -603,7 +617,7 @@ impl<'a> Integrator<'a> {
             };
         }
         let q = o + t_end * d;
-        near - self.tr_seg(o, d, t_end) * col.radiance(-q.z, d, with_first)
+        near - self.tr_seg(o, d, t_end) * read(-q.z, d)
     }
 
     /// The column's daylight scattered towards `o` along the camera ray `o + t d` up to
@@ -773,17 +787,8 @@ impl<'a> Integrator<'a> {
         d: DVec3,
         t_end: f64,
     ) -> DVec3 {
-        let near = col.radiance_binned(-o.z, d);
-        if !t_end.is_finite() {
-            let s = col.to_boundary(-o.z, d);
-            return if s.is_finite() {
-                near + self.tr_seg(o, d, s) * col.boundary(d)
-            } else {
-                near
-            };
-        }
-        let q = o + t_end * d;
-        (near - self.tr_seg(o, d, t_end) * col.radiance_binned(-q.z, d)).max(DVec3::ZERO)
+        self.column_between(col, o, d, t_end, |z, w| col.radiance_binned(z, w))
+            .max(DVec3::ZERO)
     }
 
     fn roulette(&self, beta: &mut DVec3, depth: u32, rng: &mut Sampler) -> bool {
