@@ -581,18 +581,17 @@ impl<'a> Integrator<'a> {
     }
 
     /// The column's daylight scattered towards `o` along the ray `o + t d` up to `t_end` (a
-    /// surface, or ∞): `L_m(z_o, d) − T(t_end) L_m(z_end, d)` ([`crate::optics::column`]).
-    /// `with_first`: the sun's first scattering from the column too (on the segments after a
-    /// surface bounce; the camera ray traces it, with the shadows it shows).
+    /// surface, or ∞): `L_m(z_o, d) − T(t_end) L_m(z_end, d)` ([`crate::optics::column`]),
+    /// without the sun's first scattering (the camera ray traces it, with the shadows it
+    /// shows): the gather's fallback where it cannot draw a distance.
     fn column_segment(
         &self,
         col: &crate::optics::column::Column,
         o: DVec3,
         d: DVec3,
         t_end: f64,
-        with_first: bool,
     ) -> DVec3 {
-        self.column_between(col, o, d, t_end, |z, w| col.radiance(z, w, with_first))
+        self.column_between(col, o, d, t_end, |z, w| col.radiance(z, w, false))
     }
 
     /// `read(z_o, d) − T(o→q) · read(z_q, d)` up to a surface at `q = o + t_end d`, or
@@ -638,7 +637,7 @@ impl<'a> Integrator<'a> {
         rng: &mut Sampler,
     ) -> DVec3 {
         let Some(m) = &self.medium else {
-            return self.column_segment(col, o, d, t_end, false);
+            return self.column_segment(col, o, d, t_end);
         };
         let (u0, u1, u2, u3) = (rng.next(), rng.next(), rng.next(), rng.next());
         let (s, beyond) = if t_end.is_finite() {
@@ -647,7 +646,7 @@ impl<'a> Integrator<'a> {
             let sb = col.to_boundary(-o.z, d);
             if !sb.is_finite() {
                 // Horizontal to infinity: the table's own value along it.
-                return self.column_segment(col, o, d, t_end, false);
+                return self.column_segment(col, o, d, t_end);
             }
             (sb, self.tr_seg(o, d, sb) * col.boundary(d))
         };
