@@ -10,6 +10,9 @@ perturbed ``cam_from_world`` poses), 3D points (initial, perturbed positions) an
 observations; COLMAP's bundle adjuster then refines poses, points and the camera model's
 intrinsics (self-calibration). The gauge is fixed by two cameras (COLMAP's
 ``TWO_CAMS_FROM_WORLD``); the result is compared with the truth by a similarity on the Rust side.
+With ``gcps`` (control points weighted in the adjustment, ``poser evaluate --gcp-sigma``), each
+control point's known position enters COLMAP's bundle adjustment as a weighted constraint, and
+the gauge is theirs (no camera is held): see ``add_gcp_views``.
 With a ``rig`` (a rig calibrated beforehand), the cameras form one COLMAP rig, each rig pose
 one frame; the intrinsics and the sensors' poses in the rig are held, and the bundle adjuster
 refines the frames' poses and the points, the first frame held (the baseline sets the scale).
@@ -25,6 +28,8 @@ Request (``bundle``)::
      "images": [{"id": 1, "name": "..", "camera": 1, "qvec": [w, x, y, z], "tvec": [..],
                  "observations": [[u, v, point_id], ...]}],
      "points": [{"id": 1, "xyz": [x, y, z]}],
+     "gcps": [{"id": 1, "xyz": [x, y, z], "sigma": 0.002}],      # optional; point ids, m
+     "tie_sigma_px": 0.3,                                        # with gcps: the pixels' sigma
      "rig": {"sensor_from_rig": [{"qvec": .., "tvec": ..}, ...],   # optional; per camera
              "frames": [{"id": 1, "qvec": .., "tvec": ..}]}}      # rig_from_world per pose
     (with a rig, each image also has ``"frame": id``)
@@ -190,6 +195,87 @@ def add_rig(pycolmap, rec, req: dict, images: list) -> None:
         rec.register_frame(fid)
 
 
+# Distance of a control point's three views from it, m: far enough that each view projects
+# the point's displacement parallel to its image plane (the relative error of that linear
+# reading is the displacement over this distance, 1e-4 for a 0.1 m displacement).
+GCP_VIEW_DISTANCE = 1000.0
+# Each view's image size, px (the point projects to its centre; the adjustment does not clip).
+GCP_VIEW_SIZE = 1000
+
+
+def add_gcp_views(pycolmap, rec, req: dict, ids: dict[int, int]) -> list[int]:
+    """Control points weighted in the adjustment, as Metashape weights a marker by its accuracy.
+
+    COLMAP's bundle adjuster sums squared reprojection errors in pixels; a position prior on
+    a 3D point is added to that sum as pseudo-observations: each control point is seen by three
+    views of its own, held (pose and intrinsics constant), looking at its known position along
+    −x, −y and −z from ``GCP_VIEW_DISTANCE``. A view reads the point's displacement across its
+    line of sight in pixels at ``F / D`` px per metre, so each axis is read by two views and
+    the point adds ``|X − G|² · 2 (F/D)²`` to the cost. With ``F/D = s_px / (s_G √2)`` that is
+    ``s_px² |X − G|² / s_G²``: the control point's squared error in units of its own sigma,
+    on the same scale as a tie point's squared pixel error in units of ``s_px`` (the request's
+    ``tie_sigma_px``). Returns the image ids of the views (removed again by
+    ``remove_gcp_views``)."""
+    by_request = {v: k for k, v in ids.items()}
+    tie_sigma = float(req["tie_sigma_px"])
+    if not (math.isfinite(tie_sigma) and tie_sigma > 0):
+        raise EvaluateError(
+            f"tie_sigma_px {tie_sigma}: expected a positive pixel sigma"
+        )
+    next_camera = max(rec.cameras) + 1
+    next_image = max(rec.images) + 1
+    views = []
+    axes = np.eye(3)
+    for g in req["gcps"]:
+        pid = by_request.get(int(g["id"]))
+        if pid is None:
+            continue  # not reconstructed (seen by fewer than two images)
+        sigma = float(g["sigma"])
+        if not (math.isfinite(sigma) and sigma > 0):
+            raise EvaluateError(f"gcp {g['id']}: sigma {sigma} m, expected > 0")
+        known = np.asarray(g["xyz"], dtype=float)
+        focal = tie_sigma / (sigma * math.sqrt(2.0)) * GCP_VIEW_DISTANCE
+        c = GCP_VIEW_SIZE / 2.0
+        for k in range(3):
+            # Rows of cam_from_world: the view's x, y and z (its axis, towards the point).
+            z = -axes[k]
+            x = axes[(k + 1) % 3]
+            r = np.stack([x, np.cross(z, x), z])
+            centre = known + GCP_VIEW_DISTANCE * axes[k]
+            rec.add_camera_with_trivial_rig(
+                pycolmap.Camera(
+                    camera_id=next_camera,
+                    model="PINHOLE",
+                    width=GCP_VIEW_SIZE,
+                    height=GCP_VIEW_SIZE,
+                    params=[focal, focal, c, c],
+                )
+            )
+            image = pycolmap.Image(
+                name=f"gcp-view-{next_image}",
+                keypoints=np.array([[c, c]], dtype=float),
+                camera_id=next_camera,
+                image_id=next_image,
+            )
+            rec.add_image_with_trivial_frame(
+                image, pycolmap.Rigid3d(pycolmap.Rotation3d(r), -r @ centre)
+            )
+            rec.add_observation(pid, pycolmap.TrackElement(next_image, 0))
+            views.append(next_image)
+            next_camera += 1
+            next_image += 1
+    return views
+
+
+def remove_gcp_views(rec, views: list[int]) -> None:
+    """Take the control points' views out of the reconstruction again: their observations
+    and their frames, so the statistics, the focal probe and the export see only the
+    survey's images."""
+    for image_id in views:
+        rec.delete_observation(image_id, 0)
+        rec.deregister_frame(rec.image(image_id).frame_id)
+
+
 def ba_options(pycolmap, req: dict):
     """Self-calibrating bundle adjustment: focal, principal point (if asked) and distortion;
     with a calibrated rig, the intrinsics and the rig's relative poses held."""
@@ -231,7 +317,24 @@ def bundle(pycolmap, req: dict) -> dict:
     config = pycolmap.BundleAdjustmentConfig()
     for image_id in sorted(rec.reg_image_ids()):
         config.add_image(image_id)
-    if req.get("rig") is None:
+    views = add_gcp_views(pycolmap, rec, req, ids) if req.get("gcps") else []
+    if req.get("gcps") and len(views) < 9:
+        raise EvaluateError(
+            f"only {len(views) // 3} control point(s) are seen in two or more images; "
+            "weighting them in the adjustment needs at least 3 (help: add targets inside "
+            "the surveyed area or name more of them as control points)"
+        )
+    for image_id in views:
+        # The views are held: they carry the control points' known positions.
+        config.add_image(image_id)
+        config.set_constant_cam_intrinsics(rec.image(image_id).camera_id)
+        config.set_constant_rig_from_world_pose(rec.image(image_id).frame_id)
+    if views:
+        # The control points fix the datum (position, orientation and scale).
+        if req.get("rig") is not None:
+            for cam in req["cameras"]:
+                config.set_constant_cam_intrinsics(int(cam["id"]))
+    elif req.get("rig") is None:
         config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
     else:
         # The calibrated rig fixes the scale (its baseline) and the intrinsics; the first
@@ -241,12 +344,15 @@ def bundle(pycolmap, req: dict) -> dict:
         config.set_constant_rig_from_world_pose(min(rec.reg_frame_ids()))
     adjuster = pycolmap.create_default_bundle_adjuster(opts, config, rec)
     summary = adjuster.solve()
+    remove_gcp_views(rec, views)
     rec.update_point_3d_errors()
     # The focal probe, when the adjustment calibrated the camera itself (not a calibrated rig).
     sensitivity = (
         focal_sensitivity(pycolmap, rec, req) if req.get("rig") is None else None
     )
     result = export(rec, ids)
+    survey_cameras = {int(c["id"]) for c in req["cameras"]}
+    result["cameras"] = [c for c in result["cameras"] if c["id"] in survey_cameras]
     result["summary"] = {
         "initial_reprojection_error": initial_error,
         "reprojection_error": rec.compute_mean_reprojection_error(),
@@ -257,6 +363,7 @@ def bundle(pycolmap, req: dict) -> dict:
         "mean_track_length": rec.compute_mean_track_length(),
         "observations": rec.compute_num_observations(),
         "focal_sensitivity": sensitivity,
+        "gcps_weighted": len(views) // 3,
         "colmap": pycolmap.COLMAP_version,
     }
     return result

@@ -8,6 +8,7 @@
 //! | `--density` | 20 /m² | tie points per m² of surface (observations mode) |
 //! | `--gcp [IDS]` | off | align on the targets' points (GCPs); with IDS (comma-separated target names) only those are control points and the other targets are check points; the default aligns on all points |
 //! | `--check IDS` | – | with `--gcp`: these targets are check points, held out of the alignment |
+//! | `--gcp-sigma [METRES]` | off (0.002 when given alone) | with `--gcp`: the control points enter the bundle adjustment as weighted constraints, each known to this σ per axis, as Metashape weights markers; no similarity after |
 //! | `--strict` | off | a health warning (images dropped, focal length not determined, outlier-driven RMS) is an error: exit status 1 after the report is written |
 //! | `--rig` | off | observations mode: the rig is calibrated beforehand — intrinsics held at the in-water-equivalent values, the cameras' poses in the rig held at the truth; the bundle adjuster solves one pose per rig position (its baseline sets the scale) |
 //! | `--images DIR` | render | images mode: use the images already rendered in DIR (any backend) |
@@ -49,6 +50,11 @@ pub struct Args {
     /// alignment; the others are control points unless --gcp names its own.
     #[arg(long, value_name = "IDS")]
     pub check: Option<String>,
+    /// With --gcp: weight the control points in the bundle adjustment, each known to this
+    /// accuracy (σ per axis, metres; 0.002 when the flag is given alone), instead of only
+    /// aligning the result on them. Check points stay out of the adjustment.
+    #[arg(long, value_name = "METRES", num_args = 0..=1, default_missing_value = "0.002")]
+    pub gcp_sigma: Option<f64>,
     /// Exit with status 1 when a health warning is given (the report is still written).
     #[arg(long)]
     pub strict: bool,
@@ -130,6 +136,20 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 .into(),
         ));
     }
+    if args.gcp_sigma.is_some() && args.gcp.is_none() {
+        return Err(CliError::Usage(
+            "--gcp-sigma weights the control points in the adjustment: give --gcp too (with \
+             IDS for the control points, or --check IDS for the check points)"
+                .into(),
+        ));
+    }
+    if let Some(s) = args.gcp_sigma
+        && !(s.is_finite() && s > 0.0)
+    {
+        return Err(CliError::Usage(format!(
+            "--gcp-sigma {s}: expected the control points' accuracy in metres, > 0, e.g. 0.002"
+        )));
+    }
     if args.gcp.is_some() && args.mode == Mode::Images {
         return Err(CliError::Usage(
             "--gcp belongs to `--mode observations` (images mode aligns on the camera centres)"
@@ -143,6 +163,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         gcp: args.gcp.is_some(),
         control: ids(&args.gcp),
         check: ids(&args.check),
+        gcp_sigma: args.gcp_sigma,
         seed: args.seed,
         refine_principal_point: args.refine_principal_point,
         rig: args.rig,
@@ -232,6 +253,18 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         r.le90 * 1e3,
         100.0 * r.outliers
     );
+    if let (Some(c), "gcp") = (&ev.control_errors, ev.alignment.as_str()) {
+        eprintln!(
+            "control points: {}{}, RMSE X/Y/Z {:.2}/{:.2}/{:.2} mm",
+            c.count,
+            ev.gcp_sigma
+                .map(|s| format!(" (weighted in the adjustment, σ {:.1} mm)", s * 1e3))
+                .unwrap_or_default(),
+            c.rms[0] * 1e3,
+            c.rms[1] * 1e3,
+            c.rms[2] * 1e3
+        );
+    }
     if let (Some(c), "gcp") = (&ev.check_errors, ev.alignment.as_str()) {
         eprintln!(
             "check points: {}, RMSE X/Y/Z {:.2}/{:.2}/{:.2} mm",

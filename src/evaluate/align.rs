@@ -23,6 +23,16 @@ pub struct Similarity {
 }
 
 impl Similarity {
+    /// The identity: the reconstruction is already in the truth's frame (control points
+    /// weighted in the adjustment).
+    pub fn identity() -> Similarity {
+        Similarity {
+            scale: 1.0,
+            rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            translation: [0.0; 3],
+        }
+    }
+
     /// Least-squares similarity taking `from[i]` onto `to[i]` (Umeyama 1991). `None` for fewer
     /// than three points or a degenerate (collinear) set.
     pub fn estimate(from: &[DVec3], to: &[DVec3]) -> Option<Similarity> {

@@ -4,7 +4,7 @@
 //! | item | meaning |
 //! |---|---|
 //! | [`CameraModel`] | the camera model COLMAP self-calibrates (the port is ignored, as practitioners do) |
-//! | [`Request`] | cameras (initial intrinsics), images (initial `cam_from_world`), points, observations |
+//! | [`Request`] | cameras (initial intrinsics), images (initial `cam_from_world`), points, observations, control points weighted in the adjustment ([`RequestGcp`]) |
 //! | [`Reconstruction`] | what COLMAP returns: refined cameras, registered images, points |
 //! | [`run`] | write the request, run the script, read the result |
 //!
@@ -77,6 +77,15 @@ pub struct RequestPoint {
     pub xyz: [f64; 3],
 }
 
+/// A control point weighted in the bundle adjustment: the request point `id` is known to lie
+/// at `xyz` (m) with accuracy `sigma` (m, per axis).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RequestGcp {
+    pub id: u64,
+    pub xyz: [f64; 3],
+    pub sigma: f64,
+}
+
 /// A job for `backends/colmap/evaluate.py`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Request {
@@ -89,6 +98,14 @@ pub struct Request {
     pub images: Vec<RequestImage>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub points: Vec<RequestPoint>,
+    /// Control points weighted in the adjustment (`bundle`, `--gcp-sigma`); their views hold
+    /// the datum, so no camera is held.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub gcps: Vec<RequestGcp>,
+    /// With `gcps`: the σ of an image measurement, px, against which a control point's σ
+    /// weighs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tie_sigma_px: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub image_dir: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -1,15 +1,18 @@
 //! The control/check split of `poser evaluate --gcp`: which target point is a control point
-//! (its truth enters the similarity to the truth), which a check point (held out of it, only
-//! measured), and every reconstructed point's error after that similarity.
+//! (its truth enters the similarity to the truth, or the bundle adjustment itself with
+//! `--gcp-sigma`), which a check point (held out of both, only measured), and every
+//! reconstructed point's error after that similarity.
 //!
 //! | item | meaning |
 //! |---|---|
 //! | [`Role`], [`target_role`] | a target point's role under `--gcp IDS` and `--check IDS` |
 //! | [`check_target_names`] | every id names a target, and none is both control and check |
 //! | [`align`] | the similarity fitted on the control points (`--gcp`) or on all points |
+//! | [`priors`] | the control points weighted in the adjustment (`--gcp-sigma`): their truth and σ, and nothing of a check point |
 //! | [`residuals`] | each point's error after it, sorted into tie, control and check sets |
 
 use super::align::Similarity;
+use super::colmap::RequestGcp;
 use super::observe::{PointKind, SurveyPoint};
 use super::{Options, PointError};
 use glam::DVec3;
@@ -133,6 +136,49 @@ pub fn align(
         count: fit_set.len(),
         sim,
     })
+}
+
+/// The control points that enter the bundle adjustment as weighted constraints
+/// (`--gcp-sigma`): each control target point seen in two or more images (`seen[k]` images),
+/// as request point `k + 1` known at its truth to `sigma` m. A check point's truth is never
+/// in it, so it reaches neither the adjustment nor the datum.
+pub fn priors(
+    points: &[SurveyPoint],
+    seen: &[u32],
+    opts: &Options,
+    sigma: f64,
+) -> Result<Vec<RequestGcp>, String> {
+    check_target_names(points, opts)?;
+    if !(sigma.is_finite() && sigma > 0.0) {
+        return Err(format!(
+            "--gcp-sigma {sigma}: expected the control points' accuracy in metres, > 0\n  help: \
+             e.g. `--gcp-sigma 0.002` for targets surveyed to 2 mm"
+        ));
+    }
+    let out: Vec<RequestGcp> = points
+        .iter()
+        .enumerate()
+        .filter(|(k, p)| {
+            seen.get(*k).is_some_and(|&n| n >= 2)
+                && p.kind == PointKind::Target
+                && target_role(&p.label, opts) == Role::Control
+        })
+        .map(|(k, p)| RequestGcp {
+            id: k as u64 + 1,
+            xyz: p.world.to_array(),
+            sigma,
+        })
+        .collect();
+    if out.len() < 3 {
+        return Err(format!(
+            "--gcp-sigma: only {} control point(s) are seen in two or more images; weighting \
+             them in the adjustment needs at least 3\n  help: add targets (coded targets, a \
+             points file) inside the surveyed area, name more of them as control points, or \
+             drop --gcp-sigma to align on them",
+            out.len()
+        ));
+    }
+    Ok(out)
 }
 
 /// Every reconstructed point's error after the alignment, and the sets the report sums.
@@ -305,6 +351,39 @@ mod tests {
                 d.length() > 1e-3,
                 "point {k} did not follow the control point"
             );
+        }
+    }
+
+    #[test]
+    fn only_control_points_enter_the_adjustment_and_a_check_points_truth_never_does() {
+        let (mut points, _) = block();
+        let seen = vec![5u32; points.len()];
+        let opts = split();
+        let before = priors(&points, &seen, &opts, 0.002).unwrap();
+        let ids: Vec<u64> = before.iter().map(|g| g.id).collect();
+        assert_eq!(ids, [1, 2, 3, 4], "the four corner control points");
+        assert!(before.iter().all(|g| g.sigma == 0.002));
+        assert_eq!(before[0].xyz, points[0].world.to_array());
+        // Move check point gcp_n0's truth: the adjustment's input does not change, so nothing
+        // of the block can (only that point's own residual, measured against its truth).
+        points[6].world.z += 0.5;
+        assert_eq!(priors(&points, &seen, &opts, 0.002).unwrap(), before);
+        // Move a control point's truth: the adjustment is told.
+        points[0].world.z += 0.5;
+        let moved = priors(&points, &seen, &opts, 0.002).unwrap();
+        assert_eq!(moved[0].xyz[2], before[0].xyz[2] + 0.5);
+        // A control point seen once is not reconstructed: with two left, a clear error.
+        let mut seen_once = seen.clone();
+        seen_once[0] = 1;
+        seen_once[1] = 1;
+        let e = priors(&points, &seen_once, &opts, 0.002).unwrap_err();
+        assert!(
+            e.contains("only 2 control point(s)") && e.contains("help:"),
+            "{e}"
+        );
+        for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let e = priors(&points, &seen, &opts, bad).unwrap_err();
+            assert!(e.contains("--gcp-sigma") && e.contains("help:"), "{e}");
         }
     }
 

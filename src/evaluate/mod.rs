@@ -3,7 +3,7 @@
 //!
 //! | mode | what COLMAP gets | alignment to the truth |
 //! |---|---|---|
-//! | observations (default) | exact refractive projections of sampled tie points ([`observe`]) with seeded pixel noise; a perturbed initial network; self-calibrating bundle adjustment with a camera model that ignores the port | 7-parameter similarity from the targets as GCPs (`gcp`) or from all points |
+//! | observations (default) | exact refractive projections of sampled tie points ([`observe`]) with seeded pixel noise; a perturbed initial network; self-calibrating bundle adjustment with a camera model that ignores the port | 7-parameter similarity from the targets as GCPs (`gcp`) or from all points; or control points weighted in the adjustment (`gcp_sigma`), no similarity after |
 //! | images | rendered images: SIFT, matching, incremental mapping | similarity from the registered camera centres and axes |
 //!
 //! | item | meaning |
@@ -12,7 +12,7 @@
 //! | [`evaluate_observations`], [`evaluate_images`] | run one mode, return an [`Evaluation`] |
 //! | [`Evaluation`] | registered images, track length, reprojection error, recovered intrinsics against the in-water-equivalent truth, 3D errors, the fitted bowl |
 //! | [`health`] | the checks that flag a degenerate block (images dropped, a focal length the block does not determine, an RMS driven by outliers) |
-//! | [`gcp`] | the control/check split of `--gcp`: the similarity fitted on the control points, every point's error after it |
+//! | [`gcp`] | the control/check split of `--gcp`: the similarity fitted on the control points, or the control points weighted in the adjustment (`--gcp-sigma`); every point's error after it |
 //! | [`report`] | `report.json`, `report.md`, `errors.csv`, `deformation.png`, `profile.svg` |
 //!
 //! The *in-water-equivalent* intrinsics are what a pinhole camera model would need to match the
@@ -83,6 +83,12 @@ pub struct Options {
     pub control: Vec<String>,
     /// With `gcp`: the targets held out as check points (empty: those not in `control`).
     pub check: Vec<String>,
+    /// With `gcp` (observations mode): weight the control points in the bundle adjustment,
+    /// each known to this accuracy (σ per axis, m), as Metashape weights a marker, instead of
+    /// only fitting a similarity to them afterwards. The adjustment then holds no camera: the
+    /// control points fix the datum, and the errors are read with no similarity. `None`: the
+    /// control points only align.
+    pub gcp_sigma: Option<f64>,
     pub seed: u64,
     /// Let the bundle adjustment refine the principal point (COLMAP's default: no).
     pub refine_principal_point: bool,
@@ -107,6 +113,7 @@ impl Default for Options {
             gcp: false,
             control: Vec::new(),
             check: Vec::new(),
+            gcp_sigma: None,
             seed: 1,
             refine_principal_point: false,
             rig: false,
@@ -163,6 +170,9 @@ pub struct Evaluation {
     /// `"gcp"`, `"all points"` or `"camera centres"`, and how many were used.
     pub alignment: String,
     pub alignment_count: usize,
+    /// With `"gcp"`: the control points were weighted in the adjustment at this σ (m), and
+    /// `similarity` is the identity; `None`: the similarity was fitted to them afterwards.
+    pub gcp_sigma: Option<f64>,
     pub similarity: Similarity,
     /// Errors of the points used as ties (observations mode: 3D; images mode: height only).
     pub tie_errors: AxisStats,
@@ -234,6 +244,11 @@ fn surfaces(model: &Model) -> Result<(Vec<(String, TriMesh)>, Scene), String> {
     }
     Ok((labelled, Scene::from_meshes(all)))
 }
+
+/// The smallest σ of an image measurement, px, that control points weighted in the adjustment
+/// are weighed against (with `--noise 0` the pixels would otherwise outweigh any control
+/// point without bound).
+pub const MIN_TIE_SIGMA_PX: f64 = 0.1;
 
 /// Below this share of textured pixels, images mode refuses before running COLMAP.
 pub const MIN_TEXTURED_SHARE: f64 = 0.2;
@@ -498,6 +513,13 @@ pub fn evaluate_observations(
             }
         })
         .collect();
+    // Control points weighted in the adjustment: their known positions, against the pixels'
+    // σ (the simulated noise, at least MIN_TIE_SIGMA_PX).
+    let weighted = opts.gcp_sigma.filter(|_| opts.gcp);
+    let gcps = match weighted {
+        Some(sigma) => gcp::priors(&points, &seen, opts, sigma)?,
+        None => Vec::new(),
+    };
     let req = Request {
         job: "bundle",
         model: opts.model,
@@ -510,6 +532,8 @@ pub fn evaluate_observations(
         },
         images: req_images,
         points: req_points,
+        tie_sigma_px: weighted.map(|_| opts.noise.max(MIN_TIE_SIGMA_PX)),
+        gcps,
         rig,
         image_dir: None,
         work_dir: None,
@@ -527,7 +551,15 @@ pub fn evaluate_observations(
         .iter()
         .map(|p| ((p.id - 1) as usize, DVec3::from_array(p.xyz)))
         .collect();
-    let aligned = gcp::align(&points, &pairs, opts)?;
+    let aligned = match weighted {
+        // The control points fixed the datum inside the adjustment: no similarity after.
+        Some(_) => gcp::Alignment {
+            name: "gcp",
+            count: summary_f64(&rec, "gcps_weighted") as usize,
+            sim: Similarity::identity(),
+        },
+        None => gcp::align(&points, &pairs, opts)?,
+    };
     let sim = aligned.sim;
     let res = gcp::residuals(&points, &pairs, &sim, opts, |id| {
         by_id.get(&id).map_or(0, |r| r.track)
@@ -550,6 +582,8 @@ pub fn evaluate_observations(
                 "perturb_position_m": sigma_pos,
                 "perturb_rotation_deg": opts.perturb_rotation.to_degrees(),
                 "tie_points_sampled": points.len(),
+                "gcp_sigma_m": weighted,
+                "tie_sigma_px": req.tie_sigma_px,
             }),
             images: images.len(),
             registered: rec.images.len(),
@@ -560,6 +594,7 @@ pub fn evaluate_observations(
             cameras: camera_evals(model, &rec, distance)?,
             alignment: aligned.name.into(),
             alignment_count: aligned.count,
+            gcp_sigma: weighted,
             similarity: sim,
             tie_errors: AxisStats::of(&res.tie),
             check_errors: (!res.check.is_empty()).then(|| AxisStats::of(&res.check)),
@@ -696,6 +731,8 @@ pub fn evaluate_images(
             })
             .collect(),
         points: Vec::new(),
+        gcps: Vec::new(),
+        tie_sigma_px: None,
         image_dir: Some(abs_dir.to_string_lossy().into_owned()),
         work_dir: Some(work.path().to_string_lossy().into_owned()),
         rig: None,
@@ -827,6 +864,7 @@ pub fn evaluate_images(
             cameras: camera_evals(model, &rec, distance)?,
             alignment: "camera centres".into(),
             alignment_count: rec_centres.len(),
+            gcp_sigma: None,
             similarity: sim,
             tie_errors: AxisStats::of(&tie),
             check_errors: None,

@@ -49,14 +49,23 @@ fn mm(x: f64) -> String {
 pub fn markdown(ev: &Evaluation) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# poser evaluate: {}\n", ev.scene);
+    let aligned = match ev.gcp_sigma {
+        Some(sigma) => format!(
+            "the control points **weighted in the bundle adjustment** (σ {} mm per axis; {} \
+             used), with no similarity after",
+            mm(sigma),
+            ev.alignment_count
+        ),
+        None => format!(
+            "aligned on **{}** ({} used)",
+            ev.alignment, ev.alignment_count
+        ),
+    };
     let _ = writeln!(
         s,
-        "Mode **{:?}**, camera model **{}** (self-calibrated, the port ignored), aligned on \
-         **{}** ({} used). {}.\n",
+        "Mode **{:?}**, camera model **{}** (self-calibrated, the port ignored), {aligned}. {}.\n",
         ev.mode,
         ev.camera_model.name(),
-        ev.alignment,
-        ev.alignment_count,
         ev.conventions
     );
     let _ = writeln!(s, "| quantity | value |\n|---|---|");
@@ -241,14 +250,29 @@ fn target_tables(s: &mut String, ev: &Evaluation) {
         points_table(s, ev, "target", "Targets (not used by the alignment)");
         return;
     }
-    points_table(s, ev, "gcp", "Control points (GCPs, used by the alignment)");
-    points_table(s, ev, "check", "Check points (held out of the alignment)");
+    let (control, check, fitted) = match ev.gcp_sigma {
+        Some(sigma) => (
+            format!(
+                "Control points (GCPs, weighted in the adjustment, σ = {} mm)",
+                mm(sigma)
+            ),
+            "Check points (held out of the adjustment)".to_string(),
+            "the adjustment was pulled onto",
+        ),
+        None => (
+            "Control points (GCPs, used by the alignment)".to_string(),
+            "Check points (held out of the alignment)".to_string(),
+            "the alignment was fitted to",
+        ),
+    };
+    points_table(s, ev, "gcp", &control);
+    points_table(s, ev, "check", &check);
     let _ = if n("check") > 0 {
         writeln!(
             s,
-            "\n**The check points' RMSE is the honest accuracy figure**: the alignment was fitted \
-             to the {} control point(s), so their RMSE shows how well a similarity fits them, not \
-             how right the model is.",
+            "\n**The check points' RMSE is the honest accuracy figure**: {fitted} the {} \
+             control point(s), so their RMSE shows how well the block was made to meet them, \
+             not how right the model is.",
             n("gcp")
         )
     } else {
