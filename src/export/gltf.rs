@@ -27,6 +27,7 @@
 use crate::geometry::mesh::{TriMesh, object_mesh};
 use crate::geometry::targets;
 use crate::model::{Camera, LensModel, LightKind, Model, Mount, Port, Pose, Rgb, TargetKind};
+use crate::optics::port::{self, HousingMesh, revolve, z_to};
 use glam::{DMat3, DQuat, DVec3};
 use gltf::json;
 use gltf::json::validation::{Checked, USize64};
@@ -43,8 +44,8 @@ pub const ZNEAR: f64 = 0.01;
 pub const TARGET_PX_PER_M: f64 = 2000.0;
 /// Largest side of a target texture in the preview, px.
 pub const TARGET_MAX_PX: f64 = 2048.0;
-/// Segments around the axis of the port meshes.
-pub const PORT_SEGMENTS: u32 = 48;
+/// Segments around the axis of the port meshes (and the targets' disks).
+pub const PORT_SEGMENTS: u32 = port::MESH_SEGMENTS;
 /// The rig pose at which rig-mounted lights and the ports are placed.
 pub const REPRESENTATIVE_POSE: usize = 0;
 /// Largest number of cells along one side of the wave mesh.
@@ -810,7 +811,11 @@ fn target_primitives(
         )?;
         let mut disks = TriMesh::default();
         for (_, p) in targets::local_points(&t.kind) {
-            let mut d = revolve(&[(0.0, 0.0), (0.5 * diameter, 0.0)], false, PORT_SEGMENTS);
+            let mut d = tri_mesh(revolve(
+                &[(0.0, 0.0), (0.5 * diameter, 0.0)],
+                false,
+                PORT_SEGMENTS,
+            ));
             for q in &mut d.positions {
                 *q += p + DVec3::new(0.0, 0.0, 1e-4);
             }
@@ -861,51 +866,8 @@ fn target_primitives(
 }
 
 // ------------------------------------------------------------------------------------------
-// Meshes built here: surfaces of revolution, height fields
+// Meshes built here: height fields (surfaces of revolution: `optics::port::revolve`)
 // ------------------------------------------------------------------------------------------
-
-/// The surface swept by a profile of `(ρ, z)` points (ρ ≥ 0; ρ = 0 is one vertex on the axis)
-/// turned about the z axis in `seg` steps; `closed` joins the last point to the first.
-fn revolve(profile: &[(f64, f64)], closed: bool, seg: u32) -> TriMesh {
-    let seg = seg.max(3);
-    let mut m = TriMesh::default();
-    // First vertex index of each profile point and whether it is on the axis.
-    let mut rings = Vec::with_capacity(profile.len());
-    for &(r, z) in profile {
-        let start = m.positions.len() as u32;
-        if r == 0.0 {
-            m.positions.push(DVec3::new(0.0, 0.0, z));
-            rings.push((start, true));
-        } else {
-            for s in 0..seg {
-                let a = std::f64::consts::TAU * s as f64 / seg as f64;
-                m.positions.push(DVec3::new(r * a.cos(), r * a.sin(), z));
-            }
-            rings.push((start, false));
-        }
-    }
-    let n = profile.len();
-    let pairs = if closed { n } else { n.saturating_sub(1) };
-    for k in 0..pairs {
-        let (a, pa) = rings[k];
-        let (b, pb) = rings[(k + 1) % n];
-        let at = |base: u32, pole: bool, s: u32| if pole { base } else { base + s % seg };
-        for s in 0..seg {
-            let (a0, a1) = (at(a, pa, s), at(a, pa, s + 1));
-            let (b0, b1) = (at(b, pb, s), at(b, pb, s + 1));
-            match (pa, pb) {
-                (true, true) => {}
-                (true, false) => m.triangles.push([a0, b1, b0]),
-                (false, true) => m.triangles.push([a0, a1, b0]),
-                (false, false) => {
-                    m.triangles.push([a0, a1, b1]);
-                    m.triangles.push([a0, b1, b0]);
-                }
-            }
-        }
-    }
-    m
-}
 
 /// A `n × n` cell height field over the square `[x0, x0 + size] × [y0, y0 + size]`.
 fn grid(x0: f64, y0: f64, size: f64, n: u32, h: impl Fn(f64, f64) -> f64) -> TriMesh {
@@ -928,174 +890,26 @@ fn grid(x0: f64, y0: f64, size: f64, n: u32, h: impl Fn(f64, f64) -> f64) -> Tri
     m
 }
 
-/// A rotation taking +z to the unit vector `a`.
-fn z_to(a: DVec3) -> DMat3 {
-    let z = a.normalize();
-    let helper = if z.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
-    let x = helper.cross(z).normalize();
-    let y = z.cross(x);
-    DMat3::from_cols(x, y, z)
-}
-
-/// Unit directions of the field of view's border (corners and edge midpoints) from the pupil,
-/// camera frame.
-fn border_directions(cam: &Camera) -> Vec<DVec3> {
-    let lens = crate::optics::lens::Lens::from_camera(cam);
-    let (w, h) = (cam.width as f64, cam.height as f64);
-    let mut out = Vec::new();
-    for (u, v) in [
-        (0.0, 0.0),
-        (w, 0.0),
-        (0.0, h),
-        (w, h),
-        (0.5 * w, 0.0),
-        (0.5 * w, h),
-        (0.0, 0.5 * h),
-        (w, 0.5 * h),
-    ] {
-        if let Ok(d) = lens.unproject(u, v) {
-            out.push(d.normalize());
-        }
-    }
-    out
-}
-
-/// The mesh of a camera's housing port in its camera frame (`None` without a port).
+/// A camera's housing port in its camera frame (`None` without a port): the glass shell of
+/// [`crate::optics::port::housing_mesh`].
 fn port_mesh(cam: &Camera, n_water: f64, what: &str) -> Result<Option<TriMesh>, String> {
-    let dirs = border_directions(cam);
-    let mesh = match &cam.port {
-        Port::None => return Ok(None),
-        Port::Flat {
-            normal, distance, ..
-        } => {
-            let t = cam.port.total_thickness();
-            let n = normal.normalize();
-            // The radius the field of view needs: where the sensor corners' rays leave the
-            // glass (exact refraction), else the straight rays to the outer face; + 10 %.
-            let exact = crate::optics::project::Projector::for_camera(cam, 1, n_water)
-                .ok()
-                .map(|pr| {
-                    let (w, h) = (cam.width as f64, cam.height as f64);
-                    [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
-                        .iter()
-                        .filter_map(|&(u, v)| pr.camera_ray(u, v).ok())
-                        .map(|r| (r.origin - n * n.dot(r.origin)).length())
-                        .fold(0.0, f64::max)
-                })
-                .filter(|r| *r > 0.0);
-            let straight = dirs
-                .iter()
-                .filter(|d| d.dot(n) > 1e-3)
-                .map(|d| {
-                    let p = *d * ((distance + t) / d.dot(n));
-                    (p - n * n.dot(p)).length()
-                })
-                .fold(0.0, f64::max);
-            let r = 1.1 * exact.unwrap_or(straight).max(0.5 * (distance + t));
-            let local = revolve(
-                &[(0.0, 0.0), (r, 0.0), (r, t), (0.0, t)],
-                false,
-                PORT_SEGMENTS,
-            );
-            local.transformed(
-                &Pose {
-                    rotation: z_to(n),
-                    translation: n * *distance,
-                },
-                DVec3::ONE,
-            )
-        }
-        Port::Dome {
-            center,
-            inner_radius,
-            thickness,
-            ..
-        } => {
-            let (r, t) = (*inner_radius, *thickness);
-            // The cap covers the field of view seen from the dome's centre, + 10°; at least a
-            // hemisphere.
-            let mut cap = std::f64::consts::FRAC_PI_2;
-            for d in &dirs {
-                let b = d.dot(*center);
-                let disc = b * b - center.length_squared() + r * r;
-                if disc >= 0.0 {
-                    let p = *d * (b + disc.sqrt()) - *center;
-                    cap = cap.max(p.normalize().z.clamp(-1.0, 1.0).acos() + 10f64.to_radians());
-                }
-            }
-            let cap = cap.min(175f64.to_radians());
-            let k = 24;
-            let mut profile = Vec::with_capacity(2 * k + 2);
-            for i in 0..=k {
-                let a = cap * i as f64 / k as f64;
-                profile.push(((r + t) * a.sin(), (r + t) * a.cos()));
-            }
-            for i in (0..=k).rev() {
-                let a = cap * i as f64 / k as f64;
-                profile.push((r * a.sin(), r * a.cos()));
-            }
-            if let Some(p) = profile.first_mut() {
-                p.0 = 0.0;
-            }
-            if let Some(p) = profile.last_mut() {
-                p.0 = 0.0;
-            }
-            revolve(&profile, false, PORT_SEGMENTS).transformed(
-                &Pose {
-                    rotation: DMat3::IDENTITY,
-                    translation: *center,
-                },
-                DVec3::ONE,
-            )
-        }
-        Port::Cylinder {
-            axis_point,
-            axis,
-            inner_radius,
-            thickness,
-            ..
-        } => {
-            let (r, t) = (*inner_radius, *thickness);
-            let u = axis.normalize();
-            // Half-length: the field of view's reach along the axis on the inner cylinder,
-            // + 20 % (at least half the radius).
-            let w = -*axis_point - (-*axis_point).dot(u) * u;
-            let mut reach: f64 = 0.0;
-            for d in &dirs {
-                let dp = *d - d.dot(u) * u;
-                let a = dp.length_squared();
-                if a < 1e-9 {
-                    continue;
-                }
-                let bq = 2.0 * w.dot(dp);
-                let c = w.length_squared() - r * r;
-                let disc = bq * bq - 4.0 * a * c;
-                if disc >= 0.0 {
-                    let s = (-bq + disc.sqrt()) / (2.0 * a);
-                    reach = reach.max((*d * s - *axis_point).dot(u).abs());
-                }
-            }
-            let l = (1.2 * reach).max(0.5 * r) + t;
-            revolve(
-                &[(r, -l), (r + t, -l), (r + t, l), (r, l)],
-                true,
-                PORT_SEGMENTS,
-            )
-            .transformed(
-                &Pose {
-                    rotation: z_to(u),
-                    translation: *axis_point,
-                },
-                DVec3::ONE,
-            )
-        }
+    let Some(mesh) = port::housing_mesh(cam, n_water) else {
+        return Ok(None);
     };
     if mesh.positions.iter().any(|p| !p.is_finite()) {
         return Err(format!(
             "{what}: its geometry is not finite; nothing was written"
         ));
     }
-    Ok(Some(mesh))
+    Ok(Some(tri_mesh(mesh)))
+}
+
+/// The optics' mesh as the geometry's.
+fn tri_mesh(m: HousingMesh) -> TriMesh {
+    TriMesh {
+        positions: m.positions,
+        triangles: m.triangles,
+    }
 }
 
 fn port_json(port: &Port, what: &str) -> Result<Value, String> {
@@ -1475,14 +1289,18 @@ mod tests {
 
     #[test]
     fn revolve_closes_a_disc_and_a_tube() {
-        let disc = revolve(&[(0.0, 0.0), (1.0, 0.0), (1.0, 0.1), (0.0, 0.1)], false, 16);
+        let disc = tri_mesh(revolve(
+            &[(0.0, 0.0), (1.0, 0.0), (1.0, 0.1), (0.0, 0.1)],
+            false,
+            16,
+        ));
         assert_eq!(disc.positions.len(), 2 + 2 * 16);
         assert_eq!(disc.triangles.len(), 16 + 2 * 16 + 16);
-        let tube = revolve(
+        let tube = tri_mesh(revolve(
             &[(1.0, -1.0), (1.1, -1.0), (1.1, 1.0), (1.0, 1.0)],
             true,
             16,
-        );
+        ));
         assert_eq!(tube.triangles.len(), 4 * 2 * 16);
         // Every triangle is proper.
         for m in [&disc, &tube] {

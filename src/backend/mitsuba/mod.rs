@@ -69,7 +69,7 @@ pub mod xml;
 pub use runner::{DRIVER_FILE, DRIVER_SOURCE, render, write_driver};
 
 use crate::model::*;
-use glam::DVec3;
+use crate::optics::port::basis;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -340,13 +340,4 @@ fn slug(s: &str) -> String {
 /// The sampler seed of the `view_index`-th view (`render.seed` + index, 32 bits).
 fn seed_for(model: &Model, view_index: usize) -> u32 {
     (model.render.seed.wrapping_add(view_index as u64) & 0xffff_ffff) as u32
-}
-
-/// An orthonormal basis `(e1, e2)` with `e1 × e2 = n` (spot lights in the world, port faces in
-/// the views).
-fn basis(n: DVec3) -> (DVec3, DVec3) {
-    let a = if n.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
-    let e1 = a.cross(n).normalize();
-    let e2 = n.cross(e1);
-    (e1, e2)
 }

@@ -6,7 +6,7 @@
 //! | header and integrator | [`view`] | `volpathmis` with water (spectral MIS), else `volpath`; `include` of `world.xml` |
 //! | water | `medium_region`, `water_medium`, [`ff_table`] | `homogeneous` medium in a `null` cube |
 //! | camera | [`check_camera`], `sensor`, `thin_lens` | `perspective` or `thinlens` sensor |
-//! | port and housing | `port_shapes` (`border_rays`, `rect_to_world`, `dielectric`) | `dielectric` shapes, black housing walls |
+//! | port and housing | `port_shapes` (the housing from [`crate::optics::port::housing`], `dielectric`) | `dielectric` shapes, black housing walls |
 //! | rig-mounted lights | `world::light` (shared with the world) | as world-mounted lights |
 //!
 //! Indices: a dielectric needs one number per side; without per-channel passes the G channel
@@ -21,6 +21,7 @@ use super::xml::El;
 use super::{SEA_MARGIN, TABPHASE_SAMPLES, WATER_ID, basis};
 use crate::model::*;
 use crate::optics::phase::ff_cdf;
+use crate::optics::port::{self, Face, Shape};
 use glam::{DMat3, DVec3};
 
 /// What one view document needs to know besides the model.
@@ -391,36 +392,9 @@ struct PortShapes {
     extent: f64,
 }
 
-/// Where a port's shapes go: the camera, its pose in the world and the medium outside.
-struct PortPlacement<'a> {
-    cam: &'a Camera,
-    world_from_cam: &'a Pose,
-    /// Refractive index outside the glass in this channel.
-    n_out: f64,
-    medium_outside: bool,
-}
-
-impl PortPlacement<'_> {
-    /// A camera-frame point in the world.
-    fn wp(&self, p: DVec3) -> DVec3 {
-        self.world_from_cam.transform_point(p)
-    }
-
-    /// A camera-frame direction in the world, unit length.
-    fn wv(&self, v: DVec3) -> DVec3 {
-        (self.world_from_cam.rotation * v).normalize()
-    }
-
-    /// A glass face towards the outside, in the water medium when there is one.
-    fn outer(&self, el: El) -> El {
-        if self.medium_outside {
-            el.reference("exterior", WATER_ID)
-        } else {
-            el
-        }
-    }
-}
-
+/// The port's housing ([`crate::optics::port::housing`], camera frame) as Mitsuba shapes in
+/// the world: glass faces as `dielectric`s (`n_out`: the index outside the glass in this
+/// channel; with `medium_outside`, the outer faces' exterior is the water medium), walls black.
 fn port_shapes(
     cam: &Camera,
     world_from_cam: &Pose,
@@ -428,326 +402,82 @@ fn port_shapes(
     n_out: f64,
     medium_outside: bool,
 ) -> Result<Option<PortShapes>, String> {
-    let at = PortPlacement {
-        cam,
-        world_from_cam,
-        n_out,
-        medium_outside,
+    let name = &cam.name;
+    let Some(h) = port::housing(cam).map_err(|e| format!("camera `{name}`: {e}"))? else {
+        return Ok(None);
     };
-    match &cam.port {
-        Port::None => Ok(None),
-        Port::Flat {
-            normal,
-            distance,
-            thickness,
-            glass,
-            ..
-        } => flat_port(&at, *normal, *distance, *thickness, glass.ior[channel]).map(Some),
-        Port::Dome {
-            center,
-            inner_radius,
-            thickness,
-            glass,
-        } => dome_port(&at, *center, *inner_radius, *thickness, glass.ior[channel]).map(Some),
-        Port::Cylinder {
-            axis_point,
-            axis,
-            inner_radius,
-            thickness,
-            glass,
-        } => cylinder_port(
-            &at,
-            *axis_point,
-            *axis,
-            *inner_radius,
-            *thickness,
-            glass.ior[channel],
-        )
-        .map(Some),
-    }
-}
-
-/// A flat port: the glass slab's six faces and the black housing walls behind it.
-fn flat_port(
-    at: &PortPlacement,
-    normal: DVec3,
-    distance: f64,
-    thickness: f64,
-    n_g: f64,
-) -> Result<PortShapes, String> {
-    let n = normal.normalize();
-    let (name, wp, wv) = (&at.cam.name, |p| at.wp(p), |v| at.wv(v));
-    if !(distance > 0.0) || !(thickness > 0.0) {
-        return Err(format!(
-            "camera `{name}`: the flat port needs a positive distance and thickness"
-        ));
-    }
-    let mut max_tan: f64 = 0.0;
-    for r in border_rays(at.cam) {
-        let c = r.dot(n);
-        if c < 0.1 {
-            return Err(format!(
-                "camera `{name}`: the field of view reaches {:.1}° from the flat port's \
-                 normal; the port cannot cover it",
-                c.clamp(-1.0, 1.0).acos().to_degrees()
-            ));
-        }
-        max_tan = max_tan.max((1.0 - c * c).sqrt() / c);
-    }
-    let (d, t) = (distance, thickness);
-    let half = 1.5 * (d + t) * max_tan + 2.0 * t;
-    let (e1, e2) = basis(n);
-    let (we1, we2, wn) = (wv(e1), wv(e2), wv(n));
-    let mut shapes = Vec::new();
-    // Inner face, normal towards the camera: interior (behind the normal) is glass.
-    shapes.push(
-        rect_to_world(
-            El::typed("shape", "rectangle")
-                .comment(format!("port of `{name}`: inner face (air | glass)")),
-            wp(n * d),
-            we2,
-            we1,
-            -wn,
-            half,
-            half,
-        )
-        .child(dielectric(n_g, 1.0)),
-    );
-    // Outer face, normal towards the water.
-    shapes.push(
-        at.outer(
-            rect_to_world(
-                El::typed("shape", "rectangle")
-                    .comment(format!("port of `{name}`: outer face (glass | water)")),
-                wp(n * (d + t)),
-                we1,
-                we2,
-                wn,
-                half,
-                half,
-            )
-            .child(dielectric(n_g, at.n_out)),
-        ),
-    );
-    // Four edge faces, normals outward.
-    let mid = wp(n * (d + 0.5 * t));
-    for (axis, other) in [(we1, we2), (-we1, -we2), (we2, -we1), (-we2, we1)] {
-        // Rectangle local x = other (half), y = wn (t/2), z = axis (outward normal).
-        shapes.push(
-            at.outer(
-                El::typed("shape", "rectangle")
-                    .to_world(
-                        DMat3::from_cols(other * half, wn * (0.5 * t), axis),
-                        mid + axis * half,
-                    )
-                    .child(dielectric(n_g, at.n_out)),
-            ),
-        );
-    }
-    // The housing behind the port: five black walls (back and four sides, from the
-    // inner face back to `d + t` behind the pupil) close the air pocket, so rays
-    // reflected by the glass back into the housing end there instead of escaping to
-    // the ambient light (a real housing is dark inside).
-    let back = d + t;
-    let black = black_bsdf();
-    shapes.push(
-        rect_to_world(
-            El::typed("shape", "rectangle")
-                .comment(format!("housing of `{name}`: black walls behind the port")),
-            wp(-n * back),
-            we1,
-            we2,
-            -wn,
-            half,
-            half,
-        )
-        .child(black.clone()),
-    );
-    let wall_mid = wp(n * (0.5 * (d - back)));
-    for (axis, other) in [(we1, we2), (-we1, -we2), (we2, -we1), (-we2, we1)] {
-        shapes.push(
-            El::typed("shape", "rectangle")
-                .to_world(
-                    DMat3::from_cols(other * half, wn * (0.5 * (d + back)), axis),
-                    wall_mid + axis * half,
-                )
-                .child(black.clone()),
-        );
-    }
-    let extent = ((d + t).powi(2) + 2.0 * half * half).sqrt();
-    Ok(PortShapes {
-        shapes,
-        clearance: d,
-        extent,
-    })
-}
-
-/// A dome port: the inner and outer spheres and the black disk behind them.
-fn dome_port(
-    at: &PortPlacement,
-    center: DVec3,
-    r: f64,
-    t: f64,
-    n_g: f64,
-) -> Result<PortShapes, String> {
-    let (name, wp, wv) = (&at.cam.name, |p| at.wp(p), |v| at.wv(v));
-    if !(r > 0.0) || !(t > 0.0) {
-        return Err(format!(
-            "camera `{name}`: the dome port needs a positive radius and thickness"
-        ));
-    }
-    if center.length() >= r {
-        return Err(format!(
-            "camera `{name}`: the dome's centre is {:.4} m from the entrance pupil, outside \
-             its inner radius {r} m",
-            center.length()
-        ));
-    }
-    let c = wp(center);
-    let inner = El::typed("shape", "sphere")
-        .comment(format!(
-            "dome port of `{name}`: inner sphere (air inside | glass)"
-        ))
-        .point("center", c)
-        .float("radius", r)
-        .child(dielectric(1.0, n_g));
-    let outer_s = at.outer(
-        El::typed("shape", "sphere")
-            .comment(format!(
-                "dome port of `{name}`: outer sphere (glass inside | water)"
-            ))
-            .point("center", c)
-            .float("radius", r + t)
-            .child(dielectric(n_g, at.n_out)),
-    );
-    // The housing behind the dome: a black disk across the inner sphere, behind the
-    // pupil and the glass the field of view uses (its rim at the field angle + 15°,
-    // 60°..170° from the axis, as the Blender backend's housing). The spheres are
-    // whole, so without it light the glass reflects back into the housing crossed the
-    // spheres' back halves to the water and the sky: flat_port_deformation_dome was
-    // +17 % G over native (`poser bench parity --quick`).
-    let max_field = border_rays(at.cam)
+    let n_g = cam.port.glass().map_or(1.0, |g| g.ior[channel]);
+    let wp = |p: DVec3| world_from_cam.transform_point(p);
+    // A camera-frame direction in the world, unit length.
+    let wv = |v: DVec3| (world_from_cam.rotation * v).normalize();
+    let shapes = h
+        .parts
         .iter()
-        .map(|d| d.z.clamp(-1.0, 1.0).acos())
-        .fold(0.0, f64::max);
-    let alpha = (max_field + 15f64.to_radians()).clamp(60f64.to_radians(), 170f64.to_radians());
-    let z_back = (center.z + r * alpha.cos()).min(0.0) - 0.01 * r;
-    let rho = (r * r - (z_back - center.z).powi(2)).max(0.0).sqrt() * (1.0 - 1e-6);
-    let axis = wv(DVec3::Z);
-    let (e1, e2) = basis(axis);
-    let housing = El::typed("shape", "disk")
-        .comment(format!("housing of `{name}`: black disk behind the dome"))
-        .to_world(
-            DMat3::from_cols(e1 * rho, e2 * rho, axis),
-            wp(DVec3::new(center.x, center.y, z_back)),
-        )
-        .child(black_bsdf());
-    Ok(PortShapes {
-        shapes: vec![inner, outer_s, housing],
-        clearance: r - center.length(),
-        extent: center.length() + r + t,
-    })
-}
-
-/// A cylinder port: the inner and outer cylinders, each closed by two disks.
-fn cylinder_port(
-    at: &PortPlacement,
-    axis_point: DVec3,
-    axis: DVec3,
-    r: f64,
-    t: f64,
-    n_g: f64,
-) -> Result<PortShapes, String> {
-    let (name, wp, wv) = (&at.cam.name, |p| at.wp(p), |v| at.wv(v));
-    let u = axis.normalize();
-    if !(r > 0.0) || !(t > 0.0) {
-        return Err(format!(
-            "camera `{name}`: the cylinder port needs a positive radius and thickness"
-        ));
-    }
-    // Pupil (origin) relative to the axis.
-    let w = -axis_point - (-axis_point).dot(u) * u;
-    if w.length() >= r {
-        return Err(format!(
-            "camera `{name}`: the entrance pupil is {:.4} m from the cylinder axis, outside \
-             its inner radius {r} m",
-            w.length()
-        ));
-    }
-    let mut max_axial: f64 = 0.0;
-    for d in border_rays(at.cam) {
-        let dp = d - d.dot(u) * u;
-        let a = dp.length_squared();
-        if a < 1e-6 {
-            return Err(format!(
-                "camera `{name}`: the field of view contains the cylinder port's axis; the \
-                 port cannot cover it"
-            ));
-        }
-        let b = 2.0 * w.dot(dp);
-        let cc = w.length_squared() - r * r;
-        let s = (-b + (b * b - 4.0 * a * cc).sqrt()) / (2.0 * a);
-        max_axial = max_axial.max((s * d - axis_point).dot(u).abs());
-    }
-    let half_len = 1.5 * max_axial + 4.0 * t + 0.5 * r;
-    let a0 = axis_point;
-    let mut shapes = Vec::new();
-    for (rad, hl, int_ior, ext_ior, label) in [
-        (r, half_len, 1.0, n_g, "inner (air inside | glass)"),
-        (
-            r + t,
-            half_len + t,
-            n_g,
-            at.n_out,
-            "outer (glass inside | water)",
-        ),
-    ] {
-        let is_outer = rad > r;
-        let cyl = El::typed("shape", "cylinder")
-            .comment(format!("cylinder port of `{name}`: {label}"))
-            .point("p0", wp(a0 - u * hl))
-            .point("p1", wp(a0 + u * hl))
-            .float("radius", rad)
-            .child(dielectric(int_ior, ext_ior));
-        shapes.push(if is_outer { at.outer(cyl) } else { cyl });
-        for sign in [-1.0, 1.0] {
-            let nrm = wv(u * sign);
-            let (e1, e2) = basis(nrm);
-            let disk = El::typed("shape", "disk")
-                .to_world(
-                    DMat3::from_cols(e1 * rad, e2 * rad, nrm),
-                    wp(a0 + u * (sign * hl)),
-                )
-                .child(dielectric(int_ior, ext_ior));
-            shapes.push(if is_outer { at.outer(disk) } else { disk });
-        }
-    }
-    Ok(PortShapes {
+        .map(|part| {
+            let kind = match part.shape {
+                Shape::Rectangle { .. } => "rectangle",
+                Shape::Disk { .. } => "disk",
+                Shape::Sphere { .. } => "sphere",
+                Shape::Cylinder { .. } => "cylinder",
+            };
+            let el = match part.label {
+                Some((of, what)) => {
+                    El::typed("shape", kind).comment(format!("{of} of `{name}`: {what}"))
+                }
+                None => El::typed("shape", kind),
+            };
+            let el = match part.shape {
+                Shape::Rectangle {
+                    centre,
+                    shift,
+                    x,
+                    y,
+                    normal,
+                } => {
+                    let c = match shift {
+                        Some((d, l)) => wp(centre) + wv(d) * l,
+                        None => wp(centre),
+                    };
+                    el.to_world(
+                        DMat3::from_cols(wv(x.0) * x.1, wv(y.0) * y.1, wv(normal)),
+                        c,
+                    )
+                }
+                Shape::Disk {
+                    centre,
+                    normal,
+                    radius,
+                } => {
+                    let nrm = wv(normal);
+                    let (e1, e2) = basis(nrm);
+                    el.to_world(DMat3::from_cols(e1 * radius, e2 * radius, nrm), wp(centre))
+                }
+                Shape::Sphere { center, radius } => {
+                    el.point("center", wp(center)).float("radius", radius)
+                }
+                Shape::Cylinder { p0, p1, radius } => el
+                    .point("p0", wp(p0))
+                    .point("p1", wp(p1))
+                    .float("radius", radius),
+            };
+            match part.face {
+                Face::Inner { glass_inside: true } => el.child(dielectric(n_g, 1.0)),
+                Face::Inner {
+                    glass_inside: false,
+                } => el.child(dielectric(1.0, n_g)),
+                Face::Outer if medium_outside => el
+                    .child(dielectric(n_g, n_out))
+                    .reference("exterior", WATER_ID),
+                Face::Outer => el.child(dielectric(n_g, n_out)),
+                Face::Wall => el.child(black_bsdf()),
+            }
+        })
+        .collect();
+    Ok(Some(PortShapes {
         shapes,
-        clearance: r - w.length(),
-        extent: axis_point.length() + (half_len + t).hypot(r + t),
-    })
-}
-
-/// Camera-frame rays through the image border (pixel-edge samples), unit length.
-fn border_rays(cam: &Camera) -> Vec<DVec3> {
-    let (w, h) = (cam.width as f64, cam.height as f64);
-    let n = 32;
-    let mut pts = Vec::with_capacity(4 * n);
-    for k in 0..n {
-        let s = k as f64 / n as f64;
-        pts.push((s * w, 0.0));
-        pts.push((w, s * h));
-        pts.push((w - s * w, h));
-        pts.push((0.0, h - s * h));
-    }
-    pts.into_iter()
-        .map(|(u, v)| DVec3::new((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1.0).normalize())
-        .collect()
-}
-
-fn rect_to_world(el: El, centre: DVec3, e1: DVec3, e2: DVec3, n: DVec3, h1: f64, h2: f64) -> El {
-    el.to_world(DMat3::from_cols(e1 * h1, e2 * h2, n), centre)
+        clearance: h.clearance,
+        extent: h.extent,
+    }))
 }
 
 /// The inside of a housing: black on both sides.

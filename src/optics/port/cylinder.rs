@@ -3,8 +3,13 @@
 
 use super::PortRay;
 use super::flat::Slabs;
+use super::housing::{
+    Face, Housing, HousingMesh, MESH_SEGMENTS, Part, Shape, border_directions, border_rays,
+    revolve, z_to,
+};
 use crate::optics::NoSolution;
 use crate::optics::interface::{fresnel_transmittance, refract};
+use crate::optics::types::{Camera, Pose};
 use glam::{DVec2, DVec3};
 
 /// Cylindrical port: coaxial cylinders about a line.
@@ -256,4 +261,150 @@ impl CylinderPort {
         }
         Ok(v)
     }
+}
+
+/// Why a cylinder port has no housing covering the field of view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum HousingError {
+    /// The radius or the thickness is not positive.
+    NotPositive,
+    /// The entrance pupil lies `offset` m from the axis, outside the inner cylinder.
+    PupilOutside { offset: f64, inner_radius: f64 },
+    /// A ray of the field of view runs along the axis.
+    AxisInView,
+}
+
+impl std::fmt::Display for HousingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            HousingError::NotPositive => {
+                write!(f, "the cylinder port needs a positive radius and thickness")
+            }
+            HousingError::PupilOutside {
+                offset,
+                inner_radius,
+            } => write!(
+                f,
+                "the entrance pupil is {offset:.4} m from the cylinder axis, outside its inner \
+                 radius {inner_radius} m"
+            ),
+            HousingError::AxisInView => write!(
+                f,
+                "the field of view contains the cylinder port's axis; the port cannot cover it"
+            ),
+        }
+    }
+}
+
+/// A cylinder port's housing: the inner and outer cylinders, each closed by two disks, long
+/// enough for 1.5 times the field of view's reach along the axis.
+pub fn housing(
+    cam: &Camera,
+    axis_point: DVec3,
+    axis: DVec3,
+    r: f64,
+    t: f64,
+) -> Result<Housing, HousingError> {
+    let u = axis.normalize();
+    if !(r > 0.0) || !(t > 0.0) {
+        return Err(HousingError::NotPositive);
+    }
+    // Pupil (origin) relative to the axis.
+    let w = -axis_point - (-axis_point).dot(u) * u;
+    if w.length() >= r {
+        return Err(HousingError::PupilOutside {
+            offset: w.length(),
+            inner_radius: r,
+        });
+    }
+    let mut max_axial: f64 = 0.0;
+    for d in border_rays(cam) {
+        let dp = d - d.dot(u) * u;
+        let a = dp.length_squared();
+        if a < 1e-6 {
+            return Err(HousingError::AxisInView);
+        }
+        let b = 2.0 * w.dot(dp);
+        let cc = w.length_squared() - r * r;
+        let s = (-b + (b * b - 4.0 * a * cc).sqrt()) / (2.0 * a);
+        max_axial = max_axial.max((s * d - axis_point).dot(u).abs());
+    }
+    let half_len = 1.5 * max_axial + 4.0 * t + 0.5 * r;
+    let a0 = axis_point;
+    let mut parts = Vec::new();
+    for (radius, hl, face, label) in [
+        (
+            r,
+            half_len,
+            Face::Inner {
+                glass_inside: false,
+            },
+            "inner (air inside | glass)",
+        ),
+        (
+            r + t,
+            half_len + t,
+            Face::Outer,
+            "outer (glass inside | water)",
+        ),
+    ] {
+        parts.push(
+            Part::new(
+                face,
+                Shape::Cylinder {
+                    p0: a0 - u * hl,
+                    p1: a0 + u * hl,
+                    radius,
+                },
+            )
+            .labelled("cylinder port", label),
+        );
+        for sign in [-1.0, 1.0] {
+            parts.push(Part::new(
+                face,
+                Shape::Disk {
+                    centre: a0 + u * (sign * hl),
+                    normal: u * sign,
+                    radius,
+                },
+            ));
+        }
+    }
+    Ok(Housing {
+        parts,
+        clearance: r - w.length(),
+        extent: axis_point.length() + (half_len + t).hypot(r + t),
+    })
+}
+
+/// A cylinder port's glass as a tube shell, for display: the field of view's reach along the
+/// axis on the inner cylinder, + 20 % (at least half the radius).
+pub fn housing_mesh(cam: &Camera, axis_point: DVec3, axis: DVec3, r: f64, t: f64) -> HousingMesh {
+    let u = axis.normalize();
+    let w = -axis_point - (-axis_point).dot(u) * u;
+    let mut reach: f64 = 0.0;
+    for d in &border_directions(cam) {
+        let dp = *d - d.dot(u) * u;
+        let a = dp.length_squared();
+        if a < 1e-9 {
+            continue;
+        }
+        let bq = 2.0 * w.dot(dp);
+        let c = w.length_squared() - r * r;
+        let disc = bq * bq - 4.0 * a * c;
+        if disc >= 0.0 {
+            let s = (-bq + disc.sqrt()) / (2.0 * a);
+            reach = reach.max((*d * s - axis_point).dot(u).abs());
+        }
+    }
+    let l = (1.2 * reach).max(0.5 * r) + t;
+    revolve(
+        &[(r, -l), (r + t, -l), (r + t, l), (r, l)],
+        true,
+        MESH_SEGMENTS,
+    )
+    .transformed(&Pose {
+        rotation: z_to(u),
+        translation: axis_point,
+    })
 }

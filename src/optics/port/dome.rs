@@ -2,10 +2,14 @@
 //! moment equation, bracketed Illinois as fallback.
 
 use super::PortRay;
+use super::housing::{
+    Face, Housing, HousingMesh, MESH_SEGMENTS, Part, Shape, border_directions, border_rays, revolve,
+};
 use crate::optics::NoSolution;
 use crate::optics::interface::{fresnel_transmittance, refract};
 use crate::optics::lanes::Lane;
-use glam::{DVec2, DVec3};
+use crate::optics::types::{Camera, Pose};
+use glam::{DMat3, DVec2, DVec3};
 
 #[derive(Debug, Clone, Copy)]
 pub struct DomePort {
@@ -429,4 +433,120 @@ impl DomePort {
         }
         Ok(0.5 * (a + b))
     }
+}
+
+/// Why a dome port has no housing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum HousingError {
+    /// The radius or the thickness is not positive.
+    NotPositive,
+    /// The entrance pupil lies `decentring` m from the centre, outside the inner sphere.
+    PupilOutside { decentring: f64, inner_radius: f64 },
+}
+
+impl std::fmt::Display for HousingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            HousingError::NotPositive => {
+                write!(f, "the dome port needs a positive radius and thickness")
+            }
+            HousingError::PupilOutside {
+                decentring,
+                inner_radius,
+            } => write!(
+                f,
+                "the dome's centre is {decentring:.4} m from the entrance pupil, outside its \
+                 inner radius {inner_radius} m"
+            ),
+        }
+    }
+}
+
+/// A dome port's housing: the inner and outer spheres (whole) and a black disk across the
+/// inner sphere behind the pupil and the glass the field of view uses (its rim at the field
+/// angle + 15°, 60°..170° from the axis). Without the disk, light the glass reflects back
+/// into the housing would cross the spheres' back halves to the water and the sky.
+pub fn housing(cam: &Camera, center: DVec3, r: f64, t: f64) -> Result<Housing, HousingError> {
+    if !(r > 0.0) || !(t > 0.0) {
+        return Err(HousingError::NotPositive);
+    }
+    if center.length() >= r {
+        return Err(HousingError::PupilOutside {
+            decentring: center.length(),
+            inner_radius: r,
+        });
+    }
+    let max_field = border_rays(cam)
+        .iter()
+        .map(|d| d.z.clamp(-1.0, 1.0).acos())
+        .fold(0.0, f64::max);
+    let alpha = (max_field + 15f64.to_radians()).clamp(60f64.to_radians(), 170f64.to_radians());
+    let z_back = (center.z + r * alpha.cos()).min(0.0) - 0.01 * r;
+    let rho = (r * r - (z_back - center.z).powi(2)).max(0.0).sqrt() * (1.0 - 1e-6);
+    let parts = vec![
+        Part::new(
+            Face::Inner {
+                glass_inside: false,
+            },
+            Shape::Sphere { center, radius: r },
+        )
+        .labelled("dome port", "inner sphere (air inside | glass)"),
+        Part::new(
+            Face::Outer,
+            Shape::Sphere {
+                center,
+                radius: r + t,
+            },
+        )
+        .labelled("dome port", "outer sphere (glass inside | water)"),
+        Part::new(
+            Face::Wall,
+            Shape::Disk {
+                centre: DVec3::new(center.x, center.y, z_back),
+                normal: DVec3::Z,
+                radius: rho,
+            },
+        )
+        .labelled("housing", "black disk behind the dome"),
+    ];
+    Ok(Housing {
+        parts,
+        clearance: r - center.length(),
+        extent: center.length() + r + t,
+    })
+}
+
+/// A dome port's glass as a spherical cap shell, for display: the cap covers the field of
+/// view seen from the dome's centre, + 10°; at least a hemisphere, at most 175°.
+pub fn housing_mesh(cam: &Camera, center: DVec3, r: f64, t: f64) -> HousingMesh {
+    let mut cap = std::f64::consts::FRAC_PI_2;
+    for d in &border_directions(cam) {
+        let b = d.dot(center);
+        let disc = b * b - center.length_squared() + r * r;
+        if disc >= 0.0 {
+            let p = *d * (b + disc.sqrt()) - center;
+            cap = cap.max(p.normalize().z.clamp(-1.0, 1.0).acos() + 10f64.to_radians());
+        }
+    }
+    let cap = cap.min(175f64.to_radians());
+    let k = 24;
+    let mut profile = Vec::with_capacity(2 * k + 2);
+    for i in 0..=k {
+        let a = cap * i as f64 / k as f64;
+        profile.push(((r + t) * a.sin(), (r + t) * a.cos()));
+    }
+    for i in (0..=k).rev() {
+        let a = cap * i as f64 / k as f64;
+        profile.push((r * a.sin(), r * a.cos()));
+    }
+    if let Some(p) = profile.first_mut() {
+        p.0 = 0.0;
+    }
+    if let Some(p) = profile.last_mut() {
+        p.0 = 0.0;
+    }
+    revolve(&profile, false, MESH_SEGMENTS).transformed(&Pose {
+        rotation: DMat3::IDENTITY,
+        translation: center,
+    })
 }

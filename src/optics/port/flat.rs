@@ -2,10 +2,16 @@
 //! q-equation ([`Slabs`], shared with the on-axis cylinder) and its double-double refinement.
 
 use super::PortRay;
+use super::housing::{
+    Face, Housing, HousingMesh, MESH_SEGMENTS, Part, Shape, basis, border_directions, border_rays,
+    revolve, z_to,
+};
 use crate::optics::NoSolution;
 use crate::optics::interface::{fresnel_transmittance, refract};
 use crate::optics::lanes::Lane;
+use crate::optics::project::Projector;
 use crate::optics::reference::{Dd, V3};
+use crate::optics::types::{Camera, Pose};
 use glam::DVec3;
 
 /// Largest number of glass layers of a flat port.
@@ -560,4 +566,155 @@ impl FlatDd {
         }
         out
     }
+}
+
+/// Why a flat port has no housing covering the field of view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum HousingError {
+    /// The distance or the (first layer's) thickness is not positive.
+    NotPositive,
+    /// A ray of the field of view leaves `degrees` from the normal (cosine below 0.1).
+    FieldTooWide { degrees: f64 },
+}
+
+impl std::fmt::Display for HousingError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            HousingError::NotPositive => {
+                write!(f, "the flat port needs a positive distance and thickness")
+            }
+            HousingError::FieldTooWide { degrees } => write!(
+                f,
+                "the field of view reaches {degrees:.1}° from the flat port's normal; the port \
+                 cannot cover it"
+            ),
+        }
+    }
+}
+
+/// A flat port's housing: the glass slab's six faces (`thickness`: the first layer) and the
+/// black walls behind it. The slab's half-width covers the field of view's straight rays
+/// 1.5 times over; five walls (back and four sides, from the inner face back to `d + t`
+/// behind the pupil) close the air pocket, so rays the glass reflects back into the housing
+/// end there instead of escaping to the ambient light (a real housing is dark inside).
+pub fn housing(
+    cam: &Camera,
+    normal: DVec3,
+    distance: f64,
+    thickness: f64,
+) -> Result<Housing, HousingError> {
+    let n = normal.normalize();
+    if !(distance > 0.0) || !(thickness > 0.0) {
+        return Err(HousingError::NotPositive);
+    }
+    let mut max_tan: f64 = 0.0;
+    for r in border_rays(cam) {
+        let c = r.dot(n);
+        if c < 0.1 {
+            return Err(HousingError::FieldTooWide {
+                degrees: c.clamp(-1.0, 1.0).acos().to_degrees(),
+            });
+        }
+        max_tan = max_tan.max((1.0 - c * c).sqrt() / c);
+    }
+    let (d, t) = (distance, thickness);
+    let half = 1.5 * (d + t) * max_tan + 2.0 * t;
+    let (e1, e2) = basis(n);
+    let rect = |centre, shift, x, y, normal| Shape::Rectangle {
+        centre,
+        shift,
+        x,
+        y,
+        normal,
+    };
+    let sides = [(e1, e2), (-e1, -e2), (e2, -e1), (-e2, e1)];
+    let mut parts = vec![
+        // Inner face, normal towards the camera: interior (behind the normal) is glass.
+        Part::new(
+            Face::Inner { glass_inside: true },
+            rect(n * d, None, (e2, half), (e1, half), -n),
+        )
+        .labelled("port", "inner face (air | glass)"),
+        // Outer face, normal towards the water.
+        Part::new(
+            Face::Outer,
+            rect(n * (d + t), None, (e1, half), (e2, half), n),
+        )
+        .labelled("port", "outer face (glass | water)"),
+    ];
+    // Four edge faces, normals outward: local x = other (half), y = n (t/2), z = axis.
+    for (axis, other) in sides {
+        parts.push(Part::new(
+            Face::Outer,
+            rect(
+                n * (d + 0.5 * t),
+                Some((axis, half)),
+                (other, half),
+                (n, 0.5 * t),
+                axis,
+            ),
+        ));
+    }
+    let back = d + t;
+    parts.push(
+        Part::new(
+            Face::Wall,
+            rect(-n * back, None, (e1, half), (e2, half), -n),
+        )
+        .labelled("housing", "black walls behind the port"),
+    );
+    for (axis, other) in sides {
+        parts.push(Part::new(
+            Face::Wall,
+            rect(
+                n * (0.5 * (d - back)),
+                Some((axis, half)),
+                (other, half),
+                (n, 0.5 * (d + back)),
+                axis,
+            ),
+        ));
+    }
+    Ok(Housing {
+        parts,
+        clearance: d,
+        extent: ((d + t).powi(2) + 2.0 * half * half).sqrt(),
+    })
+}
+
+/// A flat port's glass as a disc, for display: the radius the field of view needs (where the
+/// sensor corners' rays leave the glass by exact refraction in water of index `n_water`, else
+/// the straight rays to the outer face; + 10 %), the glass's whole thickness.
+pub fn housing_mesh(cam: &Camera, normal: DVec3, distance: f64, n_water: f64) -> HousingMesh {
+    let t = cam.port.total_thickness();
+    let n = normal.normalize();
+    let exact = Projector::for_camera(cam, 1, n_water)
+        .ok()
+        .map(|pr| {
+            let (w, h) = (cam.width as f64, cam.height as f64);
+            [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)]
+                .iter()
+                .filter_map(|&(u, v)| pr.camera_ray(u, v).ok())
+                .map(|r| (r.origin - n * n.dot(r.origin)).length())
+                .fold(0.0, f64::max)
+        })
+        .filter(|r| *r > 0.0);
+    let straight = border_directions(cam)
+        .iter()
+        .filter(|d| d.dot(n) > 1e-3)
+        .map(|d| {
+            let p = *d * ((distance + t) / d.dot(n));
+            (p - n * n.dot(p)).length()
+        })
+        .fold(0.0, f64::max);
+    let r = 1.1 * exact.unwrap_or(straight).max(0.5 * (distance + t));
+    revolve(
+        &[(0.0, 0.0), (r, 0.0), (r, t), (0.0, t)],
+        false,
+        MESH_SEGMENTS,
+    )
+    .transformed(&Pose {
+        rotation: z_to(n),
+        translation: n * distance,
+    })
 }

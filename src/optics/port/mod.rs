@@ -3,9 +3,13 @@
 //!
 //! | port | parameters (camera frame, metres) | forward solver |
 //! |---|---|---|
-//! | [`FlatPort`] | unit normal N (camera → water), inner-face distance d ≥ 0, glass layers (thickness, index)… | Halley on the scalar q-equation in ratio form t = q/r, from the water-unit guess (≤ 2 evaluations on ordinary points; no bracket needed when every n ≥ n_air; safeguarded Newton–bisection otherwise) |
-//! | [`DomePort`] | centre C (|C| < R₁), inner radius R₁, thickness t | Halley on the exact moment equation in the plane (O, C, P) from the first-order guess; bracketed secant/Illinois inside ±asin(|C|/R₁) as fallback; pinhole when centred |
-//! | [`CylinderPort`] | axis point, unit axis, inner radius, thickness | on its axis: the flat q-equation in the meridional plane; off it: 2-D Newton (skew rays) from two starts, then continuation in the decentring |
+//! | [`FlatPort`] (`flat.rs`) | unit normal N (camera → water), inner-face distance d ≥ 0, glass layers (thickness, index)… | Halley on the scalar q-equation in ratio form t = q/r, from the water-unit guess (≤ 2 evaluations on ordinary points; no bracket needed when every n ≥ n_air; safeguarded Newton–bisection otherwise) |
+//! | [`DomePort`] (`dome.rs`) | centre C (|C| < R₁), inner radius R₁, thickness t | Halley on the exact moment equation in the plane (O, C, P) from the first-order guess; bracketed secant/Illinois inside ±asin(|C|/R₁) as fallback; pinhole when centred |
+//! | [`CylinderPort`] (`cylinder.rs`) | axis point, unit axis, inner radius, thickness | on its axis: the flat q-equation in the meridional plane; off it: 2-D Newton (skew rays) from two starts, then continuation in the decentring |
+//!
+//! Each type's file also builds its housing: [`housing`] (the exact glass surfaces and black
+//! walls, what Mitsuba renders) and [`housing_mesh`] (the glass shell as triangles, what the
+//! glTF export shows), with the typed [`HousingError`]s; shared types in `port/housing.rs`.
 //!
 //! [`PortSolver::forward_many`] (in `port/batch.rs`) solves [`LANES`] points at a time in SIMD
 //! lanes, AVX2 where the CPU has it: the same results bit for bit as [`PortSolver::forward`],
@@ -19,14 +23,19 @@
 //! the camera, beyond the critical angle, a camera ray that misses the port or is totally
 //! internally reflected, or (never seen, but guarded) a solver that does not converge.
 
-mod cylinder;
-mod dome;
-mod flat;
+pub mod cylinder;
+pub mod dome;
+pub mod flat;
+mod housing;
 
 pub use cylinder::CylinderPort;
 pub use dome::DomePort;
 pub use flat::{FlatPort, MAX_LAYERS};
 use flat::{REFINE_AT, Slabs};
+pub use housing::{
+    Face, Housing, HousingError, HousingMesh, MESH_SEGMENTS, Part, Shape, basis, housing,
+    housing_mesh, revolve, z_to,
+};
 
 use super::NoSolution;
 use super::types::Port;
