@@ -42,6 +42,10 @@ class Reader:
         self.work = work
         self.notes = []
         self.edited = []
+        self.port_glass = False  # glass (or poser's housing) at a camera
+        # A file poser saved: its image textures are poser's own bakes of the scene's patterns,
+        # imported as their mean colour (the round trip gives back the scene, not the bake).
+        self.poser_saved = False
 
     def note(self, element, message, help_=None):
         self.notes.append({"element": element, "message": message, "help": help_})
@@ -104,6 +108,8 @@ def image_mean(img):
     px = np.empty(n * img.channels, dtype=np.float32)
     img.pixels.foreach_get(px)
     px = px.reshape(n, img.channels)[:, :3].astype(float)
+    if px.shape[1] < 3:  # grey (and alpha)
+        px = np.repeat(px[:, :1], 3, axis=1)
     if not img.is_float and img.colorspace_settings.name.lower().startswith("srgb"):
         px = srgb_to_linear(px)
     return [float(x) for x in px.mean(axis=0)]
@@ -180,8 +186,78 @@ def volume_of(node, r, where):
     return None
 
 
+WRAPS = {"REPEAT": "repeat", "EXTEND": "clamp", "MIRROR": "mirror", "CLIP": "clamp"}
+MAX_TEXTURE_SIDE = 16384  # poser's limit on a mesh's image (src/texture/mapped.rs)
+
+
+def image_texture(node, into, r, where):
+    """What poser needs to draw the Image Texture `node` (linked into `into`) as a mesh's
+    image texture: {"image", "uv_map", "wrap"}; or None (noted) when the node does something
+    poser's textured meshes cannot (then the image's mean colour is used)."""
+    img = node.image
+    name = f"image texture `{img.name}`"
+    link = into.links[0]
+    if link.from_socket.name != "Color":
+        r.note(where, f"{name}: its `{link.from_socket.name}` output, not its colour, feeds the base colour")
+        return None
+    if img.source not in ("FILE", "GENERATED"):
+        r.note(where, f"{name}: a `{img.source}` image (not one still image) is not drawn as a texture")
+        return None
+    if node.projection != "FLAT":
+        r.note(where, f"{name}: the `{node.projection}` projection is not drawn as a texture",
+               "poser's textured meshes read the UV map (the Flat projection)")
+        return None
+    uv_map = None
+    vec = linked(node.inputs.get("Vector"))
+    if vec is not None:
+        out = node.inputs["Vector"].links[0].from_socket.name
+        if vec.bl_idname == "ShaderNodeUVMap" and not vec.from_instancer:
+            uv_map = vec.uv_map or None
+        elif vec.bl_idname == "ShaderNodeTexCoord" and out == "UV" and not vec.from_instancer:
+            uv_map = None
+        else:
+            r.note(where, f"{name}: its coordinates come from a `{vec.bl_idname}` node "
+                   f"(`{out}`), which poser does not follow",
+                   "feed the texture a UV map directly (bake a Mapping node into the UVs)")
+            return None
+    w, h = int(img.size[0]), int(img.size[1])
+    if w == 0 or h == 0:
+        fail(f"{where}: {name} has no pixels (its file `{img.filepath}` is missing "
+             f"or unreadable)\n  help: pack the image into the .blend or put it where the file says")
+    if w > MAX_TEXTURE_SIDE or h > MAX_TEXTURE_SIDE:
+        fail(f"{where}: {name} is {w}x{h} pixels, more than poser's "
+             f"{MAX_TEXTURE_SIDE} a side\n  help: scale the image down")
+    if node.extension == "CLIP":
+        r.note(where, f"{name}: `Clip` extension (black outside the image) is imported as `Extend`")
+    if node.interpolation != "Linear":
+        r.note(where, f"{name}: `{node.interpolation}` interpolation becomes poser's bilinear lookup "
+               "(at the mipmap level the cameras' sampling asks for)")
+    return {"image": img, "uv_map": uv_map, "wrap": WRAPS.get(node.extension, "repeat")}
+
+
+def write_texture(img, path):
+    """The image's pixels as float32 RGB rows, Blender's first row (the image's bottom, v = 0)
+    first; returns how the values are encoded: "srgb" (an 8-bit sRGB image's bytes / 255) or
+    "linear"."""
+    w, h = int(img.size[0]), int(img.size[1])
+    px = np.empty(w * h * img.channels, dtype=np.float32)
+    img.pixels.foreach_get(px)
+    px = px.reshape(h, w, img.channels)
+    rgb = np.empty((h, w, 3), dtype="<f4")
+    if img.channels >= 3:
+        rgb[...] = px[:, :, :3]
+    else:  # grey (and alpha)
+        rgb[...] = px[:, :, :1]
+    srgb = not img.is_float and img.colorspace_settings.name.lower().startswith("srgb")
+    with open(path + ".tmp", "wb") as f:
+        f.write(rgb.tobytes())
+    os.replace(path + ".tmp", path)
+    return "srgb" if srgb else "linear"
+
+
 def surface_of(mat, r, where):
-    """('diffuse', albedo) | ('glass', ior) | ('volume', coefficients) | ('skip', None)."""
+    """('diffuse', albedo) | ('textured', (albedo, texture)) | ('glass', ior) |
+    ('volume', coefficients) | ('skip', None)."""
     if mat is None:
         r.note(where, "has no material; imported with Blender's default grey (0.8)")
         return ("diffuse", [0.8] * 3)
@@ -210,10 +286,13 @@ def surface_of(mat, r, where):
         key = "Base Color" if t == "ShaderNodeBsdfPrincipled" else "Color"
         inp = surf.inputs[key]
         src = linked(inp)
+        tex = None
         if src is not None and src.bl_idname == "ShaderNodeTexImage" and src.image is not None:
+            tex = None if r.poser_saved else image_texture(src, inp, r, where)
             albedo = image_mean(src.image)
-            r.note(where, f"image texture `{src.image.name}` is imported as its mean colour",
-                   "poser's objects take a pattern or a printed target instead")
+            if tex is None:
+                r.note(where, f"image texture `{src.image.name}` is imported as its mean colour",
+                       "poser's objects take a pattern or a printed target instead")
         elif src is not None:
             albedo = colour_of(inp)
             r.note(where, f"`{key}` is driven by a `{src.bl_idname}` node; its unlinked value is used")
@@ -230,6 +309,8 @@ def surface_of(mat, r, where):
             r.note(where, msg, "poser's surfaces are diffuse")
         elif float(surf.inputs["Roughness"].default_value) > 0.0:
             r.note(where, "the Diffuse BSDF's roughness (Oren-Nayar) is dropped")
+        if tex is not None:
+            return ("textured", (albedo, tex))
         return ("diffuse", albedo)
     if t == "ShaderNodeEmission":
         r.note(where, "an emitting surface is not imported",
@@ -239,14 +320,41 @@ def surface_of(mat, r, where):
     return ("skip", None)
 
 
-def write_ply(path, verts, tris):
+def corner_uvs(me, name, r, where):
+    """The texture coordinates of every triangle corner (loop triangles' loops, in order) from
+    the UV map `name`, or the one Cycles renders with; None (noted) when there is none."""
+    layers = me.uv_layers
+    layer = layers.get(name) if name else next((l for l in layers if l.active_render), None)
+    if layer is None:
+        r.note(where, f"has no UV map{f' `{name}`' if name else ''} for its image texture; "
+               "the image's mean colour is used")
+        return None
+    loops = np.empty(len(me.loop_triangles) * 3, dtype=np.int32)
+    me.loop_triangles.foreach_get("loops", loops)
+    uv = np.empty(len(me.loops) * 2, dtype=np.float32)
+    layer.uv.foreach_get("vector", uv)
+    uv = uv.reshape(-1, 2)[loops]
+    if not np.all(np.isfinite(uv)):
+        fail(f"{where}: UV map `{layer.name}` has a coordinate that is not a number")
+    return uv
+
+
+def write_ply(path, verts, tris, uv=None):
+    """A binary PLY of triangles (double x y z; float u v when `uv` is given)."""
     tris = np.asarray(tris, dtype=np.int32).reshape(-1, 3)
+    uv_props = "property float u\nproperty float v\n" if uv is not None else ""
     head = (
         "ply\nformat binary_little_endian 1.0\n"
         f"element vertex {len(verts)}\nproperty double x\nproperty double y\nproperty double z\n"
+        f"{uv_props}"
         f"element face {len(tris)}\nproperty list uchar int vertex_indices\nend_header\n"
     ).encode("ascii")
-    body = np.asarray(verts, dtype="<f8").tobytes()
+    if uv is None:
+        body = np.asarray(verts, dtype="<f8").tobytes()
+    else:
+        rows = np.zeros(len(verts), dtype=[("p", "<f8", 3), ("uv", "<f4", 2)])
+        rows["p"], rows["uv"] = verts, uv
+        body = rows.tobytes()
     faces = np.zeros(len(tris), dtype=[("n", "u1"), ("i", "<i4", 3)])
     faces["n"] = 3
     faces["i"] = tris
@@ -265,6 +373,7 @@ def read(bpy, blend, work):
     bpy.ops.wm.open_mainfile(filepath=blend, load_ui=False, use_scripts=False)
     r = Reader(bpy, work)
     scene = bpy.context.scene
+    r.poser_saved = scene.get("poser_bounces") is not None
     rd = scene.render
     width = int(round(rd.resolution_x * rd.resolution_percentage / 100.0))
     height = int(round(rd.resolution_y * rd.resolution_percentage / 100.0))
@@ -357,9 +466,13 @@ def read(bpy, blend, work):
         where = f"object `{o.name}`"
         mats = [s.material for s in o.material_slots] or [None]
         kind, value = surface_of(mats[0], r, where)
+        tex = None
+        if kind == "textured":
+            kind, (value, tex) = "diffuse", value
         if len(mats) > 1 and kind == "diffuse":
             r.note(where, f"has {len(mats)} materials; the first is used for all faces")
         if kind == "housing":
+            r.port_glass = True
             continue
         if kind == "volume" or o.name == "poser_water":
             water = water_of(r, o, mats, value, water, where)
@@ -368,6 +481,7 @@ def read(bpy, blend, work):
             centre = np.array(o.matrix_world, dtype=float)[:3, 3]
             near = [cams[i].name for i, cc in enumerate(cam_centres) if np.linalg.norm(cc - centre) < 0.5]
             if near:
+                r.port_glass = True
                 r.note(where, f"glass at camera `{strip(near[0], 'camera:')}` is taken as its housing port and not imported",
                        "declare it as `[camera.port]` (type = \"flat\" or \"dome\", with its "
                        "thickness, radius and material) so that poser refracts through it exactly")
@@ -388,6 +502,11 @@ def read(bpy, blend, work):
             me.vertices.foreach_get("co", co)
             tris = np.empty(len(me.loop_triangles) * 3, dtype=np.int32)
             me.loop_triangles.foreach_get("vertices", tris)
+            uv = None
+            if tex is not None:
+                uv = corner_uvs(me, tex["uv_map"], r, where)
+                if uv is None:
+                    tex = None
         finally:
             ev.to_mesh_clear()
         m = r.world(o, 0)
@@ -397,9 +516,25 @@ def read(bpy, blend, work):
             local = r.shadow(o, "poser_vertices", local.ravel(), where).reshape(-1, 3)
         verts = local @ m[:3, :3].T + m[:3, 3]
         path = os.path.join(work, f"mesh_{len(meshes)}.ply")
-        write_ply(path, verts, tris)
+        texture = None
+        if tex is not None:
+            # One vertex per distinct (vertex, texture coordinate) pair of the triangles' corners.
+            keys = np.zeros(len(tris), dtype=[("i", "<i4"), ("u", "<f4"), ("v", "<f4")])
+            keys["i"], keys["u"], keys["v"] = tris, uv[:, 0], uv[:, 1]
+            uniq, inverse = np.unique(keys, return_inverse=True)
+            verts, tris = verts[uniq["i"]], inverse.astype(np.int32).ravel()
+            # glTF's and poser's v = 0 is the image's first row; Blender's the image's bottom.
+            corner_uv = np.stack([uniq["u"], 1.0 - uniq["v"]], axis=1)
+            tex_path = os.path.join(work, f"texture_{len(meshes)}.f32")
+            img = tex["image"]
+            texture = {"file": os.path.basename(tex_path), "name": img.name,
+                       "width": int(img.size[0]), "height": int(img.size[1]),
+                       "encoding": write_texture(img, tex_path), "wrap": tex["wrap"]}
+            write_ply(path, verts, tris, corner_uv)
+        else:
+            write_ply(path, verts, tris)
         meshes.append({"name": strip(o.name, "object:"), "ply": os.path.basename(path),
-                       "albedo": value, "triangles": int(len(tris) // 3)})
+                       "albedo": value, "triangles": int(len(tris) // 3), "texture": texture})
 
     world_out = world_light(r, scene)
     if world_out is not None and world_out[0] == "volume":
@@ -416,6 +551,14 @@ def read(bpy, blend, work):
     if world_out is not None:
         lights.append(world_out[1])
 
+    if water is not None and scene.get("poser_bounces") is None and \
+            min(cy.volume_bounces, cy.max_bounces) == 0:
+        r.note("scene", "Cycles renders the water with 0 volume bounces (Blender's default): a "
+               "path ends where it scatters in the volume (single scattering only), while poser "
+               f"follows it up to render.bounces = {render['bounces']}, so the imported water is "
+               "brighter",
+               "raise Cycles' Volume bounces (Light Paths) to the Diffuse bounces to compare like "
+               "with like")
     if r.edited:
         shown = sorted(set(r.edited))
         r.note("scene", "edited in Blender since poser saved it (float32 values used): "
@@ -430,6 +573,7 @@ def read(bpy, blend, work):
         "lights": lights,
         "water": water,
         "meshes": meshes,
+        "port_glass": r.port_glass,
         "notes": r.notes,
     }
 

@@ -8,9 +8,10 @@
 //! | one pose per frame when the first camera moves, else one | `[network]` explicit poses |
 //! | perspective camera: lens, sensor fit, shift, depth of field | `fx`, `principal_point`, `focal_length`, `f_number`, `focus_distance` |
 //! | point, spot, area (W) and sun (W/m²) lights; the world's background | `[[lights]]` (W/sr, W/(m²·sr)), `[sun]`, an ambient light |
-//! | a volume-only material on a mesh (Volume Absorption/Scatter/Coefficients, Principled Volume), or the world's volume | `[water]`; a mesh whose top is at z = 0 gives a flat sea surface |
+//! | a volume-only material on a mesh (Volume Absorption/Scatter/Coefficients, Principled Volume), or the world's volume | `[water]`; a mesh whose top is at z = 0 gives a flat sea surface; a box elsewhere moves the scene so that its top is at z = 0 |
 //! | meshes with a Principled or Diffuse BSDF | `.glb` assets, albedo = base colour |
-//! | glass at a camera | a note with the `[camera.port]` to declare |
+//! | an Image Texture (UV map, a still image) feeding the base colour | a textured `.glb` and its image as a PNG beside it |
+//! | glass at a camera | a note with the `[camera.port]` to declare; without it `[camera.port] type = "none"` |
 //!
 //! A file poser saved (`--save-blend`) carries poser's exact values as custom properties; the
 //! reader uses each while it agrees with Blender's float32 value, so the round trip is exact.
@@ -39,6 +40,9 @@ struct Read {
     lights: Vec<serde_json::Map<String, serde_json::Value>>,
     water: Option<ReadWater>,
     meshes: Vec<ReadMesh>,
+    /// Glass (or poser's housing) at a camera: the housing port the scene should declare.
+    #[serde(default)]
+    port_glass: bool,
     notes: Vec<ReadNote>,
 }
 
@@ -90,6 +94,23 @@ struct ReadMesh {
     name: String,
     ply: String,
     albedo: [f64; 3],
+    /// The Image Texture that feeds the base colour, when poser can draw it (the PLY then has
+    /// `u v` per vertex, v = 0 at the image's first row).
+    #[serde(default)]
+    texture: Option<ReadTexture>,
+}
+
+/// An image's pixels as the reader wrote them: `width` × `height` float32 RGB, Blender's first
+/// row (the image's bottom) first; `encoding` "srgb" (an 8-bit sRGB image's bytes / 255) or
+/// "linear".
+#[derive(Deserialize)]
+struct ReadTexture {
+    file: String,
+    name: String,
+    width: u32,
+    height: u32,
+    encoding: String,
+    wrap: String,
 }
 
 #[derive(Deserialize)]
@@ -213,6 +234,9 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
     };
     let mut cam = Table::new();
     intrinsics(c0, &mut cam);
+    if !read.port_glass {
+        cam.insert("port".into(), no_port());
+    }
     if read.cameras.len() > 1 {
         let mut cams = Vec::new();
         for c in &read.cameras {
@@ -243,7 +267,15 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
         .as_ref()
         .and_then(|w| w.ior)
         .unwrap_or([default_n; 3]);
-    let poses: Vec<(DMat3, DVec3)> = read.poses.iter().map(|p| frame_of(&mat(p))).collect();
+    let dz = box_offset(read.water.as_ref(), &shown, &mut notes);
+    let poses: Vec<(DMat3, DVec3)> = read
+        .poses
+        .iter()
+        .map(|p| {
+            let (r, c) = frame_of(&mat(p));
+            (r, c + DVec3::Z * dz)
+        })
+        .collect();
     if let Some(w) = &read.water {
         if !finite(&w.absorption) || !finite(&w.scattering) || !w.g.is_finite() {
             return Err(format!("{shown}: the water's coefficients are not finite"));
@@ -327,6 +359,7 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
     };
     let mut sun_done = false;
     for l in &read.lights {
+        let world = l.get("mount").and_then(|v| v.as_str()) == Some("world");
         let kind = l.get("type").and_then(|v| v.as_str()).unwrap_or("");
         let lname = l.get("name").and_then(|v| v.as_str()).unwrap_or("light");
         if kind == "sun" {
@@ -377,7 +410,10 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
                 serde_json::Value::String(s) => Value::String(s.clone()),
                 serde_json::Value::Number(n) => Value::Float(n.as_f64().unwrap_or(f64::NAN)),
                 serde_json::Value::Array(a) => {
-                    arr(a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)))
+                    let shift = if k == "position" && world { dz } else { 0.0 };
+                    arr(a.iter().enumerate().map(|(i, x)| {
+                        x.as_f64().unwrap_or(f64::NAN) + if i == 2 { shift } else { 0.0 }
+                    }))
                 }
                 _ => continue,
             };
@@ -401,27 +437,11 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
     let mut objects = Vec::new();
     let mut assets_out = Vec::new();
     for m in &read.meshes {
-        let bytes = std::fs::read(work.join(safe_file_name(&m.ply)))
-            .map_err(|e| format!("{}: {e}", m.ply))?;
-        let mesh = meshes::read_ply(&bytes, &m.ply)?;
-        let name = unique(&m.name);
-        let file = safe_file_name(&format!("{name}.glb"));
-        assets_out.push((file.clone(), meshes::glb(&mesh, &name)));
-        if m.albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {
-            notes.push(Note::new(
-                at(&format!("object `{}`", m.name)),
-                format!(
-                    "albedo ({:.3}, {:.3}, {:.3}) clamped to [0, 1]",
-                    m.albedo[0], m.albedo[1], m.albedo[2]
-                ),
-            ));
-        }
-        let mut o = Table::new();
-        o.insert("name".into(), Value::String(name));
-        o.insert("shape".into(), Value::String("mesh".into()));
-        o.insert("path".into(), Value::String(format!("{assets}/{file}")));
-        o.insert("albedo".into(), arr(m.albedo.map(|a| a.clamp(0.0, 1.0))));
-        objects.push(Value::Table(o));
+        let at_object = format!("{shown}: object `{}`", m.name);
+        let (files, more, o) = mesh_object(m, dz, &unique(&m.name), assets, work, &at_object)?;
+        notes.extend(more);
+        assets_out.extend(files);
+        objects.push(o);
     }
     if !objects.is_empty() {
         t.insert("objects".into(), Value::Array(objects));
@@ -462,6 +482,162 @@ fn junge_slope(n: f64, b: f64) -> Option<f64> {
         }
     }
     Some(0.5 * (lo + hi))
+}
+
+/// The offset along z that puts the top of a user's water box (not poser's own sea, which
+/// says its surface) at z = 0, with its notes: poser's water lies below z = 0 and, lit by the
+/// sun or a sky, ends there, as the box's top ends Cycles' volume.
+fn box_offset(water: Option<&ReadWater>, shown: &str, notes: &mut Vec<Note>) -> f64 {
+    let at = |element: &str| Some(format!("{shown}: {element}"));
+    let user_box = water.filter(|w| w.surface.is_none()).and_then(|w| w.top);
+    let dz = match user_box {
+        Some(top) if top.is_finite() && top.abs() >= 1e-4 => -top,
+        _ => 0.0,
+    };
+    if user_box.is_some() {
+        notes.push(
+            Note::new(
+                at("water"),
+                "the water box's sides and bottom are not imported: poser's water reaches \
+                 without end sideways and downwards",
+            )
+            .help("make the box wide and deep enough that no light or view reaches its sides"),
+        );
+    }
+    if dz != 0.0 {
+        notes.push(
+            Note::new(
+                at("water"),
+                format!(
+                    "the scene is moved by {dz:+.6} m along z so that the water box's top is at \
+                     z = 0: poser's water lies below z = 0 (and, lit by the sun, ends there as \
+                     the box's top ends Cycles' volume)"
+                ),
+            )
+            .help("every position in the scene file is the Blender one plus this offset"),
+        );
+    }
+    dz
+}
+
+/// Mesh `m` (its PLY in `work`, moved by `dz` along z) as object `name`: its assets (a `.glb`,
+/// textured with its image as a PNG beside it when the reader gave a texture and the mesh has
+/// texture coordinates), the notes (located at `at`) and its `[[objects]]` entry.
+#[allow(clippy::type_complexity)]
+fn mesh_object(
+    m: &ReadMesh,
+    dz: f64,
+    name: &str,
+    assets: &str,
+    work: &Path,
+    at: &str,
+) -> Result<(Vec<(String, Vec<u8>)>, Vec<Note>, Value), String> {
+    let mut notes = Vec::new();
+    let mut assets_out = Vec::new();
+    let bytes =
+        std::fs::read(work.join(safe_file_name(&m.ply))).map_err(|e| format!("{}: {e}", m.ply))?;
+    let read_mesh = crate::geometry::meshfile::read_ply(&bytes, &m.ply)?;
+    let (mut mesh, uv) = (read_mesh.mesh, read_mesh.uv);
+    for p in &mut mesh.positions {
+        p.z += dz;
+    }
+    let (mesh, uv) = (&mesh, &uv[..]);
+    let file = safe_file_name(&format!("{name}.glb"));
+    match &m.texture {
+        Some(tex) if uv.len() == mesh.positions.len() => {
+            let (image, png) = texture_png(tex, name, work)?;
+            let wrap = match tex.wrap.as_str() {
+                "clamp" => crate::geometry::meshfile::Wrap::Clamp,
+                "mirror" => crate::geometry::meshfile::Wrap::Mirror,
+                _ => crate::geometry::meshfile::Wrap::Repeat,
+            };
+            let t = meshes::MeshTexture {
+                uv,
+                image: &image,
+                wrap,
+            };
+            assets_out.push((file.to_string(), meshes::glb_textured(mesh, Some(&t), name)));
+            assets_out.push((image.clone(), png));
+            notes.push(
+                Note::new(
+                    Some(at.to_string()),
+                    format!(
+                        "image texture `{}` is imported as the image texture of `{name}` \
+                             ({assets}/{image}, sampled bilinearly at the mipmap level the \
+                             cameras' sampling asks for)",
+                        tex.name
+                    ),
+                )
+                .help("docs/textures.md, \"Textured meshes\""),
+            );
+        }
+        Some(tex) => {
+            notes.push(Note::new(
+                Some(at.to_string()),
+                format!(
+                    "image texture `{}`: the mesh has no texture coordinates; imported as \
+                         its mean colour",
+                    tex.name
+                ),
+            ));
+            assets_out.push((file.to_string(), meshes::glb(mesh, name)));
+        }
+        None => assets_out.push((file.to_string(), meshes::glb(mesh, name))),
+    }
+    if m.albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {
+        notes.push(Note::new(
+            Some(at.to_string()),
+            format!(
+                "albedo ({:.3}, {:.3}, {:.3}) clamped to [0, 1]",
+                m.albedo[0], m.albedo[1], m.albedo[2]
+            ),
+        ));
+    }
+    let mut o = Table::new();
+    o.insert("name".into(), Value::String(name.to_string()));
+    o.insert("shape".into(), Value::String("mesh".into()));
+    o.insert("path".into(), Value::String(format!("{assets}/{file}")));
+    o.insert("albedo".into(), arr(m.albedo.map(|a| a.clamp(0.0, 1.0))));
+    Ok((assets_out, notes, Value::Table(o)))
+}
+
+/// The PNG file (its asset name and bytes) of the texture the reader wrote for object `name`:
+/// an 8-bit sRGB image keeps its bytes (an 8-bit PNG), any other image becomes a 16-bit sRGB
+/// PNG of its linear values; rows turned so that the image's top is the first.
+fn texture_png(tex: &ReadTexture, name: &str, work: &Path) -> Result<(String, Vec<u8>), String> {
+    let side = crate::texture::mapped::MAX_TEXTURE_SIDE;
+    let (w, h) = (tex.width, tex.height);
+    if !(1..=side).contains(&w) || !(1..=side).contains(&h) {
+        return Err(format!(
+            "image texture `{}` is {w}×{h} pixels; poser's textures have 1 to {side} a side\n  \
+             help: scale the image down",
+            tex.name
+        ));
+    }
+    let path = work.join(safe_file_name(&tex.file));
+    let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    if bytes.len() as u64 != 12 * w as u64 * h as u64 {
+        return Err(format!(
+            "image texture `{}`: the reader wrote {} bytes for {w}×{h} RGB pixels",
+            tex.name,
+            bytes.len()
+        ));
+    }
+    let rgb: Vec<f32> = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    let png = meshes::png_rgb(w, h, &rgb, tex.encoding == "srgb", true)
+        .map_err(|e| format!("image texture `{}`: {e}", tex.name))?;
+    Ok((safe_file_name(&format!("{name}-texture.png")), png))
+}
+
+/// `[camera.port] type = "none"`: no glass at the camera, no housing, said explicitly (poser's
+/// default in water is a 10 mm flat port).
+fn no_port() -> Value {
+    let mut port = Table::new();
+    port.insert("type".into(), Value::String("none".into()));
+    Value::Table(port)
 }
 
 fn mat(rows: &[[f64; 4]; 4]) -> DMat4 {
@@ -553,6 +729,104 @@ mod tests {
             imp.notes
                 .iter()
                 .any(|n| n.message.contains("no refractive index"))
+        );
+    }
+
+    /// A user's water box with its top at z = 3 m, a world light, a textured quad, no glass.
+    #[test]
+    fn a_user_water_box_moves_the_scene_and_a_texture_becomes_a_textured_mesh() {
+        let dir = tempfile::tempdir().unwrap();
+        let work = dir.path();
+        // Blender's first row (the image's bottom) is red, its top row blue.
+        let rgb: Vec<f32> = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+            .iter()
+            .flat_map(|c| c.iter().chain(c.iter()).copied())
+            .collect();
+        let raw: Vec<u8> = rgb.iter().flat_map(|v| v.to_le_bytes()).collect();
+        std::fs::write(work.join("texture_0.f32"), raw).unwrap();
+        std::fs::write(
+            work.join("mesh_0.ply"),
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\n\
+             property double z\nproperty float u\nproperty float v\nelement face 1\n\
+             property list uchar int vertex_indices\nend_header\n\
+             0 0 1 0 1\n1 0 1 1 1\n1 1 1 1 0\n0 1 1 0 0\n4 0 1 2 3\n",
+        )
+        .unwrap();
+        let read = READ
+            .replace(
+                r#""ff": {"n": 1.1, "backscatter": 0.02}, "ior": null, "top": 0.0"#,
+                r#""ior": null, "top": 3.0"#,
+            )
+            .replace(
+                r#""mount": "rig", "position": [0.1, 0.0, 0.0]"#,
+                r#""mount": "world", "position": [0.1, 0.0, 2.0]"#,
+            )
+            .replace(
+                r#""meshes": []"#,
+                r#""meshes": [{"name": "quad", "ply": "mesh_0.ply", "albedo": [0.5, 0.5, 0.5],
+                   "texture": {"file": "texture_0.f32", "name": "../img", "width": 2,
+                   "height": 2, "encoding": "linear", "wrap": "mirror"}}]"#,
+            );
+        let again = read.clone();
+        let read: Read = serde_json::from_str(&read).unwrap();
+        let imp = convert(read, Path::new("x.blend"), "x_assets", work).unwrap();
+        let names: Vec<&str> = imp.assets.iter().map(|a| a.0.as_str()).collect();
+        assert_eq!(names, ["quad.glb", "quad-texture.png"]);
+        for (name, bytes) in &imp.assets {
+            std::fs::write(work.join(name), bytes).unwrap();
+        }
+        // The scene moved down by 3 m: cameras, world lights and meshes; no housing.
+        let path = work.join("x.toml");
+        let text = imp.toml.replace("x_assets/", "");
+        std::fs::write(&path, &text).unwrap();
+        let m = crate::scene::load(&path, &[])
+            .map_err(|e| e.render())
+            .unwrap()
+            .model;
+        assert!(
+            matches!(m.cameras[0].port, crate::model::Port::None),
+            "{text}"
+        );
+        assert!((m.world_from_camera(0, 0).translation.z + 5.0).abs() < 1e-12);
+        assert!(text.contains("position = [0.1, 0.0, -1.0]"), "{text}");
+        assert!(text.contains("surface = \"none\""), "{text}");
+        assert!(
+            imp.notes
+                .iter()
+                .any(|n| n.message.contains("moved by -3.000000 m"))
+        );
+        let glb = crate::geometry::meshfile::load(&work.join("quad.glb"), &[]).unwrap();
+        assert!(glb.mesh.positions.iter().all(|p| (p.z + 2.0).abs() < 1e-6));
+        assert_eq!(
+            glb.materials[0].wrap,
+            crate::geometry::meshfile::Wrap::Mirror
+        );
+        // v = 0 is the image's first row: Blender's top row, blue.
+        let png = image::open(work.join("quad-texture.png"))
+            .unwrap()
+            .to_rgb16();
+        assert_eq!(png.get_pixel(0, 0).0, [0, 0, 65535]);
+        assert_eq!(png.get_pixel(1, 1).0, [65535, 0, 0]);
+        // A texture the mesh has no coordinates for stays its mean colour, noted.
+        std::fs::write(
+            work.join("mesh_0.ply"),
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n\
+             property double z\nelement face 1\nproperty list uchar int vertex_indices\n\
+             end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+        )
+        .unwrap();
+        let imp = convert(
+            serde_json::from_str(&again).unwrap(),
+            Path::new("x.blend"),
+            "a",
+            work,
+        )
+        .unwrap();
+        assert_eq!(imp.assets.len(), 1);
+        assert!(
+            imp.notes
+                .iter()
+                .any(|n| n.message.contains("no texture coordinates"))
         );
     }
 

@@ -5,6 +5,7 @@
 //! |---|---|---|
 //! | OBJ | `v` and `f` (polygons fan-triangulated; `v/vt/vn` and negative indices) | other statements ignored |
 //! | PLY | `ascii`, `binary_little_endian`, `binary_big_endian`; vertex `x y z` (float or double, any other properties skipped); face `vertex_indices`/`vertex_index` lists | counts checked against the file's size before anything is allocated |
+//! | PNG | written: an image texture's pixels (8-bit sRGB kept, linear values as 16-bit sRGB) | |
 //! | GLB | written: one mesh, POSITION (f32) and u32 indices, and for an image texture TEXCOORD_0 and one material naming the image beside it; glTF's +Y up (`(x, y, z)_poser → (x, z, −y)_gltf`, the inverse of the mesh loader's) | |
 
 use crate::geometry::mesh::TriMesh;
@@ -129,6 +130,68 @@ pub fn glb_textured(mesh: &TriMesh, tex: Option<&MeshTexture>, name: &str) -> Ve
     out
 }
 
+/// A PNG of `width` × `height` RGB values (row-major; `bottom_up`: the first row is the
+/// image's bottom, as Blender keeps images). `srgb_bytes`: the values are an 8-bit sRGB image's
+/// bytes / 255, kept exactly in an 8-bit PNG; otherwise they are linear and become a 16-bit
+/// sRGB-encoded PNG (clamped to [0, 1]; not a number becomes 0). Either way the mesh loader
+/// decodes the PNG from sRGB back to the same linear values.
+pub fn png_rgb(
+    width: u32,
+    height: u32,
+    rgb: &[f32],
+    srgb_bytes: bool,
+    bottom_up: bool,
+) -> Result<Vec<u8>, String> {
+    let (w, h) = (width as usize, height as usize);
+    if rgb.len() != 3 * w * h {
+        return Err(format!(
+            "{} values for {width}×{height} RGB pixels",
+            rgb.len()
+        ));
+    }
+    let row = |y: usize| {
+        let src = if bottom_up { h - 1 - y } else { y };
+        &rgb[3 * w * src..3 * w * (src + 1)]
+    };
+    let unit = |v: f32| {
+        if v.is_finite() {
+            v.clamp(0.0, 1.0) as f64
+        } else {
+            0.0
+        }
+    };
+    let mut png = Vec::new();
+    let mut out = std::io::Cursor::new(&mut png);
+    let done = if srgb_bytes {
+        let px: Vec<u8> = (0..h)
+            .flat_map(|y| row(y).iter().map(|&v| (unit(v) * 255.0).round() as u8))
+            .collect();
+        image::RgbImage::from_raw(width, height, px)
+            .map(|i| i.write_to(&mut out, image::ImageFormat::Png))
+    } else {
+        let px: Vec<u16> = (0..h)
+            .flat_map(|y| {
+                row(y).iter().map(|&v| {
+                    let v = unit(v);
+                    let e = if v <= 0.0031308 {
+                        12.92 * v
+                    } else {
+                        1.055 * v.powf(1.0 / 2.4) - 0.055
+                    };
+                    (e * 65535.0).round() as u16
+                })
+            })
+            .collect();
+        image::ImageBuffer::<image::Rgb<u16>, Vec<u16>>::from_raw(width, height, px)
+            .map(|i| i.write_to(&mut out, image::ImageFormat::Png))
+    };
+    match done {
+        Some(Ok(())) => Ok(png),
+        Some(Err(e)) => Err(format!("writing the PNG: {e}")),
+        None => Err("writing the PNG: wrong buffer size".into()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -180,6 +243,30 @@ mod tests {
                 .contains("more than the file")
         );
         assert!(read_ply(b"not a ply", "x.ply").is_err());
+    }
+
+    #[test]
+    fn png_keeps_srgb_bytes_and_encodes_linear_values() {
+        // 2 × 1 pixels, stored bottom-up: one row, so the flip is the identity here; a 1 × 2
+        // image checks it.
+        let px = [10.0 / 255.0, 128.0 / 255.0, 1.0, 0.0, 0.5, 2.0];
+        let png = png_rgb(2, 1, &px, true, true).unwrap();
+        let img = image::load_from_memory(&png).unwrap().to_rgb8();
+        assert_eq!(img.as_raw(), &vec![10, 128, 255, 0, 128, 255]);
+        let png = png_rgb(1, 2, &[0.0, 0.0, 0.0, 1.0, 1.0, 1.0], true, true).unwrap();
+        let img = image::load_from_memory(&png).unwrap().to_rgb8();
+        assert_eq!(
+            img.as_raw(),
+            &vec![255, 255, 255, 0, 0, 0],
+            "the top row first"
+        );
+        // Linear 0.5 → sRGB 0.7354 in 16 bits, decoded back by the texture code.
+        let png = png_rgb(1, 1, &[0.5, 0.0, f32::NAN], false, false).unwrap();
+        let img = image::load_from_memory(&png).unwrap().to_rgb16();
+        let back = crate::geometry::meshfile::srgb_to_linear(img.as_raw()[0] as f64 / 65535.0);
+        assert!((back - 0.5).abs() < 1e-4, "{back}");
+        assert_eq!(img.as_raw()[1..], [0, 0]);
+        assert!(png_rgb(2, 2, &px, true, false).is_err());
     }
 
     #[test]
