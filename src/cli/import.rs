@@ -18,7 +18,7 @@ pub struct Args {
     /// Folder for the mesh assets (default: `<scene name>_assets` beside the scene file).
     #[arg(long)]
     pub assets: Option<PathBuf>,
-    /// Render the source in its own renderer (Mitsuba 3 for `.xml`) and the imported scene
+    /// Render the source in its own renderer (Mitsuba 3 for `.xml`, Cycles for `.blend`) and the imported scene
     /// natively (daylight traced), at a small size, print the difference per channel and per
     /// region, and fail when a channel's mean differs by more than `--tolerance`.
     #[arg(long)]
@@ -111,13 +111,6 @@ fn verify(
     stem: &str,
     blend: bool,
 ) -> Result<(), CliError> {
-    if blend {
-        return Err(CliError::Failed(
-            "--verify: a Blender source is not verified yet (only Mitsuba 3 files are rendered \
-             by their own renderer)\n  help: render both with `poser render` and `poser compare`"
-                .into(),
-        ));
-    }
     if !(args.tolerance.is_finite() && args.tolerance > 0.0) || args.verify_width == 0 {
         return Err(CliError::Usage(
             "--tolerance and --verify-width must be positive".into(),
@@ -135,14 +128,20 @@ fn verify(
     let work = out_dir.join(format!("{}_verify", crate::import::safe_file_name(stem)));
     std::fs::create_dir_all(&work)
         .map_err(|e| CliError::Failed(format!("{}: {e}", work.display())))?;
-    let c =
-        crate::import::verify::verify_mitsuba(&args.files[0], &model, args.verify_samples, &work)
-            .map_err(|e| CliError::Failed(format!("--verify: {e}")))?;
+    use crate::import::verify::Source;
+    let source = if blend {
+        Source::Blender(&args.files[0])
+    } else {
+        Source::Mitsuba(&args.files[0])
+    };
+    let c = crate::import::verify::verify(source, &model, args.verify_samples, &work)
+        .map_err(|e| CliError::Failed(format!("--verify: {e}")))?;
     let cam = &model.cameras[0];
     eprintln!(
-        "verify: {} rendered by Mitsuba 3 and the imported scene natively, {}×{} px, {} spp \
+        "verify: {} rendered by {} and the imported scene natively, {}×{} px, {} spp \
          (images in {})",
         args.files[0].display(),
+        source.renderer(),
         cam.width,
         cam.height,
         args.verify_samples,

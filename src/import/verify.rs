@@ -1,10 +1,12 @@
 //! `poser import --verify`: the source scene rendered by its own renderer (Mitsuba 3's
-//! `scalar_rgb`, through `backends/mitsuba/render_source.py`) against the imported scene rendered
-//! by the native renderer, at a small size, compared per channel and per region. The one idea:
-//! an import that changed what the scene looks like fails loudly.
+//! `scalar_rgb`, through `backends/mitsuba/render_source.py`, or Cycles through
+//! `backends/blender/render_source.py`) against the imported scene rendered by the native
+//! renderer, at a small size, compared per channel and per region. The one idea: an import
+//! that changed what the scene looks like fails loudly.
 //!
-//! Both renders are of the first view (Mitsuba's first sensor, poser's pose 0 and first
-//! camera), at the same field of view and size, with the same samples per pixel. The verdict
+//! Both renders are of the first view (Mitsuba's first sensor or the Blender scene's camera at
+//! its first frame; poser's pose 0 and first camera), at the same field of view and size, with
+//! the same samples per pixel. The verdict
 //! is the relative difference of each channel's mean; the regions (a 4 × 4 grid) are printed to
 //! show where a difference sits, and are not part of the verdict (at a few dozen samples per
 //! pixel a region's noise is several per cent).
@@ -15,6 +17,28 @@ use std::path::{Path, PathBuf};
 
 /// The Mitsuba driver that renders a scene file as it is (`backends/mitsuba/render_source.py`).
 pub const MITSUBA_SOURCE_DRIVER: &str = include_str!("../../backends/mitsuba/render_source.py");
+
+/// The Cycles driver that renders a `.blend` as it is (`backends/blender/render_source.py`).
+pub const BLENDER_SOURCE_DRIVER: &str = include_str!("../../backends/blender/render_source.py");
+
+/// The file an import came from, and so the renderer that renders it as it is.
+#[derive(Debug, Clone, Copy)]
+pub enum Source<'a> {
+    /// A Mitsuba 3 scene file, rendered by Mitsuba 3.
+    Mitsuba(&'a Path),
+    /// A Blender file, rendered by Cycles.
+    Blender(&'a Path),
+}
+
+impl Source<'_> {
+    /// The renderer's name, as `--verify` prints it.
+    pub fn renderer(&self) -> &'static str {
+        match self {
+            Source::Mitsuba(_) => "Mitsuba 3",
+            Source::Blender(_) => "Cycles",
+        }
+    }
+}
 
 /// A channel darker than this share of the brightest channel's mean, in the source, is not
 /// compared (a relative difference of nearly nothing is noise).
@@ -131,21 +155,26 @@ pub fn compare(
     })
 }
 
-/// Render the Mitsuba scene file `xml` as it is (first sensor, resized to `width` × `height`,
-/// `spp` samples per pixel) into `work/source.exr`.
-pub fn render_mitsuba_source(
-    xml: &Path,
+/// Render the source file as it is (Mitsuba: its first sensor; Blender: the scene camera at
+/// the first frame; resized to `width` × `height`, `spp` samples per pixel) into
+/// `work/source.exr`.
+pub fn render_source(
+    source: Source,
     width: u32,
     height: u32,
     spp: u32,
     work: &Path,
 ) -> Result<PathBuf, String> {
-    python::require_module("mitsuba")?;
-    let driver = python::embedded_script(work, "render_source.py", MITSUBA_SOURCE_DRIVER)?;
+    let (module, script, flag, file) = match source {
+        Source::Mitsuba(xml) => ("mitsuba", MITSUBA_SOURCE_DRIVER, "--xml", xml),
+        Source::Blender(blend) => ("bpy", BLENDER_SOURCE_DRIVER, "--blend", blend),
+    };
+    python::require_module(module)?;
+    let driver = python::embedded_script(work, "render_source.py", script)?;
     let out = work.join("source.exr");
     let o = python::command(&driver)
-        .arg("--xml")
-        .arg(xml)
+        .arg(flag)
+        .arg(file)
         .args([
             "--width",
             &width.to_string(),
@@ -161,8 +190,9 @@ pub fn render_mitsuba_source(
         let err = String::from_utf8_lossy(&o.stderr);
         let tail: Vec<&str> = err.lines().rev().take(12).collect();
         return Err(format!(
-            "Mitsuba could not render {} ({}):\n{}",
-            xml.display(),
+            "{} could not render {} ({}):\n{}",
+            source.renderer(),
+            file.display(),
             o.status,
             tail.into_iter().rev().collect::<Vec<_>>().join("\n")
         ));
@@ -189,14 +219,9 @@ pub fn render_native(model: &Model, spp: u32, work: &Path) -> Result<PathBuf, St
         .ok_or_else(|| "the imported scene rendered no image".to_string())
 }
 
-/// The whole check for a Mitsuba source: `model` is the imported scene at the verification
-/// size; the source is rendered at its first camera's size.
-pub fn verify_mitsuba(
-    xml: &Path,
-    model: &Model,
-    spp: u32,
-    work: &Path,
-) -> Result<Comparison, String> {
+/// The whole check: `model` is the imported scene at the verification size; the source is
+/// rendered at its first camera's size.
+pub fn verify(source: Source, model: &Model, spp: u32, work: &Path) -> Result<Comparison, String> {
     let cam = model
         .cameras
         .first()
@@ -204,10 +229,10 @@ pub fn verify_mitsuba(
     if model.poses.is_empty() {
         return Err("the imported scene has no pose".into());
     }
-    let source = render_mitsuba_source(xml, cam.width, cam.height, spp, work)?;
+    let rendered = render_source(source, cam.width, cam.height, spp, work)?;
     let native = render_native(model, spp, work)?;
     compare(
-        &crate::image::read_exr(&source)?,
+        &crate::image::read_exr(&rendered)?,
         &crate::image::read_exr(&native)?,
         4,
     )
