@@ -374,13 +374,24 @@ fn daylight(s: &mut String, m: &Model) {
         bottomless(s, past);
     }
     if let Some(gain) = m.surface_reflection_gain() {
-        let _ = writeln!(
-            s,
-            "  the sea surface is open from below in every backend: reflecting the light that \
-             comes up (Fresnel, total beyond the critical angle) would add {} to E_d at the seabed (R / G / B)",
-            gain.map(|g| g.map_or("black".into(), |g| format!("{:+.1} %", g * 100.0)))
-                .join(" / ")
-        );
+        let gain = gain
+            .map(|g| g.map_or("black".into(), |g| format!("{:+.1} %", g * 100.0)))
+            .join(" / ");
+        let _ = if m.underside() == crate::optics::column::Top::Open {
+            writeln!(
+                s,
+                "  the sea surface is open from below (render.surface_from_below = \"open\"): \
+                 reflecting the light that comes up (Fresnel, total beyond the critical angle), \
+                 with the sky through Snell's window, would change E_d at the seabed by {gain} (R / G / B)"
+            )
+        } else {
+            writeln!(
+                s,
+                "  the sea surface reflects the light that comes up (Fresnel, total beyond the \
+                 critical angle) and shows the sky through Snell's window: E_d at the seabed \
+                 differs by {gain} (R / G / B) from the open surface of Mitsuba and Cycles"
+            )
+        };
     }
     if column.is_none() && m.water.is_some() {
         // What the bounce limit leaves out of the traced daylight (W0239, docs/column.md).

@@ -771,6 +771,30 @@ pub struct RenderSettings {
     /// (`render.texture_filter`).
     #[serde(default, skip_serializing_if = "TextureFilter::is_footprint")]
     pub texture_filter: TextureFilter,
+    /// How the native renderer treats the sea surface seen from below
+    /// (`render.surface_from_below`).
+    #[serde(default, skip_serializing_if = "Underside::is_fresnel")]
+    pub surface_from_below: Underside,
+}
+
+/// `render.surface_from_below`: the sea surface as the light coming up to it meets it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Underside {
+    /// The default: a flat or wavy sea surface reflects the light coming up to it (unpolarised
+    /// Fresnel, totally beyond the critical angle), and the sky is seen through Snell's window
+    /// (`docs/column.md`, "The sea surface seen from below").
+    #[default]
+    Fresnel,
+    /// The light coming up leaves, and the sky is an isotropic radiance below the surface, as
+    /// Mitsuba and Cycles have it.
+    Open,
+}
+
+impl Underside {
+    pub fn is_fresnel(&self) -> bool {
+        *self == Underside::Fresnel
+    }
 }
 
 /// `render.texture_filter`: the native renderer's texture lookup at the camera ray's first hit.
@@ -1164,6 +1188,23 @@ impl Model {
         Ok(input)
     }
 
+    /// The sea surface as the light from below meets it in the native renderer: reflecting
+    /// (Fresnel, the water's index per channel) where the scene has water under a flat or wavy
+    /// surface and `render.surface_from_below = "fresnel"`, else open.
+    pub fn underside(&self) -> crate::optics::column::Top {
+        use crate::optics::column::Top;
+        match &self.water {
+            Some(w)
+                if self.render.surface_from_below == Underside::Fresnel
+                    && !matches!(self.site.surface, SeaSurface::None)
+                    && !matches!(w.extent, WaterExtent::BoxAroundCamera { .. }) =>
+            {
+                Top::Fresnel(w.ior)
+            }
+            _ => Top::Open,
+        }
+    }
+
     /// The plane-parallel column of the scene's water and daylight, wherever its cameras are
     /// ([`Model::column_input`] without the cameras' check).
     pub fn column_physics(&self) -> Result<crate::optics::column::ColumnInput, String> {
@@ -1217,7 +1258,7 @@ impl Model {
             sun,
             ambient,
             bottom_albedo: self.bottom_albedo(),
-            top: crate::optics::column::Top::Open,
+            top: self.underside(),
             photons: COLUMN_PHOTONS,
             seed: self.render.seed,
         })
@@ -1262,17 +1303,19 @@ impl Model {
         })
     }
 
-    /// What the open sea surface leaves out: per channel, how much more daylight would reach
-    /// the seabed if the flat surface reflected the light coming up from below (Fresnel,
-    /// totally beyond the critical angle), as a share of today's E_d there. No backend models
-    /// that reflection yet; `explain` prints it (docs/column.md). `None` where the scene is
-    /// not a column.
+    /// The reflecting sea surface against the open one: per channel, how much more daylight
+    /// reaches the seabed when the flat surface reflects the light coming up from below
+    /// (Fresnel, totally beyond the critical angle) and the sky comes in through Snell's
+    /// window, as a share of E_d there under the open surface (Mitsuba's and Cycles' model;
+    /// the native renderer's is [`Model::underside`]). `explain` prints it (docs/column.md).
+    /// `None` where the scene is not a column.
     /// A channel black at the seabed ([`crate::optics::column::Column::visible_at_bottom`]) is
     /// `None`.
     pub fn surface_reflection_gain(&self) -> Option<[Option<f64>; 3]> {
         use crate::optics::column::{Top, solve_rounds};
         let mut open = self.column_physics().ok()?;
         open.photons = BOUNCE_PHOTONS;
+        open.top = Top::Open;
         let n = self.water.as_ref()?.ior;
         let fresnel = crate::optics::column::ColumnInput {
             top: Top::Fresnel(n),

@@ -518,7 +518,6 @@ const LONG_FNS: &[(&str, usize)] = &[
     ("scene/resolve/render.rs::render", 162),
     ("scene/source.rs::load_file", 157),
     ("import/mitsuba.rs::sensor", 155),
-    ("optics/column.rs::run_batch", 152),
 ];
 
 /// `code` with the insides of comments, strings and character literals blanked to spaces (line

@@ -47,6 +47,7 @@ fn backends_agree_in_scattering_water() {
     // whatever the native default for daylight is (this scene has only a strobe today).
     let mut model = load("scattering_backscatter");
     model.render.daylight = poser::model::Daylight::Traced;
+    model.render.surface_from_below = poser::model::Underside::Open;
     let tmp = tempfile::tempdir().unwrap();
     let means: Vec<(&str, [f64; 3])> = ["native", "mitsuba", "blender"]
         .into_iter()

@@ -328,6 +328,8 @@ fn a_scene_built_in_blender_imports_and_renders_as_cycles_renders_it() {
             "256",
             "--set",
             r#"render.daylight="traced""#,
+            "--set",
+            r#"render.surface_from_below="open""#,
             "-o",
         ])
         .arg(d.join("native"))

@@ -133,7 +133,7 @@ fn rendered(name: &str) -> Row {
 fn first_pose_model(name: &str) -> serde_json::Value {
     let model = poser::scene::load(
         &scene(name),
-        &[poser::bench::parity::PARITY_DAYLIGHT.to_string()],
+        &poser::bench::parity::PARITY_SETS.map(String::from),
     )
     .unwrap_or_else(|f| panic!("{name}: {}", f.render()))
     .model

@@ -8,7 +8,7 @@
 //! | size | 1/10 of each camera's resolution | 1/4 |
 //! | samples per pixel | 16 | 64 |
 //! | poses | the first | the first |
-//! | native daylight | traced (`render.daylight = "traced"`): the transport all three share; the water column's difference from it is measured in `docs/column.md` | the same |
+//! | native daylight | traced (`render.daylight = "traced"`) under an open surface (`render.surface_from_below = "open"`): the transport all three share; the water column's and the reflecting surface's differences from it are measured in `docs/column.md` | the same |
 //!
 //! A pair of backends **agrees** when, in every channel, the image means differ by at most
 //! [`TOLERANCE`] plus a noise allowance computed from the images: three standard errors of the
@@ -38,8 +38,13 @@ const DARK: f64 = 1e-6;
 /// its mean is made of the rare paths that reach it (two_gas_dive's red: 1e-5 of its green).
 pub const BLACK_CHANNEL: f64 = 1e-3;
 
-/// The parity runs compare the traced transport the three backends share.
-pub const PARITY_DAYLIGHT: &str = "render.daylight=\"traced\"";
+/// The parity runs compare the transport the three backends share: daylight traced, and the
+/// sea surface open from below (Mitsuba and Cycles have no Snell's window; the difference is
+/// measured on the column, `poser explain` and docs/column.md).
+pub const PARITY_SETS: [&str; 2] = [
+    "render.daylight=\"traced\"",
+    "render.surface_from_below=\"open\"",
+];
 
 /// The size and sampling of a run.
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -129,7 +134,7 @@ pub fn run_scene(
     out: &Path,
 ) -> Result<Row, String> {
     // Like for like: the native renderer traces daylight as Mitsuba and Cycles do.
-    let model = crate::scene::load(scene, &[PARITY_DAYLIGHT.to_string()])
+    let model = crate::scene::load(scene, &PARITY_SETS.map(String::from))
         .map_err(|f| f.render())?
         .model
         .with_resolution_scale(form.scale);

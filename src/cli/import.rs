@@ -121,7 +121,7 @@ fn verify(
     // The same light transport in both: the water column's daylight is native-only.
     let traced = super::load_scene(&super::SceneArgs {
         scene: args.out.clone(),
-        sets: vec!["render.daylight=\"traced\"".into()],
+        sets: crate::bench::parity::PARITY_SETS.map(String::from).to_vec(),
     })?
     .model;
     let model = super::common::apply_scale(traced, Some(scale))?;

@@ -9,14 +9,14 @@
 //! | `sigma_a`, `sigma_s` | per channel, 1/m; absorption must be > 0 in every channel |
 //! | `phase` | [`PhaseFn`]: HG, or Fournier–Forand tabulated exactly as the renderer's |
 //! | `sun` | refracted beam: cosine of its zenith angle in the water, irradiance per channel on a plane normal to the beam just below the surface |
-//! | `ambient` | isotropic radiance arriving from every downward direction just below the surface |
+//! | `ambient` | the sky's isotropic radiance: with [`Top::Open`], arriving from every downward direction just below the surface; with [`Top::Fresnel`], the sky above the surface, seen below it through Snell's window (refracted, times the Fresnel transmittance and `n²`: [`sky_below`]) |
 //! | `bottom_albedo` | per channel |
 //! | `top` | [`Top::Open`]: light reaching the surface from below leaves (the renderers' model); [`Top::Fresnel`]: a flat water–air surface reflects it with the unpolarised Fresnel reflectance, wholly beyond the critical angle (total internal reflection) |
 //!
 //! | output ([`Column`]) | meaning |
 //! |---|---|
 //! | [`Column::radiance`] | `L_m(z, ω)`: radiance seen at depth `z` looking along `ω` that was scattered in the water on its way, the sun's *first* scattering apart (the renderer traces it on camera rays, with shadows) |
-//! | [`Column::boundary`] | the sky's and the bottom's own radiance (analytic: `L_sky`, `A·E_d(H)/π`), seen through the water where a ray meets no geometry |
+//! | [`Column::boundary`] | the sky's and the bottom's own radiance (analytic: `L_sky` or the sky through Snell's window, `A·E_d(H)/π`), seen through the water where a ray meets no geometry |
 //! | [`Profile`] | per channel, at `nz + 1` planes: E_d (direct, diffuse), E_u, E_0, K_d, with standard errors |
 //! | [`Column::seen_orders`] | the radiance seen looking down in every layer, split by the number of events the light met: what a bounce limit cuts off ([`Column::share_seen_beyond`]) |
 //!
@@ -98,8 +98,30 @@ pub enum Top {
     #[default]
     Open,
     /// A flat surface of water of this index (per channel) under air: light from below is
-    /// reflected with the unpolarised Fresnel reflectance, totally beyond the critical angle.
+    /// reflected with the unpolarised Fresnel reflectance, totally beyond the critical angle,
+    /// and the sky's light comes in through Snell's window ([`sky_below`]).
     Fresnel([f64; 3]),
+}
+
+impl Top {
+    /// The water's index under a reflecting surface (the sky through Snell's window).
+    pub fn window(self) -> Option<[f64; 3]> {
+        match self {
+            Top::Fresnel(n) => Some(n),
+            Top::Open => None,
+        }
+    }
+}
+
+/// The radiance below a flat water–air surface, looking up at `cos_w` (> 0) to the vertical,
+/// of a sky of isotropic radiance `sky` above it: `n² · T · sky` inside Snell's window (the
+/// radiance law at a refracting interface; `T = 1 − R` the Fresnel transmittance, the same
+/// both ways), 0 beyond the critical angle, where the surface reflects the water's light.
+pub fn sky_below(n_water: f64, sky: f64, cos_w: f64) -> f64 {
+    if !(cos_w > 0.0) {
+        return 0.0;
+    }
+    n_water * n_water * (1.0 - reflectance_from_below(n_water, cos_w)) * sky
 }
 
 /// Unpolarised Fresnel reflectance of a flat water–air surface for light arriving from the
@@ -111,6 +133,32 @@ pub fn reflectance_from_below(n_water: f64, cos_w: f64) -> f64 {
     }
     let cos_a = (1.0 - sin_a2).sqrt();
     1.0 - super::interface::fresnel_transmittance(n_water, 1.0, cos_w, cos_a)
+}
+
+/// The sky's radiance seen looking up at `cos_w` (> 0) to the vertical, per channel: `sky`
+/// itself below an open surface, through Snell's window below a reflecting one.
+fn sky_seen(sky: DVec3, window: Option<[f64; 3]>, cos_w: f64) -> DVec3 {
+    match window {
+        None => sky,
+        Some(n) => DVec3::from_array([0, 1, 2].map(|c| sky_below(n[c], sky[c], cos_w))),
+    }
+}
+
+/// A sky photon's direction in the water and weight: isotropic radiance, cosine-weighted
+/// downward directions (in the air above a reflecting surface, then refracted into the water
+/// with the Fresnel transmittance; the n² of the radiance is the window's narrower solid angle).
+fn sky_photon(top: Top, c: usize, u1: f64, u2: f64) -> (DVec3, f64) {
+    let phi = 2.0 * PI * u2;
+    let (sin, w) = match top {
+        Top::Open => (u1.sqrt(), 1.0),
+        Top::Fresnel(n) => {
+            let sin_w = u1.sqrt() / n[c];
+            let cos_w = (1.0 - sin_w * sin_w).max(0.0).sqrt();
+            (sin_w, 1.0 - reflectance_from_below(n[c], cos_w))
+        }
+    };
+    let cos = (1.0 - sin * sin).max(0.0).sqrt();
+    (DVec3::new(sin * phi.cos(), sin * phi.sin(), -cos), w)
 }
 
 /// Why a column cannot be solved.
@@ -191,10 +239,13 @@ pub struct Column {
     pub truncated: f64,
     /// Photons of the channel that took the most rounds.
     pub photons: usize,
-    /// The boundaries' radiances: the sky just below the surface, and the bottom's
-    /// (`A·E_d(H)/π`), per channel.
+    /// The boundaries' radiances: the sky's (just below an open surface, above a reflecting
+    /// one: [`Column::boundary`]), and the bottom's (`A·E_d(H)/π`), per channel.
     pub sky: DVec3,
     pub bottom: DVec3,
+    /// The water's index under a reflecting surface ([`Top::Fresnel`]): the sky is seen
+    /// through Snell's window.
+    pub window: Option<[f64; 3]>,
     pub seconds: f64,
 }
 
@@ -459,11 +510,9 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
     }
     let bottom =
         DVec3::from_array([0, 1, 2].map(|c| input.bottom_albedo[c] * profiles[c].e_d(NZ) / PI));
-    let sky = DVec3::from_array(input.ambient);
-    let sigma_t = DVec3::from_array([0, 1, 2].map(|c| input.sigma_a[c] + input.sigma_s[c]));
     let all: [Vec<f32>; 3] =
         [0, 1, 2].map(|c| table[c].iter().zip(&first[c]).map(|(a, b)| a + b).collect());
-    let cdf = build_cdf(&all, input.depth, sky, bottom, sigma_t);
+    let cdf = build_cdf(&all, input, bottom);
     Ok(Column {
         depth: input.depth,
         sun_azimuth: az,
@@ -474,8 +523,9 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
         seen_orders,
         truncated: if launched > 0.0 { lost / launched } else { 0.0 },
         photons: photons_max,
-        sky,
+        sky: DVec3::from_array(input.ambient),
         bottom,
+        window: input.top.window(),
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
@@ -506,17 +556,15 @@ fn stderr(v: &[f64]) -> f64 {
 }
 
 /// Per layer, the CDFs of luminance × |cos θ| over the upper and the lower half of the bins:
-/// the table's (`table`: `L_m` with the sun's first scattering) plus the boundary's (`sky`
-/// above, `bottom` below) seen through the water from the layer's centre (`sigma_t`), so that
-/// a surface's next-event directions follow the whole diffuse light it sees where nothing
-/// shades it.
-fn build_cdf(
-    table: &[Vec<f32>; 3],
-    depth: f64,
-    sky: DVec3,
-    bottom: DVec3,
-    sigma_t: DVec3,
-) -> Vec<[Vec<f64>; 2]> {
+/// the table's (`table`: `L_m` with the sun's first scattering) plus the boundary's (the sky
+/// above, through Snell's window under a reflecting surface; `bottom` below) seen through the
+/// water from the layer's centre, so that a surface's next-event directions follow the whole
+/// diffuse light it sees where nothing shades it.
+fn build_cdf(table: &[Vec<f32>; 3], input: &ColumnInput, bottom: DVec3) -> Vec<[Vec<f64>; 2]> {
+    let depth = input.depth;
+    let sky = DVec3::from_array(input.ambient);
+    let sky_at = |mu: f64| sky_seen(sky, input.top.window(), mu);
+    let sigma_t = DVec3::from_array([0, 1, 2].map(|c| input.sigma_a[c] + input.sigma_s[c]));
     let half = NMU / 2 * NPHI;
     let dz = depth / NZ as f64;
     (0..NZ)
@@ -531,7 +579,7 @@ fn build_cdf(
                     let mu_bin = up * NMU / 2 + b / NPHI;
                     let mu = 0.5 * (mu_edge(mu_bin) + mu_edge(mu_bin + 1)).abs();
                     let (to, lb) = if up == 1 {
-                        (z, sky)
+                        (z, sky_at(mu))
                     } else {
                         (depth - z, bottom)
                     };
@@ -599,20 +647,16 @@ fn run_batch(input: &ColumnInput, c: usize, batch: usize, n: usize, az: DVec3) -
                 },
             )
         } else {
-            // Isotropic radiance: cosine-weighted downward directions.
-            let (u1, u2) = (rng.next_f64(), rng.next_f64());
-            let r = u1.sqrt();
-            let phi = 2.0 * PI * u2;
-            let dir = DVec3::new(r * phi.cos(), r * phi.sin(), -(1.0 - u1).max(0.0).sqrt());
+            let (dir, w) = sky_photon(input.top, c, rng.next_f64(), rng.next_f64());
             let w0 = f_sky / n_sky as f64;
             // The sky's light crosses the surface plane downwards.
-            t.down[0] += w0;
+            t.down[0] += w * w0;
             (
                 w0,
                 Photon {
                     depth: 0.0,
                     dir,
-                    w: 1.0,
+                    w,
                     order: Order::Boundary,
                     events: 0,
                 },
@@ -996,7 +1040,7 @@ impl Column {
     /// for the whole diffuse radiance of the column.
     pub fn boundary(&self, look: DVec3) -> DVec3 {
         if look.z > 0.0 {
-            self.sky
+            sky_seen(self.sky, self.window, look.z)
         } else if look.z < 0.0 {
             self.bottom
         } else {
@@ -1222,6 +1266,58 @@ mod tests {
             assert!(got > direct * (1.0 + 0.5 * input.bottom_albedo[c] * rho));
             assert!((open.profiles[c].e_d(NZ) - direct).abs() < 1e-9 * direct);
         }
+    }
+
+    /// Below a reflecting surface the sky comes in through Snell's window: with nothing
+    /// scattering and a black bottom, `E_d(z) = 2π L ∫ T(μ_a) μ_a e^(−σa z/μ_w) dμ_a` over the
+    /// air's directions (μ_w the refracted cosine), by quadrature, independent of the walk's
+    /// sampling; the boundary seen looking up is `n² T L` inside the window and dark beyond it.
+    #[test]
+    fn the_sky_comes_in_through_snells_window() {
+        let n = [1.331, 1.334, 1.338];
+        let mut inp = case(0.2, 0.0, 0.9, 6.0, false, 2.0);
+        inp.bottom_albedo = [0.0; 3];
+        inp.top = Top::Fresnel(n);
+        inp.photons = 200_000;
+        let col = solve(&inp).unwrap();
+        for c in 0..3 {
+            let p = &col.profiles[c];
+            for j in [0, NZ / 4, NZ / 2, NZ] {
+                let z = col.planes()[j];
+                let m = 20_000;
+                let want: f64 = (0..m)
+                    .map(|i| {
+                        let mu_a = (i as f64 + 0.5) / m as f64;
+                        let sin_w2 = (1.0 - mu_a * mu_a) / (n[c] * n[c]);
+                        let mu_w = (1.0 - sin_w2).sqrt();
+                        let t = 1.0 - reflectance_from_below(n[c], mu_w);
+                        2.0 * PI * 2.0 * t * mu_a * (-inp.sigma_a[c] * z / mu_w).exp() / m as f64
+                    })
+                    .sum();
+                let got = p.e_d_diffuse[j];
+                assert!(
+                    (got - want).abs() < 4.0 * p.e_d_stderr[j] + 1e-3 * want,
+                    "c {c} z {z}: {got} vs {want}"
+                );
+            }
+            // About 6.6 % of a uniform sky is reflected away at the surface.
+            let t_hemi = p.e_d_diffuse[0] / (PI * 2.0);
+            assert!((0.92..0.945).contains(&t_hemi), "c {c}: {t_hemi}");
+        }
+        let up = col.boundary(DVec3::Z);
+        let want = 1.334f64.powi(2) * (1.0 - reflectance_from_below(1.334, 1.0)) * 2.0;
+        assert!((up.y - want).abs() < 1e-12, "{up}");
+        let c = (1.0f64 - 1.0 / (1.334 * 1.334)).sqrt(); // cosine of the critical angle
+        assert!(
+            col.boundary(DVec3::new((1.0f64 - 0.99 * c * c).sqrt(), 0.0, 0.99 * c))
+                .y
+                == 0.0
+        );
+        assert!(
+            col.boundary(DVec3::new((1.0f64 - 1.01 * c * c).sqrt(), 0.0, 1.01 * c))
+                .y
+                > 0.0
+        );
     }
 
     #[test]

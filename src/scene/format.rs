@@ -958,6 +958,14 @@ pub struct Render {
     /// pixel, as Mitsuba and Cycles do). Same image mean; `"point"` is for comparison.
     /// **Default:** `"footprint"` (`docs/textures.md`).
     pub texture_filter: Option<String>,
+    /// Native renderer: the sea surface seen from below. `"fresnel"`: a flat or wavy surface
+    /// reflects the light coming up to it (unpolarised Fresnel, all of it beyond the critical
+    /// angle, about 48.6° from the vertical) and the sky is seen through Snell's window, as
+    /// under a real sea. `"open"`: the light coming up leaves, and the sky is an isotropic
+    /// radiance below the surface, as Mitsuba and Cycles have it (`poser explain` prints how
+    /// far apart the two are on the scene's column). **Default:** `"fresnel"`
+    /// (`docs/column.md`).
+    pub surface_from_below: Option<String>,
 }
 
 /// `[sensor]` — the camera after the lens: exposure, photon shot noise, read noise, ADC, white

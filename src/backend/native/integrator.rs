@@ -49,6 +49,7 @@ use super::medium::{Medium, tr};
 use super::sampler::Sampler;
 use super::scene::{Hit, Ray, Scene, SurfaceId};
 use crate::model::{Model, Pose};
+use crate::optics::column;
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -116,6 +117,9 @@ pub struct Integrator<'a> {
     /// Share of medium segments on which a free-flight vertex is tried: 1 when daylight is
     /// traced; with a column, [`COLUMN_FREE_FLIGHT`] with strobes or area lights, else 0.
     pub ff_share: f64,
+    /// The water's index per channel where the sea surface reflects the light coming up to
+    /// it and shows the sky through Snell's window ([`Model::underside`]); `None`: open.
+    pub underside: Option<DVec3>,
     object_from_world: Vec<Pose>,
     target_from_world: Vec<Pose>,
 }
@@ -160,6 +164,10 @@ impl<'a> Integrator<'a> {
                 (None, _) => 1.0,
                 (Some(_), true) => 0.0,
                 (Some(_), false) => COLUMN_FREE_FLIGHT,
+            },
+            underside: match model.underside() {
+                crate::optics::column::Top::Fresnel(n) => Some(DVec3::from_array(n)),
+                crate::optics::column::Top::Open => None,
             },
             object_from_world: model.objects.iter().map(|o| o.pose.inverse()).collect(),
             target_from_world: model.targets.iter().map(|t| t.pose.inverse()).collect(),
@@ -542,11 +550,21 @@ impl<'a> Integrator<'a> {
                 break;
             }
             let Some(h) = hit else {
-                // With a column the sky is in its table (added along the segment above).
-                if day && self.column.is_none() {
-                    l += beta * self.lights.ambient;
+                // The ray leaves: the sky, or the sea surface seen from below, whose
+                // reflection is followed as a mirror bounce.
+                let Some(mirror) = self.leave(o, d, day, can_scatter, &mut l, &mut beta, rng)
+                else {
+                    break;
+                };
+                (o, d, prev_pdf) = (mirror.0, mirror.1, 0.0);
+                depth += 1;
+                // With a column, the light the surface reflects is in its table: the mirror
+                // path carries strobe light only.
+                day &= self.column.is_none();
+                if !self.roulette(&mut beta, depth, rng) {
+                    break;
                 }
-                break;
+                continue;
             };
             if !can_scatter {
                 break;
@@ -578,6 +596,45 @@ impl<'a> Integrator<'a> {
             }
         }
         l
+    }
+
+    /// A ray that meets nothing, leaving from `o` along `d`: adds the sky to `l` where the path
+    /// carries traced daylight. Where it leaves the water upwards under a reflecting surface
+    /// ([`Integrator::underside`]) the sky is seen through Snell's window, and the mirrored
+    /// ray is returned when the path follows the reflection (Fresnel, total beyond the
+    /// critical angle; chosen with the channels' mean reflectance, `beta` reweighted). The
+    /// flat mean plane serves under waves too, as in the column.
+    #[allow(clippy::too_many_arguments)]
+    fn leave(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        day: bool,
+        can_scatter: bool,
+        l: &mut DVec3,
+        beta: &mut DVec3,
+        rng: &mut Sampler,
+    ) -> Option<(DVec3, DVec3)> {
+        // With a column the sky is in its table (added along the segment before).
+        let sky = if day && self.column.is_none() {
+            self.lights.ambient
+        } else {
+            DVec3::ZERO
+        };
+        let Some(n) = self.underside.filter(|_| d.z > 0.0 && o.z < 0.0) else {
+            *l += *beta * sky;
+            return None;
+        };
+        let r = DVec3::from_array([0, 1, 2].map(|c| column::reflectance_from_below(n[c], d.z)));
+        *l += *beta * DVec3::from_array([0, 1, 2].map(|c| column::sky_below(n[c], sky[c], d.z)));
+        let q = mean(r);
+        if !can_scatter || !(q > 0.0) || rng.next() >= q {
+            return None;
+        }
+        *beta *= r / q;
+        let p = o + (-o.z / d.z) * d;
+        let p = DVec3::new(p.x, p.y, -SURFACE_OFFSET * (1.0 + p.abs().max_element()));
+        Some((p, DVec3::new(d.x, d.y, -d.z)))
     }
 
     /// The column's daylight scattered towards `o` along the ray `o + t d` up to `t_end` (a

@@ -161,7 +161,7 @@ pub(super) fn render(
                 )),
         );
     }
-    let (daylight, texture_filter) = estimators(cx, &mut r);
+    let (daylight, texture_filter, surface_from_below) = estimators(cx, &mut r);
     at.daylight = r.has("daylight").then(|| r.span_of("daylight"));
     at.bounces = r.has("bounces").then(|| r.span_of("bounces"));
     r.finish(cx);
@@ -176,11 +176,13 @@ pub(super) fn render(
         noise,
         daylight,
         texture_filter,
+        surface_from_below,
     }
 }
 
-/// `daylight` and `texture_filter`: the native renderer's choices of estimator.
-fn estimators(cx: &mut Cx, r: &mut Tab) -> (Daylight, TextureFilter) {
+/// `daylight`, `texture_filter` and `surface_from_below`: the native renderer's choices of
+/// estimator and of the sea surface's model.
+fn estimators(cx: &mut Cx, r: &mut Tab) -> (Daylight, TextureFilter, Underside) {
     let daylight = match r.choice(cx, "daylight", &["auto", "column", "traced"]) {
         Some("column") => Daylight::Column,
         Some("traced") => Daylight::Traced,
@@ -190,5 +192,9 @@ fn estimators(cx: &mut Cx, r: &mut Tab) -> (Daylight, TextureFilter) {
         Some("point") => TextureFilter::Point,
         _ => TextureFilter::Footprint,
     };
-    (daylight, texture_filter)
+    let underside = match r.choice(cx, "surface_from_below", &["fresnel", "open"]) {
+        Some("open") => Underside::Open,
+        _ => Underside::Fresnel,
+    };
+    (daylight, texture_filter, underside)
 }
