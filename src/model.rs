@@ -1205,6 +1205,26 @@ impl Model {
         }
     }
 
+    /// The one line a backend whose sea surface is open from below (Mitsuba, Cycles) warns
+    /// with where the native renderer's reflects ([`Model::underside`]) and daylight comes
+    /// down: the light that surface returns, and the sky's Snell's window, are left out.
+    pub fn open_underside_warning(&self, backend: &str) -> Option<String> {
+        let daylight = self.sun.is_some()
+            || self
+                .lights
+                .iter()
+                .any(|l| matches!(l.kind, LightKind::Ambient { .. }));
+        (daylight && self.underside() != crate::optics::column::Top::Open).then(|| {
+            format!(
+                "{backend} has the sea surface open from below: no Snell's window and no \
+                 reflection of the light coming up, which the native renderer models (a \
+                 sky-lit seabed 35 m down gets about a quarter more light); `poser explain` \
+                 prints the difference at this scene's seabed, and `--set \
+                 render.surface_from_below='\"open\"'` compares like for like (docs/column.md)"
+            )
+        })
+    }
+
     /// The plane-parallel column of the scene's water and daylight, wherever its cameras are
     /// ([`Model::column_input`] without the cameras' check).
     pub fn column_physics(&self) -> Result<crate::optics::column::ColumnInput, String> {

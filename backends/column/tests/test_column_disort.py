@@ -62,6 +62,12 @@ type = "explicit"
 
 [[network.poses]]
 position = [0.0, 0.0, -{camera_depth}]
+
+# Like for like: DISORT's top boundary lets the light coming up leave, and its sky is an
+# isotropic radiance just below the surface; poser's default surface reflects from below
+# (Fresnel, Snell's window), which src/optics/column.rs checks against closed forms instead.
+[render]
+surface_from_below = "open"
 """
 
 SUN = """\

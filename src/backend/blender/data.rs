@@ -85,8 +85,8 @@ pub struct Description {
 /// Build the description of `model`.
 pub fn describe(model: &Model) -> Result<Description, String> {
     let mut assets = Vec::new();
-    // Nothing the Blender backend draws approximately today; kept for `compile`'s report.
-    let warnings = Vec::new();
+    // What Cycles cannot express, for `compile`'s report.
+    let warnings: Vec<String> = model.open_underside_warning("Cycles").into_iter().collect();
     let base_dir = std::path::Path::new(&model.source)
         .parent()
         .map(|p| p.to_path_buf())

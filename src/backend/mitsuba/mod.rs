@@ -173,6 +173,7 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
     if let Some(w) = housing_shadow_warning(model) {
         warnings.push(w);
     }
+    warnings.extend(model.open_underside_warning("Mitsuba"));
     for w in &warnings {
         eprintln!("warning: {w}");
     }
