@@ -120,15 +120,6 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--images and --samples belong to `--mode images`".into(),
         ));
     }
-    let ids = |v: &Option<String>| -> Vec<String> {
-        v.as_deref()
-            .unwrap_or("")
-            .split(',')
-            .map(str::trim)
-            .filter(|s| !s.is_empty())
-            .map(str::to_string)
-            .collect()
-    };
     if args.check.is_some() && args.gcp.is_none() {
         return Err(CliError::Usage(
             "--check holds targets out of a GCP alignment: give --gcp too (without IDS, every \
@@ -161,8 +152,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         noise: args.noise,
         density: args.density,
         gcp: args.gcp.is_some(),
-        control: ids(&args.gcp),
-        check: ids(&args.check),
+        control: target_ids(&args.gcp),
+        check: target_ids(&args.check),
         gcp_sigma: args.gcp_sigma,
         seed: args.seed,
         refine_principal_point: args.refine_principal_point,
@@ -225,6 +216,39 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     bar.finish_and_clear();
     let ev = ev.map_err(CliError::Failed)?;
     evaluate::report::write(&ev, &args.out).map_err(CliError::Failed)?;
+    print_summary(&ev, &args.out);
+    for w in &ev.warnings {
+        eprintln!("warning: {w}");
+    }
+    if args.strict && !ev.warnings.is_empty() {
+        return Err(CliError::Failed(format!(
+            "--strict: {} health warning(s) above ({}); the report is written but its figures \
+             do not describe a sound block",
+            ev.warnings.len(),
+            ev.warnings
+                .iter()
+                .map(|w| w.code)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    Ok(())
+}
+
+/// The target names of a comma-separated `--gcp`/`--check` list (none when absent).
+fn target_ids(v: &Option<String>) -> Vec<String> {
+    v.as_deref()
+        .unwrap_or("")
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(str::to_string)
+        .collect()
+}
+
+/// The evaluation's summary on stderr: registration, height error, control and check
+/// points, tie-point RMS and where the report is.
+fn print_summary(ev: &evaluate::Evaluation, out: &std::path::Path) {
     let cam = ev.cameras.first();
     eprintln!(
         "{}: {} of {} images registered, {} points, track {:.1}, reprojection {:.3} px{}",
@@ -286,22 +310,6 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 100.0 * b.explained
             ))
             .unwrap_or_default(),
-        args.out.join("report.md").display()
+        out.join("report.md").display()
     );
-    for w in &ev.warnings {
-        eprintln!("warning: {w}");
-    }
-    if args.strict && !ev.warnings.is_empty() {
-        return Err(CliError::Failed(format!(
-            "--strict: {} health warning(s) above ({}); the report is written but its figures \
-             do not describe a sound block",
-            ev.warnings.len(),
-            ev.warnings
-                .iter()
-                .map(|w| w.code)
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
-    }
-    Ok(())
 }

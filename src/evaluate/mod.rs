@@ -401,35 +401,8 @@ pub fn evaluate_observations(
     })?;
     observe::add_noise(&mut images, opts.noise, opts.seed);
 
-    // Points seen at least twice; images with enough of them.
-    let mut seen = vec![0u32; points.len()];
-    for im in &images {
-        for (k, _) in &im.points {
-            seen[*k] += 1;
-        }
-    }
-    let used: Vec<&ImageObservations> = images
-        .iter()
-        .filter(|im| im.points.iter().filter(|(k, _)| seen[*k] >= 2).count() >= 8)
-        .collect();
-    let tie_count = seen.iter().filter(|&&s| s >= 2).count();
-    if used.len() < 3 || tie_count < 10 {
-        return Err(format!(
-            "only {} image(s) see enough tie points and {tie_count} point(s) are seen twice or \
-             more\n  help: the network must overlap on textured surfaces; raise --density, the \
-             overlap, or check that the cameras look at the scene",
-            used.len()
-        ));
-    }
-    // Median viewing distance, for the perturbation scale and the equivalent focal length.
-    let mut depths = Vec::new();
-    for im in used.iter().step_by((used.len() / 50).max(1)) {
-        let cfw = model.world_from_camera(im.pose, im.camera).inverse();
-        for (k, _) in im.points.iter().step_by(7) {
-            depths.push(cfw.transform_point(points[*k].world).z);
-        }
-    }
-    let distance = median(depths);
+    let (seen, used) = tie_points(&images, points.len())?;
+    let distance = median_distance(model, &used, &points);
     let sigma_pos = opts.perturb_position * distance;
 
     let mut rng = SplitMix64(opts.seed ^ 0x1417_1A11_5EED);
@@ -444,75 +417,9 @@ pub fn evaluate_observations(
     };
     // With a calibrated rig: one perturbed start per rig pose (the first camera's frame,
     // COLMAP's reference sensor); the images follow it through the rig.
-    let rig = if opts.rig {
-        let mut poses: Vec<usize> = used.iter().map(|im| im.pose).collect();
-        poses.sort_unstable();
-        poses.dedup();
-        let frames = poses
-            .iter()
-            .map(|&p| {
-                let (qvec, tvec) = perturbed(model.world_from_camera(p, 0));
-                colmap::RequestFrame {
-                    id: p as u32 + 1,
-                    qvec,
-                    tvec,
-                }
-            })
-            .collect();
-        let sensor_from_rig = (0..model.cameras.len())
-            .map(|k| {
-                let s = model
-                    .world_from_camera(0, k)
-                    .inverse()
-                    .compose(&model.world_from_camera(0, 0));
-                let q = DQuat::from_mat3(&s.rotation).normalize();
-                colmap::RequestSensor {
-                    qvec: [q.w, q.x, q.y, q.z],
-                    tvec: s.translation.to_array(),
-                }
-            })
-            .collect();
-        Some(colmap::RequestRig {
-            sensor_from_rig,
-            frames,
-        })
-    } else {
-        None
-    };
-    let mut req_images = Vec::new();
-    for (n, im) in used.iter().enumerate() {
-        let (qvec, tvec) = if opts.rig {
-            ([1.0, 0.0, 0.0, 0.0], [0.0; 3]) // unused: the frame's pose
-        } else {
-            perturbed(model.world_from_camera(im.pose, im.camera))
-        };
-        req_images.push(RequestImage {
-            id: n as u32 + 1,
-            name: im.name.clone(),
-            camera: im.camera as u32 + 1,
-            frame: opts.rig.then_some(im.pose as u32 + 1),
-            qvec: Some(qvec),
-            tvec: Some(tvec),
-            observations: im
-                .points
-                .iter()
-                .filter(|(k, _)| seen[*k] >= 2)
-                .map(|(k, px)| [px[0], px[1], (*k + 1) as f64])
-                .collect(),
-        });
-    }
-    let req_points: Vec<RequestPoint> = points
-        .iter()
-        .enumerate()
-        .filter(|(k, _)| seen[*k] >= 2)
-        .map(|(k, p)| {
-            let d = sigma_pos * DVec3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng));
-            RequestPoint {
-                id: k as u64 + 1,
-                xyz: (p.world + d).to_array(),
-            }
-        })
-        .collect();
+    let rig = opts.rig.then(|| rig_request(model, &used, &mut perturbed));
+    let req_images = request_images(model, &used, &seen, opts.rig, &mut perturbed);
+    let req_points = request_points(&points, &seen, sigma_pos, &mut rng);
     // Control points weighted in the adjustment: their known positions, against the pixels'
     // σ (the simulated noise, at least MIN_TIE_SIGMA_PX).
     let weighted = opts.gcp_sigma.filter(|_| opts.gcp);
@@ -610,6 +517,145 @@ pub fn evaluate_observations(
         },
         !opts.rig,
     )
+}
+
+/// The used images' request: their tie points' pixels and, without a rig, a perturbed start.
+fn request_images(
+    model: &Model,
+    used: &[&ImageObservations],
+    seen: &[u32],
+    rig: bool,
+    perturbed: &mut impl FnMut(Pose) -> ([f64; 4], [f64; 3]),
+) -> Vec<RequestImage> {
+    let mut req_images = Vec::new();
+    for (n, im) in used.iter().enumerate() {
+        let (qvec, tvec) = if rig {
+            ([1.0, 0.0, 0.0, 0.0], [0.0; 3]) // unused: the frame's pose
+        } else {
+            perturbed(model.world_from_camera(im.pose, im.camera))
+        };
+        req_images.push(RequestImage {
+            id: n as u32 + 1,
+            name: im.name.clone(),
+            camera: im.camera as u32 + 1,
+            frame: rig.then_some(im.pose as u32 + 1),
+            qvec: Some(qvec),
+            tvec: Some(tvec),
+            observations: im
+                .points
+                .iter()
+                .filter(|(k, _)| seen[*k] >= 2)
+                .map(|(k, px)| [px[0], px[1], (*k + 1) as f64])
+                .collect(),
+        });
+    }
+    req_images
+}
+
+/// The tie points seen twice or more, each started `sigma_pos` (σ per axis) off its truth.
+fn request_points(
+    points: &[observe::SurveyPoint],
+    seen: &[u32],
+    sigma_pos: f64,
+    rng: &mut SplitMix64,
+) -> Vec<RequestPoint> {
+    points
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| seen[*k] >= 2)
+        .map(|(k, p)| {
+            let d = sigma_pos * DVec3::new(gauss(rng), gauss(rng), gauss(rng));
+            RequestPoint {
+                id: k as u64 + 1,
+                xyz: (p.world + d).to_array(),
+            }
+        })
+        .collect()
+}
+
+/// How many images see each point, and the images that see at least 8 points seen twice or
+/// more; an error when too few images or points tie the network together.
+fn tie_points(
+    images: &[ImageObservations],
+    n_points: usize,
+) -> Result<(Vec<u32>, Vec<&ImageObservations>), String> {
+    let mut seen = vec![0u32; n_points];
+    for im in images {
+        for (k, _) in &im.points {
+            seen[*k] += 1;
+        }
+    }
+    let used: Vec<&ImageObservations> = images
+        .iter()
+        .filter(|im| im.points.iter().filter(|(k, _)| seen[*k] >= 2).count() >= 8)
+        .collect();
+    let tie_count = seen.iter().filter(|&&s| s >= 2).count();
+    if used.len() < 3 || tie_count < 10 {
+        return Err(format!(
+            "only {} image(s) see enough tie points and {tie_count} point(s) are seen twice or \
+             more\n  help: the network must overlap on textured surfaces; raise --density, the \
+             overlap, or check that the cameras look at the scene",
+            used.len()
+        ));
+    }
+    Ok((seen, used))
+}
+
+/// The median viewing distance of the used images' points, for the perturbation scale and the
+/// equivalent focal length.
+fn median_distance(
+    model: &Model,
+    used: &[&ImageObservations],
+    points: &[observe::SurveyPoint],
+) -> f64 {
+    let mut depths = Vec::new();
+    for im in used.iter().step_by((used.len() / 50).max(1)) {
+        let cfw = model.world_from_camera(im.pose, im.camera).inverse();
+        for (k, _) in im.points.iter().step_by(7) {
+            depths.push(cfw.transform_point(points[*k].world).z);
+        }
+    }
+    median(depths)
+}
+
+/// The calibrated rig's request: one perturbed start per rig pose (the first camera's frame,
+/// COLMAP's reference sensor) and the cameras' true poses in the rig.
+fn rig_request(
+    model: &Model,
+    used: &[&ImageObservations],
+    perturbed: &mut impl FnMut(Pose) -> ([f64; 4], [f64; 3]),
+) -> colmap::RequestRig {
+    let mut poses: Vec<usize> = used.iter().map(|im| im.pose).collect();
+    poses.sort_unstable();
+    poses.dedup();
+    let frames = poses
+        .iter()
+        .map(|&p| {
+            let (qvec, tvec) = perturbed(model.world_from_camera(p, 0));
+            colmap::RequestFrame {
+                id: p as u32 + 1,
+                qvec,
+                tvec,
+            }
+        })
+        .collect();
+    let sensor_from_rig = (0..model.cameras.len())
+        .map(|k| {
+            let s = model
+                .world_from_camera(0, k)
+                .inverse()
+                .compose(&model.world_from_camera(0, 0));
+            let q = DQuat::from_mat3(&s.rotation).normalize();
+            colmap::RequestSensor {
+                qvec: [q.w, q.x, q.y, q.z],
+                tvec: s.translation.to_array(),
+            }
+        })
+        .collect();
+    colmap::RequestRig {
+        sensor_from_rig,
+        frames,
+    }
 }
 
 /// The evaluation with its [`health`] checks run.
@@ -793,53 +839,9 @@ pub fn evaluate_images(
     }
     let sim = Similarity::estimate(&from, &to)
         .ok_or("the registered cameras are degenerate; no similarity to the truth")?;
-    // Height error of each well-measured point against the true surface below or above it.
-    let mut point_errors = Vec::new();
-    let mut tie = Vec::new();
-    let mut bowl_samples = Vec::new();
-    for p in &rec.points {
-        if p.track < 3 || p.error > 2.0 {
-            continue;
-        }
-        let x = sim.apply(DVec3::from_array(p.xyz));
-        let top = Ray {
-            origin: DVec3::new(x.x, x.y, x.z + 50.0),
-            dir: -DVec3::Z,
-        };
-        let Some(hit) = scene.intersect(&top, 100.0) else {
-            continue;
-        };
-        let dz = x.z - hit.point.z;
-        let e = DVec3::new(0.0, 0.0, dz);
-        tie.push(e);
-        bowl_samples.push((x.x, x.y, dz));
-        point_errors.push(PointError {
-            id: p.id,
-            label: String::new(),
-            kind: "tie",
-            truth: hit.point.to_array(),
-            error: e.to_array(),
-            track: p.track,
-        });
-    }
+    let (point_errors, tie, bowl_samples) = height_errors(&rec, &sim, &scene);
     let (camera_errors, centres) = camera_centre_errors(model, &rec, &sim, &names);
-    let distance = median(
-        true_centres
-            .iter()
-            .filter_map(|c| {
-                scene
-                    .intersect(
-                        &Ray {
-                            origin: *c,
-                            dir: -DVec3::Z,
-                        },
-                        1e3,
-                    )
-                    .map(|h| h.t)
-            })
-            .collect(),
-    );
-    let distance = if distance.is_finite() { distance } else { 2.0 };
+    let distance = camera_height(&scene, &true_centres);
     let dropped = dropped(files.iter().map(|(f, _, _)| f.as_str()), &rec);
     finish(
         model,
@@ -880,6 +882,66 @@ pub fn evaluate_images(
         },
         true,
     )
+}
+
+/// The height error of each well-measured point of `rec` after `sim` against the true
+/// surface below or above it: the points' errors, the error vectors and the bowl's samples.
+fn height_errors(
+    rec: &Reconstruction,
+    sim: &Similarity,
+    scene: &Scene,
+) -> (Vec<PointError>, Vec<DVec3>, Vec<(f64, f64, f64)>) {
+    let mut point_errors = Vec::new();
+    let mut tie = Vec::new();
+    let mut bowl_samples = Vec::new();
+    for p in &rec.points {
+        if p.track < 3 || p.error > 2.0 {
+            continue;
+        }
+        let x = sim.apply(DVec3::from_array(p.xyz));
+        let top = Ray {
+            origin: DVec3::new(x.x, x.y, x.z + 50.0),
+            dir: -DVec3::Z,
+        };
+        let Some(hit) = scene.intersect(&top, 100.0) else {
+            continue;
+        };
+        let dz = x.z - hit.point.z;
+        let e = DVec3::new(0.0, 0.0, dz);
+        tie.push(e);
+        bowl_samples.push((x.x, x.y, dz));
+        point_errors.push(PointError {
+            id: p.id,
+            label: String::new(),
+            kind: "tie",
+            truth: hit.point.to_array(),
+            error: e.to_array(),
+            track: p.track,
+        });
+    }
+    (point_errors, tie, bowl_samples)
+}
+
+/// The median height of the true camera centres above the surface below them (2 m when
+/// none is above one).
+fn camera_height(scene: &Scene, centres: &[DVec3]) -> f64 {
+    let distance = median(
+        centres
+            .iter()
+            .filter_map(|c| {
+                scene
+                    .intersect(
+                        &Ray {
+                            origin: *c,
+                            dir: -DVec3::Z,
+                        },
+                        1e3,
+                    )
+                    .map(|h| h.t)
+            })
+            .collect(),
+    );
+    if distance.is_finite() { distance } else { 2.0 }
 }
 
 #[cfg(test)]

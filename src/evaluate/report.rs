@@ -97,55 +97,7 @@ pub fn markdown(ev: &Evaluation) -> String {
         100.0 * r.outliers
     );
 
-    let _ = writeln!(s, "## Intrinsics against the in-water-equivalent truth\n");
-    let _ = writeln!(
-        s,
-        "| camera | f in air | f truth (water-equiv.) | f recovered | focal error | cx, cy truth | cx, cy recovered | other |\n|---|---|---|---|---|---|---|---|"
-    );
-    for c in &ev.cameras {
-        let other: Vec<String> = c
-            .extra
-            .iter()
-            .map(|(n, v)| format!("{n} = {v:.4e}"))
-            .collect();
-        let _ = writeln!(
-            s,
-            "| {} | {:.1} px | {:.1} × {:.1} px (at {:.2} m) | {:.1} × {:.1} px | {:+.2} % | {:.1}, {:.1} | {:.1}, {:.1} | {} |",
-            c.name,
-            c.f_air,
-            c.truth[0],
-            c.truth[1],
-            c.distance,
-            c.recovered[0],
-            c.recovered[1],
-            100.0 * c.focal_error,
-            c.truth[2],
-            c.truth[3],
-            c.recovered[2],
-            c.recovered[3],
-            other.join(", ")
-        );
-    }
-    if let Some(sens) = ev.focal_sensitivity() {
-        let _ = writeln!(
-            s,
-            "\nHolding the focal length 10 % off its estimate raises the mean reprojection error by \
-             {}: {}",
-            if sens >= super::FOCAL_RISE_CAP {
-                format!("more than {:.0} %", 100.0 * super::FOCAL_RISE_CAP)
-            } else {
-                format!("{:.3} %", 100.0 * sens)
-            },
-            if sens >= super::FOCAL_DETERMINED {
-                "the images determine the focal length."
-            } else {
-                "**the images do not determine the focal length** (a nearly flat block seen \
-                 from above: focal length and height trade against each other), so the focal \
-                 error above is not a measurement. Relief, obliques, or a calibration beforehand \
-                 fix it."
-            }
-        );
-    }
+    intrinsics(&mut s, ev);
     let _ = writeln!(s, "\n## 3D errors after alignment (mm)\n");
     let _ = writeln!(
         s,
@@ -223,6 +175,60 @@ pub fn markdown(ev: &Evaluation) -> String {
         m = mm(color_scale(ev))
     );
     s
+}
+
+/// The recovered intrinsics against the in-water-equivalent truth, and whether the images
+/// determine the focal length.
+fn intrinsics(s: &mut String, ev: &Evaluation) {
+    let _ = writeln!(s, "## Intrinsics against the in-water-equivalent truth\n");
+    let _ = writeln!(
+        s,
+        "| camera | f in air | f truth (water-equiv.) | f recovered | focal error | cx, cy truth | cx, cy recovered | other |\n|---|---|---|---|---|---|---|---|"
+    );
+    for c in &ev.cameras {
+        let other: Vec<String> = c
+            .extra
+            .iter()
+            .map(|(n, v)| format!("{n} = {v:.4e}"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {:.1} px | {:.1} × {:.1} px (at {:.2} m) | {:.1} × {:.1} px | {:+.2} % | {:.1}, {:.1} | {:.1}, {:.1} | {} |",
+            c.name,
+            c.f_air,
+            c.truth[0],
+            c.truth[1],
+            c.distance,
+            c.recovered[0],
+            c.recovered[1],
+            100.0 * c.focal_error,
+            c.truth[2],
+            c.truth[3],
+            c.recovered[2],
+            c.recovered[3],
+            other.join(", ")
+        );
+    }
+    if let Some(sens) = ev.focal_sensitivity() {
+        let _ = writeln!(
+            s,
+            "\nHolding the focal length 10 % off its estimate raises the mean reprojection error by \
+             {}: {}",
+            if sens >= super::FOCAL_RISE_CAP {
+                format!("more than {:.0} %", 100.0 * super::FOCAL_RISE_CAP)
+            } else {
+                format!("{:.3} %", 100.0 * sens)
+            },
+            if sens >= super::FOCAL_DETERMINED {
+                "the images determine the focal length."
+            } else {
+                "**the images do not determine the focal length** (a nearly flat block seen \
+                 from above: focal length and height trade against each other), so the focal \
+                 error above is not a measurement. Relief, obliques, or a calibration beforehand \
+                 fix it."
+            }
+        );
+    }
 }
 
 /// The health warnings, or a line saying there are none.
