@@ -591,21 +591,34 @@ fn a_copied_binary_renders_with_mitsuba() {
         std::fs::copy(canon.join(f), tmp.path().join(f)).unwrap();
     }
     let python = poser::backend::python::interpreter();
-    let out = std::process::Command::new(&bin)
-        .current_dir(tmp.path())
-        .env("POSER_PYTHON", &python)
-        .env_remove("PYTHONPATH")
-        .args([
-            "render",
-            "pinhole_air.toml",
-            "--backend",
-            "mitsuba",
-            "-o",
-            "out",
-        ])
-        .args(["--scale", "0.1", "--samples", "2", "--quiet"])
-        .output()
-        .unwrap();
+    let run = || {
+        std::process::Command::new(&bin)
+            .current_dir(tmp.path())
+            .env("POSER_PYTHON", &python)
+            .env_remove("PYTHONPATH")
+            .args([
+                "render",
+                "pinhole_air.toml",
+                "--backend",
+                "mitsuba",
+                "-o",
+                "out",
+            ])
+            .args(["--scale", "0.1", "--samples", "2", "--quiet"])
+            .output()
+    };
+    // The copy's write handle can live on for a moment in a child that another test thread
+    // forked meanwhile (until that child execs): "text file busy" (ETXTBSY, 26). Wait it out.
+    let mut tries = 0;
+    let out = loop {
+        match run() {
+            Err(e) if e.raw_os_error() == Some(26) && tries < 50 => {
+                tries += 1;
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+            r => break r.unwrap(),
+        }
+    };
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     let out_dir = tmp.path().join("out");
