@@ -324,7 +324,7 @@ def corner_uvs(me, name, r, where):
     """The texture coordinates of every triangle corner (loop triangles' loops, in order) from
     the UV map `name`, or the one Cycles renders with; None (noted) when there is none."""
     layers = me.uv_layers
-    layer = layers.get(name) if name else next((l for l in layers if l.active_render), None)
+    layer = layers.get(name) if name else next((uv for uv in layers if uv.active_render), None)
     if layer is None:
         r.note(where, f"has no UV map{f' `{name}`' if name else ''} for its image texture; "
                "the image's mean colour is used")
