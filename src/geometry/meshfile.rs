@@ -955,6 +955,30 @@ pub fn srgb_to_linear(c: f64) -> f64 {
 // glTF
 // ------------------------------------------------------------------------------------------
 
+/// A glTF file (`.gltf` text or `.glb`) parsed and validated, or why not. gltf-json 1.4.1's
+/// validation reads a primitive's `POSITION` accessor before it checks that the accessor
+/// exists, and panics on a file that names one it lacks (found by fuzzing `import`,
+/// `docs/fuzzing.md`). Every accessor a primitive names is checked here first, so a malformed
+/// file is an error, never a panic.
+pub fn parse_gltf(bytes: &[u8]) -> Result<gltf::Gltf, String> {
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| e.to_string())?;
+    let json = document.into_json();
+    let n = json.accessors.len();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let named = prim.attributes.values().chain(prim.indices.iter());
+            if let Some(i) = named.map(|i| i.value()).find(|&i| i >= n) {
+                return Err(format!(
+                    "mesh {m}, primitive {p} names accessor {i}, and the file has {n} accessors"
+                ));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
+    Ok(gltf::Gltf { document, blob })
+}
+
 /// Read a glTF 2.0 file (`bytes`, at `path`): every triangle primitive of the default scene
 /// (or the first), node transforms applied, turned from +Y up into +Z up; with `colours`, each
 /// glTF material one [`FileMaterial`] (a primitive without one takes the object's albedo) and
@@ -966,8 +990,7 @@ pub fn read_gltf(
     colours: bool,
 ) -> Result<MeshFile, String> {
     let shown = path.display().to_string();
-    let gltf =
-        gltf::Gltf::from_slice(bytes).map_err(|e| format!("cannot read glTF `{shown}`: {e}"))?;
+    let gltf = parse_gltf(bytes).map_err(|e| format!("cannot read glTF `{shown}`: {e}"))?;
     let base = path.parent();
     let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
         .map_err(|e| format!("cannot load the buffers of `{shown}`: {e}"))?;
@@ -1338,7 +1361,7 @@ pub fn probe(bytes: &[u8], path: &Path, roots: &[PathBuf]) -> Result<Probe, Stri
             })
         }
         Some(Format::Gltf) => {
-            let g = gltf::Gltf::from_slice(bytes).map_err(|e| e.to_string())?;
+            let g = parse_gltf(bytes)?;
             let mut out = Probe::default();
             for m in g.materials() {
                 let Some(info) = m.pbr_metallic_roughness().base_color_texture() else {
@@ -1384,6 +1407,17 @@ pub fn probe(bytes: &[u8], path: &Path, roots: &[PathBuf]) -> Result<Probe, Stri
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A primitive naming an accessor the file lacks is an error (gltf-json's own validation
+    /// panics on it).
+    #[test]
+    fn a_gltf_naming_a_missing_accessor_is_an_error_not_a_panic() {
+        let text = br#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]}"#;
+        let e = parse_gltf(text).unwrap_err();
+        assert!(e.contains("names accessor 0, and the file has 0"), "{e}");
+        let e = read_gltf(text, Path::new("bad.gltf"), &[], false).unwrap_err();
+        assert!(e.starts_with("cannot read glTF `bad.gltf`"), "{e}");
+    }
 
     fn write(dir: &Path, name: &str, text: &[u8]) -> PathBuf {
         let p = dir.join(name);

@@ -289,8 +289,7 @@ fn resolve_asset(
                         .help("convert the mesh to glTF (`.glb` or `.gltf`), OBJ or PLY, e.g. with Blender's exporters"),
                 );
             } else if format == Some(crate::geometry::meshfile::Format::Gltf)
-                && let Err(e) = gltf::Gltf::from_slice(&bytes)
-                    .map_err(|e| e.to_string())
+                && let Err(e) = crate::geometry::meshfile::parse_gltf(&bytes)
                     .and_then(|g| {
                         gltf_side_files(&g, p.parent().unwrap_or(Path::new(".")), sources)
                     })
