@@ -1,5 +1,5 @@
-//! libFuzzer target `import`: see `fuzz/checks.rs` for the property it checks. Not in
-//! `fuzz/run.sh`'s default list (CI time); run it with `fuzz/run.sh SECONDS import`.
+//! libFuzzer target `import`: see `fuzz/checks.rs` for the property it checks, and
+//! `docs/fuzzing.md` for what it found.
 #![no_main]
 #[path = "../checks.rs"]
 mod checks;
