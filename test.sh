@@ -1,22 +1,42 @@
 #!/usr/bin/env bash
-# Run every test of poser: sets up the pinned Python environment (bpy, mitsuba) first, then
-# lints and tests the Python back-end code, then runs the Rust test suite, which renders with
-# the real Mitsuba and Cycles.
+# Run every test of poser, in its two tiers, each timed:
+#  1. the fast tier, plain `cargo test`: unit, doc and the `suite` integration tests, no Python;
+#  2. the full tier: sets up the pinned Python environment (bpy, mitsuba, pycolmap, OpenCV,
+#     Chromium), builds the Python module's wheel, lints and tests the Python code, then runs
+#     the `backends` integration tests, which render with the real Mitsuba and Cycles.
+# POSER_FUZZ_SECONDS=N also fuzzes each cargo-fuzz target for N s (nightly; docs/fuzzing.md). The
+# stable replay of the fuzz corpus runs in tier 1 either way. Both tiers build with the one `dev`
+# profile (optimised, with overflow checks; Cargo.toml), so the dependencies compile once.
 set -euo pipefail
 cd "$(dirname "$0")"
+step() { printf '\n== %s (at %d s)\n' "$1" "$SECONDS"; }
+SECONDS=0
+
+step "fast tier: build"
+time cargo test --locked --no-run
+step "fast tier: plain cargo test"
+time cargo test --locked
+
+step "full tier: Python environment"
 backends/setup.sh
 export POSER_PYTHON="$PWD/.venv/bin/python"
 # The Python module (crates/poser-py): build the abi3 wheel with maturin, install it into .venv
 # (the Blender add-on's tests use it in-process), and the binary its tests compare against.
+step "full tier: the Python module's wheel and the binary"
 rm -rf target/wheels
-.venv/bin/maturin build --release --locked --quiet -m crates/poser-py/Cargo.toml \
-  -o target/wheels -i .venv/bin/python
+.venv/bin/maturin build --profile dev --features poser/backends --locked --quiet \
+  -m crates/poser-py/Cargo.toml -o target/wheels -i .venv/bin/python
 .venv/bin/pip install --quiet --force-reinstall --no-deps target/wheels/poser-*.whl
-cargo build --release --locked --features backends --bin poser
+cargo build --locked --features backends --bin poser
+step "full tier: Python tests"
 .venv/bin/ruff check backends crates/poser-py
-OPENCV_IO_ENABLE_OPENEXR=1 POSER_BIN="$PWD/target/release/poser" \
+OPENCV_IO_ENABLE_OPENEXR=1 POSER_BIN="$PWD/target/debug/poser" \
   .venv/bin/python -m pytest -q -p no:cacheprovider backends crates/poser-py/tests
-cargo test --release --locked --features backends
-# Each fuzz target for 30 s, when a nightly toolchain is available (fuzz/run.sh says so and
-# skips otherwise; the stable replay of the corpus ran above as `fuzz_replay`).
-fuzz/run.sh 30
+step "full tier: cargo test --test backends"
+time cargo test --locked --features backends --test backends
+
+if [ -n "${POSER_FUZZ_SECONDS:-}" ]; then
+  step "fuzzing each target for $POSER_FUZZ_SECONDS s"
+  fuzz/run.sh "$POSER_FUZZ_SECONDS"
+fi
+step "all tests passed"

@@ -6,7 +6,7 @@
 # The seed corpus is the committed scenes (tests/invalid, scenarios) and fuzz/corpus/<target>;
 # new inputs go to a scratch corpus under target/fuzz-corpus, crashes to fuzz/artifacts/.
 # Without a nightly (none installed and none installable) it says so and exits 0: the stable
-# replay of the corpus (`cargo test --test fuzz_replay`) still runs everywhere.
+# replay of the corpus (`cargo test --test suite fuzz_replay::`) still runs everywhere.
 set -euo pipefail
 cd "$(dirname "$0")"
 secs="${1:-60}"

@@ -2,59 +2,8 @@
 //! command (its JSON, plot and the README's block), on real renders. The native run is in the
 //! plain tier; the run with all three backends needs the `backends` feature.
 
-use poser::bench::render::{README_BEGIN, README_END, Report, TARGETS};
-use std::process::Command;
-
-fn poser() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_poser"))
-}
-
-/// Run the quick bench on the scenes matching `only` with `backends`, into a temporary folder
-/// holding a README copy; returns the folder and the parsed report.
-fn bench(only: &str, backends: &str) -> (tempfile::TempDir, Report) {
-    let dir = tempfile::tempdir().unwrap();
-    let readme = dir.path().join("README.md");
-    std::fs::write(
-        &readme,
-        format!("# x\n\nbefore\n\n{README_BEGIN}\nstale\n{README_END}\n\nafter\n"),
-    )
-    .unwrap();
-    let json = dir.path().join("render.json");
-    let svg = dir.path().join("render.svg");
-    let out = poser()
-        .args(["bench", "render", "--quick", "--only", only, "--backends"])
-        .arg(backends)
-        .arg("--json")
-        .arg(&json)
-        .arg("--plot")
-        .arg(&svg)
-        .arg("--readme")
-        .arg(&readme)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: Report = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    // The printed report is the one in the JSON.
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(stdout.trim_end(), report.to_markdown().trim_end());
-    // The README's block, and only it, was replaced.
-    let text = std::fs::read_to_string(&readme).unwrap();
-    assert!(
-        text.starts_with("# x\n\nbefore\n\n") && text.ends_with("\n\nafter\n"),
-        "{text}"
-    );
-    assert!(text.contains(&report.readme_block()) && !text.contains("stale"));
-    let plot = std::fs::read_to_string(&svg).unwrap();
-    assert!(
-        plot.starts_with("<svg") && plot.contains(only),
-        "{plot:.200}"
-    );
-    (dir, report)
-}
+use crate::support::bench::{bench, poser};
+use poser::bench::render::{README_BEGIN, TARGETS};
 
 #[test]
 fn native_curve_reaches_both_targets_and_the_readme_block_is_regenerated() {
@@ -115,24 +64,3 @@ fn a_readme_without_the_markers_is_refused_before_any_rendering() {
     );
 }
 
-/// The three backends time the same image: one curve each, and their converged references
-/// agree on the mean.
-#[cfg(feature = "backends")]
-#[test]
-fn every_backend_has_a_curve_on_the_same_image() {
-    let (_dir, report) = bench("strobe_backscatter", "native,mitsuba,blender");
-    let sc = &report.scenes[0];
-    let names: Vec<&str> = sc.curves.iter().map(|c| c.backend.as_str()).collect();
-    assert_eq!(names, ["native", "mitsuba", "blender"]);
-    let native = sc.curves[0].reference_means;
-    for c in &sc.curves {
-        assert_eq!(c.error, None, "{}", c.backend);
-        assert_eq!(c.to_target.len(), TARGETS.len(), "{}", c.backend);
-        for (ch, (m, n)) in c.reference_means.iter().zip(native).enumerate() {
-            let d = m / n - 1.0;
-            assert!(d.abs() < 0.05, "{} channel {ch}: {d:+.3}", c.backend);
-        }
-    }
-    let (wall, render) = sc.speedup(TARGETS[1]);
-    assert!(wall.is_some() && render.is_some());
-}

@@ -1,7 +1,7 @@
 //! Blender backend: generated scripts are data-only, and Cycles renders agree with analytic
 //! truth (projection and radiometry). Renders are 160×120 with the real `bpy`.
 
-mod support;
+use crate::support;
 
 use glam::DVec3;
 use poser::backend::RenderOptions;

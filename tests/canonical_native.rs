@@ -2,7 +2,7 @@
 //! against the exact truth (target positions) and the analytic radiance oracle
 //! (`support::canonical`). The same checks for Mitsuba and Cycles are in `cross_backend.rs`.
 
-mod support;
+use crate::support;
 use poser::model::LightKind;
 use support::canonical::*;
 

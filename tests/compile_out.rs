@@ -8,7 +8,7 @@
 //! | `tests/out/blender/` | the scene description that `scene.py` carries, its assets (size and FNV-1a hash), warnings; or Blender's refusal |
 //!
 //! The list of scenes is the directory: add a file to `tests/in/` and its three snapshots follow
-//! (`cargo insta review`, or `INSTA_UPDATE=always cargo test --test compile_out`, then review the
+//! (`cargo insta review`, or `INSTA_UPDATE=always cargo test --test suite compile_out::`, then review the
 //! diff). A file there is usually a one-line `include` of a shipped scene, so that a scenario is
 //! pinned exactly as a user runs it. The Mitsuba output is also compiled twice and compared, byte
 //! for byte. Refusals are snapshots too: what a backend cannot express is part of its contract.

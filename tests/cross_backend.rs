@@ -5,7 +5,7 @@
 //!
 //! Tolerance between backends in scattering water: ≤ 2 % on the image mean.
 
-mod support;
+use crate::support;
 use support::canonical::*;
 
 #[test]

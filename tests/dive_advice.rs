@@ -3,7 +3,7 @@
 //! verdict); MODs and switch depths shown to a diver are rounded down; air is one gas however
 //! the scene spells it; a deco gas at its reserve hands over to the back gas and the rest of
 //! the ascent is planned on the gas breathed.
-mod support;
+use crate::support;
 use poser::model::{CylinderRole, Model};
 use poser::plan::deco::{Environment, Gas};
 use poser::plan::dive::*;

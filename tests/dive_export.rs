@@ -1,5 +1,5 @@
 //! Subsurface export and plot of a simulated dive: structure, units and values read back.
-mod support;
+use crate::support;
 use poser::plan::dive::plan_dive;
 use quick_xml::Reader;
 use quick_xml::events::Event;

@@ -1,7 +1,7 @@
 //! Lost-gas plans (issue 38): the decompression on the back gas (or the gases left) when a
 //! travel or deco gas is lost at the end of the bottom time, and the ascent on the bailout when
 //! the bottom gas is lost; each with its runtime and gas check, in the verdict.
-mod support;
+use crate::support;
 use poser::model::{CylinderRole, DecoMode};
 use poser::plan::dive::*;
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! Oxygen toxicity of a dive plan: CNS % against the NOAA single-exposure limits and OTU
 //! (Lambertsen / REPEX), checked against hand-computed values, a ramp, a shipped scenario on
 //! EAN32 and oxygen-rich deco cases (issue 38).
-mod support;
+use crate::support;
 use poser::model::CylinderRole;
 use poser::plan::dive::plan_dive;
 use poser::plan::oxygen::{Exposure, NOAA_CNS_LIMITS, cns_rate, otu_rate};

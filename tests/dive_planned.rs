@@ -2,7 +2,7 @@
 //! decompression plan holds is "OK, decompression planned" with its plan; every other fault
 //! (gas, pO₂, CNS, a hypoxic gas, the ceiling) stays NOT SAFE, and without the key a dive that
 //! needs stops stays NOT SAFE.
-mod support;
+use crate::support;
 use poser::model::{CylinderRole, DecoMode};
 use poser::plan::dive::*;
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! Oxygen toxicity across surface intervals (issue 38): the dives of a split survey carry CNS %
 //! over each surface interval, halved every 90 min (NOAA; Subsurface does the same), and count
 //! the day's OTU against REPEX's 850. Checked against hand-computed values.
-mod support;
+use crate::support;
 use poser::model::{CylinderRole, Model};
 use poser::plan::dive::{DiveConfig, Track, max_strips, split};
 use poser::plan::oxygen::{CNS_LIMIT, OTU_DAY_LIMIT, cns_after_surface_interval};

@@ -2,7 +2,7 @@
 //! and the checks of each gas where it is breathed. A hypoxic trimix with a travel gas is no
 //! longer NOT SAFE for being hypoxic; the same mix without one, or with a travel gas left too
 //! shallow, still is.
-mod support;
+use crate::support;
 use poser::model::{CylinderRole, Diver};
 use poser::plan::deco::{Environment, Gas};
 use poser::plan::dive::*;

@@ -1,7 +1,7 @@
 //! Dive safety: every cylinder with its own gas (pO₂/MOD and hypoxic checks, deco gas
 //! switches, per-cylinder accounting), one criterion for "in decompression" (the ceiling), and
 //! a property test that a verdict never calls a dangerous plan OK.
-mod support;
+use crate::support;
 use poser::model::{CylinderRole, DecoMode};
 use poser::plan::deco::{Environment, Gas, GradientFactors, Tissues};
 use poser::plan::dive::*;

@@ -2,7 +2,7 @@
 //! (one located diagnostic, nothing written, whatever the backend), and characters that XML
 //! forbids never reach a Mitsuba document.
 
-mod support;
+use crate::support;
 use poser::backend::mitsuba::{self, xml::is_xml_char};
 use std::path::Path;
 use std::process::Command;

@@ -7,7 +7,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod support;
+use crate::support;
 
 fn poser() -> Command {
     Command::new(env!("CARGO_BIN_EXE_poser"))

@@ -7,7 +7,7 @@
 //! `data-key` cell of the DOM Chromium builds; the images and plots are there; and the
 //! screenshot is not blank.
 
-mod support;
+use crate::support;
 
 use support::lesson::{cell, check_page, f, row, rows, run_lesson, slug};
 

@@ -4,7 +4,7 @@
 //! formats it; the seen/unseen maps decoded as images; the screenshot not blank. The physics
 //! bands are checked in the fast tier (`lesson_completeness.rs`).
 
-mod support;
+use crate::support;
 
 use base64::Engine as _;
 use support::lesson::{assert_self_contained, cell, dump_dom, run_lesson, screenshot_variance};

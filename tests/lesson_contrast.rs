@@ -7,7 +7,7 @@
 //! times the height in air, and the smallest resolved element is one to three planned GSDs —
 //! and the page must show every number of `lesson.json` as it formats it.
 
-mod support;
+use crate::support;
 
 use support::lesson::{cell, check_page, f, row, rows, run_lesson, slug};
 

@@ -8,7 +8,7 @@
 //! minutes deeper, accuracy no better in the plume; and the page must show them in their
 //! `data-key` cells.
 
-mod support;
+use crate::support;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

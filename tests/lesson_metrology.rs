@@ -9,7 +9,7 @@
 //! the baseline; the block, where every rig position along the pipe triangulates each point,
 //! beats one narrow pair.
 
-mod support;
+use crate::support;
 
 use support::lesson::{
     assert_self_contained, cell, dump_dom, f, row, rows, run_lesson, screenshot_variance, slug,

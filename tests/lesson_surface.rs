@@ -7,7 +7,7 @@
 //! below calm water and grow with depth towards their focus, while steeper waves focus them
 //! nearer the surface, so the depth of the strongest caustics moves up as the waves grow.
 
-mod support;
+use crate::support;
 
 use support::lesson::{
     assert_self_contained, cell, dump_dom, f, row, rows, run_lesson, screenshot_variance, slug,

@@ -2,7 +2,7 @@
 //! measured with `poser::compare` against the exact truth of `poser::optics` (disk-image
 //! centroids vs the centroid of the exactly projected disk outline).
 
-mod support;
+use crate::support;
 use poser::backend::RenderOptions;
 use support::canonical::{analytic, load};
 

@@ -1,6 +1,6 @@
 //! Mitsuba backend: compiled XML snapshots, byte stability, escaping and path safety, and the
 //! clear errors for what Mitsuba cannot express.
-mod support;
+use crate::support;
 use glam::DVec3;
 use poser::backend::mitsuba;
 use poser::model::*;

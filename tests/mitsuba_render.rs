@@ -6,7 +6,7 @@
 //! Each render is 160×120 at 16–32 spp (≈0.3–1 s). Tolerances are derived from the measured
 //! Monte Carlo noise of each image and written next to each check.
 
-mod support;
+use crate::support;
 use glam::{DMat3, DVec3};
 use poser::backend::{RenderOptions, mitsuba};
 use poser::compare::LinearImage;

@@ -2,7 +2,7 @@
 //! Y-up, metres) and its checks: the committed file is byte-identical to what this generator
 //! writes, and it loads through `poser::geometry::mesh::load_gltf` standing upright along +z.
 //!
-//! Regenerate with `POSER_REGEN_ASSETS=1 cargo test --test native_amphora`.
+//! Regenerate with `POSER_REGEN_ASSETS=1 cargo test --test suite native_amphora::`.
 
 use serde_json::json;
 use std::path::PathBuf;

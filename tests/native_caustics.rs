@@ -1,7 +1,7 @@
 //! Caustics under a wavy sea surface in the native renderer: energy conservation of the
 //! caustic volume, caustic contrast against depth, a rendered seabed, determinism.
 
-mod support;
+use crate::support;
 
 use glam::DVec3;
 use poser::backend::native::caustics::{CausticVolume, PLANES};

@@ -1,6 +1,6 @@
 //! Native renderer against analytic radiometry, thread-count determinism and finiteness.
 
-mod support;
+use crate::support;
 
 use glam::DVec3;
 use poser::backend::RenderOptions;

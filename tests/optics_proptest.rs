@@ -3,7 +3,7 @@
 //! of a fisheye's backward pole, see [`pole_floor_px`]), and nothing is NaN.
 //!
 //! The normal run uses 3000 cases (override with `PROPTEST_CASES`); the million-case run is
-//! `cargo test --release --test optics_proptest -- --ignored`.
+//! `cargo test --release --test suite optics_proptest:: -- --ignored`.
 use glam::DVec3;
 use poser::model::{Distortion, LensModel};
 use poser::optics::lens::Lens;

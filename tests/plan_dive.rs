@@ -1,5 +1,5 @@
 //! Dive planning on Rust-built models: the paper's survey, a short survey within the NDL.
-mod support;
+use crate::support;
 use poser::plan::deco::Environment;
 use poser::plan::dive::*;
 use support::plan as common;

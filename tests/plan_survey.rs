@@ -1,6 +1,6 @@
 //! Survey metrics on Rust-built models: GSD through the port, achieved overlap against the
 //! pinhole analytic value, coverage with occlusion.
-mod support;
+use crate::support;
 use glam::DVec3;
 use poser::model::*;
 use poser::plan::survey::{Site, coverage, survey};

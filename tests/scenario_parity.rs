@@ -9,7 +9,6 @@
 //! same list as `poser bench parity` (docs/bench/parity.md). A pair left unchecked is left out
 //! for a measured reason, written beside it.
 
-mod support;
 use poser::backend::Backend;
 use poser::bench::parity::{Row, run_scene};
 use std::collections::BTreeMap;

@@ -4,7 +4,7 @@
 //! where the truth projects it; and hostile mesh files are refused with the file (and line)
 //! named. The same scene in Mitsuba and Cycles: `tests/textured_mesh_backends.rs`.
 
-mod support;
+use crate::support;
 use poser::geometry::meshfile::Wrap;
 use poser::model::Shape;
 use poser::texture::mapped::Look;

@@ -7,7 +7,7 @@
 //!
 //! Measured (32 spp): Mitsuba and Cycles within 0.1 % of native in every channel.
 
-mod support;
+use crate::support;
 use poser::backend::Backend;
 use poser::bench::parity::{Form, run_scene};
 use std::path::PathBuf;

@@ -196,6 +196,7 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
             );
         }
     }
+    camera_below_seabed(cx, m, spans);
     // Target or object point inside the port glass (or between the pupil and the port).
     for (pi, _) in m.poses.iter().enumerate().take(2000) {
         for (ci, cam) in m.cameras.iter().enumerate() {
@@ -349,6 +350,45 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
                     );
                 }
             }
+        }
+    }
+}
+
+/// A camera at or below the nominal seabed (z = −`site.depth`): it looks at the underside of
+/// the site's ground, and it sits below the bottom of the water column that lights the
+/// scene. Usually a pose list written up from the seabed, not down from the surface.
+fn camera_below_seabed(cx: &mut Cx, m: &Model, spans: &Spans) {
+    if m.water.is_some() && m.site.depth > 0.0 {
+        let bed = -m.site.depth;
+        let low = |pi: usize, ci: usize| m.world_from_camera(pi, ci).translation.z < bed + 0.05;
+        let pairs = || {
+            (0..m.poses.len()).flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
+        };
+        if let Some((pi, ci)) = pairs().find(|&(pi, ci)| low(pi, ci)) {
+            let n = pairs().filter(|&(pi, ci)| low(pi, ci)).count();
+            let lowest = pairs()
+                .map(|(pi, ci)| m.world_from_camera(pi, ci).translation.z)
+                .fold(f64::INFINITY, f64::min);
+            cx.push(
+                Diagnostic::warning(
+                    "W0403",
+                    format!(
+                        "camera `{}` is at or below the seabed at pose {} ({n} image{} in all, \
+                         the lowest {:.2} m below it)",
+                        m.cameras[ci].name,
+                        m.poses[pi].name,
+                        if n == 1 { "" } else { "s" },
+                        (bed - lowest).max(0.0)
+                    ),
+                )
+                .label(spans.network, format!("puts cameras within 5 cm of z = {bed} m or below"))
+                .help(format!(
+                    "the nominal seabed is `site.depth` = {} m below the surface (z = {bed} m): \
+                     give the network an altitude above it (poses are in metres, z up from \
+                     the surface), or deepen the site",
+                    m.site.depth
+                )),
+            );
         }
     }
 }

@@ -1,4 +1,5 @@
-//! The one test-support module of the integration tests (`mod support;` in each test file).
+//! The one test-support module of the integration tests (`mod support;` in `tests/suite.rs` and
+//! `tests/backends.rs`, `use crate::support;` in each suite).
 //!
 //! | module | what |
 //! |---|---|
@@ -6,9 +7,13 @@
 //! | [`canonical`] | the canonical scenes of `tests/canonical/`, the analytic radiance oracle, and the geometry / radiometry checks every backend runs |
 //! | [`lesson`] | running a lesson's quick form; its page in headless Chromium |
 //! | [`mitsuba`], [`blender`], [`native`], [`plan`] | each suite's preset models, built with [`model`] |
+//! | [`bench`] | `poser bench render --quick` run into a temporary folder, its report checked |
+//! | [`pack`] | the `poser` command from the repository root, its output as text, a pack's entries and manifest |
+//! | [`scenario`] | a shipped scenario, loaded |
 //! | [`textured`] | the textured-mesh site: loading it, the disk printed in its texture against the truth |
 #![allow(dead_code)]
 
+pub mod bench;
 pub mod blender;
 pub mod canonical;
 pub mod import;
@@ -16,6 +21,7 @@ pub mod lesson;
 pub mod mitsuba;
 pub mod model;
 pub mod native;
+pub mod pack;
 pub mod plan;
 pub mod textured;
 
@@ -85,4 +91,16 @@ pub fn map_parallel<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -
     out.into_iter()
         .map(|m| m.into_inner().unwrap().expect("every item was done"))
         .collect()
+}
+
+/// A shipped scenario (`scenarios/NAME`) as poser loads it; panics with the rendered
+/// diagnostics if it does not load.
+pub fn scenario(name: &str) -> poser::model::Model {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(name);
+    match poser::scene::load(&path, &[]) {
+        Ok(l) => l.model,
+        Err(f) => panic!("{}", f.render()),
+    }
 }

@@ -1,0 +1,33 @@
+//! The full tier's own suites, one binary (`cargo test --release --features backends --test
+//! backends`): the ones that run the real Mitsuba 3, Blender/Cycles, COLMAP, OpenCV and
+//! headless Chromium (`./test.sh` sets them up). Each module is one file of `tests/`; run one
+//! with `cargo test --release --features backends --test backends NAME::`.
+
+#[allow(dead_code)]
+mod support;
+
+mod bench_render_backends;
+mod blender;
+mod compare_cli;
+mod cross_backend;
+mod evaluate;
+mod gltf_view;
+mod import_blender;
+mod import_cbox;
+mod import_verify;
+mod lesson;
+mod lesson_completeness_page;
+mod lesson_contrast;
+mod lesson_dive;
+mod lesson_metrology;
+mod lesson_surface;
+mod mitsuba_canonical;
+mod mitsuba_render;
+mod opencv_export;
+mod pack_python;
+mod scenario_parity;
+mod slurm;
+mod surface_view;
+mod textured_mesh_backends;
+mod textures_cross_backend;
+mod truth_pycolmap;
