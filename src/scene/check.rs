@@ -384,8 +384,8 @@ fn camera_below_seabed(cx: &mut Cx, m: &Model, spans: &Spans) {
                 .label(spans.network, format!("puts cameras within 5 cm of z = {bed} m or below"))
                 .help(format!(
                     "the nominal seabed is `site.depth` = {} m below the surface (z = {bed} m): \
-                     give the network an altitude above it (poses are in metres, z up from \
-                     the surface), or deepen the site",
+                     give the network an altitude above it (z is up, 0 at the \
+                     surface), or deepen the site",
                     m.site.depth
                 )),
             );
