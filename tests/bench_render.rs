@@ -63,4 +63,3 @@ fn a_readme_without_the_markers_is_refused_before_any_rendering() {
         "# no markers here\n"
     );
 }
-

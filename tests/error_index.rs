@@ -272,7 +272,10 @@ fn validate_explain_prints_one_entry() {
     assert!(text.starts_with("## E0290"), "{text}");
     assert!(text.contains("albedo must be between 0 and 1"), "{text}");
     assert!(text.contains("albedo = 1.5"), "the example scene: {text}");
-    assert!(text.contains("error[E0290]"), "what poser prints for it: {text}");
+    assert!(
+        text.contains("error[E0290]"),
+        "what poser prints for it: {text}"
+    );
     assert!(!text.contains("## E0291"), "one entry only: {text}");
     // Lower case is accepted; an unknown code is a clear error.
     let lower = Command::new(bin)

@@ -749,4 +749,3 @@ fn signed_packs_run_only_unchanged_and_by_the_trusted_key() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("a public key; signing needs the private key"));
 }
-

@@ -1,10 +1,10 @@
 //! Ground truth (`poser truth`, `truth::write`): every reported pixel is the exact refractive
 //! image of its target point, hidden and back-facing points are left out, the COLMAP model is
 //! consistent, and output is deterministic.
+use crate::support::scenario as load;
 use glam::DVec3;
 use poser::model::{Material, Object, Pose, Shape};
 use poser::optics::project::Projector;
-use crate::support::scenario as load;
 use std::path::Path;
 
 #[test]

@@ -163,39 +163,7 @@ pub fn index(cx: &mut Cx, t: &Tab, key: &str, v: Rgb) {
 
 /// Whole-scene checks on the resolved model.
 pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
-    // A camera above the sea surface is modelled only as a camera in the air (no port) above
-    // every crest of a modelled surface (flat or waves): it looks through the surface. Any
-    // other camera out of the water would be modelled as if in it (its port, the medium).
-    if m.water.is_some() {
-        let wrong = |pi: usize, ci: usize| {
-            m.world_from_camera(pi, ci).translation.z >= 0.0
-                && !(matches!(m.cameras[ci].port, crate::model::Port::None)
-                    && m.above_surface(pi, ci))
-        };
-        let above = (0..m.poses.len())
-            .flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
-            .find(|&(pi, ci)| wrong(pi, ci));
-        if let Some((pi, ci)) = above {
-            let z = m.world_from_camera(pi, ci).translation.z;
-            let n = (0..m.poses.len())
-                .flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
-                .filter(|&(pi, ci)| wrong(pi, ci))
-                .count();
-            cx.push(
-                Diagnostic::error(
-                    "E0402",
-                    format!(
-                        "camera `{}` is {z:.2} m above the sea surface at pose {} ({n} image{} in all)",
-                        m.cameras[ci].name,
-                        m.poses[pi].name,
-                        if n == 1 { "" } else { "s" }
-                    ),
-                )
-                .label(spans.network, "puts cameras above the water")
-                .help("cameras are in the water (z < 0, the surface is z = 0): lower the altitude or raise `site.depth`; for a survey in air, remove [water]; for a drone looking down through the water, give the camera `[camera.port] type = \"none\"`, model the surface (`site.surface = \"flat\"` or `\"waves\"`) and keep it above the crests"),
-            );
-        }
-    }
+    camera_above_surface(cx, m, spans);
     camera_below_seabed(cx, m, spans);
     // Target or object point inside the port glass (or between the pupil and the port).
     for (pi, _) in m.poses.iter().enumerate().take(2000) {
@@ -354,6 +322,42 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
     }
 }
 
+/// A camera above the sea surface is modelled only as a camera in the air (no port) above
+/// every crest of a modelled surface (flat or waves): it looks through the surface. Any
+/// other camera out of the water would be modelled as if in it (its port, the medium).
+fn camera_above_surface(cx: &mut Cx, m: &Model, spans: &Spans) {
+    if m.water.is_some() {
+        let wrong = |pi: usize, ci: usize| {
+            m.world_from_camera(pi, ci).translation.z >= 0.0
+                && !(matches!(m.cameras[ci].port, crate::model::Port::None)
+                    && m.above_surface(pi, ci))
+        };
+        let above = (0..m.poses.len())
+            .flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
+            .find(|&(pi, ci)| wrong(pi, ci));
+        if let Some((pi, ci)) = above {
+            let z = m.world_from_camera(pi, ci).translation.z;
+            let n = (0..m.poses.len())
+                .flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
+                .filter(|&(pi, ci)| wrong(pi, ci))
+                .count();
+            cx.push(
+                Diagnostic::error(
+                    "E0402",
+                    format!(
+                        "camera `{}` is {z:.2} m above the sea surface at pose {} ({n} image{} in all)",
+                        m.cameras[ci].name,
+                        m.poses[pi].name,
+                        if n == 1 { "" } else { "s" }
+                    ),
+                )
+                .label(spans.network, "puts cameras above the water")
+                .help("cameras are in the water (z < 0, the surface is z = 0): lower the altitude or raise `site.depth`; for a survey in air, remove [water]; for a drone looking down through the water, give the camera `[camera.port] type = \"none\"`, model the surface (`site.surface = \"flat\"` or `\"waves\"`) and keep it above the crests"),
+            );
+        }
+    }
+}
+
 /// A camera at or below the nominal seabed (z = −`site.depth`): it looks at the underside of
 /// the site's ground, and it sits below the bottom of the water column that lights the
 /// scene. Usually a pose list written up from the seabed, not down from the surface.
@@ -361,9 +365,8 @@ fn camera_below_seabed(cx: &mut Cx, m: &Model, spans: &Spans) {
     if m.water.is_some() && m.site.depth > 0.0 {
         let bed = -m.site.depth;
         let low = |pi: usize, ci: usize| m.world_from_camera(pi, ci).translation.z < bed + 0.05;
-        let pairs = || {
-            (0..m.poses.len()).flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)))
-        };
+        let pairs =
+            || (0..m.poses.len()).flat_map(|pi| (0..m.cameras.len()).map(move |ci| (pi, ci)));
         if let Some((pi, ci)) = pairs().find(|&(pi, ci)| low(pi, ci)) {
             let n = pairs().filter(|&(pi, ci)| low(pi, ci)).count();
             let lowest = pairs()
@@ -381,7 +384,10 @@ fn camera_below_seabed(cx: &mut Cx, m: &Model, spans: &Spans) {
                         (bed - lowest).max(0.0)
                     ),
                 )
-                .label(spans.network, format!("puts cameras within 5 cm of z = {bed} m or below"))
+                .label(
+                    spans.network,
+                    format!("puts cameras within 5 cm of z = {bed} m or below"),
+                )
                 .help(format!(
                     "the nominal seabed is `site.depth` = {} m below the surface (z = {bed} m): \
                      give the network an altitude above it (z is up, 0 at the \
