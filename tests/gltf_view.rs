@@ -200,8 +200,10 @@ fn serve(dir: PathBuf) -> String {
     url
 }
 
-/// How often a page that has not finished loading (or drawing) is opened again.
-const ATTEMPTS: usize = 4;
+/// How often a page that has not finished loading (or drawing), or whose Chromium failed, is
+/// opened again. In one test binary with the other full-tier suites, Blender and the renders
+/// load the machine while this runs.
+const ATTEMPTS: usize = 8;
 
 fn chromium_run(profile: &Path, action: &str, url: &str) -> std::process::Output {
     Command::new(support::lesson::chromium())
@@ -287,13 +289,13 @@ fn three_js_loads_and_renders_the_export() {
         let mut dom = String::new();
         for _ in 0..ATTEMPTS {
             let o = chromium_run(&profile, "--dump-dom", &page);
-            assert!(
-                o.status.success(),
-                "chromium --dump-dom failed: {}",
+            dom = format!(
+                "{}\n(chromium: {}; stderr: {})",
+                String::from_utf8_lossy(&o.stdout),
+                o.status,
                 String::from_utf8_lossy(&o.stderr)
             );
-            dom = String::from_utf8_lossy(&o.stdout).to_string();
-            if !dom.contains("data-status=\"loading\"") {
+            if o.status.success() && !dom.contains("data-status=\"loading\"") {
                 break;
             }
         }
