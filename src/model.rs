@@ -775,6 +775,28 @@ pub struct RenderSettings {
     /// (`render.surface_from_below`).
     #[serde(default, skip_serializing_if = "Underside::is_fresnel")]
     pub surface_from_below: Underside,
+    /// The native renderer's numbers for a pixel's samples (`render.sampler`).
+    #[serde(default, skip_serializing_if = "SamplerKind::is_sobol")]
+    pub sampler: SamplerKind,
+}
+
+/// `render.sampler`: how the native renderer draws the random numbers of a pixel's samples
+/// ([`crate::backend::native::sampler`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SamplerKind {
+    /// The default: an Owen-scrambled Sobol sequence over the pixel's samples in each sample's
+    /// first draws.
+    #[default]
+    Sobol,
+    /// Every draw independent.
+    Independent,
+}
+
+impl SamplerKind {
+    pub fn is_sobol(&self) -> bool {
+        *self == SamplerKind::Sobol
+    }
 }
 
 /// `render.surface_from_below`: the sea surface as the light coming up to it meets it.

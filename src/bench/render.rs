@@ -209,6 +209,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
             // The benchmark isolates the traced estimators.
             daylight: crate::model::Daylight::Traced,
             texture_filter: Default::default(),
+            sampler: Default::default(),
             surface_from_below: Default::default(),
         },
         sensor: None,

@@ -12,11 +12,16 @@ pub struct Args {
     pub backend: Backend,
     #[arg(short, long)]
     pub out: PathBuf,
+    /// Compile at a fraction of the cameras' resolution (e.g. `0.25`), as `poser render
+    /// --scale` previews: same field of view, lens and port; textures are baked for the
+    /// coarser pixels, so the files are smaller and quicker to write and to load.
+    #[arg(long)]
+    pub scale: Option<f64>,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
     let (scene, backend, out) = (&args.scene, args.backend, &args.out);
-    let model = load_model(scene)?;
+    let model = super::common::apply_scale(load_model(scene)?, args.scale)?;
     if !backend.capabilities().compiles {
         return Err(CliError::Usage(
             "the native backend renders directly; use `poser render` (compile targets: mitsuba, blender)".into(),

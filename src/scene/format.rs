@@ -966,6 +966,13 @@ pub struct Render {
     /// far apart the two are on the scene's column). **Default:** `"fresnel"`
     /// (`docs/column.md`).
     pub surface_from_below: Option<String>,
+    /// Native renderer: the random numbers of a pixel's samples. `"sobol"`: the first 64
+    /// draws of every sample (the camera ray, its first vertex and first bounces) come from an
+    /// Owen-scrambled Sobol sequence over the pixel's samples, so the samples stratify each
+    /// other and the pixel's mean converges faster; `"independent"`: every draw is
+    /// independent. Both are unbiased and deterministic for a seed, at any thread count.
+    /// **Default:** `"sobol"` (`docs/native.md`).
+    pub sampler: Option<String>,
 }
 
 /// `[sensor]` — the camera after the lens: exposure, photon shot noise, read noise, ADC, white

@@ -4,15 +4,24 @@ use poser::model::Model;
 use serde_json::Value;
 use std::path::Path;
 
-/// Load `scene` and compile it with `backend` into `out`: the model, or `Err(reason)` when the
-/// backend refuses the scene (with its message).
+/// The round trips compile at this fraction of the cameras' resolution (`poser compile
+/// --scale`): the poses, intrinsics, water and lights they compare are the same at any size,
+/// and the textures baked for the coarser pixels are 1/100 of the texels (a full-size
+/// dome_orbit bakes a 45 MB sand texture).
+pub const ROUND_TRIP_SCALE: f64 = 0.1;
+
+/// Load `scene`, scale its cameras by [`ROUND_TRIP_SCALE`] and compile it for `backend` into
+/// `out` at that scale; the scaled model, or why the backend refused the scene.
 pub fn load_and_compile(scene: &Path, backend: &str, out: &Path) -> Result<Model, String> {
     let model = poser::scene::load(scene, &[])
         .map_err(|e| e.render())
         .expect("a shipped scene loads")
-        .model;
+        .model
+        .with_resolution_scale(ROUND_TRIP_SCALE);
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
-        .args(["compile", "--backend", backend, "-o"])
+        .args(["compile", "--backend", backend, "--scale"])
+        .arg(ROUND_TRIP_SCALE.to_string())
+        .arg("-o")
         .arg(out)
         .arg(scene)
         .output()

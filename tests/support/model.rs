@@ -140,6 +140,7 @@ pub fn render_settings(samples: u32) -> RenderSettings {
         noise: None,
         daylight: Default::default(),
         texture_filter: Default::default(),
+        sampler: Default::default(),
         surface_from_below: Default::default(),
     }
 }

@@ -412,6 +412,7 @@ impl<'a> Integrator<'a> {
                 }
             }
             let can_scatter = depth < self.max_bounces;
+            rng.segment(depth);
             // The column's light scattered along the camera ray. At the surfaces its light
             // is next-event estimated alone ([`Integrator::column_nee`]), so the segments
             // after a surface bounce carry none of it.
@@ -462,9 +463,7 @@ impl<'a> Integrator<'a> {
                     let c = ((rng.next() * 3.0) as usize).min(2);
                     let u = rng.next();
                     let st = m.sigma_t[c];
-                    let t = if !attempt {
-                        f64::INFINITY
-                    } else if st > 0.0 {
+                    let t = if attempt && st > 0.0 {
                         a - (1.0 - u).ln() / st
                     } else {
                         f64::INFINITY
@@ -579,6 +578,7 @@ impl<'a> Integrator<'a> {
                 break;
             }
             let p = h.point + n * SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
+            rng.surface(depth);
             l += beta_nee * self.surface_direct(&h, d, albedo, day, rng);
             // f·cos/pdf = albedo·(cos/π)/pdf (= albedo for pure cosine sampling).
             let (nd, pdf) = self.sample_surface(n, rng);

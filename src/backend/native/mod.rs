@@ -34,6 +34,7 @@ use crate::model::Model;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
+use sampler::Sampler;
 use std::path::Path;
 use std::time::Instant;
 
@@ -116,7 +117,7 @@ pub fn render_image(
         .map(|&c| camera::CameraRays::new(model, pose, cam, c))
         .collect::<Result<_, _>>()?;
     let image_id = (pose * model.cameras.len() + cam) as u64;
-    let seed = model.render.seed;
+    let (seed, kind) = (model.render.seed, model.render.sampler);
     let spp = samples.max(1);
     let cam_from_world = model.world_from_camera(pose, cam).inverse();
     let want_albedo = model.render.denoise_radius.is_some();
@@ -132,7 +133,7 @@ pub fn render_image(
         let pixel = j as u64 * w as u64 + i as u64;
         let (mut acc, mut acc2) = (DVec3::ZERO, DVec3::ZERO);
         for s in from..from + n {
-            let mut rng = sampler::Sampler::new(seed, image_id, k as u64, pixel, s as u64);
+            let mut rng = Sampler::for_sample(kind, seed, image_id, k as u64, pixel, s as u64);
             let (du, dv) = rng.next2();
             if let Some((o, d, wgt)) = r.ray(i as f64 + du, j as f64 + dv) {
                 if want_albedo && k == 0 {

@@ -161,7 +161,7 @@ pub(super) fn render(
                 )),
         );
     }
-    let (daylight, texture_filter, surface_from_below) = estimators(cx, &mut r);
+    let (daylight, texture_filter, surface_from_below, sampler) = estimators(cx, &mut r);
     at.daylight = r.has("daylight").then(|| r.span_of("daylight"));
     at.bounces = r.has("bounces").then(|| r.span_of("bounces"));
     r.finish(cx);
@@ -177,12 +177,13 @@ pub(super) fn render(
         daylight,
         texture_filter,
         surface_from_below,
+        sampler,
     }
 }
 
-/// `daylight`, `texture_filter` and `surface_from_below`: the native renderer's choices of
-/// estimator and of the sea surface's model.
-fn estimators(cx: &mut Cx, r: &mut Tab) -> (Daylight, TextureFilter, Underside) {
+/// `daylight`, `texture_filter`, `surface_from_below` and `sampler`: the native renderer's
+/// choices of estimator, of the sea surface's model and of its random numbers.
+fn estimators(cx: &mut Cx, r: &mut Tab) -> (Daylight, TextureFilter, Underside, SamplerKind) {
     let daylight = match r.choice(cx, "daylight", &["auto", "column", "traced"]) {
         Some("column") => Daylight::Column,
         Some("traced") => Daylight::Traced,
@@ -196,5 +197,9 @@ fn estimators(cx: &mut Cx, r: &mut Tab) -> (Daylight, TextureFilter, Underside) 
         Some("open") => Underside::Open,
         _ => Underside::Fresnel,
     };
-    (daylight, texture_filter, underside)
+    let sampler = match r.choice(cx, "sampler", &["sobol", "independent"]) {
+        Some("independent") => SamplerKind::Independent,
+        _ => SamplerKind::Sobol,
+    };
+    (daylight, texture_filter, underside, sampler)
 }
