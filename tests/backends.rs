@@ -1,7 +1,7 @@
-//! The full tier's own suites, one binary (`cargo test --release --features backends --test
-//! backends`): the ones that run the real Mitsuba 3, Blender/Cycles, COLMAP, OpenCV and
-//! headless Chromium (`./test.sh` sets them up). Each module is one file of `tests/`; run one
-//! with `cargo test --release --features backends --test backends NAME::`.
+//! The full tier's own suites, one binary (`cargo test --features backends --test backends`):
+//! the ones that run the real Mitsuba 3, Blender/Cycles, COLMAP, OpenCV and headless Chromium
+//! (`./test.sh` sets them up). Each module is one file of `tests/`; run one
+//! with `cargo test --features backends --test backends NAME::`.
 
 #[allow(dead_code)]
 mod support;
@@ -21,7 +21,6 @@ mod lesson_contrast;
 mod lesson_dive;
 mod lesson_metrology;
 mod lesson_surface;
-mod mitsuba_canonical;
 mod mitsuba_render;
 mod opencv_export;
 mod pack_python;

@@ -205,7 +205,14 @@ fn serve(dir: PathBuf) -> String {
 /// load the machine while this runs.
 const ATTEMPTS: usize = 8;
 
-fn chromium_run(profile: &Path, action: &str, url: &str) -> std::process::Output {
+/// One headless Chromium run of `action` on `url`; attempt `attempt` (from 0) waits that many
+/// times 3 s of real time first (a loaded machine gets time to settle) and gives the page a
+/// virtual-time budget that grows with it.
+fn chromium_run(profile: &Path, action: &str, url: &str, attempt: usize) -> std::process::Output {
+    if attempt > 0 {
+        eprintln!("{url}: attempt {} of {ATTEMPTS}", attempt + 1);
+        std::thread::sleep(std::time::Duration::from_secs(3 * attempt as u64));
+    }
     Command::new(support::lesson::chromium())
         .args([
             "--headless",
@@ -213,9 +220,9 @@ fn chromium_run(profile: &Path, action: &str, url: &str) -> std::process::Output
             "--use-angle=swiftshader",
             "--enable-unsafe-swiftshader",
             "--hide-scrollbars",
-            "--virtual-time-budget=60000",
             "--window-size=800,600",
         ])
+        .arg(format!("--virtual-time-budget={}", 60_000 * (1 + attempt)))
         .arg(format!("--user-data-dir={}", profile.display()))
         .arg(action)
         .arg(url)
@@ -285,10 +292,10 @@ fn three_js_loads_and_renders_the_export() {
         let profile = tmp.path().join(format!("profile-{file}"));
         let page = format!("{url}/view.html?glb={file}");
         // Headless Chromium's virtual time can run out before a loaded machine has fetched and
-        // parsed three.js: a page that is still loading is asked for again (at most 4 times).
+        // parsed three.js: a page that is still loading is asked for again (ATTEMPTS times).
         let mut dom = String::new();
-        for _ in 0..ATTEMPTS {
-            let o = chromium_run(&profile, "--dump-dom", &page);
+        for attempt in 0..ATTEMPTS {
+            let o = chromium_run(&profile, "--dump-dom", &page, attempt);
             dom = format!(
                 "{}\n(chromium: {}; stderr: {})",
                 String::from_utf8_lossy(&o.stdout),
@@ -324,11 +331,12 @@ fn three_js_loads_and_renders_the_export() {
                 .join(format!("{file}-{}.png", label.replace(' ', "")));
             let (mut mean, mut sd) = (0.0, 0.0);
             // As above: a screenshot taken before the page drew is taken again.
-            for _ in 0..ATTEMPTS {
+            for attempt in 0..ATTEMPTS {
                 let o = chromium_run(
                     &profile,
                     &format!("--screenshot={}", shot.display()),
                     &format!("{page}{query}"),
+                    attempt,
                 );
                 assert!(
                     o.status.success() && shot.exists(),

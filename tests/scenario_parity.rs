@@ -17,7 +17,7 @@ use std::sync::{Arc, Mutex, OnceLock};
 /// At a tenth of the resolution and 16 spp, disk centroids are located to about 0.1–0.6 px
 /// RMS (measured: calibration_flat 0.14 native, 0.16 Cycles, 0.62 Mitsuba, whose images are
 /// the noisiest at equal spp). The 0.05 px agreement is checked at full size and 256 spp on
-/// the canonical scenes (`cross_backend.rs`, `mitsuba_canonical.rs`); this bound catches a
+/// the canonical scenes (`cross_backend.rs`); this bound catches a
 /// convention error (half a pixel, a wrong port or focal length), not noise.
 const TARGET_RMS_PX: f64 = 1.0;
 
