@@ -173,6 +173,16 @@ fn serve(dir: PathBuf) -> String {
                     .next()
                     .unwrap_or("/")
                     .trim_start_matches('/');
+                // The page's `hold` request (view.html?hold=1) is answered after half a
+                // second: while one is pending, Chromium's virtual time stands still.
+                if path == "hold" {
+                    std::thread::sleep(std::time::Duration::from_millis(500));
+                    let _ = write!(
+                        stream,
+                        "HTTP/1.1 204 No Content\r\nConnection: close\r\n\r\n"
+                    );
+                    return;
+                }
                 let file = dir.join(path);
                 let ok = !path.split('/').any(|c| c == "..") && file.is_file();
                 let (status, body) = if ok {
@@ -290,7 +300,9 @@ fn three_js_loads_and_renders_the_export() {
 
         // What three.js loaded.
         let profile = tmp.path().join(format!("profile-{file}"));
-        let page = format!("{url}/view.html?glb={file}");
+        // `hold=1`: the page keeps a request pending until it has loaded (view.html), so
+        // that the virtual-time budget cannot run out first on a loaded machine.
+        let page = format!("{url}/view.html?hold=1&glb={file}");
         // Headless Chromium's virtual time can run out before a loaded machine has fetched and
         // parsed three.js: a page that is still loading is asked for again (ATTEMPTS times).
         let mut dom = String::new();
