@@ -523,18 +523,17 @@ fn images_mode_processes_the_shipped_archaeology_survey() {
     // 36 images of 600 × 400 px, through COLMAP's whole pipeline. `poser bench images` reports
     // the same on every shipped survey (docs/bench/images.md).
     //
-    // Rendered at 4 spp and 4 bounces instead of the scene's 16 and 9 to keep the test short
+    // Rendered at 8 spp and 4 bounces instead of the scene's 16 and 9 to keep the test short
     // on 2 cores: COLMAP's result does not hinge on the 7 % of green light the lower limit
-    // cuts off, nor, with daylight from the water column and the Sobol sampler, on the
-    // samples (measured: 36 of 36 registered, 0.13 px, focal −0.01 %, focal sensitivity 24 %
-    // at 4 spp; 36, 0.11 px, −0.06 % and 31 % at 8 spp, which renders twice as long).
+    // cuts off (measured with `render.sampler = "sobol"`: 36 of 36 registered, 0.11 px, focal
+    // −0.06 %, focal sensitivity 31 % at 8 spp; 36, 0.13 px, −0.01 % and 24 % at 4 spp).
     let report = images_report(
         "scenarios/lessons/archaeology.toml",
         &[
             "--scale",
             "0.1",
             "--samples",
-            "4",
+            "8",
             "--set",
             "render.bounces=4",
             "--set",

@@ -971,7 +971,8 @@ pub struct Render {
     /// Owen-scrambled Sobol sequence over the pixel's samples, so the samples stratify each
     /// other and the pixel's mean converges faster; `"independent"`: every draw is
     /// independent. Both are unbiased and deterministic for a seed, at any thread count.
-    /// **Default:** `"sobol"` (`docs/native.md`).
+    /// **Default:** `"independent"` (`"sobol"` is opt-in until an outlier it gave in the
+    /// metrology lesson is understood; `docs/native.md`).
     pub sampler: Option<String>,
 }
 

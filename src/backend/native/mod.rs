@@ -132,8 +132,8 @@ pub fn render_image(
         let spread = footprint::PixelSpread::of(model, scene, r, i, j);
         let pixel = j as u64 * w as u64 + i as u64;
         let (mut acc, mut acc2) = (DVec3::ZERO, DVec3::ZERO);
-        for s in from..from + n {
-            let mut rng = Sampler::for_sample(kind, seed, image_id, k as u64, pixel, s as u64);
+        for s in from as u64..(from + n) as u64 {
+            let mut rng = Sampler::for_sample(kind, seed, image_id, k, pixel, from, s);
             let (du, dv) = rng.next2();
             if let Some((o, d, wgt)) = r.ray(i as f64 + du, j as f64 + dv) {
                 if want_albedo && k == 0 {

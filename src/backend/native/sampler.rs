@@ -3,8 +3,8 @@
 //!
 //! | `render.sampler` | the numbers of one pixel's samples |
 //! |---|---|
-//! | `"sobol"` (default) | the first [`SOBOL_DIMENSIONS`] draws of each sample are an Owen-scrambled Sobol sequence over the pixel's samples (Burley 2020, the `sobol_burley` crate): 4-D sets, each shuffled and scrambled with its own seed (Burley's padding), the pixel's hash as the seed; later draws, and samples past 2¹⁶, are independent |
-//! | `"independent"` | every draw independent (SplitMix64), as before |
+//! | `"sobol"` | the first [`SOBOL_DIMENSIONS`] draws of each sample are an Owen-scrambled Sobol sequence over the pixel's samples (Burley 2020, the `sobol_burley` crate): 4-D sets, each shuffled and scrambled with its own seed (Burley's padding), the pixel's hash as the seed; later draws, and samples past 2¹⁶, are independent |
+//! | `"independent"` (default) | every draw independent (SplitMix64) |
 //!
 //! Owen scrambling keeps every draw uniform on [0, 1), so each sample is an unbiased estimate
 //! either way; the samples of one pixel are stratified against each other instead of
@@ -60,21 +60,32 @@ impl Sampler {
     }
 
     /// The stream of sample `sample` of one pixel under `kind`: with
-    /// [`crate::model::SamplerKind::Sobol`], the pixel's samples share one scrambled Sobol
-    /// sequence in their first [`SOBOL_DIMENSIONS`] draws.
+    /// [`crate::model::SamplerKind::Sobol`], the samples of one block (`first` on) share one
+    /// scrambled Sobol sequence in their first [`SOBOL_DIMENSIONS`] draws, the block's first
+    /// sample at its index 0. Blocks are scrambled independently: the fresh samples a noise
+    /// target adds after a pixel's pilot (`first` = the pilot's count) are independent of the
+    /// pilot that chose how many there are, so their mean stays unbiased. The independent
+    /// stream depends on `sample` alone.
     pub fn for_sample(
         kind: crate::model::SamplerKind,
         seed: u64,
         image: u64,
-        pass: u64,
+        pass: usize,
         pixel: u64,
+        first: u32,
         sample: u64,
     ) -> Sampler {
+        let (pass, first) = (pass as u64, first as u64);
         let mut s = Sampler::new(seed, image, pass, pixel, sample);
-        if kind == crate::model::SamplerKind::Sobol && sample < (1 << 16) {
+        let index = sample.wrapping_sub(first);
+        if kind == crate::model::SamplerKind::Sobol && sample >= first && index < (1 << 16) {
+            let mut scramble = mix64(pixel_hash(seed, image, pass, pixel) ^ 0x50B0_1000);
+            if first > 0 {
+                scramble = mix64(scramble ^ first);
+            }
             s.sobol = Some(Sobol {
-                index: sample as u32,
-                seed: mix64(pixel_hash(seed, image, pass, pixel) ^ 0x50B0_1000),
+                index: index as u32,
+                seed: scramble,
                 dim: 0,
                 held: u32::MAX,
                 set: [0.0; 4],
@@ -161,7 +172,7 @@ mod tests {
             for pixel in 0..200 {
                 let mut m = 0.0;
                 for s in 0..n {
-                    let mut r = Sampler::for_sample(kind, 3, 0, 1, pixel, s);
+                    let mut r = Sampler::for_sample(kind, 3, 0, 1, pixel, 0, s);
                     // Pass one 4-D set so that dimensions 4 and 5 come from the second set.
                     for _ in 0..4 {
                         let x = r.next();
@@ -184,7 +195,7 @@ mod tests {
         let mut total = 0.0;
         for pixel in 0..400u64 {
             for s in 0..16 {
-                let mut r = Sampler::for_sample(SamplerKind::Sobol, 9, 2, 0, pixel, s);
+                let mut r = Sampler::for_sample(SamplerKind::Sobol, 9, 2, 0, pixel, 0, s);
                 let (u, v) = r.next2();
                 total += f(u, v);
             }
@@ -192,10 +203,27 @@ mod tests {
         assert!((total / 6400.0 - exact).abs() < 3e-3, "{}", total / 6400.0);
     }
 
+    /// A block after the first (a noise target's fresh samples) is its own scrambled sequence:
+    /// it starts at index 0 of a different scramble, not where the first block left off.
+    #[test]
+    fn each_block_of_samples_is_scrambled_on_its_own() {
+        let first = |block: u32, sample: u64| {
+            Sampler::for_sample(SamplerKind::Sobol, 4, 0, 0, 9, block, sample).next()
+        };
+        let continued = Sampler::for_sample(SamplerKind::Sobol, 4, 0, 0, 9, 0, 16).next();
+        assert_ne!(first(16, 16), continued);
+        // Within a block the samples still stratify: 16 samples put one in each sixteenth.
+        let mut bins = [0; 16];
+        for s in 16..32 {
+            bins[(first(16, s) * 16.0) as usize] += 1;
+        }
+        assert_eq!(bins, [1; 16]);
+    }
+
     #[test]
     fn past_the_sobol_dimensions_and_samples_draws_are_independent_and_deterministic() {
         let draw = |sample| {
-            let mut r = Sampler::for_sample(SamplerKind::Sobol, 1, 0, 0, 5, sample);
+            let mut r = Sampler::for_sample(SamplerKind::Sobol, 1, 0, 0, 5, 0, sample);
             (0..SOBOL_DIMENSIONS + 3)
                 .map(|_| r.next())
                 .collect::<Vec<_>>()
@@ -203,7 +231,7 @@ mod tests {
         assert_eq!(draw(7), draw(7));
         assert_ne!(draw(7), draw(8));
         // Sample 2¹⁶ and on: the independent stream.
-        let mut a = Sampler::for_sample(SamplerKind::Sobol, 1, 0, 0, 5, 1 << 16);
+        let mut a = Sampler::for_sample(SamplerKind::Sobol, 1, 0, 0, 5, 0, 1 << 16);
         let mut b = Sampler::new(1, 0, 0, 5, 1 << 16);
         assert_eq!(a.next(), b.next());
     }
