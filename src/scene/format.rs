@@ -966,7 +966,7 @@ pub struct Render {
     /// far apart the two are on the scene's column). **Default:** `"fresnel"`
     /// (`docs/column.md`).
     pub surface_from_below: Option<String>,
-    /// Native renderer: the random numbers of a pixel's samples. `"sobol"`: the first 64
+    /// Native renderer: the random numbers of a pixel's samples. `"sobol"`: the first 132
     /// draws of every sample (the camera ray, its first vertex and first bounces) come from an
     /// Owen-scrambled Sobol sequence over the pixel's samples, so the samples stratify each
     /// other and the pixel's mean converges faster; `"independent"`: every draw is

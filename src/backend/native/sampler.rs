@@ -8,7 +8,7 @@
 //!
 //! Owen scrambling keeps every draw uniform on [0, 1), so each sample is an unbiased estimate
 //! either way; the samples of one pixel are stratified against each other instead of
-//! independent, which lowers the error of their mean (docs/native.md, "Sampler"). The 24 bits
+//! independent, which lowers the error of their mean (docs/native.md, "The sampler"). The 24 bits
 //! of a Sobol value are completed to 53 with independent low bits.
 
 use crate::geometry::mesh::mix64;
@@ -76,10 +76,14 @@ impl Sampler {
         sample: u64,
     ) -> Sampler {
         let (pass, first) = (pass as u64, first as u64);
-        let mut s = Sampler::new(seed, image, pass, pixel, sample);
+        let h = pixel_hash(seed, image, pass, pixel);
+        let mut s = Sampler {
+            stream: SplitMix64(mix64(h ^ sample)),
+            sobol: None,
+        };
         let index = sample.wrapping_sub(first);
         if kind == crate::model::SamplerKind::Sobol && sample >= first && index < (1 << 16) {
-            let mut scramble = mix64(pixel_hash(seed, image, pass, pixel) ^ 0x50B0_1000);
+            let mut scramble = mix64(h ^ 0x50B0_1000);
             if first > 0 {
                 scramble = mix64(scramble ^ first);
             }
@@ -114,11 +118,6 @@ impl Sampler {
         if let Some(s) = &mut self.sobol {
             s.dim = s.dim.max(dim);
         }
-    }
-
-    /// How many draws this sample has taken from the Sobol sequence (its next dimension).
-    pub fn dimension(&self) -> Option<u32> {
-        self.sobol.as_ref().map(|s| s.dim)
     }
 
     #[inline]
