@@ -713,14 +713,27 @@ def _water_mesh(desc, pose_index, shells):
     if _sea_below_surface(desc):
         box["tags"] = [SEA_WALLS] * 5 + [0]  # box_mesh's faces: -x, +x, -y, +y, -z, +z (top)
     parts = [box]
-    pose = geo.mat4(desc["poses"][pose_index]["world_from_rig"])
-    for s in shells:
-        if s is None:
-            continue
-        ci, shell, _ = s
-        m = pose @ geo.mat4(desc["cameras"][ci]["rig_from_camera"])
+    for m, shell in _shells_at(desc, pose_index, shells):
         parts.append(geo.reverse_mesh(geo.transform_mesh(shell, m)))
     return geo.merge_meshes(parts)
+
+
+def _shells_at(desc, pose_index, shells):
+    """(world_from_camera, shell) of every port shell at pose `pose_index`."""
+    pose = geo.mat4(desc["poses"][pose_index]["world_from_rig"])
+    return [(pose @ geo.mat4(desc["cameras"][ci]["rig_from_camera"]), shell)
+            for ci, shell, _ in (s for s in shells if s is not None)]
+
+
+def _water_verts(desc, pose_index, shells):
+    """The vertices of `_water_mesh(desc, pose_index, shells)`, in its order, without building
+    its faces: one shape key per pose (a survey has hundreds; building each pose's whole mesh
+    in Python took 70 s for flat_port_deformation_dome's 891 poses)."""
+    lo, hi = _water_box(desc, pose_index)
+    parts = [geo.box_mesh(lo, hi, 0)["verts"]]
+    parts += [geo.transform_points(shell["verts"], m)
+              for m, shell in _shells_at(desc, pose_index, shells)]
+    return np.concatenate([np.asarray(p, dtype=float) for p in parts])
 
 
 def _build_water(built, coll, desc, shells, n_w, ref):
@@ -789,7 +802,7 @@ def _build_water(built, coll, desc, shells, n_w, ref):
         obj.shape_key_add(name="basis", from_mix=False)
         for i in range(n_poses):
             key = obj.shape_key_add(name=f"pose {i}", from_mix=False)
-            verts = _water_mesh(desc, i, gapped)["verts"] if i else mesh["verts"]
+            verts = _water_verts(desc, i, gapped) if i else mesh["verts"]
             key.data.foreach_set("co", np.asarray(verts, dtype=np.float32).ravel())
             # Constant interpolation: 0 before pose i, 1 at pose i, 0 after (O(1) keys each).
             for f, value in ((0, 0.0), (i, 1.0), (i + 1, 0.0)):

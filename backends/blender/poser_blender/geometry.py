@@ -350,10 +350,16 @@ def housing(cam):
     raise ValueError(f"unknown port kind {kind!r}")
 
 
+def transform_points(points, m):
+    """Apply a 4x4 rigid transform to an (n, 3) array of points."""
+    m = np.asarray(m, dtype=float)
+    return np.asarray(points, dtype=float) @ m[:3, :3].T + m[:3, 3]
+
+
 def transform_mesh(mesh, m):
     """Apply a 4x4 rigid transform to a mesh (normals rotated)."""
     m = np.asarray(m, dtype=float)
-    verts = mesh["verts"] @ m[:3, :3].T + m[:3, 3]
+    verts = transform_points(mesh["verts"], m)
     normals = None if mesh["normals"] is None else mesh["normals"] @ m[:3, :3].T
     return {"verts": verts, "faces": mesh["faces"], "tags": mesh["tags"], "normals": normals}
 

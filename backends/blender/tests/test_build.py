@@ -370,6 +370,22 @@ def test_water_cut_out_follows_the_rig_per_pose(scene_desc):
     assert rig.matrix_world.translation.x == pytest.approx(0.5)
 
 
+def test_per_pose_water_vertices_are_the_whole_meshs(scene_desc):
+    # The shape keys are built from the vertices alone (_water_verts); they must be the
+    # vertices of the whole mesh (_water_mesh) of that pose, in its order.
+    moved = [list(row) for row in scene_desc["poses"][0]["world_from_rig"]]
+    moved[0][3] += 0.5
+    moved[2][3] -= 0.25
+    scene_desc["poses"][1]["world_from_rig"] = moved
+    housings = [geo.housing(cam) for cam in scene_desc["cameras"]]
+    shells = [None if h is None else (ci, geo.inflate(h[0], pbuild.WATER_GAP), None)
+              for ci, h in enumerate(housings)]
+    assert any(s is not None for s in shells), "the fixture has a port"
+    for i in range(len(scene_desc["poses"])):
+        whole = pbuild._water_mesh(scene_desc, i, shells)["verts"]
+        assert np.array_equal(pbuild._water_verts(scene_desc, i, shells), whole)
+
+
 def test_depth_pass_is_camera_z_through_the_port(scene_desc, tmp_path):
     # Flat port, water, camera 2 m above the floor looking straight down: every pixel sees
     # the floor, at camera-frame z = 2 m, whatever the refraction does to the ray directions.
