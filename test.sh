@@ -28,7 +28,7 @@ rm -rf target/wheels
 .venv/bin/maturin build --profile dev --locked --quiet \
   -m crates/poser-py/Cargo.toml -o target/wheels -i .venv/bin/python
 .venv/bin/pip install --quiet --force-reinstall --no-deps target/wheels/poser-*.whl
-time cargo test --locked --features backends --test backends --no-run
+time cargo test --locked --test backends --no-run
 step "full tier: Python tests"
 .venv/bin/ruff check backends crates/poser-py
 OPENCV_IO_ENABLE_OPENEXR=1 POSER_BIN="$PWD/target/debug/poser" \
@@ -37,7 +37,7 @@ OPENCV_IO_ENABLE_OPENEXR=1 POSER_BIN="$PWD/target/debug/poser" \
 # Blender start-up, scene building, COLMAP's matching), so two at a time left a core idle
 # (measured: 1.07 cores busy on average over the run).
 step "full tier: cargo test --test backends"
-time cargo test --locked --features backends --test backends -- --test-threads 4
+time cargo test --locked --test backends -- --test-threads 4
 
 if [ -n "${POSER_FUZZ_SECONDS:-}" ]; then
   step "fuzzing each target for $POSER_FUZZ_SECONDS s"

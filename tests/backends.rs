@@ -1,7 +1,7 @@
-//! The full tier's own suites, one binary (`cargo test --features backends --test backends`):
+//! The full tier's own suites, one binary (`cargo test --test backends`):
 //! the ones that run the real Mitsuba 3, Blender/Cycles, COLMAP, OpenCV and headless Chromium
 //! (`./test.sh` sets them up). Each module is one file of `tests/`; run one
-//! with `cargo test --features backends --test backends NAME::`.
+//! with `cargo test --test backends NAME::`.
 
 #[allow(dead_code)]
 mod support;

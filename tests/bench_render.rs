@@ -1,6 +1,6 @@
 //! `poser bench render` end to end: the speed-against-error report a user regenerates with one
 //! command (its JSON, plot and the README's block), on real renders. The native run is in the
-//! plain tier; the run with all three backends needs the `backends` feature.
+//! plain tier; the run with all three backends is in the full tier (`tests/bench_render_backends.rs`).
 
 use crate::support::bench::{bench, poser};
 use poser::bench::render::{README_BEGIN, TARGETS};

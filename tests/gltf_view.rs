@@ -1,4 +1,4 @@
-//! `poser export` files in real glTF tools (full tier: `--features backends`; needs node with
+//! `poser export` files in real glTF tools (full tier: `cargo test --test backends`; needs node with
 //! the pinned npm packages of `backends/gltf/` and Debian's `chromium`, both installed by
 //! `backends/setup.sh`):
 //!

@@ -1,6 +1,6 @@
 //! The `opencv/` truth files, read by the real OpenCV (the pinned `opencv-python-headless`):
 //! `cv::FileStorage` loads each camera file, and `cv::projectPoints` / `cv::fisheye::projectPoints`
-//! with the written poses reproduce the written observations. Full tier (`--features backends`).
+//! with the written poses reproduce the written observations. Full tier (`cargo test --test backends`).
 use std::path::Path;
 use std::process::Command;
 
