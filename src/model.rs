@@ -776,7 +776,7 @@ pub struct RenderSettings {
     #[serde(default, skip_serializing_if = "Underside::is_fresnel")]
     pub surface_from_below: Underside,
     /// The native renderer's numbers for a pixel's samples (`render.sampler`).
-    #[serde(default, skip_serializing_if = "SamplerKind::is_independent")]
+    #[serde(default, skip_serializing_if = "SamplerKind::is_sobol")]
     pub sampler: SamplerKind,
 }
 
@@ -785,16 +785,17 @@ pub struct RenderSettings {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SamplerKind {
-    /// An Owen-scrambled Sobol sequence over the pixel's samples in each sample's first draws.
-    Sobol,
-    /// The default: every draw independent.
+    /// The default: an Owen-scrambled Sobol sequence over the pixel's samples in each
+    /// sample's first draws.
     #[default]
+    Sobol,
+    /// Every draw independent.
     Independent,
 }
 
 impl SamplerKind {
-    pub fn is_independent(&self) -> bool {
-        *self == SamplerKind::Independent
+    pub fn is_sobol(&self) -> bool {
+        *self == SamplerKind::Sobol
     }
 }
 

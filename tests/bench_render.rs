@@ -16,13 +16,15 @@ fn native_curve_reaches_both_targets_and_the_readme_block_is_regenerated() {
     );
     let c = &sc.curves[0];
     assert_eq!((c.backend.as_str(), c.error.as_deref()), ("native", None));
-    // The error falls with the samples as a Monte Carlo estimate's should (∝ spp^-½: 4× the
-    // samples halves it; allow for the reference's own noise). With `render.sampler =
-    // "sobol"` it fell 3.49× on this scene.
+    // The error falls with the samples at least as a Monte Carlo estimate's does (∝ spp^-½:
+    // 4× the samples halve it; 1.5 allows for the reference's own noise), and at most about as
+    // fast as a stratified one can on a smooth pixel (∝ spp^-1: 4×). The default Sobol sampler
+    // stratifies a pixel's samples: measured 3.49× on this scene; independent samples gave
+    // 1.5–2.7× (the bound before Sobol became the default).
     let p = &c.points;
     assert_eq!(p.iter().map(|p| p.spp).collect::<Vec<_>>(), [1, 4]);
     let ratio = p[0].rmse / p[1].rmse;
-    assert!((1.5..2.7).contains(&ratio), "RMSE 1 → 4 spp fell {ratio}×");
+    assert!((1.5..4.5).contains(&ratio), "RMSE 1 → 4 spp fell {ratio}×");
     // Each target has its spp and time; the smaller target costs more.
     assert_eq!(c.to_target.len(), TARGETS.len());
     let (a, b) = (&c.to_target[0], &c.to_target[1]);

@@ -971,8 +971,7 @@ pub struct Render {
     /// Owen-scrambled Sobol sequence over the pixel's samples, so the samples stratify each
     /// other and the pixel's mean converges faster; `"independent"`: every draw is
     /// independent. Both are unbiased and deterministic for a seed, at any thread count.
-    /// **Default:** `"independent"` (`"sobol"` is opt-in until an outlier it gave in the
-    /// metrology lesson is understood; `docs/native.md`).
+    /// **Default:** `"sobol"` (`docs/native.md`, "The sampler").
     pub sampler: Option<String>,
 }
 

@@ -3,8 +3,8 @@
 //!
 //! | `render.sampler` | the numbers of one pixel's samples |
 //! |---|---|
-//! | `"sobol"` | the first [`SOBOL_DIMENSIONS`] draws of each sample are an Owen-scrambled Sobol sequence over the pixel's samples (Burley 2020, the `sobol_burley` crate): 4-D sets, each shuffled and scrambled with its own seed (Burley's padding), the pixel's hash as the seed; later draws, and samples past 2¹⁶, are independent |
-//! | `"independent"` (default) | every draw independent (SplitMix64) |
+//! | `"sobol"` (default) | the first [`SOBOL_DIMENSIONS`] draws of each sample are an Owen-scrambled Sobol sequence over the pixel's samples (Burley 2020, the `sobol_burley` crate): 4-D sets, each shuffled and scrambled with its own seed (Burley's padding), the pixel's hash as the seed; later draws, and samples past 2¹⁶, are independent |
+//! | `"independent"` | every draw independent (SplitMix64) |
 //!
 //! Owen scrambling keeps every draw uniform on [0, 1), so each sample is an unbiased estimate
 //! either way; the samples of one pixel are stratified against each other instead of

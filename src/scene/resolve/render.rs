@@ -197,9 +197,9 @@ fn estimators(cx: &mut Cx, r: &mut Tab) -> (Daylight, TextureFilter, Underside, 
         Some("open") => Underside::Open,
         _ => Underside::Fresnel,
     };
-    let sampler = match r.choice(cx, "sampler", &["independent", "sobol"]) {
-        Some("sobol") => SamplerKind::Sobol,
-        _ => SamplerKind::Independent,
+    let sampler = match r.choice(cx, "sampler", &["sobol", "independent"]) {
+        Some("independent") => SamplerKind::Independent,
+        _ => SamplerKind::Sobol,
     };
     (daylight, texture_filter, underside, sampler)
 }
