@@ -43,7 +43,7 @@ pub fn json(model: &Model, input: &ColumnInput, col: &Column) -> serde_json::Val
         "scene": model.name,
         "depth": col.depth,
         "top": "open",
-        "mu0": input.sun.map(|s| -s.dir.z),
+        "mu0": input.sun.map(|s| s.dirs.map(|d| -d.z)),
         "sun_irradiance": input.sun.map_or([0.0; 3], |s| s.irradiance),
         "ambient": input.ambient,
         "bottom_albedo": input.bottom_albedo,

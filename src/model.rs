@@ -1247,6 +1247,33 @@ impl Model {
         })
     }
 
+    /// The sun's propagation direction in the water per channel (R, G, B): refracted at the
+    /// flat surface with each channel's water index, so that blue, bent more, runs a little
+    /// steeper than red. G's is [`Sun::direction_water`] itself, and the others follow from it
+    /// by Snell's law, `n_c sin θ_c = n_G sin θ_G` in the same azimuth (for a resolved scene
+    /// that is `sin θ_air`). Without water or without a sea surface all three are
+    /// `direction_water`. `None` without a sun.
+    pub fn sun_directions_water(&self) -> Option<[DVec3; 3]> {
+        let s = self.sun.as_ref()?;
+        let g = s.direction_water;
+        Some(match &self.water {
+            Some(w) if !matches!(self.site.surface, SeaSurface::None) && g.z < 0.0 => {
+                let (horizontal, len) = (DVec3::new(g.x, g.y, 0.0), g.length());
+                let sin_g = horizontal.length() / len;
+                [0, 1, 2].map(|c| {
+                    let sin_c = sin_g * w.ior[1] / w.ior[c];
+                    match horizontal.try_normalize() {
+                        Some(h) if c != 1 && sin_c < 1.0 => {
+                            (h * sin_c - DVec3::Z * (1.0 - sin_c * sin_c).sqrt()) * len
+                        }
+                        _ => g,
+                    }
+                })
+            }
+            _ => [g; 3],
+        })
+    }
+
     /// The plane-parallel column of the scene's water and daylight, wherever its cameras are
     /// ([`Model::column_input`] without the cameras' check).
     pub fn column_physics(&self) -> Result<crate::optics::column::ColumnInput, String> {
@@ -1270,9 +1297,10 @@ impl Model {
         let sun = self
             .sun
             .as_ref()
-            .filter(|s| s.direction_water.z < 0.0)
-            .map(|s| ColumnSun {
-                dir: s.direction_water.normalize(),
+            .zip(self.sun_directions_water())
+            .filter(|(_, dirs)| dirs.iter().all(|d| d.z < 0.0))
+            .map(|(s, dirs)| ColumnSun {
+                dirs: dirs.map(DVec3::normalize),
                 irradiance: s.irradiance_water,
             });
         let mut ambient = [0.0; 3];

@@ -22,6 +22,58 @@ fn native_radiometry_sun() {
 }
 
 #[test]
+fn native_sun_refracts_per_channel() {
+    // sun_seabed with a strongly dispersive water (n = 1.25 / 1.34 / 1.45) and more red
+    // absorption: refracted with green's index alone, red would arrive 4.6 % too bright and
+    // blue 1.3 % too dark (computed below). The render must follow each channel's direction to
+    // the 1 % of the canonical radiometry (measured: 0.00000 in every channel, the water
+    // absorbing only).
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/canonical/sun_seabed.toml");
+    // One pass per channel (`render.dispersion`): in one green pass the camera side (the n²
+    // law behind the port) takes green's index too, which is not what is tested here.
+    let sets = [
+        "water.ior=[1.25, 1.34, 1.45]",
+        "water.absorption=[0.5, 0.08, 0.03]",
+        "render.dispersion=true",
+    ]
+    .map(String::from);
+    let model = poser::scene::load(&path, &sets)
+        .unwrap_or_else(|f| panic!("{}", f.render()))
+        .model;
+    let dirs = model.sun_directions_water().unwrap();
+    let sun = model.sun.as_ref().unwrap();
+    let w = model.water.as_ref().unwrap();
+    // Snell per channel: sin θ_air = n_c sin θ_c, blue the steepest; green's is the model's.
+    let sin_air = (1.0 - sun.direction_air.z.powi(2)).sqrt();
+    for c in 0..3 {
+        let sin_c = (1.0 - dirs[c].z.powi(2)).sqrt();
+        assert!((sin_air - w.ior[c] * sin_c).abs() < 1e-12, "channel {c}");
+    }
+    assert!(-dirs[2].z > -dirs[1].z && -dirs[1].z > -dirs[0].z);
+    assert_eq!(dirs[1], sun.direction_water);
+    // What green's direction for every channel would give on the seabed 5 m down: the
+    // irradiance there is E cos θ e^(−σa · 5 m / cos θ).
+    let e = |c: usize, mu: f64| mu * (-w.absorption[c] * 5.0 / mu).exp();
+    let shift: Vec<f64> = (0..3)
+        .map(|c| e(c, -dirs[1].z) / e(c, -dirs[c].z) - 1.0)
+        .collect();
+    eprintln!("one direction against per channel: {shift:+.4?}");
+    assert!(shift[0] > 0.03 && shift[2] < -0.01, "{shift:?}");
+    let tmp = tempfile::tempdir().unwrap();
+    render("native", &model, tmp.path(), None);
+    let img = poser::compare::LinearImage::read(
+        &tmp.path().join(format!("{}.exr", model.image_name(0, 0))),
+    )
+    .unwrap();
+    let rel = poser::compare::analytic::window_error(&model, &img).unwrap();
+    for (c, rel) in rel.into_iter().enumerate() {
+        eprintln!("native channel {c}: rendered/analytic − 1 = {rel:+.5}");
+        assert!(rel.abs() <= MAX_ANALYTIC_REL, "channel {c}: {rel:+.4}");
+    }
+}
+
+#[test]
 fn analytic_reference_matches_a_hand_computation_on_the_axis() {
     // The oracle against the closed form worked out by hand for absorbing_strobe's principal
     // point, whose ray meets the flat port and the patch at normal incidence: water path

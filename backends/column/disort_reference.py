@@ -13,7 +13,7 @@ The mapping (each convention checked numerically by `--selftest` against closed 
 |---|---|
 | `depth`, `sigma_a`, `sigma_s` | one layer: `tau = (sigma_a + sigma_s) * depth`, `omega = sigma_s / (sigma_a + sigma_s)`; a depth z is `tau = (sigma_a + sigma_s) * z` |
 | `phase` HG `g` | Legendre coefficients `g**l`, delta-M with `f = g**NQuad` (the package's advice: `f_arr = Leg_coeffs_all[NLeg]`) |
-| `mu0`, `sun_irradiance` E | `mu0`, `I0 = E`: DISORT's direct flux is `I0 * mu0 * exp(-tau / mu0)`, so `I0` is the irradiance on a plane normal to the beam |
+| `mu0` (per channel), `sun_irradiance` E | `mu0` of the channel, `I0 = E`: DISORT's direct flux is `I0 * mu0 * exp(-tau / mu0)`, so `I0` is the irradiance on a plane normal to the beam |
 | `ambient` L | `b_neg = L`: isotropic downward intensity at the top (Fourier mode 0); E_d(0) = pi * L |
 | `bottom_albedo` A | `BDRF_Fourier_modes = [A]`: PythonicDISORT's reflected intensity is `rho/pi` times the incident flux, so a Lambertian bottom of albedo A is rho = A (not A/pi) |
 | `top = "open"` | DISORT's top boundary does not reflect |
@@ -67,6 +67,8 @@ def disort_channel(case: dict, c: int, z, nquad: int = NQUAD) -> dict:
     f = leg[nquad] if omega > 0 else 0.0
 
     mu0 = case.get("mu0")
+    if isinstance(mu0, list):  # per channel: the sun refracts with each channel's index
+        mu0 = mu0[c]
     e_sun = float(case["sun_irradiance"][c]) if mu0 is not None else 0.0
     if e_sun > 0:
         mu0 = float(mu0)

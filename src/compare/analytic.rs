@@ -85,8 +85,9 @@ pub fn radiance(model: &Model, u: f64, v: f64, c: usize) -> Result<f64, String> 
     let water = model.water.as_ref().ok_or("no water")?;
     let sa = water.absorption[c];
     let rho = obj.material.albedo[c];
-    let e = if let Some(sun) = &model.sun {
-        let dz = -sun.direction_water.z;
+    let e = if let (Some(sun), Some(dirs)) = (&model.sun, model.sun_directions_water()) {
+        // Each channel's own refracted direction.
+        let dz = -dirs[c].z;
         sun.irradiance_water[c] * dz * (-sa * (-p.z) / dz).exp()
     } else {
         let l = &model.lights[0];

@@ -8,7 +8,7 @@
 //! | `depth` | the column's Lambertian bottom, m below the surface (the site's seabed) |
 //! | `sigma_a`, `sigma_s` | per channel, 1/m; absorption must be > 0 in every channel |
 //! | `phase` | [`PhaseFn`]: HG, or Fournier–Forand tabulated exactly as the renderer's |
-//! | `sun` | refracted beam: cosine of its zenith angle in the water, irradiance per channel on a plane normal to the beam just below the surface |
+//! | `sun` | refracted beam per channel: its direction in the water (each channel refracts with its own index), irradiance on a plane normal to the beam just below the surface |
 //! | `ambient` | the sky's isotropic radiance: with [`Top::Open`], arriving from every downward direction just below the surface; with [`Top::Fresnel`], the sky above the surface, seen below it through Snell's window (refracted, times the Fresnel transmittance and `n²`: [`sky_below`]) |
 //! | `bottom_albedo` | per channel |
 //! | `top` | [`Top::Open`]: light reaching the surface from below leaves (the renderers' model); [`Top::Fresnel`]: a flat water–air surface reflects it with the unpolarised Fresnel reflectance, wholly beyond the critical angle (total internal reflection) |
@@ -69,8 +69,9 @@ const FLIGHT_BUDGET: usize = 60;
 /// The refracted sun in the water.
 #[derive(Debug, Clone, Copy)]
 pub struct ColumnSun {
-    /// Unit propagation direction in the water (z < 0, world z up).
-    pub dir: DVec3,
+    /// Unit propagation direction in the water per channel (z < 0, world z up): the sun
+    /// refracts with each channel's index.
+    pub dirs: [DVec3; 3],
     /// Irradiance on a plane normal to `dir`, just below the surface, W/m² per channel.
     pub irradiance: [f64; 3],
 }
@@ -368,7 +369,7 @@ impl ColumnInput {
             ));
         }
         if let Some(s) = &self.sun
-            && !(s.dir.is_finite() && s.dir.z < 0.0)
+            && !s.dirs.iter().all(|d| d.is_finite() && d.z < 0.0)
         {
             return Err(ColumnError::BadInput(
                 "the sun must shine downwards in the water".into(),
@@ -391,7 +392,7 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
     let t0 = std::time::Instant::now();
     let az = input
         .sun
-        .and_then(|s| DVec3::new(-s.dir.x, -s.dir.y, 0.0).try_normalize())
+        .and_then(|s| DVec3::new(-s.dirs[1].x, -s.dirs[1].y, 0.0).try_normalize())
         .unwrap_or(DVec3::X);
     let dz = input.depth / NZ as f64;
     let per_batch = input.photons.div_ceil(BATCHES).max(2);
@@ -406,7 +407,7 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
         // Rounds of BATCHES batches until E_d at the seabed is known to TARGET_STDERR (where
         // the channel keeps at least VISIBLE of the surface light), or MAX_ROUNDS.
         let (mu0, e0) = match input.sun {
-            Some(s) => (-s.dir.z, s.irradiance[c]),
+            Some(s) => (-s.dirs[c].z, s.irradiance[c]),
             None => (1.0, 0.0),
         };
         let st = input.sigma_a[c] + input.sigma_s[c];
@@ -616,7 +617,7 @@ fn run_batch(input: &ColumnInput, c: usize, batch: usize, n: usize, az: DVec3) -
     let k = sa.clamp(0.0, 40.0 / h);
     let target = |depth: f64| (-k * depth).exp();
     // Horizontal fluxes of the two sources and the photons each gets.
-    let f_sun = input.sun.map_or(0.0, |s| s.irradiance[c] * -s.dir.z);
+    let f_sun = input.sun.map_or(0.0, |s| s.irradiance[c] * -s.dirs[c].z);
     let f_sky = PI * input.ambient[c];
     let total = f_sun + f_sky;
     if total <= 0.0 {
@@ -640,7 +641,7 @@ fn run_batch(input: &ColumnInput, c: usize, batch: usize, n: usize, az: DVec3) -
                 f_sun / n_sun as f64,
                 Photon {
                     depth: 0.0,
-                    dir: s.dir,
+                    dir: s.dirs[c],
                     w: 1.0,
                     order: Order::Beam,
                     events: 0,
@@ -1079,7 +1080,9 @@ mod tests {
             sigma_s: [ss, ss, ss * 1.2],
             phase: PhaseFn::Hg { g },
             sun: sun.then(|| ColumnSun {
-                dir: DVec3::new(el.cos(), 0.3, -1.2).normalize(),
+                // Each channel its own direction, as the sun refracts per channel (more than
+                // water's dispersion, so that a mixed-up channel shows).
+                dirs: [-1.1, -1.2, -1.3].map(|z| DVec3::new(el.cos(), 0.3, z).normalize()),
                 irradiance: [500.0, 600.0, 550.0],
             }),
             ambient: [ambient; 3],
@@ -1119,7 +1122,7 @@ mod tests {
                     rel.abs() < 4.0 * p.e_d_stderr[j] / sky + 1e-3,
                     "c {c} z {z}: {rel}"
                 );
-                let mu0 = -inp.sun.unwrap().dir.z;
+                let mu0 = -inp.sun.unwrap().dirs[c].z;
                 let beam = inp.sun.unwrap().irradiance[c] * mu0 * (-inp.sigma_a[c] * z / mu0).exp();
                 assert!((p.e_d_direct[j] - beam).abs() < 1e-9 * beam);
             }
@@ -1357,7 +1360,7 @@ mod tests {
             sigma_s: [0.045, 0.0536, 0.068],
             phase: PhaseFn::Hg { g: 0.92 },
             sun: Some(ColumnSun {
-                dir: DVec3::new(0.33, -0.28, -0.9).normalize(),
+                dirs: [DVec3::new(0.33, -0.28, -0.9).normalize(); 3],
                 irradiance: [500.0, 600.0, 550.0],
             }),
             ambient: [0.0, 2.0, 3.0],

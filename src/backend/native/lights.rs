@@ -5,7 +5,7 @@
 //! | point | intensity `I` W/sr per channel, irradiance `I·cos/r²` |
 //! | spot | point light restricted to the sharp cone `angle(direction, x − p) ≤ half_angle` |
 //! | area | one-sided rectangle emitting along its frame's +z, radiance `L` W/(m²·sr) |
-//! | sun | directional light in the water: propagation `direction_water`, irradiance `irradiance_water` just below z = 0, attenuated by the water between the point and z = 0 |
+//! | sun | directional light in the water: propagation `direction_water` per channel (each channel refracted with its own index; shadow rays follow green's), irradiance `irradiance_water` just below z = 0, attenuated by the water between the point and z = 0 |
 //! | ambient | uniform radiance from every direction, reached by rays that leave the scene |
 
 use crate::model::{LightKind, Model, Pose};
@@ -70,8 +70,14 @@ impl AreaLight {
 
 #[derive(Debug, Clone)]
 pub struct SunLight {
-    /// Unit propagation direction (z < 0).
+    /// Unit propagation direction (z < 0): the green channel's, which shadow rays follow.
     pub dir: DVec3,
+    /// Unit propagation direction per channel (in water each channel refracts with its own
+    /// index, [`Model::sun_directions_water`]); all three `dir` in air.
+    pub dirs: [DVec3; 3],
+    /// Whether `dirs` differ: the cosines, path lengths and phase angles are then taken per
+    /// channel.
+    pub chromatic: bool,
     pub irradiance: DVec3,
 }
 
@@ -128,14 +134,16 @@ impl Lights {
             }
         }
         if let Some(s) = &model.sun {
-            let (dir, e) = if model.water.is_some() {
-                (s.direction_water, s.irradiance_water)
-            } else {
-                (s.direction_air, s.irradiance)
+            let (dirs, e) = match model.sun_directions_water() {
+                Some(dirs) if model.water.is_some() => (dirs, s.irradiance_water),
+                _ => ([s.direction_air; 3], s.irradiance),
             };
-            if dir.z < 0.0 {
+            if dirs.iter().all(|d| d.z < 0.0) {
+                let dirs = dirs.map(DVec3::normalize);
                 out.sun = Some(SunLight {
-                    dir: dir.normalize(),
+                    dir: dirs[1],
+                    dirs,
+                    chromatic: dirs[0] != dirs[1] || dirs[2] != dirs[1],
                     irradiance: DVec3::from_array(e),
                 });
             }
