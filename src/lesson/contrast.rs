@@ -463,7 +463,9 @@ mod tests {
     fn trimmed_mean_ignores_a_firefly_and_keeps_the_core() {
         // 100 board points near 3.5e-3 and one firefly 7 700 times brighter: the plain mean is
         // eight times the core's, the trimmed one within a percent of it.
-        let core: Vec<f64> = (0..100).map(|i| 3.5e-3 * (1.0 + 0.01 * (i % 7) as f64)).collect();
+        let core: Vec<f64> = (0..100)
+            .map(|i| 3.5e-3 * (1.0 + 0.01 * (i % 7) as f64))
+            .collect();
         let with_firefly = core.iter().copied().chain([27.0]);
         let exact = core.iter().sum::<f64>() / core.len() as f64;
         let plain = (core.iter().sum::<f64>() + 27.0) / 101.0;

@@ -168,15 +168,19 @@ pub fn analytic(model: &Model, u: f64, v: f64, c: usize) -> f64 {
 }
 
 pub fn radiometry(backend: &str, name: &str) {
-    let model = load(name);
+    radiometry_of(backend, &load(name), name);
+}
+
+/// [`radiometry`] of a model (`name` labels the output).
+pub fn radiometry_of(backend: &str, model: &Model, name: &str) {
     let tmp = tempfile::tempdir().unwrap();
-    render(backend, &model, tmp.path(), None);
+    render(backend, model, tmp.path(), None);
     let img = poser::compare::LinearImage::read(
         &tmp.path().join(format!("{}.exr", model.image_name(0, 0))),
     )
     .unwrap();
     // Central 40×30 window.
-    let rel = poser::compare::analytic::window_error(&model, &img).unwrap();
+    let rel = poser::compare::analytic::window_error(model, &img).unwrap();
     for (c, rel) in rel.into_iter().enumerate() {
         eprintln!("{backend} {name} channel {c}: rendered/analytic − 1 = {rel:+.5}");
         assert!(
