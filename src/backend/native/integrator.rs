@@ -286,8 +286,8 @@ impl<'a> Integrator<'a> {
     /// `f` towards the sun times the water's transmittance from `p` up to the surface plane
     /// z = 0 (the sun's irradiance is given just below it), per channel: in water each channel
     /// has its own refracted direction, so its own cosine or phase angle and path length
-    /// (within 0.6 % of green's at 30 m). Visibility is the caller's: one shadow ray along
-    /// green's direction.
+    /// (up to about 1 % from green's on the shipped scenes' direct beam; docs/backends.md).
+    /// Visibility is the caller's: one shadow ray along green's direction.
     fn sun_arriving(&self, sun: &SunLight, p: DVec3, f: &impl Fn(DVec3) -> DVec3) -> DVec3 {
         let at = |d: DVec3| {
             let s = if p.z < 0.0 { p.z / d.z } else { 0.0 };
