@@ -472,7 +472,7 @@ mod tests {
         assert!(plain > 8.0 * exact);
         let t = trimmed_mean(with_firefly);
         assert!((t / exact - 1.0).abs() < 0.01, "{t} against {exact}");
-        // A constant stays itself, non-finite values are ignored, nothing gives NaN.
+        // A constant stays itself, non-finite values are ignored, no values give NaN.
         assert_eq!(trimmed_mean([2.0; 7].into_iter().chain([f64::NAN])), 2.0);
         assert!(trimmed_mean(std::iter::empty()).is_nan());
     }
