@@ -733,7 +733,7 @@ def _water_verts(desc, pose_index, shells):
     parts = [geo.box_mesh(lo, hi, 0)["verts"]]
     parts += [geo.transform_points(shell["verts"], m)
               for m, shell in _shells_at(desc, pose_index, shells)]
-    return np.concatenate([np.asarray(p, dtype=float) for p in parts])
+    return np.concatenate(parts)
 
 
 def _build_water(built, coll, desc, shells, n_w, ref):

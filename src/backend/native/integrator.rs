@@ -137,7 +137,7 @@ impl<'a> Integrator<'a> {
                     && m.phase.eval(1.0) > AUREOLE_MIN_PEAK
                     && scene.column.is_none() =>
             {
-                Some(-sun.dir)
+                Some(-sun.dir())
             }
             _ => None,
         };
@@ -298,10 +298,10 @@ impl<'a> Integrator<'a> {
                 fv * self.tr_seg(p, -d, s)
             }
         };
-        if sun.chromatic {
+        if sun.chromatic() {
             DVec3::new(at(sun.dirs[0]).x, at(sun.dirs[1]).y, at(sun.dirs[2]).z)
         } else {
-            at(sun.dir)
+            at(sun.dir())
         }
     }
 
@@ -345,7 +345,7 @@ impl<'a> Integrator<'a> {
                 let blocked = self.scene.occluded_ray(
                     &Ray {
                         origin: p,
-                        dir: -sun.dir,
+                        dir: -sun.dir(),
                     },
                     f64::INFINITY,
                 );
@@ -889,7 +889,7 @@ impl<'a> Integrator<'a> {
     /// positive on an unbounded segment (no normalisable density).
     fn sun_rate(&self, m: &Medium, d: DVec3, len: f64) -> Option<DVec3> {
         let sun = self.lights.sun.as_ref()?;
-        if !self.sun_sampling || sun.dir.z >= 0.0 || !(len > 0.0) {
+        if !self.sun_sampling || sun.dir().z >= 0.0 || !(len > 0.0) {
             return None;
         }
         let k = m.sigma_t * (DVec3::ONE + d.z / DVec3::from_array(sun.dirs.map(|s| s.z)));
@@ -926,7 +926,7 @@ impl<'a> Integrator<'a> {
             return DVec3::ZERO;
         }
         let p = o + t * d;
-        let dir = -sun.dir;
+        let dir = -sun.dir();
         let phase = |w: DVec3| DVec3::splat(m.phase.eval(d.dot(w)));
         let ft = self.sun_arriving(sun, p, &phase);
         if ft == DVec3::ZERO {

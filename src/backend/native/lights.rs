@@ -70,15 +70,25 @@ impl AreaLight {
 
 #[derive(Debug, Clone)]
 pub struct SunLight {
-    /// Unit propagation direction (z < 0): the green channel's, which shadow rays follow.
-    pub dir: DVec3,
-    /// Unit propagation direction per channel (in water each channel refracts with its own
-    /// index, [`Model::sun_directions_water`]); all three `dir` in air.
+    /// Unit propagation direction per channel, z < 0 (in water each channel refracts with
+    /// its own index, [`Model::sun_directions_water`]; all three the same in air).
     pub dirs: [DVec3; 3],
-    /// Whether `dirs` differ: the cosines, path lengths and phase angles are then taken per
-    /// channel.
-    pub chromatic: bool,
     pub irradiance: DVec3,
+}
+
+impl SunLight {
+    /// The green channel's direction, which shadow rays follow.
+    #[inline]
+    pub fn dir(&self) -> DVec3 {
+        self.dirs[1]
+    }
+
+    /// Whether the channels' directions differ: cosines, path lengths and phase angles are
+    /// then taken per channel.
+    #[inline]
+    pub fn chromatic(&self) -> bool {
+        self.dirs[0] != self.dirs[1] || self.dirs[2] != self.dirs[1]
+    }
 }
 
 /// Every light at one rig pose.
@@ -139,11 +149,8 @@ impl Lights {
                 _ => ([s.direction_air; 3], s.irradiance),
             };
             if dirs.iter().all(|d| d.z < 0.0) {
-                let dirs = dirs.map(DVec3::normalize);
                 out.sun = Some(SunLight {
-                    dir: dirs[1],
-                    dirs,
-                    chromatic: dirs[0] != dirs[1] || dirs[2] != dirs[1],
+                    dirs: dirs.map(DVec3::normalize),
                     irradiance: DVec3::from_array(e),
                 });
             }
