@@ -12,13 +12,31 @@ cd "$(dirname "$0")"
 step() { printf '\n== %s (at %d s)\n' "$1" "$SECONDS"; }
 SECONDS=0
 
+# The full tier's environment (apt, npm, pip: mostly downloads and unpacking) is set up in the
+# background while the fast tier compiles and runs; its output is shown when the full tier
+# starts. A failed fast tier stops it.
+setup_log="$(mktemp)"
+backends/setup.sh > "$setup_log" 2>&1 &
+setup_pid=$!
+stop_setup() {
+  if [ -n "$setup_pid" ]; then pkill -P "$setup_pid" 2>/dev/null || true; kill "$setup_pid" 2>/dev/null || true; fi
+  rm -f "$setup_log"
+}
+trap stop_setup EXIT
+
 step "fast tier: build"
 time cargo test --locked --no-run
 step "fast tier: plain cargo test"
 time cargo test --locked
 
-step "full tier: Python environment"
-backends/setup.sh
+step "full tier: Python environment (set up in the background since the start)"
+if ! wait "$setup_pid"; then
+  cat "$setup_log"
+  echo "error: backends/setup.sh failed (its output above)" >&2
+  exit 1
+fi
+cat "$setup_log"
+setup_pid=""
 export POSER_PYTHON="$PWD/.venv/bin/python"
 # The Python module (crates/poser-py): build the abi3 wheel with maturin, install it into .venv
 # (the Blender add-on's tests use it in-process). Then the full tier's test binary, which also
