@@ -74,11 +74,17 @@ print(json.dumps({
     let got: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     eprintln!("pycolmap: {got}; poser wrote f35 = {f35} mm, {w} × {h} px");
     assert_eq!(got["prior"], true, "{got}");
-    assert_eq!((got["width"].as_f64(), got["height"].as_f64()), (Some(w), Some(h)));
+    assert_eq!(
+        (got["width"].as_f64(), got["height"].as_f64()),
+        (Some(w), Some(h))
+    );
     let focal = got["focal"].as_f64().unwrap();
     // COLMAP's reading of the 35 mm equivalent (float arithmetic: 1e-6).
     let expect = f35 / 43.27 * w.hypot(h);
-    assert!((focal / expect - 1.0).abs() < 1e-6, "{focal} px against {expect}");
+    assert!(
+        (focal / expect - 1.0).abs() < 1e-6,
+        "{focal} px against {expect}"
+    );
     // And the true in-air focal length of this 160 × 120 preview.
     let cam = &crate::support::scenario("calibration_flat.toml").cameras[0];
     let fx = cam.fx * w / cam.width as f64;

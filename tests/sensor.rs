@@ -699,7 +699,10 @@ fn camera_images_carry_the_lens_and_sensor_in_exif_jpeg_and_png() {
             format!("poser {}", env!("CARGO_PKG_VERSION"))
         );
         let focal = exif_f64(&x, exif::Tag::FocalLength);
-        assert!((focal / f_mm - 1.0).abs() < 1e-6, "{file:?}: FocalLength {focal}");
+        assert!(
+            (focal / f_mm - 1.0).abs() < 1e-6,
+            "{file:?}: FocalLength {focal}"
+        );
         // 8 mm on a 5.52 × 4.14 mm sensor (diagonal 6.9 mm): 50.2 mm equivalent, written 50.
         let eq = exif_f64(&x, exif::Tag::FocalLengthIn35mmFilm);
         assert_eq!(eq, f35.round(), "{file:?}: 35 mm equivalent {eq} for {f35}");
@@ -724,9 +727,15 @@ fn camera_images_carry_the_lens_and_sensor_in_exif_jpeg_and_png() {
         // Across, where the width sets the scale exactly: FocalLength × pixels per mm = fx.
         let fx = f_mm * exif_f64(&x, exif::Tag::FocalPlaneXResolution) / 10.0;
         let fx_true = cam.fx * w as f64 / cam.width as f64;
-        assert!((fx / fx_true - 1.0).abs() < 1e-6, "{fx} px against {fx_true}");
+        assert!(
+            (fx / fx_true - 1.0).abs() < 1e-6,
+            "{fx} px against {fx_true}"
+        );
         assert_eq!(exif_f64(&x, exif::Tag::PixelXDimension), w as f64);
         assert_eq!(exif_f64(&x, exif::Tag::PixelYDimension), h as f64);
-        assert!(x.get_field(exif::Tag::DateTime, exif::In::PRIMARY).is_none());
+        assert!(
+            x.get_field(exif::Tag::DateTime, exif::In::PRIMARY)
+                .is_none()
+        );
     }
 }

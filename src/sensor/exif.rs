@@ -84,7 +84,13 @@ fn ascii(tag: Tag, s: &str) -> Field {
     // EXIF ASCII is 7-bit; anything else in a camera name becomes `?`.
     let bytes = s
         .chars()
-        .map(|c| if c.is_ascii() && !c.is_ascii_control() { c as u8 } else { b'?' })
+        .map(|c| {
+            if c.is_ascii() && !c.is_ascii_control() {
+                c as u8
+            } else {
+                b'?'
+            }
+        })
         .collect();
     Field {
         tag,
@@ -117,7 +123,11 @@ pub fn block(camera: &CameraTags, sensor: &Sensor, exposure: &Exposure) -> Resul
         field(Tag::ExifVersion, Value::Undefined(b"0232".to_vec(), 0)),
         field(
             Tag::ColorSpace,
-            short(if sensor.tone == ToneCurve::Srgb { 1 } else { 0xFFFF }),
+            short(if sensor.tone == ToneCurve::Srgb {
+                1
+            } else {
+                0xFFFF
+            }),
         ),
         field(Tag::FocalLength, rat(camera.focal_length_mm)),
         field(Tag::FocalLengthIn35mmFilm, short(camera.focal_35mm)),
