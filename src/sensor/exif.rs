@@ -65,14 +65,14 @@ impl CameraTags {
     }
 }
 
-/// `x` as an unsigned rational with the largest power-of-ten denominator (at most 10⁶) whose
-/// numerator fits: at least six significant digits for any value EXIF is given here. A value
-/// that is not finite or not positive is written as 0/1.
+/// `x` as an unsigned rational with the largest power-of-ten denominator (at most 10⁹) whose
+/// numerator fits in 32 bits: six significant digits or more for any value from 0.001 up,
+/// which covers every tag written here. A value that is not finite or not positive is 0/1.
 pub fn rational(x: f64) -> Rational {
     if !(x.is_finite() && x > 0.0) {
         return Rational { num: 0, denom: 1 };
     }
-    let mut den = 1_000_000u32;
+    let mut den = 1_000_000_000u32;
     while den > 1 && (x * den as f64).round() > u32::MAX as f64 {
         den /= 10;
     }
