@@ -1128,6 +1128,9 @@ impl Default for Sensor {
     }
 }
 
+/// Name of the single camera when the scene gives it none (`[camera]` without `name`).
+pub const DEFAULT_CAMERA_NAME: &str = "cam";
+
 /// Whether a name may become part of a file name (camera names form image names in a rig):
 /// letters and digits (any script), `_`, `-`, `.`; not empty, not starting with `.`, at most
 /// 100 characters. So no separator, no `..`, no control or XML-illegal character. The front

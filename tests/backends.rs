@@ -11,6 +11,7 @@ mod blender;
 mod compare_cli;
 mod cross_backend;
 mod evaluate;
+mod exif_pycolmap;
 mod gltf_view;
 mod import_blender;
 mod import_cbox;

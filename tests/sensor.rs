@@ -157,7 +157,7 @@ fn camera_bytes(s: &Sensor, img: &Linear, seed: u64) -> Vec<u8> {
     let e = sensor::expose(s, img, 4e-6);
     let raw = sensor::capture(s, &e, img, seed);
     let rgb8 = sensor::develop(s, &e, &raw);
-    sensor::encode(s, img.width, img.height, &rgb8).unwrap()
+    sensor::encode(s, img.width, img.height, &rgb8, &[]).unwrap()
 }
 
 #[test]
@@ -429,13 +429,17 @@ fn the_sidecar_records_what_was_applied() {
             .collect(),
     };
     let s = Sensor::default();
+    // The scene's camera with 4 µm pixels, 32 × 24 of them.
+    let mut cam = crate::support::scenario("calibration_flat.toml").cameras[0].clone();
+    (cam.width, cam.height, cam.pixel_pitch) = (32, 24, 4e-6);
+    (cam.fx, cam.fy) = (cam.focal_length / 4e-6, cam.focal_length / 4e-6);
     let done = sensor::files::process(
         &s,
         &img,
         Path::new("in.exr"),
         Some(&var),
         Some(16),
-        4e-6,
+        &cam,
         99,
         dir.path(),
         "img_0001",
@@ -613,4 +617,125 @@ fn render_with_a_sensor_writes_camera_images_and_sidecars_and_without_one_nothin
         std::fs::read(cam.join("camera/img_0001.png")).unwrap()
     );
     assert!(dir.path().join("again.sensor.json").is_file());
+}
+
+// ---- EXIF -----------------------------------------------------------------------------------
+
+/// The EXIF fields of an image file, read back with an independent reader (kamadak-exif).
+fn exif_of(path: &Path) -> exif::Exif {
+    let f = std::fs::File::open(path).unwrap();
+    exif::Reader::new()
+        .read_from_container(&mut std::io::BufReader::new(f))
+        .unwrap_or_else(|e| panic!("{}: no EXIF ({e})", path.display()))
+}
+
+fn exif_f64(x: &exif::Exif, tag: exif::Tag) -> f64 {
+    let f = x
+        .get_field(tag, exif::In::PRIMARY)
+        .unwrap_or_else(|| panic!("no {tag}"));
+    match &f.value {
+        exif::Value::Rational(v) => v[0].to_f64(),
+        v => v.get_uint(0).unwrap_or_else(|| panic!("{tag}: {v:?}")) as f64,
+    }
+}
+
+fn exif_str(x: &exif::Exif, tag: exif::Tag) -> String {
+    let f = x
+        .get_field(tag, exif::In::PRIMARY)
+        .unwrap_or_else(|| panic!("no {tag}"));
+    match &f.value {
+        exif::Value::Ascii(v) => String::from_utf8_lossy(&v[0]).into_owned(),
+        v => panic!("{tag}: {v:?}"),
+    }
+}
+
+#[test]
+fn camera_images_carry_the_lens_and_sensor_in_exif_jpeg_and_png() {
+    // A 48 × 36 native render of calibration_flat (8 mm lens, 1600 × 1200 pixels of 3.45 µm):
+    // the JPEG from `poser render --sensor`, the PNG from `poser sensor` on the same EXR.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let o = poser(&[
+        "render",
+        "scenarios/calibration_flat.toml",
+        "--scale",
+        "0.03",
+        "--samples",
+        "1",
+        "--poses",
+        "0",
+        "--quiet",
+        "--sensor",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let png = dir.path().join("again.png");
+    let o = poser(&[
+        "sensor",
+        "scenarios/calibration_flat.toml",
+        out.join("img_0001.exr").to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The scene's lens and sensor, at full resolution.
+    let cam = crate::support::scenario("calibration_flat.toml").cameras[0].clone();
+    let f_mm = cam.focal_length * 1e3;
+    let sensor_mm = [
+        cam.width as f64 * cam.pixel_pitch * 1e3,
+        cam.height as f64 * cam.pixel_pitch * 1e3,
+    ];
+    let f35 = f_mm * 36f64.hypot(24.0) / sensor_mm[0].hypot(sensor_mm[1]);
+    assert!((f_mm - 8.0).abs() < 1e-9 && (sensor_mm[0] - 5.52).abs() < 1e-9);
+    for file in [out.join("camera/img_0001.jpg"), png] {
+        let x = exif_of(&file);
+        let img = image::open(&file).unwrap();
+        let (w, h) = (img.width(), img.height());
+        assert_eq!(exif_str(&x, exif::Tag::Make), "poser");
+        assert_eq!(exif_str(&x, exif::Tag::Model), "poser camera");
+        assert_eq!(
+            exif_str(&x, exif::Tag::Software),
+            format!("poser {}", env!("CARGO_PKG_VERSION"))
+        );
+        let focal = exif_f64(&x, exif::Tag::FocalLength);
+        assert!(
+            (focal / f_mm - 1.0).abs() < 1e-6,
+            "{file:?}: FocalLength {focal}"
+        );
+        // 8 mm on a 5.52 × 4.14 mm sensor (diagonal 6.9 mm): 50.2 mm equivalent, written 50.
+        let eq = exif_f64(&x, exif::Tag::FocalLengthIn35mmFilm);
+        assert_eq!(eq, f35.round(), "{file:?}: 35 mm equivalent {eq} for {f35}");
+        assert_eq!(exif_f64(&x, exif::Tag::FocalPlaneResolutionUnit), 3.0);
+        // Pixels per cm × the sensor's size in cm = the image's pixels: the sensor is the
+        // scene's, whatever the preview scale.
+        for (k, tag) in [
+            exif::Tag::FocalPlaneXResolution,
+            exif::Tag::FocalPlaneYResolution,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let ppcm = exif_f64(&x, tag);
+            let px = [w, h][k] as f64;
+            assert!(
+                (ppcm * sensor_mm[k] / 10.0 / px - 1.0).abs() < 0.02,
+                "{file:?}: {tag} {ppcm} px/cm on {} mm for {px} px",
+                sensor_mm[k]
+            );
+        }
+        // Across, where the width sets the scale exactly: FocalLength × pixels per mm = fx.
+        let fx = f_mm * exif_f64(&x, exif::Tag::FocalPlaneXResolution) / 10.0;
+        let fx_true = cam.fx * w as f64 / cam.width as f64;
+        assert!(
+            (fx / fx_true - 1.0).abs() < 1e-6,
+            "{fx} px against {fx_true}"
+        );
+        assert_eq!(exif_f64(&x, exif::Tag::PixelXDimension), w as f64);
+        assert_eq!(exif_f64(&x, exif::Tag::PixelYDimension), h as f64);
+        assert!(
+            x.get_field(exif::Tag::DateTime, exif::In::PRIMARY)
+                .is_none()
+        );
+    }
 }

@@ -93,6 +93,8 @@ fn colmap_model_is_consistent_and_output_deterministic() {
         "colmap/cameras.bin",
         "colmap/images.bin",
         "colmap/points3D.bin",
+        "markers/markers.csv",
+        "markers/gcp.csv",
     ] {
         let a = std::fs::read(d1.path().join(f)).unwrap();
         assert_eq!(
@@ -881,4 +883,88 @@ fn refractive_colmap_binary_model_reads_in_the_fork_and_reprojects() {
     // Upstream's cameras.bin has no refraction id: the fork's reader cannot take it.
     let up = std::fs::read(d.path().join("colmap/cameras.bin")).unwrap();
     assert!(fork_binary::cameras(&up).is_err());
+}
+
+/// `markers/markers.csv` is `points.csv` as marker rows: the same observations at the same
+/// pixels, labelled by target point id and keyed by the image file a package loads; every label
+/// is in `markers/gcp.csv` at its target point's position; an id that two targets share (two
+/// coded targets with the same codes) is qualified by the target's name in both files.
+#[test]
+fn marker_files_are_the_truths_observations_with_their_gcp_reference() {
+    fn file(files: &[(String, Vec<u8>)], name: &str) -> String {
+        let (_, b) = files.iter().find(|(n, _)| n == name).unwrap();
+        String::from_utf8(b.clone()).unwrap()
+    }
+    /// The rows after the column names (and, in the marker files, a `#` line before them).
+    fn rows(text: &str, header: &str) -> Vec<Vec<String>> {
+        let mut lines = text.lines();
+        if !header.starts_with("image,") {
+            let first = lines.next().unwrap();
+            assert!(first.starts_with("# "), "{first}");
+        }
+        assert_eq!(lines.next().unwrap(), header);
+        lines
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect()
+    }
+    let mut model = load("calibration_flat.toml");
+    for (sensor, ext) in [
+        (None, "png"),
+        (Some(poser::model::Sensor::default()), "jpg"),
+    ] {
+        model.sensor = sensor;
+        let truth = poser::truth::compute(&model).unwrap();
+        let files = poser::truth::files(&model, &truth).unwrap();
+        let markers = file(&files, "markers/markers.csv");
+        assert!(markers.lines().next().unwrap().contains("(0.5, 0.5)"));
+        let m = rows(&markers, "marker,image,x,y");
+        let p = rows(
+            &file(&files, "points.csv"),
+            "image,camera,pose,target,id,u,v,u_r,v_r,u_b,v_b,x,y,z,x_cam,y_cam,z_cam",
+        );
+        assert!(m.len() > 50);
+        assert_eq!(m.len(), p.len());
+        for (m, p) in m.iter().zip(&p) {
+            // Ids are unique in this scene, so the label is the id.
+            assert_eq!(
+                (&m[0], &m[1], &m[2], &m[3]),
+                (&p[4], &format!("{}.{ext}", p[0]), &p[5], &p[6])
+            );
+        }
+        let gcp = rows(&file(&files, "markers/gcp.csv"), "label,x,y,z");
+        let n: usize = model.targets.iter().map(|t| t.points.len()).sum();
+        assert_eq!(gcp.len(), n);
+        for t in &model.targets {
+            for tp in &t.points {
+                let row = gcp.iter().find(|r| r[0] == tp.id).unwrap();
+                let xyz: Vec<f64> = row[1..].iter().map(|x| x.parse().unwrap()).collect();
+                assert_eq!(xyz, tp.world.to_array().to_vec());
+            }
+        }
+    }
+    // Both targets become coded targets with codes 1..6: the ids clash.
+    for t in &mut model.targets {
+        t.kind = poser::model::TargetKind::Coded {
+            count: 6,
+            spacing: 0.05,
+            diameter: 0.02,
+            first_code: 1,
+        };
+        t.points = poser::geometry::targets::points(&t.name, &t.kind, &t.pose);
+    }
+    let truth = poser::truth::compute(&model).unwrap();
+    let files = poser::truth::files(&model, &truth).unwrap();
+    let gcp = rows(&file(&files, "markers/gcp.csv"), "label,x,y,z");
+    let mut labels: Vec<&str> = gcp.iter().map(|r| r[0].as_str()).collect();
+    assert_eq!(labels.len(), 12);
+    assert!(
+        labels.contains(&"board/1") && labels.contains(&"dots/6"),
+        "{labels:?}"
+    );
+    labels.sort();
+    labels.dedup();
+    assert_eq!(labels.len(), 12, "labels are unique");
+    let m = rows(&file(&files, "markers/markers.csv"), "marker,image,x,y");
+    assert!(!m.is_empty());
+    assert!(m.iter().all(|r| labels.contains(&r[0].as_str())));
 }

@@ -140,7 +140,6 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     }
     let img = crate::image::read_exr(input)?;
     let var = variance.map(crate::image::read_exr).transpose()?;
-    let pitch = crate::sensor::files::pixel_pitch(cam, img.width);
     let seed = crate::sensor::image_seed(model.render.seed, pose, c);
     let dir = match out.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
@@ -157,7 +156,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         input,
         var.as_ref(),
         samples,
-        pitch,
+        cam,
         seed,
         dir,
         &stem,

@@ -4,7 +4,7 @@
 //!
 //! | file | content |
 //! |---|---|
-//! | `OUT/camera/<image>.jpg` or `.png` | the camera's 8-bit image ([`super::develop`]) |
+//! | `OUT/camera/<image>.jpg` or `.png` | the camera's 8-bit image ([`super::develop`]) with its EXIF block ([`super::exif`]) |
 //! | `OUT/camera/<image>.sensor.json` | [`Sidecar`]: sensor, exposure, white balance, seed, clipping, render noise |
 //!
 //! The camera images sit in their own folder so that photogrammetry software pointed at it
@@ -12,7 +12,7 @@
 
 use super::{Exposure, Linear, RenderNoise};
 use crate::image::read_exr;
-use crate::model::{Model, Sensor};
+use crate::model::{Camera, Model, Sensor};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -51,8 +51,9 @@ pub struct Done {
 }
 
 /// Run the sensor on one linear image and write `<dir>/<stem>.<ext>` and
-/// `<dir>/<stem>.sensor.json`. `pixel_pitch` is that of the camera at the image's size;
-/// `variance` the render's per-pixel variance of the mean, `samples` its samples per pixel.
+/// `<dir>/<stem>.sensor.json`. `camera` took the image (at any resolution: its pixel pitch and
+/// EXIF tags are taken at the image's size, [`at_image_size`]); `variance` is the render's
+/// per-pixel variance of the mean, `samples` its samples per pixel.
 #[allow(clippy::too_many_arguments)]
 pub fn process(
     sensor: &Sensor,
@@ -60,15 +61,18 @@ pub fn process(
     input: &Path,
     variance: Option<&Linear>,
     samples: Option<u32>,
-    pixel_pitch: f64,
+    camera: &Camera,
     seed: u64,
     dir: &Path,
     stem: &str,
 ) -> Result<Done, String> {
-    let exposure = super::expose(sensor, img, pixel_pitch);
+    let cam = at_image_size(camera, img.width);
+    let exposure = super::expose(sensor, img, cam.pixel_pitch);
     let raw = super::capture(sensor, &exposure, img, seed);
     let rgb8 = super::develop(sensor, &exposure, &raw);
-    let bytes = super::encode(sensor, img.width, img.height, &rgb8)?;
+    let tags = super::exif::CameraTags::of(&cam, img.width, img.height);
+    let exif = super::exif::block(&tags, sensor, &exposure)?;
+    let bytes = super::encode(sensor, img.width, img.height, &rgb8, &exif)?;
     let out = dir.join(format!("{stem}.{}", super::extension(sensor)));
     let (render_noise, mut note) = match (variance, samples) {
         (None, _) => (
@@ -164,7 +168,6 @@ pub fn apply(
             } else {
                 None
             };
-            let pitch = pixel_pitch(cam, img.width);
             let seed = super::image_seed(model.render.seed, p, c);
             done.push(process(
                 sensor,
@@ -172,7 +175,7 @@ pub fn apply(
                 &exr,
                 variance.as_ref(),
                 Some(samples),
-                pitch,
+                cam,
                 seed,
                 &dir,
                 &name,
@@ -185,11 +188,17 @@ pub fn apply(
 /// Pixel pitch of `cam` for an image `width` pixels wide (a `--scale` preview has larger
 /// pixels on the same sensor), computed as [`crate::model::Camera::with_resolution_scale`]
 /// does so that `poser sensor` and `poser render` agree to the bit.
-pub fn pixel_pitch(cam: &crate::model::Camera, width: u32) -> f64 {
+pub fn pixel_pitch(cam: &Camera, width: u32) -> f64 {
+    at_image_size(cam, width).pixel_pitch
+}
+
+/// `cam` resampled to an image `width` pixels wide: the same sensor and lens, the pixel pitch
+/// and intrinsics of that pixel grid ([`Camera::with_resolution_scale`]; `cam` itself when the
+/// width is its own).
+pub fn at_image_size(cam: &Camera, width: u32) -> Camera {
     if width == cam.width || cam.width == 0 {
-        cam.pixel_pitch
+        cam.clone()
     } else {
         cam.with_resolution_scale(width as f64 / cam.width as f64)
-            .pixel_pitch
     }
 }

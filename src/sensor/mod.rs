@@ -16,6 +16,7 @@
 //! ([`image_seed`]: render seed, pose, camera) and the row, so the bytes do not depend on the
 //! number of threads.
 
+pub mod exif;
 pub mod files;
 
 use crate::model::{Meter, Rgb, Sensor, SensorExposure, SensorFormat, ToneCurve, WhiteBalance};
@@ -350,17 +351,44 @@ pub fn develop(s: &Sensor, e: &Exposure, raw: &Raw) -> Vec<u8> {
         .collect()
 }
 
-/// Encode 8-bit RGB as the sensor's file format.
-pub fn encode(s: &Sensor, width: u32, height: u32, rgb8: &[u8]) -> Result<Vec<u8>, String> {
+/// Encode 8-bit RGB as the sensor's file format, with `exif` (an [`exif::block`], or empty for
+/// none) as the JPEG's APP1 `Exif` segment or the PNG's `eXIf` chunk.
+pub fn encode(
+    s: &Sensor,
+    width: u32,
+    height: u32,
+    rgb8: &[u8],
+    exif: &[u8],
+) -> Result<Vec<u8>, String> {
     use image::ImageEncoder;
+    fn write(
+        mut enc: impl ImageEncoder,
+        exif: &[u8],
+        rgb8: &[u8],
+        (width, height): (u32, u32),
+    ) -> image::ImageResult<()> {
+        if !exif.is_empty() {
+            enc.set_exif_metadata(exif.to_vec())
+                .map_err(image::ImageError::Unsupported)?;
+        }
+        enc.write_image(rgb8, width, height, image::ExtendedColorType::Rgb8)
+    }
     let mut out = Vec::new();
     match s.format {
-        SensorFormat::Jpeg(q) => image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, q)
-            .write_image(rgb8, width, height, image::ExtendedColorType::Rgb8)
-            .map_err(|e| format!("JPEG encoding: {e}"))?,
-        SensorFormat::Png => image::codecs::png::PngEncoder::new(&mut out)
-            .write_image(rgb8, width, height, image::ExtendedColorType::Rgb8)
-            .map_err(|e| format!("PNG encoding: {e}"))?,
+        SensorFormat::Jpeg(q) => write(
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, q),
+            exif,
+            rgb8,
+            (width, height),
+        )
+        .map_err(|e| format!("JPEG encoding: {e}"))?,
+        SensorFormat::Png => write(
+            image::codecs::png::PngEncoder::new(&mut out),
+            exif,
+            rgb8,
+            (width, height),
+        )
+        .map_err(|e| format!("PNG encoding: {e}"))?,
     }
     Ok(out)
 }

@@ -10,6 +10,7 @@
 //! | `images.csv` | one row per image: `world_from_camera` as quaternion (w, x, y, z) + translation |
 //! | `colmap/…`, `colmap_refractive/…` | COLMAP models (text and binary) of the true poses and the visible target points, without and with the port ([`colmap`]) |
 //! | `opencv/…` | `cv::FileStorage` calibration files and the observations in OpenCV's pixel convention ([`opencv`]) |
+//! | `markers/…` | the observations as marker files (`marker,image,x,y`) and the target points as a GCP reference (`label,x,y,z`) for outside photogrammetry software ([`markers`]) |
 //!
 //! Pixel convention: poser's, which is COLMAP's — the top-left pixel's centre is at (0.5,
 //! 0.5). OpenCV's pixel centres are at integers; only the files under `opencv/` use it.
@@ -20,6 +21,7 @@
 //! where its ray leaves the port.
 
 pub mod colmap;
+pub mod markers;
 pub mod opencv;
 
 use crate::geometry::Bvh;
@@ -376,6 +378,7 @@ pub fn files(model: &Model, truth: &Truth) -> Result<Vec<(String, Vec<u8>)>, Str
 
     out.extend(colmap::files(model, truth));
     out.extend(opencv::files(truth));
+    out.extend(markers::files(model, truth));
     Ok(out)
 }
 

@@ -80,7 +80,15 @@ pub(super) fn cameras(
             }
         }
         _ => {
-            if let Some(c) = camera(cx, &base, "camera", water, "cam", Pose::IDENTITY, spans) {
+            if let Some(c) = camera(
+                cx,
+                &base,
+                "camera",
+                water,
+                DEFAULT_CAMERA_NAME,
+                Pose::IDENTITY,
+                spans,
+            ) {
                 out.push(c);
             }
         }
