@@ -148,6 +148,37 @@ pub fn load_geometry(path: &Path, roots: &[PathBuf]) -> Result<TriMesh, String> 
     Ok(load_with(path, roots, false)?.mesh)
 }
 
+/// The bounds `(min, max)` of a mesh file's vertices as [`load_geometry`] reads them (glTF
+/// turned to +Z up); `None` without vertices. An OBJ's `v` lines are scanned alone (its faces
+/// are not parsed): what the scene's front end can afford on every load.
+pub fn vertex_bounds(path: &Path) -> Result<Option<(DVec3, DVec3)>, String> {
+    if Format::of(path) != Some(Format::Obj) {
+        return Ok(load_geometry(path, &[])?.bounds());
+    }
+    let bytes = read(path)?;
+    let text = text_of(&bytes, &path.display().to_string())?;
+    let mut out: Option<(DVec3, DVec3)> = None;
+    for line in text.lines() {
+        let line = line.trim_start();
+        let (key, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+        if key != "v" {
+            continue;
+        }
+        let c: Vec<f64> = rest
+            .split_whitespace()
+            .take(3)
+            .filter_map(|s| s.parse().ok())
+            .collect();
+        if let [x, y, z] = c[..]
+            && [x, y, z].iter().all(|v| v.is_finite())
+        {
+            let p = DVec3::new(x, y, z);
+            out = Some(out.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
+        }
+    }
+    Ok(out)
+}
+
 fn load_with(path: &Path, roots: &[PathBuf], colours: bool) -> Result<MeshFile, String> {
     let shown = path.display().to_string();
     let format = Format::of(path)
