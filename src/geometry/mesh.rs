@@ -5,7 +5,7 @@
 //!
 //! | shape | parameters (object frame, metres) | tessellation |
 //! |---|---|---|
-//! | `Mesh` | a glTF 2.0 (`.glb`/`.gltf`), OBJ or PLY file ([`super::meshfile`]) | glTF: every triangle primitive of the default scene, node transforms applied, glTF's +Y-up turned into poser's +Z-up: `(x, y, z)_gltf → (x, -z, y)`; OBJ, PLY: as written (+Z up) |
+//! | `Mesh` | a glTF 2.0 (`.glb`/`.gltf`), OBJ or PLY file ([`super::meshfile`]) | glTF: every triangle primitive of the default scene, node transforms applied, then the object's `offset` subtracted in the file's axes and its up axis turned to +Z ([`georeferenced`]; glTF's +Y-up by default: `(x, y, z)_gltf → (x, -z, y)`; OBJ, PLY: +Z up by default) |
 //! | `Plane` | `width` (x) × `height` (y), centred, normal +z | 2 triangles |
 //! | `Box` | `size` (x, y, z), centred | 12 triangles, outward normals |
 //! | `Sphere` | `radius`, centred | UV sphere, [`SPHERE_SEGMENTS`] × [`SPHERE_SEGMENTS`]/2 |
