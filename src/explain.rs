@@ -288,6 +288,7 @@ fn contents(s: &mut String, m: &Model) {
         m.lights.len()
     );
     for i in 0..m.objects.len() {
+        mesh_extent(s, m, i);
         match crate::texture::mapped::plan_object(m, i) {
             Ok(Some(p)) => {
                 for (k, line) in p.lines().into_iter().enumerate() {
@@ -323,6 +324,34 @@ fn contents(s: &mut String, m: &Model) {
     let _ = writeln!(s, "will be modelled:");
     for r in &m.needs.reasons {
         let _ = writeln!(s, "  - {r}");
+    }
+}
+
+/// For a mesh object, the size of its bounding box in metres (after `offset`, up axis and
+/// scale: the object frame, before rotation) and where its centre lands in the scene.
+fn mesh_extent(s: &mut String, m: &Model, i: usize) {
+    let o = &m.objects[i];
+    if !matches!(o.shape, crate::model::Shape::Mesh { .. }) {
+        return;
+    }
+    let base = std::path::Path::new(&m.source)
+        .parent()
+        .unwrap_or(std::path::Path::new("."));
+    match crate::geometry::mesh::shape_mesh(&o.shape, base).map(|l| l.bounds()) {
+        Ok(Some((lo, hi))) => {
+            let (a, b) = (lo * o.scale, hi * o.scale);
+            let size = (b - a).abs();
+            let c = o.pose.transform_point(0.5 * (a + b));
+            let _ = writeln!(
+                s,
+                "mesh `{}`: extent {:.3} × {:.3} × {:.3} m (x × y × z after offset, up axis and scale), centre at ({:.3}, {:.3}, {:.3}) m",
+                o.name, size.x, size.y, size.z, c.x, c.y, c.z
+            );
+        }
+        Ok(None) => {}
+        Err(e) => {
+            let _ = writeln!(s, "mesh `{}`: {e}", o.name);
+        }
     }
 }
 

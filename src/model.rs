@@ -349,6 +349,20 @@ pub struct Object {
     pub backdrop: bool,
 }
 
+/// The axis of a mesh file that points up (poser's object frame is +Z up).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UpAxis {
+    /// +Z up: taken as it is.
+    Z,
+    /// +Y up (glTF's convention): `(x, y, z) → (x, −z, y)`.
+    Y,
+}
+
+fn is_zero(v: &DVec3) -> bool {
+    *v == DVec3::ZERO
+}
+
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum Shape {
@@ -362,6 +376,15 @@ pub enum Shape {
         /// object's `albedo`. `false`: the object's `albedo` everywhere.
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         textured: bool,
+        /// Subtracted from the file's vertices (in the file's own units and axes, in f64)
+        /// before anything else: the georeferenced point that becomes the object's origin.
+        #[serde(default, skip_serializing_if = "is_zero")]
+        offset: DVec3,
+        /// Which axis of the file points up; `None`: the format's own (glTF +Y, OBJ and PLY
+        /// +Z). Applied after `offset`, before the object's scale and pose
+        /// ([`crate::geometry::mesh::georeferenced`]).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        up_axis: Option<UpAxis>,
     },
     /// Rectangle in the object's xy plane, centred, normal +z.
     Plane {

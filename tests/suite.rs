@@ -54,5 +54,6 @@ mod render_resume;
 mod scenarios;
 mod sensor;
 mod texture_budget;
+mod georef_mesh;
 mod textured_mesh;
 mod truth;

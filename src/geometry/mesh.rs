@@ -5,7 +5,7 @@
 //!
 //! | shape | parameters (object frame, metres) | tessellation |
 //! |---|---|---|
-//! | `Mesh` | a glTF 2.0 (`.glb`/`.gltf`), OBJ or PLY file ([`super::meshfile`]) | glTF: every triangle primitive of the default scene, node transforms applied, glTF's +Y-up turned into poser's +Z-up: `(x, y, z)_gltf → (x, -z, y)`; OBJ, PLY: as written (+Z up) |
+//! | `Mesh` | a glTF 2.0 (`.glb`/`.gltf`), OBJ or PLY file ([`super::meshfile`]) | glTF: every triangle primitive of the default scene, node transforms applied, then the object's `offset` subtracted in the file's axes and its up axis turned to +Z ([`georeferenced`]; glTF's +Y-up by default: `(x, y, z)_gltf → (x, -z, y)`; OBJ, PLY: +Z up by default) |
 //! | `Plane` | `width` (x) × `height` (y), centred, normal +z | 2 triangles |
 //! | `Box` | `size` (x, y, z), centred | 12 triangles, outward normals |
 //! | `Sphere` | `radius`, centred | UV sphere, [`SPHERE_SEGMENTS`] × [`SPHERE_SEGMENTS`]/2 |
@@ -19,7 +19,7 @@
 //! the winding so that normals stay outward. Every procedural shape is a pure function of its
 //! parameters and seed: the same scene gives the same bytes.
 
-use crate::model::{Object, Pattern, Pose, Shape};
+use crate::model::{Object, Pattern, Pose, Shape, UpAxis};
 use glam::DVec3;
 use std::path::Path;
 
@@ -112,14 +112,16 @@ pub fn shape_mesh(shape: &Shape, base_dir: &Path) -> Result<TriMesh, String> {
         }
     };
     match *shape {
-        Shape::Mesh { ref path, .. } => {
-            let p = Path::new(path);
-            let full = if p.is_absolute() {
-                p.to_path_buf()
-            } else {
-                base_dir.join(p)
-            };
-            super::meshfile::load_geometry(&full, &[base_dir.to_path_buf()])
+        Shape::Mesh {
+            ref path,
+            offset,
+            up_axis,
+            ..
+        } => {
+            let full = mesh_file_path(path, base_dir);
+            let mut m = super::meshfile::load_geometry(&full, &[base_dir.to_path_buf()])?;
+            georeferenced(&mut m, super::meshfile::Format::of(&full), offset, up_axis);
+            Ok(m)
         }
         Shape::Plane { width, height } => {
             positive("plane width", width)?;
@@ -180,6 +182,58 @@ pub fn shape_mesh(shape: &Shape, base_dir: &Path) -> Result<TriMesh, String> {
             };
             Ok(super::coral::coral(growth, radius, seed))
         }
+    }
+}
+
+/// The file of a mesh shape's `path`, resolved against `base_dir` when relative.
+pub fn mesh_file_path(path: &str, base_dir: &Path) -> std::path::PathBuf {
+    let p = Path::new(path);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        base_dir.join(p)
+    }
+}
+
+/// A point as the reader of `format` returned it (glTF turned to +Z up) → in the file's own
+/// axes, exactly (a permutation and a sign).
+pub fn file_axes(q: DVec3, format: Option<super::meshfile::Format>) -> DVec3 {
+    match format {
+        Some(super::meshfile::Format::Gltf) => DVec3::new(q.x, q.z, -q.y),
+        _ => q,
+    }
+}
+
+/// A point in the file's own axes turned so that `up` points along +Z (exact).
+pub fn up_turned(p: DVec3, up: UpAxis) -> DVec3 {
+    match up {
+        UpAxis::Z => p,
+        UpAxis::Y => DVec3::new(p.x, -p.z, p.y),
+    }
+}
+
+/// The up axis of a mesh file: `up` when given, else the format's own (glTF +Y, OBJ and PLY
+/// +Z).
+pub fn up_of(up: Option<UpAxis>, format: Option<super::meshfile::Format>) -> UpAxis {
+    up.unwrap_or(match format {
+        Some(super::meshfile::Format::Gltf) => UpAxis::Y,
+        _ => UpAxis::Z,
+    })
+}
+
+/// A mesh file's vertices (as [`super::meshfile`] read them, in f64) brought into the object
+/// frame: in the file's own axes, `offset` subtracted (f64), then turned so that the file's
+/// `up` axis is +Z. The object's scale and pose come after ([`TriMesh::transformed`]). A
+/// turn is a rotation: the winding, hence the normals, stay outward.
+pub fn georeferenced(
+    m: &mut TriMesh,
+    format: Option<super::meshfile::Format>,
+    offset: DVec3,
+    up: Option<UpAxis>,
+) {
+    let up = up_of(up, format);
+    for p in &mut m.positions {
+        *p = up_turned(file_axes(*p, format) - offset, up);
     }
 }
 

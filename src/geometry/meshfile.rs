@@ -11,7 +11,9 @@
 //!
 //! Texture coordinates follow poser's convention: v = 0 at the image's first stored row (glTF's
 //! own; OBJ's v runs from the bottom row, so OBJ gives v = 1 − vt). OBJ and PLY coordinates are
-//! taken as poser's object frame (+Z up); turn a Y-up file with the object's `rotation`.
+//! returned as written; a mesh object's `offset` and `up_axis` are applied after reading
+//! ([`super::mesh::georeferenced`]). Node transforms of a glTF are read from its JSON in f64
+//! (the glTF crate's are f32, too coarse for a UTM translation).
 //!
 //! Every error names the file, and the line for OBJ and MTL. A file an OBJ, MTL or glTF names
 //! (an MTL, an image, a buffer) must be a relative path that stays inside the scene's folder or
@@ -146,6 +148,37 @@ pub fn load(path: &Path, roots: &[PathBuf]) -> Result<MeshFile, String> {
 /// same triangles, vertices and order as [`load`]).
 pub fn load_geometry(path: &Path, roots: &[PathBuf]) -> Result<TriMesh, String> {
     Ok(load_with(path, roots, false)?.mesh)
+}
+
+/// The bounds `(min, max)` of a mesh file's vertices as [`load_geometry`] reads them (glTF
+/// turned to +Z up); `None` without vertices. An OBJ's `v` lines are scanned alone (its faces
+/// are not parsed): what the scene's front end can afford on every load.
+pub fn vertex_bounds(path: &Path) -> Result<Option<(DVec3, DVec3)>, String> {
+    if Format::of(path) != Some(Format::Obj) {
+        return Ok(load_geometry(path, &[])?.bounds());
+    }
+    let bytes = read(path)?;
+    let text = text_of(&bytes, &path.display().to_string())?;
+    let mut out: Option<(DVec3, DVec3)> = None;
+    for line in text.lines() {
+        let line = line.trim_start();
+        let (key, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+        if key != "v" {
+            continue;
+        }
+        let c: Vec<f64> = rest
+            .split_whitespace()
+            .take(3)
+            .filter_map(|s| s.parse().ok())
+            .collect();
+        if let [x, y, z] = c[..]
+            && [x, y, z].iter().all(|v| v.is_finite())
+        {
+            let p = DVec3::new(x, y, z);
+            out = Some(out.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
+        }
+    }
+    Ok(out)
 }
 
 fn load_with(path: &Path, roots: &[PathBuf], colours: bool) -> Result<MeshFile, String> {
@@ -1002,11 +1035,14 @@ pub fn read_gltf(
     let mut out = MeshFile::default();
     // glTF material index (None: the default material) → ours.
     let mut mat_of: Vec<(Option<usize>, u32)> = Vec::new();
+    let exact = node_matrices(bytes);
     let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
     stack.reverse();
     while let Some((node, parent)) = stack.pop() {
-        let local = node.transform().matrix();
-        let local = DMat4::from_cols_array_2d(&local.map(|c| c.map(f64::from)));
+        let local = match exact.get(node.index()) {
+            Some(Some(m)) => *m,
+            _ => DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from))),
+        };
         let world = parent * local;
         if let Some(mesh) = node.mesh() {
             let mesh_name = mesh
@@ -1085,6 +1121,62 @@ pub fn read_gltf(
         out.uv.resize(out.mesh.positions.len(), [0.0; 2]);
     }
     Ok(out)
+}
+
+/// Every node's local transform read from the glTF's JSON in f64 (the glTF crate keeps them
+/// in f32, which rounds a georeferenced translation such as 4 200 000.37 m to 0.5 m): per
+/// node, `matrix`, or `translation · rotation · scale`; `None` for a node whose numbers are
+/// not all there and finite (its f32 transform is used).
+fn node_matrices(bytes: &[u8]) -> Vec<Option<DMat4>> {
+    let json: &[u8] = if bytes.starts_with(b"glTF") {
+        match gltf::Glb::from_slice(bytes) {
+            Ok(g) => return node_matrices_json(&g.json),
+            Err(_) => return Vec::new(),
+        }
+    } else {
+        bytes
+    };
+    node_matrices_json(json)
+}
+
+fn node_matrices_json(json: &[u8]) -> Vec<Option<DMat4>> {
+    let Ok(v) = serde_json::from_slice::<serde_json::Value>(json) else {
+        return Vec::new();
+    };
+    let numbers = |n: &serde_json::Value, key: &str, len: usize| -> Option<Option<Vec<f64>>> {
+        match n.get(key) {
+            None => Some(None),
+            Some(a) => {
+                let a = a.as_array()?;
+                let v: Vec<f64> = a.iter().filter_map(serde_json::Value::as_f64).collect();
+                (v.len() == len && a.len() == len && v.iter().all(|x| x.is_finite()))
+                    .then_some(Some(v))
+            }
+        }
+    };
+    let nodes = v.get("nodes").and_then(|n| n.as_array()).cloned().unwrap_or_default();
+    nodes
+        .iter()
+        .map(|n| {
+            if let Some(m) = numbers(n, "matrix", 16)? {
+                let mut a = [0.0; 16];
+                a.copy_from_slice(&m);
+                return Some(DMat4::from_cols_array(&a));
+            }
+            let t = numbers(n, "translation", 3)?.unwrap_or(vec![0.0; 3]);
+            let r = numbers(n, "rotation", 4)?.unwrap_or(vec![0.0, 0.0, 0.0, 1.0]);
+            let s = numbers(n, "scale", 3)?.unwrap_or(vec![1.0; 3]);
+            let q = glam::DQuat::from_xyzw(r[0], r[1], r[2], r[3]);
+            if !q.is_normalized() {
+                return None;
+            }
+            Some(DMat4::from_scale_rotation_translation(
+                DVec3::new(s[0], s[1], s[2]),
+                q,
+                DVec3::new(t[0], t[1], t[2]),
+            ))
+        })
+        .collect()
 }
 
 /// The material of a glTF primitive (its index in `out.materials`, added when new) and the

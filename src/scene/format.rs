@@ -525,6 +525,19 @@ pub struct Object {
     /// `false`: one plain `albedo`. **Default:** true when the file has an image texture or
     /// vertex colours.
     pub texture: Option<bool>,
+    /// Mesh: subtracted from the file's vertices (in f64, in the file's own units and axes)
+    /// before the up axis, `scale` and the pose: the georeferenced point (e.g. UTM easting,
+    /// northing, height) that becomes the object's origin. See `docs/textures.md`,
+    /// "Georeferenced meshes". **Default:** `[0, 0, 0]`.
+    pub offset: Option<Vec3<Number>>,
+    /// Mesh: a text file (relative to the file that names it) holding the three numbers of
+    /// `offset`, as photogrammetry exports write a model's shift beside it (instead of
+    /// `offset`).
+    pub offset_file: Option<String>,
+    /// Mesh: the file's axis that points up, `"z"` or `"y"` (a Y-up file is turned
+    /// `(x, y, z) → (x, −z, y)`), after `offset`. **Default:** the format's own: `"y"` for
+    /// glTF, `"z"` for OBJ and PLY.
+    pub up_axis: Option<UpAxisKind>,
     /// Plane width / seabed and boulder field extent along x. **Unit:** m. **Default:** 1 m
     /// (plane), 20 m (seabed, boulders).
     pub width: Option<Length>,
@@ -576,6 +589,13 @@ pub enum ShapeKind {
     Boulders,
     /// A procedural coral colony (see `growth`, `radius`, `seed`).
     Coral,
+}
+
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum UpAxisKind {
+    Z,
+    Y,
 }
 
 #[derive(JsonSchema)]

@@ -290,6 +290,8 @@ pub struct MaterialPlan {
 /// for [`prepare_object`].
 #[derive(Debug, Clone)]
 pub struct MeshPlan {
+    /// The file read, its vertices in the object frame (offset and up axis applied:
+    /// [`crate::geometry::mesh::georeferenced`]).
     pub file: MeshFile,
     pub materials: Vec<MaterialPlan>,
     /// Texel wanted, m, and why (half the finest GSD).
@@ -397,14 +399,8 @@ fn mesh_path(o: &Object, base: &Path) -> Option<PathBuf> {
         Shape::Mesh {
             path,
             textured: true,
-        } => {
-            let p = Path::new(path);
-            Some(if p.is_absolute() {
-                p.to_path_buf()
-            } else {
-                base.join(p)
-            })
-        }
+            ..
+        } => Some(crate::geometry::mesh::mesh_file_path(path, base)),
         _ => None,
     }
 }
@@ -446,7 +442,14 @@ pub fn plan_object(model: &Model, index: usize) -> Result<Option<MeshPlan>, Stri
         return Ok(None);
     };
     let err = |e: String| format!("object `{}`: {e}", o.name);
-    let file = crate::geometry::meshfile::load(&path, &roots).map_err(err)?;
+    let mut file = crate::geometry::meshfile::load(&path, &roots).map_err(err)?;
+    if let Shape::Mesh {
+        offset, up_axis, ..
+    } = &o.shape
+    {
+        let format = crate::geometry::meshfile::Format::of(&path);
+        crate::geometry::mesh::georeferenced(&mut file.mesh, format, *offset, *up_axis);
+    }
     let (wanted, reason) = super::bake::wanted_texel(model, o, file.mesh.bounds());
     let mut materials = Vec::new();
     let mut sizes: HashMap<String, (u32, u32)> = HashMap::new();

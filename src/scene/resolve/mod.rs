@@ -25,6 +25,7 @@
 mod camera;
 mod diver;
 mod environment;
+mod georef;
 mod lights;
 mod network;
 mod objects;

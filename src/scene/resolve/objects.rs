@@ -1,7 +1,8 @@
 //! The `[[objects]]` of a scene: their shape (glTF mesh, plane, box, sphere, cylinder,
 //! generated seabed, boulders, coral), placement, scale and material (albedo and texture
 //! pattern). Mesh paths are resolved relative to the scene file that names them, checked to be
-//! readable glTF and kept inside the scene's folder.
+//! readable glTF, OBJ or PLY and kept inside the scene's folder; their georeference keys are
+//! [`super::georef`]'s.
 
 use super::{Spans, placement};
 use crate::model::*;
@@ -42,7 +43,9 @@ pub(super) fn objects(
         let seed = o
             .opt_u64(cx, "seed")
             .unwrap_or(seed0.wrapping_add(i as u64));
+        let errors = cx.diags.iter().filter(|d| d.is_error()).count();
         let shape = shape(cx, &mut o, shape_kind, seed, sources, scene);
+        let mesh_ok = cx.diags.iter().filter(|d| d.is_error()).count() == errors;
         let backdrop = o.bool(cx, "backdrop", false);
         let default_pos = if matches!(shape, Shape::Seabed { .. } | Shape::Boulders { .. }) {
             DVec3::new(0.0, 0.0, -site.depth)
@@ -68,6 +71,18 @@ pub(super) fn objects(
                     .label(sp, "every factor must be > 0")
                     .help("use `scale = 1` for the original size"),
             );
+        }
+        if let Shape::Mesh {
+            path,
+            up_axis,
+            offset: _,
+            ..
+        } = &shape
+            && mesh_ok
+            && !o.has("offset")
+            && !o.has("offset_file")
+        {
+            super::georef::warn_far(cx, Path::new(path), *up_axis, scale, o.span_of("path"));
         }
         let material = material(cx, &mut o, 0.3);
         spans.objects.push(o.span);
@@ -118,9 +133,12 @@ fn shape(
                         .help("remove `pattern`, or set `texture = false` to draw the pattern over one plain albedo"),
                 );
             }
+            let (offset, up_axis) = super::georef::keys(cx, o, sources, scene);
             Shape::Mesh {
                 path: resolved,
                 textured,
+                offset,
+                up_axis,
             }
         }
         "plane" => {
