@@ -126,6 +126,51 @@ fn include_errors_point_into_the_included_file() {
     assert!(d.rendered.contains("did you mean `convergence`?"));
 }
 
+/// An unknown key that a base file sets points into the base, says it is inherited, shows
+/// the include line and names `{ unset = true }`; with that line the variant loads.
+#[test]
+fn an_inherited_key_is_located_in_the_base_and_can_be_unset() {
+    let (_, diags, ok) = run(Path::new("tests/invalid/include_flat_key_under_dome.toml"));
+    assert!(!ok);
+    let d = diags.iter().find(|d| d.code == "E0100").unwrap();
+    assert_eq!(
+        d.location.as_deref(),
+        Some("tests/invalid/shared/base_flat_port.toml:7:1")
+    );
+    assert!(d.message.contains("inherited from"), "{}", d.rendered);
+    assert!(d.rendered.contains("included here"), "{}", d.rendered);
+    assert!(
+        d.help.as_deref().unwrap().contains("pupil_distance = { unset = true }"),
+        "{}",
+        d.rendered
+    );
+    // The variant that unsets it loads, as a dome, without the key.
+    let l = scene::load(Path::new("tests/invalid/shared/dome_variant.toml"), &[]).unwrap();
+    assert!(matches!(
+        l.model.cameras[0].port,
+        poser::model::Port::Dome { .. }
+    ));
+    // The same removal from the command line.
+    let l = scene::load(
+        Path::new("tests/invalid/include_flat_key_under_dome.toml"),
+        &["camera.port.pupil_distance={ unset = true }".to_string()],
+    )
+    .unwrap();
+    assert!(matches!(
+        l.model.cameras[0].port,
+        poser::model::Port::Dome { .. }
+    ));
+    // Unsetting a key nothing sets is an error at the key, on the command line too.
+    let f = scene::load(
+        Path::new("tests/invalid/shared/dome_variant.toml"),
+        &["camera.port.tilt={ unset = true }".to_string()],
+    )
+    .err()
+    .unwrap();
+    let d = f.errors().find(|d| d.code == "E0021").unwrap();
+    assert_eq!(d.location.as_deref(), Some("<command line>:1:19"));
+}
+
 /// An override with a misspelt path points at the command line with "did you mean".
 #[test]
 fn set_errors_point_at_the_command_line() {

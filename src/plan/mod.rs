@@ -2,6 +2,7 @@
 
 pub mod deco;
 pub mod dive;
+pub mod footprints;
 pub mod gas;
 pub mod network;
 pub mod oxygen;

@@ -294,6 +294,7 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
             );
         }
     }
+    seabed_seen(cx, m, spans);
     // Strobes close to the optical axis and port: backscatter dominates.
     if let Some(w) = &m.water {
         let scatter = w.scattering.iter().cloned().fold(0.0, f64::max);
@@ -318,6 +319,82 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
                     );
                 }
             }
+        }
+    }
+}
+
+/// A seabed (or boulder field) with less than this share inside the union of the images'
+/// ground footprints is mostly unseen (W0302) ...
+pub const SEABED_SEEN_MIN: f64 = 0.5;
+/// ... and below this share of the footprints' union on that seabed, the network looks past
+/// it: the two do not match. A seabed larger than the network with every image on it (scenery
+/// around the site, as the water column wants) is not warned about.
+pub const NETWORK_ON_SEABED_MIN: f64 = 0.9;
+
+/// `26 %`, or `0.4 %` below 10 %.
+fn percent(x: f64) -> String {
+    if x < 0.1 {
+        format!("{:.1} %", 100.0 * x)
+    } else {
+        format!("{:.0} %", 100.0 * x)
+    }
+}
+
+/// A seabed or boulder field (not a backdrop) mostly outside the network's footprints while the
+/// network also looks past it: the usual cause is a seabed's `width`/`length` (along x/y) swapped against a lawnmower's
+/// (across/along its strips), or a network centred elsewhere.
+fn seabed_seen(cx: &mut Cx, m: &Model, spans: &Spans) {
+    if cx.has_errors() || m.poses.is_empty() {
+        return;
+    }
+    for (i, o) in m.objects.iter().enumerate() {
+        let (Shape::Seabed { width, length, .. } | Shape::Boulders { width, length, .. }) = o.shape
+        else {
+            continue;
+        };
+        if o.backdrop || !(width > 0.0 && length > 0.0) {
+            continue;
+        }
+        let (hx, hy) = (0.5 * width * o.scale.x, 0.5 * length * o.scale.y);
+        let corners = [(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]
+            .map(|(x, y)| o.pose.transform_point(glam::DVec3::new(x, y, 0.0)));
+        if (corners[0].z - corners[2].z).abs() > 1e-6 || (corners[1].z - corners[3].z).abs() > 1e-6 {
+            continue; // a tilted seabed: its plane is not horizontal
+        }
+        let Some(seen) = crate::plan::footprints::seen(m, corners) else {
+            continue;
+        };
+        let Some(sp) = spans.objects.get(i) else {
+            continue;
+        };
+        if seen.rect_seen < SEABED_SEEN_MIN && seen.on_rect < NETWORK_ON_SEABED_MIN {
+            cx.push(
+                Diagnostic::warning(
+                    "W0302",
+                    format!(
+                        "the camera network sees {} of seabed `{}`",
+                        percent(seen.rect_seen),
+                        o.name
+                    ),
+                )
+                .label(
+                    *sp,
+                    format!(
+                        "{} m × {} m (x × y): the images' footprints cover {} of it, and {} of \
+                         what they see is past it",
+                        num(width * o.scale.x),
+                        num(length * o.scale.y),
+                        percent(seen.rect_seen),
+                        percent(1.0 - seen.on_rect)
+                    ),
+                )
+                .help(
+                    "a seabed's `width` runs along x (east) and its `length` along y (north), while a \
+                     lawnmower's `width` is across its strips and its `length` along them (`heading`, \
+                     clockwise from north): check that the two agree, that the network is centred on the \
+                     seabed, and that the seabed covers the surveyed area",
+                ),
+            );
         }
     }
 }

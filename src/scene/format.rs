@@ -1267,7 +1267,13 @@ pub fn format_markdown() -> String {
     s.push_str(
         "Composition: `include = [\"../shared/rig.toml\"]` merges files under this one (deep merge \
          of tables); `poser … --set a.b.c=value` overrides any value after includes (the value is \
-         read as TOML, else as a string; list entries by index: `--set network.poses.0.position=[0,0,-2]`).\n\n",
+         read as TOML, else as a string; list entries by index: `--set network.poses.0.position=[0,0,-2]`). \
+         A key written `key = { unset = true }` removes what the included files set for it (a \
+         dome variant of a flat-port base: `pupil_distance = { unset = true }` under \
+         `[camera.port]`; a whole table: `port = { unset = true }` under `[camera]`); unsetting a \
+         key no included file sets is error E0021, and `--set camera.port.tilt='{ unset = true }'` \
+         removes a key from the command line. An unknown key an included file sets is reported \
+         in that file, as inherited, with the include line.\n\n",
     );
     s.push_str(
         "Editor support: the JSON Schema is `schema/poser-scene.schema.json`. With the Even Better \

@@ -116,9 +116,17 @@ fn load_sources(
         return Err(finish_failure(diags, &sources));
     };
     source::apply_sets(&mut root, sets, &mut sources, &mut diags);
+    source::unset_leftovers(&mut root, "", &mut diags);
+    let included = sources
+        .included_at
+        .iter()
+        .enumerate()
+        .map(|(i, at)| at.map(|at| (at, sources.files[i].0.clone())))
+        .collect();
     let mut cx = reader::Cx {
         diags,
         files: Vec::new(),
+        included,
     };
     let (model, spans) = resolve::resolve(&root, path, &sources, &mut cx);
     check::scene(&mut cx, &model, &spans);

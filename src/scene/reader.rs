@@ -14,6 +14,10 @@ pub struct Cx {
     pub diags: Vec<Diagnostic>,
     /// Asset files read while resolving (meshes, point lists), for [`super::Loaded::files`].
     pub files: Vec<std::path::PathBuf>,
+    /// Per source file read through an include: the span of the `include` entry that read it
+    /// and the file's name (None for the scene file and the command line). An unknown key
+    /// such a file sets is reported as inherited ([`Tab::finish_as`]).
+    pub included: Vec<Option<(Span, String)>>,
 }
 
 impl Cx {
@@ -83,6 +87,23 @@ pub struct Tab<'a> {
     /// Dotted path, e.g. `camera.port`, for messages.
     pub path: String,
     known: Vec<&'static str>,
+}
+
+/// An unknown key that an included file set (at `span`, in `file`, read by the include entry
+/// at `at`): it may be right for that file's own table (a flat port's key under a dome that
+/// includes a flat-port base), so the hint names the way to remove it.
+fn inherited_unknown(key: &str, whose: &str, span: Span, at: Span, file: &str, t: &Tab) -> Diagnostic {
+    let d = Diagnostic::error("E0100", format!("unknown key `{key}`{whose}, inherited from `{file}`"))
+        .label(span, format!("unknown key, set by the included `{file}`"))
+        .also(at, "included here");
+    let unset = format!(
+        "remove the inherited key: write `{key} = {{ unset = true }}` {} of the scene that includes `{file}`",
+        t.header()
+    );
+    match did_you_mean(key, t.known.iter().copied()) {
+        Some(s) => d.help(format!("did you mean `{s}`? Fix it in `{file}`; or, if the key is right there but not here, {unset}")),
+        None => d.help(unset),
+    }
 }
 
 fn expect_dim(dim: Dim) -> String {
@@ -226,6 +247,11 @@ impl<'a> Tab<'a> {
                 None if self.path.is_empty() => " at the top level".to_string(),
                 None => format!(" in `[{}]`", self.path),
             };
+            if let Some(Some((at, file))) = cx.included.get(e.key_span.file) {
+                let d = inherited_unknown(&e.key, &whose, e.key_span, *at, file, &self);
+                cx.push(d);
+                continue;
+            }
             let mut d = Diagnostic::error("E0100", format!("unknown key `{}`{whose}", e.key))
                 .label(e.key_span, "unknown key");
             match did_you_mean(&e.key, self.known.iter().copied()) {
@@ -237,6 +263,15 @@ impl<'a> Tab<'a> {
                 }
             }
             cx.push(d);
+        }
+    }
+
+    /// `[camera.port]`-style header of this table, for hints (`the top level` for the root).
+    fn header(&self) -> String {
+        if self.path.is_empty() {
+            "at the top level".into()
+        } else {
+            format!("in `[{}]`", normalise_path(&self.path))
         }
     }
 

@@ -28,12 +28,16 @@ pub struct Sources {
     /// must be inside it: a relative path without `..` that does not leave it through a link
     /// ([`outside_root`]).
     pub root: Option<PathBuf>,
+    /// Per file, the span of the `include = [...]` entry that read it (None for the scene file
+    /// itself and the command line): an inherited key's diagnostic points at both.
+    pub included_at: Vec<Option<Span>>,
 }
 
 impl Sources {
     pub fn add(&mut self, name: String, text: String, path: Option<PathBuf>) -> usize {
         self.files.push((name, text));
         self.paths.push(path);
+        self.included_at.push(None);
         self.files.len() - 1
     }
     /// Directory of the file a span points into (for resolving relative paths).
@@ -414,11 +418,26 @@ fn syntax_help(msg: &str) -> String {
     }
 }
 
-/// Deep merge `over` onto `base`: tables merge key by key, everything else is replaced.
+/// Whether `node` is the marker `{ unset = true }`, which removes the key it is written for
+/// from what the included files set ([`merge`]).
+pub fn is_unset(node: &Node) -> bool {
+    matches!(&node.val, Val::Table(t)
+        if t.entries.len() == 1 && t.entries[0].key == "unset"
+            && matches!(t.entries[0].node.val, Val::Bool(true)))
+}
+
+/// Deep merge `over` onto `base`: tables merge key by key, everything else is replaced. A key
+/// set to `{ unset = true }` in `over` removes the key from `base`; when `base` does not have
+/// it the marker stays, for a later merge (a file included after the base) or for
+/// [`unset_leftovers`] to report.
 pub fn merge(base: &mut Node, over: Node) {
     match (&mut base.val, over.val) {
         (Val::Table(b), Val::Table(o)) => {
             for e in o.entries {
+                if is_unset(&e.node) && b.get(&e.key).is_some_and(|be| !is_unset(&be.node)) {
+                    b.remove(&e.key);
+                    continue;
+                }
                 match b.get_mut(&e.key) {
                     Some(be) => {
                         be.key_span = e.key_span;
@@ -432,6 +451,73 @@ pub fn merge(base: &mut Node, over: Node) {
             base.val = v;
             base.span = over.span;
         }
+    }
+}
+
+/// Report every `{ unset = true }` left in the merged tree: it removed nothing, because no
+/// included file sets that key (E0021, with the keys that table does have when one is close).
+/// Also a table whose only key is `unset` with another value than `true`. The markers are
+/// taken out of the tree, so the reader does not report them again.
+pub fn unset_leftovers(node: &mut Node, path: &str, diags: &mut Vec<Diagnostic>) {
+    let Val::Table(t) = &mut node.val else {
+        if let Val::Array(a) = &mut node.val {
+            for (i, x) in a.iter_mut().enumerate() {
+                unset_leftovers(x, &format!("{path}[{i}]"), diags);
+            }
+        }
+        return;
+    };
+    let siblings: Vec<String> = t
+        .entries
+        .iter()
+        .filter(|e| !is_unset(&e.node))
+        .map(|e| e.key.clone())
+        .collect();
+    let mut i = 0;
+    while i < t.entries.len() {
+        let e = &t.entries[i];
+        let full = if path.is_empty() {
+            e.key.clone()
+        } else {
+            format!("{path}.{}", e.key)
+        };
+        if is_unset(&e.node) {
+            let mut d = Diagnostic::error(
+                "E0021",
+                format!("`{full}` is unset, but no included file sets it"),
+            )
+            .label(e.key_span, "nothing to remove here");
+            d = match super::reader::did_you_mean(&e.key, siblings.iter().map(String::as_str)) {
+                Some(s) => d.help(format!(
+                    "did you mean `{s}`? `{{ unset = true }}` removes a key that an included file sets"
+                )),
+                None => d.help(
+                    "`{ unset = true }` removes a key that an included file sets: check the key's \
+                     spelling and table, or delete this line",
+                ),
+            };
+            diags.push(d);
+            t.entries.remove(i);
+            continue;
+        }
+        if let Val::Table(inner) = &e.node.val
+            && inner.entries.len() == 1
+            && inner.entries[0].key == "unset"
+        {
+            let v = &inner.entries[0].node;
+            diags.push(
+                Diagnostic::error("E0021", format!("`{full}.unset` takes only `true`"))
+                    .label(v.span, format!("found {}", v.val.type_name()))
+                    .help(format!(
+                        "write `{} = {{ unset = true }}` to remove the key an included file sets, or delete the line to keep it",
+                        e.key
+                    )),
+            );
+            t.entries.remove(i);
+            continue;
+        }
+        unset_leftovers(&mut t.entries[i].node, &full, diags);
+        i += 1;
     }
 }
 
@@ -538,6 +624,7 @@ pub fn load_file(
     }
     let text = String::from_utf8(bytes).expect("checked by not_text");
     let file = sources.add(display(path), text, Some(path.to_path_buf()));
+    sources.included_at[file] = included_from;
     let text = sources.files[file].1.clone();
     let mut node = parse_text(&text, file, diags)?;
     // Includes.
@@ -715,6 +802,17 @@ fn set_path(node: &mut Node, segs: &[(String, Span)], value: Node, diags: &mut V
     let (key, kspan) = &segs[0];
     match &mut node.val {
         Val::Table(t) => {
+            if segs.len() == 1 && is_unset(&value) {
+                // `--set a.b={ unset = true }` removes the key (nothing to remove: E0021).
+                if t.remove(key).is_none() {
+                    diags.push(
+                        Diagnostic::error("E0021", format!("`{key}` is unset, but the scene does not set it"))
+                            .label(*kspan, "nothing to remove here")
+                            .help("`{ unset = true }` removes a key the scene or its includes set: check the key's spelling and table"),
+                    );
+                }
+                return;
+            }
             if segs.len() == 1 {
                 // A new `type` changes what the table is: its other keys belonged to the old
                 // kind, so the table is replaced by one holding only the new type.

@@ -543,7 +543,14 @@ pub fn plan(model: &Model, index: usize) -> Result<Option<String>, String> {
         p.reason
     );
     if p.texel > p.wanted * 1.000_001 {
-        s.push_str(&coarsened_note(p.wanted, p.texel, &p.limit));
+        // Information here: the commands that render or compile the texture warn about it.
+        s.push_str(&format!(
+            "; coarsened ×{:.2} from {:.2} mm {}, so detail at the pixel is lost (`poser \
+             render` and `compile` warn; make the object smaller or set `pattern.texel` to keep it)",
+            p.texel / p.wanted,
+            p.wanted * 1e3,
+            p.limit
+        ));
     }
     Ok(Some(s))
 }

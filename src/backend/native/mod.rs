@@ -356,6 +356,13 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     }
     let samples = checked_samples(opts.samples.unwrap_or(model.render.samples))?;
     let scene = scene::Scene::build(model)?;
+    // A baked texture coarser than wanted loses detail in these images: warn here, where it is
+    // rendered (Mitsuba and Cycles warn when they compile; `poser explain` lists it as a plan).
+    for (o, b) in model.objects.iter().zip(&scene.bvh.textures) {
+        if let Some(b) = b.as_ref().filter(|b| b.coarsened()) {
+            eprintln!("warning: object `{}`: texture {}", o.name, b.summary());
+        }
+    }
     let rows_total: u64 =
         poses.len() as u64 * model.cameras.iter().map(|c| c.height as u64).sum::<u64>();
     let pb = if opts.progress {
