@@ -140,7 +140,10 @@ fn an_inherited_key_is_located_in_the_base_and_can_be_unset() {
     assert!(d.message.contains("inherited from"), "{}", d.rendered);
     assert!(d.rendered.contains("included here"), "{}", d.rendered);
     assert!(
-        d.help.as_deref().unwrap().contains("pupil_distance = { unset = true }"),
+        d.help
+            .as_deref()
+            .unwrap()
+            .contains("pupil_distance = { unset = true }"),
         "{}",
         d.rendered
     );

@@ -6,11 +6,12 @@
 //! offset are warned of with the offset to give; a malformed offset file is a located error;
 //! `poser explain` prints the extent; Mitsuba and Cycles are given the same geometry.
 
+use crate::support;
 use glam::DVec3;
 use poser::geometry::mesh::object_mesh;
 use poser::model::Model;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use support::textured::poser_in;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -145,7 +146,11 @@ fn truth_gap(a: &Model, b: &Model) -> (f64, f64) {
 fn a_utm_model_with_its_offset_is_the_local_model() {
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
-    std::fs::write(d.join("local.obj"), relief(|x, y, z| format!("{x} {y} {z}"))).unwrap();
+    std::fs::write(
+        d.join("local.obj"),
+        relief(|x, y, z| format!("{x} {y} {z}")),
+    )
+    .unwrap();
     // Written as a photogrammetry package writes UTM: easting, northing to the millimetre
     // and beyond, in text.
     std::fs::write(
@@ -253,7 +258,10 @@ fn a_y_up_file_with_up_axis_y_and_a_gltf_are_the_z_up_model() {
                 pos.push([c[0] as f32, c[2] as f32, -c[1] as f32]);
             }
             Some(&"f") => {
-                let k: Vec<u16> = w[1..].iter().map(|s| s.parse::<u16>().unwrap() - 1).collect();
+                let k: Vec<u16> = w[1..]
+                    .iter()
+                    .map(|s| s.parse::<u16>().unwrap() - 1)
+                    .collect();
                 idx.extend([k[0], k[1], k[2], k[0], k[2], k[3]]);
             }
             _ => {}
@@ -263,12 +271,14 @@ fn a_y_up_file_with_up_axis_y_and_a_gltf_are_the_z_up_model() {
     let npos = bin.len();
     bin.extend(idx.iter().flat_map(|i| i.to_le_bytes()));
     std::fs::write(d.join("relief.bin"), &bin).unwrap();
-    let (lo, hi) = pos.iter().fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
-        (
-            [lo[0].min(p[0]), lo[1].min(p[1]), lo[2].min(p[2])],
-            [hi[0].max(p[0]), hi[1].max(p[1]), hi[2].max(p[2])],
-        )
-    });
+    let (lo, hi) = pos
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1]), lo[2].min(p[2])],
+                [hi[0].max(p[0]), hi[1].max(p[1]), hi[2].max(p[2])],
+            )
+        });
     let gltf = format!(
         r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
         "nodes": [{{"mesh": 0, "translation": [500000.37, -11.63, -4200000.37]}}],
@@ -320,23 +330,6 @@ fn a_millimetre_model_at_scale_0_001_is_the_metre_model() {
     assert!(gap < 1e-9 && dm < 1e-9 && dpx < 1e-6, "{gap} {dm} {dpx}");
 }
 
-/// Run poser in `dir`; returns (success, stdout + stderr).
-fn poser(args: &[&str], dir: &Path) -> (bool, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_poser"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    (
-        o.status.success(),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
-}
-
 #[test]
 fn far_coordinates_without_an_offset_are_warned_of_with_the_offset_to_give() {
     let tmp = tempfile::tempdir().unwrap();
@@ -347,7 +340,7 @@ fn far_coordinates_without_an_offset_are_warned_of_with_the_offset_to_give() {
     )
     .unwrap();
     let p = scene(d, "utm.obj", "");
-    let (ok, text) = poser(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
+    let (ok, text) = poser_in(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
     assert!(ok, "{text}");
     for want in [
         "warning[W0296]: the mesh's vertices are up to 4230 km from its origin",
@@ -358,15 +351,19 @@ fn far_coordinates_without_an_offset_are_warned_of_with_the_offset_to_give() {
     }
     // Given an offset, or a small model: no warning.
     let p = scene(d, "utm.obj", "offset = [500000, 4200000, -12]");
-    let (ok, text) = poser(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
+    let (ok, text) = poser_in(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
     assert!(ok && !text.contains("W0296"), "{text}");
-    std::fs::write(d.join("local.obj"), relief(|x, y, z| format!("{x} {y} {z}"))).unwrap();
+    std::fs::write(
+        d.join("local.obj"),
+        relief(|x, y, z| format!("{x} {y} {z}")),
+    )
+    .unwrap();
     let p = scene(d, "local.obj", "");
-    let (ok, text) = poser(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
+    let (ok, text) = poser_in(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
     assert!(ok && !text.contains("W0296"), "{text}");
     // `poser explain` gives the extent after the offset: 1.2 m × 0.9 m, 4.9 cm of relief.
     let p = scene(d, "utm.obj", "offset = [500000, 4200000, -12]");
-    let (ok, text) = poser(&["explain", p.file_name().unwrap().to_str().unwrap()], d);
+    let (ok, text) = poser_in(&["explain", p.file_name().unwrap().to_str().unwrap()], d);
     assert!(ok, "{text}");
     assert!(
         text.contains("mesh `relief`: extent 1.200 × 0.900 × 0.049 m (x × y × z after offset, up axis and scale)"),
@@ -382,24 +379,34 @@ fn a_malformed_offset_file_is_a_located_error() {
     for (file, wants) in [
         (
             "# shift\n500000 4200000 abc\n",
-            &["error[E0297]", "m.xyz:2:16: `abc` is not a finite number", "help: an offset file holds three numbers"][..],
+            &[
+                "error[E0297]",
+                "m.xyz:2:16: `abc` is not a finite number",
+                "help: an offset file holds three numbers",
+            ][..],
         ),
-        ("500000 4200000\n", &["m.xyz:1:8: 2 number(s) where an offset needs three"][..]),
+        (
+            "500000 4200000\n",
+            &["m.xyz:1:8: 2 number(s) where an offset needs three"][..],
+        ),
         ("1 2 3 4\n", &["m.xyz:1:7: a fourth number `4`"][..]),
     ] {
         std::fs::write(d.join("m.xyz"), file).unwrap();
         let p = scene(d, "m.obj", "offset_file = \"m.xyz\"");
-        let (ok, text) = poser(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
+        let (ok, text) = poser_in(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
         assert!(!ok, "{file}: accepted\n{text}");
         for w in wants {
             assert!(text.contains(w), "{file}: `{w}` not in\n{text}");
         }
     }
     let p = scene(d, "m.obj", "offset_file = \"gone.xyz\"");
-    let (ok, text) = poser(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
-    assert!(!ok && text.contains("E0297") && text.contains("gone.xyz"), "{text}");
+    let (ok, text) = poser_in(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
+    assert!(
+        !ok && text.contains("E0297") && text.contains("gone.xyz"),
+        "{text}"
+    );
     let p = scene(d, "m.obj", "offset_file = \"m.xyz\"\noffset = [1, 2, 3]");
-    let (ok, text) = poser(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
+    let (ok, text) = poser_in(&["validate", p.file_name().unwrap().to_str().unwrap()], d);
     assert!(!ok && text.contains("E0298"), "{text}");
 }
 
@@ -436,7 +443,10 @@ fn mitsuba_and_cycles_are_given_the_local_geometry() {
         ("blender", "assets/object_0.ply"),
     ] {
         let b = poser::backend::Backend::parse(backend).unwrap();
-        let (oa, ob) = (d.join(format!("{backend}-a")), d.join(format!("{backend}-b")));
+        let (oa, ob) = (
+            d.join(format!("{backend}-a")),
+            d.join(format!("{backend}-b")),
+        );
         b.compile(&local, &oa).unwrap();
         b.compile(&utm, &ob).unwrap();
         let (fa, fb) = (

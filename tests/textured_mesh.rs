@@ -8,7 +8,7 @@ use crate::support;
 use poser::geometry::meshfile::Wrap;
 use poser::model::Shape;
 use poser::texture::mapped::Look;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 fn root() -> PathBuf {
@@ -83,23 +83,6 @@ fn the_texture_disk_is_where_the_truth_projects_it_natively() {
         d[0], d[1]
     );
     assert!(d[0].hypot(d[1]) < 0.05, "{d:?}");
-}
-
-/// Run poser; returns (success, stdout + stderr).
-fn poser(args: &[&str], dir: &Path) -> (bool, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_poser"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    (
-        o.status.success(),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        ),
-    )
 }
 
 /// A scene folder with the test site's scene and `site/site.obj` (`obj`), `site/site.mtl`
@@ -207,7 +190,7 @@ fn hostile_textures_are_refused_before_anything_is_decoded() {
         // A file just outside the scene's folder, for the `..` case.
         std::fs::write(dir.path().parent().unwrap().join("outside.png"), &png).ok();
         let t0 = std::time::Instant::now();
-        let (ok, text) = poser(&["validate", "scene.toml"], dir.path());
+        let (ok, text) = support::textured::poser_in(&["validate", "scene.toml"], dir.path());
         assert!(!ok, "{mtl}: accepted\n{text}");
         for w in wants {
             assert!(text.contains(w), "{mtl}: `{w}` not in\n{text}");
@@ -243,7 +226,7 @@ fn hostile_geometry_is_refused_with_its_line() {
         ),
     ] {
         let dir = site(&obj, mtl, &[("site/reef.png", png.clone())]);
-        let (ok, text) = poser(
+        let (ok, text) = support::textured::poser_in(
             &[
                 "render",
                 "scene.toml",

@@ -1154,7 +1154,11 @@ fn node_matrices_json(json: &[u8]) -> Vec<Option<DMat4>> {
             }
         }
     };
-    let nodes = v.get("nodes").and_then(|n| n.as_array()).cloned().unwrap_or_default();
+    let nodes = v
+        .get("nodes")
+        .and_then(|n| n.as_array())
+        .cloned()
+        .unwrap_or_default();
     nodes
         .iter()
         .map(|n| {

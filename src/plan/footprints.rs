@@ -83,7 +83,11 @@ pub fn seen(model: &Model, corners: [DVec3; 4]) -> Option<Seen> {
     }
     Some(Seen {
         rect_seen: seen as f64 / (GRID * GRID) as f64,
-        on_rect: if union == 0 { 0.0 } else { on as f64 / union as f64 },
+        on_rect: if union == 0 {
+            0.0
+        } else {
+            on as f64 / union as f64
+        },
     })
 }
 

@@ -358,7 +358,8 @@ fn seabed_seen(cx: &mut Cx, m: &Model, spans: &Spans) {
         let (hx, hy) = (0.5 * width * o.scale.x, 0.5 * length * o.scale.y);
         let corners = [(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]
             .map(|(x, y)| o.pose.transform_point(glam::DVec3::new(x, y, 0.0)));
-        if (corners[0].z - corners[2].z).abs() > 1e-6 || (corners[1].z - corners[3].z).abs() > 1e-6 {
+        if (corners[0].z - corners[2].z).abs() > 1e-6 || (corners[1].z - corners[3].z).abs() > 1e-6
+        {
             continue; // a tilted seabed: its plane is not horizontal
         }
         let Some(seen) = crate::plan::footprints::seen(m, corners) else {

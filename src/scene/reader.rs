@@ -92,10 +92,20 @@ pub struct Tab<'a> {
 /// An unknown key that an included file set (at `span`, in `file`, read by the include entry
 /// at `at`): it may be right for that file's own table (a flat port's key under a dome that
 /// includes a flat-port base), so the hint names the way to remove it.
-fn inherited_unknown(key: &str, whose: &str, span: Span, at: Span, file: &str, t: &Tab) -> Diagnostic {
-    let d = Diagnostic::error("E0100", format!("unknown key `{key}`{whose}, inherited from `{file}`"))
-        .label(span, format!("unknown key, set by the included `{file}`"))
-        .also(at, "included here");
+fn inherited_unknown(
+    key: &str,
+    whose: &str,
+    span: Span,
+    at: Span,
+    file: &str,
+    t: &Tab,
+) -> Diagnostic {
+    let d = Diagnostic::error(
+        "E0100",
+        format!("unknown key `{key}`{whose}, inherited from `{file}`"),
+    )
+    .label(span, format!("unknown key, set by the included `{file}`"))
+    .also(at, "included here");
     let unset = format!(
         "remove the inherited key: write `{key} = {{ unset = true }}` {} of the scene that includes `{file}`",
         t.header()

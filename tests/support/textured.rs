@@ -45,3 +45,20 @@ pub fn disk_error(model: &Model, dir: &Path) -> [f64; 2] {
     let m = poser::compare::detect::disk_centroid(&gray, c, half, 0.03 / 0.8).unwrap();
     [m[0] - c[0], m[1] - c[1]]
 }
+
+/// Run the `poser` binary in `dir`; returns (success, stdout + stderr).
+pub fn poser_in(args: &[&str], dir: &std::path::Path) -> (bool, String) {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    (
+        o.status.success(),
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        ),
+    )
+}

@@ -94,7 +94,10 @@ pub fn parse(text: &str) -> Result<DVec3, (usize, usize, String)> {
         let line = line.split('#').next().unwrap_or("");
         let mut words: Vec<(usize, &str)> = Vec::new();
         let mut start = None;
-        for (k, c) in line.char_indices().chain(std::iter::once((line.len(), ' '))) {
+        for (k, c) in line
+            .char_indices()
+            .chain(std::iter::once((line.len(), ' ')))
+        {
             let sep = c.is_whitespace() || c == ',' || c == ';';
             match (sep, start) {
                 (false, None) => start = Some(k),
@@ -114,7 +117,11 @@ pub fn parse(text: &str) -> Result<DVec3, (usize, usize, String)> {
             match w.parse::<f64>() {
                 Ok(v) if v.is_finite() && out.len() < 3 => out.push(v),
                 Ok(v) if v.is_finite() => {
-                    return Err((i + 1, col + 1, format!("a fourth number `{w}`: an offset is three numbers")));
+                    return Err((
+                        i + 1,
+                        col + 1,
+                        format!("a fourth number `{w}`: an offset is three numbers"),
+                    ));
                 }
                 _ => return Err((i + 1, col + 1, format!("`{w}` is not a finite number"))),
             }
@@ -122,7 +129,11 @@ pub fn parse(text: &str) -> Result<DVec3, (usize, usize, String)> {
     }
     match out.as_slice() {
         [x, y, z] => Ok(DVec3::new(*x, *y, *z)),
-        v => Err((last.0, last.1, format!("{} number(s) where an offset needs three", v.len()))),
+        v => Err((
+            last.0,
+            last.1,
+            format!("{} number(s) where an offset needs three", v.len()),
+        )),
     }
 }
 
