@@ -40,6 +40,19 @@ impl Sources {
         self.included_at.push(None);
         self.files.len() - 1
     }
+    /// [`Sources::add`] for a file read from `path`, named by the `include` entry at
+    /// `included_from` (None: the scene file itself).
+    pub fn add_included(
+        &mut self,
+        name: String,
+        text: String,
+        path: &Path,
+        included_from: Option<Span>,
+    ) -> usize {
+        let file = self.add(name, text, Some(path.to_path_buf()));
+        self.included_at[file] = included_from;
+        file
+    }
     /// Directory of the file a span points into (for resolving relative paths).
     pub fn dir_of(&self, file: usize) -> Option<PathBuf> {
         self.paths
@@ -623,8 +636,7 @@ pub fn load_file(
         return None;
     }
     let text = String::from_utf8(bytes).expect("checked by not_text");
-    let file = sources.add(display(path), text, Some(path.to_path_buf()));
-    sources.included_at[file] = included_from;
+    let file = sources.add_included(display(path), text, path, included_from);
     let text = sources.files[file].1.clone();
     let mut node = parse_text(&text, file, diags)?;
     // Includes.
