@@ -83,3 +83,58 @@ fn the_bake_follows_the_plan() {
         assert_eq!(b.coarsened(), p.texel > p.wanted * 1.000_001);
     }
 }
+
+/// `poser ARGS…` from the repository root: (success, stderr + stdout).
+fn poser(args: &[&str]) -> (bool, String) {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        o.status.success(),
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stderr),
+            String::from_utf8_lossy(&o.stdout)
+        ),
+    )
+}
+
+#[test]
+fn a_coarsened_texture_is_warned_of_where_it_is_rendered_and_only_told_elsewhere() {
+    // reef_strip's textures are coarsened to fit the budget (the test above). Commands that
+    // render nothing do not warn of it; `explain` tells it as information; a render warns (at
+    // half size the texture is still coarsened ×1.8; at a few per cent of it, nothing is).
+    let scene = "scenarios/reef_strip.toml";
+    let (ok, text) = poser(&["validate", scene]);
+    assert!(ok && !text.to_lowercase().contains("coarsened"), "{text}");
+    let (ok, text) = poser(&["explain", scene]);
+    assert!(ok && text.contains("coarsened ×"), "{text}");
+    assert!(
+        !text
+            .lines()
+            .any(|l| l.starts_with("warning") && l.to_lowercase().contains("coarsened")),
+        "{text}"
+    );
+    let out = tempfile::tempdir().unwrap();
+    let (ok, text) = poser(&[
+        "render",
+        scene,
+        "-o",
+        out.path().to_str().unwrap(),
+        "--poses",
+        "0",
+        "--scale",
+        "0.5",
+        "--samples",
+        "1",
+        "--skip-truth",
+    ]);
+    assert!(ok, "{text}");
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("warning:") && l.contains("COARSENED")),
+        "{text}"
+    );
+}
