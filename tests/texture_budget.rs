@@ -2,6 +2,7 @@
 //! whose wanted textures exceed it is coarsened by one factor to fit, objects with a set
 //! `texel` keep it, and the plan is what the bake produces.
 
+use crate::support;
 use poser::texture::bake::{TEXEL_BUDGET, bake_object, scene_plan};
 
 fn load(rel: &str) -> poser::model::Model {
@@ -84,25 +85,10 @@ fn the_bake_follows_the_plan() {
     }
 }
 
-/// `poser ARGS…` from the repository root: (success, stderr + stdout).
-fn poser(args: &[&str]) -> (bool, String) {
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        o.status.success(),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&o.stderr),
-            String::from_utf8_lossy(&o.stdout)
-        ),
-    )
-}
-
 #[test]
 fn a_coarsened_texture_is_warned_of_where_it_is_rendered_and_only_told_elsewhere() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let poser = |args: &[&str]| support::textured::poser_in(args, root);
     // reef_strip's textures are coarsened to fit the budget (the test above). Commands that
     // render nothing do not warn of it; `explain` tells it as information; a render warns (at
     // half size the texture is still coarsened ×1.8; at a few per cent of it, nothing is).
