@@ -24,6 +24,11 @@ stop_setup() {
 }
 trap stop_setup EXIT
 
+# A fresh checkout (CI's clean clone) has no incremental state to reuse: compiling without
+# it skips writing that state (the poser crate is built three times: library, unit tests,
+# binary). A checkout that already builds incrementally keeps doing so.
+[ -d target/debug/incremental ] || export CARGO_INCREMENTAL=0
+
 step "fast tier: build"
 time cargo test --locked --no-run
 step "fast tier: plain cargo test"

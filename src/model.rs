@@ -1369,7 +1369,7 @@ impl Model {
     pub fn bounce_cut(&self) -> Option<BounceCut> {
         let mut input = self.column_physics().ok()?;
         input.photons = BOUNCE_PHOTONS;
-        let col = crate::optics::column::solve_rounds(&input, 1).ok()?;
+        let col = quick_column(&input, 1)?;
         let mut depths: Vec<f64> = (0..self.poses.len())
             .flat_map(|p| (0..self.cameras.len()).map(move |c| (p, c)))
             .map(|(p, c)| {
@@ -1408,7 +1408,7 @@ impl Model {
     /// A channel black at the seabed ([`crate::optics::column::Column::visible_at_bottom`]) is
     /// `None`.
     pub fn surface_reflection_gain(&self) -> Option<[Option<f64>; 3]> {
-        use crate::optics::column::{Top, solve_rounds};
+        use crate::optics::column::Top;
         let mut open = self.column_physics().ok()?;
         open.photons = BOUNCE_PHOTONS;
         open.top = Top::Open;
@@ -1417,8 +1417,8 @@ impl Model {
             top: Top::Fresnel(n),
             ..open.clone()
         };
-        let a = solve_rounds(&open, 4).ok()?;
-        let b = solve_rounds(&fresnel, 4).ok()?;
+        let a = quick_column(&open, 4)?;
+        let b = quick_column(&fresnel, 4)?;
         let nz = crate::optics::column::NZ;
         // Both solves draw the same photons until the first reflection at the surface, so
         // their difference is far less noisy than either (±0.5 points measured).
@@ -1510,4 +1510,35 @@ impl Model {
             Err(why) => (None, format!("traced: the column does not apply ({why})")),
         }
     }
+}
+
+/// A quick column solve ([`crate::optics::column::solve_rounds`]), remembered for the life of
+/// the process: resolution measures the bounce limit of every scene lit through a column
+/// ([`Model::bounce_cut`]), and a process that loads one site many times (a test binary, the
+/// Python module, a lesson's variants, the dive planner's alternatives) then solves its column
+/// once. The key is the whole input, seed and photon count included (`Debug` prints every
+/// `f64` exactly), so a hit is the very column a solve would return: no result depends on the
+/// cache. The few most recent columns are kept.
+fn quick_column(
+    input: &crate::optics::column::ColumnInput,
+    rounds: usize,
+) -> Option<std::sync::Arc<crate::optics::column::Column>> {
+    use crate::optics::column::Column;
+    use std::sync::{Arc, Mutex};
+    static CACHE: Mutex<Vec<(String, Arc<Column>)>> = Mutex::new(Vec::new());
+    const KEEP: usize = 8;
+    let key = format!("{rounds} {input:?}");
+    let find = |c: &[(String, Arc<Column>)]| c.iter().find(|e| e.0 == key).map(|e| e.1.clone());
+    if let Some(col) = find(&CACHE.lock().unwrap_or_else(|p| p.into_inner())) {
+        return Some(col);
+    }
+    let col = Arc::new(crate::optics::column::solve_rounds(input, rounds).ok()?);
+    let mut cache = CACHE.lock().unwrap_or_else(|p| p.into_inner());
+    if find(&cache).is_none() {
+        if cache.len() == KEEP {
+            cache.remove(0);
+        }
+        cache.push((key, col.clone()));
+    }
+    Some(col)
 }

@@ -347,9 +347,31 @@ pub fn wanted_texel(
 
 type CacheMap = HashMap<(u64, u64), Weak<Baked>>;
 static CACHE: Mutex<Option<CacheMap>> = Mutex::new(None);
+/// The most recent bakes, held strongly (oldest first) so that a process that compiles or
+/// renders the same scene again (a test binary, the Python module, a lesson's variants, a
+/// Mitsuba compile followed by a Cycles one) does not bake it again once the first user let
+/// go. At most [`RECENT_TEXELS`] texels are held.
+static RECENT: Mutex<std::collections::VecDeque<Arc<Baked>>> =
+    Mutex::new(std::collections::VecDeque::new());
+/// Texels the recent bakes may hold together: three scenes' [`TEXEL_BUDGET`] (144 MiB).
+const RECENT_TEXELS: u64 = 3 * TEXEL_BUDGET;
+
+/// Keep `b` among the recent bakes (moved to the newest end when already there).
+fn hold(b: &Arc<Baked>) {
+    let mut recent = RECENT.lock().unwrap_or_else(|e| e.into_inner());
+    recent.retain(|r| !Arc::ptr_eq(r, b));
+    recent.push_back(b.clone());
+    let texels = |r: &Arc<Baked>| r.texture.width as u64 * r.texture.height as u64;
+    let mut total: u64 = recent.iter().map(texels).sum();
+    while total > RECENT_TEXELS && recent.len() > 1 {
+        total -= recent.pop_front().as_ref().map_or(0, texels);
+    }
+}
 
 /// The baked form of object `index` of the model (`None` when its material is not baked),
-/// cached by content while any user holds it.
+/// cached by content while any user holds it, and the most recent ones a while longer
+/// ([`RECENT_TEXELS`]). A cached bake is the very result of baking again: the key is the
+/// object's whole description, its scene file and the planned texel.
 pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, String> {
     let o = &model.objects[index];
     if !o.material.is_baked() {
@@ -361,7 +383,10 @@ pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, St
     let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
     let json = serde_json::to_string(o).map_err(|e| e.to_string())?;
     let key = (
-        name_hash(&json) ^ mix64(name_hash(&model.source)) ^ mix64(plan.start.to_bits()),
+        name_hash(&json)
+            ^ mix64(name_hash(&model.source))
+            ^ mix64(plan.start.to_bits())
+            ^ mix64(name_hash(&plan.reason) ^ mix64(name_hash(&plan.limit))),
         plan.wanted.to_bits(),
     );
     {
@@ -369,6 +394,8 @@ pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, St
         let map = g.get_or_insert_with(HashMap::new);
         map.retain(|_, w| w.strong_count() > 0);
         if let Some(b) = map.get(&key).and_then(Weak::upgrade) {
+            drop(g);
+            hold(&b);
             return Ok(Some(b));
         }
     }
@@ -381,6 +408,8 @@ pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, St
     let mut g = CACHE.lock().unwrap_or_else(|e| e.into_inner());
     g.get_or_insert_with(HashMap::new)
         .insert(key, Arc::downgrade(&b));
+    drop(g);
+    hold(&b);
     Ok(Some(b))
 }
 

@@ -96,9 +96,22 @@ pub fn cell<'a>(dom: &'a str, key: &str) -> &'a str {
 }
 
 pub fn run_lesson(scene: &str, name: &str) -> (tempfile::TempDir, PathBuf, serde_json::Value) {
+    run_lesson_with(scene, name, &[])
+}
+
+/// [`run_lesson`] with `--set` overrides on top of the quick form.
+pub fn run_lesson_with(
+    scene: &str,
+    name: &str,
+    sets: &[&str],
+) -> (tempfile::TempDir, PathBuf, serde_json::Value) {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join(name);
-    let o = poser(&["lesson", scene, "-o", out.to_str().unwrap(), "--quiet"]);
+    let mut args = vec!["lesson", scene, "-o", out.to_str().unwrap(), "--quiet"];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    let o = poser(&args);
     assert!(
         o.status.success(),
         "poser lesson {scene} failed:\n{}",
