@@ -9,7 +9,7 @@
 //! |---|---|
 //! | [`water`], [`glass`] | refractive indices (Quan–Fry, Millard–Seaver, Sellmeier), Jerlov IOPs |
 //! | [`phase`] | Henyey–Greenstein and Fournier–Forand, and [`phase::PhaseFn`] (closed form or table) |
-//! | [`column`] | the plane-parallel water column's light field, solved once per scene (1D Monte Carlo) |
+//! | [`column`](mod@column) | the plane-parallel water column's light field, solved once per scene (1D Monte Carlo) |
 //! | [`sun`] | NOAA solar position, refraction of sunlight into the sea |
 //! | [`interface`] | vector Snell with explicit TIR, unpolarised Fresnel |
 //! | [`lens`] | rectilinear + Brown, equidistant and equisolid fisheye |

@@ -96,7 +96,7 @@ pub enum PhaseFn {
     Hg {
         g: f64,
     },
-    /// Table: bin k spans θ ∈ [theta[k], theta[k+1]] (μ decreasing); `cdf[k]` is the mass of
+    /// Table: bin k spans θ ∈ `[theta[k], theta[k+1]]` (μ decreasing); `cdf[k]` is the mass of
     /// bins < k; density `dens[k]` per steradian inside bin k.
     Tab {
         mu: Vec<f64>,

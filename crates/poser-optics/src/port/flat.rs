@@ -1,5 +1,5 @@
 //! The flat port ([`FlatPort`]): parallel glass layers, possibly tilted; the scalar
-//! q-equation ([`Slabs`], shared with the on-axis cylinder) and its double-double refinement.
+//! q-equation (`Slabs`, shared with the on-axis cylinder) and its double-double refinement.
 
 use super::PortRay;
 use super::housing::{
