@@ -1,15 +1,15 @@
 //! poser — simulate underwater photogrammetry surveys.
 //!
-//! Structured like a compiler: a front end ([`scene`]: TOML scene format → diagnostics),
-//! one resolved [`model`], and peer back ends ([`backend`]: native, Mitsuba, Blender, behind
-//! one [`backend::Backend`]), with the optics core ([`optics`], pure math) as the geometric truth
-//! that [`truth`] and every back end are checked against, the [`geometry`] service (meshes,
-//! targets, BVH) shared by the truth, the planner and the native renderer, [`plan`] for survey
-//! and dive planning, [`compare`] / [`bench`] driving the back ends from outside, and
-//! [`export`] writing the model for other tools (a glTF preview of the whole scene). The
-//! [`cli`] sits on top and nothing in the library imports it: [`explain`] (the model for a
-//! person), [`points`] (the one point-list parser) and [`image`] (linear images, the EXR
-//! reader) serve the CLI, the Python module and the fuzz targets alike.
+//! Structured like a compiler: a front end ([`scene`]: TOML scene format → diagnostics), one
+//! resolved [`model`], and peer back ends ([`backend`]: native, Mitsuba, Blender, behind one
+//! [`backend::Backend`]), with the optics core ([`optics`], pure math, the `poser-optics`
+//! crate) as the geometric truth that [`truth`] and every back end are checked against, the
+//! [`geometry`] service (meshes, targets, BVH) shared by the truth, the planner and the native
+//! renderer, [`plan`] for survey and dive planning, [`compare`] / [`bench`] driving the back
+//! ends from outside, and [`export`] writing the model for other tools (a glTF preview of the
+//! whole scene). The [`cli`] sits on top and nothing in the library imports it: [`explain`]
+//! (the model for a person), [`points`] (the one point-list parser) and [`image`] (linear
+//! images, the EXR reader) serve the CLI, the Python module and the fuzz targets alike.
 
 // `!(x > 0.0)` is how poser rejects NaN together with the values out of range.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -28,14 +28,18 @@ pub mod import;
 pub mod io;
 pub mod lesson;
 pub mod model;
-pub mod optics;
 pub mod pack;
 pub mod plan;
 pub mod points;
-pub mod rng;
 pub mod scene;
 pub mod sensor;
 pub mod slurm;
 pub mod texture;
 pub mod truth;
 pub mod units;
+
+/// The optics core, its own crate (`crates/poser-optics`): pure math on its own value types,
+/// which the compiler keeps free of the scene, the model and the back ends.
+pub use poser_optics as optics;
+/// SplitMix64, the one random stream (it lives in the optics crate, which uses it too).
+pub use poser_optics::rng;

@@ -192,6 +192,19 @@ pub enum Phase {
     FournierForand { n: f64, mu: f64, backscatter: f64 },
 }
 
+impl Phase {
+    /// The optics' phase function for this one, as the renderers and the water column use it:
+    /// HG with `g` kept inside (-0.999, 0.999), FF as its table.
+    pub fn phase_fn(&self) -> crate::optics::phase::PhaseFn {
+        match *self {
+            Phase::HenyeyGreenstein { g } => crate::optics::phase::PhaseFn::Hg {
+                g: g.clamp(-0.999, 0.999),
+            },
+            Phase::FournierForand { n, mu, .. } => crate::optics::phase::ff_table(n, mu),
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum WaterExtent {
@@ -1022,13 +1035,13 @@ impl Model {
 
 /// The exact projection of a camera of the model: the optics core's [`Projector`] placed at
 /// every rig pose of the network (the optics itself knows nothing of the model).
-impl Projector {
-    /// The projector of camera `cam` of `model` for `channel` (0 = R, 1 = G, 2 = B).
-    pub fn new(model: &Model, cam: usize, channel: usize) -> Result<Projector, String> {
-        let camera = model.cameras.get(cam).ok_or_else(|| {
+impl Model {
+    /// The projector of camera `cam` for `channel` (0 = R, 1 = G, 2 = B).
+    pub fn projector(&self, cam: usize, channel: usize) -> Result<Projector, String> {
+        let camera = self.cameras.get(cam).ok_or_else(|| {
             format!(
                 "camera index {cam} out of range ({} cameras)",
-                model.cameras.len()
+                self.cameras.len()
             )
         })?;
         if channel > 2 {
@@ -1036,10 +1049,10 @@ impl Projector {
                 "channel {channel} out of range (0 = R, 1 = G, 2 = B)"
             ));
         }
-        let p = Projector::for_camera(camera, channel, model.ambient_ior()[channel])?;
+        let p = Projector::for_camera(camera, channel, self.ambient_ior()[channel])?;
         Ok(p.with_poses(
-            (0..model.poses.len())
-                .map(|i| model.world_from_camera(i, cam))
+            (0..self.poses.len())
+                .map(|i| self.world_from_camera(i, cam))
                 .collect(),
         ))
     }
@@ -1350,7 +1363,7 @@ impl Model {
             depth: self.site.depth,
             sigma_a: w.absorption,
             sigma_s: w.scattering,
-            phase: crate::optics::phase::PhaseFn::from_model(&w.phase),
+            phase: w.phase.phase_fn(),
             sun,
             ambient,
             bottom_albedo: self.bottom_albedo(),

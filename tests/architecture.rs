@@ -6,12 +6,13 @@
 //!
 //! | rule | why |
 //! |---|---|
-//! | `src/optics` imports nothing of `crate::scene` or `crate::model` | the optics is pure math on its own value types (`optics::types`, re-exported by the model) |
+//! | the optics crate (`crates/poser-optics`) depends on no path crate and on glam, serde and rayon only | the optics is pure math on its own value types (`optics::types`, re-exported by the model); the compiler now keeps it from naming the scene or the model, since it cannot see them, so only its manifest is checked |
 //! | no backend imports another (`backend/native`, `backend/mitsuba`, `backend/blender`) | backends are peers; `compare`, `bench` and the commands reach them through `backend::Backend` |
 //! | nothing outside `src/scene` names `scene::format` | only the front end reads the raw scene format; everything else uses the resolved model |
 //! | no backend names the front end's insides (`scene::reader`, `resolve`, `check`, `format`, `source`) | a backend works from the resolved model; it may load a scene (`scene::load`, in its tests) and format numbers as diagnostics do (`scene::diag`) |
 //! | nothing outside `src/cli` (and `src/main.rs`) imports `crate::cli` | the library sits under the CLI: `explain`, point lists and channel names live in the library, for the CLI, Python and the fuzz targets alike |
-//! | no function in `src/` is over 150 lines, but for a commented allowlist that may only shrink | a long function is a list of steps that wants names |
+//! | no function in `src/` or the optics crate is over 150 lines, but for a commented allowlist that may only shrink | a long function is a list of steps that wants names |
+//! | every source file of `src/` and the optics crate opens with a `//!` header | the header says which one idea the file owns |
 //!
 //! Each hole a scan can have is planted in a probe test below, which expects the violation.
 
@@ -243,14 +244,6 @@ fn violations_in(files: &[(String, String)]) -> Vec<String> {
     let mut bad = Vec::new();
     for (rel, code) in files {
         let paths = paths_of(rel, code);
-        if rel.starts_with("optics/") || rel == "optics.rs" {
-            for p in paths
-                .iter()
-                .filter(|p| under(p, "scene") || under(p, "model"))
-            {
-                bad.push(format!("src/{rel}: optics imports crate::{p}"));
-            }
-        }
         if let Some(me) = backend_of(rel) {
             for other in ["native", "mitsuba", "blender"]
                 .into_iter()
@@ -345,45 +338,49 @@ fn expect_caught(rel: &str, code: &str, what: &str) {
     );
 }
 
+// The optics once had a scan rule here (no `crate::scene`, no `crate::model`); it is now a
+// crate of its own, and the compiler refuses such an import (see `optics_crate_*` below). The
+// probes of path resolution use the rules that are still scanned.
+
 #[test]
-fn probe_super_path_to_the_model() {
+fn probe_super_path_to_the_cli() {
     expect_caught(
-        "optics/mod.rs",
-        "use super::model::Model;",
-        "optics imports crate::model::Model",
+        "export/mod.rs",
+        "use super::cli::CliError;",
+        "the library imports the CLI (crate::cli::CliError)",
     );
     // `super` of a file module is its parent, not the root.
     expect_caught(
-        "optics.rs",
-        "use super::model::Model;",
-        "optics imports crate::model::Model",
+        "points.rs",
+        "use super::cli::CliError;",
+        "the library imports the CLI (crate::cli::CliError)",
     );
 }
 
 #[test]
 fn probe_super_super_from_a_nested_module() {
     expect_caught(
-        "optics/port/mod.rs",
-        "use super::super::model::Port;",
-        "optics imports crate::model::Port",
+        "truth/colmap.rs",
+        "use super::super::cli::common;",
+        "the library imports the CLI (crate::cli::common)",
     );
     expect_caught(
-        "optics/port/flat.rs",
-        "use super::super::super::scene::load;",
-        "optics imports crate::scene::load",
+        "backend/native/integrator.rs",
+        "use super::super::super::scene::format::Scene;",
+        "reads the raw scene format (crate::scene::format::Scene)",
     );
     // An inline module adds a level: `super` in `mod tests` is the file's module.
     expect_caught(
-        "optics/glass.rs",
-        "pub fn f() {}\n#[cfg(test)]\nmod tests {\n    use super::super::super::model::Model;\n}",
-        "optics imports crate::model::Model",
+        "geometry/bvh.rs",
+        "pub fn f() {}\n#[cfg(test)]\nmod tests {\n    use super::super::super::cli::Cli;\n}",
+        "the library imports the CLI (crate::cli::Cli)",
     );
-    // …and resolves correctly: these name `optics::model`, `optics::glass`, not the model.
-    assert!(planted("optics/port/flat.rs", "use super::super::model::X;").is_empty());
+    // …and resolves correctly: these name `backend::cli`, `geometry::cli`, not the CLI.
+    assert!(planted("backend/native/camera.rs", "use super::super::cli::X;").is_empty());
     assert!(
         planted(
-            "optics/glass.rs",
-            "mod tests {\n    use super::f;\n}\nuse super::model;"
+            "geometry/bvh.rs",
+            "mod tests {\n    use super::f;\n}\nuse super::cli;"
         )
         .is_empty()
     );
@@ -392,19 +389,19 @@ fn probe_super_super_from_a_nested_module() {
 #[test]
 fn probe_nested_use_groups() {
     expect_caught(
-        "optics/water.rs",
-        "use crate::{optics::{glass, water}, model::Model};",
-        "optics imports crate::model::Model",
+        "export/gltf.rs",
+        "use crate::{optics::{glass, water}, cli::Cli};",
+        "the library imports the CLI (crate::cli::Cli)",
     );
     expect_caught(
-        "optics/water.rs",
-        "use crate::{\n    optics::{glass::{self, Glass}, water},\n    scene::{diag::{Span}},\n};",
-        "optics imports crate::scene::diag::Span",
+        "export/gltf.rs",
+        "use crate::{\n    optics::{glass::{self, Glass}, water},\n    scene::{format::{Scene}},\n};",
+        "reads the raw scene format (crate::scene::format::Scene)",
     );
     expect_caught(
-        "optics/water.rs",
-        "use super::{glass, super::model::{self}};",
-        "optics imports crate::model",
+        "export/gltf.rs",
+        "use super::{glass, super::cli::{self}};",
+        "the library imports the CLI (crate::cli)",
     );
     assert_eq!(
         crate_paths("use crate::{optics::{glass, water as w}, model::*};"),
@@ -662,20 +659,47 @@ fn fn_lengths(code: &str) -> Vec<(String, usize)> {
     found
 }
 
-/// Every function in `src/` as (`file::name`, lines).
-fn all_fn_lengths() -> Vec<(String, usize)> {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
-    files.sort();
+/// The source trees the per-file rules cover (function length, headers), each with the prefix
+/// its files are named by: `src/` by the path inside it (`plan/dive.rs`), the optics crate by
+/// the path from the repository root (`crates/poser-optics/src/column.rs`).
+const TREES: [(&str, &str); 2] = [("src", ""), (OPTICS_SRC, "crates/poser-optics/src/")];
+
+/// The optics crate's sources.
+const OPTICS_SRC: &str = "crates/poser-optics/src";
+
+/// Every source file of [`TREES`] as (name, full text).
+fn tree_files() -> Vec<(String, String)> {
     let mut all = Vec::new();
-    for p in files {
-        let rel = p
-            .strip_prefix(&src)
-            .unwrap()
-            .to_string_lossy()
-            .replace('\\', "/");
-        for (name, n) in fn_lengths(&std::fs::read_to_string(&p).unwrap()) {
+    for (dir, prefix) in TREES {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
+        let mut files = Vec::new();
+        rust_files(&root, &mut files);
+        files.sort();
+        assert!(
+            files.len() > 10,
+            "found only {} files in {dir}",
+            files.len()
+        );
+        for p in files {
+            let rel = p
+                .strip_prefix(&root)
+                .unwrap()
+                .to_string_lossy()
+                .replace('\\', "/");
+            all.push((
+                format!("{prefix}{rel}"),
+                std::fs::read_to_string(&p).unwrap(),
+            ));
+        }
+    }
+    all
+}
+
+/// Every function of [`TREES`] as (`file::name`, lines).
+fn all_fn_lengths() -> Vec<(String, usize)> {
+    let mut all = Vec::new();
+    for (rel, text) in tree_files() {
+        for (name, n) in fn_lengths(&text) {
             all.push((format!("{rel}::{name}"), n));
         }
     }
@@ -710,6 +734,14 @@ fn length_violations(fns: &[(String, usize)], allowed: &[(&str, usize)]) -> Vec<
 fn no_function_is_over_the_length_limit() {
     let fns = all_fn_lengths();
     assert!(fns.len() > 500, "found only {} functions", fns.len());
+    let optics = fns
+        .iter()
+        .filter(|(f, _)| f.starts_with("crates/poser-optics/"))
+        .count();
+    assert!(
+        optics > 100,
+        "found only {optics} functions in the optics crate"
+    );
     let mut long: Vec<_> = fns.iter().filter(|(_, n)| *n > MAX_FN_LINES).collect();
     long.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
     let bad = length_violations(&fns, LONG_FNS);
@@ -773,4 +805,181 @@ fn probe_a_long_function() {
             && stale[0].contains("planted.rs::short is allowlisted but no longer over"),
         "{stale:?}"
     );
+}
+
+// ---- File headers -------------------------------------------------------------------------
+
+/// The files of `files` (name, full text) whose first line is not a `//!` header.
+fn header_violations(files: &[(String, String)]) -> Vec<String> {
+    files
+        .iter()
+        .filter(|(_, text)| !text.starts_with("//!"))
+        .map(|(rel, _)| format!("{rel}: no `//!` header saying what the file owns"))
+        .collect()
+}
+
+#[test]
+fn every_source_file_opens_with_its_header() {
+    let files = tree_files();
+    assert!(
+        files
+            .iter()
+            .any(|(f, _)| f == "crates/poser-optics/src/lib.rs"),
+        "the optics crate is not scanned"
+    );
+    let bad = header_violations(&files);
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+#[test]
+fn probe_a_file_without_a_header() {
+    let bad = header_violations(&[
+        ("a.rs".into(), "//! Owns a.\nfn a() {}\n".into()),
+        ("b.rs".into(), "// a plain comment\n//! too late\n".into()),
+        ("c.rs".into(), "\n//! after a blank line\n".into()),
+    ]);
+    assert_eq!(bad.len(), 2, "{bad:?}");
+    assert!(bad[0].starts_with("b.rs:") && bad[1].starts_with("c.rs:"));
+}
+
+// ---- The optics crate's dependencies ------------------------------------------------------
+
+/// The external crates the optics may use: vectors, serialisation of its value types, and the
+/// thread pool of the water-column solver.
+const OPTICS_DEPS: [&str; 3] = ["glam", "rayon", "serde"];
+
+/// What breaks the optics crate's isolation in its manifest `manifest`, with the workspace's
+/// manifest `workspace` (for `workspace = true` entries): any dependency by path (`poser`
+/// itself, or a stage crate above it), or a crate not in [`OPTICS_DEPS`], in any dependency
+/// table (normal, dev, build, per target). That the optics code names nothing of the scene or
+/// the model is then the compiler's to enforce: it cannot see them.
+fn optics_manifest_violations(manifest: &str, workspace: &str) -> Vec<String> {
+    let m: toml::Table = toml::from_str(manifest).expect("the optics manifest parses");
+    let w: toml::Table = toml::from_str(workspace).expect("the workspace manifest parses");
+    let shared = w
+        .get("workspace")
+        .and_then(|t| t.get("dependencies"))
+        .and_then(toml::Value::as_table);
+    let mut tables: Vec<(String, &toml::Table)> = Vec::new();
+    for kind in ["dependencies", "dev-dependencies", "build-dependencies"] {
+        if let Some(t) = m.get(kind).and_then(toml::Value::as_table) {
+            tables.push((kind.to_string(), t));
+        }
+    }
+    for (target, t) in m
+        .get("target")
+        .and_then(toml::Value::as_table)
+        .into_iter()
+        .flatten()
+    {
+        for kind in ["dependencies", "dev-dependencies", "build-dependencies"] {
+            if let Some(d) = t.get(kind).and_then(toml::Value::as_table) {
+                tables.push((format!("target.{target}.{kind}"), d));
+            }
+        }
+    }
+    let mut bad = Vec::new();
+    for (kind, deps) in tables {
+        for (name, spec) in deps {
+            let inherited = spec.get("workspace").and_then(toml::Value::as_bool) == Some(true);
+            let resolved = if inherited {
+                shared.and_then(|s| s.get(name))
+            } else {
+                Some(spec)
+            };
+            if resolved.is_some_and(|r| r.get("path").is_some()) {
+                bad.push(format!(
+                    "[{kind}] {name}: a path dependency (the optics sees no stage)"
+                ));
+            }
+            let crate_name = spec
+                .get("package")
+                .and_then(toml::Value::as_str)
+                .unwrap_or(name);
+            if !OPTICS_DEPS.contains(&crate_name) {
+                bad.push(format!(
+                    "[{kind}] {name}: not one of the optics' crates {OPTICS_DEPS:?}"
+                ));
+            }
+        }
+    }
+    bad
+}
+
+fn read_manifest(rel: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)).unwrap()
+}
+
+/// The optics crate depends on no other crate of poser and on glam, serde and rayon only;
+/// `src/` keeps no optics of its own (`poser::optics` is the crate, re-exported).
+#[test]
+fn optics_crate_depends_on_no_stage() {
+    let manifest = read_manifest("crates/poser-optics/Cargo.toml");
+    let bad = optics_manifest_violations(&manifest, &read_manifest("Cargo.toml"));
+    assert!(
+        bad.is_empty(),
+        "crates/poser-optics/Cargo.toml:\n{}",
+        bad.join("\n")
+    );
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for old in ["src/optics.rs", "src/rng.rs"] {
+        assert!(
+            !root.join(old).exists(),
+            "{old} is back: the optics lives in its crate"
+        );
+    }
+    // An empty `src/optics/` left by a checkout is harmless; a source file in it is not.
+    let mut stray = Vec::new();
+    if root.join("src/optics").is_dir() {
+        rust_files(&root.join("src/optics"), &mut stray);
+    }
+    assert!(stray.is_empty(), "{stray:?}: the optics lives in its crate");
+    let lib = read_manifest("src/lib.rs");
+    assert!(
+        lib.contains("pub use poser_optics as optics;"),
+        "poser::optics is not re-exported"
+    );
+}
+
+#[test]
+fn probe_optics_crate_dependencies() {
+    let workspace = "[workspace.dependencies]\nglam = \"0.34\"\nmodel = { path = \"crates/m\" }\n";
+    let ok = "[dependencies]\nglam = { workspace = true }\nserde = \"1\"\n";
+    assert!(optics_manifest_violations(ok, workspace).is_empty());
+    for (planted, what) in [
+        (
+            "[dependencies]\nposer = { path = \"../..\" }\n",
+            "poser: a path dependency",
+        ),
+        (
+            "[dev-dependencies]\nposer = { path = \"../..\" }\n",
+            "[dev-dependencies] poser",
+        ),
+        (
+            "[dependencies]\nmodel = { workspace = true }\n",
+            "model: a path dependency",
+        ),
+        (
+            "[dependencies]\nglam = { path = \"../glam\" }\n",
+            "glam: a path dependency",
+        ),
+        (
+            "[dependencies]\ntoml = \"1\"\n",
+            "toml: not one of the optics' crates",
+        ),
+        (
+            "[dependencies]\nv = { package = \"nalgebra\", version = \"0.34\" }\n",
+            "v: not one",
+        ),
+        (
+            "[target.'cfg(unix)'.dependencies]\nlibc = \"0.2\"\n",
+            "[target.cfg(unix).dependencies] libc",
+        ),
+    ] {
+        let bad = optics_manifest_violations(planted, workspace);
+        assert!(
+            bad.iter().any(|b| b.contains(what)),
+            "`{planted}` was not caught ({what}): {bad:?}"
+        );
+    }
 }

@@ -474,7 +474,7 @@ fn depth_pass_is_camera_z_of_the_first_surface_through_the_port() {
     poser::backend::blender::render(&model, dir.path(), &opts).unwrap();
     let depth = LinearImage::read(&dir.path().join("img_0001.depth.exr")).expect("depth EXR");
     assert_eq!((depth.width, depth.height), (160, 120));
-    let proj = poser::optics::project::Projector::new(&model, 0, 1).unwrap();
+    let proj = model.projector(0, 1).unwrap();
     let card = &model.targets[0];
     let (w, h) = poser::geometry::targets::extent(&card.kind);
     let normal = card.pose.rotation.z_axis;
@@ -595,7 +595,7 @@ bounces = 8
         height: img.height,
         data: &g,
     };
-    let proj = poser::optics::project::Projector::new(&model, 0, 1).unwrap();
+    let proj = model.projector(0, 1).unwrap();
     let t = &model.targets[0];
     let dark = poser::geometry::targets::BLACK / poser::geometry::targets::WHITE;
     let mut errs = Vec::new();

@@ -122,10 +122,7 @@ fn vertex_gap(a: &Model, b: &Model) -> f64 {
 
 /// Largest gap between the dropped GCPs of two models (m) and between their pixels (px).
 fn truth_gap(a: &Model, b: &Model) -> (f64, f64) {
-    let (pa, pb) = (
-        poser::optics::project::Projector::new(a, 0, 1).unwrap(),
-        poser::optics::project::Projector::new(b, 0, 1).unwrap(),
-    );
+    let (pa, pb) = (a.projector(0, 1).unwrap(), b.projector(0, 1).unwrap());
     let (mut dm, mut dpx) = (0.0f64, 0.0f64);
     assert_eq!(a.targets.len(), 3);
     for (ta, tb) in a.targets.iter().zip(&b.targets) {

@@ -337,7 +337,7 @@ fn check_scenario_with(scene: &Path, sets: &[String], glb: &Path) -> usize {
                 .sea_interface(1)
                 .is_none_or(|_| !model.above_surface(p, c))
         {
-            let pr = poser::optics::project::Projector::new(&model, c, 1).unwrap();
+            let pr = model.projector(c, 1).unwrap();
             let (o, dir, _) = pr.pixel_ray_world(p, cam.cx, cam.cy).unwrap();
             let w = o + dir * d;
             let px = pr.project_world(p, w).unwrap();

@@ -1,6 +1,7 @@
 //! The native renderer's daylight from the water column (`render.daylight = "column"`,
-//! src/optics/column.rs) against its own brute-force transport (`"traced"`, bounces raised so
-//! that nothing is cut off), on a flat untextured seabed where the column is exact: the sun
+//! crates/poser-optics/src/column.rs) against its own brute-force transport (`"traced"`,
+//! bounces raised so that nothing is cut off), on a flat untextured seabed where the column is
+//! exact: the sun
 //! case and the sky-only case. Also: the column's image is far less noisy at equal samples,
 //! a scene where the column cannot apply is refused with a located diagnostic, and `explain`
 //! names the views that look down past the seabed (where column and traced differ).

@@ -282,7 +282,7 @@ fn resolution_scale_keeps_every_ray_in_place() {
     let path =
         std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios/reef_strip.toml");
     let model = poser::scene::load(&path, &[]).unwrap().model;
-    let full = poser::optics::project::Projector::new(&model, 0, 1).unwrap();
+    let full = model.projector(0, 1).unwrap();
     for scale in [0.25, 0.1, 0.333, 2.0] {
         let small_model = model.clone().with_resolution_scale(scale);
         let c0 = &model.cameras[0];
@@ -300,7 +300,7 @@ fn resolution_scale_keeps_every_ray_in_place() {
             c0.fx == c0.fy,
             "scale {scale}: squareness kept"
         );
-        let small = poser::optics::project::Projector::new(&small_model, 0, 1).unwrap();
+        let small = small_model.projector(0, 1).unwrap();
         let mut checked = 0;
         let cam = model.world_from_camera(0, 0);
         for k in 0..50 {

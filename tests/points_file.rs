@@ -299,7 +299,7 @@ diameter = "5 cm"
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let pr = poser::optics::project::Projector::new(&m, 0, 1).unwrap();
+    let pr = m.projector(0, 1).unwrap();
     assert_eq!(
         stdout,
         poser::cli::project::project_csv(&pr, &from_target, Some(0))

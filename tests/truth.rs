@@ -4,14 +4,13 @@
 use crate::support::scenario as load;
 use glam::DVec3;
 use poser::model::{Material, Object, Pose, Shape};
-use poser::optics::project::Projector;
 use std::path::Path;
 
 #[test]
 fn every_observation_is_the_exact_refractive_image() {
     let model = load("calibration_flat.toml");
     let truth = poser::truth::compute(&model).unwrap();
-    let p = Projector::new(&model, 0, 1).unwrap();
+    let p = model.projector(0, 1).unwrap();
     let mut n = 0;
     for im in &truth.images {
         for o in &im.points {

@@ -97,7 +97,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             model.cameras[cam].name
         )));
     }
-    let p = Projector::new(&model, cam, ch).map_err(CliError::Failed)?;
+    let p = model.projector(cam, ch).map_err(CliError::Failed)?;
     let csv = project_csv(&p, &pts, world_pose);
     match output {
         Some(path) => crate::io::write_atomic(path, csv.as_bytes())

@@ -17,7 +17,6 @@
 
 use super::LinearImage;
 use crate::model::{LightKind, Model, Mount, Port, SeaSurface, Shape};
-use crate::optics::project::Projector;
 
 /// Why the scene has no analytic radiance, or `Ok` when it has one.
 pub fn applies(model: &Model) -> Result<(), String> {
@@ -43,7 +42,7 @@ pub fn applies(model: &Model) -> Result<(), String> {
         (None, [l]) if matches!(l.kind, LightKind::Spot { .. }) => {}
         _ => return Err("not a single spot light or the sun alone".into()),
     }
-    let proj = Projector::new(model, 0, 1)?;
+    let proj = model.projector(0, 1)?;
     let (x0, x1, y0, y1) = window(proj.width as usize, proj.height as usize);
     for (x, y) in [(x0, y0), (x1 - 1, y0), (x0, y1 - 1), (x1 - 1, y1 - 1)] {
         radiance(model, x as f64 + 0.5, y as f64 + 0.5, 1)
@@ -64,7 +63,7 @@ pub fn window(width: usize, height: usize) -> (usize, usize, usize, usize) {
 /// pixel does not see the patch lit by the light. Call [`applies`] first for the scene's
 /// other requirements.
 pub fn radiance(model: &Model, u: f64, v: f64, c: usize) -> Result<f64, String> {
-    let proj = Projector::new(model, 0, c)?;
+    let proj = model.projector(0, c)?;
     let (o, d, t) = proj
         .pixel_ray_world(0, u, v)
         .map_err(|_| format!("pixel ({u}, {v}) has no ray through the port"))?;

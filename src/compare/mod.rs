@@ -182,7 +182,7 @@ pub fn measure_targets_in_channel(
     let mut found = Vec::new();
     let mut expected = 0;
     for cam in 0..model.cameras.len() {
-        let proj = Projector::new(model, cam, channel)?;
+        let proj = model.projector(cam, channel)?;
         for pose in 0..model.poses.len() {
             let name = model.image_name(pose, cam);
             let path = dir.join(format!("{name}.exr"));

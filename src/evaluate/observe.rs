@@ -145,7 +145,7 @@ pub fn observe(
     progress: &(dyn Fn() + Sync),
 ) -> Result<Vec<ImageObservations>, String> {
     let projectors: Vec<Projector> = (0..model.cameras.len())
-        .map(|ci| Projector::new(model, ci, 1))
+        .map(|ci| model.projector(ci, 1))
         .collect::<Result<_, _>>()?;
     let cos_max = MAX_INCIDENCE_DEG.to_radians().cos();
     let jobs: Vec<(usize, usize)> = (0..model.poses.len())

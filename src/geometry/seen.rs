@@ -6,7 +6,6 @@
 
 use crate::geometry::{Bvh, Ray, SurfaceId};
 use crate::model::Model;
-use crate::optics::project::Projector;
 
 /// What the cameras see, as shares of a grid of sampled pixels over the network's images.
 #[derive(Debug, Clone, Copy)]
@@ -38,7 +37,7 @@ pub fn texture_seen(model: &Model, scene: &Bvh) -> TextureSeen {
     let step = n_poses.div_ceil(64).max(1);
     let (mut rays, mut hit, mut textured, mut bottomless) = (0usize, 0usize, 0usize, 0usize);
     for (ci, cam) in model.cameras.iter().enumerate() {
-        let Ok(pr) = Projector::new(model, ci, 1) else {
+        let Ok(pr) = model.projector(ci, 1) else {
             continue;
         };
         for pi in (0..n_poses).step_by(step) {

@@ -131,7 +131,7 @@ pub fn sample(mesh: &TriMesh, n: usize, seed: u64) -> Vec<Sample> {
 /// For every sample, how many images of `model` see it within the angle (see the module).
 pub fn counts(model: &Model, scene: &Bvh, samples: &[Sample]) -> Result<Vec<u32>, String> {
     let projectors: Vec<Projector> = (0..model.cameras.len())
-        .map(|ci| Projector::new(model, ci, 1))
+        .map(|ci| model.projector(ci, 1))
         .collect::<Result<_, _>>()?;
     let cos_max = MAX_ANGLE_DEG.to_radians().cos();
     // A cheap, conservative first cut on the direction to the entrance pupil (the port's exit

@@ -174,7 +174,7 @@ fn samples(model: &Model) -> Result<Vec<Sample>, String> {
             t.name
         ));
     };
-    let pr = Projector::new(model, 0, 1)?;
+    let pr = model.projector(0, 1)?;
     let (w, h) = (cols as f64 * square, rows as f64 * square);
     let mut out = Vec::new();
     for i in 0..cols {
@@ -344,7 +344,7 @@ fn profile(
         TargetKind::Checkerboard { square, .. } => 0.5 * square,
         _ => 0.0,
     };
-    let pr = Projector::new(model, 0, 1)?;
+    let pr = model.projector(0, 1)?;
     let mut a = Vec::new();
     let mut b = Vec::new();
     for k in 0..400 {

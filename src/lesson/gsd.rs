@@ -93,7 +93,7 @@ fn circles(model: &Model, img: &crate::backend::native::Image) -> Result<Vec<Cir
             t.name
         ));
     };
-    let pr = Projector::new(model, 0, 1)?;
+    let pr = model.projector(0, 1)?;
     let sector = PI / spokes as f64;
     let world = |r: f64, a: f64| {
         t.pose
@@ -173,7 +173,7 @@ fn circles(model: &Model, img: &crate::backend::native::Image) -> Result<Vec<Cir
 
 /// GSD on the star's plane at its centre: 1 mm along the target's x, exact projection, m/px.
 fn gsd_at_star(model: &Model) -> Option<f64> {
-    let pr = Projector::new(model, 0, 1).ok()?;
+    let pr = model.projector(0, 1).ok()?;
     let t = &model.targets[0];
     let a = pr
         .project_world_unbounded(0, t.pose.transform_point(DVec3::ZERO))

@@ -13,7 +13,6 @@ use super::contrast::view_png;
 use super::html::{escape, num, png, svg};
 use crate::backend::native::caustics::CausticVolume;
 use crate::model::SeaSurface;
-use crate::optics::project::Projector;
 use crate::optics::surface::{SeaInterface, image_through};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -68,7 +67,7 @@ pub fn run(
             .sea_interface(1)
             .ok_or_else(|| err("no sea surface".into()))?;
         let flat = SeaInterface::flat(waves.n_water);
-        let pr = Projector::new(m, 0, 1).map_err(err)?;
+        let pr = m.projector(0, 1).map_err(err)?;
         let ray = |u: f64, v: f64| pr.pixel_ray_world(0, u, v).map(|(o, d, _)| (o, d));
         progress(&format!(
             "projecting `{}`'s targets through the surface",

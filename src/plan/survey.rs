@@ -197,7 +197,7 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
     if model.cameras.is_empty() {
         return Err("the scene has no camera".into());
     }
-    let proj = Projector::new(model, 0, 1)?;
+    let proj = model.projector(0, 1)?;
     let cam = &model.cameras[0];
     let n = model.poses.len();
     let mut notes: Vec<String> = site.note.iter().cloned().collect();
@@ -407,7 +407,7 @@ pub const MAX_EVALUATED: usize = 40_000;
 /// area on the nominal seabed. Meshes over [`MAX_EVALUATED`] faces are binned into xy cells and
 /// each cell's highest face stands for the cell.
 pub fn coverage(model: &Model, site: &Site) -> Result<Coverage, String> {
-    let proj = Projector::new(model, 0, 1)?;
+    let proj = model.projector(0, 1)?;
     let base = std::path::Path::new(&model.source)
         .parent()
         .unwrap_or(std::path::Path::new("."));

@@ -132,7 +132,7 @@ pub fn compute_with(
     let mut projectors = Vec::new();
     for (ci, cam) in model.cameras.iter().enumerate() {
         let pr: Vec<Projector> = (0..3)
-            .map(|ch| Projector::new(model, ci, ch))
+            .map(|ch| model.projector(ci, ch))
             .collect::<Result<_, _>>()?;
         projectors.push(pr);
         cameras.push(camera_truth(cam, model.ambient_ior()));

@@ -9,7 +9,6 @@
 
 use poser::backend::RenderOptions;
 use poser::model::Model;
-use poser::optics::project::Projector;
 use std::path::{Path, PathBuf};
 
 pub const GEOMETRY: &[&str] = &[
@@ -69,8 +68,8 @@ pub fn geometry_samples(backend: &str) -> Option<u32> {
 /// measurable disk of camera 0: how far a backend ignoring dispersion would be off.
 pub fn dispersion_shift(model: &Model, channel: usize) -> f64 {
     let (pc, pg) = (
-        Projector::new(model, 0, channel).unwrap(),
-        Projector::new(model, 0, 1).unwrap(),
+        model.projector(0, channel).unwrap(),
+        model.projector(0, 1).unwrap(),
     );
     let mut d2 = Vec::new();
     for pose in 0..model.poses.len() {

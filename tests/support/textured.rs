@@ -30,7 +30,7 @@ pub fn texture_disk(model: &Model) -> poser::compare::Disk {
 
 /// Measured − expected position of the texture's disk in the render in `dir`, px.
 pub fn disk_error(model: &Model, dir: &Path) -> [f64; 2] {
-    let proj = poser::optics::project::Projector::new(model, 0, 1).unwrap();
+    let proj = model.projector(0, 1).unwrap();
     let (c, half) = poser::compare::expected_disk(&proj, None, 0, &texture_disk(model))
         .expect("the disk is measurable");
     let img =

@@ -247,7 +247,7 @@ def test_fisheye_projects_like_the_lens_model(lens, tmp_path):
 
 
 def _distort(x, y, d):
-    """Brown-Conrady (OpenCV), as src/optics/lens.rs `Lens::distort`."""
+    """Brown-Conrady (OpenCV), as crates/poser-optics/src/lens.rs `Lens::distort`."""
     r2 = x * x + y * y
     radial = 1.0 + r2 * (d["k1"] + r2 * (d["k2"] + r2 * d["k3"]))
     return (x * radial + 2.0 * d["p1"] * x * y + d["p2"] * (r2 + 2.0 * x * x),

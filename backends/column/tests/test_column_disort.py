@@ -8,7 +8,7 @@ bottom must agree within 1 % per channel, with the Monte Carlo's own standard er
 
 Channels that keep less than 0.1 % of the surface's light at the seabed (red at 30 m, blue in
 coastal water at 30 m: ten stops below the surface, black in an image) are solved with one round
-of photons (src/optics/column.rs, VISIBLE): there the column must agree within 1 % or three of
+of photons (crates/poser-optics/src/column.rs, VISIBLE): there the column must agree within 1 % or three of
 its own standard errors, whichever is larger.
 """
 
@@ -65,7 +65,7 @@ position = [0.0, 0.0, -{camera_depth}]
 
 # Like for like: DISORT's top boundary lets the light coming up leave, and its sky is an
 # isotropic radiance just below the surface; poser's default surface reflects from below
-# (Fresnel, Snell's window), which src/optics/column.rs checks against closed forms instead.
+# (Fresnel, Snell's window), which crates/poser-optics/src/column.rs checks against closed forms instead.
 [render]
 surface_from_below = "open"
 """

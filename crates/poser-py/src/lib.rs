@@ -22,7 +22,6 @@
 use numpy::{IntoPyArray, PyArray1, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods};
 use poser::backend::Backend;
 use poser::model::{Model, Pose};
-use poser::optics::project::Projector;
 use poser::scene::diag::{Diagnostic as Diag, Severity};
 use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
@@ -343,7 +342,7 @@ impl Scene {
                 self.model.cameras[cam].name
             )));
         }
-        let p = Projector::new(&self.model, cam, ch).map_err(failed)?;
+        let p = self.model.projector(cam, ch).map_err(failed)?;
         let results = py.detach(|| p.project_points(&pts, world_pose));
         let mut uv = Vec::with_capacity(results.len() * 2);
         let mut status = Vec::with_capacity(results.len());

@@ -46,7 +46,7 @@ impl CameraRays {
             _ => (1.0 / n_w).powi(2),
         };
         Ok(CameraRays {
-            projector: Projector::new(model, cam, channel)?,
+            projector: model.projector(cam, channel)?,
             pose,
             world_from_camera: model.world_from_camera(pose, cam),
             n2_factor,

@@ -9,23 +9,10 @@
 //! | region | `z ≤ 0` when the site has a sea surface or daylight (sun, ambient); ∩ the box `camera ± half_size` for `BoxAroundCamera` |
 //! | phase | `cos θ` between propagation directions; FF as a piecewise-constant table in cos θ ([`FF_BINS`] bins, log-spaced in θ) — evaluation and sampling use the same table, so sample weights are exact |
 
-use crate::model::{Model, Phase, SeaSurface, WaterExtent};
-use crate::optics::phase;
+use crate::model::{Model, SeaSurface, WaterExtent};
 use glam::DVec3;
 
 pub use crate::optics::phase::{FF_BINS, PhaseFn};
-
-/// The renderer's phase function for the model's.
-impl PhaseFn {
-    pub fn from_model(p: &Phase) -> PhaseFn {
-        match *p {
-            Phase::HenyeyGreenstein { g } => PhaseFn::Hg {
-                g: g.clamp(-0.999, 0.999),
-            },
-            Phase::FournierForand { n, mu, .. } => phase::ff_table(n, mu),
-        }
-    }
-}
 
 /// The water of one image: coefficients, phase and region.
 #[derive(Debug, Clone)]
@@ -70,7 +57,7 @@ impl Medium {
             sigma_a: sa,
             sigma_s: ss,
             sigma_t: st,
-            phase: PhaseFn::from_model(&w.phase),
+            phase: w.phase.phase_fn(),
             lo,
             hi,
         })
@@ -142,7 +129,7 @@ fn ex(s: f64, len: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::phase::ff_table;
+    use crate::optics::phase::{self, ff_table};
     use std::f64::consts::PI;
 
     /// `u_of_cos` inverts `sample_cos` for Henyey–Greenstein (forward, backward, isotropic)

@@ -70,7 +70,7 @@ impl Projector {
     }
 
     /// The same projector placed at rig poses: `world_from_camera` at each pose (the model
-    /// builds these: `Projector::new` in [`crate::model`]).
+    /// builds these: `Projector::new` in `poser::model`).
     pub fn with_poses(mut self, world_from_camera: Vec<Pose>) -> Projector {
         self.camera_from_world = world_from_camera.iter().map(Pose::inverse).collect();
         self.world_from_camera = world_from_camera;
@@ -241,7 +241,7 @@ pub fn parse_channel(s: &str) -> Result<usize, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::optics::types::{Distortion, Glass, LensModel, Port};
+    use crate::types::{Distortion, Glass, LensModel, Port};
 
     fn camera(port: Port) -> Camera {
         Camera {

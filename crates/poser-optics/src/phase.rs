@@ -66,8 +66,8 @@ pub fn ff_backscatter(n: f64, mu: f64) -> f64 {
 
 /// Fournier–Forand cumulative distribution: the fraction of the scattered light within angle
 /// θ of the forward direction (Fournier & Jonasz 1999; Mobley, Sundman & Boss 2002). The
-/// backends tabulate FF from it: the native medium ([`crate::backend::native::medium`]) and
-/// Mitsuba's `tabphase` ([`crate::backend::mitsuba::view::ff_table`]).
+/// backends tabulate FF from it: the native medium (`poser::backend::native::medium`) and
+/// Mitsuba's `tabphase` (`poser::backend::mitsuba::view::ff_table`).
 pub fn ff_cdf(n: f64, mu: f64, theta: f64) -> f64 {
     let nu = (3.0 - mu) / 2.0;
     let k = 3.0 * (n - 1.0) * (n - 1.0);
@@ -90,13 +90,13 @@ pub const FF_BINS: usize = 2048;
 
 /// A phase function ready for rendering: HG in closed form, or any phase function as a table in
 /// cos θ (evaluation and sampling use the same table, so sample weights are exact). Shared by
-/// the native renderer and the water-column solver ([`crate::optics::column`]).
+/// the native renderer and the water-column solver ([`crate::column`]).
 #[derive(Debug, Clone)]
 pub enum PhaseFn {
     Hg {
         g: f64,
     },
-    /// Table: bin k spans θ ∈ [theta[k], theta[k+1]] (μ decreasing); `cdf[k]` is the mass of
+    /// Table: bin k spans θ ∈ `[theta[k], theta[k+1]]` (μ decreasing); `cdf[k]` is the mass of
     /// bins < k; density `dens[k]` per steradian inside bin k.
     Tab {
         mu: Vec<f64>,

@@ -1,5 +1,5 @@
 //! The batch forward solvers ([`PortSolver::forward_many`]): the scalar solvers' fast paths
-//! on [`LANES`] points at once in SIMD lanes ([`crate::optics::lanes`]), AVX2 where the CPU
+//! on [`LANES`] points at once in SIMD lanes ([`crate::lanes`]), AVX2 where the CPU
 //! has it.
 //!
 //! | port | in lanes | handed back to the scalar solver |
@@ -10,12 +10,12 @@
 //!
 //! The steps themselves (`Slabs::eval2_ratio`, `halley_parts`, `one_layer_parts`,
 //! `DomePort::guess`, `moment_step`) are the scalar solver's own functions, generic over
-//! [`crate::optics::lanes::Lane`]; the setup and stopping rule here repeat the scalar ones
+//! [`crate::lanes::Lane`]; the setup and stopping rule here repeat the scalar ones
 //! operation for operation. So each point gets the same bits as [`PortSolver::forward`]
 //! (tested), whichever instruction set runs it.
 
 use super::{CylinderPort, DomePort, FlatPort, NoSolution, PortSolver, REFINE_AT, Slabs};
-use crate::optics::lanes::{M, V, W, has_avx2};
+use crate::lanes::{M, V, W, has_avx2};
 use glam::DVec3;
 use std::ops::Not;
 
@@ -411,7 +411,7 @@ impl PortSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::projection::cases;
+    use crate::cases::cases;
     use std::cell::Cell;
 
     thread_local! {

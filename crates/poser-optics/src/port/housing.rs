@@ -6,8 +6,8 @@
 //! dispatch on the [`Port`].
 
 use super::{cylinder, dome, flat};
-use crate::optics::lens::Lens;
-use crate::optics::types::{Camera, Port, Pose};
+use crate::lens::Lens;
+use crate::types::{Camera, Port, Pose};
 use glam::{DMat3, DVec3};
 
 /// Which interface a part of a housing is.

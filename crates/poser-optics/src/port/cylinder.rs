@@ -7,9 +7,9 @@ use super::housing::{
     Face, Housing, HousingMesh, MESH_SEGMENTS, Part, Shape, border_directions, border_rays,
     revolve, z_to,
 };
-use crate::optics::NoSolution;
-use crate::optics::interface::{fresnel_transmittance, refract};
-use crate::optics::types::{Camera, Pose};
+use crate::NoSolution;
+use crate::interface::{fresnel_transmittance, refract};
+use crate::types::{Camera, Pose};
 use glam::{DVec2, DVec3};
 
 /// Cylindrical port: coaxial cylinders about a line.

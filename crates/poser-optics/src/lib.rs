@@ -1,11 +1,15 @@
-//! The optics core: refractive indices (water, glass), water IOPs and phase functions, lens
-//! models, housing ports with exact forward and backward projection, sun position.
+//! poser-optics: the pure optics of poser, as a crate of its own so that the compiler keeps it
+//! pure. It owns refractive indices (water, glass), water IOPs and phase functions, lens
+//! models, housing ports with exact forward and backward projection, the water column's light,
+//! sun position and the sea surface, and poser's one random stream ([`rng`]). It depends on
+//! glam, serde and rayon only: nothing of the scene, the model or the back ends (the `poser`
+//! crate re-exports it as `poser::optics`, and `poser::rng`).
 //!
 //! | module | owns |
 //! |---|---|
 //! | [`water`], [`glass`] | refractive indices (Quan–Fry, Millard–Seaver, Sellmeier), Jerlov IOPs |
 //! | [`phase`] | Henyey–Greenstein and Fournier–Forand, and [`phase::PhaseFn`] (closed form or table) |
-//! | [`column`] | the plane-parallel water column's light field, solved once per scene (1D Monte Carlo) |
+//! | [`column`](mod@column) | the plane-parallel water column's light field, solved once per scene (1D Monte Carlo) |
 //! | [`sun`] | NOAA solar position, refraction of sunlight into the sea |
 //! | [`interface`] | vector Snell with explicit TIR, unpolarised Fresnel |
 //! | [`lens`] | rectilinear + Brown, equidistant and equisolid fisheye |
@@ -13,6 +17,8 @@
 //! | [`lanes`] | f64 SIMD lanes for the batch port solvers (AVX2 picked at run time) |
 //! | [`project`] | [`project::Projector`]: camera + port + poses for one channel |
 //! | [`types`] | the value types: [`types::Camera`], [`types::Port`], [`types::Pose`], … (re-exported by the model) |
+//! | [`rng`] | SplitMix64, the one deterministic random stream (renders, waves, benchmark points) |
+//! | [`cases`] | the hard-case table of the port solvers, shared by the tests and `poser bench projection` |
 //! | [`waves`] | seeded periodic random sea surface (Pierson–Moskowitz, Mitsuyasu spread) for caustics |
 //!
 //! "No solution" is always an explicit [`NoSolution`], never NaN.
@@ -20,6 +26,7 @@
 // `!(x > y)` is deliberate throughout: it rejects NaN as well as the failing comparison.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod cases;
 pub mod column;
 pub mod glass;
 pub mod interface;
@@ -29,6 +36,7 @@ pub mod phase;
 pub mod port;
 pub mod project;
 pub mod reference;
+pub mod rng;
 pub mod sun;
 pub mod surface;
 pub mod types;

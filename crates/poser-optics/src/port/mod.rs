@@ -162,7 +162,7 @@ pub use batch::{LANES, Simd};
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::projection::cases;
+    use crate::cases::cases;
 
     /// Evaluations of the fast solver per point of the benchmark's sets (`None`: the point
     /// left the fast path), for the flat port and the on-axis cylinder (q-equation) and the

@@ -1,5 +1,5 @@
 //! The value types the optics core works on, free of the scene and the model (which re-exports
-//! them: [`crate::model`]). Conventions are the model's: camera frame OpenCV (x right, y down,
+//! them: `poser::model`). Conventions are the model's: camera frame OpenCV (x right, y down,
 //! z forward, origin at the entrance pupil), SI units, channels `[R, G, B]`.
 //!
 //! | type | what |

@@ -1,7 +1,7 @@
 //! SplitMix64: the one deterministic, platform-independent random stream of poser. The render
-//! sampler ([`crate::backend::native::sampler::Sampler`]), the wave fields ([`crate::optics::waves`]) and
-//! the benchmark point sets ([`crate::bench::projection`]) all draw from it, so the same seed gives
-//! the same numbers everywhere.
+//! sampler (`poser::backend::native::sampler::Sampler`), the wave fields ([`crate::waves`])
+//! and the benchmark point sets ([`crate::cases`], `poser bench projection`) all draw from
+//! it, so the same seed gives the same numbers everywhere.
 
 /// A SplitMix64 stream (Steele, Lea & Flood 2014) from a raw 64-bit state.
 #[derive(Debug, Clone)]

@@ -1,17 +1,17 @@
 //! The flat port ([`FlatPort`]): parallel glass layers, possibly tilted; the scalar
-//! q-equation ([`Slabs`], shared with the on-axis cylinder) and its double-double refinement.
+//! q-equation (`Slabs`, shared with the on-axis cylinder) and its double-double refinement.
 
 use super::PortRay;
 use super::housing::{
     Face, Housing, HousingMesh, MESH_SEGMENTS, Part, Shape, basis, border_directions, border_rays,
     revolve, z_to,
 };
-use crate::optics::NoSolution;
-use crate::optics::interface::{fresnel_transmittance, refract};
-use crate::optics::lanes::Lane;
-use crate::optics::project::Projector;
-use crate::optics::reference::{Dd, V3};
-use crate::optics::types::{Camera, Pose};
+use crate::NoSolution;
+use crate::interface::{fresnel_transmittance, refract};
+use crate::lanes::Lane;
+use crate::project::Projector;
+use crate::reference::{Dd, V3};
+use crate::types::{Camera, Pose};
 use glam::DVec3;
 
 /// Largest number of glass layers of a flat port.

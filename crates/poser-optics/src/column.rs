@@ -236,7 +236,7 @@ pub struct Column {
     /// that met `n` events, the last of them the first vertex of a camera path looking down
     /// from layer `k` ([`Column::share_seen_beyond`]).
     pub seen_orders: [Vec<f64>; 3],
-    /// Share of the photons' weight lost to [`MAX_EVENTS`] (should be 0).
+    /// Share of the photons' weight lost to `MAX_EVENTS` (should be 0).
     pub truncated: f64,
     /// Photons of the channel that took the most rounds.
     pub photons: usize,

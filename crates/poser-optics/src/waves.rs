@@ -1,6 +1,6 @@
 //! A wavy sea surface: a deterministic, seeded, periodic height field `h(x, y)` (m, z up,
 //! mean level z = 0) with its analytic gradient. Used by the native renderer's caustics
-//! ([`crate::backend::native::caustics`]).
+//! (`poser::backend::native::caustics`).
 //!
 //! | parameter | unit | default (scene) | meaning |
 //! |---|---|---|---|

@@ -5,10 +5,10 @@ use super::PortRay;
 use super::housing::{
     Face, Housing, HousingMesh, MESH_SEGMENTS, Part, Shape, border_directions, border_rays, revolve,
 };
-use crate::optics::NoSolution;
-use crate::optics::interface::{fresnel_transmittance, refract};
-use crate::optics::lanes::Lane;
-use crate::optics::types::{Camera, Pose};
+use crate::NoSolution;
+use crate::interface::{fresnel_transmittance, refract};
+use crate::lanes::Lane;
+use crate::types::{Camera, Pose};
 use glam::{DMat3, DVec2, DVec3};
 
 #[derive(Debug, Clone, Copy)]
