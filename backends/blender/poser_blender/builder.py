@@ -7,7 +7,7 @@ The description (format `poser-blender/1`) is written by `poser compile --backen
 |---|---|
 | rig pose | Empty `poser_rig`, keyframed once per pose (frame = pose index, constant interpolation) |
 | camera | Empty (OpenCV frame) child of the rig + Camera child; exact intrinsics via lens/shift |
-| distortion, fx != fy | CUSTOM camera running poser's fixed OSL shader `camera.osl` (parameters only): Newton inverse of Brown-Conrady per film sample, as src/optics/lens.rs; exact, no resampling |
+| distortion, fx != fy | CUSTOM camera running poser's fixed OSL shader `camera.osl` (parameters only): Newton inverse of Brown-Conrady per film sample, as crates/poser-optics/src/lens.rs; exact, no resampling |
 | port | inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g); black housing walls inside it (HOUSING_INSIDE); no housing shadow (HOUSING_SHADOW) |
 | water | one closed mesh `poser_water` (box minus housings), Volume Coefficients node; per pose a shape key |
 | lights | point/spot (P = 4 pi I, radius 0, blend 0), sun (angle 0), area (P = L pi A), ambient = world |
@@ -1095,7 +1095,7 @@ WAVE_CELLS_PER_WAVELENGTH = 8
 
 def wave_surface(field):
     """One period of the sea surface as a mesh: the native backend's height field
-    h(x, y) = sum a cos(kx x + ky y + phi) (src/optics/waves.rs, exactly periodic with period P)
+    h(x, y) = sum a cos(kx x + ky y + phi) (crates/poser-optics/src/waves.rs, exactly periodic with period P)
     sampled on a regular grid over [0, P]^2, with its analytic normals (smooth shading)."""
     period = float(field["period"])
     comps = np.asarray(field["components"], dtype=float).reshape(-1, 4)
