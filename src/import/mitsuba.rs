@@ -1583,39 +1583,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
     let first = files.first().ok_or("no input file")?;
     let root = std::fs::canonicalize(first.parent().unwrap_or(Path::new(".")).join("."))
         .map_err(|e| format!("{}: {e}", first.display()))?;
-    let mut docs = Vec::new();
-    let mut search = Vec::new();
-    for (di, f) in files.iter().enumerate() {
-        let abs = std::fs::canonicalize(f).map_err(|e| format!("{}: {e}", f.display()))?;
-        if !abs.starts_with(&root) {
-            return Err(format!(
-                "{}: every file of one import must be in the first file's folder ({})",
-                f.display(),
-                root.display()
-            ));
-        }
-        let main = abs.parent().unwrap_or(&root).to_path_buf();
-        let mut r = Reader {
-            root: root.clone(),
-            elements: 0,
-            params: HashMap::new(),
-            doc: di,
-            main: main.clone(),
-            paths: Vec::new(),
-        };
-        let mut doc = r.parse_file(&abs, 0, false)?;
-        // Keep the given spelling of the path in locations.
-        let shown = f.display().to_string();
-        relabel(&mut doc, &self::shown(&abs), &shown);
-        if doc.tag != "scene" {
-            return Err(format!(
-                "{}: the root element is <{}>, not <scene>",
-                doc.loc, doc.tag
-            ));
-        }
-        docs.push(doc);
-        search.push((main, r.paths));
-    }
+    let (mut docs, search) = read_docs(files, &root)?;
     let mut cx = Cx {
         notes: Vec::new(),
         targets: Vec::new(),
@@ -1634,88 +1602,18 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
     }
 
     // Sensors → camera and poses.
-    let mut sensors = Vec::new();
-    for (di, d) in docs.iter().enumerate() {
-        for k in d.kids.iter().filter(|k| k.tag == "sensor") {
-            if let Some(mut s) = sensor(&mut cx, k)? {
-                s.doc = di;
-                if d.kids.iter().filter(|k| k.tag == "sensor").count() == 1 {
-                    s.view = view_of(d);
-                }
-                sensors.push(s);
-            }
-        }
-    }
+    let sensors = sensors_of(&mut cx, &docs)?;
     let Some(s0) = sensors.first() else {
         return Err(format!(
             "{}: no sensor\n  help: a poser scene needs a camera; add a <sensor type=\"perspective\">",
             first.display()
         ));
     };
-    // A rig: poser's view files of several cameras (each names its pose and camera).
-    let mut names: Vec<String> = Vec::new();
-    for s in &sensors {
-        if let Some((_, n)) = &s.view
-            && !names.contains(n)
-        {
-            names.push(n.clone());
-        }
+    let (names, rig) = rig_names(&sensors);
+    if !rig {
+        note_other_intrinsics(&mut cx, &sensors);
     }
-    let rig = names.len() > 1 && sensors.iter().all(|s| s.view.is_some());
-    for s in &sensors[1..] {
-        if rig {
-            break;
-        }
-        if (s.width, s.height) != (s0.width, s0.height)
-            || (s.fx / s0.fx - 1.0).abs() > 1e-9
-            || (s.cx - s0.cx).abs() > 1e-6
-            || (s.cy - s0.cy).abs() > 1e-6
-        {
-            cx.note(
-                &s.x,
-                "this sensor's intrinsics differ from the first's; it is imported with the first's",
-                Some("poser's network shares one camera; import the sensors separately"),
-            );
-        }
-    }
-
-    // The water: the medium inside a `null` shape (poser's sea box), else the first medium.
-    let world = &docs[0];
-    let mut water = None;
-    let mut surface = false;
-    for k in world.kids.iter().filter(|k| k.tag == "medium") {
-        if water.is_none() {
-            water = medium(&mut cx, k)?;
-        }
-    }
-    for d in &docs {
-        for k in d
-            .kids
-            .iter()
-            .filter(|k| k.tag == "shape" && k.ty() == "cube")
-        {
-            let interior = k.kids.iter().any(|c| c.attr("name") == Some("interior"));
-            if interior {
-                if water.is_none()
-                    && let Some(r) = k.kids.iter().find(|c| c.attr("name") == Some("interior"))
-                {
-                    let m = cx.deref(r)?.clone();
-                    water = medium(&mut cx, &m)?;
-                }
-                let m = cx.to_world(k)?;
-                let top = m
-                    .transform_point3(DVec3::ONE)
-                    .z
-                    .max(m.transform_point3(-DVec3::ONE).z);
-                surface |= top.abs() < 1e-6;
-            }
-        }
-        for k in d.kids.iter().filter(|k| k.tag == "medium") {
-            if water.is_none() {
-                water = medium(&mut cx, k)?;
-            }
-        }
-    }
+    let (water, surface) = water_of(&mut cx, &docs)?;
 
     let mut t = Table::new();
     let name = comment_name(&docs[0], "poser scene")
@@ -1730,6 +1628,85 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         )),
     );
 
+    let World {
+        objects,
+        lights,
+        assets_out,
+        port_faces,
+        sun,
+        max_depth,
+    } = world_of(&mut cx, &docs, &sensors, assets)?;
+
+    t.insert("camera".into(), camera_table(s0, port_faces.is_empty()));
+    if !port_faces.is_empty() {
+        port_note(&mut cx, s0, &port_faces);
+    }
+
+    // The index outside the glass faces that border the water (an `exterior` medium).
+    let n_water = port_faces
+        .iter()
+        .filter(|p| p.0.kids.iter().any(|c| c.attr("name") == Some("exterior")))
+        .map(|p| p.3)
+        .filter(|&n| n > 1.0)
+        .reduce(f64::max);
+    if let Some(w) = &water {
+        insert_water(&mut cx, &mut t, w, n_water, surface, &sensors);
+    }
+    if let Some((k, dir, e)) = &sun {
+        let (dir_air, e_air) = match (&water, surface) {
+            (Some(_), true) => {
+                let n = n_water.unwrap_or(1.334);
+                unrefract(*dir, *e, [n; 3])
+            }
+            _ => (*dir, *e),
+        };
+        t.insert("sun".into(), sun_table(dir_air, e_air));
+        if water.is_some() && surface {
+            cx.note(k, "the directional light is read as the sun refracted at the flat sea surface: elevation and irradiance are those above the water", None);
+        }
+    }
+    if !lights.is_empty() {
+        t.insert("lights".into(), Value::Array(lights));
+    }
+    if !objects.is_empty() {
+        t.insert("objects".into(), Value::Array(objects));
+    }
+
+    // Network: one explicit pose per sensor, or per rig pose (the rig frame is the first
+    // camera's).
+    let poses = if rig {
+        rig_poses(&mut cx, &mut t, &sensors, &names)?
+    } else {
+        sensors.iter().map(|s| (s.rot, s.pos)).collect()
+    };
+    t.insert("network".into(), explicit_network(poses));
+    let r = render_table(&mut cx, s0, max_depth.as_ref(), &port_faces);
+    if !r.is_empty() {
+        t.insert("render".into(), Value::Table(r));
+    }
+
+    let sources = files
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    finish(&t, &sources, cx.notes, assets_out)
+}
+
+/// What the world's elements give: objects, lights (the sun apart), mesh and texture assets,
+/// the glass and housing faces of the port, and the integrator's `max_depth`.
+struct World {
+    objects: Vec<Value>,
+    lights: Vec<Value>,
+    assets_out: Vec<(String, Vec<u8>)>,
+    port_faces: Vec<(X, DMat4, f64, f64)>,
+    sun: Option<(X, DVec3, [f64; 3])>,
+    max_depth: Option<(X, i64)>,
+}
+
+/// Read the shapes, lights and integrator of the world (the first file; its included world for
+/// a poser view file) and the rig-mounted lights of the first view.
+fn world_of(cx: &mut Cx, docs: &[X], sensors: &[Sensor], assets: &str) -> Result<World, String> {
     // Housing: dielectric and black shapes close to a sensor; the port's geometry.
     let near_sensor = |m: &DMat4| -> bool {
         let c = m.transform_point3(DVec3::ZERO);
@@ -1757,7 +1734,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
             match k.tag.as_str() {
                 "shape" if di == 0 => {
                     shape(
-                        &mut cx,
+                        cx,
                         k,
                         &near_sensor,
                         &mut objects,
@@ -1774,7 +1751,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
                     view_lights.push((k.clone(), di))
                 }
                 "emitter" if di == 0 => {
-                    emitter(&mut cx, k, None, &mut lights, &mut sun, &mut unique)?;
+                    emitter(cx, k, None, &mut lights, &mut sun, &mut unique)?;
                 }
                 "shape" | "emitter" | "sensor" | "medium" | "bsdf" | "texture" => {}
                 // The file's own integrator; else the one of a file it includes.
@@ -1795,9 +1772,9 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         if Some(*d) != first_view {
             continue;
         }
-        let s = sensors.iter().find(|s| s.doc == *d).unwrap_or(s0);
+        let s = sensors.iter().find(|s| s.doc == *d).unwrap_or(&sensors[0]);
         emitter(
-            &mut cx,
+            cx,
             k,
             Some((s.rot, s.pos)),
             &mut lights,
@@ -1806,7 +1783,155 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         )?;
     }
 
-    // Camera.
+    Ok(World {
+        objects,
+        lights,
+        assets_out,
+        port_faces,
+        sun,
+        max_depth,
+    })
+}
+
+/// Parse every input file (all inside `root`, the first file's folder), with the resolver
+/// state each leaves: its folder and its `<path>` folders.
+#[allow(clippy::type_complexity)]
+fn read_docs(
+    files: &[PathBuf],
+    root: &Path,
+) -> Result<(Vec<X>, Vec<(PathBuf, Vec<PathBuf>)>), String> {
+    let mut docs = Vec::new();
+    let mut search = Vec::new();
+    for (di, f) in files.iter().enumerate() {
+        let abs = std::fs::canonicalize(f).map_err(|e| format!("{}: {e}", f.display()))?;
+        if !abs.starts_with(root) {
+            return Err(format!(
+                "{}: every file of one import must be in the first file's folder ({})",
+                f.display(),
+                root.display()
+            ));
+        }
+        let main = abs.parent().unwrap_or(root).to_path_buf();
+        let mut r = Reader {
+            root: root.to_path_buf(),
+            elements: 0,
+            params: HashMap::new(),
+            doc: di,
+            main: main.clone(),
+            paths: Vec::new(),
+        };
+        let mut doc = r.parse_file(&abs, 0, false)?;
+        // Keep the given spelling of the path in locations.
+        let shown = f.display().to_string();
+        relabel(&mut doc, &self::shown(&abs), &shown);
+        if doc.tag != "scene" {
+            return Err(format!(
+                "{}: the root element is <{}>, not <scene>",
+                doc.loc, doc.tag
+            ));
+        }
+        docs.push(doc);
+        search.push((main, r.paths));
+    }
+    Ok((docs, search))
+}
+
+/// Every sensor of every file, in file order; a file's only sensor takes the (pose, camera)
+/// its poser view comment names.
+fn sensors_of(cx: &mut Cx, docs: &[X]) -> Result<Vec<Sensor>, String> {
+    let mut sensors = Vec::new();
+    for (di, d) in docs.iter().enumerate() {
+        for k in d.kids.iter().filter(|k| k.tag == "sensor") {
+            if let Some(mut s) = sensor(cx, k)? {
+                s.doc = di;
+                if d.kids.iter().filter(|k| k.tag == "sensor").count() == 1 {
+                    s.view = view_of(d);
+                }
+                sensors.push(s);
+            }
+        }
+    }
+    Ok(sensors)
+}
+
+/// The camera names of poser's view files, in first-seen order, and whether they make a rig
+/// (several cameras, every sensor from a view file).
+fn rig_names(sensors: &[Sensor]) -> (Vec<String>, bool) {
+    let mut names: Vec<String> = Vec::new();
+    for s in sensors {
+        if let Some((_, n)) = &s.view
+            && !names.contains(n)
+        {
+            names.push(n.clone());
+        }
+    }
+    let rig = names.len() > 1 && sensors.iter().all(|s| s.view.is_some());
+    (names, rig)
+}
+
+/// Note each sensor whose intrinsics differ from the first's (poser's network shares one
+/// camera).
+fn note_other_intrinsics(cx: &mut Cx, sensors: &[Sensor]) {
+    let s0 = &sensors[0];
+    for s in &sensors[1..] {
+        if (s.width, s.height) != (s0.width, s0.height)
+            || (s.fx / s0.fx - 1.0).abs() > 1e-9
+            || (s.cx - s0.cx).abs() > 1e-6
+            || (s.cy - s0.cy).abs() > 1e-6
+        {
+            cx.note(
+                &s.x,
+                "this sensor's intrinsics differ from the first's; it is imported with the first's",
+                Some("poser's network shares one camera; import the sensors separately"),
+            );
+        }
+    }
+}
+
+/// The water: the medium inside a `null` shape (poser's sea box), else the first medium; and
+/// whether a sea box has its top at z = 0 (a flat surface).
+fn water_of(cx: &mut Cx, docs: &[X]) -> Result<(Option<Water>, bool), String> {
+    let world = &docs[0];
+    let mut water = None;
+    let mut surface = false;
+    for k in world.kids.iter().filter(|k| k.tag == "medium") {
+        if water.is_none() {
+            water = medium(cx, k)?;
+        }
+    }
+    for d in docs {
+        for k in d
+            .kids
+            .iter()
+            .filter(|k| k.tag == "shape" && k.ty() == "cube")
+        {
+            let interior = k.kids.iter().any(|c| c.attr("name") == Some("interior"));
+            if interior {
+                if water.is_none()
+                    && let Some(r) = k.kids.iter().find(|c| c.attr("name") == Some("interior"))
+                {
+                    let m = cx.deref(r)?.clone();
+                    water = medium(cx, &m)?;
+                }
+                let m = cx.to_world(k)?;
+                let top = m
+                    .transform_point3(DVec3::ONE)
+                    .z
+                    .max(m.transform_point3(-DVec3::ONE).z);
+                surface |= top.abs() < 1e-6;
+            }
+        }
+        for k in d.kids.iter().filter(|k| k.tag == "medium") {
+            if water.is_none() {
+                water = medium(cx, k)?;
+            }
+        }
+    }
+    Ok((water, surface))
+}
+
+/// The `[camera]` table of the first sensor; `no_port`: no glass at the camera.
+fn camera_table(s0: &Sensor, no_port: bool) -> Value {
     let mut cam = Table::new();
     cam.insert("width".into(), Value::Integer(s0.width));
     cam.insert("height".into(), Value::Integer(s0.height));
@@ -1829,136 +1954,129 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         cam.remove("fx");
         cam.insert("focal_length".into(), Value::Float(s0.fx * pitch));
     }
-    if port_faces.is_empty() {
+    if no_port {
         // No glass at the camera: no housing, said explicitly (poser's default in water is
         // a 10 mm flat port).
         let mut port = Table::new();
         port.insert("type".into(), Value::String("none".into()));
         cam.insert("port".into(), Value::Table(port));
     }
-    t.insert("camera".into(), Value::Table(cam));
-    if !port_faces.is_empty() {
-        port_note(&mut cx, s0, &port_faces);
-    }
+    Value::Table(cam)
+}
 
-    // The index outside the glass faces that border the water (an `exterior` medium).
-    let n_water = port_faces
-        .iter()
-        .filter(|p| p.0.kids.iter().any(|c| c.attr("name") == Some("exterior")))
-        .map(|p| p.3)
-        .filter(|&n| n > 1.0)
-        .reduce(f64::max);
-    if let Some(w) = &water {
-        let mut wt = Table::new();
-        wt.insert("absorption".into(), arr(w.sigma_a));
-        wt.insert("scattering".into(), arr(w.sigma_s));
-        wt.insert("g".into(), Value::Float(w.g));
-        if let Some(n) = n_water {
-            wt.insert("ior".into(), Value::Float(n));
-        }
-        t.insert("water".into(), Value::Table(wt));
-        if !surface && sensors.iter().any(|s| s.pos.z >= 0.0) {
-            cx.notes.push(
-                Note::new(
-                    Some(s0.x.loc.clone()),
-                    "a camera is at z ≥ 0 in water: poser's water lies below z = 0",
-                )
-                .help("move the scene down (every to_world) so that the cameras are at z < 0"),
-            );
-        }
-        // poser's sea has a flat surface at z = 0 unless told otherwise; a Mitsuba medium
-        // without poser's sea box fills the scene.
-        let mut site = Table::new();
-        site.insert(
-            "surface".into(),
-            Value::String(if surface { "flat" } else { "none" }.into()),
+/// The `[water]` and `[site]` tables of the water medium `w`; `n_water`: the index outside the
+/// port's glass. Notes a camera above the water.
+fn insert_water(
+    cx: &mut Cx,
+    t: &mut Table,
+    w: &Water,
+    n_water: Option<f64>,
+    surface: bool,
+    sensors: &[Sensor],
+) {
+    let mut wt = Table::new();
+    wt.insert("absorption".into(), arr(w.sigma_a));
+    wt.insert("scattering".into(), arr(w.sigma_s));
+    wt.insert("g".into(), Value::Float(w.g));
+    if let Some(n) = n_water {
+        wt.insert("ior".into(), Value::Float(n));
+    }
+    t.insert("water".into(), Value::Table(wt));
+    if !surface && sensors.iter().any(|s| s.pos.z >= 0.0) {
+        cx.notes.push(
+            Note::new(
+                Some(sensors[0].x.loc.clone()),
+                "a camera is at z ≥ 0 in water: poser's water lies below z = 0",
+            )
+            .help("move the scene down (every to_world) so that the cameras are at z < 0"),
         );
-        t.insert("site".into(), Value::Table(site));
     }
-    if let Some((k, dir, e)) = &sun {
-        let (dir_air, e_air) = match (&water, surface) {
-            (Some(_), true) => {
-                let n = n_water.unwrap_or(1.334);
-                unrefract(*dir, *e, [n; 3])
-            }
-            _ => (*dir, *e),
-        };
-        t.insert("sun".into(), sun_table(dir_air, e_air));
-        if water.is_some() && surface {
-            cx.note(k, "the directional light is read as the sun refracted at the flat sea surface: elevation and irradiance are those above the water", None);
-        }
-    }
-    if !lights.is_empty() {
-        t.insert("lights".into(), Value::Array(lights));
-    }
-    if !objects.is_empty() {
-        t.insert("objects".into(), Value::Array(objects));
-    }
+    // poser's sea has a flat surface at z = 0 unless told otherwise; a Mitsuba medium
+    // without poser's sea box fills the scene.
+    let mut site = Table::new();
+    site.insert(
+        "surface".into(),
+        Value::String(if surface { "flat" } else { "none" }.into()),
+    );
+    t.insert("site".into(), Value::Table(site));
+}
 
-    // Network: one explicit pose per sensor, or per rig pose (the rig frame is the first
-    // camera's).
+/// A rig of poser's view files: the `[rig]` table (each camera relative to the first camera
+/// `names[0]`) and one pose per rig pose that has an image of the first camera.
+fn rig_poses(
+    cx: &mut Cx,
+    t: &mut Table,
+    sensors: &[Sensor],
+    names: &[String],
+) -> Result<Vec<(DMat3, DVec3)>, String> {
     let mut poses = Vec::new();
-    if rig {
-        let find = |p: usize, n: &str| {
-            sensors
-                .iter()
-                .find(|s| s.view.as_ref().is_some_and(|v| v.0 == p && v.1 == n))
-        };
-        let mut ids: Vec<usize> = Vec::new();
-        for s in &sensors {
-            let p = s.view.as_ref().map_or(0, |v| v.0);
-            if !ids.contains(&p) {
-                ids.push(p);
-            }
+    let find = |p: usize, n: &str| {
+        sensors
+            .iter()
+            .find(|s| s.view.as_ref().is_some_and(|v| v.0 == p && v.1 == n))
+    };
+    let mut ids: Vec<usize> = Vec::new();
+    for s in sensors {
+        let p = s.view.as_ref().map_or(0, |v| v.0);
+        if !ids.contains(&p) {
+            ids.push(p);
         }
-        let mut cams = Vec::new();
-        for n in &names {
-            let Some((a, b)) = ids
-                .iter()
-                .find_map(|&p| Some((find(p, &names[0])?, find(p, n)?)))
-            else {
-                return Err(format!(
-                    "camera `{n}` is never imaged at a pose of camera `{}`: its place in the rig is unknown",
-                    names[0]
-                ));
-            };
-            let inv = a.rot.transpose();
-            let mut c = Table::new();
-            c.insert("name".into(), Value::String(n.clone()));
-            c.insert("position".into(), arr((inv * (b.pos - a.pos)).to_array()));
-            c.insert("rotation".into(), arr(euler_xyz(inv * b.rot)));
-            c.insert("width".into(), Value::Integer(b.width));
-            c.insert("height".into(), Value::Integer(b.height));
-            c.insert("fx".into(), Value::Float(b.fx));
-            c.insert("principal_point".into(), arr([b.cx, b.cy]));
-            cams.push(Value::Table(c));
-        }
-        let mut rt = Table::new();
-        rt.insert("type".into(), Value::String("multi".into()));
-        rt.insert("cameras".into(), Value::Array(cams));
-        t.insert("rig".into(), Value::Table(rt));
-        for &p in &ids {
-            let Some(s) = find(p, &names[0]) else {
-                cx.notes.push(Note::new(
-                    None,
-                    format!(
-                        "rig pose {p} has no image of camera `{}`: it is not imported",
-                        names[0]
-                    ),
-                ));
-                continue;
-            };
-            poses.push((s.rot, s.pos));
-        }
-    } else {
-        poses.extend(sensors.iter().map(|s| (s.rot, s.pos)));
     }
-    t.insert("network".into(), explicit_network(poses));
+    let mut cams = Vec::new();
+    for n in names {
+        let Some((a, b)) = ids
+            .iter()
+            .find_map(|&p| Some((find(p, &names[0])?, find(p, n)?)))
+        else {
+            return Err(format!(
+                "camera `{n}` is never imaged at a pose of camera `{}`: its place in the rig is unknown",
+                names[0]
+            ));
+        };
+        let inv = a.rot.transpose();
+        let mut c = Table::new();
+        c.insert("name".into(), Value::String(n.clone()));
+        c.insert("position".into(), arr((inv * (b.pos - a.pos)).to_array()));
+        c.insert("rotation".into(), arr(euler_xyz(inv * b.rot)));
+        c.insert("width".into(), Value::Integer(b.width));
+        c.insert("height".into(), Value::Integer(b.height));
+        c.insert("fx".into(), Value::Float(b.fx));
+        c.insert("principal_point".into(), arr([b.cx, b.cy]));
+        cams.push(Value::Table(c));
+    }
+    let mut rt = Table::new();
+    rt.insert("type".into(), Value::String("multi".into()));
+    rt.insert("cameras".into(), Value::Array(cams));
+    t.insert("rig".into(), Value::Table(rt));
+    for &p in &ids {
+        let Some(s) = find(p, &names[0]) else {
+            cx.notes.push(Note::new(
+                None,
+                format!(
+                    "rig pose {p} has no image of camera `{}`: it is not imported",
+                    names[0]
+                ),
+            ));
+            continue;
+        };
+        poses.push((s.rot, s.pos));
+    }
+    Ok(poses)
+}
+
+/// The `[render]` table: the first sensor's samples and the integrator's `max_depth` as
+/// poser's bounces (noted when it cannot be).
+fn render_table(
+    cx: &mut Cx,
+    s0: &Sensor,
+    max_depth: Option<&(X, i64)>,
+    port_faces: &[(X, DMat4, f64, f64)],
+) -> Table {
     let mut r = Table::new();
     if let Some(spp) = s0.samples {
         r.insert("samples".into(), Value::Integer(spp.clamp(1, 1 << 20)));
     }
-    if let Some((k, depth)) = &max_depth {
+    if let Some((k, depth)) = max_depth {
         // Mitsuba counts path vertices from the camera and every glass face (poser's port:
         // 2); poser counts scattering vertices (docs/render-conventions.md §3.5).
         let glass = if port_faces.iter().any(|p| p.2 > 1.0) {
@@ -1976,16 +2094,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
             );
         }
     }
-    if !r.is_empty() {
-        t.insert("render".into(), Value::Table(r));
-    }
-
-    let sources = files
-        .iter()
-        .map(|f| f.display().to_string())
-        .collect::<Vec<_>>()
-        .join(", ");
-    finish(&t, &sources, cx.notes, assets_out)
+    r
 }
 
 /// How locations name a file: relative to the working folder when it is inside it.
