@@ -502,7 +502,6 @@ const LONG_FNS: &[(&str, usize)] = &[
     ("backend/native/mod.rs::render_image", 222),
     ("lesson/html.rs::page", 198),
     ("backend/native/integrator.rs::li_spread", 214),
-    ("import/mitsuba.rs::shape", 270),
     ("export/gltf.rs::export", 192),
     ("scene/check.rs::scene", 190),
     ("geometry/meshfile.rs::read_ply", 203),

@@ -2248,64 +2248,11 @@ fn shape(
     let m = cx.to_world(k)?;
     let kind = k.ty().to_string();
     // An area emitter on the shape.
-    if let Some(e) = k.kids.iter().find(|c| c.tag == "emitter") {
-        if e.ty() == "area" && kind == "rectangle" {
-            let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
-            let (len, frame, ..) = decompose(&m);
-            let mut l = Table::new();
-            l.insert(
-                "name".into(),
-                Value::String(unique(
-                    comment_name(k, "light").unwrap_or_else(|| "area".into()),
-                )),
-            );
-            l.insert("type".into(), Value::String("area".into()));
-            l.insert("mount".into(), Value::String("world".into()));
-            l.insert("position".into(), arr(m.w_axis.truncate().to_array()));
-            l.insert("aim".into(), arr(frame.z_axis.to_array()));
-            l.insert("width".into(), Value::Float(2.0 * len.x));
-            l.insert("height".into(), Value::Float(2.0 * len.y));
-            l.insert("radiance".into(), arr(radiance));
-            lights.push(Value::Table(l));
-            return Ok(());
-        }
-        if e.ty() == "area"
-            && (kind == "obj" || kind == "ply")
-            && let Some((centre, u, v, n)) = rectangle_of(&file_mesh(cx, k, &m)?)
-        {
-            let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
-            let mut l = Table::new();
-            l.insert(
-                "name".into(),
-                Value::String(unique(
-                    k.attr("id")
-                        .map(str::to_string)
-                        .unwrap_or_else(|| "area".into()),
-                )),
-            );
-            l.insert("type".into(), Value::String("area".into()));
-            l.insert("mount".into(), Value::String("world".into()));
-            l.insert("position".into(), arr(centre.to_array()));
-            l.insert("aim".into(), arr(n.to_array()));
-            l.insert("width".into(), Value::Float(u.length()));
-            l.insert("height".into(), Value::Float(v.length()));
-            l.insert("radiance".into(), arr(radiance));
-            lights.push(Value::Table(l));
-            if (u.length() - v.length()).abs() > 1e-9 * u.length() {
-                cx.note(
-                    e,
-                    "a rectangular mesh emitter becomes an area light; its turn about its \
-                         normal follows poser's convention for `aim`",
-                    None,
-                );
-            }
-            return Ok(());
-        }
-        cx.note(
-            e,
-            format!("an area emitter on a `{kind}` is not imported"),
-            Some("poser's area lights are rectangles (a `rectangle`, or a mesh of one)"),
-        );
+    if let Some(e) = k.kids.iter().find(|c| c.tag == "emitter")
+        && let Some(l) = area_light(cx, k, e, &m, &kind, unique)?
+    {
+        lights.push(l);
+        return Ok(());
     }
     // A bitmap that becomes the mesh's image texture: on an `obj`/`ply` with texture
     // coordinates, or on a `rectangle` (Mitsuba's uv: (x + 1)/2, (y + 1)/2 of its local square).
@@ -2314,35 +2261,9 @@ fn shape(
     } else {
         None
     };
-    let uv_mesh = match (&bitmap, kind.as_str()) {
-        (Some(b), "obj" | "ply") => {
-            let (mesh, uv) = file_mesh_uv(cx, k, &m)?;
-            if uv.is_empty() {
-                cx.note(
-                    b,
-                    format!("the `{kind}` has no texture coordinates for its bitmap"),
-                    Some("the bitmap's mean colour is used (noted below)"),
-                );
-                None
-            } else {
-                Some((mesh, uv))
-            }
-        }
-        (Some(_), "rectangle") => {
-            let mut w = TriMesh {
-                positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                    .map(|(x, y)| m.transform_point3(DVec3::new(x, y, 0.0)))
-                    .to_vec(),
-                triangles: vec![[0, 1, 2], [0, 2, 3]],
-            };
-            if m.determinant() < 0.0 {
-                for t in &mut w.triangles {
-                    t.swap(1, 2);
-                }
-            }
-            Some((w, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]))
-        }
-        _ => None,
+    let uv_mesh = match &bitmap {
+        Some(b) => mapped_mesh(cx, k, b, &m, &kind)?,
+        None => None,
     };
     if let (Some(b), Some(_)) = (&bitmap, &uv_mesh) {
         cx.mapped.insert(b.loc.clone());
@@ -2390,12 +2311,6 @@ fn shape(
     );
     let mut o = Table::new();
     o.insert("name".into(), Value::String(name.clone()));
-    let (len, frame, mirror, sheared) = decompose(&m);
-    let placed = |o: &mut Table| {
-        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
-        o.insert("rotation".into(), arr(euler_xyz(frame)));
-    };
-    let analytic = !sheared && !mirror;
     if let (Some(b), Some((mesh, uv))) = (&bitmap, &uv_mesh) {
         let (image, bytes, wrap) = bitmap_asset(cx, b, &format!("{name}-texture"))?;
         let file = safe_file_name(&format!("{}.glb", name));
@@ -2424,17 +2339,155 @@ fn shape(
         );
         return Ok(());
     }
-    match kind.as_str() {
+    if !shape_geometry(cx, k, &m, &kind, &name, &mut o, assets_out, assets)? {
+        return Ok(());
+    }
+    o.insert("albedo".into(), arr(alb));
+    objects.push(Value::Table(o));
+    Ok(())
+}
+
+/// The area light of emitter `e` on shape `k` (a `rectangle`, or an `obj`/`ply` mesh of one
+/// rectangle); `None`, noted, for an emitter poser cannot take.
+fn area_light(
+    cx: &mut Cx,
+    k: &X,
+    e: &X,
+    m: &DMat4,
+    kind: &str,
+    unique: &mut dyn FnMut(String) -> String,
+) -> Result<Option<Value>, String> {
+    if e.ty() == "area" && kind == "rectangle" {
+        let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
+        let (len, frame, ..) = decompose(m);
+        let mut l = Table::new();
+        l.insert(
+            "name".into(),
+            Value::String(unique(
+                comment_name(k, "light").unwrap_or_else(|| "area".into()),
+            )),
+        );
+        l.insert("type".into(), Value::String("area".into()));
+        l.insert("mount".into(), Value::String("world".into()));
+        l.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+        l.insert("aim".into(), arr(frame.z_axis.to_array()));
+        l.insert("width".into(), Value::Float(2.0 * len.x));
+        l.insert("height".into(), Value::Float(2.0 * len.y));
+        l.insert("radiance".into(), arr(radiance));
+        return Ok(Some(Value::Table(l)));
+    }
+    if e.ty() == "area"
+        && (kind == "obj" || kind == "ply")
+        && let Some((centre, u, v, n)) = rectangle_of(&file_mesh(cx, k, m)?)
+    {
+        let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
+        let mut l = Table::new();
+        l.insert(
+            "name".into(),
+            Value::String(unique(
+                k.attr("id")
+                    .map(str::to_string)
+                    .unwrap_or_else(|| "area".into()),
+            )),
+        );
+        l.insert("type".into(), Value::String("area".into()));
+        l.insert("mount".into(), Value::String("world".into()));
+        l.insert("position".into(), arr(centre.to_array()));
+        l.insert("aim".into(), arr(n.to_array()));
+        l.insert("width".into(), Value::Float(u.length()));
+        l.insert("height".into(), Value::Float(v.length()));
+        l.insert("radiance".into(), arr(radiance));
+        if (u.length() - v.length()).abs() > 1e-9 * u.length() {
+            cx.note(
+                e,
+                "a rectangular mesh emitter becomes an area light; its turn about its \
+                     normal follows poser's convention for `aim`",
+                None,
+            );
+        }
+        return Ok(Some(Value::Table(l)));
+    }
+    cx.note(
+        e,
+        format!("an area emitter on a `{kind}` is not imported"),
+        Some("poser's area lights are rectangles (a `rectangle`, or a mesh of one)"),
+    );
+    Ok(None)
+}
+
+/// The mesh in world coordinates and its texture coordinates for bitmap `b` on shape `k`;
+/// `None` (noted for a mesh without texture coordinates) when the bitmap cannot be mapped.
+#[allow(clippy::type_complexity)]
+fn mapped_mesh(
+    cx: &mut Cx,
+    k: &X,
+    b: &X,
+    m: &DMat4,
+    kind: &str,
+) -> Result<Option<(TriMesh, Vec<[f32; 2]>)>, String> {
+    Ok(match kind {
+        "obj" | "ply" => {
+            let (mesh, uv) = file_mesh_uv(cx, k, m)?;
+            if uv.is_empty() {
+                cx.note(
+                    b,
+                    format!("the `{kind}` has no texture coordinates for its bitmap"),
+                    Some("the bitmap's mean colour is used (noted below)"),
+                );
+                None
+            } else {
+                Some((mesh, uv))
+            }
+        }
+        "rectangle" => {
+            let mut w = TriMesh {
+                positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                    .map(|(x, y)| m.transform_point3(DVec3::new(x, y, 0.0)))
+                    .to_vec(),
+                triangles: vec![[0, 1, 2], [0, 2, 3]],
+            };
+            if m.determinant() < 0.0 {
+                for t in &mut w.triangles {
+                    t.swap(1, 2);
+                }
+            }
+            Some((w, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]))
+        }
+        _ => None,
+    })
+}
+
+/// The geometry keys of object `o` for shape `k` (world matrix `m`): an analytic shape when
+/// `m` neither shears nor mirrors it, else a mesh asset. `false`, noted, for a kind poser
+/// does not read.
+#[allow(clippy::too_many_arguments)]
+fn shape_geometry(
+    cx: &mut Cx,
+    k: &X,
+    m: &DMat4,
+    kind: &str,
+    name: &str,
+    o: &mut Table,
+    assets_out: &mut Vec<(String, Vec<u8>)>,
+    assets: &str,
+) -> Result<bool, String> {
+    let (len, frame, mirror, sheared) = decompose(m);
+    let placed = |o: &mut Table| {
+        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+        o.insert("rotation".into(), arr(euler_xyz(frame)));
+    };
+    let analytic = !sheared && !mirror;
+    match kind {
         "rectangle" if analytic => {
             o.insert("shape".into(), Value::String("plane".into()));
             o.insert("width".into(), Value::Float(2.0 * len.x));
             o.insert("height".into(), Value::Float(2.0 * len.y));
-            placed(&mut o);
+            placed(o);
         }
         "cube" if analytic => {
             o.insert("shape".into(), Value::String("box".into()));
             o.insert("size".into(), arr((2.0 * len).to_array()));
-            placed(&mut o);
+            placed(o);
         }
         "sphere"
             if analytic
@@ -2468,13 +2521,13 @@ fn shape(
             cx.note(k, "Mitsuba's cylinder is open; poser's has caps", None);
         }
         "rectangle" | "cube" | "sphere" | "cylinder" | "disk" | "obj" | "ply" => {
-            let mesh = match kind.as_str() {
-                "obj" | "ply" => file_mesh(cx, k, &m)?,
-                "disk" => disk_mesh(&m),
+            let mesh = match kind {
+                "obj" | "ply" => file_mesh(cx, k, m)?,
+                "disk" => disk_mesh(m),
                 _ => {
                     // Sheared or mirrored analytic shapes: tessellate them.
                     use crate::geometry::mesh as gm;
-                    let mut w = match kind.as_str() {
+                    let mut w = match kind {
                         "rectangle" => gm::plane(2.0, 2.0),
                         "cube" => gm::cuboid(DVec3::splat(2.0)),
                         "sphere" => gm::sphere(1.0, gm::SPHERE_SEGMENTS),
@@ -2487,7 +2540,7 @@ fn shape(
                 }
             };
             let file = safe_file_name(&format!("{}.glb", name));
-            assets_out.push((file.clone(), meshes::glb(&mesh, &name)));
+            assets_out.push((file.clone(), meshes::glb(&mesh, name)));
             o.insert("shape".into(), Value::String("mesh".into()));
             o.insert("path".into(), Value::String(format!("{assets}/{file}")));
         }
@@ -2497,12 +2550,10 @@ fn shape(
                 format!("a `{other}` shape is not imported"),
                 Some("poser reads rectangle, cube, sphere, cylinder, disk, obj and ply"),
             );
-            return Ok(());
+            return Ok(false);
         }
     }
-    o.insert("albedo".into(), arr(alb));
-    objects.push(Value::Table(o));
-    Ok(())
+    Ok(true)
 }
 
 /// A light (not an area emitter). `view`: the camera (rotation, centre) of the view file the
