@@ -511,7 +511,6 @@ const LONG_FNS: &[(&str, usize)] = &[
     ("lesson/dive.rs::run", 165),
     ("scene/resolve/render.rs::render", 162),
     ("scene/source.rs::load_file", 157),
-    ("import/mitsuba.rs::sensor", 155),
 ];
 
 /// `code` with the insides of comments, strings and character literals blanked to spaces (line

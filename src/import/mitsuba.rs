@@ -1052,22 +1052,9 @@ fn view_of(doc: &X) -> Option<(usize, String)> {
     Some((pose, name))
 }
 
-fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
-    let thin = match x.ty() {
-        "perspective" => None,
-        "thinlens" => Some((
-            cx.float(x, "aperture_radius", 0.0)?,
-            cx.float(x, "focus_distance", 0.0)?,
-        )),
-        t => {
-            cx.note(
-                x,
-                format!("a `{t}` sensor is not imported"),
-                Some("poser's cameras are perspective (with an optional thin lens)"),
-            );
-            return Ok(None);
-        }
-    };
+/// The film's size in pixels (Mitsuba's default 768 × 576); notes a reconstruction filter
+/// other than a box.
+fn film_size(cx: &mut Cx, x: &X) -> Result<(i64, i64), String> {
     let film = x.kids.iter().find(|k| k.tag == "film");
     // Mitsuba's film defaults: 768 × 576 pixels, a Gaussian reconstruction filter.
     let (width, height) = match film {
@@ -1095,11 +1082,15 @@ fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
     if !(1..=100_000).contains(&width) || !(1..=100_000).contains(&height) {
         return Err(format!("{}: film of {width}×{height} pixels", x.loc));
     }
-    let (w, h) = (width as f64, height as f64);
+    Ok((width, height))
+}
+
+/// The sensor's field of view in degrees and the axis it spans (`x`, `y`, `diagonal`, …).
+fn field_of_view(cx: &mut Cx, x: &X) -> Result<(f64, String), String> {
     // Mitsuba 3's `parse_fov` (src/render/sensor.cpp): `fov` along `fov_axis` (default x),
     // or else `focal_length` (default "50mm"), a 35 mm-film equivalent on the diagonal
     // (fov_axis is then not read).
-    let (fov, axis) = match (x.named("fov"), x.named("focal_length")) {
+    Ok(match (x.named("fov"), x.named("focal_length")) {
         (Some(_), Some(f)) => {
             return Err(format!(
                 "{}: the sensor gives both `fov` and `focal_length`\n  help: Mitsuba refuses \
@@ -1144,7 +1135,28 @@ fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
                 "diagonal".to_string(),
             )
         }
+    })
+}
+
+fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
+    let thin = match x.ty() {
+        "perspective" => None,
+        "thinlens" => Some((
+            cx.float(x, "aperture_radius", 0.0)?,
+            cx.float(x, "focus_distance", 0.0)?,
+        )),
+        t => {
+            cx.note(
+                x,
+                format!("a `{t}` sensor is not imported"),
+                Some("poser's cameras are perspective (with an optional thin lens)"),
+            );
+            return Ok(None);
+        }
     };
+    let (width, height) = film_size(cx, x)?;
+    let (w, h) = (width as f64, height as f64);
+    let (fov, axis) = field_of_view(cx, x)?;
     if !(fov > 0.0 && fov < 180.0) {
         return Err(format!(
             "{}: the sensor's field of view is {fov}°, not in (0, 180)\n  help: give `fov` in \
