@@ -1459,148 +1459,13 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
     let mut advice = Vec::new();
     let deco = dive.deco_required();
     // Gases first: a gas that poisons or starves the diver outweighs everything else.
-    for (i, c) in dive.gas.cylinders.iter().enumerate() {
-        let role = role_name(cfg.tanks[i].role);
-        if !c.po2_ok
-            && let Some(p) = c.max_po2
-        {
-            problems.push(format!(
-                "cylinder '{}' ({}, {role}): pO₂ {p:.2} bar at {:.1} m, above the {:.1} bar limit \
-                 of a {role} gas (MOD {:.0} m){}",
-                c.name,
-                c.gas,
-                c.max_po2_depth,
-                c.po2_limit,
-                depth_limit(c.mod_depth),
-                if cfg.tanks[i].role.switched() {
-                    format!(
-                        "; its switch depth is {:.0} m",
-                        depth_limit(cfg.tanks[i].switch_depth.unwrap_or(0.0))
-                    )
-                } else {
-                    String::new()
-                }
-            ));
-        }
-        if c.hypoxic {
-            let from = gas::breathable_from(&cfg.env, cfg.tanks[i].gas);
-            problems.push(format!(
-                "cylinder '{}' ({}, {role}): hypoxic where it is breathed — pO₂ {:.2} bar at \
-                 {:.1} m, below {:.2} bar; it is breathable only from {:.0} m down{}",
-                c.name,
-                c.gas,
-                c.min_po2.unwrap_or(0.0),
-                c.min_po2_depth,
-                hypoxic_limit(&cfg.env).min(HYPOXIC),
-                from.ceil(),
-                if cfg.tanks[i].role.is_bottom() {
-                    format!(
-                        ": carry a travel gas (`role = \"travel\"`) with a switch depth of at \
-                         least {:.0} m",
-                        from.ceil()
-                    )
-                } else {
-                    String::new()
-                }
-            ));
-        }
-    }
-    // Oxygen toxicity (CNS % against the NOAA limits, OTU against a single-dive figure).
-    let ox = &dive.oxygen;
-    // Beyond the table even within the diver's own limits (a cylinder above its own limit is
-    // reported above already).
-    if ox.max_po2 > oxygen::PO2_TABLE_MAX + 1e-9 && dive.gas.cylinders.iter().all(|c| c.po2_ok) {
-        problems.push(format!(
-            "pO₂ {:.2} bar at {:.1} m ({} runtime), beyond the 1.6 bar end of the NOAA oxygen \
-             limits whatever the diver's own limits; {:.1} min breathed above it (CNS there \
-             extrapolated steeply: ×2.7 per 0.1 bar)",
-            ox.max_po2,
-            ox.max_po2_depth,
-            mmss(ox.max_po2_time),
-            ox.minutes_above_table
-        ));
-    }
-    if ox.cns_percent > oxygen::CNS_LIMIT {
-        problems.push(format!(
-            "CNS oxygen toxicity {:.1} %: above 100 % of the NOAA single-exposure limits \
-             (highest pO₂ {:.2} bar at {:.1} m); breathe a leaner gas or shorten the exposure",
-            ox.cns_percent, ox.max_po2, ox.max_po2_depth
-        ));
-    } else if ox.cns_percent > oxygen::CNS_WARN {
-        advice.push(format!(
-            "CNS oxygen toxicity {:.1} %: above the 80 % warning level of the NOAA \
-             single-exposure limits (highest pO₂ {:.2} bar at {:.1} m); no repetitive dive \
-             on oxygen-rich gas until it has come down (half-time 90 min)",
-            ox.cns_percent, ox.max_po2, ox.max_po2_depth
-        ));
-    }
-    if ox.otu > oxygen::OTU_WARN {
-        advice.push(format!(
-            "pulmonary oxygen exposure {:.0} OTU: above the {:.0} OTU single-dive planning \
-             figure (REPEX: at most 850 OTU in one day)",
-            ox.otu,
-            oxygen::OTU_WARN
-        ));
-    }
+    gas_problems(cfg, dive, &mut problems);
+    oxygen_findings(dive, &mut problems, &mut advice);
     let planned = cfg.deco == DecoMode::Planned;
     // With decompression planned, the stops are the plan, not a problem; everything else
     // still is. The plan in words, for the report, either way.
-    let mut deco_lines: Vec<String> = Vec::new();
-    if deco && dive.stops.is_empty() {
-        deco_lines.push(format!(
-            "decompression dive: the ceiling leaves the surface at {} runtime ({} into the \
-             survey; ceiling {:.1} m at the end of the bottom time) at GF {:.0}/{:.0}; the ascent \
-             itself clears it without a stop, but the no-decompression limit is exceeded",
-            mmss(dive.deco_from.unwrap_or(0.0)),
-            mmss(dive.deco_from.unwrap_or(0.0) - dive.descent_time),
-            dive.ceiling_at_end,
-            cfg.gf.low * 100.0,
-            cfg.gf.high * 100.0
-        ));
-    }
-    if deco && !dive.stops.is_empty() {
-        let total: f64 = dive.stops.iter().map(|s| s.duration).sum();
-        let stops = dive
-            .stops
-            .iter()
-            .map(|s| format!("{:.0} m {}", s.depth, mmss(s.duration)))
-            .collect::<Vec<_>>()
-            .join(", ");
-        deco_lines.push(format!(
-            "decompression obligation: the NDL runs out at {} runtime ({} into the survey); \
-             {} of mandatory stops ({stops}) at GF {:.0}/{:.0}",
-            mmss(dive.deco_from.unwrap_or(0.0)),
-            mmss(dive.deco_from.unwrap_or(0.0) - dive.descent_time),
-            mmss(total),
-            cfg.gf.low * 100.0,
-            cfg.gf.high * 100.0
-        ));
-    }
-    let deco_plan = deco.then(|| {
-        let switches: Vec<String> = dive
-            .switches
-            .iter()
-            .skip(1)
-            .filter(|s| s.time > dive.descent_time + dive.bottom_time - 1e-6)
-            .map(|s| {
-                format!(
-                    "{} at {:.0} m",
-                    gas_label(cfg.tanks[s.cylinder].gas),
-                    s.depth
-                )
-            })
-            .collect();
-        format!(
-            "{}; gas switches on the ascent: {}; runtime {}",
-            deco_lines.join("; "),
-            if switches.is_empty() {
-                "none".to_string()
-            } else {
-                switches.join(", ")
-            },
-            mmss(dive.runtime)
-        )
-    });
+    let deco_lines = deco_lines(cfg, dive);
+    let deco_plan = deco.then(|| deco_plan(cfg, dive, &deco_lines));
     if !planned {
         problems.extend(deco_lines);
     } else if deco && dive.ascent_ceiling_excess > CEILING_TOLERANCE {
@@ -1612,89 +1477,8 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
         ));
     }
     let g = &dive.gas;
-    let bar = |l: f64| cfg.supply.pressure_after(cfg.supply.start - l);
-    if !g.reserve_ok {
-        let when = match (g.empty_at, g.reserve_reached_at) {
-            (Some(e), _) => format!("; a cylinder is empty at {} runtime", mmss(e)),
-            (None, Some(r)) => format!("; the reserve is reached at {} runtime", mmss(r)),
-            _ => String::new(),
-        };
-        for (i, c) in g
-            .cylinders
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| !c.reserve_ok)
-        {
-            let t = &cfg.tanks[i];
-            problems.push(format!(
-                "not enough gas in cylinder '{}' ({}, {}): {:.0} l breathed from it, it holds \
-                 {:.0} l ({:.0} l above the {:.0} bar reserve), {:.0} bar left at the end{when}",
-                c.name,
-                c.gas,
-                role_name(t.role),
-                c.used,
-                c.start,
-                c.start - t.reserve,
-                cfg.reserve_bar,
-                c.end_pressure
-            ));
-        }
-    } else {
-        if !g.thirds_ok {
-            problems.push(format!(
-                "rule of thirds broken: {:.0} l used of {:.0} l (at most {:.0} l)",
-                g.used,
-                g.start,
-                g.start * 2.0 / 3.0
-            ));
-        }
-        if !g.min_gas_ok {
-            advice.push(format!(
-                "minimum gas not kept: {:.0} l ({:.0} bar) left at the end of the bottom time, \
-                 {:.0} l ({:.0} bar) needed for an ascent with a problem (SAC×{SAC_FACTOR}, 4 min)",
-                g.at_end_of_bottom,
-                bar(g.at_end_of_bottom),
-                g.min_gas,
-                bar(g.min_gas)
-            ));
-        }
-    }
-    // Narcosis: a breathed gas whose END at its deepest is beyond the limit (advice: the END
-    // limit is a choice of the diver's agency, the pO₂ and hypoxic limits are physiology).
-    for (i, c) in dive.gas.cylinders.iter().enumerate() {
-        let t = &cfg.tanks[i];
-        if c.max_po2.is_none() {
-            continue;
-        }
-        let end = t.gas.end(&cfg.env, c.max_po2_depth);
-        if end > cfg.end_limit + 1e-6 && t.role == CylinderRole::Travel {
-            // A travel gas is chosen for the shallows: breathed past its END, its switch is
-            // too deep, and switching shallower costs nothing.
-            problems.push(format!(
-                "travel gas '{}' ({}) is breathed to {:.1} m, where its END is {end:.1} m, deeper \
-                 than the {:.0} m END limit (O₂ counted as narcotic); its switch depth is {:.0} m, \
-                 at most {:.0} m keeps it within the limit",
-                c.name,
-                c.gas,
-                c.max_po2_depth,
-                depth_limit(cfg.end_limit),
-                depth_limit(t.switch_depth.unwrap_or(0.0)),
-                depth_limit(gas::end_depth(&cfg.env, t.gas, cfg.end_limit)),
-            ));
-        } else if end > cfg.end_limit + 1e-6 {
-            let fit = bottom_gas(&cfg.env, c.max_po2_depth, cfg.po2_limit(t), cfg.end_limit)
-                .map(|b| format!("; e.g. {}", bottom_gas_phrase(&b)))
-                .unwrap_or_default();
-            advice.push(format!(
-                "narcosis: cylinder '{}' ({}) has an END of {end:.1} m at {:.1} m, deeper than \
-                 the {:.0} m END limit (O₂ counted as narcotic){fit}",
-                c.name,
-                c.gas,
-                c.max_po2_depth,
-                depth_limit(cfg.end_limit),
-            ));
-        }
-    }
+    supply_findings(cfg, g, &mut problems, &mut advice);
+    narcosis_findings(cfg, dive, &mut problems, &mut advice);
     let mut suggestions = Vec::new();
     if !g.breathable() {
         // Every other remedy is moot while a gas is unfit: name the gas that would do.
@@ -1752,6 +1536,263 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
         problems,
         advice,
         suggestions,
+    }
+}
+
+/// The problems of the gases themselves: a pO₂ above a cylinder's limit, a hypoxic gas where
+/// it is breathed.
+fn gas_problems(cfg: &DiveConfig, dive: &DiveResult, problems: &mut Vec<String>) {
+    for (i, c) in dive.gas.cylinders.iter().enumerate() {
+        let role = role_name(cfg.tanks[i].role);
+        if !c.po2_ok
+            && let Some(p) = c.max_po2
+        {
+            problems.push(format!(
+                "cylinder '{}' ({}, {role}): pO₂ {p:.2} bar at {:.1} m, above the {:.1} bar limit \
+                 of a {role} gas (MOD {:.0} m){}",
+                c.name,
+                c.gas,
+                c.max_po2_depth,
+                c.po2_limit,
+                depth_limit(c.mod_depth),
+                if cfg.tanks[i].role.switched() {
+                    format!(
+                        "; its switch depth is {:.0} m",
+                        depth_limit(cfg.tanks[i].switch_depth.unwrap_or(0.0))
+                    )
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        if c.hypoxic {
+            let from = gas::breathable_from(&cfg.env, cfg.tanks[i].gas);
+            problems.push(format!(
+                "cylinder '{}' ({}, {role}): hypoxic where it is breathed — pO₂ {:.2} bar at \
+                 {:.1} m, below {:.2} bar; it is breathable only from {:.0} m down{}",
+                c.name,
+                c.gas,
+                c.min_po2.unwrap_or(0.0),
+                c.min_po2_depth,
+                hypoxic_limit(&cfg.env).min(HYPOXIC),
+                from.ceil(),
+                if cfg.tanks[i].role.is_bottom() {
+                    format!(
+                        ": carry a travel gas (`role = \"travel\"`) with a switch depth of at \
+                         least {:.0} m",
+                        from.ceil()
+                    )
+                } else {
+                    String::new()
+                }
+            ));
+        }
+    }
+}
+
+/// Oxygen toxicity (CNS % against the NOAA limits, OTU against a single-dive figure).
+fn oxygen_findings(dive: &DiveResult, problems: &mut Vec<String>, advice: &mut Vec<String>) {
+    let ox = &dive.oxygen;
+    // Beyond the table even within the diver's own limits (a cylinder above its own limit is
+    // reported above already).
+    if ox.max_po2 > oxygen::PO2_TABLE_MAX + 1e-9 && dive.gas.cylinders.iter().all(|c| c.po2_ok) {
+        problems.push(format!(
+            "pO₂ {:.2} bar at {:.1} m ({} runtime), beyond the 1.6 bar end of the NOAA oxygen \
+             limits whatever the diver's own limits; {:.1} min breathed above it (CNS there \
+             extrapolated steeply: ×2.7 per 0.1 bar)",
+            ox.max_po2,
+            ox.max_po2_depth,
+            mmss(ox.max_po2_time),
+            ox.minutes_above_table
+        ));
+    }
+    if ox.cns_percent > oxygen::CNS_LIMIT {
+        problems.push(format!(
+            "CNS oxygen toxicity {:.1} %: above 100 % of the NOAA single-exposure limits \
+             (highest pO₂ {:.2} bar at {:.1} m); breathe a leaner gas or shorten the exposure",
+            ox.cns_percent, ox.max_po2, ox.max_po2_depth
+        ));
+    } else if ox.cns_percent > oxygen::CNS_WARN {
+        advice.push(format!(
+            "CNS oxygen toxicity {:.1} %: above the 80 % warning level of the NOAA \
+             single-exposure limits (highest pO₂ {:.2} bar at {:.1} m); no repetitive dive \
+             on oxygen-rich gas until it has come down (half-time 90 min)",
+            ox.cns_percent, ox.max_po2, ox.max_po2_depth
+        ));
+    }
+    if ox.otu > oxygen::OTU_WARN {
+        advice.push(format!(
+            "pulmonary oxygen exposure {:.0} OTU: above the {:.0} OTU single-dive planning \
+             figure (REPEX: at most 850 OTU in one day)",
+            ox.otu,
+            oxygen::OTU_WARN
+        ));
+    }
+}
+
+/// The decompression obligation in words (none within the NDL).
+fn deco_lines(cfg: &DiveConfig, dive: &DiveResult) -> Vec<String> {
+    let deco = dive.deco_required();
+    let mut deco_lines: Vec<String> = Vec::new();
+    if deco && dive.stops.is_empty() {
+        deco_lines.push(format!(
+            "decompression dive: the ceiling leaves the surface at {} runtime ({} into the \
+             survey; ceiling {:.1} m at the end of the bottom time) at GF {:.0}/{:.0}; the ascent \
+             itself clears it without a stop, but the no-decompression limit is exceeded",
+            mmss(dive.deco_from.unwrap_or(0.0)),
+            mmss(dive.deco_from.unwrap_or(0.0) - dive.descent_time),
+            dive.ceiling_at_end,
+            cfg.gf.low * 100.0,
+            cfg.gf.high * 100.0
+        ));
+    }
+    if deco && !dive.stops.is_empty() {
+        let total: f64 = dive.stops.iter().map(|s| s.duration).sum();
+        let stops = dive
+            .stops
+            .iter()
+            .map(|s| format!("{:.0} m {}", s.depth, mmss(s.duration)))
+            .collect::<Vec<_>>()
+            .join(", ");
+        deco_lines.push(format!(
+            "decompression obligation: the NDL runs out at {} runtime ({} into the survey); \
+             {} of mandatory stops ({stops}) at GF {:.0}/{:.0}",
+            mmss(dive.deco_from.unwrap_or(0.0)),
+            mmss(dive.deco_from.unwrap_or(0.0) - dive.descent_time),
+            mmss(total),
+            cfg.gf.low * 100.0,
+            cfg.gf.high * 100.0
+        ));
+    }
+    deco_lines
+}
+
+/// The decompression plan in words: the obligation, the gas switches on the ascent, the
+/// runtime.
+fn deco_plan(cfg: &DiveConfig, dive: &DiveResult, deco_lines: &[String]) -> String {
+    let switches: Vec<String> = dive
+        .switches
+        .iter()
+        .skip(1)
+        .filter(|s| s.time > dive.descent_time + dive.bottom_time - 1e-6)
+        .map(|s| {
+            format!(
+                "{} at {:.0} m",
+                gas_label(cfg.tanks[s.cylinder].gas),
+                s.depth
+            )
+        })
+        .collect();
+    format!(
+        "{}; gas switches on the ascent: {}; runtime {}",
+        deco_lines.join("; "),
+        if switches.is_empty() {
+            "none".to_string()
+        } else {
+            switches.join(", ")
+        },
+        mmss(dive.runtime)
+    )
+}
+
+/// The gas supply `g`: a cylinder short of its reserve, else the rule of thirds and the
+/// minimum gas.
+fn supply_findings(
+    cfg: &DiveConfig,
+    g: &GasCheck,
+    problems: &mut Vec<String>,
+    advice: &mut Vec<String>,
+) {
+    let bar = |l: f64| cfg.supply.pressure_after(cfg.supply.start - l);
+    if !g.reserve_ok {
+        let when = match (g.empty_at, g.reserve_reached_at) {
+            (Some(e), _) => format!("; a cylinder is empty at {} runtime", mmss(e)),
+            (None, Some(r)) => format!("; the reserve is reached at {} runtime", mmss(r)),
+            _ => String::new(),
+        };
+        for (i, c) in g
+            .cylinders
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| !c.reserve_ok)
+        {
+            let t = &cfg.tanks[i];
+            problems.push(format!(
+                "not enough gas in cylinder '{}' ({}, {}): {:.0} l breathed from it, it holds \
+                 {:.0} l ({:.0} l above the {:.0} bar reserve), {:.0} bar left at the end{when}",
+                c.name,
+                c.gas,
+                role_name(t.role),
+                c.used,
+                c.start,
+                c.start - t.reserve,
+                cfg.reserve_bar,
+                c.end_pressure
+            ));
+        }
+    } else {
+        if !g.thirds_ok {
+            problems.push(format!(
+                "rule of thirds broken: {:.0} l used of {:.0} l (at most {:.0} l)",
+                g.used,
+                g.start,
+                g.start * 2.0 / 3.0
+            ));
+        }
+        if !g.min_gas_ok {
+            advice.push(format!(
+                "minimum gas not kept: {:.0} l ({:.0} bar) left at the end of the bottom time, \
+                 {:.0} l ({:.0} bar) needed for an ascent with a problem (SAC×{SAC_FACTOR}, 4 min)",
+                g.at_end_of_bottom,
+                bar(g.at_end_of_bottom),
+                g.min_gas,
+                bar(g.min_gas)
+            ));
+        }
+    }
+}
+
+/// Narcosis: a breathed gas whose END at its deepest is beyond the limit (advice: the END
+/// limit is a choice of the diver's agency, the pO₂ and hypoxic limits are physiology).
+fn narcosis_findings(
+    cfg: &DiveConfig,
+    dive: &DiveResult,
+    problems: &mut Vec<String>,
+    advice: &mut Vec<String>,
+) {
+    for (i, c) in dive.gas.cylinders.iter().enumerate() {
+        let t = &cfg.tanks[i];
+        if c.max_po2.is_none() {
+            continue;
+        }
+        let end = t.gas.end(&cfg.env, c.max_po2_depth);
+        if end > cfg.end_limit + 1e-6 && t.role == CylinderRole::Travel {
+            // A travel gas is chosen for the shallows: breathed past its END, its switch is
+            // too deep, and switching shallower costs nothing.
+            problems.push(format!(
+                "travel gas '{}' ({}) is breathed to {:.1} m, where its END is {end:.1} m, deeper \
+                 than the {:.0} m END limit (O₂ counted as narcotic); its switch depth is {:.0} m, \
+                 at most {:.0} m keeps it within the limit",
+                c.name,
+                c.gas,
+                c.max_po2_depth,
+                depth_limit(cfg.end_limit),
+                depth_limit(t.switch_depth.unwrap_or(0.0)),
+                depth_limit(gas::end_depth(&cfg.env, t.gas, cfg.end_limit)),
+            ));
+        } else if end > cfg.end_limit + 1e-6 {
+            let fit = bottom_gas(&cfg.env, c.max_po2_depth, cfg.po2_limit(t), cfg.end_limit)
+                .map(|b| format!("; e.g. {}", bottom_gas_phrase(&b)))
+                .unwrap_or_default();
+            advice.push(format!(
+                "narcosis: cylinder '{}' ({}) has an END of {end:.1} m at {:.1} m, deeper than \
+                 the {:.0} m END limit (O₂ counted as narcotic){fit}",
+                c.name,
+                c.gas,
+                c.max_po2_depth,
+                depth_limit(cfg.end_limit),
+            ));
+        }
     }
 }
 
