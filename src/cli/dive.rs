@@ -2,8 +2,8 @@
 use super::{CliError, SceneArgs};
 use crate::plan::dive::{DiveConfig, DiveReport, DiveResult, Verdict, plan_dive};
 use crate::plan::gas::GasCheck;
-use crate::plan::oxygen::OxygenExposure;
 use crate::plan::gas::depth_limit;
+use crate::plan::oxygen::OxygenExposure;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 

@@ -421,8 +421,11 @@ fn water_tables(
     let surface = match w.surface.as_deref() {
         Some("waves") => {
             notes.push(
-                Note::new(located(shown, "water"), "the wavy sea surface is imported flat")
-                    .help("set `site.surface = \"waves\"` with its height and wavelength"),
+                Note::new(
+                    located(shown, "water"),
+                    "the wavy sea surface is imported flat",
+                )
+                .help("set `site.surface = \"waves\"` with its height and wavelength"),
             );
             true
         }

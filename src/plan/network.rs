@@ -576,8 +576,7 @@ fn orbit_poses(
         }
         for k in 0..per_ring {
             let phi = std::f64::consts::TAU * k as f64 / per_ring as f64;
-            let p = center
-                + radius * DVec3::new(e.cos() * phi.cos(), e.cos() * phi.sin(), e.sin());
+            let p = center + radius * DVec3::new(e.cos() * phi.cos(), e.cos() * phi.sin(), e.sin());
             let up = if e.cos() < 1e-6 {
                 DVec3::new(-phi.cos(), -phi.sin(), 0.0) * e.signum()
             } else {
