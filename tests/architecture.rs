@@ -495,7 +495,6 @@ const LONG_FNS: &[(&str, usize)] = &[
     ("lesson/html.rs::page", 198),
     ("export/gltf.rs::export", 192),
     ("scene/check.rs::scene", 190),
-    ("geometry/meshfile.rs::read_ply", 203),
     ("plan/survey.rs::survey", 175),
     ("compare/report.rs::plot_svg", 174),
     ("plan/ssrf.rs::to_ssrf", 169),
