@@ -253,12 +253,7 @@ pub fn run(
         };
         let view_png = if evaluate {
             progress(&format!("rendering a view of `{}`", c.label));
-            let (scale, samples) = if full {
-                (VIEW_SCALE, VIEW_SAMPLES)
-            } else {
-                (VIEW_SCALE_QUICK, VIEW_SAMPLES_QUICK)
-            };
-            view(m, &out.join(&c.slug).join("view"), scale, samples).map_err(err)?
+            case_view(c, out, full).map_err(err)?
         } else {
             Vec::new()
         };
@@ -268,19 +263,6 @@ pub fn run(
         if !depths.iter().any(|x| (x - depth).abs() < 0.5) {
             depths.push(depth);
         }
-        let bottom_gases: Vec<String> = cfg
-            .tanks
-            .iter()
-            .map(|t| {
-                format!(
-                    "{}: {}, {:.0} l at {:.0} bar",
-                    t.name,
-                    gas_label(t.gas),
-                    t.volume,
-                    t.fill
-                )
-            })
-            .collect();
         rows.push(Row {
             label: c.label.clone(),
             command: c.command("dive"),
@@ -293,7 +275,7 @@ pub fn run(
             gsd_mm: plan.gsd.map(|s| 1e3 * s.mean),
             distance_m: distance,
             contrast_left,
-            gases: bottom_gases.join(" + "),
+            gases: gas_column(cfg),
             gf: format!("{:.0}/{:.0}", 100.0 * cfg.gf.low, 100.0 * cfg.gf.high),
             ndl_runs_out_min: d.deco_from.map(|t| minutes(t - d.descent_time)),
             min_ndl_min: d.min_ndl.map(minutes),
@@ -306,22 +288,7 @@ pub fn run(
             deco_min: minutes(d.stops.iter().map(|s| s.duration).sum::<f64>() + 0.0),
             tts_min: minutes(d.tts_at_end),
             runtime_min: minutes(d.runtime),
-            cylinders: d
-                .gas
-                .cylinders
-                .iter()
-                .zip(&cfg.tanks)
-                .map(|(u, t)| CylinderRow {
-                    name: u.name.clone(),
-                    gas: u.gas.clone(),
-                    volume_l: t.volume,
-                    fill_bar: t.fill,
-                    start_l: u.start,
-                    used_l: u.used,
-                    end_bar: u.end_pressure,
-                    reserve_ok: u.reserve_ok,
-                })
-                .collect(),
+            cylinders: cylinder_rows(cfg, d),
             ok: v.ok,
             deco_required: v.deco_required,
             gas_ok: v.gas_ok,
@@ -329,18 +296,7 @@ pub fn run(
             advice: v.advice.clone(),
             suggestions: v.suggestions.iter().map(|s| s.text.clone()).collect(),
             dives,
-            split: split
-                .unwrap_or_default()
-                .iter()
-                .map(|s| SplitRow {
-                    first_strip: s.first_strip,
-                    last_strip: s.last_strip,
-                    survey_min: minutes(s.dive.bottom_time),
-                    runtime_min: minutes(s.dive.runtime),
-                    end_bar: s.dive.gas.end_pressure,
-                    safety_stop: s.dive.safety_stop.is_some(),
-                })
-                .collect(),
+            split: split_rows(&split.unwrap_or_default()),
             surface_interval_min: minutes(cfg.surface_interval),
             accuracy,
             seconds: t0.elapsed().as_secs_f64(),
@@ -359,6 +315,69 @@ pub fn run(
         rows,
         rule_of_thumb: rule_of_thumb(&cfg, &depths),
     })
+}
+
+/// The gas column of a case: each cylinder's name, gas, volume and fill.
+fn gas_column(cfg: &DiveConfig) -> String {
+    let bottom_gases: Vec<String> = cfg
+        .tanks
+        .iter()
+        .map(|t| {
+            format!(
+                "{}: {}, {:.0} l at {:.0} bar",
+                t.name,
+                gas_label(t.gas),
+                t.volume,
+                t.fill
+            )
+        })
+        .collect();
+    bottom_gases.join(" + ")
+}
+
+/// Each cylinder of a dive: its gas, contents, what was breathed and what is left.
+fn cylinder_rows(cfg: &DiveConfig, d: &crate::plan::dive::DiveResult) -> Vec<CylinderRow> {
+    d.gas
+        .cylinders
+        .iter()
+        .zip(&cfg.tanks)
+        .map(|(u, t)| CylinderRow {
+            name: u.name.clone(),
+            gas: u.gas.clone(),
+            volume_l: t.volume,
+            fill_bar: t.fill,
+            start_l: u.start,
+            used_l: u.used,
+            end_bar: u.end_pressure,
+            reserve_ok: u.reserve_ok,
+        })
+        .collect()
+}
+
+/// The dives of the planner's split: their strips, times, end pressure and safety stop.
+fn split_rows(split: &[crate::plan::dive::SplitDive]) -> Vec<SplitRow> {
+    split
+        .iter()
+        .map(|s| SplitRow {
+            first_strip: s.first_strip,
+            last_strip: s.last_strip,
+            survey_min: minutes(s.dive.bottom_time),
+            runtime_min: minutes(s.dive.runtime),
+            end_bar: s.dive.gas.end_pressure,
+            safety_stop: s.dive.safety_stop.is_some(),
+        })
+        .collect()
+}
+
+/// The rendered view of case `c` (into its folder under `out`): the quick or the full form's
+/// scale and samples.
+fn case_view(c: &Case, out: &Path, full: bool) -> Result<Vec<u8>, String> {
+    let (scale, samples) = if full {
+        (VIEW_SCALE, VIEW_SAMPLES)
+    } else {
+        (VIEW_SCALE_QUICK, VIEW_SAMPLES_QUICK)
+    };
+    view(&c.model, &out.join(&c.slug).join("view"), scale, samples)
 }
 
 /// `poser evaluate` (observations mode) on `m` with `opts`; its report is written into `dir`.
