@@ -494,7 +494,6 @@ const MAX_FN_LINES: usize = 150;
 const LONG_FNS: &[(&str, usize)] = &[
     ("compare/report.rs::plot_svg", 174),
     ("scene/resolve/render.rs::render", 162),
-    ("scene/source.rs::load_file", 157),
 ];
 
 /// `code` with the insides of comments, strings and character literals blanked to spaces (line
