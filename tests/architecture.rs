@@ -488,30 +488,7 @@ const MAX_FN_LINES: usize = 150;
 /// check was written. The list may only shrink: a function not on it may not grow past the
 /// limit, and one on it may not grow past its count (split it instead). Delete an entry once its
 /// function is split; the check fails on an entry that is no longer over the limit.
-const LONG_FNS: &[(&str, usize)] = &[
-    ("import/mitsuba.rs::import", 408),
-    ("plan/dive.rs::simulate_losing", 353),
-    ("import/blender.rs::convert", 329),
-    ("plan/dive.rs::verdict", 300),
-    ("backend/blender/data.rs::describe", 271),
-    ("lesson/dive.rs::html", 240),
-    ("plan/network.rs::expand", 239),
-    ("cli/dive.rs::text_report", 232),
-    ("backend/native/mod.rs::render_image", 222),
-    ("lesson/html.rs::page", 198),
-    ("backend/native/integrator.rs::li_spread", 214),
-    ("import/mitsuba.rs::shape", 270),
-    ("export/gltf.rs::export", 192),
-    ("scene/check.rs::scene", 190),
-    ("geometry/meshfile.rs::read_ply", 203),
-    ("plan/survey.rs::survey", 175),
-    ("compare/report.rs::plot_svg", 174),
-    ("plan/ssrf.rs::to_ssrf", 169),
-    ("lesson/dive.rs::run", 165),
-    ("scene/resolve/render.rs::render", 162),
-    ("scene/source.rs::load_file", 157),
-    ("import/mitsuba.rs::sensor", 155),
-];
+const LONG_FNS: &[(&str, usize)] = &[];
 
 /// `code` with the insides of comments, strings and character literals blanked to spaces (line
 /// breaks kept), so that braces can be counted and `fn` found in code only.

@@ -1,7 +1,9 @@
 //! `poser dive`: dive profile, decompression, gas; Subsurface export.
 use super::{CliError, SceneArgs};
-use crate::plan::dive::{DiveReport, plan_dive};
+use crate::plan::dive::{DiveConfig, DiveReport, DiveResult, Verdict, plan_dive};
+use crate::plan::gas::GasCheck;
 use crate::plan::gas::depth_limit;
+use crate::plan::oxygen::OxygenExposure;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -43,6 +45,45 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
         d.max_depth,
         d.mean_depth
     );
+    deco_lines(&mut o, c, d);
+    let g = &d.gas;
+    gas_lines(&mut o, c, g);
+    oxygen_line(&mut o, &d.oxygen);
+    for (k, p) in v.lost_gas.iter().enumerate() {
+        let _ = writeln!(
+            o,
+            "  {}{}",
+            if k == 0 {
+                "lost gas    "
+            } else {
+                "            "
+            },
+            crate::plan::dive::lost_gas_line(p)
+        );
+    }
+    verdict_line(&mut o, v, g);
+    if v.deco_planned
+        && let Some(plan) = &v.deco_plan
+    {
+        let _ = writeln!(o, "  ✓ {plan}");
+    }
+    for p in &v.problems {
+        let _ = writeln!(o, "  ✗ {p}");
+    }
+    for a in &v.advice {
+        let _ = writeln!(o, "  ! {a}");
+    }
+    if !v.suggestions.is_empty() {
+        let _ = writeln!(o, "What would fix it:");
+        for s in &v.suggestions {
+            let _ = writeln!(o, "  {} {}", if s.fixes_all { "→" } else { "·" }, s.text);
+        }
+    }
+    o
+}
+
+/// The decompression lines: the model and water, the NDL or where it runs out, the stops.
+fn deco_lines(o: &mut String, c: &DiveConfig, d: &DiveResult) {
     let _ = writeln!(
         o,
         "  deco        Bühlmann ZHL-16C, GF {:.0}/{:.0}, {} water ({:.0} kg/m³), surface {:.3} bar",
@@ -90,7 +131,10 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
             .collect();
         let _ = writeln!(o, "  stops       {} (mandatory)", stops.join(", "));
     }
-    let g = &d.gas;
+}
+
+/// The gas lines: SAC, reserve and pO₂ limits, one line per cylinder, the gas rules.
+fn gas_lines(o: &mut String, c: &DiveConfig, g: &GasCheck) {
     let _ = writeln!(
         o,
         "  gas         SAC {:.0} l/min; {:.0} bar reserve in every cylinder; pO₂ limits {:.1} bar bottom, {:.1} bar deco",
@@ -142,7 +186,10 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
         if g.thirds_ok { "kept" } else { "BROKEN" },
         if g.min_gas_ok { "kept" } else { "not kept" }
     );
-    let ox = &d.oxygen;
+}
+
+/// The oxygen line: CNS %, OTU and the highest pO₂, each with its flag.
+fn oxygen_line(o: &mut String, ox: &OxygenExposure) {
     let cns_flag = if ox.cns_percent > crate::plan::oxygen::CNS_LIMIT {
         "NOT SAFE (> 100 %)"
     } else if ox.cns_percent > crate::plan::oxygen::CNS_WARN {
@@ -168,18 +215,10 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
             ""
         }
     );
-    for (k, p) in v.lost_gas.iter().enumerate() {
-        let _ = writeln!(
-            o,
-            "  {}{}",
-            if k == 0 {
-                "lost gas    "
-            } else {
-                "            "
-            },
-            crate::plan::dive::lost_gas_line(p)
-        );
-    }
+}
+
+/// The verdict line: OK or not, the NDL or the decompression plan, the gases, the supply.
+fn verdict_line(o: &mut String, v: &Verdict, g: &GasCheck) {
     let _ = writeln!(
         o,
         "\nVerdict: {} — {}, {}, {}",
@@ -224,24 +263,6 @@ pub fn text_report(model: &crate::model::Model, r: &DiveReport) -> String {
             }
         }
     );
-    if v.deco_planned
-        && let Some(plan) = &v.deco_plan
-    {
-        let _ = writeln!(o, "  ✓ {plan}");
-    }
-    for p in &v.problems {
-        let _ = writeln!(o, "  ✗ {p}");
-    }
-    for a in &v.advice {
-        let _ = writeln!(o, "  ! {a}");
-    }
-    if !v.suggestions.is_empty() {
-        let _ = writeln!(o, "What would fix it:");
-        for s in &v.suggestions {
-            let _ = writeln!(o, "  {} {}", if s.fixes_all { "→" } else { "·" }, s.text);
-        }
-    }
-    o
 }
 
 /// The arguments of `poser dive`.

@@ -146,22 +146,7 @@ impl Report {
             .find(|b| b.error.is_none())
             .map(|b| (b.backend.clone(), b.mean_rgb));
         let analytic = self.analytic.as_ref().is_some_and(|a| a.is_ok());
-        let rel = |b: &BackendResult| -> Option<[f64; 3]> {
-            if b.error.is_some() {
-                return None;
-            }
-            if analytic {
-                return b.analytic_rel;
-            }
-            let (_, m) = base.as_ref()?;
-            Some([0, 1, 2].map(|c| {
-                if m[c] > 0.0 {
-                    b.mean_rgb[c] / m[c] - 1.0
-                } else {
-                    0.0
-                }
-            }))
-        };
+        let rel = |b: &BackendResult| relative_error(b, base.as_ref(), analytic);
         let rms_max = self
             .backends
             .iter()
@@ -183,11 +168,6 @@ impl Report {
                 None => "mean radiance".into(),
             }
         };
-        let colours = [
-            RGBColor(200, 40, 40),
-            RGBColor(40, 150, 40),
-            RGBColor(30, 80, 200),
-        ];
         let mut svg = String::new();
         {
             let root =
@@ -195,121 +175,185 @@ impl Report {
             root.fill(&WHITE).map_err(|e| e.to_string())?;
             let (left, right) = root.split_horizontally((210 + 80 * n) as u32);
             let x_range = -0.5..n as f64 - 0.5;
-            let mut chart = ChartBuilder::on(&left)
-                .caption("target position vs exact truth", ("sans-serif", 16))
-                .margin(12)
-                .x_label_area_size(36)
-                .y_label_area_size(56)
-                .build_cartesian_2d(x_range.clone(), 0.0..rms_max)
-                .map_err(|e| e.to_string())?;
-            chart
-                .configure_mesh()
-                .disable_x_mesh()
-                .x_labels(0)
-                .x_desc("backend")
-                .y_desc("RMS error (px)")
-                .draw()
-                .map_err(|e| e.to_string())?;
-            for (i, b) in self.backends.iter().enumerate() {
-                let x = i as f64;
-                let label = if b.error.is_some() {
-                    format!("{} (failed)", b.backend)
-                } else {
-                    b.backend.clone()
-                };
-                chart
-                    .draw_series(std::iter::once(Text::new(
-                        label,
-                        (x - 0.4, rms_max * 0.04),
-                        ("sans-serif", 13),
-                    )))
-                    .map_err(|e| e.to_string())?;
-                match (&b.error, b.target_rms_px) {
-                    (Some(_), _) => chart
-                        .draw_series(std::iter::once(Text::new(
-                            "failed",
-                            (x - 0.25, rms_max * 0.5),
-                            ("sans-serif", 16).into_font().color(&RED),
-                        )))
-                        .map(|_| ()),
-                    (None, Some(v)) => chart
-                        .draw_series(std::iter::once(Rectangle::new(
-                            [(x - 0.3, 0.0), (x + 0.3, v)],
-                            RGBColor(90, 90, 90).filled(),
-                        )))
-                        .map(|_| ()),
-                    (None, None) => chart
-                        .draw_series(std::iter::once(Text::new(
-                            "no targets",
-                            (x - 0.3, rms_max * 0.5),
-                            ("sans-serif", 13),
-                        )))
-                        .map(|_| ()),
-                }
-                .map_err(|e| e.to_string())?;
-            }
-            let mut chart = ChartBuilder::on(&right)
-                .caption(right_title, ("sans-serif", 16))
-                .margin(12)
-                .x_label_area_size(36)
-                .y_label_area_size(56)
-                .build_cartesian_2d(x_range, -pct_max..pct_max)
-                .map_err(|e| e.to_string())?;
-            chart
-                .configure_mesh()
-                .disable_x_mesh()
-                .x_labels(0)
-                .x_desc("backend (bars: R, G, B)")
-                .y_desc("relative error (%)")
-                .draw()
-                .map_err(|e| e.to_string())?;
-            chart
-                .draw_series(LineSeries::new(
-                    [(-0.5, 0.0), (n as f64 - 0.5, 0.0)],
-                    BLACK.mix(0.5),
-                ))
-                .map_err(|e| e.to_string())?;
-            for (i, b) in self.backends.iter().enumerate() {
-                let x = i as f64;
-                chart
-                    .draw_series(std::iter::once(Text::new(
-                        b.backend.clone(),
-                        (x - 0.4, -pct_max * 0.92),
-                        ("sans-serif", 13),
-                    )))
-                    .map_err(|e| e.to_string())?;
-                match rel(b) {
-                    Some(r) => {
-                        for (c, col) in colours.iter().enumerate() {
-                            let x0 = x - 0.3 + 0.2 * c as f64;
-                            chart
-                                .draw_series(std::iter::once(Rectangle::new(
-                                    [(x0, 0.0), (x0 + 0.18, 100.0 * r[c])],
-                                    col.filled(),
-                                )))
-                                .map_err(|e| e.to_string())?;
-                        }
-                    }
-                    None => {
-                        let text = if b.error.is_some() {
-                            "failed"
-                        } else {
-                            "no value"
-                        };
-                        chart
-                            .draw_series(std::iter::once(Text::new(
-                                text,
-                                (x - 0.25, pct_max * 0.5),
-                                ("sans-serif", 16).into_font().color(&RED),
-                            )))
-                            .map_err(|e| e.to_string())?;
-                    }
-                }
-            }
+            self.position_panel(&left, x_range.clone(), rms_max)?;
+            self.radiometry_panel(&right, x_range, pct_max, right_title, &rel)?;
             root.present().map_err(|e| e.to_string())?;
         }
         Ok(svg)
     }
+
+    /// The left panel: each backend's target position error (RMS, px) as a bar, "failed" or
+    /// "no targets" where there is none.
+    fn position_panel(
+        &self,
+        left: &plotters::drawing::DrawingArea<
+            plotters::prelude::SVGBackend<'_>,
+            plotters::coord::Shift,
+        >,
+        x_range: std::ops::Range<f64>,
+        rms_max: f64,
+    ) -> Result<(), String> {
+        use plotters::prelude::*;
+        let mut chart = ChartBuilder::on(left)
+            .caption("target position vs exact truth", ("sans-serif", 16))
+            .margin(12)
+            .x_label_area_size(36)
+            .y_label_area_size(56)
+            .build_cartesian_2d(x_range, 0.0..rms_max)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(0)
+            .x_desc("backend")
+            .y_desc("RMS error (px)")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (i, b) in self.backends.iter().enumerate() {
+            let x = i as f64;
+            let label = if b.error.is_some() {
+                format!("{} (failed)", b.backend)
+            } else {
+                b.backend.clone()
+            };
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    label,
+                    (x - 0.4, rms_max * 0.04),
+                    ("sans-serif", 13),
+                )))
+                .map_err(|e| e.to_string())?;
+            match (&b.error, b.target_rms_px) {
+                (Some(_), _) => chart
+                    .draw_series(std::iter::once(Text::new(
+                        "failed",
+                        (x - 0.25, rms_max * 0.5),
+                        ("sans-serif", 16).into_font().color(&RED),
+                    )))
+                    .map(|_| ()),
+                (None, Some(v)) => chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(x - 0.3, 0.0), (x + 0.3, v)],
+                        RGBColor(90, 90, 90).filled(),
+                    )))
+                    .map(|_| ()),
+                (None, None) => chart
+                    .draw_series(std::iter::once(Text::new(
+                        "no targets",
+                        (x - 0.3, rms_max * 0.5),
+                        ("sans-serif", 13),
+                    )))
+                    .map(|_| ()),
+            }
+            .map_err(|e| e.to_string())?;
+        }
+        Ok(())
+    }
+
+    /// The right panel: each backend's radiometric error per channel (%, `rel`) as R, G, B
+    /// bars, "failed" or "no value" where there is none.
+    fn radiometry_panel(
+        &self,
+        right: &plotters::drawing::DrawingArea<
+            plotters::prelude::SVGBackend<'_>,
+            plotters::coord::Shift,
+        >,
+        x_range: std::ops::Range<f64>,
+        pct_max: f64,
+        right_title: String,
+        rel: &dyn Fn(&BackendResult) -> Option<[f64; 3]>,
+    ) -> Result<(), String> {
+        use plotters::prelude::*;
+        let n = self.backends.len().max(1);
+        let colours = [
+            RGBColor(200, 40, 40),
+            RGBColor(40, 150, 40),
+            RGBColor(30, 80, 200),
+        ];
+        let mut chart = ChartBuilder::on(right)
+            .caption(right_title, ("sans-serif", 16))
+            .margin(12)
+            .x_label_area_size(36)
+            .y_label_area_size(56)
+            .build_cartesian_2d(x_range, -pct_max..pct_max)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(0)
+            .x_desc("backend (bars: R, G, B)")
+            .y_desc("relative error (%)")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(LineSeries::new(
+                [(-0.5, 0.0), (n as f64 - 0.5, 0.0)],
+                BLACK.mix(0.5),
+            ))
+            .map_err(|e| e.to_string())?;
+        for (i, b) in self.backends.iter().enumerate() {
+            let x = i as f64;
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    b.backend.clone(),
+                    (x - 0.4, -pct_max * 0.92),
+                    ("sans-serif", 13),
+                )))
+                .map_err(|e| e.to_string())?;
+            match rel(b) {
+                Some(r) => {
+                    for (c, col) in colours.iter().enumerate() {
+                        let x0 = x - 0.3 + 0.2 * c as f64;
+                        chart
+                            .draw_series(std::iter::once(Rectangle::new(
+                                [(x0, 0.0), (x0 + 0.18, 100.0 * r[c])],
+                                col.filled(),
+                            )))
+                            .map_err(|e| e.to_string())?;
+                    }
+                }
+                None => {
+                    let text = if b.error.is_some() {
+                        "failed"
+                    } else {
+                        "no value"
+                    };
+                    chart
+                        .draw_series(std::iter::once(Text::new(
+                            text,
+                            (x - 0.25, pct_max * 0.5),
+                            ("sans-serif", 16).into_font().color(&RED),
+                        )))
+                        .map_err(|e| e.to_string())?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A backend's radiometric error per channel: against the analytic radiance when the scene
+/// has one (`analytic`), else against `base` (the first backend that rendered); `None` for a
+/// failed backend.
+fn relative_error(
+    b: &BackendResult,
+    base: Option<&(String, [f64; 3])>,
+    analytic: bool,
+) -> Option<[f64; 3]> {
+    if b.error.is_some() {
+        return None;
+    }
+    if analytic {
+        return b.analytic_rel;
+    }
+    let (_, m) = base?;
+    Some([0, 1, 2].map(|c| {
+        if m[c] > 0.0 {
+            b.mean_rgb[c] / m[c] - 1.0
+        } else {
+            0.0
+        }
+    }))
 }
 
 #[cfg(test)]

@@ -129,10 +129,73 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
         .to_path_buf();
 
     // Site geometry.
-    let mut site = Vec::new();
     let mut bounds = Bounds::default();
+    site_group(&mut b, model, &base, &mut bounds, &mut s)?;
+
+    // Targets.
+    target_group(&mut b, model, &mut bounds, &mut s)?;
+
+    for p in 0..model.poses.len() {
+        bounds.add(model.poses[p].world_from_rig.translation);
+        for c in 0..model.cameras.len() {
+            bounds.add(model.world_from_camera(p, c).translation);
+        }
+    }
+
+    // Water surface.
+    if let Some(sea) = model.sea_interface(1) {
+        water_surface(&mut b, model, &sea, &bounds, &mut s)?;
+    }
+
+    // Ports at the representative pose.
+    port_group(&mut b, model, &mut s)?;
+
+    // Cameras.
+    let mut cnodes = Vec::new();
+    for p in 0..model.poses.len() {
+        for (c, cam) in model.cameras.iter().enumerate() {
+            cnodes.push(camera_node(&mut b, model, p, c, cam)?);
+            s.cameras += 1;
+        }
+    }
+    b.group("cameras", cnodes);
+
+    // Swim path.
+    swim_path(&mut b, model, &mut s)?;
+
+    // Lights.
+    let (lnodes, ambient) = lights(&mut b, model, &bounds, &mut s)?;
+    b.group("lights", lnodes);
+
+    // Scene extras.
+    let extras = json!({
+        "generator": format!("poser {} export", env!("CARGO_PKG_VERSION")),
+        "scenario": model.name,
+        "description": model.description,
+        "units": "metres",
+        "axes": "glTF y up; poser's world (x east, y north, z up) maps as (x, y, z) -> (x, z, -y)",
+        "camera_frame": "poser cameras are OpenCV (x right, y down, z forward); glTF cameras look down -z with +y up: node rotation = C * R_world_from_camera * diag(1, -1, -1)",
+        "pixel_convention": "pixel centres at +0.5 (COLMAP's): the image centre is (width/2, height/2); OpenCV's principal point is (cx - 0.5, cy - 0.5)",
+        "light_units": "point/spot intensity (cd) = 683 lm/W * max channel of I (W/sr); sun (lux) = 683 lm/W * max channel of E (W/m2); colour = channels / max",
+        "representative_pose": REPRESENTATIVE_POSE,
+        "ambient": ambient,
+        "approximated": s.approximated,
+    });
+    b.finish(&model.name, extras_of("the scene", extras)?, &mut s)
+}
+
+/// The site: one mesh node per object with geometry, in the `site` group (their extent into
+/// `bounds`).
+fn site_group(
+    b: &mut Builder,
+    model: &Model,
+    base: &Path,
+    bounds: &mut Bounds,
+    s: &mut Summary,
+) -> Result<(), String> {
+    let mut site = Vec::new();
     for o in &model.objects {
-        let mesh = object_mesh(o, &base)?;
+        let mesh = object_mesh(o, base)?;
         if mesh.triangles.is_empty() {
             continue;
         }
@@ -151,12 +214,21 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
         s.objects += 1;
     }
     b.group("site", site);
+    Ok(())
+}
 
-    // Targets.
+/// The targets: one node per target with its kind and point count, in the `targets` group
+/// (their points and origins into `bounds`).
+fn target_group(
+    b: &mut Builder,
+    model: &Model,
+    bounds: &mut Bounds,
+    s: &mut Summary,
+) -> Result<(), String> {
     let mut tnodes = Vec::new();
     for (i, t) in model.targets.iter().enumerate() {
         let what = format!("target `{}`", t.name);
-        let prims = target_primitives(&mut b, t, i, &what, &mut s.triangles)?;
+        let prims = target_primitives(b, t, i, &what, &mut s.triangles)?;
         for p in &t.points {
             bounds.add(p.world);
         }
@@ -169,58 +241,63 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
         s.targets += 1;
     }
     b.group("targets", tnodes);
+    Ok(())
+}
 
-    for p in 0..model.poses.len() {
-        bounds.add(model.poses[p].world_from_rig.translation);
-        for c in 0..model.cameras.len() {
-            bounds.add(model.world_from_camera(p, c).translation);
+/// The water surface over `bounds` with a margin: a flat plane, or the wave field's heights
+/// on a grid.
+fn water_surface(
+    b: &mut Builder,
+    model: &Model,
+    sea: &crate::optics::surface::SeaInterface,
+    bounds: &Bounds,
+    s: &mut Summary,
+) -> Result<(), String> {
+    let (lo, hi) = bounds
+        .get()
+        .unwrap_or((DVec3::splat(-5.0), DVec3::splat(5.0)));
+    let centre = 0.5 * (lo + hi);
+    let half = 0.75 * (hi - lo).truncate().max_element() + 5.0;
+    let (mesh, kind) = if sea.field.components.is_empty() {
+        let mut m = crate::geometry::mesh::plane(2.0 * half, 2.0 * half);
+        for p in &mut m.positions {
+            p.x += centre.x;
+            p.y += centre.y;
         }
-    }
+        (m, "flat")
+    } else {
+        let step = (sea.field.peak_wavelength / 12.0).max(2.0 * half / WAVE_MAX_CELLS);
+        let n = ((2.0 * half / step).ceil() as u32).clamp(1, WAVE_MAX_CELLS as u32);
+        (
+            grid(centre.x - half, centre.y - half, 2.0 * half, n, |x, y| {
+                sea.field.height(x, y)
+            }),
+            "waves",
+        )
+    };
+    let mat = b.material(
+        "water surface",
+        [0.05, 0.3, 0.55, 0.35],
+        Look::Transparent,
+        None,
+        "the water surface",
+    )?;
+    let prim = b.triangles(&mesh, None, mat, "the water surface")?;
+    s.triangles += mesh.triangles.len();
+    let extras = json!({ "surface": kind, "n_water": model.ambient_ior() });
+    let node = b.mesh_node(
+        "water surface",
+        vec![prim],
+        extras_of("the water surface", extras)?,
+    );
+    b.scene_nodes.push(node);
+    s.water_surface = Some(kind);
+    Ok(())
+}
 
-    // Water surface.
-    if let Some(sea) = model.sea_interface(1) {
-        let (lo, hi) = bounds
-            .get()
-            .unwrap_or((DVec3::splat(-5.0), DVec3::splat(5.0)));
-        let centre = 0.5 * (lo + hi);
-        let half = 0.75 * (hi - lo).truncate().max_element() + 5.0;
-        let (mesh, kind) = if sea.field.components.is_empty() {
-            let mut m = crate::geometry::mesh::plane(2.0 * half, 2.0 * half);
-            for p in &mut m.positions {
-                p.x += centre.x;
-                p.y += centre.y;
-            }
-            (m, "flat")
-        } else {
-            let step = (sea.field.peak_wavelength / 12.0).max(2.0 * half / WAVE_MAX_CELLS);
-            let n = ((2.0 * half / step).ceil() as u32).clamp(1, WAVE_MAX_CELLS as u32);
-            (
-                grid(centre.x - half, centre.y - half, 2.0 * half, n, |x, y| {
-                    sea.field.height(x, y)
-                }),
-                "waves",
-            )
-        };
-        let mat = b.material(
-            "water surface",
-            [0.05, 0.3, 0.55, 0.35],
-            Look::Transparent,
-            None,
-            "the water surface",
-        )?;
-        let prim = b.triangles(&mesh, None, mat, "the water surface")?;
-        s.triangles += mesh.triangles.len();
-        let extras = json!({ "surface": kind, "n_water": model.ambient_ior() });
-        let node = b.mesh_node(
-            "water surface",
-            vec![prim],
-            extras_of("the water surface", extras)?,
-        );
-        b.scene_nodes.push(node);
-        s.water_surface = Some(kind);
-    }
-
-    // Ports at the representative pose.
+/// The ports at the representative pose: one glass node per camera with a port, in the
+/// `ports` group.
+fn port_group(b: &mut Builder, model: &Model, s: &mut Summary) -> Result<(), String> {
     let mut pnodes = Vec::new();
     let mut glass = None;
     for (c, cam) in model.cameras.iter().enumerate() {
@@ -255,18 +332,11 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
         s.ports += 1;
     }
     b.group("ports", pnodes);
+    Ok(())
+}
 
-    // Cameras.
-    let mut cnodes = Vec::new();
-    for p in 0..model.poses.len() {
-        for (c, cam) in model.cameras.iter().enumerate() {
-            cnodes.push(camera_node(&mut b, model, p, c, cam)?);
-            s.cameras += 1;
-        }
-    }
-    b.group("cameras", cnodes);
-
-    // Swim path.
+/// The swim path: the rig positions in pose order as a line strip.
+fn swim_path(b: &mut Builder, model: &Model, s: &mut Summary) -> Result<(), String> {
     let path: Vec<DVec3> = model
         .poses
         .iter()
@@ -288,26 +358,7 @@ pub fn export(model: &Model) -> Result<(Vec<u8>, Summary), String> {
     let node = b.mesh_node("swim path", vec![prim], extras_of("the swim path", extras)?);
     b.scene_nodes.push(node);
     s.path_points = path.len();
-
-    // Lights.
-    let (lnodes, ambient) = lights(&mut b, model, &bounds, &mut s)?;
-    b.group("lights", lnodes);
-
-    // Scene extras.
-    let extras = json!({
-        "generator": format!("poser {} export", env!("CARGO_PKG_VERSION")),
-        "scenario": model.name,
-        "description": model.description,
-        "units": "metres",
-        "axes": "glTF y up; poser's world (x east, y north, z up) maps as (x, y, z) -> (x, z, -y)",
-        "camera_frame": "poser cameras are OpenCV (x right, y down, z forward); glTF cameras look down -z with +y up: node rotation = C * R_world_from_camera * diag(1, -1, -1)",
-        "pixel_convention": "pixel centres at +0.5 (COLMAP's): the image centre is (width/2, height/2); OpenCV's principal point is (cx - 0.5, cy - 0.5)",
-        "light_units": "point/spot intensity (cd) = 683 lm/W * max channel of I (W/sr); sun (lux) = 683 lm/W * max channel of E (W/m2); colour = channels / max",
-        "representative_pose": REPRESENTATIVE_POSE,
-        "ambient": ambient,
-        "approximated": s.approximated,
-    });
-    b.finish(&model.name, extras_of("the scene", extras)?, &mut s)
+    Ok(())
 }
 
 // ------------------------------------------------------------------------------------------

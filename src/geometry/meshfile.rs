@@ -768,10 +768,9 @@ impl Cursor<'_> {
     }
 }
 
-/// Read a PLY file: its triangles (faces fan-triangulated) and, when the vertices have `red`,
-/// `green`, `blue` (or `r`, `g`, `b`), their colours (integers as sRGB, floats as linear);
-/// then the mesh has one material of vertex colours.
-pub fn read_ply(bytes: &[u8], file: &str) -> Result<MeshFile, String> {
+/// The header of a PLY file: its encoding, its elements with their properties, and where the
+/// body starts.
+fn ply_header(bytes: &[u8], file: &str) -> Result<(Enc, Vec<Element>, usize), String> {
     let end = bytes
         .windows(10)
         .position(|w| w == b"end_header")
@@ -838,41 +837,55 @@ pub fn read_ply(bytes: &[u8], file: &str) -> Result<MeshFile, String> {
         }
     }
     let enc = enc.ok_or_else(|| format!("{file}: the PLY header has no format line"))?;
-    let channel = |name: &str| match name {
+    Ok((enc, elements, body))
+}
+
+/// The colour channel a vertex property holds (0, 1, 2 for red, green, blue).
+fn channel(name: &str) -> Option<usize> {
+    match name {
         "red" | "r" | "diffuse_red" => Some(0),
         "green" | "g" | "diffuse_green" => Some(1),
         "blue" | "b" | "diffuse_blue" => Some(2),
         _ => None,
-    };
-    let has_colors = elements.iter().any(|e| {
+    }
+}
+
+/// The texture axis a vertex property holds (0: u, 1: v), under the names Mitsuba's PLY reader
+/// takes (taken as they are: v = 0 at the image's first row, as Mitsuba's bitmap reads them).
+fn uv_axis(name: &str) -> Option<usize> {
+    match name {
+        "u" | "s" | "texture_u" | "texture_s" => Some(0),
+        "v" | "t" | "texture_v" | "texture_t" => Some(1),
+        _ => None,
+    }
+}
+
+/// Whether a `vertex` element has a scalar property for each of the `n` slots `slot` maps
+/// property names to.
+fn vertex_has(elements: &[Element], n: usize, slot: fn(&str) -> Option<usize>) -> bool {
+    elements.iter().any(|e| {
         e.name == "vertex"
-            && (0..3).all(|c| {
+            && (0..n).all(|c| {
                 e.props
                     .iter()
-                    .any(|p| matches!(p, Prop::Scalar(_, n) if channel(n) == Some(c)))
+                    .any(|p| matches!(p, Prop::Scalar(_, name) if slot(name) == Some(c)))
             })
-    });
+    })
+}
+
+/// Read a PLY file: its triangles (faces fan-triangulated) and, when the vertices have `red`,
+/// `green`, `blue` (or `r`, `g`, `b`), their colours (integers as sRGB, floats as linear);
+/// then the mesh has one material of vertex colours.
+pub fn read_ply(bytes: &[u8], file: &str) -> Result<MeshFile, String> {
+    let (enc, elements, body) = ply_header(bytes, file)?;
+    let has_colors = vertex_has(&elements, 3, channel);
     let mut c = Cursor {
         b: bytes,
         at: body,
         enc,
         file,
     };
-    // Per-vertex texture coordinates, under the names Mitsuba's PLY reader takes (taken as
-    // they are: v = 0 at the image's first row, as Mitsuba's bitmap reads them).
-    let uv_axis = |name: &str| match name {
-        "u" | "s" | "texture_u" | "texture_s" => Some(0),
-        "v" | "t" | "texture_v" | "texture_t" => Some(1),
-        _ => None,
-    };
-    let has_uv = elements.iter().any(|e| {
-        e.name == "vertex"
-            && (0..2).all(|a| {
-                e.props
-                    .iter()
-                    .any(|p| matches!(p, Prop::Scalar(_, n) if uv_axis(n) == Some(a)))
-            })
-    });
+    let has_uv = vertex_has(&elements, 2, uv_axis);
     let mut m = TriMesh::default();
     let mut colors: Vec<[f32; 3]> = Vec::new();
     let mut uvs: Vec<[f32; 2]> = Vec::new();

@@ -135,7 +135,7 @@ pub fn import(blend: &Path, assets: &str, work: &Path) -> Result<Imported, Strin
 /// What the reader found → scene text and assets (its PLY meshes are in `work`).
 fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Imported, String> {
     let shown = blend.display().to_string();
-    let at = |element: &str| Some(format!("{shown}: {element}"));
+    let at = |element: &str| located(&shown, element);
     let mut notes: Vec<Note> = read
         .notes
         .iter()
@@ -147,7 +147,6 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
             }
         })
         .collect();
-    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
 
     let mut t = Table::new();
     let name = if read.name.trim().is_empty() {
@@ -165,101 +164,12 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
     );
 
     // Cameras: [camera] is the first; a rig when there are more.
-    // Camera names become file names (`<camera>_img_0001.exr`): one safe component each.
     let mut read = read;
-    for c in &mut read.cameras {
-        let safe = safe_file_name(&c.name).replace('.', "_");
-        if safe != c.name {
-            notes.push(Note::new(
-                at(&format!("camera `{}`", c.name)),
-                format!("renamed `{safe}`: a camera's name is part of its images' file names"),
-            ));
-            c.name = safe;
-        }
-    }
-    let Some(c0) = read.cameras.first() else {
-        return Err(format!(
-            "{shown}: no camera that poser can import\n  help: a poser scene needs a perspective camera"
-        ));
-    };
-    for c in &read.cameras {
-        if !(1..=100_000).contains(&c.width) || !(1..=100_000).contains(&c.height) {
-            return Err(format!(
-                "{shown}: camera `{}`: {}×{} pixels",
-                c.name, c.width, c.height
-            ));
-        }
-        if !finite(&[c.fx, c.fy, c.cx, c.cy]) || c.fx <= 0.0 || c.fy <= 0.0 {
-            return Err(format!(
-                "{shown}: camera `{}`: no finite positive focal length",
-                c.name
-            ));
-        }
-    }
-    let intrinsics = |c: &ReadCamera, tab: &mut Table| {
-        tab.insert("width".into(), Value::Integer(c.width));
-        tab.insert("height".into(), Value::Integer(c.height));
-        match (c.focal_length, c.f_number) {
-            (Some(fl), Some(n)) if fl > 0.0 && n > 0.0 => {
-                // Depth of field: the thin lens needs a physical focal length.
-                tab.insert("focal_length".into(), Value::Float(fl));
-                tab.insert("pixel_pitch".into(), Value::Float(fl / c.fx));
-                tab.insert("f_number".into(), Value::Float(n));
-                if let Some(d) = c.focus_distance.filter(|d| *d > 0.0) {
-                    tab.insert("focus_distance".into(), Value::Float(d));
-                }
-            }
-            _ => {
-                tab.insert("fx".into(), Value::Float(c.fx));
-            }
-        }
-        if c.fy != c.fx {
-            tab.insert("fy".into(), Value::Float(c.fy));
-        }
-        tab.insert("principal_point".into(), arr([c.cx, c.cy]));
-        if c.lens != "rectilinear" {
-            tab.insert("lens".into(), Value::String(c.lens.clone()));
-        }
-        if let Some(d) = &c.distortion {
-            let mut dt = Table::new();
-            for k in ["k1", "k2", "k3", "p1", "p2"] {
-                if let Some(v) = d.get(k).filter(|v| **v != 0.0) {
-                    dt.insert(k.into(), Value::Float(*v));
-                }
-            }
-            if !dt.is_empty() {
-                tab.insert("distortion".into(), Value::Table(dt));
-            }
-        }
-    };
-    let mut cam = Table::new();
-    intrinsics(c0, &mut cam);
-    if !read.port_glass {
-        cam.insert("port".into(), no_port());
-    }
-    if read.cameras.len() > 1 {
-        let mut cams = Vec::new();
-        for c in &read.cameras {
-            let (rot, pos) = frame_of(&mat(&c.rig_from_camera));
-            let mut ct = Table::new();
-            ct.insert("name".into(), Value::String(c.name.clone()));
-            ct.insert("position".into(), arr(pos.to_array()));
-            ct.insert("rotation".into(), arr(euler_xyz(rot)));
-            intrinsics(c, &mut ct);
-            cams.push(Value::Table(ct));
-        }
-        let mut rt = Table::new();
-        rt.insert("type".into(), Value::String("multi".into()));
-        rt.insert("cameras".into(), Value::Array(cams));
-        t.insert("camera".into(), Value::Table(cam));
-        t.insert("rig".into(), Value::Table(rt));
-    } else {
-        cam.insert("name".into(), Value::String(c0.name.clone()));
-        t.insert("camera".into(), Value::Table(cam));
-    }
+    rename_cameras(&mut read.cameras, &shown, &mut notes);
+    check_cameras(&read.cameras, &shown)?;
+    camera_tables(&read, &mut t);
 
     // Water.
-    let mut surface = false;
     // A Blender volume has no index: poser's seawater at 20 °C, 35 PSU, 550 nm stands in.
     let default_n = crate::optics::water::seawater_ior(20.0, 35.0, 0.0, 550.0);
     let n_water = read
@@ -276,74 +186,10 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
             (r, c + DVec3::Z * dz)
         })
         .collect();
-    if let Some(w) = &read.water {
-        if !finite(&w.absorption) || !finite(&w.scattering) || !w.g.is_finite() {
-            return Err(format!("{shown}: the water's coefficients are not finite"));
-        }
-        let mut wt = Table::new();
-        wt.insert("absorption".into(), arr(w.absorption));
-        wt.insert("scattering".into(), arr(w.scattering));
-        match &w.ff {
-            Some(ff) => {
-                // Cycles gives the backscatter fraction; poser the Junge slope that yields it.
-                let mu = ff
-                    .mu
-                    .filter(|m| *m > 3.0 && *m <= 5.0)
-                    .or_else(|| junge_slope(ff.n, ff.backscatter));
-                let Some(mu) = mu else {
-                    return Err(format!(
-                        "{shown}: water: no Junge slope in (3, 5] gives a Fournier–Forand backscatter fraction of {} with particle index {}",
-                        ff.backscatter, ff.n
-                    ));
-                };
-                wt.insert("phase".into(), Value::String("fournier_forand".into()));
-                wt.insert("particle_index".into(), Value::Float(ff.n));
-                wt.insert("junge_slope".into(), Value::Float(mu));
-            }
-            None => {
-                wt.insert("g".into(), Value::Float(w.g.clamp(-0.999, 0.999)));
-            }
-        }
-        match w.ior {
-            Some(n) => {
-                wt.insert("ior".into(), arr(n));
-            }
-            None => {
-                wt.insert("ior".into(), Value::Float(default_n));
-                notes.push(Note::new(
-                    at("water"),
-                    format!("a Blender volume has no refractive index; seawater's at 20 °C, 35 PSU and 550 nm ({default_n:.5}) is written"),
-                ).help("set `water.ior`, or `temperature` and `salinity` instead"));
-            }
-        }
-        t.insert("water".into(), Value::Table(wt));
-        surface = match w.surface.as_deref() {
-            Some("waves") => {
-                notes.push(
-                    Note::new(at("water"), "the wavy sea surface is imported flat")
-                        .help("set `site.surface = \"waves\"` with its height and wavelength"),
-                );
-                true
-            }
-            Some(s) => s == "flat",
-            None => w.top.is_some_and(|z| z.abs() < 1e-4),
-        };
-        let mut site = Table::new();
-        site.insert(
-            "surface".into(),
-            Value::String(if surface { "flat" } else { "none" }.into()),
-        );
-        t.insert("site".into(), Value::Table(site));
-        if surface && poses.iter().any(|(_, c)| c.z >= 0.0) {
-            notes.push(
-                Note::new(
-                    at("camera"),
-                    "a camera is at z ≥ 0 in water: poser's water lies below z = 0",
-                )
-                .help("move the scene down so that the cameras are below the water's top"),
-            );
-        }
-    }
+    let surface = match &read.water {
+        Some(w) => water_tables(w, default_n, &poses, &shown, &mut notes, &mut t)?,
+        None => false,
+    };
 
     // Lights and the sun.
     let mut lights = Vec::new();
@@ -359,75 +205,17 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
     };
     let mut sun_done = false;
     for l in &read.lights {
-        let world = l.get("mount").and_then(|v| v.as_str()) == Some("world");
         let kind = l.get("type").and_then(|v| v.as_str()).unwrap_or("");
         let lname = l.get("name").and_then(|v| v.as_str()).unwrap_or("light");
         if kind == "sun" {
-            let v3 = |k: &str| -> Option<[f64; 3]> {
-                let a = l.get(k)?.as_array()?;
-                Some([
-                    a.first()?.as_f64()?,
-                    a.get(1)?.as_f64()?,
-                    a.get(2)?.as_f64()?,
-                ])
-            };
-            let (Some(dir), Some(e)) = (v3("direction"), v3("irradiance")) else {
-                continue;
-            };
-            let dir = DVec3::from_array(dir).normalize_or_zero();
-            if sun_done || dir.z >= 0.0 || !finite(&e) {
-                notes.push(
-                    Note::new(
-                        at(&format!("light `{lname}`")),
-                        if sun_done {
-                            "a second sun is not imported"
-                        } else {
-                            "a sun shining upwards is not imported"
-                        },
-                    )
-                    .help("poser has one sun, shining down"),
-                );
-                continue;
+            let in_water = read.water.is_some() && surface;
+            if let Some(sun) = sun_of(l, lname, sun_done, in_water, n_water, &shown, &mut notes) {
+                sun_done = true;
+                t.insert("sun".into(), sun);
             }
-            sun_done = true;
-            let (dir_air, e_air) = if read.water.is_some() && surface {
-                // Cycles has no sea surface to refract at: its sun shines in the water.
-                notes.push(Note::new(
-                    at(&format!("light `{lname}`")),
-                    "the sun is read as shining in the water: elevation and irradiance are those above the flat surface that refracts it so",
-                ));
-                unrefract(dir, e, n_water)
-            } else {
-                (dir, e)
-            };
-            t.insert("sun".into(), sun_table(dir_air, e_air));
             continue;
         }
-        let mut lt = Table::new();
-        for (k, v) in l {
-            let value = match v {
-                serde_json::Value::String(s) if k == "name" => Value::String(unique(s)),
-                serde_json::Value::String(s) => Value::String(s.clone()),
-                serde_json::Value::Number(n) => Value::Float(n.as_f64().unwrap_or(f64::NAN)),
-                serde_json::Value::Array(a) => {
-                    let shift = if k == "position" && world { dz } else { 0.0 };
-                    arr(a.iter().enumerate().map(|(i, x)| {
-                        x.as_f64().unwrap_or(f64::NAN) + if i == 2 { shift } else { 0.0 }
-                    }))
-                }
-                _ => continue,
-            };
-            let ok = match &value {
-                Value::Float(x) => x.is_finite(),
-                Value::Array(a) => a.iter().all(|x| x.as_float().is_some_and(f64::is_finite)),
-                _ => true,
-            };
-            if !ok {
-                return Err(format!("{shown}: light `{lname}`: `{k}` is not finite"));
-            }
-            lt.insert(k.clone(), value);
-        }
-        lights.push(Value::Table(lt));
+        lights.push(light_table(l, lname, dz, &mut unique, &shown)?);
     }
     if !lights.is_empty() {
         t.insert("lights".into(), Value::Array(lights));
@@ -460,6 +248,294 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
     );
     t.insert("render".into(), Value::Table(r));
     finish(&t, &shown, notes, assets_out)
+}
+
+/// A note's location: `element` of the file shown as `shown`.
+fn located(shown: &str, element: &str) -> Option<String> {
+    Some(format!("{shown}: {element}"))
+}
+
+/// Every value finite.
+fn finite(v: &[f64]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+/// Camera names become file names (`<camera>_img_0001.exr`): one safe component each; a
+/// renamed camera is noted.
+fn rename_cameras(cameras: &mut [ReadCamera], shown: &str, notes: &mut Vec<Note>) {
+    for c in cameras {
+        let safe = safe_file_name(&c.name).replace('.', "_");
+        if safe != c.name {
+            notes.push(Note::new(
+                located(shown, &format!("camera `{}`", c.name)),
+                format!("renamed `{safe}`: a camera's name is part of its images' file names"),
+            ));
+            c.name = safe;
+        }
+    }
+}
+
+/// At least one camera, each with a sane size and a finite positive focal length.
+fn check_cameras(cameras: &[ReadCamera], shown: &str) -> Result<(), String> {
+    if cameras.is_empty() {
+        return Err(format!(
+            "{shown}: no camera that poser can import\n  help: a poser scene needs a perspective camera"
+        ));
+    }
+    for c in cameras {
+        if !(1..=100_000).contains(&c.width) || !(1..=100_000).contains(&c.height) {
+            return Err(format!(
+                "{shown}: camera `{}`: {}×{} pixels",
+                c.name, c.width, c.height
+            ));
+        }
+        if !finite(&[c.fx, c.fy, c.cx, c.cy]) || c.fx <= 0.0 || c.fy <= 0.0 {
+            return Err(format!(
+                "{shown}: camera `{}`: no finite positive focal length",
+                c.name
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A camera's intrinsics into `tab`: size, focal length (physical, with the thin lens, when
+/// it has an f-number), principal point, lens model and distortion.
+fn insert_intrinsics(c: &ReadCamera, tab: &mut Table) {
+    tab.insert("width".into(), Value::Integer(c.width));
+    tab.insert("height".into(), Value::Integer(c.height));
+    match (c.focal_length, c.f_number) {
+        (Some(fl), Some(n)) if fl > 0.0 && n > 0.0 => {
+            // Depth of field: the thin lens needs a physical focal length.
+            tab.insert("focal_length".into(), Value::Float(fl));
+            tab.insert("pixel_pitch".into(), Value::Float(fl / c.fx));
+            tab.insert("f_number".into(), Value::Float(n));
+            if let Some(d) = c.focus_distance.filter(|d| *d > 0.0) {
+                tab.insert("focus_distance".into(), Value::Float(d));
+            }
+        }
+        _ => {
+            tab.insert("fx".into(), Value::Float(c.fx));
+        }
+    }
+    if c.fy != c.fx {
+        tab.insert("fy".into(), Value::Float(c.fy));
+    }
+    tab.insert("principal_point".into(), arr([c.cx, c.cy]));
+    if c.lens != "rectilinear" {
+        tab.insert("lens".into(), Value::String(c.lens.clone()));
+    }
+    if let Some(d) = &c.distortion {
+        let mut dt = Table::new();
+        for k in ["k1", "k2", "k3", "p1", "p2"] {
+            if let Some(v) = d.get(k).filter(|v| **v != 0.0) {
+                dt.insert(k.into(), Value::Float(*v));
+            }
+        }
+        if !dt.is_empty() {
+            tab.insert("distortion".into(), Value::Table(dt));
+        }
+    }
+}
+
+/// The `[camera]` table (the first camera) and, for several cameras, the `[rig]`.
+fn camera_tables(read: &Read, t: &mut Table) {
+    let c0 = &read.cameras[0];
+    let mut cam = Table::new();
+    insert_intrinsics(c0, &mut cam);
+    if !read.port_glass {
+        cam.insert("port".into(), no_port());
+    }
+    if read.cameras.len() > 1 {
+        let mut cams = Vec::new();
+        for c in &read.cameras {
+            let (rot, pos) = frame_of(&mat(&c.rig_from_camera));
+            let mut ct = Table::new();
+            ct.insert("name".into(), Value::String(c.name.clone()));
+            ct.insert("position".into(), arr(pos.to_array()));
+            ct.insert("rotation".into(), arr(euler_xyz(rot)));
+            insert_intrinsics(c, &mut ct);
+            cams.push(Value::Table(ct));
+        }
+        let mut rt = Table::new();
+        rt.insert("type".into(), Value::String("multi".into()));
+        rt.insert("cameras".into(), Value::Array(cams));
+        t.insert("camera".into(), Value::Table(cam));
+        t.insert("rig".into(), Value::Table(rt));
+    } else {
+        cam.insert("name".into(), Value::String(c0.name.clone()));
+        t.insert("camera".into(), Value::Table(cam));
+    }
+}
+
+/// The `[water]` and `[site]` tables of the volume `w` (`default_n`: the index written when it
+/// has none). Returns whether the sea has a flat surface at z = 0.
+fn water_tables(
+    w: &ReadWater,
+    default_n: f64,
+    poses: &[(DMat3, DVec3)],
+    shown: &str,
+    notes: &mut Vec<Note>,
+    t: &mut Table,
+) -> Result<bool, String> {
+    if !finite(&w.absorption) || !finite(&w.scattering) || !w.g.is_finite() {
+        return Err(format!("{shown}: the water's coefficients are not finite"));
+    }
+    let mut wt = Table::new();
+    wt.insert("absorption".into(), arr(w.absorption));
+    wt.insert("scattering".into(), arr(w.scattering));
+    match &w.ff {
+        Some(ff) => {
+            // Cycles gives the backscatter fraction; poser the Junge slope that yields it.
+            let mu = ff
+                .mu
+                .filter(|m| *m > 3.0 && *m <= 5.0)
+                .or_else(|| junge_slope(ff.n, ff.backscatter));
+            let Some(mu) = mu else {
+                return Err(format!(
+                    "{shown}: water: no Junge slope in (3, 5] gives a Fournier–Forand backscatter fraction of {} with particle index {}",
+                    ff.backscatter, ff.n
+                ));
+            };
+            wt.insert("phase".into(), Value::String("fournier_forand".into()));
+            wt.insert("particle_index".into(), Value::Float(ff.n));
+            wt.insert("junge_slope".into(), Value::Float(mu));
+        }
+        None => {
+            wt.insert("g".into(), Value::Float(w.g.clamp(-0.999, 0.999)));
+        }
+    }
+    match w.ior {
+        Some(n) => {
+            wt.insert("ior".into(), arr(n));
+        }
+        None => {
+            wt.insert("ior".into(), Value::Float(default_n));
+            notes.push(Note::new(
+                located(shown, "water"),
+                format!("a Blender volume has no refractive index; seawater's at 20 °C, 35 PSU and 550 nm ({default_n:.5}) is written"),
+            ).help("set `water.ior`, or `temperature` and `salinity` instead"));
+        }
+    }
+    t.insert("water".into(), Value::Table(wt));
+    let surface = match w.surface.as_deref() {
+        Some("waves") => {
+            notes.push(
+                Note::new(
+                    located(shown, "water"),
+                    "the wavy sea surface is imported flat",
+                )
+                .help("set `site.surface = \"waves\"` with its height and wavelength"),
+            );
+            true
+        }
+        Some(s) => s == "flat",
+        None => w.top.is_some_and(|z| z.abs() < 1e-4),
+    };
+    let mut site = Table::new();
+    site.insert(
+        "surface".into(),
+        Value::String(if surface { "flat" } else { "none" }.into()),
+    );
+    t.insert("site".into(), Value::Table(site));
+    if surface && poses.iter().any(|(_, c)| c.z >= 0.0) {
+        notes.push(
+            Note::new(
+                located(shown, "camera"),
+                "a camera is at z ≥ 0 in water: poser's water lies below z = 0",
+            )
+            .help("move the scene down so that the cameras are below the water's top"),
+        );
+    }
+    Ok(surface)
+}
+
+/// The `[sun]` table of sun light `l` (`lname`), above the water when it shines in water
+/// under a flat surface (`in_water`, refracted with `n_water`). `None` for a sun without a
+/// direction or irradiance, and, noted, for a second sun or one shining upwards.
+fn sun_of(
+    l: &serde_json::Map<String, serde_json::Value>,
+    lname: &str,
+    sun_done: bool,
+    in_water: bool,
+    n_water: [f64; 3],
+    shown: &str,
+    notes: &mut Vec<Note>,
+) -> Option<Value> {
+    let v3 = |k: &str| -> Option<[f64; 3]> {
+        let a = l.get(k)?.as_array()?;
+        Some([
+            a.first()?.as_f64()?,
+            a.get(1)?.as_f64()?,
+            a.get(2)?.as_f64()?,
+        ])
+    };
+    let (Some(dir), Some(e)) = (v3("direction"), v3("irradiance")) else {
+        return None;
+    };
+    let dir = DVec3::from_array(dir).normalize_or_zero();
+    if sun_done || dir.z >= 0.0 || !finite(&e) {
+        notes.push(
+            Note::new(
+                located(shown, &format!("light `{lname}`")),
+                if sun_done {
+                    "a second sun is not imported"
+                } else {
+                    "a sun shining upwards is not imported"
+                },
+            )
+            .help("poser has one sun, shining down"),
+        );
+        return None;
+    }
+    let (dir_air, e_air) = if in_water {
+        // Cycles has no sea surface to refract at: its sun shines in the water.
+        notes.push(Note::new(
+            located(shown, &format!("light `{lname}`")),
+            "the sun is read as shining in the water: elevation and irradiance are those above the flat surface that refracts it so",
+        ));
+        unrefract(dir, e, n_water)
+    } else {
+        (dir, e)
+    };
+    Some(sun_table(dir_air, e_air))
+}
+
+/// The `[[lights]]` table of light `l` (`lname`) as the reader wrote it: its name made unique,
+/// a world-mounted light's position moved by `dz`; a value that is not finite is refused.
+fn light_table(
+    l: &serde_json::Map<String, serde_json::Value>,
+    lname: &str,
+    dz: f64,
+    unique: &mut dyn FnMut(&str) -> String,
+    shown: &str,
+) -> Result<Value, String> {
+    let world = l.get("mount").and_then(|v| v.as_str()) == Some("world");
+    let mut lt = Table::new();
+    for (k, v) in l {
+        let value = match v {
+            serde_json::Value::String(s) if k == "name" => Value::String(unique(s)),
+            serde_json::Value::String(s) => Value::String(s.clone()),
+            serde_json::Value::Number(n) => Value::Float(n.as_f64().unwrap_or(f64::NAN)),
+            serde_json::Value::Array(a) => {
+                let shift = if k == "position" && world { dz } else { 0.0 };
+                arr(a.iter().enumerate().map(|(i, x)| {
+                    x.as_f64().unwrap_or(f64::NAN) + if i == 2 { shift } else { 0.0 }
+                }))
+            }
+            _ => continue,
+        };
+        let ok = match &value {
+            Value::Float(x) => x.is_finite(),
+            Value::Array(a) => a.iter().all(|x| x.as_float().is_some_and(f64::is_finite)),
+            _ => true,
+        };
+        if !ok {
+            return Err(format!("{shown}: light `{lname}`: `{k}` is not finite"));
+        }
+        lt.insert(k.clone(), value);
+    }
+    Ok(Value::Table(lt))
 }
 
 /// The Junge slope μ ∈ (3, 5] whose Fournier–Forand backscatter fraction is `b` for particle

@@ -1052,22 +1052,9 @@ fn view_of(doc: &X) -> Option<(usize, String)> {
     Some((pose, name))
 }
 
-fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
-    let thin = match x.ty() {
-        "perspective" => None,
-        "thinlens" => Some((
-            cx.float(x, "aperture_radius", 0.0)?,
-            cx.float(x, "focus_distance", 0.0)?,
-        )),
-        t => {
-            cx.note(
-                x,
-                format!("a `{t}` sensor is not imported"),
-                Some("poser's cameras are perspective (with an optional thin lens)"),
-            );
-            return Ok(None);
-        }
-    };
+/// The film's size in pixels (Mitsuba's default 768 × 576); notes a reconstruction filter
+/// other than a box.
+fn film_size(cx: &mut Cx, x: &X) -> Result<(i64, i64), String> {
     let film = x.kids.iter().find(|k| k.tag == "film");
     // Mitsuba's film defaults: 768 × 576 pixels, a Gaussian reconstruction filter.
     let (width, height) = match film {
@@ -1095,11 +1082,15 @@ fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
     if !(1..=100_000).contains(&width) || !(1..=100_000).contains(&height) {
         return Err(format!("{}: film of {width}×{height} pixels", x.loc));
     }
-    let (w, h) = (width as f64, height as f64);
+    Ok((width, height))
+}
+
+/// The sensor's field of view in degrees and the axis it spans (`x`, `y`, `diagonal`, …).
+fn field_of_view(cx: &mut Cx, x: &X) -> Result<(f64, String), String> {
     // Mitsuba 3's `parse_fov` (src/render/sensor.cpp): `fov` along `fov_axis` (default x),
     // or else `focal_length` (default "50mm"), a 35 mm-film equivalent on the diagonal
     // (fov_axis is then not read).
-    let (fov, axis) = match (x.named("fov"), x.named("focal_length")) {
+    Ok(match (x.named("fov"), x.named("focal_length")) {
         (Some(_), Some(f)) => {
             return Err(format!(
                 "{}: the sensor gives both `fov` and `focal_length`\n  help: Mitsuba refuses \
@@ -1144,7 +1135,28 @@ fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
                 "diagonal".to_string(),
             )
         }
+    })
+}
+
+fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
+    let thin = match x.ty() {
+        "perspective" => None,
+        "thinlens" => Some((
+            cx.float(x, "aperture_radius", 0.0)?,
+            cx.float(x, "focus_distance", 0.0)?,
+        )),
+        t => {
+            cx.note(
+                x,
+                format!("a `{t}` sensor is not imported"),
+                Some("poser's cameras are perspective (with an optional thin lens)"),
+            );
+            return Ok(None);
+        }
     };
+    let (width, height) = film_size(cx, x)?;
+    let (w, h) = (width as f64, height as f64);
+    let (fov, axis) = field_of_view(cx, x)?;
     if !(fov > 0.0 && fov < 180.0) {
         return Err(format!(
             "{}: the sensor's field of view is {fov}°, not in (0, 180)\n  help: give `fov` in \
@@ -1583,39 +1595,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
     let first = files.first().ok_or("no input file")?;
     let root = std::fs::canonicalize(first.parent().unwrap_or(Path::new(".")).join("."))
         .map_err(|e| format!("{}: {e}", first.display()))?;
-    let mut docs = Vec::new();
-    let mut search = Vec::new();
-    for (di, f) in files.iter().enumerate() {
-        let abs = std::fs::canonicalize(f).map_err(|e| format!("{}: {e}", f.display()))?;
-        if !abs.starts_with(&root) {
-            return Err(format!(
-                "{}: every file of one import must be in the first file's folder ({})",
-                f.display(),
-                root.display()
-            ));
-        }
-        let main = abs.parent().unwrap_or(&root).to_path_buf();
-        let mut r = Reader {
-            root: root.clone(),
-            elements: 0,
-            params: HashMap::new(),
-            doc: di,
-            main: main.clone(),
-            paths: Vec::new(),
-        };
-        let mut doc = r.parse_file(&abs, 0, false)?;
-        // Keep the given spelling of the path in locations.
-        let shown = f.display().to_string();
-        relabel(&mut doc, &self::shown(&abs), &shown);
-        if doc.tag != "scene" {
-            return Err(format!(
-                "{}: the root element is <{}>, not <scene>",
-                doc.loc, doc.tag
-            ));
-        }
-        docs.push(doc);
-        search.push((main, r.paths));
-    }
+    let (mut docs, search) = read_docs(files, &root)?;
     let mut cx = Cx {
         notes: Vec::new(),
         targets: Vec::new(),
@@ -1634,88 +1614,18 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
     }
 
     // Sensors → camera and poses.
-    let mut sensors = Vec::new();
-    for (di, d) in docs.iter().enumerate() {
-        for k in d.kids.iter().filter(|k| k.tag == "sensor") {
-            if let Some(mut s) = sensor(&mut cx, k)? {
-                s.doc = di;
-                if d.kids.iter().filter(|k| k.tag == "sensor").count() == 1 {
-                    s.view = view_of(d);
-                }
-                sensors.push(s);
-            }
-        }
-    }
+    let sensors = sensors_of(&mut cx, &docs)?;
     let Some(s0) = sensors.first() else {
         return Err(format!(
             "{}: no sensor\n  help: a poser scene needs a camera; add a <sensor type=\"perspective\">",
             first.display()
         ));
     };
-    // A rig: poser's view files of several cameras (each names its pose and camera).
-    let mut names: Vec<String> = Vec::new();
-    for s in &sensors {
-        if let Some((_, n)) = &s.view
-            && !names.contains(n)
-        {
-            names.push(n.clone());
-        }
+    let (names, rig) = rig_names(&sensors);
+    if !rig {
+        note_other_intrinsics(&mut cx, &sensors);
     }
-    let rig = names.len() > 1 && sensors.iter().all(|s| s.view.is_some());
-    for s in &sensors[1..] {
-        if rig {
-            break;
-        }
-        if (s.width, s.height) != (s0.width, s0.height)
-            || (s.fx / s0.fx - 1.0).abs() > 1e-9
-            || (s.cx - s0.cx).abs() > 1e-6
-            || (s.cy - s0.cy).abs() > 1e-6
-        {
-            cx.note(
-                &s.x,
-                "this sensor's intrinsics differ from the first's; it is imported with the first's",
-                Some("poser's network shares one camera; import the sensors separately"),
-            );
-        }
-    }
-
-    // The water: the medium inside a `null` shape (poser's sea box), else the first medium.
-    let world = &docs[0];
-    let mut water = None;
-    let mut surface = false;
-    for k in world.kids.iter().filter(|k| k.tag == "medium") {
-        if water.is_none() {
-            water = medium(&mut cx, k)?;
-        }
-    }
-    for d in &docs {
-        for k in d
-            .kids
-            .iter()
-            .filter(|k| k.tag == "shape" && k.ty() == "cube")
-        {
-            let interior = k.kids.iter().any(|c| c.attr("name") == Some("interior"));
-            if interior {
-                if water.is_none()
-                    && let Some(r) = k.kids.iter().find(|c| c.attr("name") == Some("interior"))
-                {
-                    let m = cx.deref(r)?.clone();
-                    water = medium(&mut cx, &m)?;
-                }
-                let m = cx.to_world(k)?;
-                let top = m
-                    .transform_point3(DVec3::ONE)
-                    .z
-                    .max(m.transform_point3(-DVec3::ONE).z);
-                surface |= top.abs() < 1e-6;
-            }
-        }
-        for k in d.kids.iter().filter(|k| k.tag == "medium") {
-            if water.is_none() {
-                water = medium(&mut cx, k)?;
-            }
-        }
-    }
+    let (water, surface) = water_of(&mut cx, &docs)?;
 
     let mut t = Table::new();
     let name = comment_name(&docs[0], "poser scene")
@@ -1730,6 +1640,85 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         )),
     );
 
+    let World {
+        objects,
+        lights,
+        assets_out,
+        port_faces,
+        sun,
+        max_depth,
+    } = world_of(&mut cx, &docs, &sensors, assets)?;
+
+    t.insert("camera".into(), camera_table(s0, port_faces.is_empty()));
+    if !port_faces.is_empty() {
+        port_note(&mut cx, s0, &port_faces);
+    }
+
+    // The index outside the glass faces that border the water (an `exterior` medium).
+    let n_water = port_faces
+        .iter()
+        .filter(|p| p.0.kids.iter().any(|c| c.attr("name") == Some("exterior")))
+        .map(|p| p.3)
+        .filter(|&n| n > 1.0)
+        .reduce(f64::max);
+    if let Some(w) = &water {
+        insert_water(&mut cx, &mut t, w, n_water, surface, &sensors);
+    }
+    if let Some((k, dir, e)) = &sun {
+        let (dir_air, e_air) = match (&water, surface) {
+            (Some(_), true) => {
+                let n = n_water.unwrap_or(1.334);
+                unrefract(*dir, *e, [n; 3])
+            }
+            _ => (*dir, *e),
+        };
+        t.insert("sun".into(), sun_table(dir_air, e_air));
+        if water.is_some() && surface {
+            cx.note(k, "the directional light is read as the sun refracted at the flat sea surface: elevation and irradiance are those above the water", None);
+        }
+    }
+    if !lights.is_empty() {
+        t.insert("lights".into(), Value::Array(lights));
+    }
+    if !objects.is_empty() {
+        t.insert("objects".into(), Value::Array(objects));
+    }
+
+    // Network: one explicit pose per sensor, or per rig pose (the rig frame is the first
+    // camera's).
+    let poses = if rig {
+        rig_poses(&mut cx, &mut t, &sensors, &names)?
+    } else {
+        sensors.iter().map(|s| (s.rot, s.pos)).collect()
+    };
+    t.insert("network".into(), explicit_network(poses));
+    let r = render_table(&mut cx, s0, max_depth.as_ref(), &port_faces);
+    if !r.is_empty() {
+        t.insert("render".into(), Value::Table(r));
+    }
+
+    let sources = files
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    finish(&t, &sources, cx.notes, assets_out)
+}
+
+/// What the world's elements give: objects, lights (the sun apart), mesh and texture assets,
+/// the glass and housing faces of the port, and the integrator's `max_depth`.
+struct World {
+    objects: Vec<Value>,
+    lights: Vec<Value>,
+    assets_out: Vec<(String, Vec<u8>)>,
+    port_faces: Vec<(X, DMat4, f64, f64)>,
+    sun: Option<(X, DVec3, [f64; 3])>,
+    max_depth: Option<(X, i64)>,
+}
+
+/// Read the shapes, lights and integrator of the world (the first file; its included world for
+/// a poser view file) and the rig-mounted lights of the first view.
+fn world_of(cx: &mut Cx, docs: &[X], sensors: &[Sensor], assets: &str) -> Result<World, String> {
     // Housing: dielectric and black shapes close to a sensor; the port's geometry.
     let near_sensor = |m: &DMat4| -> bool {
         let c = m.transform_point3(DVec3::ZERO);
@@ -1757,7 +1746,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
             match k.tag.as_str() {
                 "shape" if di == 0 => {
                     shape(
-                        &mut cx,
+                        cx,
                         k,
                         &near_sensor,
                         &mut objects,
@@ -1774,7 +1763,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
                     view_lights.push((k.clone(), di))
                 }
                 "emitter" if di == 0 => {
-                    emitter(&mut cx, k, None, &mut lights, &mut sun, &mut unique)?;
+                    emitter(cx, k, None, &mut lights, &mut sun, &mut unique)?;
                 }
                 "shape" | "emitter" | "sensor" | "medium" | "bsdf" | "texture" => {}
                 // The file's own integrator; else the one of a file it includes.
@@ -1795,9 +1784,9 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         if Some(*d) != first_view {
             continue;
         }
-        let s = sensors.iter().find(|s| s.doc == *d).unwrap_or(s0);
+        let s = sensors.iter().find(|s| s.doc == *d).unwrap_or(&sensors[0]);
         emitter(
-            &mut cx,
+            cx,
             k,
             Some((s.rot, s.pos)),
             &mut lights,
@@ -1806,7 +1795,155 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         )?;
     }
 
-    // Camera.
+    Ok(World {
+        objects,
+        lights,
+        assets_out,
+        port_faces,
+        sun,
+        max_depth,
+    })
+}
+
+/// Parse every input file (all inside `root`, the first file's folder), with the resolver
+/// state each leaves: its folder and its `<path>` folders.
+#[allow(clippy::type_complexity)]
+fn read_docs(
+    files: &[PathBuf],
+    root: &Path,
+) -> Result<(Vec<X>, Vec<(PathBuf, Vec<PathBuf>)>), String> {
+    let mut docs = Vec::new();
+    let mut search = Vec::new();
+    for (di, f) in files.iter().enumerate() {
+        let abs = std::fs::canonicalize(f).map_err(|e| format!("{}: {e}", f.display()))?;
+        if !abs.starts_with(root) {
+            return Err(format!(
+                "{}: every file of one import must be in the first file's folder ({})",
+                f.display(),
+                root.display()
+            ));
+        }
+        let main = abs.parent().unwrap_or(root).to_path_buf();
+        let mut r = Reader {
+            root: root.to_path_buf(),
+            elements: 0,
+            params: HashMap::new(),
+            doc: di,
+            main: main.clone(),
+            paths: Vec::new(),
+        };
+        let mut doc = r.parse_file(&abs, 0, false)?;
+        // Keep the given spelling of the path in locations.
+        let shown = f.display().to_string();
+        relabel(&mut doc, &self::shown(&abs), &shown);
+        if doc.tag != "scene" {
+            return Err(format!(
+                "{}: the root element is <{}>, not <scene>",
+                doc.loc, doc.tag
+            ));
+        }
+        docs.push(doc);
+        search.push((main, r.paths));
+    }
+    Ok((docs, search))
+}
+
+/// Every sensor of every file, in file order; a file's only sensor takes the (pose, camera)
+/// its poser view comment names.
+fn sensors_of(cx: &mut Cx, docs: &[X]) -> Result<Vec<Sensor>, String> {
+    let mut sensors = Vec::new();
+    for (di, d) in docs.iter().enumerate() {
+        for k in d.kids.iter().filter(|k| k.tag == "sensor") {
+            if let Some(mut s) = sensor(cx, k)? {
+                s.doc = di;
+                if d.kids.iter().filter(|k| k.tag == "sensor").count() == 1 {
+                    s.view = view_of(d);
+                }
+                sensors.push(s);
+            }
+        }
+    }
+    Ok(sensors)
+}
+
+/// The camera names of poser's view files, in first-seen order, and whether they make a rig
+/// (several cameras, every sensor from a view file).
+fn rig_names(sensors: &[Sensor]) -> (Vec<String>, bool) {
+    let mut names: Vec<String> = Vec::new();
+    for s in sensors {
+        if let Some((_, n)) = &s.view
+            && !names.contains(n)
+        {
+            names.push(n.clone());
+        }
+    }
+    let rig = names.len() > 1 && sensors.iter().all(|s| s.view.is_some());
+    (names, rig)
+}
+
+/// Note each sensor whose intrinsics differ from the first's (poser's network shares one
+/// camera).
+fn note_other_intrinsics(cx: &mut Cx, sensors: &[Sensor]) {
+    let s0 = &sensors[0];
+    for s in &sensors[1..] {
+        if (s.width, s.height) != (s0.width, s0.height)
+            || (s.fx / s0.fx - 1.0).abs() > 1e-9
+            || (s.cx - s0.cx).abs() > 1e-6
+            || (s.cy - s0.cy).abs() > 1e-6
+        {
+            cx.note(
+                &s.x,
+                "this sensor's intrinsics differ from the first's; it is imported with the first's",
+                Some("poser's network shares one camera; import the sensors separately"),
+            );
+        }
+    }
+}
+
+/// The water: the medium inside a `null` shape (poser's sea box), else the first medium; and
+/// whether a sea box has its top at z = 0 (a flat surface).
+fn water_of(cx: &mut Cx, docs: &[X]) -> Result<(Option<Water>, bool), String> {
+    let world = &docs[0];
+    let mut water = None;
+    let mut surface = false;
+    for k in world.kids.iter().filter(|k| k.tag == "medium") {
+        if water.is_none() {
+            water = medium(cx, k)?;
+        }
+    }
+    for d in docs {
+        for k in d
+            .kids
+            .iter()
+            .filter(|k| k.tag == "shape" && k.ty() == "cube")
+        {
+            let interior = k.kids.iter().any(|c| c.attr("name") == Some("interior"));
+            if interior {
+                if water.is_none()
+                    && let Some(r) = k.kids.iter().find(|c| c.attr("name") == Some("interior"))
+                {
+                    let m = cx.deref(r)?.clone();
+                    water = medium(cx, &m)?;
+                }
+                let m = cx.to_world(k)?;
+                let top = m
+                    .transform_point3(DVec3::ONE)
+                    .z
+                    .max(m.transform_point3(-DVec3::ONE).z);
+                surface |= top.abs() < 1e-6;
+            }
+        }
+        for k in d.kids.iter().filter(|k| k.tag == "medium") {
+            if water.is_none() {
+                water = medium(cx, k)?;
+            }
+        }
+    }
+    Ok((water, surface))
+}
+
+/// The `[camera]` table of the first sensor; `no_port`: no glass at the camera.
+fn camera_table(s0: &Sensor, no_port: bool) -> Value {
     let mut cam = Table::new();
     cam.insert("width".into(), Value::Integer(s0.width));
     cam.insert("height".into(), Value::Integer(s0.height));
@@ -1829,136 +1966,129 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
         cam.remove("fx");
         cam.insert("focal_length".into(), Value::Float(s0.fx * pitch));
     }
-    if port_faces.is_empty() {
+    if no_port {
         // No glass at the camera: no housing, said explicitly (poser's default in water is
         // a 10 mm flat port).
         let mut port = Table::new();
         port.insert("type".into(), Value::String("none".into()));
         cam.insert("port".into(), Value::Table(port));
     }
-    t.insert("camera".into(), Value::Table(cam));
-    if !port_faces.is_empty() {
-        port_note(&mut cx, s0, &port_faces);
-    }
+    Value::Table(cam)
+}
 
-    // The index outside the glass faces that border the water (an `exterior` medium).
-    let n_water = port_faces
-        .iter()
-        .filter(|p| p.0.kids.iter().any(|c| c.attr("name") == Some("exterior")))
-        .map(|p| p.3)
-        .filter(|&n| n > 1.0)
-        .reduce(f64::max);
-    if let Some(w) = &water {
-        let mut wt = Table::new();
-        wt.insert("absorption".into(), arr(w.sigma_a));
-        wt.insert("scattering".into(), arr(w.sigma_s));
-        wt.insert("g".into(), Value::Float(w.g));
-        if let Some(n) = n_water {
-            wt.insert("ior".into(), Value::Float(n));
-        }
-        t.insert("water".into(), Value::Table(wt));
-        if !surface && sensors.iter().any(|s| s.pos.z >= 0.0) {
-            cx.notes.push(
-                Note::new(
-                    Some(s0.x.loc.clone()),
-                    "a camera is at z ≥ 0 in water: poser's water lies below z = 0",
-                )
-                .help("move the scene down (every to_world) so that the cameras are at z < 0"),
-            );
-        }
-        // poser's sea has a flat surface at z = 0 unless told otherwise; a Mitsuba medium
-        // without poser's sea box fills the scene.
-        let mut site = Table::new();
-        site.insert(
-            "surface".into(),
-            Value::String(if surface { "flat" } else { "none" }.into()),
+/// The `[water]` and `[site]` tables of the water medium `w`; `n_water`: the index outside the
+/// port's glass. Notes a camera above the water.
+fn insert_water(
+    cx: &mut Cx,
+    t: &mut Table,
+    w: &Water,
+    n_water: Option<f64>,
+    surface: bool,
+    sensors: &[Sensor],
+) {
+    let mut wt = Table::new();
+    wt.insert("absorption".into(), arr(w.sigma_a));
+    wt.insert("scattering".into(), arr(w.sigma_s));
+    wt.insert("g".into(), Value::Float(w.g));
+    if let Some(n) = n_water {
+        wt.insert("ior".into(), Value::Float(n));
+    }
+    t.insert("water".into(), Value::Table(wt));
+    if !surface && sensors.iter().any(|s| s.pos.z >= 0.0) {
+        cx.notes.push(
+            Note::new(
+                Some(sensors[0].x.loc.clone()),
+                "a camera is at z ≥ 0 in water: poser's water lies below z = 0",
+            )
+            .help("move the scene down (every to_world) so that the cameras are at z < 0"),
         );
-        t.insert("site".into(), Value::Table(site));
     }
-    if let Some((k, dir, e)) = &sun {
-        let (dir_air, e_air) = match (&water, surface) {
-            (Some(_), true) => {
-                let n = n_water.unwrap_or(1.334);
-                unrefract(*dir, *e, [n; 3])
-            }
-            _ => (*dir, *e),
-        };
-        t.insert("sun".into(), sun_table(dir_air, e_air));
-        if water.is_some() && surface {
-            cx.note(k, "the directional light is read as the sun refracted at the flat sea surface: elevation and irradiance are those above the water", None);
-        }
-    }
-    if !lights.is_empty() {
-        t.insert("lights".into(), Value::Array(lights));
-    }
-    if !objects.is_empty() {
-        t.insert("objects".into(), Value::Array(objects));
-    }
+    // poser's sea has a flat surface at z = 0 unless told otherwise; a Mitsuba medium
+    // without poser's sea box fills the scene.
+    let mut site = Table::new();
+    site.insert(
+        "surface".into(),
+        Value::String(if surface { "flat" } else { "none" }.into()),
+    );
+    t.insert("site".into(), Value::Table(site));
+}
 
-    // Network: one explicit pose per sensor, or per rig pose (the rig frame is the first
-    // camera's).
+/// A rig of poser's view files: the `[rig]` table (each camera relative to the first camera
+/// `names[0]`) and one pose per rig pose that has an image of the first camera.
+fn rig_poses(
+    cx: &mut Cx,
+    t: &mut Table,
+    sensors: &[Sensor],
+    names: &[String],
+) -> Result<Vec<(DMat3, DVec3)>, String> {
     let mut poses = Vec::new();
-    if rig {
-        let find = |p: usize, n: &str| {
-            sensors
-                .iter()
-                .find(|s| s.view.as_ref().is_some_and(|v| v.0 == p && v.1 == n))
-        };
-        let mut ids: Vec<usize> = Vec::new();
-        for s in &sensors {
-            let p = s.view.as_ref().map_or(0, |v| v.0);
-            if !ids.contains(&p) {
-                ids.push(p);
-            }
+    let find = |p: usize, n: &str| {
+        sensors
+            .iter()
+            .find(|s| s.view.as_ref().is_some_and(|v| v.0 == p && v.1 == n))
+    };
+    let mut ids: Vec<usize> = Vec::new();
+    for s in sensors {
+        let p = s.view.as_ref().map_or(0, |v| v.0);
+        if !ids.contains(&p) {
+            ids.push(p);
         }
-        let mut cams = Vec::new();
-        for n in &names {
-            let Some((a, b)) = ids
-                .iter()
-                .find_map(|&p| Some((find(p, &names[0])?, find(p, n)?)))
-            else {
-                return Err(format!(
-                    "camera `{n}` is never imaged at a pose of camera `{}`: its place in the rig is unknown",
-                    names[0]
-                ));
-            };
-            let inv = a.rot.transpose();
-            let mut c = Table::new();
-            c.insert("name".into(), Value::String(n.clone()));
-            c.insert("position".into(), arr((inv * (b.pos - a.pos)).to_array()));
-            c.insert("rotation".into(), arr(euler_xyz(inv * b.rot)));
-            c.insert("width".into(), Value::Integer(b.width));
-            c.insert("height".into(), Value::Integer(b.height));
-            c.insert("fx".into(), Value::Float(b.fx));
-            c.insert("principal_point".into(), arr([b.cx, b.cy]));
-            cams.push(Value::Table(c));
-        }
-        let mut rt = Table::new();
-        rt.insert("type".into(), Value::String("multi".into()));
-        rt.insert("cameras".into(), Value::Array(cams));
-        t.insert("rig".into(), Value::Table(rt));
-        for &p in &ids {
-            let Some(s) = find(p, &names[0]) else {
-                cx.notes.push(Note::new(
-                    None,
-                    format!(
-                        "rig pose {p} has no image of camera `{}`: it is not imported",
-                        names[0]
-                    ),
-                ));
-                continue;
-            };
-            poses.push((s.rot, s.pos));
-        }
-    } else {
-        poses.extend(sensors.iter().map(|s| (s.rot, s.pos)));
     }
-    t.insert("network".into(), explicit_network(poses));
+    let mut cams = Vec::new();
+    for n in names {
+        let Some((a, b)) = ids
+            .iter()
+            .find_map(|&p| Some((find(p, &names[0])?, find(p, n)?)))
+        else {
+            return Err(format!(
+                "camera `{n}` is never imaged at a pose of camera `{}`: its place in the rig is unknown",
+                names[0]
+            ));
+        };
+        let inv = a.rot.transpose();
+        let mut c = Table::new();
+        c.insert("name".into(), Value::String(n.clone()));
+        c.insert("position".into(), arr((inv * (b.pos - a.pos)).to_array()));
+        c.insert("rotation".into(), arr(euler_xyz(inv * b.rot)));
+        c.insert("width".into(), Value::Integer(b.width));
+        c.insert("height".into(), Value::Integer(b.height));
+        c.insert("fx".into(), Value::Float(b.fx));
+        c.insert("principal_point".into(), arr([b.cx, b.cy]));
+        cams.push(Value::Table(c));
+    }
+    let mut rt = Table::new();
+    rt.insert("type".into(), Value::String("multi".into()));
+    rt.insert("cameras".into(), Value::Array(cams));
+    t.insert("rig".into(), Value::Table(rt));
+    for &p in &ids {
+        let Some(s) = find(p, &names[0]) else {
+            cx.notes.push(Note::new(
+                None,
+                format!(
+                    "rig pose {p} has no image of camera `{}`: it is not imported",
+                    names[0]
+                ),
+            ));
+            continue;
+        };
+        poses.push((s.rot, s.pos));
+    }
+    Ok(poses)
+}
+
+/// The `[render]` table: the first sensor's samples and the integrator's `max_depth` as
+/// poser's bounces (noted when it cannot be).
+fn render_table(
+    cx: &mut Cx,
+    s0: &Sensor,
+    max_depth: Option<&(X, i64)>,
+    port_faces: &[(X, DMat4, f64, f64)],
+) -> Table {
     let mut r = Table::new();
     if let Some(spp) = s0.samples {
         r.insert("samples".into(), Value::Integer(spp.clamp(1, 1 << 20)));
     }
-    if let Some((k, depth)) = &max_depth {
+    if let Some((k, depth)) = max_depth {
         // Mitsuba counts path vertices from the camera and every glass face (poser's port:
         // 2); poser counts scattering vertices (docs/render-conventions.md §3.5).
         let glass = if port_faces.iter().any(|p| p.2 > 1.0) {
@@ -1976,16 +2106,7 @@ pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
             );
         }
     }
-    if !r.is_empty() {
-        t.insert("render".into(), Value::Table(r));
-    }
-
-    let sources = files
-        .iter()
-        .map(|f| f.display().to_string())
-        .collect::<Vec<_>>()
-        .join(", ");
-    finish(&t, &sources, cx.notes, assets_out)
+    r
 }
 
 /// How locations name a file: relative to the working folder when it is inside it.
@@ -2139,64 +2260,11 @@ fn shape(
     let m = cx.to_world(k)?;
     let kind = k.ty().to_string();
     // An area emitter on the shape.
-    if let Some(e) = k.kids.iter().find(|c| c.tag == "emitter") {
-        if e.ty() == "area" && kind == "rectangle" {
-            let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
-            let (len, frame, ..) = decompose(&m);
-            let mut l = Table::new();
-            l.insert(
-                "name".into(),
-                Value::String(unique(
-                    comment_name(k, "light").unwrap_or_else(|| "area".into()),
-                )),
-            );
-            l.insert("type".into(), Value::String("area".into()));
-            l.insert("mount".into(), Value::String("world".into()));
-            l.insert("position".into(), arr(m.w_axis.truncate().to_array()));
-            l.insert("aim".into(), arr(frame.z_axis.to_array()));
-            l.insert("width".into(), Value::Float(2.0 * len.x));
-            l.insert("height".into(), Value::Float(2.0 * len.y));
-            l.insert("radiance".into(), arr(radiance));
-            lights.push(Value::Table(l));
-            return Ok(());
-        }
-        if e.ty() == "area"
-            && (kind == "obj" || kind == "ply")
-            && let Some((centre, u, v, n)) = rectangle_of(&file_mesh(cx, k, &m)?)
-        {
-            let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
-            let mut l = Table::new();
-            l.insert(
-                "name".into(),
-                Value::String(unique(
-                    k.attr("id")
-                        .map(str::to_string)
-                        .unwrap_or_else(|| "area".into()),
-                )),
-            );
-            l.insert("type".into(), Value::String("area".into()));
-            l.insert("mount".into(), Value::String("world".into()));
-            l.insert("position".into(), arr(centre.to_array()));
-            l.insert("aim".into(), arr(n.to_array()));
-            l.insert("width".into(), Value::Float(u.length()));
-            l.insert("height".into(), Value::Float(v.length()));
-            l.insert("radiance".into(), arr(radiance));
-            lights.push(Value::Table(l));
-            if (u.length() - v.length()).abs() > 1e-9 * u.length() {
-                cx.note(
-                    e,
-                    "a rectangular mesh emitter becomes an area light; its turn about its \
-                         normal follows poser's convention for `aim`",
-                    None,
-                );
-            }
-            return Ok(());
-        }
-        cx.note(
-            e,
-            format!("an area emitter on a `{kind}` is not imported"),
-            Some("poser's area lights are rectangles (a `rectangle`, or a mesh of one)"),
-        );
+    if let Some(e) = k.kids.iter().find(|c| c.tag == "emitter")
+        && let Some(l) = area_light(cx, k, e, &m, &kind, unique)?
+    {
+        lights.push(l);
+        return Ok(());
     }
     // A bitmap that becomes the mesh's image texture: on an `obj`/`ply` with texture
     // coordinates, or on a `rectangle` (Mitsuba's uv: (x + 1)/2, (y + 1)/2 of its local square).
@@ -2205,35 +2273,9 @@ fn shape(
     } else {
         None
     };
-    let uv_mesh = match (&bitmap, kind.as_str()) {
-        (Some(b), "obj" | "ply") => {
-            let (mesh, uv) = file_mesh_uv(cx, k, &m)?;
-            if uv.is_empty() {
-                cx.note(
-                    b,
-                    format!("the `{kind}` has no texture coordinates for its bitmap"),
-                    Some("the bitmap's mean colour is used (noted below)"),
-                );
-                None
-            } else {
-                Some((mesh, uv))
-            }
-        }
-        (Some(_), "rectangle") => {
-            let mut w = TriMesh {
-                positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                    .map(|(x, y)| m.transform_point3(DVec3::new(x, y, 0.0)))
-                    .to_vec(),
-                triangles: vec![[0, 1, 2], [0, 2, 3]],
-            };
-            if m.determinant() < 0.0 {
-                for t in &mut w.triangles {
-                    t.swap(1, 2);
-                }
-            }
-            Some((w, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]))
-        }
-        _ => None,
+    let uv_mesh = match &bitmap {
+        Some(b) => mapped_mesh(cx, k, b, &m, &kind)?,
+        None => None,
     };
     if let (Some(b), Some(_)) = (&bitmap, &uv_mesh) {
         cx.mapped.insert(b.loc.clone());
@@ -2281,12 +2323,6 @@ fn shape(
     );
     let mut o = Table::new();
     o.insert("name".into(), Value::String(name.clone()));
-    let (len, frame, mirror, sheared) = decompose(&m);
-    let placed = |o: &mut Table| {
-        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
-        o.insert("rotation".into(), arr(euler_xyz(frame)));
-    };
-    let analytic = !sheared && !mirror;
     if let (Some(b), Some((mesh, uv))) = (&bitmap, &uv_mesh) {
         let (image, bytes, wrap) = bitmap_asset(cx, b, &format!("{name}-texture"))?;
         let file = safe_file_name(&format!("{}.glb", name));
@@ -2315,17 +2351,155 @@ fn shape(
         );
         return Ok(());
     }
-    match kind.as_str() {
+    if !shape_geometry(cx, k, &m, &kind, &name, &mut o, assets_out, assets)? {
+        return Ok(());
+    }
+    o.insert("albedo".into(), arr(alb));
+    objects.push(Value::Table(o));
+    Ok(())
+}
+
+/// The area light of emitter `e` on shape `k` (a `rectangle`, or an `obj`/`ply` mesh of one
+/// rectangle); `None`, noted, for an emitter poser cannot take.
+fn area_light(
+    cx: &mut Cx,
+    k: &X,
+    e: &X,
+    m: &DMat4,
+    kind: &str,
+    unique: &mut dyn FnMut(String) -> String,
+) -> Result<Option<Value>, String> {
+    if e.ty() == "area" && kind == "rectangle" {
+        let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
+        let (len, frame, ..) = decompose(m);
+        let mut l = Table::new();
+        l.insert(
+            "name".into(),
+            Value::String(unique(
+                comment_name(k, "light").unwrap_or_else(|| "area".into()),
+            )),
+        );
+        l.insert("type".into(), Value::String("area".into()));
+        l.insert("mount".into(), Value::String("world".into()));
+        l.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+        l.insert("aim".into(), arr(frame.z_axis.to_array()));
+        l.insert("width".into(), Value::Float(2.0 * len.x));
+        l.insert("height".into(), Value::Float(2.0 * len.y));
+        l.insert("radiance".into(), arr(radiance));
+        return Ok(Some(Value::Table(l)));
+    }
+    if e.ty() == "area"
+        && (kind == "obj" || kind == "ply")
+        && let Some((centre, u, v, n)) = rectangle_of(&file_mesh(cx, k, m)?)
+    {
+        let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
+        let mut l = Table::new();
+        l.insert(
+            "name".into(),
+            Value::String(unique(
+                k.attr("id")
+                    .map(str::to_string)
+                    .unwrap_or_else(|| "area".into()),
+            )),
+        );
+        l.insert("type".into(), Value::String("area".into()));
+        l.insert("mount".into(), Value::String("world".into()));
+        l.insert("position".into(), arr(centre.to_array()));
+        l.insert("aim".into(), arr(n.to_array()));
+        l.insert("width".into(), Value::Float(u.length()));
+        l.insert("height".into(), Value::Float(v.length()));
+        l.insert("radiance".into(), arr(radiance));
+        if (u.length() - v.length()).abs() > 1e-9 * u.length() {
+            cx.note(
+                e,
+                "a rectangular mesh emitter becomes an area light; its turn about its \
+                     normal follows poser's convention for `aim`",
+                None,
+            );
+        }
+        return Ok(Some(Value::Table(l)));
+    }
+    cx.note(
+        e,
+        format!("an area emitter on a `{kind}` is not imported"),
+        Some("poser's area lights are rectangles (a `rectangle`, or a mesh of one)"),
+    );
+    Ok(None)
+}
+
+/// The mesh in world coordinates and its texture coordinates for bitmap `b` on shape `k`;
+/// `None` (noted for a mesh without texture coordinates) when the bitmap cannot be mapped.
+#[allow(clippy::type_complexity)]
+fn mapped_mesh(
+    cx: &mut Cx,
+    k: &X,
+    b: &X,
+    m: &DMat4,
+    kind: &str,
+) -> Result<Option<(TriMesh, Vec<[f32; 2]>)>, String> {
+    Ok(match kind {
+        "obj" | "ply" => {
+            let (mesh, uv) = file_mesh_uv(cx, k, m)?;
+            if uv.is_empty() {
+                cx.note(
+                    b,
+                    format!("the `{kind}` has no texture coordinates for its bitmap"),
+                    Some("the bitmap's mean colour is used (noted below)"),
+                );
+                None
+            } else {
+                Some((mesh, uv))
+            }
+        }
+        "rectangle" => {
+            let mut w = TriMesh {
+                positions: [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                    .map(|(x, y)| m.transform_point3(DVec3::new(x, y, 0.0)))
+                    .to_vec(),
+                triangles: vec![[0, 1, 2], [0, 2, 3]],
+            };
+            if m.determinant() < 0.0 {
+                for t in &mut w.triangles {
+                    t.swap(1, 2);
+                }
+            }
+            Some((w, vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]))
+        }
+        _ => None,
+    })
+}
+
+/// The geometry keys of object `o` for shape `k` (world matrix `m`): an analytic shape when
+/// `m` neither shears nor mirrors it, else a mesh asset. `false`, noted, for a kind poser
+/// does not read.
+#[allow(clippy::too_many_arguments)]
+fn shape_geometry(
+    cx: &mut Cx,
+    k: &X,
+    m: &DMat4,
+    kind: &str,
+    name: &str,
+    o: &mut Table,
+    assets_out: &mut Vec<(String, Vec<u8>)>,
+    assets: &str,
+) -> Result<bool, String> {
+    let (len, frame, mirror, sheared) = decompose(m);
+    let placed = |o: &mut Table| {
+        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+        o.insert("rotation".into(), arr(euler_xyz(frame)));
+    };
+    let analytic = !sheared && !mirror;
+    match kind {
         "rectangle" if analytic => {
             o.insert("shape".into(), Value::String("plane".into()));
             o.insert("width".into(), Value::Float(2.0 * len.x));
             o.insert("height".into(), Value::Float(2.0 * len.y));
-            placed(&mut o);
+            placed(o);
         }
         "cube" if analytic => {
             o.insert("shape".into(), Value::String("box".into()));
             o.insert("size".into(), arr((2.0 * len).to_array()));
-            placed(&mut o);
+            placed(o);
         }
         "sphere"
             if analytic
@@ -2359,13 +2533,13 @@ fn shape(
             cx.note(k, "Mitsuba's cylinder is open; poser's has caps", None);
         }
         "rectangle" | "cube" | "sphere" | "cylinder" | "disk" | "obj" | "ply" => {
-            let mesh = match kind.as_str() {
-                "obj" | "ply" => file_mesh(cx, k, &m)?,
-                "disk" => disk_mesh(&m),
+            let mesh = match kind {
+                "obj" | "ply" => file_mesh(cx, k, m)?,
+                "disk" => disk_mesh(m),
                 _ => {
                     // Sheared or mirrored analytic shapes: tessellate them.
                     use crate::geometry::mesh as gm;
-                    let mut w = match kind.as_str() {
+                    let mut w = match kind {
                         "rectangle" => gm::plane(2.0, 2.0),
                         "cube" => gm::cuboid(DVec3::splat(2.0)),
                         "sphere" => gm::sphere(1.0, gm::SPHERE_SEGMENTS),
@@ -2378,7 +2552,7 @@ fn shape(
                 }
             };
             let file = safe_file_name(&format!("{}.glb", name));
-            assets_out.push((file.clone(), meshes::glb(&mesh, &name)));
+            assets_out.push((file.clone(), meshes::glb(&mesh, name)));
             o.insert("shape".into(), Value::String("mesh".into()));
             o.insert("path".into(), Value::String(format!("{assets}/{file}")));
         }
@@ -2388,12 +2562,10 @@ fn shape(
                 format!("a `{other}` shape is not imported"),
                 Some("poser reads rectangle, cube, sphere, cylinder, disk, obj and ply"),
             );
-            return Ok(());
+            return Ok(false);
         }
     }
-    o.insert("albedo".into(), arr(alb));
-    objects.push(Value::Table(o));
-    Ok(())
+    Ok(true)
 }
 
 /// A light (not an area emitter). `view`: the camera (rotation, centre) of the view file the

@@ -253,12 +253,7 @@ pub fn run(
         };
         let view_png = if evaluate {
             progress(&format!("rendering a view of `{}`", c.label));
-            let (scale, samples) = if full {
-                (VIEW_SCALE, VIEW_SAMPLES)
-            } else {
-                (VIEW_SCALE_QUICK, VIEW_SAMPLES_QUICK)
-            };
-            view(m, &out.join(&c.slug).join("view"), scale, samples).map_err(err)?
+            case_view(c, out, full).map_err(err)?
         } else {
             Vec::new()
         };
@@ -268,19 +263,6 @@ pub fn run(
         if !depths.iter().any(|x| (x - depth).abs() < 0.5) {
             depths.push(depth);
         }
-        let bottom_gases: Vec<String> = cfg
-            .tanks
-            .iter()
-            .map(|t| {
-                format!(
-                    "{}: {}, {:.0} l at {:.0} bar",
-                    t.name,
-                    gas_label(t.gas),
-                    t.volume,
-                    t.fill
-                )
-            })
-            .collect();
         rows.push(Row {
             label: c.label.clone(),
             command: c.command("dive"),
@@ -293,7 +275,7 @@ pub fn run(
             gsd_mm: plan.gsd.map(|s| 1e3 * s.mean),
             distance_m: distance,
             contrast_left,
-            gases: bottom_gases.join(" + "),
+            gases: gas_column(cfg),
             gf: format!("{:.0}/{:.0}", 100.0 * cfg.gf.low, 100.0 * cfg.gf.high),
             ndl_runs_out_min: d.deco_from.map(|t| minutes(t - d.descent_time)),
             min_ndl_min: d.min_ndl.map(minutes),
@@ -306,22 +288,7 @@ pub fn run(
             deco_min: minutes(d.stops.iter().map(|s| s.duration).sum::<f64>() + 0.0),
             tts_min: minutes(d.tts_at_end),
             runtime_min: minutes(d.runtime),
-            cylinders: d
-                .gas
-                .cylinders
-                .iter()
-                .zip(&cfg.tanks)
-                .map(|(u, t)| CylinderRow {
-                    name: u.name.clone(),
-                    gas: u.gas.clone(),
-                    volume_l: t.volume,
-                    fill_bar: t.fill,
-                    start_l: u.start,
-                    used_l: u.used,
-                    end_bar: u.end_pressure,
-                    reserve_ok: u.reserve_ok,
-                })
-                .collect(),
+            cylinders: cylinder_rows(cfg, d),
             ok: v.ok,
             deco_required: v.deco_required,
             gas_ok: v.gas_ok,
@@ -329,18 +296,7 @@ pub fn run(
             advice: v.advice.clone(),
             suggestions: v.suggestions.iter().map(|s| s.text.clone()).collect(),
             dives,
-            split: split
-                .unwrap_or_default()
-                .iter()
-                .map(|s| SplitRow {
-                    first_strip: s.first_strip,
-                    last_strip: s.last_strip,
-                    survey_min: minutes(s.dive.bottom_time),
-                    runtime_min: minutes(s.dive.runtime),
-                    end_bar: s.dive.gas.end_pressure,
-                    safety_stop: s.dive.safety_stop.is_some(),
-                })
-                .collect(),
+            split: split_rows(&split.unwrap_or_default()),
             surface_interval_min: minutes(cfg.surface_interval),
             accuracy,
             seconds: t0.elapsed().as_secs_f64(),
@@ -359,6 +315,69 @@ pub fn run(
         rows,
         rule_of_thumb: rule_of_thumb(&cfg, &depths),
     })
+}
+
+/// The gas column of a case: each cylinder's name, gas, volume and fill.
+fn gas_column(cfg: &DiveConfig) -> String {
+    let bottom_gases: Vec<String> = cfg
+        .tanks
+        .iter()
+        .map(|t| {
+            format!(
+                "{}: {}, {:.0} l at {:.0} bar",
+                t.name,
+                gas_label(t.gas),
+                t.volume,
+                t.fill
+            )
+        })
+        .collect();
+    bottom_gases.join(" + ")
+}
+
+/// Each cylinder of a dive: its gas, contents, what was breathed and what is left.
+fn cylinder_rows(cfg: &DiveConfig, d: &crate::plan::dive::DiveResult) -> Vec<CylinderRow> {
+    d.gas
+        .cylinders
+        .iter()
+        .zip(&cfg.tanks)
+        .map(|(u, t)| CylinderRow {
+            name: u.name.clone(),
+            gas: u.gas.clone(),
+            volume_l: t.volume,
+            fill_bar: t.fill,
+            start_l: u.start,
+            used_l: u.used,
+            end_bar: u.end_pressure,
+            reserve_ok: u.reserve_ok,
+        })
+        .collect()
+}
+
+/// The dives of the planner's split: their strips, times, end pressure and safety stop.
+fn split_rows(split: &[crate::plan::dive::SplitDive]) -> Vec<SplitRow> {
+    split
+        .iter()
+        .map(|s| SplitRow {
+            first_strip: s.first_strip,
+            last_strip: s.last_strip,
+            survey_min: minutes(s.dive.bottom_time),
+            runtime_min: minutes(s.dive.runtime),
+            end_bar: s.dive.gas.end_pressure,
+            safety_stop: s.dive.safety_stop.is_some(),
+        })
+        .collect()
+}
+
+/// The rendered view of case `c` (into its folder under `out`): the quick or the full form's
+/// scale and samples.
+fn case_view(c: &Case, out: &Path, full: bool) -> Result<Vec<u8>, String> {
+    let (scale, samples) = if full {
+        (VIEW_SCALE, VIEW_SAMPLES)
+    } else {
+        (VIEW_SCALE_QUICK, VIEW_SAMPLES_QUICK)
+    };
+    view(&c.model, &out.join(&c.slug).join("view"), scale, samples)
 }
 
 /// `poser evaluate` (observations mode) on `m` with `opts`; its report is written into `dir`.
@@ -463,7 +482,6 @@ pub fn verdict_text(r: &Row) -> &'static str {
 /// The lesson's section of the page (numbers, rule of thumb, per-case plots and the planner's
 /// words); `survey` adds GSD, contrast and accuracy columns.
 pub fn html(res: &Results, survey: bool) -> String {
-    use super::html::{escape, num, svg};
     use std::fmt::Write as _;
     let mut s = String::new();
     s.push_str(
@@ -489,86 +507,7 @@ pub fn html(res: &Results, survey: bool) -> String {
     }
     s.push_str("</tr>\n");
     for r in &res.rows {
-        let k = super::slug(&r.label);
-        let stops = if r.stops.is_empty() {
-            "none".to_string()
-        } else {
-            r.stops
-                .iter()
-                .map(|(d, t)| format!("{d:.0} m {}", mmss(*t)))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let _ = write!(
-            s,
-            "<tr><td>{}</td>{}{}{}{}{}",
-            escape(&r.label),
-            num(&format!("{k}.images"), r.images.to_string()),
-            num(&format!("{k}.strips"), r.strips.to_string()),
-            num(&format!("{k}.path_m"), format!("{:.0}", r.path_m)),
-            num(&format!("{k}.survey_min"), format!("{:.1}", r.survey_min)),
-            num(&format!("{k}.max_depth_m"), format!("{:.1}", r.max_depth_m)),
-        );
-        if survey {
-            let _ = write!(
-                s,
-                "{}{}",
-                num(
-                    &format!("{k}.gsd_mm"),
-                    r.gsd_mm.map_or("–".into(), |g| format!("{g:.2}"))
-                ),
-                num(
-                    &format!("{k}.contrast_left"),
-                    r.contrast_left
-                        .map_or("–".into(), |c| format!("{:.0} %", 100.0 * c))
-                ),
-            );
-        }
-        let cyl = |f: &dyn Fn(&CylinderRow) -> String| {
-            r.cylinders.iter().map(f).collect::<Vec<_>>().join(" + ")
-        };
-        let _ = write!(
-            s,
-            "{}{}{}{}<td>{}</td>{}{}{}{}",
-            num(
-                &format!("{k}.ndl_runs_out_min"),
-                r.ndl_runs_out_min
-                    .map_or("not reached".into(), |t| format!("{t:.1}"))
-            ),
-            num(&format!("{k}.stops"), escape(&stops)),
-            num(&format!("{k}.deco_min"), format!("{:.1}", r.deco_min)),
-            num(&format!("{k}.tts_min"), format!("{:.1}", r.tts_min)),
-            escape(&r.gases),
-            num(&format!("{k}.used_l"), cyl(&|c| format!("{:.0}", c.used_l))),
-            num(
-                &format!("{k}.end_bar"),
-                cyl(&|c| format!("{:.0}", c.end_bar))
-            ),
-            num(&format!("{k}.verdict"), verdict_text(r).into()),
-            num(
-                &format!("{k}.dives"),
-                r.dives.map_or("no split fits".into(), |n| n.to_string())
-            ),
-        );
-        if survey {
-            let a = r.accuracy.as_ref();
-            let _ = write!(
-                s,
-                "{}{}",
-                num(
-                    &format!("{k}.rms_3d_mm"),
-                    a.map_or("–".into(), |a| format!("{:.1}", a.rms_3d_mm))
-                ),
-                num(
-                    &format!("{k}.rms_xyz_mm"),
-                    a.map_or("–".into(), |a| format!(
-                        "{:.1}, {:.1}, {:.1}",
-                        a.rms_xyz_mm[0], a.rms_xyz_mm[1], a.rms_xyz_mm[2]
-                    ))
-                ),
-            );
-        }
-        s.push_str("</tr>\n");
+        number_row(&mut s, r, survey);
     }
     s.push_str("</table>\n");
     if let Some(r) = res.rows.first() {
@@ -594,7 +533,105 @@ pub fn html(res: &Results, survey: bool) -> String {
         }
         s.push_str("</p>\n");
     }
-    let t = &res.rule_of_thumb;
+    rule_of_thumb_table(&mut s, &res.rule_of_thumb);
+    s.push_str("<h2>The dives</h2>\n");
+    for r in &res.rows {
+        dive_section(&mut s, r);
+    }
+    s
+}
+
+/// One row of the numbers table: the case's plan, dive and (with `survey`) image columns.
+fn number_row(s: &mut String, r: &Row, survey: bool) {
+    use super::html::{escape, num};
+    use std::fmt::Write as _;
+    let k = super::slug(&r.label);
+    let stops = if r.stops.is_empty() {
+        "none".to_string()
+    } else {
+        r.stops
+            .iter()
+            .map(|(d, t)| format!("{d:.0} m {}", mmss(*t)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let _ = write!(
+        s,
+        "<tr><td>{}</td>{}{}{}{}{}",
+        escape(&r.label),
+        num(&format!("{k}.images"), r.images.to_string()),
+        num(&format!("{k}.strips"), r.strips.to_string()),
+        num(&format!("{k}.path_m"), format!("{:.0}", r.path_m)),
+        num(&format!("{k}.survey_min"), format!("{:.1}", r.survey_min)),
+        num(&format!("{k}.max_depth_m"), format!("{:.1}", r.max_depth_m)),
+    );
+    if survey {
+        let _ = write!(
+            s,
+            "{}{}",
+            num(
+                &format!("{k}.gsd_mm"),
+                r.gsd_mm.map_or("–".into(), |g| format!("{g:.2}"))
+            ),
+            num(
+                &format!("{k}.contrast_left"),
+                r.contrast_left
+                    .map_or("–".into(), |c| format!("{:.0} %", 100.0 * c))
+            ),
+        );
+    }
+    let cyl = |f: &dyn Fn(&CylinderRow) -> String| {
+        r.cylinders.iter().map(f).collect::<Vec<_>>().join(" + ")
+    };
+    let _ = write!(
+        s,
+        "{}{}{}{}<td>{}</td>{}{}{}{}",
+        num(
+            &format!("{k}.ndl_runs_out_min"),
+            r.ndl_runs_out_min
+                .map_or("not reached".into(), |t| format!("{t:.1}"))
+        ),
+        num(&format!("{k}.stops"), escape(&stops)),
+        num(&format!("{k}.deco_min"), format!("{:.1}", r.deco_min)),
+        num(&format!("{k}.tts_min"), format!("{:.1}", r.tts_min)),
+        escape(&r.gases),
+        num(&format!("{k}.used_l"), cyl(&|c| format!("{:.0}", c.used_l))),
+        num(
+            &format!("{k}.end_bar"),
+            cyl(&|c| format!("{:.0}", c.end_bar))
+        ),
+        num(&format!("{k}.verdict"), verdict_text(r).into()),
+        num(
+            &format!("{k}.dives"),
+            r.dives.map_or("no split fits".into(), |n| n.to_string())
+        ),
+    );
+    if survey {
+        let a = r.accuracy.as_ref();
+        let _ = write!(
+            s,
+            "{}{}",
+            num(
+                &format!("{k}.rms_3d_mm"),
+                a.map_or("–".into(), |a| format!("{:.1}", a.rms_3d_mm))
+            ),
+            num(
+                &format!("{k}.rms_xyz_mm"),
+                a.map_or("–".into(), |a| format!(
+                    "{:.1}, {:.1}, {:.1}",
+                    a.rms_xyz_mm[0], a.rms_xyz_mm[1], a.rms_xyz_mm[2]
+                ))
+            ),
+        );
+    }
+    s.push_str("</tr>\n");
+}
+
+/// The rule-of-thumb section: how long a cylinder lasts at each depth, by the rule and by
+/// poser's gas model.
+fn rule_of_thumb_table(s: &mut String, t: &RuleOfThumb) {
+    use super::html::{escape, num};
+    use std::fmt::Write as _;
     let _ = write!(
         s,
         "<h2>Rule of thumb: how long does a cylinder last?</h2>\n<p>{} l of {} at {:.0} bar \
@@ -630,77 +667,81 @@ pub fn html(res: &Results, survey: bool) -> String {
             ),
         );
     }
-    s.push_str("</table>\n<h2>The dives</h2>\n");
-    for r in &res.rows {
-        let _ = writeln!(s, "<h3>{}</h3>", escape(&r.label));
-        if !r.view_png.is_empty() {
-            let _ = writeln!(
-                s,
-                "<figure><img alt=\"rendered view, {}\" src=\"data:image/png;base64,{}\">\
-                 <figcaption>The view from the pose nearest the centre (native renderer, a \
-                 twentieth of the resolution, 32 samples per pixel).</figcaption></figure>",
-                escape(&r.label),
-                super::html::base64(&r.view_png)
-            );
-        }
-        let _ = write!(
-            s,
-            "<figure>{svg}<figcaption>Depth, ceiling and NDL over the runtime \
-             of the survey as one dive.</figcaption></figure>\n<p><b>Verdict: {v}</b> \
-             ({runtime:.0} min runtime, GF {gf}, {gases}).</p>\n",
-            svg = svg(&r.profile_svg),
-            v = verdict_text(r),
-            runtime = r.runtime_min,
-            gf = escape(&r.gf),
-            gases = escape(&r.gases),
-        );
-        for (title, list) in [
-            ("Problems", &r.problems),
-            ("Advice", &r.advice),
-            ("What would fix it (the planner's remedies)", &r.suggestions),
-        ] {
-            if list.is_empty() {
-                continue;
-            }
-            let _ = write!(s, "<p>{title}:</p><ul>");
-            for p in list {
-                let _ = write!(s, "<li>{}</li>", escape(p));
-            }
-            s.push_str("</ul>\n");
-        }
-        if !r.split.is_empty() {
-            let _ = write!(
-                s,
-                "<p>Split into {} dives, {:.0} min apart:</p><ul>",
-                r.split.len(),
-                r.surface_interval_min
-            );
-            for p in &r.split {
-                let _ = write!(
-                    s,
-                    "<li>strips {}–{}: {:.1} min of survey, {:.1} min runtime, {:.0} bar left{}\
-                     </li>",
-                    p.first_strip,
-                    p.last_strip,
-                    p.survey_min,
-                    p.runtime_min,
-                    p.end_bar,
-                    if p.safety_stop {
-                        ", 3 min safety stop at 5 m"
-                    } else {
-                        ""
-                    }
-                );
-            }
-            s.push_str("</ul>\n");
-        }
+    s.push_str("</table>\n");
+}
+
+/// One case's dive: its view, profile plot, verdict, problems, advice, remedies, split and
+/// command.
+fn dive_section(s: &mut String, r: &Row) {
+    use super::html::{escape, svg};
+    use std::fmt::Write as _;
+    let _ = writeln!(s, "<h3>{}</h3>", escape(&r.label));
+    if !r.view_png.is_empty() {
         let _ = writeln!(
             s,
-            "<p class=\"small\">This case alone: <code>{}</code></p>",
-            escape(&r.command)
+            "<figure><img alt=\"rendered view, {}\" src=\"data:image/png;base64,{}\">\
+             <figcaption>The view from the pose nearest the centre (native renderer, a \
+             twentieth of the resolution, 32 samples per pixel).</figcaption></figure>",
+            escape(&r.label),
+            super::html::base64(&r.view_png)
         );
     }
-    s
+    let _ = write!(
+        s,
+        "<figure>{svg}<figcaption>Depth, ceiling and NDL over the runtime \
+         of the survey as one dive.</figcaption></figure>\n<p><b>Verdict: {v}</b> \
+         ({runtime:.0} min runtime, GF {gf}, {gases}).</p>\n",
+        svg = svg(&r.profile_svg),
+        v = verdict_text(r),
+        runtime = r.runtime_min,
+        gf = escape(&r.gf),
+        gases = escape(&r.gases),
+    );
+    for (title, list) in [
+        ("Problems", &r.problems),
+        ("Advice", &r.advice),
+        ("What would fix it (the planner's remedies)", &r.suggestions),
+    ] {
+        if list.is_empty() {
+            continue;
+        }
+        let _ = write!(s, "<p>{title}:</p><ul>");
+        for p in list {
+            let _ = write!(s, "<li>{}</li>", escape(p));
+        }
+        s.push_str("</ul>\n");
+    }
+    if !r.split.is_empty() {
+        let _ = write!(
+            s,
+            "<p>Split into {} dives, {:.0} min apart:</p><ul>",
+            r.split.len(),
+            r.surface_interval_min
+        );
+        for p in &r.split {
+            let _ = write!(
+                s,
+                "<li>strips {}–{}: {:.1} min of survey, {:.1} min runtime, {:.0} bar left{}\
+                 </li>",
+                p.first_strip,
+                p.last_strip,
+                p.survey_min,
+                p.runtime_min,
+                p.end_bar,
+                if p.safety_stop {
+                    ", 3 min safety stop at 5 m"
+                } else {
+                    ""
+                }
+            );
+        }
+        s.push_str("</ul>\n");
+    }
+    let _ = writeln!(
+        s,
+        "<p class=\"small\">This case alone: <code>{}</code></p>",
+        escape(&r.command)
+    );
 }
 
 #[cfg(test)]

@@ -122,127 +122,10 @@ pub fn page(r: &Report) -> String {
         );
     }
     match &r.results {
-        Results::Deformation { rows } => {
-            s.push_str(
-                "<h2>The numbers</h2>\n<p>Each case is processed by COLMAP (self-calibrating \
-                 bundle adjustment of exact refractive observations with 0.3 px noise, an \
-                 OpenCV camera model that ignores the port) and compared with the truth.</p>\n\
-                 <table><tr><th>case</th><th>images</th><th>reprojection, px</th>\
-                 <th>focal error, %</th><th>RMS Z, mm</th><th>NMAD Z, mm</th><th>bowl peak-to-peak, mm</th>\
-                 <th>bowl share, %</th></tr>\n",
-            );
-            for row in rows {
-                let k = slug(&row.label);
-                let _ = writeln!(
-                    s,
-                    "<tr><th>{}</th>{}{}{}{}{}{}{}</tr>",
-                    escape(&row.label),
-                    num(&format!("{k}.images"), row.images.to_string()),
-                    num(
-                        &format!("{k}.reprojection_px"),
-                        format!("{:.2}", row.reprojection_px)
-                    ),
-                    num(
-                        &format!("{k}.focal_error_percent"),
-                        format!("{:+.2}", row.focal_error_percent)
-                    ),
-                    num(&format!("{k}.rms_z_mm"), format!("{:.1}", row.rms_z_mm)),
-                    num(&format!("{k}.nmad_z_mm"), format!("{:.1}", row.nmad_z_mm)),
-                    num(&format!("{k}.bowl_mm"), format!("{:.1}", row.bowl_mm)),
-                    num(
-                        &format!("{k}.bowl_share"),
-                        format!("{:.0}", 100.0 * row.bowl_share)
-                    ),
-                );
-            }
-            s.push_str(
-                "</table>\n<p class=\"small\">Bowl: a quadratic surface fitted to the height \
-                 errors; its share is the part of their variance it explains. NMAD: the robust \
-                 spread of the height errors (what RMS would be without outliers).</p>\n",
-            );
-            for row in rows.iter().filter(|r| !r.warnings.is_empty()) {
-                let _ = writeln!(
-                    s,
-                    "<div class=\"warn\"><b>⚠ {}:</b> {}</div>",
-                    escape(&row.label),
-                    row.warnings
-                        .iter()
-                        .map(|w| escape(w))
-                        .collect::<Vec<_>>()
-                        .join("; ")
-                );
-            }
-            deformation_maps(&mut s, rows);
-        }
+        Results::Deformation { rows } => deformation_section(&mut s, rows),
         Results::Contrast { rows } => s.push_str(&super::contrast::html(rows)),
         Results::Gsd { rows } => s.push_str(&super::gsd::html(rows)),
-        Results::Calibration { rows } => {
-            s.push_str(
-                "<h2>The numbers</h2>\n<p>OpenCV detects the board's inner corners in the \
-                 rendered images and calibrates a pinhole camera with k1, k2, p1, p2, k3; the \
-                 colour channels are also calibrated one by one. Pixel convention: OpenCV's, \
-                 pixel centres at integers (poser's and COLMAP's are at +0.5, so cx<sub>poser\
-                 </sub> = cx<sub>OpenCV</sub> + 0.5).</p>\n<table><tr><th>port</th>\
-                 <th>views</th><th>RMS, px</th><th>f<sub>x</sub>/f<sub>air</sub></th>\
-                 <th>f<sub>y</sub>/f<sub>air</sub></th><th>c<sub>x</sub>, c<sub>y</sub> \
-                 (OpenCV), px</th><th>k1</th><th>k2</th><th>p1</th><th>p2</th><th>k3</th>\
-                 <th>lateral colour R−B at the corners, px (calibrated; detected)</th></tr>\n",
-            );
-            for row in rows {
-                let k = slug(&row.label);
-                let c = &row.calibration;
-                let d = &c.grey.dist;
-                let _ = writeln!(
-                    s,
-                    "<tr><th>{}</th>{}{}{}{}{}{}{}{}{}{}{}</tr>",
-                    escape(&row.label),
-                    num(&format!("{k}.views"), c.views.len().to_string()),
-                    num(&format!("{k}.rms"), format!("{:.3}", c.grey.rms)),
-                    num(&format!("{k}.fx_ratio"), format!("{:.3}", row.fx_ratio)),
-                    num(&format!("{k}.fy_ratio"), format!("{:.3}", row.fy_ratio)),
-                    num(
-                        &format!("{k}.principal_point"),
-                        format!("{:.1}, {:.1}", c.grey.cx, c.grey.cy)
-                    ),
-                    num(&format!("{k}.k1"), format!("{:.3}", d.k1)),
-                    num(&format!("{k}.k2"), format!("{:.3}", d.k2)),
-                    num(&format!("{k}.p1"), format!("{:.4}", d.p1)),
-                    num(&format!("{k}.p2"), format!("{:.4}", d.p2)),
-                    num(&format!("{k}.k3"), format!("{:.3}", d.k3)),
-                    num(
-                        &format!("{k}.lateral_colour"),
-                        c.lateral_colour.as_ref().map_or("–".into(), |l| format!(
-                            "{:.2}; {:.2}",
-                            l.r_minus_b_px, l.detected_r_minus_b_px
-                        ))
-                    ),
-                );
-            }
-            let f_air = rows.first().map_or(f64::NAN, |r| r.f_air);
-            let _ = write!(
-                s,
-                "</table>\n<p class=\"small\">f<sub>air</sub> = {f_air:.1} px: the lens's focal \
-                 length over the pixel pitch. A flat port multiplies the focal length by about \
-                 the water's index; a centred dome leaves it nearly unchanged. Lateral colour: \
-                 the distance between the red and the blue image of the same point, at the \
-                 board corners seen nearest to the image corners, through the per-channel \
-                 calibrations and directly between the corners detected in each channel.</p>\n\
-                 <h2>Views and residuals</h2>\n"
-            );
-            for row in rows {
-                let _ = write!(
-                    s,
-                    "<h3>{l}</h3>\n<figure>{img}<figcaption>View 1 as rendered.</figcaption>\
-                     </figure>\n<figure>{svg}<figcaption>Corners (dots) and their residual \
-                     vectors after calibration.</figcaption></figure>\n<p class=\"small\">\
-                     Render alone: <code>{cmd}</code></p>\n",
-                    l = escape(&row.label),
-                    img = png(&row.view_png, &format!("rendered view, {}", row.label)),
-                    svg = svg(&row.residuals_svg),
-                    cmd = escape(&row.command),
-                );
-            }
-        }
+        Results::Calibration { rows } => calibration_section(&mut s, rows),
         Results::Dive(res) => s.push_str(&super::dive::html(res, false)),
         Results::Survey(res) => s.push_str(&super::dive::html(res, true)),
         Results::Completeness { rows } => s.push_str(&super::completeness::section(rows)),
@@ -266,6 +149,131 @@ pub fn page(r: &Report) -> String {
          run.</p>\n</body></html>\n",
     );
     s
+}
+
+/// The deformation lesson's numbers: per case, COLMAP's reprojection error, focal error and
+/// height errors (RMS, NMAD, the bowl), the warnings, then the error maps.
+fn deformation_section(s: &mut String, rows: &[super::deformation::Row]) {
+    s.push_str(
+        "<h2>The numbers</h2>\n<p>Each case is processed by COLMAP (self-calibrating \
+         bundle adjustment of exact refractive observations with 0.3 px noise, an \
+         OpenCV camera model that ignores the port) and compared with the truth.</p>\n\
+         <table><tr><th>case</th><th>images</th><th>reprojection, px</th>\
+         <th>focal error, %</th><th>RMS Z, mm</th><th>NMAD Z, mm</th><th>bowl peak-to-peak, mm</th>\
+         <th>bowl share, %</th></tr>\n",
+    );
+    for row in rows {
+        let k = slug(&row.label);
+        let _ = writeln!(
+            s,
+            "<tr><th>{}</th>{}{}{}{}{}{}{}</tr>",
+            escape(&row.label),
+            num(&format!("{k}.images"), row.images.to_string()),
+            num(
+                &format!("{k}.reprojection_px"),
+                format!("{:.2}", row.reprojection_px)
+            ),
+            num(
+                &format!("{k}.focal_error_percent"),
+                format!("{:+.2}", row.focal_error_percent)
+            ),
+            num(&format!("{k}.rms_z_mm"), format!("{:.1}", row.rms_z_mm)),
+            num(&format!("{k}.nmad_z_mm"), format!("{:.1}", row.nmad_z_mm)),
+            num(&format!("{k}.bowl_mm"), format!("{:.1}", row.bowl_mm)),
+            num(
+                &format!("{k}.bowl_share"),
+                format!("{:.0}", 100.0 * row.bowl_share)
+            ),
+        );
+    }
+    s.push_str(
+        "</table>\n<p class=\"small\">Bowl: a quadratic surface fitted to the height \
+         errors; its share is the part of their variance it explains. NMAD: the robust \
+         spread of the height errors (what RMS would be without outliers).</p>\n",
+    );
+    for row in rows.iter().filter(|r| !r.warnings.is_empty()) {
+        let _ = writeln!(
+            s,
+            "<div class=\"warn\"><b>⚠ {}:</b> {}</div>",
+            escape(&row.label),
+            row.warnings
+                .iter()
+                .map(|w| escape(w))
+                .collect::<Vec<_>>()
+                .join("; ")
+        );
+    }
+    deformation_maps(s, rows);
+}
+
+/// The calibration lesson's numbers: per port, OpenCV's calibration (focal ratios, principal
+/// point, distortion, lateral colour), then each port's view and residuals.
+fn calibration_section(s: &mut String, rows: &[super::calibration::Row]) {
+    s.push_str(
+        "<h2>The numbers</h2>\n<p>OpenCV detects the board's inner corners in the \
+         rendered images and calibrates a pinhole camera with k1, k2, p1, p2, k3; the \
+         colour channels are also calibrated one by one. Pixel convention: OpenCV's, \
+         pixel centres at integers (poser's and COLMAP's are at +0.5, so cx<sub>poser\
+         </sub> = cx<sub>OpenCV</sub> + 0.5).</p>\n<table><tr><th>port</th>\
+         <th>views</th><th>RMS, px</th><th>f<sub>x</sub>/f<sub>air</sub></th>\
+         <th>f<sub>y</sub>/f<sub>air</sub></th><th>c<sub>x</sub>, c<sub>y</sub> \
+         (OpenCV), px</th><th>k1</th><th>k2</th><th>p1</th><th>p2</th><th>k3</th>\
+         <th>lateral colour R−B at the corners, px (calibrated; detected)</th></tr>\n",
+    );
+    for row in rows {
+        let k = slug(&row.label);
+        let c = &row.calibration;
+        let d = &c.grey.dist;
+        let _ = writeln!(
+            s,
+            "<tr><th>{}</th>{}{}{}{}{}{}{}{}{}{}{}</tr>",
+            escape(&row.label),
+            num(&format!("{k}.views"), c.views.len().to_string()),
+            num(&format!("{k}.rms"), format!("{:.3}", c.grey.rms)),
+            num(&format!("{k}.fx_ratio"), format!("{:.3}", row.fx_ratio)),
+            num(&format!("{k}.fy_ratio"), format!("{:.3}", row.fy_ratio)),
+            num(
+                &format!("{k}.principal_point"),
+                format!("{:.1}, {:.1}", c.grey.cx, c.grey.cy)
+            ),
+            num(&format!("{k}.k1"), format!("{:.3}", d.k1)),
+            num(&format!("{k}.k2"), format!("{:.3}", d.k2)),
+            num(&format!("{k}.p1"), format!("{:.4}", d.p1)),
+            num(&format!("{k}.p2"), format!("{:.4}", d.p2)),
+            num(&format!("{k}.k3"), format!("{:.3}", d.k3)),
+            num(
+                &format!("{k}.lateral_colour"),
+                c.lateral_colour.as_ref().map_or("–".into(), |l| format!(
+                    "{:.2}; {:.2}",
+                    l.r_minus_b_px, l.detected_r_minus_b_px
+                ))
+            ),
+        );
+    }
+    let f_air = rows.first().map_or(f64::NAN, |r| r.f_air);
+    let _ = write!(
+        s,
+        "</table>\n<p class=\"small\">f<sub>air</sub> = {f_air:.1} px: the lens's focal \
+         length over the pixel pitch. A flat port multiplies the focal length by about \
+         the water's index; a centred dome leaves it nearly unchanged. Lateral colour: \
+         the distance between the red and the blue image of the same point, at the \
+         board corners seen nearest to the image corners, through the per-channel \
+         calibrations and directly between the corners detected in each channel.</p>\n\
+         <h2>Views and residuals</h2>\n"
+    );
+    for row in rows {
+        let _ = write!(
+            s,
+            "<h3>{l}</h3>\n<figure>{img}<figcaption>View 1 as rendered.</figcaption>\
+             </figure>\n<figure>{svg}<figcaption>Corners (dots) and their residual \
+             vectors after calibration.</figcaption></figure>\n<p class=\"small\">\
+             Render alone: <code>{cmd}</code></p>\n",
+            l = escape(&row.label),
+            img = png(&row.view_png, &format!("rendered view, {}", row.label)),
+            svg = svg(&row.residuals_svg),
+            cmd = escape(&row.command),
+        );
+    }
 }
 
 /// Write `index.html` and `lesson.json` into `dir`.

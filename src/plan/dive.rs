@@ -657,6 +657,57 @@ impl Breathing<'_> {
     }
 }
 
+impl<'a> Breathing<'a> {
+    /// The state at the surface before a dive whose bottom starts at `d0` m: the travel gas
+    /// for the shallows, else the first bottom cylinder.
+    fn at_surface(cfg: &'a DiveConfig, d0: f64) -> Breathing<'a> {
+        let first = cfg
+            .descent_travel(0.0)
+            .filter(|_| d0 > 0.0)
+            .unwrap_or(cfg.bottom_order()[0]);
+        let n_tanks = cfg.tanks.len();
+        let mut b = Breathing {
+            cfg,
+            used: vec![0.0; n_tanks],
+            current: first,
+            max_po2: vec![None; n_tanks],
+            min_po2: vec![None; n_tanks],
+            switches: vec![Switch {
+                time: 0.0,
+                depth: 0.0,
+                cylinder: first,
+            }],
+            reserve_reached_at: None,
+            empty_at: None,
+            exhausted: vec![false; n_tanks],
+            oxygen: OxygenExposure::default(),
+            fallback: cfg.bottom_order(),
+        };
+        b.note_po2(0.0, 0.0);
+        b
+    }
+
+    /// The cylinders `lost` gone at runtime `t`, `depth` m: the bailout cylinders join the
+    /// fallback, and when the gas breathed is lost the diver takes a bailout cylinder, else
+    /// the first bottom cylinder left.
+    fn lose(&mut self, lost: &[usize], t: f64, depth: f64) {
+        for &i in lost {
+            self.exhausted[i] = true;
+        }
+        let bailouts: Vec<usize> = (0..self.cfg.tanks.len())
+            .filter(|&i| self.cfg.tanks[i].role == CylinderRole::Bailout && !self.exhausted[i])
+            .collect();
+        let exhausted = &self.exhausted;
+        self.fallback.retain(|i| !exhausted[*i]);
+        self.fallback.extend(bailouts.iter().copied());
+        if self.exhausted[self.current]
+            && let Some(&next) = bailouts.first().or(self.fallback.first())
+        {
+            self.switch_to(next, t, depth);
+        }
+    }
+}
+
 /// Simulate a dive over `track` starting from `tissues` (surface state). `sample_every` s
 /// (e.g. 10) fills [`DiveResult::samples`] with ceiling, NDL, TTS and pressure; `None` skips
 /// the per-sample NDL/TTS work (for searches).
@@ -681,177 +732,23 @@ pub fn simulate_losing(
     lost: &[usize],
 ) -> DiveResult {
     let env = cfg.env;
-    let plan = cfg.ascent_plan();
-    let direct = cfg.direct_plan();
-    // Descent and bottom vertices; the descent gets a vertex at each travel gas's switch
-    // depth, so that no step breathes a travel gas past it.
+    let (mut profile, descent_time) = descent_and_bottom(cfg, track);
     let d0 = track.points.first().map(|p| p.1).unwrap_or(0.0);
-    let descent_time = d0 / cfg.descent_rate;
-    let mut profile: Vec<(f64, f64)> = vec![(0.0, 0.0)];
-    let mut cuts: Vec<f64> = cfg
-        .tanks
-        .iter()
-        .filter(|t| t.role == CylinderRole::Travel)
-        .filter_map(|t| t.switch_depth)
-        .filter(|&s| s > 1e-9 && s < d0 - 1e-9)
-        .collect();
-    cuts.sort_by(f64::total_cmp);
-    cuts.dedup();
-    for s in cuts {
-        profile.push((s / cfg.descent_rate, s));
-    }
-    for p in &track.points {
-        profile.push((descent_time + p.0, p.1));
-    }
     let bottom_end = descent_time + track.duration();
     let last_depth = track.points.last().map(|p| p.1).unwrap_or(0.0);
-    if track.tail > 0.0 {
-        profile.push((bottom_end, last_depth));
-    }
-
-    // From the surface: the travel gas for the shallows, else the first bottom cylinder.
-    let first = cfg
-        .descent_travel(0.0)
-        .filter(|_| d0 > 0.0)
-        .unwrap_or(cfg.bottom_order()[0]);
     let n_tanks = cfg.tanks.len();
-    let mut b = Breathing {
-        cfg,
-        used: vec![0.0; n_tanks],
-        current: first,
-        max_po2: vec![None; n_tanks],
-        min_po2: vec![None; n_tanks],
-        switches: vec![Switch {
-            time: 0.0,
-            depth: 0.0,
-            cylinder: first,
-        }],
-        reserve_reached_at: None,
-        empty_at: None,
-        exhausted: vec![false; n_tanks],
-        oxygen: OxygenExposure::default(),
-        fallback: cfg.bottom_order(),
-    };
-    b.note_po2(0.0, 0.0);
+    let mut b = Breathing::at_surface(cfg, d0);
     let mut deco_from: Option<f64> = None;
     let mut max_ceiling: f64 = 0.0;
-    let mut samples = Vec::new();
-    let mut next_sample = 0.0;
-    let mut record = |t: f64, depth: f64, tissues: &Tissues, b: &Breathing, next: &mut f64| {
-        let Some(every) = sample_every else { return };
-        if t + 1e-9 < *next {
-            return;
-        }
-        *next += every;
-        let in_deco = tissues.in_deco();
-        let mut probe = tissues.clone();
-        // The time to surface on the gases still there (not the cylinders left at their reserve).
-        let mut left = if in_deco {
-            plan.clone()
-        } else {
-            direct.clone()
-        };
-        left.deco_gases = b.ascent_gases(in_deco);
-        let asc = probe.ascend_with(depth, b.gas(), &left, t);
-        let stop = asc.stops.first().copied();
-        let pressures = b.pressures();
-        samples.push(Sample {
-            time: t,
-            depth,
-            ceiling: tissues.ceiling(),
-            ndl: Some(tissues.ndl(depth, b.gas())),
-            tts: asc.tts,
-            // The first planned stop; in deco without one (the ascent itself clears the
-            // ceiling), the ceiling rounded up to the 3 m level.
-            stop_depth: stop
-                .map(|s| s.depth)
-                .or_else(|| in_deco.then(|| ((tissues.ceiling() / 3.0).ceil() * 3.0).max(3.0))),
-            stop_time: stop.map(|s| s.duration),
-            in_deco,
-            cylinder: b.current,
-            pressure: pressures[b.current],
-            pressures,
-        });
+    let mut rec = Recorder {
+        every: sample_every,
+        next: 0.0,
+        samples: Vec::new(),
+        plan: cfg.ascent_plan(),
+        direct: cfg.direct_plan(),
     };
 
-    /// How a stretch of the profile is breathed: the bottom (stages to their reserve, then
-    /// the back gas), or one leg of the ascent (the planned gas changes; a cylinder at its
-    /// reserve left for the next gas, and — when the stops depend on the gas, `replan` — the
-    /// leg cut there so that the rest of the ascent is planned again on the gas breathed).
-    enum Leg<'s> {
-        /// The descent ends at `descent_end` s runtime.
-        Bottom { descent_end: f64 },
-        Ascent {
-            planned: &'s dyn Fn(f64) -> Option<usize>,
-            deco: bool,
-            replan: bool,
-        },
-    }
-
-    // Integrate in ≤ 1 s steps. Returns where an ascent leg was cut (runtime s, depth m):
-    // there the diver moved to another gas and the ascent must be planned again.
-    fn integrate(
-        env: &Environment,
-        sac: f64,
-        tissues: &mut Tissues,
-        b: &mut Breathing,
-        vertices: &[(f64, f64)],
-        leg: Leg,
-        on_step: &mut dyn FnMut(f64, f64, &Tissues, &Breathing),
-    ) -> Option<(f64, f64)> {
-        for w in vertices.windows(2) {
-            let ((t0, a), (t1, d1)) = (w[0], w[1]);
-            let dt = t1 - t0;
-            if dt <= 0.0 {
-                continue;
-            }
-            let n = dt.ceil().max(1.0) as usize;
-            let h = dt / n as f64;
-            for i in 0..n {
-                let f = (i as f64 + 0.5) / n as f64;
-                let d = a + (d1 - a) * f;
-                let p = env.pressure(d);
-                let ts = t0 + i as f64 * h;
-                let need = gas::consumption(sac, p, h);
-                let ds = a + (d1 - a) * i as f64 / n as f64;
-                match &leg {
-                    Leg::Bottom { descent_end } => {
-                        let de = a + (d1 - a) * (i + 1) as f64 / n as f64;
-                        b.pick_descent(need, ts, ds, de, ts + 1e-9 < *descent_end);
-                        b.pick_bottom(need, ts, ds);
-                    }
-                    Leg::Ascent {
-                        planned,
-                        deco,
-                        replan,
-                    } => {
-                        if let Some(c) = planned(ts + 0.5 * h) {
-                            b.switch_to(c, ts, ds);
-                        }
-                        let before = b.gas();
-                        if b.pick_ascent(need, ts, ds, *deco) && *replan && b.gas() != before {
-                            return Some((ts, ds));
-                        }
-                    }
-                }
-                tissues.expose_pressure(p, b.gas(), h);
-                let t = ts + h;
-                let de = a + (d1 - a) * (i + 1) as f64 / n as f64;
-                let o2 = b.gas().o2;
-                b.oxygen.breathe(
-                    ts,
-                    h,
-                    (ds, env.pressure(ds) * o2),
-                    (de, env.pressure(de) * o2),
-                );
-                b.breathe(need, t, ds.min(de), ds.max(de));
-                on_step(t, de, tissues, b);
-            }
-        }
-        None
-    }
-
-    record(0.0, 0.0, tissues, &b, &mut next_sample);
+    rec.record(0.0, 0.0, tissues, &b);
     integrate(
         &env,
         cfg.sac_lpm,
@@ -867,7 +764,7 @@ pub fn simulate_losing(
             if c > 0.0 && deco_from.is_none() {
                 deco_from = Some(t);
             }
-            record(t, d, ts, b, &mut next_sample);
+            rec.record(t, d, ts, b);
         },
     );
     let used_bottom: f64 = (0..n_tanks)
@@ -881,59 +778,18 @@ pub fn simulate_losing(
     // decompression, and a switch's hold is no decompression stop.
     let in_deco_ascent = deco_from.is_some();
     if !lost.is_empty() {
-        for &i in lost {
-            b.exhausted[i] = true;
-        }
-        let bailouts: Vec<usize> = (0..n_tanks)
-            .filter(|&i| cfg.tanks[i].role == CylinderRole::Bailout && !b.exhausted[i])
-            .collect();
-        b.fallback.retain(|i| !b.exhausted[*i]);
-        b.fallback.extend(bailouts.iter().copied());
-        if b.exhausted[b.current]
-            && let Some(&next) = bailouts.first().or(b.fallback.first())
-        {
-            b.switch_to(next, bottom_end, last_depth);
-        }
+        b.lose(lost, bottom_end, last_depth);
     }
     let mut base = if in_deco_ascent {
-        plan.clone()
+        rec.plan.clone()
     } else {
-        direct.clone()
+        rec.direct.clone()
     };
     base.deco_gases = b.ascent_gases(in_deco_ascent);
     let base = &base;
-    let mut planned = tissues.clone();
-    let ascent = planned.ascend_with(last_depth, b.gas(), base, bottom_end);
-    // A planned ascent's gas changes as (runtime, cylinder).
-    let changes = |a: &super::deco::Ascent, t0: f64, b: &Breathing| -> Vec<(f64, usize)> {
-        a.switches
-            .iter()
-            .filter_map(|&(t, _, g)| b.deco_tank(g).map(|i| (t0 + t, i)))
-            .collect()
-    };
-    let mut asc: Vec<(f64, f64)> = ascent
-        .path
-        .iter()
-        .map(|&(t, d)| (bottom_end + t, d))
-        .collect();
-    let mut gas_changes = changes(&ascent, bottom_end, &b);
     let max_depth = profile.iter().map(|p| p.1).fold(0.0, f64::max);
-    let mut safety_stop = None;
-    if ascent.stops.is_empty() && max_depth >= 10.0 && last_depth > 5.0 {
-        let t5 = bottom_end + (last_depth - 5.0) / cfg.ascent_rate;
-        asc = vec![
-            (bottom_end, last_depth),
-            (t5, 5.0),
-            (t5 + 180.0, 5.0),
-            (t5 + 180.0 + 5.0 / cfg.ascent_rate, 0.0),
-        ];
-        // The travel gases from their switch depths (a vertex at each), as on any ascent.
-        gas_changes = travel_changes(cfg, &b, &mut asc);
-        safety_stop = Some(Stop {
-            depth: 5.0,
-            duration: 180.0,
-        });
-    }
+    let (ascent, mut asc, mut gas_changes, safety_stop) =
+        plan_ascent(cfg, tissues, &b, base, (bottom_end, last_depth), max_depth);
     // Fly it. A cylinder reaching its reserve is left for the next gas (the docs' order:
     // every cylinder down to its reserve, then the next); when that changes the gas of a
     // planned ascent, the rest is planned again from there on the gas now breathed, without
@@ -964,7 +820,7 @@ pub fn simulate_losing(
                 let c = ts.ceiling();
                 max_ceiling = max_ceiling.max(c);
                 excess = excess.max(c - d);
-                record(t, d, ts, b, &mut next_sample);
+                rec.record(t, d, ts, b);
             },
         );
         let Some((t, d)) = cut else {
@@ -978,7 +834,7 @@ pub fn simulate_losing(
         again.deco_gases = b.ascent_gases(in_deco_ascent);
         let a = tissues.clone().ascend_with(d, b.gas(), &again, t);
         asc = a.path.iter().map(|&(x, y)| (t + x, y)).collect();
-        gas_changes = changes(&a, t, &b);
+        gas_changes = planned_changes(&a, t, &b);
     }
     let stops = if replanned {
         stops_of(&flown)
@@ -988,21 +844,10 @@ pub fn simulate_losing(
     let tts_at_end = flown.last().unwrap().0 - bottom_end;
     profile.extend(flown.into_iter().skip(1));
     let runtime = profile.last().unwrap().0;
+    let samples = rec.samples;
 
-    let min_ndl = samples
-        .iter()
-        .filter_map(|s| match s.ndl {
-            Some(Ndl::Limit(n)) => Some(n),
-            _ => None,
-        })
-        .reduce(f64::min);
-    let mean_depth = {
-        let mut area = 0.0;
-        for w in profile.windows(2) {
-            area += 0.5 * (w[0].1 + w[1].1) * (w[1].0 - w[0].0);
-        }
-        if runtime > 0.0 { area / runtime } else { 0.0 }
-    };
+    let min_ndl = min_ndl(&samples);
+    let mean_depth = mean_depth(&profile, runtime);
 
     let gas = gas_check(cfg, &b, used_bottom, max_depth);
     DiveResult {
@@ -1025,6 +870,238 @@ pub fn simulate_losing(
         gas,
         oxygen: b.oxygen,
     }
+}
+
+/// The ascent the model requires from `(bottom_end, last_depth)` (runtime s, m), planned on a
+/// copy of `tissues` with `base`: the planned ascent, the path to fly, its gas changes as
+/// (runtime, cylinder) and, for a direct ascent from 10 m or deeper, the safety stop at 5 m
+/// (3 min) that then replaces the planned path.
+#[allow(clippy::type_complexity)]
+fn plan_ascent(
+    cfg: &DiveConfig,
+    tissues: &Tissues,
+    b: &Breathing,
+    base: &AscentPlan,
+    (bottom_end, last_depth): (f64, f64),
+    max_depth: f64,
+) -> (
+    super::deco::Ascent,
+    Vec<(f64, f64)>,
+    Vec<(f64, usize)>,
+    Option<Stop>,
+) {
+    let mut planned = tissues.clone();
+    let ascent = planned.ascend_with(last_depth, b.gas(), base, bottom_end);
+    let mut asc: Vec<(f64, f64)> = ascent
+        .path
+        .iter()
+        .map(|&(t, d)| (bottom_end + t, d))
+        .collect();
+    let mut gas_changes = planned_changes(&ascent, bottom_end, b);
+    let mut safety_stop = None;
+    if ascent.stops.is_empty() && max_depth >= 10.0 && last_depth > 5.0 {
+        let t5 = bottom_end + (last_depth - 5.0) / cfg.ascent_rate;
+        asc = vec![
+            (bottom_end, last_depth),
+            (t5, 5.0),
+            (t5 + 180.0, 5.0),
+            (t5 + 180.0 + 5.0 / cfg.ascent_rate, 0.0),
+        ];
+        // The travel gases from their switch depths (a vertex at each), as on any ascent.
+        gas_changes = travel_changes(cfg, b, &mut asc);
+        safety_stop = Some(Stop {
+            depth: 5.0,
+            duration: 180.0,
+        });
+    }
+    (ascent, asc, gas_changes, safety_stop)
+}
+
+/// The shortest no-decompression limit of the samples, s.
+fn min_ndl(samples: &[Sample]) -> Option<f64> {
+    samples
+        .iter()
+        .filter_map(|s| match s.ndl {
+            Some(Ndl::Limit(n)) => Some(n),
+            _ => None,
+        })
+        .reduce(f64::min)
+}
+
+/// The descent and bottom vertices (runtime s, depth m) and the descent's duration; the
+/// descent gets a vertex at each travel gas's switch depth, so that no step breathes a travel
+/// gas past it.
+fn descent_and_bottom(cfg: &DiveConfig, track: &Track) -> (Vec<(f64, f64)>, f64) {
+    let d0 = track.points.first().map(|p| p.1).unwrap_or(0.0);
+    let descent_time = d0 / cfg.descent_rate;
+    let mut profile: Vec<(f64, f64)> = vec![(0.0, 0.0)];
+    let mut cuts: Vec<f64> = cfg
+        .tanks
+        .iter()
+        .filter(|t| t.role == CylinderRole::Travel)
+        .filter_map(|t| t.switch_depth)
+        .filter(|&s| s > 1e-9 && s < d0 - 1e-9)
+        .collect();
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    for s in cuts {
+        profile.push((s / cfg.descent_rate, s));
+    }
+    for p in &track.points {
+        profile.push((descent_time + p.0, p.1));
+    }
+    let bottom_end = descent_time + track.duration();
+    let last_depth = track.points.last().map(|p| p.1).unwrap_or(0.0);
+    if track.tail > 0.0 {
+        profile.push((bottom_end, last_depth));
+    }
+    (profile, descent_time)
+}
+
+/// The mean depth of a profile over `runtime` s (the area under it), m.
+fn mean_depth(profile: &[(f64, f64)], runtime: f64) -> f64 {
+    let mut area = 0.0;
+    for w in profile.windows(2) {
+        area += 0.5 * (w[0].1 + w[1].1) * (w[1].0 - w[0].0);
+    }
+    if runtime > 0.0 { area / runtime } else { 0.0 }
+}
+
+/// A planned ascent's gas changes as (runtime, cylinder), the ascent starting at `t0` s.
+fn planned_changes(a: &super::deco::Ascent, t0: f64, b: &Breathing) -> Vec<(f64, usize)> {
+    a.switches
+        .iter()
+        .filter_map(|&(t, _, g)| b.deco_tank(g).map(|i| (t0 + t, i)))
+        .collect()
+}
+
+/// The samples of a dive: every `every` s (none when `None`), the ceiling, NDL, time to
+/// surface and pressures.
+struct Recorder {
+    every: Option<f64>,
+    /// Runtime of the next sample, s.
+    next: f64,
+    samples: Vec<Sample>,
+    /// The ascent plans of a dive in deco and within the NDL.
+    plan: AscentPlan,
+    direct: AscentPlan,
+}
+
+impl Recorder {
+    /// Record a sample at runtime `t`, `depth` m, when one is due.
+    fn record(&mut self, t: f64, depth: f64, tissues: &Tissues, b: &Breathing) {
+        let Some(every) = self.every else { return };
+        if t + 1e-9 < self.next {
+            return;
+        }
+        self.next += every;
+        let in_deco = tissues.in_deco();
+        let mut probe = tissues.clone();
+        // The time to surface on the gases still there (not the cylinders left at their reserve).
+        let mut left = if in_deco {
+            self.plan.clone()
+        } else {
+            self.direct.clone()
+        };
+        left.deco_gases = b.ascent_gases(in_deco);
+        let asc = probe.ascend_with(depth, b.gas(), &left, t);
+        let stop = asc.stops.first().copied();
+        let pressures = b.pressures();
+        self.samples.push(Sample {
+            time: t,
+            depth,
+            ceiling: tissues.ceiling(),
+            ndl: Some(tissues.ndl(depth, b.gas())),
+            tts: asc.tts,
+            // The first planned stop; in deco without one (the ascent itself clears the
+            // ceiling), the ceiling rounded up to the 3 m level.
+            stop_depth: stop
+                .map(|s| s.depth)
+                .or_else(|| in_deco.then(|| ((tissues.ceiling() / 3.0).ceil() * 3.0).max(3.0))),
+            stop_time: stop.map(|s| s.duration),
+            in_deco,
+            cylinder: b.current,
+            pressure: pressures[b.current],
+            pressures,
+        });
+    }
+}
+
+/// How a stretch of the profile is breathed: the bottom (stages to their reserve, then
+/// the back gas), or one leg of the ascent (the planned gas changes; a cylinder at its
+/// reserve left for the next gas, and — when the stops depend on the gas, `replan` — the
+/// leg cut there so that the rest of the ascent is planned again on the gas breathed).
+enum Leg<'s> {
+    /// The descent ends at `descent_end` s runtime.
+    Bottom { descent_end: f64 },
+    Ascent {
+        planned: &'s dyn Fn(f64) -> Option<usize>,
+        deco: bool,
+        replan: bool,
+    },
+}
+
+/// Integrate in ≤ 1 s steps. Returns where an ascent leg was cut (runtime s, depth m):
+/// there the diver moved to another gas and the ascent must be planned again.
+fn integrate(
+    env: &Environment,
+    sac: f64,
+    tissues: &mut Tissues,
+    b: &mut Breathing,
+    vertices: &[(f64, f64)],
+    leg: Leg,
+    on_step: &mut dyn FnMut(f64, f64, &Tissues, &Breathing),
+) -> Option<(f64, f64)> {
+    for w in vertices.windows(2) {
+        let ((t0, a), (t1, d1)) = (w[0], w[1]);
+        let dt = t1 - t0;
+        if dt <= 0.0 {
+            continue;
+        }
+        let n = dt.ceil().max(1.0) as usize;
+        let h = dt / n as f64;
+        for i in 0..n {
+            let f = (i as f64 + 0.5) / n as f64;
+            let d = a + (d1 - a) * f;
+            let p = env.pressure(d);
+            let ts = t0 + i as f64 * h;
+            let need = gas::consumption(sac, p, h);
+            let ds = a + (d1 - a) * i as f64 / n as f64;
+            match &leg {
+                Leg::Bottom { descent_end } => {
+                    let de = a + (d1 - a) * (i + 1) as f64 / n as f64;
+                    b.pick_descent(need, ts, ds, de, ts + 1e-9 < *descent_end);
+                    b.pick_bottom(need, ts, ds);
+                }
+                Leg::Ascent {
+                    planned,
+                    deco,
+                    replan,
+                } => {
+                    if let Some(c) = planned(ts + 0.5 * h) {
+                        b.switch_to(c, ts, ds);
+                    }
+                    let before = b.gas();
+                    if b.pick_ascent(need, ts, ds, *deco) && *replan && b.gas() != before {
+                        return Some((ts, ds));
+                    }
+                }
+            }
+            tissues.expose_pressure(p, b.gas(), h);
+            let t = ts + h;
+            let de = a + (d1 - a) * (i + 1) as f64 / n as f64;
+            let o2 = b.gas().o2;
+            b.oxygen.breathe(
+                ts,
+                h,
+                (ds, env.pressure(ds) * o2),
+                (de, env.pressure(de) * o2),
+            );
+            b.breathe(need, t, ds.min(de), ds.max(de));
+            on_step(t, de, tissues, b);
+        }
+    }
+    None
 }
 
 /// The travel-gas changes along an ascent `path` flown without the planner (the direct ascent
@@ -1382,148 +1459,13 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
     let mut advice = Vec::new();
     let deco = dive.deco_required();
     // Gases first: a gas that poisons or starves the diver outweighs everything else.
-    for (i, c) in dive.gas.cylinders.iter().enumerate() {
-        let role = role_name(cfg.tanks[i].role);
-        if !c.po2_ok
-            && let Some(p) = c.max_po2
-        {
-            problems.push(format!(
-                "cylinder '{}' ({}, {role}): pO₂ {p:.2} bar at {:.1} m, above the {:.1} bar limit \
-                 of a {role} gas (MOD {:.0} m){}",
-                c.name,
-                c.gas,
-                c.max_po2_depth,
-                c.po2_limit,
-                depth_limit(c.mod_depth),
-                if cfg.tanks[i].role.switched() {
-                    format!(
-                        "; its switch depth is {:.0} m",
-                        depth_limit(cfg.tanks[i].switch_depth.unwrap_or(0.0))
-                    )
-                } else {
-                    String::new()
-                }
-            ));
-        }
-        if c.hypoxic {
-            let from = gas::breathable_from(&cfg.env, cfg.tanks[i].gas);
-            problems.push(format!(
-                "cylinder '{}' ({}, {role}): hypoxic where it is breathed — pO₂ {:.2} bar at \
-                 {:.1} m, below {:.2} bar; it is breathable only from {:.0} m down{}",
-                c.name,
-                c.gas,
-                c.min_po2.unwrap_or(0.0),
-                c.min_po2_depth,
-                hypoxic_limit(&cfg.env).min(HYPOXIC),
-                from.ceil(),
-                if cfg.tanks[i].role.is_bottom() {
-                    format!(
-                        ": carry a travel gas (`role = \"travel\"`) with a switch depth of at \
-                         least {:.0} m",
-                        from.ceil()
-                    )
-                } else {
-                    String::new()
-                }
-            ));
-        }
-    }
-    // Oxygen toxicity (CNS % against the NOAA limits, OTU against a single-dive figure).
-    let ox = &dive.oxygen;
-    // Beyond the table even within the diver's own limits (a cylinder above its own limit is
-    // reported above already).
-    if ox.max_po2 > oxygen::PO2_TABLE_MAX + 1e-9 && dive.gas.cylinders.iter().all(|c| c.po2_ok) {
-        problems.push(format!(
-            "pO₂ {:.2} bar at {:.1} m ({} runtime), beyond the 1.6 bar end of the NOAA oxygen \
-             limits whatever the diver's own limits; {:.1} min breathed above it (CNS there \
-             extrapolated steeply: ×2.7 per 0.1 bar)",
-            ox.max_po2,
-            ox.max_po2_depth,
-            mmss(ox.max_po2_time),
-            ox.minutes_above_table
-        ));
-    }
-    if ox.cns_percent > oxygen::CNS_LIMIT {
-        problems.push(format!(
-            "CNS oxygen toxicity {:.1} %: above 100 % of the NOAA single-exposure limits \
-             (highest pO₂ {:.2} bar at {:.1} m); breathe a leaner gas or shorten the exposure",
-            ox.cns_percent, ox.max_po2, ox.max_po2_depth
-        ));
-    } else if ox.cns_percent > oxygen::CNS_WARN {
-        advice.push(format!(
-            "CNS oxygen toxicity {:.1} %: above the 80 % warning level of the NOAA \
-             single-exposure limits (highest pO₂ {:.2} bar at {:.1} m); no repetitive dive \
-             on oxygen-rich gas until it has come down (half-time 90 min)",
-            ox.cns_percent, ox.max_po2, ox.max_po2_depth
-        ));
-    }
-    if ox.otu > oxygen::OTU_WARN {
-        advice.push(format!(
-            "pulmonary oxygen exposure {:.0} OTU: above the {:.0} OTU single-dive planning \
-             figure (REPEX: at most 850 OTU in one day)",
-            ox.otu,
-            oxygen::OTU_WARN
-        ));
-    }
+    gas_problems(cfg, dive, &mut problems);
+    oxygen_findings(dive, &mut problems, &mut advice);
     let planned = cfg.deco == DecoMode::Planned;
     // With decompression planned, the stops are the plan, not a problem; everything else
     // still is. The plan in words, for the report, either way.
-    let mut deco_lines: Vec<String> = Vec::new();
-    if deco && dive.stops.is_empty() {
-        deco_lines.push(format!(
-            "decompression dive: the ceiling leaves the surface at {} runtime ({} into the \
-             survey; ceiling {:.1} m at the end of the bottom time) at GF {:.0}/{:.0}; the ascent \
-             itself clears it without a stop, but the no-decompression limit is exceeded",
-            mmss(dive.deco_from.unwrap_or(0.0)),
-            mmss(dive.deco_from.unwrap_or(0.0) - dive.descent_time),
-            dive.ceiling_at_end,
-            cfg.gf.low * 100.0,
-            cfg.gf.high * 100.0
-        ));
-    }
-    if deco && !dive.stops.is_empty() {
-        let total: f64 = dive.stops.iter().map(|s| s.duration).sum();
-        let stops = dive
-            .stops
-            .iter()
-            .map(|s| format!("{:.0} m {}", s.depth, mmss(s.duration)))
-            .collect::<Vec<_>>()
-            .join(", ");
-        deco_lines.push(format!(
-            "decompression obligation: the NDL runs out at {} runtime ({} into the survey); \
-             {} of mandatory stops ({stops}) at GF {:.0}/{:.0}",
-            mmss(dive.deco_from.unwrap_or(0.0)),
-            mmss(dive.deco_from.unwrap_or(0.0) - dive.descent_time),
-            mmss(total),
-            cfg.gf.low * 100.0,
-            cfg.gf.high * 100.0
-        ));
-    }
-    let deco_plan = deco.then(|| {
-        let switches: Vec<String> = dive
-            .switches
-            .iter()
-            .skip(1)
-            .filter(|s| s.time > dive.descent_time + dive.bottom_time - 1e-6)
-            .map(|s| {
-                format!(
-                    "{} at {:.0} m",
-                    gas_label(cfg.tanks[s.cylinder].gas),
-                    s.depth
-                )
-            })
-            .collect();
-        format!(
-            "{}; gas switches on the ascent: {}; runtime {}",
-            deco_lines.join("; "),
-            if switches.is_empty() {
-                "none".to_string()
-            } else {
-                switches.join(", ")
-            },
-            mmss(dive.runtime)
-        )
-    });
+    let deco_lines = deco_lines(cfg, dive);
+    let deco_plan = deco.then(|| deco_plan(cfg, dive, &deco_lines));
     if !planned {
         problems.extend(deco_lines);
     } else if deco && dive.ascent_ceiling_excess > CEILING_TOLERANCE {
@@ -1535,89 +1477,8 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
         ));
     }
     let g = &dive.gas;
-    let bar = |l: f64| cfg.supply.pressure_after(cfg.supply.start - l);
-    if !g.reserve_ok {
-        let when = match (g.empty_at, g.reserve_reached_at) {
-            (Some(e), _) => format!("; a cylinder is empty at {} runtime", mmss(e)),
-            (None, Some(r)) => format!("; the reserve is reached at {} runtime", mmss(r)),
-            _ => String::new(),
-        };
-        for (i, c) in g
-            .cylinders
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| !c.reserve_ok)
-        {
-            let t = &cfg.tanks[i];
-            problems.push(format!(
-                "not enough gas in cylinder '{}' ({}, {}): {:.0} l breathed from it, it holds \
-                 {:.0} l ({:.0} l above the {:.0} bar reserve), {:.0} bar left at the end{when}",
-                c.name,
-                c.gas,
-                role_name(t.role),
-                c.used,
-                c.start,
-                c.start - t.reserve,
-                cfg.reserve_bar,
-                c.end_pressure
-            ));
-        }
-    } else {
-        if !g.thirds_ok {
-            problems.push(format!(
-                "rule of thirds broken: {:.0} l used of {:.0} l (at most {:.0} l)",
-                g.used,
-                g.start,
-                g.start * 2.0 / 3.0
-            ));
-        }
-        if !g.min_gas_ok {
-            advice.push(format!(
-                "minimum gas not kept: {:.0} l ({:.0} bar) left at the end of the bottom time, \
-                 {:.0} l ({:.0} bar) needed for an ascent with a problem (SAC×{SAC_FACTOR}, 4 min)",
-                g.at_end_of_bottom,
-                bar(g.at_end_of_bottom),
-                g.min_gas,
-                bar(g.min_gas)
-            ));
-        }
-    }
-    // Narcosis: a breathed gas whose END at its deepest is beyond the limit (advice: the END
-    // limit is a choice of the diver's agency, the pO₂ and hypoxic limits are physiology).
-    for (i, c) in dive.gas.cylinders.iter().enumerate() {
-        let t = &cfg.tanks[i];
-        if c.max_po2.is_none() {
-            continue;
-        }
-        let end = t.gas.end(&cfg.env, c.max_po2_depth);
-        if end > cfg.end_limit + 1e-6 && t.role == CylinderRole::Travel {
-            // A travel gas is chosen for the shallows: breathed past its END, its switch is
-            // too deep, and switching shallower costs nothing.
-            problems.push(format!(
-                "travel gas '{}' ({}) is breathed to {:.1} m, where its END is {end:.1} m, deeper \
-                 than the {:.0} m END limit (O₂ counted as narcotic); its switch depth is {:.0} m, \
-                 at most {:.0} m keeps it within the limit",
-                c.name,
-                c.gas,
-                c.max_po2_depth,
-                depth_limit(cfg.end_limit),
-                depth_limit(t.switch_depth.unwrap_or(0.0)),
-                depth_limit(gas::end_depth(&cfg.env, t.gas, cfg.end_limit)),
-            ));
-        } else if end > cfg.end_limit + 1e-6 {
-            let fit = bottom_gas(&cfg.env, c.max_po2_depth, cfg.po2_limit(t), cfg.end_limit)
-                .map(|b| format!("; e.g. {}", bottom_gas_phrase(&b)))
-                .unwrap_or_default();
-            advice.push(format!(
-                "narcosis: cylinder '{}' ({}) has an END of {end:.1} m at {:.1} m, deeper than \
-                 the {:.0} m END limit (O₂ counted as narcotic){fit}",
-                c.name,
-                c.gas,
-                c.max_po2_depth,
-                depth_limit(cfg.end_limit),
-            ));
-        }
-    }
+    supply_findings(cfg, g, &mut problems, &mut advice);
+    narcosis_findings(cfg, dive, &mut problems, &mut advice);
     let mut suggestions = Vec::new();
     if !g.breathable() {
         // Every other remedy is moot while a gas is unfit: name the gas that would do.
@@ -1675,6 +1536,263 @@ pub fn verdict(cfg: &DiveConfig, track: &Track, dive: &DiveResult) -> Verdict {
         problems,
         advice,
         suggestions,
+    }
+}
+
+/// The problems of the gases themselves: a pO₂ above a cylinder's limit, a hypoxic gas where
+/// it is breathed.
+fn gas_problems(cfg: &DiveConfig, dive: &DiveResult, problems: &mut Vec<String>) {
+    for (i, c) in dive.gas.cylinders.iter().enumerate() {
+        let role = role_name(cfg.tanks[i].role);
+        if !c.po2_ok
+            && let Some(p) = c.max_po2
+        {
+            problems.push(format!(
+                "cylinder '{}' ({}, {role}): pO₂ {p:.2} bar at {:.1} m, above the {:.1} bar limit \
+                 of a {role} gas (MOD {:.0} m){}",
+                c.name,
+                c.gas,
+                c.max_po2_depth,
+                c.po2_limit,
+                depth_limit(c.mod_depth),
+                if cfg.tanks[i].role.switched() {
+                    format!(
+                        "; its switch depth is {:.0} m",
+                        depth_limit(cfg.tanks[i].switch_depth.unwrap_or(0.0))
+                    )
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        if c.hypoxic {
+            let from = gas::breathable_from(&cfg.env, cfg.tanks[i].gas);
+            problems.push(format!(
+                "cylinder '{}' ({}, {role}): hypoxic where it is breathed — pO₂ {:.2} bar at \
+                 {:.1} m, below {:.2} bar; it is breathable only from {:.0} m down{}",
+                c.name,
+                c.gas,
+                c.min_po2.unwrap_or(0.0),
+                c.min_po2_depth,
+                hypoxic_limit(&cfg.env).min(HYPOXIC),
+                from.ceil(),
+                if cfg.tanks[i].role.is_bottom() {
+                    format!(
+                        ": carry a travel gas (`role = \"travel\"`) with a switch depth of at \
+                         least {:.0} m",
+                        from.ceil()
+                    )
+                } else {
+                    String::new()
+                }
+            ));
+        }
+    }
+}
+
+/// Oxygen toxicity (CNS % against the NOAA limits, OTU against a single-dive figure).
+fn oxygen_findings(dive: &DiveResult, problems: &mut Vec<String>, advice: &mut Vec<String>) {
+    let ox = &dive.oxygen;
+    // Beyond the table even within the diver's own limits (a cylinder above its own limit is
+    // reported above already).
+    if ox.max_po2 > oxygen::PO2_TABLE_MAX + 1e-9 && dive.gas.cylinders.iter().all(|c| c.po2_ok) {
+        problems.push(format!(
+            "pO₂ {:.2} bar at {:.1} m ({} runtime), beyond the 1.6 bar end of the NOAA oxygen \
+             limits whatever the diver's own limits; {:.1} min breathed above it (CNS there \
+             extrapolated steeply: ×2.7 per 0.1 bar)",
+            ox.max_po2,
+            ox.max_po2_depth,
+            mmss(ox.max_po2_time),
+            ox.minutes_above_table
+        ));
+    }
+    if ox.cns_percent > oxygen::CNS_LIMIT {
+        problems.push(format!(
+            "CNS oxygen toxicity {:.1} %: above 100 % of the NOAA single-exposure limits \
+             (highest pO₂ {:.2} bar at {:.1} m); breathe a leaner gas or shorten the exposure",
+            ox.cns_percent, ox.max_po2, ox.max_po2_depth
+        ));
+    } else if ox.cns_percent > oxygen::CNS_WARN {
+        advice.push(format!(
+            "CNS oxygen toxicity {:.1} %: above the 80 % warning level of the NOAA \
+             single-exposure limits (highest pO₂ {:.2} bar at {:.1} m); no repetitive dive \
+             on oxygen-rich gas until it has come down (half-time 90 min)",
+            ox.cns_percent, ox.max_po2, ox.max_po2_depth
+        ));
+    }
+    if ox.otu > oxygen::OTU_WARN {
+        advice.push(format!(
+            "pulmonary oxygen exposure {:.0} OTU: above the {:.0} OTU single-dive planning \
+             figure (REPEX: at most 850 OTU in one day)",
+            ox.otu,
+            oxygen::OTU_WARN
+        ));
+    }
+}
+
+/// The decompression obligation in words (none within the NDL).
+fn deco_lines(cfg: &DiveConfig, dive: &DiveResult) -> Vec<String> {
+    let deco = dive.deco_required();
+    let mut deco_lines: Vec<String> = Vec::new();
+    if deco && dive.stops.is_empty() {
+        deco_lines.push(format!(
+            "decompression dive: the ceiling leaves the surface at {} runtime ({} into the \
+             survey; ceiling {:.1} m at the end of the bottom time) at GF {:.0}/{:.0}; the ascent \
+             itself clears it without a stop, but the no-decompression limit is exceeded",
+            mmss(dive.deco_from.unwrap_or(0.0)),
+            mmss(dive.deco_from.unwrap_or(0.0) - dive.descent_time),
+            dive.ceiling_at_end,
+            cfg.gf.low * 100.0,
+            cfg.gf.high * 100.0
+        ));
+    }
+    if deco && !dive.stops.is_empty() {
+        let total: f64 = dive.stops.iter().map(|s| s.duration).sum();
+        let stops = dive
+            .stops
+            .iter()
+            .map(|s| format!("{:.0} m {}", s.depth, mmss(s.duration)))
+            .collect::<Vec<_>>()
+            .join(", ");
+        deco_lines.push(format!(
+            "decompression obligation: the NDL runs out at {} runtime ({} into the survey); \
+             {} of mandatory stops ({stops}) at GF {:.0}/{:.0}",
+            mmss(dive.deco_from.unwrap_or(0.0)),
+            mmss(dive.deco_from.unwrap_or(0.0) - dive.descent_time),
+            mmss(total),
+            cfg.gf.low * 100.0,
+            cfg.gf.high * 100.0
+        ));
+    }
+    deco_lines
+}
+
+/// The decompression plan in words: the obligation, the gas switches on the ascent, the
+/// runtime.
+fn deco_plan(cfg: &DiveConfig, dive: &DiveResult, deco_lines: &[String]) -> String {
+    let switches: Vec<String> = dive
+        .switches
+        .iter()
+        .skip(1)
+        .filter(|s| s.time > dive.descent_time + dive.bottom_time - 1e-6)
+        .map(|s| {
+            format!(
+                "{} at {:.0} m",
+                gas_label(cfg.tanks[s.cylinder].gas),
+                s.depth
+            )
+        })
+        .collect();
+    format!(
+        "{}; gas switches on the ascent: {}; runtime {}",
+        deco_lines.join("; "),
+        if switches.is_empty() {
+            "none".to_string()
+        } else {
+            switches.join(", ")
+        },
+        mmss(dive.runtime)
+    )
+}
+
+/// The gas supply `g`: a cylinder short of its reserve, else the rule of thirds and the
+/// minimum gas.
+fn supply_findings(
+    cfg: &DiveConfig,
+    g: &GasCheck,
+    problems: &mut Vec<String>,
+    advice: &mut Vec<String>,
+) {
+    let bar = |l: f64| cfg.supply.pressure_after(cfg.supply.start - l);
+    if !g.reserve_ok {
+        let when = match (g.empty_at, g.reserve_reached_at) {
+            (Some(e), _) => format!("; a cylinder is empty at {} runtime", mmss(e)),
+            (None, Some(r)) => format!("; the reserve is reached at {} runtime", mmss(r)),
+            _ => String::new(),
+        };
+        for (i, c) in g
+            .cylinders
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| !c.reserve_ok)
+        {
+            let t = &cfg.tanks[i];
+            problems.push(format!(
+                "not enough gas in cylinder '{}' ({}, {}): {:.0} l breathed from it, it holds \
+                 {:.0} l ({:.0} l above the {:.0} bar reserve), {:.0} bar left at the end{when}",
+                c.name,
+                c.gas,
+                role_name(t.role),
+                c.used,
+                c.start,
+                c.start - t.reserve,
+                cfg.reserve_bar,
+                c.end_pressure
+            ));
+        }
+    } else {
+        if !g.thirds_ok {
+            problems.push(format!(
+                "rule of thirds broken: {:.0} l used of {:.0} l (at most {:.0} l)",
+                g.used,
+                g.start,
+                g.start * 2.0 / 3.0
+            ));
+        }
+        if !g.min_gas_ok {
+            advice.push(format!(
+                "minimum gas not kept: {:.0} l ({:.0} bar) left at the end of the bottom time, \
+                 {:.0} l ({:.0} bar) needed for an ascent with a problem (SAC×{SAC_FACTOR}, 4 min)",
+                g.at_end_of_bottom,
+                bar(g.at_end_of_bottom),
+                g.min_gas,
+                bar(g.min_gas)
+            ));
+        }
+    }
+}
+
+/// Narcosis: a breathed gas whose END at its deepest is beyond the limit (advice: the END
+/// limit is a choice of the diver's agency, the pO₂ and hypoxic limits are physiology).
+fn narcosis_findings(
+    cfg: &DiveConfig,
+    dive: &DiveResult,
+    problems: &mut Vec<String>,
+    advice: &mut Vec<String>,
+) {
+    for (i, c) in dive.gas.cylinders.iter().enumerate() {
+        let t = &cfg.tanks[i];
+        if c.max_po2.is_none() {
+            continue;
+        }
+        let end = t.gas.end(&cfg.env, c.max_po2_depth);
+        if end > cfg.end_limit + 1e-6 && t.role == CylinderRole::Travel {
+            // A travel gas is chosen for the shallows: breathed past its END, its switch is
+            // too deep, and switching shallower costs nothing.
+            problems.push(format!(
+                "travel gas '{}' ({}) is breathed to {:.1} m, where its END is {end:.1} m, deeper \
+                 than the {:.0} m END limit (O₂ counted as narcotic); its switch depth is {:.0} m, \
+                 at most {:.0} m keeps it within the limit",
+                c.name,
+                c.gas,
+                c.max_po2_depth,
+                depth_limit(cfg.end_limit),
+                depth_limit(t.switch_depth.unwrap_or(0.0)),
+                depth_limit(gas::end_depth(&cfg.env, t.gas, cfg.end_limit)),
+            ));
+        } else if end > cfg.end_limit + 1e-6 {
+            let fit = bottom_gas(&cfg.env, c.max_po2_depth, cfg.po2_limit(t), cfg.end_limit)
+                .map(|b| format!("; e.g. {}", bottom_gas_phrase(&b)))
+                .unwrap_or_default();
+            advice.push(format!(
+                "narcosis: cylinder '{}' ({}) has an END of {end:.1} m at {:.1} m, deeper than \
+                 the {:.0} m END limit (O₂ counted as narcotic){fit}",
+                c.name,
+                c.gas,
+                c.max_po2_depth,
+                depth_limit(cfg.end_limit),
+            ));
+        }
     }
 }
 

@@ -329,20 +329,7 @@ pub fn expand(
     match spec {
         NetworkSpec::Explicit { poses } => {
             summary.kind = "explicit".into();
-            for (i, p) in poses.iter().enumerate() {
-                finite3(p.position, "pose position")?;
-                let rot = match &p.orientation {
-                    Orientation::LookAt { target, up } => {
-                        finite3(*target, "look_at target")?;
-                        look_rotation(*target - p.position, *up).ok_or_else(|| {
-                            format!("pose {}: the look-at target coincides with the position or the up vector is parallel to the view direction", i + 1)
-                        })?
-                    }
-                    Orientation::Rotation { rotation } => *rotation,
-                };
-                b.travel_to(p.position);
-                b.shoot(rot, 0);
-            }
+            explicit_poses(&mut b, poses)?;
             summary.strips = 1;
         }
         NetworkSpec::Lawnmower {
@@ -389,52 +376,9 @@ pub fn expand(
                 passes.push((*heading, *width, *length, *obliques));
                 summary.kind.push_str("+obliques");
             }
-            let mut strip_no = 0u32;
-            let mut strip_spacing_used = None;
-            for (h, w, l, pass_tilt) in passes {
-                let a = DVec3::new(h.sin(), h.cos(), 0.0);
-                let c = DVec3::new(h.cos(), -h.sin(), 0.0);
-                let n_strips = match strips {
-                    Some(n) if *n >= 1 => *n as usize,
-                    Some(_) => return Err("`strips` must be at least 1".into()),
-                    None => {
-                        let s = strip_gap;
-                        if w <= 0.0 {
-                            1
-                        } else {
-                            (w / s - 1e-9).ceil() as usize + 1
-                        }
-                    }
-                };
-                check_count(n_strips, 1)?;
-                let ss = if n_strips > 1 {
-                    w / (n_strips - 1) as f64
-                } else {
-                    0.0
-                };
-                strip_spacing_used.get_or_insert(ss);
-                let per_strip = (l / along + 1e-9).floor() as usize + 1;
-                check_count(n_strips, per_strip)?;
-                let span = (per_strip - 1) as f64 * along;
-                let c0 = DVec3::new(center.x, center.y, z);
-                for i in 0..n_strips {
-                    // One strip runs down the middle of the area.
-                    let off = if n_strips == 1 {
-                        0.0
-                    } else {
-                        -w / 2.0 + i as f64 * ss
-                    };
-                    let dir = if i % 2 == 0 { a } else { -a };
-                    let base = c0 + c * off;
-                    let rot = nadir_rotation(dir, pass_tilt);
-                    for k in 0..per_strip {
-                        let s = -span / 2.0 + k as f64 * along;
-                        b.travel_to(base + dir * s);
-                        b.shoot(rot, strip_no);
-                    }
-                    strip_no += 1;
-                }
-            }
+            let c0 = DVec3::new(center.x, center.y, z);
+            let (strip_no, strip_spacing_used) =
+                lawnmower_strips(&mut b, &passes, *strips, strip_gap, along, c0)?;
             summary.altitude = Some(*altitude);
             summary.spacing = Some(along);
             summary.strip_spacing = strip_spacing_used;
@@ -470,26 +414,8 @@ pub fn expand(
             let s_end = spiral_arc(bcoef, theta_end);
             let n = (s_end / along + 1e-9).floor() as usize + 1;
             check_count(n, 1)?;
-            let z = ctx.seabed_z + altitude;
-            let mut theta = 0.0;
-            for k in 0..n {
-                let target = k as f64 * along;
-                theta = spiral_theta(bcoef, target, theta);
-                let r = bcoef * theta;
-                let p = DVec3::new(center.x + r * theta.cos(), center.y + r * theta.sin(), z);
-                // Tangent of (r cos θ, r sin θ): (b cos θ − r sin θ, b sin θ + r cos θ).
-                let t = DVec3::new(
-                    bcoef * theta.cos() - r * theta.sin(),
-                    bcoef * theta.sin() + r * theta.cos(),
-                    0.0,
-                )
-                .normalize();
-                b.travel_to(p);
-                b.shoot(
-                    nadir_rotation(t, 0.0),
-                    (theta / std::f64::consts::TAU) as u32,
-                );
-            }
+            let c0 = DVec3::new(center.x, center.y, ctx.seabed_z + altitude);
+            spiral_poses(&mut b, c0, bcoef, along, n);
             summary.altitude = Some(*altitude);
             summary.spacing = Some(along);
             summary.strip_spacing = Some(turn);
@@ -515,27 +441,7 @@ pub fn expand(
                 return Err("`per_ring` must be at least 1".into());
             }
             check_count(elevations.len(), *per_ring as usize)?;
-            for (ring, &e) in elevations.iter().enumerate() {
-                if !(e.is_finite() && e.abs() < std::f64::consts::FRAC_PI_2 + 1e-12) {
-                    return Err(format!(
-                        "ring elevation {} deg is outside [-90, 90]",
-                        e.to_degrees()
-                    ));
-                }
-                for k in 0..*per_ring {
-                    let phi = std::f64::consts::TAU * k as f64 / *per_ring as f64;
-                    let p = *center
-                        + *radius * DVec3::new(e.cos() * phi.cos(), e.cos() * phi.sin(), e.sin());
-                    let up = if e.cos() < 1e-6 {
-                        DVec3::new(-phi.cos(), -phi.sin(), 0.0) * e.signum()
-                    } else {
-                        DVec3::Z
-                    };
-                    let rot = look_rotation(*center - p, up).ok_or("degenerate orbit pose")?;
-                    b.travel_to(p);
-                    b.shoot(rot, ring as u32);
-                }
-            }
+            orbit_poses(&mut b, *center, *radius, elevations, *per_ring)?;
             summary.strips = elevations.len() as u32;
         }
     }
@@ -546,6 +452,142 @@ pub fn expand(
     summary.path_length = b.distance;
     summary.duration = b.distance / ctx.speed;
     Ok((b.poses, summary))
+}
+
+/// The poses of an explicit network, in order, each at its position, looking at its target
+/// or with its rotation.
+fn explicit_poses(b: &mut Builder, poses: &[ExplicitPose]) -> Result<(), String> {
+    for (i, p) in poses.iter().enumerate() {
+        finite3(p.position, "pose position")?;
+        let rot = match &p.orientation {
+            Orientation::LookAt { target, up } => {
+                finite3(*target, "look_at target")?;
+                look_rotation(*target - p.position, *up).ok_or_else(|| {
+                    format!("pose {}: the look-at target coincides with the position or the up vector is parallel to the view direction", i + 1)
+                })?
+            }
+            Orientation::Rotation { rotation } => *rotation,
+        };
+        b.travel_to(p.position);
+        b.shoot(rot, 0);
+    }
+    Ok(())
+}
+
+/// The strips of a lawnmower's passes (heading, width, length, tilt) over the area centred on
+/// `c0` (at the altitude's depth): `strips` of them per pass, else as many as `strip_gap` asks,
+/// boustrophedon, a pose every `along` m. Returns the number of strips and the spacing of the
+/// first pass's.
+fn lawnmower_strips(
+    b: &mut Builder,
+    passes: &[(f64, f64, f64, f64)],
+    strips: Option<u32>,
+    strip_gap: f64,
+    along: f64,
+    c0: DVec3,
+) -> Result<(u32, Option<f64>), String> {
+    let mut strip_no = 0u32;
+    let mut strip_spacing_used = None;
+    for &(h, w, l, pass_tilt) in passes {
+        let a = DVec3::new(h.sin(), h.cos(), 0.0);
+        let c = DVec3::new(h.cos(), -h.sin(), 0.0);
+        let n_strips = match strips {
+            Some(n) if n >= 1 => n as usize,
+            Some(_) => return Err("`strips` must be at least 1".into()),
+            None => {
+                let s = strip_gap;
+                if w <= 0.0 {
+                    1
+                } else {
+                    (w / s - 1e-9).ceil() as usize + 1
+                }
+            }
+        };
+        check_count(n_strips, 1)?;
+        let ss = if n_strips > 1 {
+            w / (n_strips - 1) as f64
+        } else {
+            0.0
+        };
+        strip_spacing_used.get_or_insert(ss);
+        let per_strip = (l / along + 1e-9).floor() as usize + 1;
+        check_count(n_strips, per_strip)?;
+        let span = (per_strip - 1) as f64 * along;
+        for i in 0..n_strips {
+            // One strip runs down the middle of the area.
+            let off = if n_strips == 1 {
+                0.0
+            } else {
+                -w / 2.0 + i as f64 * ss
+            };
+            let dir = if i % 2 == 0 { a } else { -a };
+            let base = c0 + c * off;
+            let rot = nadir_rotation(dir, pass_tilt);
+            for k in 0..per_strip {
+                let s = -span / 2.0 + k as f64 * along;
+                b.travel_to(base + dir * s);
+                b.shoot(rot, strip_no);
+            }
+            strip_no += 1;
+        }
+    }
+    Ok((strip_no, strip_spacing_used))
+}
+
+/// `n` poses along the Archimedean spiral r = `bcoef` θ around `c0`, `along` m apart, nadir,
+/// heading along the tangent; the strip is the turn.
+fn spiral_poses(b: &mut Builder, c0: DVec3, bcoef: f64, along: f64, n: usize) {
+    let mut theta = 0.0;
+    for k in 0..n {
+        let target = k as f64 * along;
+        theta = spiral_theta(bcoef, target, theta);
+        let r = bcoef * theta;
+        let p = DVec3::new(c0.x + r * theta.cos(), c0.y + r * theta.sin(), c0.z);
+        // Tangent of (r cos θ, r sin θ): (b cos θ − r sin θ, b sin θ + r cos θ).
+        let t = DVec3::new(
+            bcoef * theta.cos() - r * theta.sin(),
+            bcoef * theta.sin() + r * theta.cos(),
+            0.0,
+        )
+        .normalize();
+        b.travel_to(p);
+        b.shoot(
+            nadir_rotation(t, 0.0),
+            (theta / std::f64::consts::TAU) as u32,
+        );
+    }
+}
+
+/// The rings of an orbit around `center`: `per_ring` poses on each elevation, looking at the
+/// centre.
+fn orbit_poses(
+    b: &mut Builder,
+    center: DVec3,
+    radius: f64,
+    elevations: &[f64],
+    per_ring: u32,
+) -> Result<(), String> {
+    for (ring, &e) in elevations.iter().enumerate() {
+        if !(e.is_finite() && e.abs() < std::f64::consts::FRAC_PI_2 + 1e-12) {
+            return Err(format!(
+                "ring elevation {} deg is outside [-90, 90]",
+                e.to_degrees()
+            ));
+        }
+        for k in 0..per_ring {
+            let phi = std::f64::consts::TAU * k as f64 / per_ring as f64;
+            let p = center + radius * DVec3::new(e.cos() * phi.cos(), e.cos() * phi.sin(), e.sin());
+            let up = if e.cos() < 1e-6 {
+                DVec3::new(-phi.cos(), -phi.sin(), 0.0) * e.signum()
+            } else {
+                DVec3::Z
+            };
+            let rot = look_rotation(center - p, up).ok_or("degenerate orbit pose")?;
+            b.travel_to(p);
+            b.shoot(rot, ring as u32);
+        }
+    }
+    Ok(())
 }
 
 /// Accumulates the swim path and the poses along it.

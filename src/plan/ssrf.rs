@@ -115,31 +115,7 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
 
     // Cylinders: each with its own gas and the pressure the simulation left in it.
     for (t, u) in cfg.tanks.iter().zip(&dive.gas.cylinders) {
-        let mut attrs = vec![
-            ("size", format!("{} l", milli(t.volume))),
-            ("workpressure", format!("{} bar", milli(t.fill))),
-            ("description", t.name.clone()),
-            ("o2", pct(t.gas.o2)),
-        ];
-        if t.gas.he > 0.0 {
-            attrs.push(("he", pct(t.gas.he)));
-        }
-        if t.role.switched() {
-            attrs.push(("use", "OC-gas".into()));
-            if let Some(d) = t.switch_depth {
-                attrs.push(("depth", format!("{} m", milli(d))));
-            }
-        }
-        attrs.push(("start", format!("{} bar", milli(t.fill))));
-        // Subsurface ignores a pressure of 0; an empty cylinder is written as 1 bar.
-        attrs.push((
-            "end",
-            format!(
-                "{} bar",
-                milli(((u.end_pressure * 1000.0).round() / 1000.0).max(1.0))
-            ),
-        ));
-        empty(&mut w, "cylinder", &attrs)?;
+        empty(&mut w, "cylinder", &cylinder_attrs(t, u))?;
     }
     start(
         &mut w,
@@ -160,7 +136,55 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
         )],
     )?;
     empty(&mut w, "water", &[("salinity", salinity.into())])?;
-    // Gas changes (Subsurface's `gaschange` events: type 11 O₂ %, type 25 O₂ % + He % << 16).
+    gas_changes(&mut w, report)?;
+    for s in &dive.samples {
+        empty(&mut w, "sample", &sample_attrs(s))?;
+    }
+    end(&mut w, "divecomputer")?;
+    end(&mut w, "dive")?;
+    end(&mut w, "dives")?;
+    end(&mut w, "divelog")?;
+    let mut out = w.into_inner();
+    out.push(b'\n');
+    Ok(out)
+}
+
+/// A cylinder's attributes: size, working pressure, gas, its use and switch depth, and the
+/// start and end pressures of the simulation.
+fn cylinder_attrs(
+    t: &super::gas::Tank,
+    u: &super::gas::CylinderUse,
+) -> Vec<(&'static str, String)> {
+    let mut attrs = vec![
+        ("size", format!("{} l", milli(t.volume))),
+        ("workpressure", format!("{} bar", milli(t.fill))),
+        ("description", t.name.clone()),
+        ("o2", pct(t.gas.o2)),
+    ];
+    if t.gas.he > 0.0 {
+        attrs.push(("he", pct(t.gas.he)));
+    }
+    if t.role.switched() {
+        attrs.push(("use", "OC-gas".into()));
+        if let Some(d) = t.switch_depth {
+            attrs.push(("depth", format!("{} m", milli(d))));
+        }
+    }
+    attrs.push(("start", format!("{} bar", milli(t.fill))));
+    // Subsurface ignores a pressure of 0; an empty cylinder is written as 1 bar.
+    attrs.push((
+        "end",
+        format!(
+            "{} bar",
+            milli(((u.end_pressure * 1000.0).round() / 1000.0).max(1.0))
+        ),
+    ));
+    attrs
+}
+
+/// The gas changes as Subsurface's `gaschange` events (type 11: O₂ %; type 25: O₂ % + He % << 16).
+fn gas_changes(w: &mut W, report: &DiveReport) -> Result<(), String> {
+    let (cfg, dive) = (&report.config, &report.dive);
     for sw in &dive.switches {
         if sw.time <= 0.0 && sw.cylinder == 0 {
             continue;
@@ -169,7 +193,7 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
         let o2 = (g.o2 * 100.0).round() as u32;
         let he = (g.he * 100.0).round() as u32;
         empty(
-            &mut w,
+            w,
             "event",
             &[
                 ("time", min_sec(sw.time.round())),
@@ -180,57 +204,54 @@ pub fn to_ssrf(model: &Model, report: &DiveReport) -> Result<Vec<u8>, String> {
             ],
         )?;
     }
-    for s in &dive.samples {
-        let mut a = vec![
-            ("time", min_sec(s.time)),
-            (
-                "depth",
-                format!("{} m", milli((s.depth * 100.0).round() / 100.0)),
-            ),
-        ];
-        // One pressure per cylinder (`pressure`, `pressure1`…`pressure4`). Subsurface reads a
-        // pressure of 0 as "no value": write the floor 1 bar when empty.
-        for (i, p) in s.pressures.iter().enumerate().take(5) {
-            let key = [
-                "pressure",
-                "pressure1",
-                "pressure2",
-                "pressure3",
-                "pressure4",
-            ][i];
-            a.push((
-                key,
-                format!("{} bar", milli(((p * 10.0).round() / 10.0).max(1.0))),
-            ));
-        }
-        match s.ndl {
-            Some(Ndl::Limit(n)) => a.push(("ndl", min_sec((n / 60.0).floor() * 60.0))),
-            Some(Ndl::Unlimited) => a.push(("ndl", min_sec(super::deco::NDL_CAP))),
-            Some(Ndl::InDeco) | None => a.push(("ndl", min_sec(0.0))),
-        }
-        a.push(("tts", min_sec((s.tts / 60.0).ceil() * 60.0)));
-        if s.in_deco {
-            a.push(("in_deco", "1".into()));
-            if let Some(d) = s.stop_depth {
-                a.push(("stopdepth", format!("{} m", milli(d))));
-            }
-            // Always written: Subsurface copies an omitted value from the previous sample.
-            let t = s.stop_time.unwrap_or(0.0);
-            a.push(("stoptime", min_sec((t / 60.0).ceil() * 60.0)));
-        } else {
-            a.push(("in_deco", "0".into()));
-            a.push(("stopdepth", "0.0 m".into()));
-            a.push(("stoptime", min_sec(0.0)));
-        }
-        empty(&mut w, "sample", &a)?;
+    Ok(())
+}
+
+/// A profile sample's attributes: time, depth, one pressure per cylinder, NDL, TTS and the
+/// decompression state.
+fn sample_attrs(s: &super::dive::Sample) -> Vec<(&'static str, String)> {
+    let mut a = vec![
+        ("time", min_sec(s.time)),
+        (
+            "depth",
+            format!("{} m", milli((s.depth * 100.0).round() / 100.0)),
+        ),
+    ];
+    // One pressure per cylinder (`pressure`, `pressure1`…`pressure4`). Subsurface reads a
+    // pressure of 0 as "no value": write the floor 1 bar when empty.
+    for (i, p) in s.pressures.iter().enumerate().take(5) {
+        let key = [
+            "pressure",
+            "pressure1",
+            "pressure2",
+            "pressure3",
+            "pressure4",
+        ][i];
+        a.push((
+            key,
+            format!("{} bar", milli(((p * 10.0).round() / 10.0).max(1.0))),
+        ));
     }
-    end(&mut w, "divecomputer")?;
-    end(&mut w, "dive")?;
-    end(&mut w, "dives")?;
-    end(&mut w, "divelog")?;
-    let mut out = w.into_inner();
-    out.push(b'\n');
-    Ok(out)
+    match s.ndl {
+        Some(Ndl::Limit(n)) => a.push(("ndl", min_sec((n / 60.0).floor() * 60.0))),
+        Some(Ndl::Unlimited) => a.push(("ndl", min_sec(super::deco::NDL_CAP))),
+        Some(Ndl::InDeco) | None => a.push(("ndl", min_sec(0.0))),
+    }
+    a.push(("tts", min_sec((s.tts / 60.0).ceil() * 60.0)));
+    if s.in_deco {
+        a.push(("in_deco", "1".into()));
+        if let Some(d) = s.stop_depth {
+            a.push(("stopdepth", format!("{} m", milli(d))));
+        }
+        // Always written: Subsurface copies an omitted value from the previous sample.
+        let t = s.stop_time.unwrap_or(0.0);
+        a.push(("stoptime", min_sec((t / 60.0).ceil() * 60.0)));
+    } else {
+        a.push(("in_deco", "0".into()));
+        a.push(("stopdepth", "0.0 m".into()));
+        a.push(("stoptime", min_sec(0.0)));
+    }
+    a
 }
 
 #[cfg(test)]

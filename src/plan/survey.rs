@@ -211,34 +211,9 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
 
     // GSD, distance and footprint at up to 400 poses.
     let idx = sample_indices(n, 400);
-    // (GSD, distance, GSD factor of the port, footprint across, footprint along) per pose.
-    type PoseMetrics = (f64, f64, f64, f64, f64);
     let per: Vec<Option<PoseMetrics>> = idx
         .par_iter()
-        .map(|&i| {
-            let (o, d, _) = proj
-                .pixel_ray_world(i, proj.width / 2.0, proj.height / 2.0)
-                .ok()?;
-            let p = site.hit(o, d)?;
-            let w = proj.world_from_camera(i);
-            let pc = w.inverse().transform_point(p);
-            let g = gsd_at(&proj, pc)?;
-            let air = pc.z / cam.fx;
-            let corners = [
-                (0.0, 0.0),
-                (proj.width, 0.0),
-                (proj.width, proj.height),
-                (0.0, proj.height),
-            ];
-            let mut hits = Vec::new();
-            for (u, v) in corners {
-                let (o, d, _) = proj.pixel_ray_world(i, u, v).ok()?;
-                hits.push(site.hit(o, d)?);
-            }
-            let across = 0.5 * ((hits[1] - hits[0]).length() + (hits[2] - hits[3]).length());
-            let along = 0.5 * ((hits[3] - hits[0]).length() + (hits[2] - hits[1]).length());
-            Some((g, (p - w.translation).length(), g / air, across, along))
-        })
+        .map(|&i| pose_metrics(&proj, site, cam, i))
         .collect();
     let ok: Vec<PoseMetrics> = per.into_iter().flatten().collect();
     if ok.len() < idx.len() {
@@ -251,6 +226,95 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
     let col = |k: usize| -> Vec<f64> { ok.iter().map(|t| [t.0, t.1, t.2, t.3, t.4][k]).collect() };
 
     // Forward pairs: consecutive poses of one strip; side pairs: nearest pose of the next strip.
+    let (fwd, side) = strip_pairs(model);
+    let pick = |pairs: &[(usize, usize)]| -> Vec<(usize, usize)> {
+        sample_indices(pairs.len(), 200)
+            .into_iter()
+            .map(|k| pairs[k])
+            .collect()
+    };
+    let frac = |pairs: Vec<(usize, usize)>| -> Vec<f64> {
+        pairs
+            .par_iter()
+            .filter_map(|&(i, j)| shared_fraction(&proj, site, i, j))
+            .collect()
+    };
+    let overlap = Stats::of(&frac(pick(&fwd)));
+    let sidelap = Stats::of(&frac(pick(&side)));
+
+    // What would restore the nominal overlaps on the real footprint.
+    let fp_across = Stats::of(&col(3));
+    let fp_along = Stats::of(&col(4));
+    overlap_notes(model, (overlap, sidelap), (fp_across, fp_along), &mut notes);
+    let distance_for_gsd = [0.25e-3, 0.5e-3, 1e-3, 2e-3]
+        .iter()
+        .filter_map(|&g| distance_for_gsd(&proj, g).map(|d| (g, d)))
+        .collect();
+    Ok(SurveyReport {
+        images: n * model.cameras.len(),
+        rig_poses: n,
+        cameras: model.cameras.len(),
+        strips: model.network.strips,
+        network: model.network.kind.clone(),
+        path_length: model.network.path_length,
+        speed: model.network.speed,
+        duration: model.network.duration,
+        port: cam.port.kind_name().to_string(),
+        gsd: Stats::of(&col(0)),
+        distance: Stats::of(&col(1)),
+        port_gsd_factor: Stats::of(&col(2)).map(|s| s.mean),
+        footprint_across: fp_across,
+        footprint_along: fp_along,
+        overlap,
+        sidelap,
+        nominal_overlap: model.network.overlap_requested,
+        nominal_sidelap: model.network.sidelap_requested,
+        nominal_altitude: model.network.altitude,
+        distance_for_gsd,
+        notes,
+    })
+}
+
+/// (GSD, distance, GSD factor of the port, footprint across, footprint along) of one pose.
+type PoseMetrics = (f64, f64, f64, f64, f64);
+
+/// The metrics of pose `i` where its centre ray meets the site, with the footprint of its four
+/// corners; `None` when the centre or a corner misses the site.
+fn pose_metrics(
+    proj: &Projector,
+    site: &Site,
+    cam: &crate::model::Camera,
+    i: usize,
+) -> Option<PoseMetrics> {
+    let (o, d, _) = proj
+        .pixel_ray_world(i, proj.width / 2.0, proj.height / 2.0)
+        .ok()?;
+    let p = site.hit(o, d)?;
+    let w = proj.world_from_camera(i);
+    let pc = w.inverse().transform_point(p);
+    let g = gsd_at(&proj, pc)?;
+    let air = pc.z / cam.fx;
+    let corners = [
+        (0.0, 0.0),
+        (proj.width, 0.0),
+        (proj.width, proj.height),
+        (0.0, proj.height),
+    ];
+    let mut hits = Vec::new();
+    for (u, v) in corners {
+        let (o, d, _) = proj.pixel_ray_world(i, u, v).ok()?;
+        hits.push(site.hit(o, d)?);
+    }
+    let across = 0.5 * ((hits[1] - hits[0]).length() + (hits[2] - hits[3]).length());
+    let along = 0.5 * ((hits[3] - hits[0]).length() + (hits[2] - hits[1]).length());
+    Some((g, (p - w.translation).length(), g / air, across, along))
+}
+
+/// The image pairs whose overlaps are measured: forward pairs, consecutive poses (in time) of
+/// one strip; side pairs, each pose with the nearest pose of the next strip.
+#[allow(clippy::type_complexity)]
+fn strip_pairs(model: &Model) -> (Vec<(usize, usize)>, Vec<(usize, usize)>) {
+    let n = model.poses.len();
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| model.poses[a].time.total_cmp(&model.poses[b].time));
     let fwd: Vec<(usize, usize)> = order
@@ -273,24 +337,18 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
             side.push((i, j));
         }
     }
-    let pick = |pairs: &[(usize, usize)]| -> Vec<(usize, usize)> {
-        sample_indices(pairs.len(), 200)
-            .into_iter()
-            .map(|k| pairs[k])
-            .collect()
-    };
-    let frac = |pairs: Vec<(usize, usize)>| -> Vec<f64> {
-        pairs
-            .par_iter()
-            .filter_map(|&(i, j)| shared_fraction(&proj, site, i, j))
-            .collect()
-    };
-    let overlap = Stats::of(&frac(pick(&fwd)));
-    let sidelap = Stats::of(&frac(pick(&side)));
+    (fwd, side)
+}
 
-    // What would restore the nominal overlaps on the real footprint.
-    let fp_across = Stats::of(&col(3));
-    let fp_along = Stats::of(&col(4));
+/// What would restore the nominal overlaps on the real footprint: the trigger spacing and the
+/// strip spacing that give them, as notes.
+fn overlap_notes(
+    model: &Model,
+    (overlap, sidelap): (Option<Stats>, Option<Stats>),
+    (fp_across, fp_along): (Option<Stats>, Option<Stats>),
+    notes: &mut Vec<String>,
+) {
+    let n = model.poses.len();
     if let (Some(o), Some(nom), Some(fp), Some(sp)) = (
         overlap,
         model.network.overlap_requested,
@@ -340,33 +398,6 @@ pub fn survey(model: &Model, site: &Site) -> Result<SurveyReport, String> {
             model.network.strips
         ));
     }
-    let distance_for_gsd = [0.25e-3, 0.5e-3, 1e-3, 2e-3]
-        .iter()
-        .filter_map(|&g| distance_for_gsd(&proj, g).map(|d| (g, d)))
-        .collect();
-    Ok(SurveyReport {
-        images: n * model.cameras.len(),
-        rig_poses: n,
-        cameras: model.cameras.len(),
-        strips: model.network.strips,
-        network: model.network.kind.clone(),
-        path_length: model.network.path_length,
-        speed: model.network.speed,
-        duration: model.network.duration,
-        port: cam.port.kind_name().to_string(),
-        gsd: Stats::of(&col(0)),
-        distance: Stats::of(&col(1)),
-        port_gsd_factor: Stats::of(&col(2)).map(|s| s.mean),
-        footprint_across: fp_across,
-        footprint_along: fp_along,
-        overlap,
-        sidelap,
-        nominal_overlap: model.network.overlap_requested,
-        nominal_sidelap: model.network.sidelap_requested,
-        nominal_altitude: model.network.altitude,
-        distance_for_gsd,
-        notes,
-    })
 }
 
 // ------------------------------------------------------------------------------------------

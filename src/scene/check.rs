@@ -165,7 +165,19 @@ pub fn index(cx: &mut Cx, t: &Tab, key: &str, v: Rgb) {
 pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
     camera_above_surface(cx, m, spans);
     camera_below_seabed(cx, m, spans);
-    // Target or object point inside the port glass (or between the pupil and the port).
+    if target_inside_port(cx, m, spans) {
+        return;
+    }
+    ports_overlap(cx, m, spans);
+    wide_lens_behind_flat_port(cx, m, spans);
+    overlap_delivered(cx, m, spans);
+    seabed_seen(cx, m, spans);
+    strobes_near_axis(cx, m, spans);
+}
+
+/// A target point inside the port glass (or between the pupil and the port) of a camera
+/// (E0400, the first found). Returns whether there is one.
+fn target_inside_port(cx: &mut Cx, m: &Model, spans: &Spans) -> bool {
     for (pi, _) in m.poses.iter().enumerate().take(2000) {
         for (ci, cam) in m.cameras.iter().enumerate() {
             let cam_from_world = m.world_from_camera(pi, ci).inverse();
@@ -182,12 +194,16 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
                                 .help("move the target or the camera: targets must be in the water in front of the port"),
                         );
                     }
-                    return;
+                    return true;
                 }
             }
         }
     }
-    // Overlapping port surfaces between cameras of a rig (two housings intersecting).
+    false
+}
+
+/// Overlapping port surfaces between cameras of a rig: two housings intersecting (E0401).
+fn ports_overlap(cx: &mut Cx, m: &Model, spans: &Spans) {
     for i in 0..m.cameras.len() {
         for j in 0..i {
             let (a, b) = (&m.cameras[i], &m.cameras[j]);
@@ -216,8 +232,11 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
             }
         }
     }
-    // A very wide lens behind a flat port in water: the corners bend strongly (distortion and
-    // lateral colour grow fast); a dome port is the usual remedy.
+}
+
+/// A very wide lens behind a flat port in water (W0250): the corners bend strongly
+/// (distortion and lateral colour grow fast); a dome port is the usual remedy.
+fn wide_lens_behind_flat_port(cx: &mut Cx, m: &Model, spans: &Spans) {
     if m.water.is_some() {
         for (i, c) in m.cameras.iter().enumerate() {
             if !matches!(c.port, Port::Flat { .. }) {
@@ -247,6 +266,11 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
             }
         }
     }
+}
+
+/// A doubtful side-lap (W0300), and what the network delivers against the overlaps asked
+/// (W0301; exact footprint over a flat seabed).
+fn overlap_delivered(cx: &mut Cx, m: &Model, spans: &Spans) {
     // Doubtful side-lap.
     if let (Some(s), Some(sp)) = (m.network.sidelap, spans.sidelap)
         && s < 0.6
@@ -294,8 +318,10 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
             );
         }
     }
-    seabed_seen(cx, m, spans);
-    // Strobes close to the optical axis and port: backscatter dominates.
+}
+
+/// Strobes close to the optical axis and port, where backscatter dominates (W0310).
+fn strobes_near_axis(cx: &mut Cx, m: &Model, spans: &Spans) {
     if let Some(w) = &m.water {
         let scatter = w.scattering.iter().cloned().fold(0.0, f64::max);
         for (li, l) in m.lights.iter().enumerate() {

@@ -534,6 +534,94 @@ pub fn unset_leftovers(node: &mut Node, path: &str, diags: &mut Vec<Diagnostic>)
     }
 }
 
+/// E0011 when `path` (canonical `canon`) is already being loaded (`stack`): the cycle, from
+/// the file where it starts back to `path`.
+fn include_cycle(
+    path: &Path,
+    canon: &Path,
+    sources: &Sources,
+    stack: &[PathBuf],
+    included_from: Option<Span>,
+) -> Option<Diagnostic> {
+    let pos = stack.iter().position(|p| p.as_path() == canon)?;
+    let chain: Vec<String> = sources
+        .paths
+        .iter()
+        .flatten()
+        .filter(|p| {
+            p.canonicalize()
+                .ok()
+                .is_some_and(|c| stack[pos..].contains(&c))
+        })
+        .map(|p| display(p))
+        .chain(std::iter::once(display(path)))
+        .collect();
+    let mut d = Diagnostic::error("E0011", "include cycle").help(
+        "remove one of the includes in the cycle; an included file must not include its includer",
+    );
+    if let Some(s) = included_from {
+        d = d.label(s, format!("includes `{}` again", display(path)));
+    }
+    Some(d.note(format!("cycle: {}", chain.join(" → "))))
+}
+
+/// E0010 for a scene file (or an include, named at `included_from`) that cannot be read.
+fn unreadable(path: &Path, r: &Refusal, included_from: Option<Span>) -> Diagnostic {
+    let mut d = Diagnostic::error(
+        "E0010",
+        format!("cannot read `{}`: {}", display(path), r.reason()),
+    );
+    let help = match r {
+        Refusal::Unreadable(_) => None,
+        Refusal::NotAFile(_) => Some(
+            "a scene and its includes are TOML text files; folders, devices and named pipes are never read",
+        ),
+        Refusal::TooLarge { .. } => Some(
+            "a scene file is text of at most 16 MiB: keep large data in the meshes and point lists it names",
+        ),
+    };
+    d = match included_from {
+        Some(s) => d.label(s, "included here").help(help.unwrap_or(
+            "include paths are relative to the file that includes them; check the spelling",
+        )),
+        None => d.help(help.unwrap_or("check the path of the scene file")),
+    };
+    d
+}
+
+/// E0010 for a file that is not UTF-8 text (a bad byte `byte` at `at`): one diagnostic that
+/// quotes none of the file's bytes but the harmless text before the bad one.
+fn not_text_diag(
+    path: &Path,
+    bytes: &[u8],
+    (at, byte): (usize, u8),
+    sources: &mut Sources,
+    included_from: Option<Span>,
+) -> Diagnostic {
+    // One diagnostic that quotes none of the file's bytes: only the text before the first
+    // bad byte, made harmless, and a replacement character where it is.
+    let mut shown = harmless_prefix(bytes, at);
+    shown.push('\u{FFFD}');
+    let file = sources.add(display(path), shown, Some(path.to_path_buf()));
+    let bad = Span {
+        file,
+        start: at,
+        end: at + '\u{FFFD}'.len_utf8(),
+    };
+    let what = if byte == 0 {
+        "a NUL byte".to_string()
+    } else {
+        format!("byte 0x{byte:02x}, not UTF-8")
+    };
+    let mut d = Diagnostic::error("E0010", format!("`{}` is not a text file", display(path)))
+        .label(bad, format!("{what} here"))
+        .help("a scene is UTF-8 TOML text: check that the path names a scene and not an image or other binary file, or save the file as UTF-8");
+    if let Some(s) = included_from {
+        d = d.also(s, "included here");
+    }
+    d
+}
+
 /// Load `path` with its includes (recursively, relative to the including file), merged:
 /// included files first in order, then the file itself on top.
 pub fn load_file(
@@ -544,25 +632,8 @@ pub fn load_file(
     included_from: Option<Span>,
 ) -> Option<Node> {
     let canon = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
-    if let Some(pos) = stack.iter().position(|p| *p == canon) {
-        let chain: Vec<String> = sources
-            .paths
-            .iter()
-            .flatten()
-            .filter(|p| {
-                p.canonicalize()
-                    .ok()
-                    .is_some_and(|c| stack[pos..].contains(&c))
-            })
-            .map(|p| display(p))
-            .chain(std::iter::once(display(path)))
-            .collect();
-        let mut d = Diagnostic::error("E0011", "include cycle")
-            .help("remove one of the includes in the cycle; an included file must not include its includer");
-        if let Some(s) = included_from {
-            d = d.label(s, format!("includes `{}` again", display(path)));
-        }
-        diags.push(d.note(format!("cycle: {}", chain.join(" → "))));
+    if let Some(d) = include_cycle(path, &canon, sources, stack, included_from) {
+        diags.push(d);
         return None;
     }
     if stack.len() > 32 {
@@ -587,52 +658,18 @@ pub fn load_file(
     let bytes = match read_capped(path, MAX_SCENE_BYTES) {
         Ok(b) => b,
         Err(r) => {
-            let mut d = Diagnostic::error(
-                "E0010",
-                format!("cannot read `{}`: {}", display(path), r.reason()),
-            );
-            let help = match &r {
-                Refusal::Unreadable(_) => None,
-                Refusal::NotAFile(_) => Some(
-                    "a scene and its includes are TOML text files; folders, devices and named pipes are never read",
-                ),
-                Refusal::TooLarge { .. } => Some(
-                    "a scene file is text of at most 16 MiB: keep large data in the meshes and point lists it names",
-                ),
-            };
-            d = match included_from {
-                Some(s) => d.label(s, "included here").help(help.unwrap_or(
-                    "include paths are relative to the file that includes them; check the spelling",
-                )),
-                None => d.help(help.unwrap_or("check the path of the scene file")),
-            };
-            diags.push(d);
+            diags.push(unreadable(path, &r, included_from));
             return None;
         }
     };
     if let Some((at, byte)) = not_text(&bytes) {
-        // One diagnostic that quotes none of the file's bytes: only the text before the first
-        // bad byte, made harmless, and a replacement character where it is.
-        let mut shown = harmless_prefix(&bytes, at);
-        shown.push('\u{FFFD}');
-        let file = sources.add(display(path), shown, Some(path.to_path_buf()));
-        let bad = Span {
-            file,
-            start: at,
-            end: at + '\u{FFFD}'.len_utf8(),
-        };
-        let what = if byte == 0 {
-            "a NUL byte".to_string()
-        } else {
-            format!("byte 0x{byte:02x}, not UTF-8")
-        };
-        let mut d = Diagnostic::error("E0010", format!("`{}` is not a text file", display(path)))
-            .label(bad, format!("{what} here"))
-            .help("a scene is UTF-8 TOML text: check that the path names a scene and not an image or other binary file, or save the file as UTF-8");
-        if let Some(s) = included_from {
-            d = d.also(s, "included here");
-        }
-        diags.push(d);
+        diags.push(not_text_diag(
+            path,
+            &bytes,
+            (at, byte),
+            sources,
+            included_from,
+        ));
         return None;
     }
     let text = String::from_utf8(bytes).expect("checked by not_text");

@@ -91,51 +91,8 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         .parent()
         .map(|p| p.to_path_buf())
         .unwrap_or_default();
-    let cameras: Vec<Value> = model
-        .cameras
-        .iter()
-        .map(|c| {
-            json!({
-                "name": c.name,
-                "width": c.width,
-                "height": c.height,
-                "lens": c.lens,
-                "fx": c.fx,
-                "fy": c.fy,
-                "cx": c.cx,
-                "cy": c.cy,
-                "focus_distance": c.focus_distance,
-                "f_number": c.f_number,
-                "focal_length": c.focal_length,
-                "distortion": c.distortion,
-                // Largest undistorted r² inside the lens field (null: no fold).
-                "r2_max": Some(crate::optics::lens::Lens::from_camera(c).r2_max)
-                    .filter(|r| r.is_finite()),
-                "rig_from_camera": pose_rows(&c.rig_from_camera),
-                "port": c.port,
-            })
-        })
-        .collect();
-    let poses: Vec<Value> = model
-        .poses
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let images: Vec<String> = (0..model.cameras.len())
-                .map(|c| model.image_name(i, c))
-                .collect();
-            let seeds: Vec<u32> = (0..model.cameras.len())
-                .map(|c| cycles_seed(model.render.seed, i, c))
-                .collect();
-            json!({
-                "name": p.name,
-                "world_from_rig": pose_rows(&p.world_from_rig),
-                "images": images,
-                "time": p.time,
-                "seeds": seeds,
-            })
-        })
-        .collect();
+    let cameras = cameras_json(model);
+    let poses = poses_json(model);
 
     let caustics = model.needs.caustics && matches!(model.site.surface, SeaSurface::Waves { .. });
     if caustics && model.sun.is_some() {
@@ -150,177 +107,18 @@ pub fn describe(model: &Model) -> Result<Description, String> {
                 .into(),
         );
     }
-    let sun = model.sun.as_ref().map(|s| {
-        if caustics {
-            json!({"direction": s.direction_air, "irradiance": s.irradiance, "in_water": false,
-                   "angle": SUN_ANGLE, "caustics": true})
-        } else if model.water.is_some() {
-            json!({"direction": s.direction_water, "irradiance": s.irradiance_water,
-                   "in_water": true, "angle": 0.0, "caustics": false})
-        } else {
-            json!({"direction": s.direction_air, "irradiance": s.irradiance, "in_water": false,
-                   "angle": 0.0, "caustics": false})
-        }
-    });
+    let sun = sun_json(model, caustics);
 
-    let lights: Vec<Value> = model
-        .lights
-        .iter()
-        .map(|l| {
-            let mut v = match &l.kind {
-                LightKind::Point {
-                    position,
-                    intensity,
-                } => {
-                    json!({"type": "point", "position": position, "intensity": intensity})
-                }
-                LightKind::Spot {
-                    position,
-                    direction,
-                    half_angle,
-                    intensity,
-                } => json!({
-                    "type": "spot", "position": position, "direction": direction,
-                    "half_angle": half_angle, "intensity": intensity
-                }),
-                LightKind::Area {
-                    frame,
-                    width,
-                    height,
-                    radiance,
-                } => json!({
-                    "type": "area", "frame": pose_rows(frame), "width": width,
-                    "height": height, "radiance": radiance
-                }),
-                LightKind::Ambient { radiance } => json!({"type": "ambient", "radiance": radiance}),
-            };
-            v["name"] = json!(l.name);
-            v["mount"] = json!(l.mount);
-            v
-        })
-        .collect();
+    let lights: Vec<Value> = model.lights.iter().map(light_json).collect();
 
     let mut objects = Vec::new();
-    for (i, o) in model.objects.iter().enumerate() {
-        if let Some(p) = crate::texture::mapped::prepare_object(model, i)? {
-            let m = pose_mat(&o.pose) * DMat4::from_scale(o.scale);
-            objects.push(json!({
-                "name": o.name,
-                "shape": mapped_parts(&p, i, &mut assets).map_err(|e| format!("object `{}`: {e}", o.name))?,
-                "scale": o.scale,
-                "matrix": mat_rows(&m),
-                "material": o.material,
-            }));
-            continue;
-        }
-        let baked = crate::texture::bake::bake_object(model, i)?;
-        let shape = match (&o.shape, baked) {
-            (_, Some(b)) => {
-                // Baked texture (crate::texture::bake): the object-frame mesh with `s`, `t`
-                // (t = 1 - v: Blender's image rows run bottom-up) and the linear 8-bit PNG.
-                if b.coarsened() {
-                    eprintln!("warning: object `{}`: texture {}", o.name, b.summary());
-                }
-                let path = format!("assets/object_{i}.ply");
-                let texture = format!("assets/object_{i}.png");
-                assets.push(Asset {
-                    path: path.clone(),
-                    bytes: crate::texture::bake::ply_bytes(&b.mesh, &b.uv, true),
-                });
-                assets.push(Asset {
-                    path: texture.clone(),
-                    bytes: b
-                        .texture
-                        .png()
-                        .map_err(|e| format!("object `{}`: {e}", o.name))?,
-                });
-                json!({"type": "ply", "path": path, "smooth": false, "texture": texture})
-            }
-            (shape, None) => match shape {
-                Shape::Plane { .. } | Shape::Box { .. } => {
-                    serde_json::to_value(&o.shape).map_err(|e| e.to_string())?
-                }
-                Shape::Sphere { .. }
-                | Shape::Cylinder { .. }
-                | Shape::Mesh { .. }
-                | Shape::Seabed { .. }
-                | Shape::Boulders { .. }
-                | Shape::Coral { .. } => {
-                    // Tessellated by the shared mesh module (same triangles as the native
-                    // renderer), in the object frame; pose and scale stay in `matrix`.
-                    let path = format!("assets/object_{i}.ply");
-                    let mesh = crate::geometry::mesh::shape_mesh(&o.shape, &base_dir)
-                        .map_err(|e| format!("object `{}`: {e}", o.name))?;
-                    let bytes = crate::geometry::mesh::ply_bytes(
-                        &mesh,
-                        crate::geometry::mesh::PlyFormat::BinaryLittleEndian,
-                    );
-                    let smooth = matches!(o.shape, Shape::Sphere { .. });
-                    assets.push(Asset {
-                        path: path.clone(),
-                        bytes,
-                    });
-                    json!({"type": "ply", "path": path, "smooth": smooth})
-                }
-            },
-        };
-        let m = pose_mat(&o.pose) * DMat4::from_scale(o.scale);
-        objects.push(json!({
-            "name": o.name,
-            "shape": shape,
-            "scale": o.scale,
-            "matrix": mat_rows(&m),
-            "material": o.material,
-        }));
+    for i in 0..model.objects.len() {
+        objects.push(object_json(model, i, &base_dir, &mut assets)?);
     }
 
-    // The native backend's wave field (same parameters and seed), so that Cycles refracts the
-    // sun through the very surface the native caustics are computed from.
-    let wave_field = match model.site.surface {
-        SeaSurface::Waves {
-            height,
-            wavelength,
-            wind_speed,
-        } => {
-            let f = crate::optics::waves::WaveField::new(
-                height,
-                wavelength,
-                wind_speed,
-                crate::optics::waves::WIND_DIRECTION,
-                model.render.seed,
-            );
-            let comps: Vec<[f64; 4]> = f
-                .components
-                .iter()
-                .map(|c| [c.kx, c.ky, c.amplitude, c.phase])
-                .collect();
-            json!({"period": f.period, "significant_height": f.significant_height,
-                   "max_abs_height": f.max_abs_height(), "components": comps})
-        }
-        _ => Value::Null,
-    };
+    let wave_field = wave_field_json(model);
 
-    let mut targets = Vec::new();
-    for (i, t) in model.targets.iter().enumerate() {
-        match super::target_texture(t)? {
-            Some(tex) => {
-                let path = format!("assets/target_{i}.png");
-                assets.push(Asset {
-                    path: path.clone(),
-                    bytes: tex.png,
-                });
-                targets.push(json!({
-                    "name": t.name,
-                    "texture": path,
-                    "width": tex.width,
-                    "height": tex.height,
-                    "origin": tex.origin,
-                    "matrix": pose_rows(&t.pose),
-                }));
-            }
-            None => targets.push(test_object(t)),
-        }
-    }
+    let targets = targets_json(model, &mut assets)?;
 
     let json = json!({
         "format": FORMAT,
@@ -353,6 +151,244 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         assets,
         warnings,
     })
+}
+
+/// The cameras: intrinsics, lens, rig placement and port.
+fn cameras_json(model: &Model) -> Vec<Value> {
+    model
+        .cameras
+        .iter()
+        .map(|c| {
+            json!({
+                "name": c.name,
+                "width": c.width,
+                "height": c.height,
+                "lens": c.lens,
+                "fx": c.fx,
+                "fy": c.fy,
+                "cx": c.cx,
+                "cy": c.cy,
+                "focus_distance": c.focus_distance,
+                "f_number": c.f_number,
+                "focal_length": c.focal_length,
+                "distortion": c.distortion,
+                // Largest undistorted r² inside the lens field (null: no fold).
+                "r2_max": Some(crate::optics::lens::Lens::from_camera(c).r2_max)
+                    .filter(|r| r.is_finite()),
+                "rig_from_camera": pose_rows(&c.rig_from_camera),
+                "port": c.port,
+            })
+        })
+        .collect()
+}
+
+/// The poses: rig placement, image names, time and one Cycles seed per camera.
+fn poses_json(model: &Model) -> Vec<Value> {
+    model
+        .poses
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let images: Vec<String> = (0..model.cameras.len())
+                .map(|c| model.image_name(i, c))
+                .collect();
+            let seeds: Vec<u32> = (0..model.cameras.len())
+                .map(|c| cycles_seed(model.render.seed, i, c))
+                .collect();
+            json!({
+                "name": p.name,
+                "world_from_rig": pose_rows(&p.world_from_rig),
+                "images": images,
+                "time": p.time,
+                "seeds": seeds,
+            })
+        })
+        .collect()
+}
+
+/// The sun: in the air above caustics (through the wave field), else in the water when there
+/// is water, else in the air.
+fn sun_json(model: &Model, caustics: bool) -> Option<Value> {
+    model.sun.as_ref().map(|s| {
+        if caustics {
+            json!({"direction": s.direction_air, "irradiance": s.irradiance, "in_water": false,
+                   "angle": SUN_ANGLE, "caustics": true})
+        } else if model.water.is_some() {
+            json!({"direction": s.direction_water, "irradiance": s.irradiance_water,
+                   "in_water": true, "angle": 0.0, "caustics": false})
+        } else {
+            json!({"direction": s.direction_air, "irradiance": s.irradiance, "in_water": false,
+                   "angle": 0.0, "caustics": false})
+        }
+    })
+}
+
+/// One light: its kind's parameters, name and mount.
+fn light_json(l: &crate::model::Light) -> Value {
+    let mut v = match &l.kind {
+        LightKind::Point {
+            position,
+            intensity,
+        } => {
+            json!({"type": "point", "position": position, "intensity": intensity})
+        }
+        LightKind::Spot {
+            position,
+            direction,
+            half_angle,
+            intensity,
+        } => json!({
+            "type": "spot", "position": position, "direction": direction,
+            "half_angle": half_angle, "intensity": intensity
+        }),
+        LightKind::Area {
+            frame,
+            width,
+            height,
+            radiance,
+        } => json!({
+            "type": "area", "frame": pose_rows(frame), "width": width,
+            "height": height, "radiance": radiance
+        }),
+        LightKind::Ambient { radiance } => json!({"type": "ambient", "radiance": radiance}),
+    };
+    v["name"] = json!(l.name);
+    v["mount"] = json!(l.mount);
+    v
+}
+
+/// Object `i`: its shape (a textured mesh, a baked mesh with its PNG, a primitive, or a
+/// tessellated PLY; the files go to `assets`), scale, world matrix and material.
+fn object_json(
+    model: &Model,
+    i: usize,
+    base_dir: &std::path::Path,
+    assets: &mut Vec<Asset>,
+) -> Result<Value, String> {
+    let o = &model.objects[i];
+    if let Some(p) = crate::texture::mapped::prepare_object(model, i)? {
+        let m = pose_mat(&o.pose) * DMat4::from_scale(o.scale);
+        return Ok(json!({
+            "name": o.name,
+            "shape": mapped_parts(&p, i, assets).map_err(|e| format!("object `{}`: {e}", o.name))?,
+            "scale": o.scale,
+            "matrix": mat_rows(&m),
+            "material": o.material,
+        }));
+    }
+    let baked = crate::texture::bake::bake_object(model, i)?;
+    let shape = match (&o.shape, baked) {
+        (_, Some(b)) => {
+            // Baked texture (crate::texture::bake): the object-frame mesh with `s`, `t`
+            // (t = 1 - v: Blender's image rows run bottom-up) and the linear 8-bit PNG.
+            if b.coarsened() {
+                eprintln!("warning: object `{}`: texture {}", o.name, b.summary());
+            }
+            let path = format!("assets/object_{i}.ply");
+            let texture = format!("assets/object_{i}.png");
+            assets.push(Asset {
+                path: path.clone(),
+                bytes: crate::texture::bake::ply_bytes(&b.mesh, &b.uv, true),
+            });
+            assets.push(Asset {
+                path: texture.clone(),
+                bytes: b
+                    .texture
+                    .png()
+                    .map_err(|e| format!("object `{}`: {e}", o.name))?,
+            });
+            json!({"type": "ply", "path": path, "smooth": false, "texture": texture})
+        }
+        (shape, None) => match shape {
+            Shape::Plane { .. } | Shape::Box { .. } => {
+                serde_json::to_value(&o.shape).map_err(|e| e.to_string())?
+            }
+            Shape::Sphere { .. }
+            | Shape::Cylinder { .. }
+            | Shape::Mesh { .. }
+            | Shape::Seabed { .. }
+            | Shape::Boulders { .. }
+            | Shape::Coral { .. } => {
+                // Tessellated by the shared mesh module (same triangles as the native
+                // renderer), in the object frame; pose and scale stay in `matrix`.
+                let path = format!("assets/object_{i}.ply");
+                let mesh = crate::geometry::mesh::shape_mesh(&o.shape, base_dir)
+                    .map_err(|e| format!("object `{}`: {e}", o.name))?;
+                let bytes = crate::geometry::mesh::ply_bytes(
+                    &mesh,
+                    crate::geometry::mesh::PlyFormat::BinaryLittleEndian,
+                );
+                let smooth = matches!(o.shape, Shape::Sphere { .. });
+                assets.push(Asset {
+                    path: path.clone(),
+                    bytes,
+                });
+                json!({"type": "ply", "path": path, "smooth": smooth})
+            }
+        },
+    };
+    let m = pose_mat(&o.pose) * DMat4::from_scale(o.scale);
+    Ok(json!({
+        "name": o.name,
+        "shape": shape,
+        "scale": o.scale,
+        "matrix": mat_rows(&m),
+        "material": o.material,
+    }))
+}
+
+/// The native backend's wave field (same parameters and seed), so that Cycles refracts the
+/// sun through the very surface the native caustics are computed from; `null` without waves.
+fn wave_field_json(model: &Model) -> Value {
+    match model.site.surface {
+        SeaSurface::Waves {
+            height,
+            wavelength,
+            wind_speed,
+        } => {
+            let f = crate::optics::waves::WaveField::new(
+                height,
+                wavelength,
+                wind_speed,
+                crate::optics::waves::WIND_DIRECTION,
+                model.render.seed,
+            );
+            let comps: Vec<[f64; 4]> = f
+                .components
+                .iter()
+                .map(|c| [c.kx, c.ky, c.amplitude, c.phase])
+                .collect();
+            json!({"period": f.period, "significant_height": f.significant_height,
+                   "max_abs_height": f.max_abs_height(), "components": comps})
+        }
+        _ => Value::Null,
+    }
+}
+
+/// The targets: printed targets with their texture PNG (to `assets`), 3D test objects as data.
+fn targets_json(model: &Model, assets: &mut Vec<Asset>) -> Result<Vec<Value>, String> {
+    let mut targets = Vec::new();
+    for (i, t) in model.targets.iter().enumerate() {
+        match super::target_texture(t)? {
+            Some(tex) => {
+                let path = format!("assets/target_{i}.png");
+                assets.push(Asset {
+                    path: path.clone(),
+                    bytes: tex.png,
+                });
+                targets.push(json!({
+                    "name": t.name,
+                    "texture": path,
+                    "width": tex.width,
+                    "height": tex.height,
+                    "origin": tex.origin,
+                    "matrix": pose_rows(&t.pose),
+                }));
+            }
+            None => targets.push(test_object(t)),
+        }
+    }
+    Ok(targets)
 }
 
 /// The 3D test object (staircase pyramid) as data: its steps as boxes (target frame, the same

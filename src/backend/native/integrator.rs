@@ -93,6 +93,16 @@ fn mean(v: DVec3) -> f64 {
     (v.x + v.y + v.z) / 3.0
 }
 
+/// How a path's segment through the water ends ([`Integrator::medium_segment`]).
+enum SegmentEnd {
+    /// The path ends.
+    Ends,
+    /// The segment is passed; `beta_nee` weighs next-event estimation at the surface ending it.
+    Passed { beta_nee: DVec3 },
+    /// A free-flight vertex: the path goes on from `o` along `d`, sampled with density `pdf`.
+    Scattered { o: DVec3, d: DVec3, pdf: f64 },
+}
+
 /// Everything needed to estimate radiance along camera rays of one image.
 pub struct Integrator<'a> {
     pub scene: &'a Scene,
@@ -453,86 +463,29 @@ impl<'a> Integrator<'a> {
             if let Some(m) = &self.medium
                 && let Some((a, b)) = m.interval(o, d, 0.0, t_end)
             {
-                if m.scatters() && can_scatter {
-                    // Equiangular in-scattering from point/spot lights on every segment: it
-                    // removes the 1/r² spikes of vertices that land near a strobe.
-                    // Each lamp's geometry relative to this segment, computed once and shared by
-                    // its two samplers and the MIS weights at a free-flight vertex.
-                    let mut segs = [LampSeg::default(); LAMP_CACHE];
-                    for (i, pl) in self.lights.points.iter().enumerate() {
-                        let seg = LampSeg::new(m, o, d, a, b, pl.pos, self.lamp_phase_sampling);
-                        if let Some(c) = segs.get_mut(i) {
-                            *c = seg;
-                        }
-                        l += beta * self.equiangular(m, pl, o, d, a, &seg, rng);
-                        if self.lamp_phase_sampling {
-                            l += beta * self.lamp_phase(m, pl, o, d, a, b, &seg, rng);
-                        }
-                    }
-                    // Sun-aware distance sampling of the sunlight scattered along [a, b].
-                    // With a column, only the camera ray traces the sun's first scattering.
-                    let sun_rate = if day && (self.column.is_none() || depth == 0) {
-                        self.sun_rate(m, d, b - a).map(|k| TruncExp::new(k, a, b))
-                    } else {
-                        None
-                    };
-                    if let Some(k) = &sun_rate {
-                        l += beta * self.sun_inscatter(m, k, o, d, a, b, rng);
-                    }
-                    // With a column only strobe light needs medium vertices: a share of the
-                    // free flights is tried (none without strobes), the rest pass analytically.
-                    let share = self.ff_share;
-                    let attempt = share >= 1.0 || (share > 0.0 && rng.next() < share);
-                    let c = ((rng.next() * 3.0) as usize).min(2);
-                    let u = rng.next();
-                    let st = m.sigma_t[c];
-                    let t = if attempt && st > 0.0 {
-                        a - (1.0 - u).ln() / st
-                    } else {
-                        f64::INFINITY
-                    };
-                    if t < b {
-                        if area_hit.is_none()
-                            && let Some(h) = &hit
-                        {
-                            let albedo =
-                                self.albedo_over(h, self.footprint(spread, depth, o, d, h));
-                            l += beta
-                                * tr(m.sigma_t, b - a)
-                                * self.surface_direct(h, d, albedo, day, rng);
-                        }
-                        let trv = tr(m.sigma_t, t - a);
-                        let pdf_d = share * mean(m.sigma_t * trv);
-                        beta *= m.sigma_s * trv / pdf_d;
-                        let p = o + t * d;
-                        let phase = &m.phase;
-                        let f = |w: DVec3| DVec3::splat(phase.eval(d.dot(w)));
-                        let pdf = |w: DVec3| self.medium_pdf(d, w);
-                        let pw = |i: usize, x: DVec3| {
-                            let seg = match segs.get(i) {
-                                Some(s) => *s,
-                                None => LampSeg::new(m, o, d, a, b, x, self.lamp_phase_sampling),
-                            };
-                            let pe = seg.equiangular_pdf(t);
-                            let pp = seg.phase_pdf(m, t);
-                            power3(pdf_d, pe, pp)
-                        };
-                        // With a column, daylight ends at a medium vertex (the column holds
-                        // the light scattered in the water).
-                        let sw = if self.column.is_some() || !day {
-                            0.0
-                        } else {
-                            sun_rate.map_or(1.0, |k| power(pdf_d, k.pdf(t)))
-                        };
-                        l += beta * self.direct(p, f, pdf, pw, sw, rng);
-                        let (nd, ppdf) = self.sample_medium(d, rng);
-                        if ppdf <= 0.0 {
-                            break;
-                        }
-                        beta *= phase.eval(d.dot(nd)) / ppdf;
-                        o = p;
+                let surface = if area_hit.is_none() {
+                    hit.as_ref()
+                } else {
+                    None
+                };
+                let at = (o, d, depth, day);
+                match self.medium_segment(
+                    m,
+                    (a, b),
+                    at,
+                    surface,
+                    spread,
+                    can_scatter,
+                    &mut l,
+                    &mut beta,
+                    rng,
+                ) {
+                    SegmentEnd::Ends => break,
+                    SegmentEnd::Passed { beta_nee: bn } => beta_nee = bn,
+                    SegmentEnd::Scattered { o: no, d: nd, pdf } => {
+                        o = no;
                         d = nd;
-                        prev_pdf = ppdf;
+                        prev_pdf = pdf;
                         depth += 1;
                         if self.column.is_some() {
                             day = false;
@@ -542,20 +495,6 @@ impl<'a> Integrator<'a> {
                         }
                         continue;
                     }
-                    let trv = tr(m.sigma_t, b - a);
-                    let p_pass = if share >= 1.0 {
-                        mean(trv)
-                    } else {
-                        (1.0 - share) + share * mean(trv)
-                    };
-                    if p_pass <= 0.0 {
-                        break;
-                    }
-                    beta_nee = beta * trv;
-                    beta *= trv / p_pass;
-                } else {
-                    beta *= tr(m.sigma_t, b - a);
-                    beta_nee = beta;
                 }
             }
             if let Some(i) = area_hit {
@@ -619,6 +558,122 @@ impl<'a> Integrator<'a> {
             }
         }
         l
+    }
+
+    /// A path's segment `[a, b]` through the water `m`, from `o` along `d` at bounce `depth`
+    /// (`day`: the path still carries daylight): the strobe and sun light scattered along it
+    /// (added to `l`), then free flight. At a medium vertex, `surface` (the surface ending the
+    /// segment, unless an area light does) gets its direct light first and the scattered
+    /// direction is returned; a passed segment leaves `beta` weighted by its transmittance.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn medium_segment(
+        &self,
+        m: &Medium,
+        (a, b): (f64, f64),
+        (o, d, depth, day): (DVec3, DVec3, u32, bool),
+        surface: Option<&Hit>,
+        spread: Option<PixelSpread>,
+        can_scatter: bool,
+        l: &mut DVec3,
+        beta: &mut DVec3,
+        rng: &mut Sampler,
+    ) -> SegmentEnd {
+        if m.scatters() && can_scatter {
+            // Equiangular in-scattering from point/spot lights on every segment: it
+            // removes the 1/r² spikes of vertices that land near a strobe.
+            // Each lamp's geometry relative to this segment, computed once and shared by
+            // its two samplers and the MIS weights at a free-flight vertex.
+            let mut segs = [LampSeg::default(); LAMP_CACHE];
+            for (i, pl) in self.lights.points.iter().enumerate() {
+                let seg = LampSeg::new(m, o, d, a, b, pl.pos, self.lamp_phase_sampling);
+                if let Some(c) = segs.get_mut(i) {
+                    *c = seg;
+                }
+                *l += *beta * self.equiangular(m, pl, o, d, a, &seg, rng);
+                if self.lamp_phase_sampling {
+                    *l += *beta * self.lamp_phase(m, pl, o, d, a, b, &seg, rng);
+                }
+            }
+            // Sun-aware distance sampling of the sunlight scattered along [a, b].
+            // With a column, only the camera ray traces the sun's first scattering.
+            let sun_rate = if day && (self.column.is_none() || depth == 0) {
+                self.sun_rate(m, d, b - a).map(|k| TruncExp::new(k, a, b))
+            } else {
+                None
+            };
+            if let Some(k) = &sun_rate {
+                *l += *beta * self.sun_inscatter(m, k, o, d, a, b, rng);
+            }
+            // With a column only strobe light needs medium vertices: a share of the
+            // free flights is tried (none without strobes), the rest pass analytically.
+            let share = self.ff_share;
+            let attempt = share >= 1.0 || (share > 0.0 && rng.next() < share);
+            let c = ((rng.next() * 3.0) as usize).min(2);
+            let u = rng.next();
+            let st = m.sigma_t[c];
+            let t = if attempt && st > 0.0 {
+                a - (1.0 - u).ln() / st
+            } else {
+                f64::INFINITY
+            };
+            if t < b {
+                if let Some(h) = surface {
+                    let albedo = self.albedo_over(h, self.footprint(spread, depth, o, d, h));
+                    *l +=
+                        *beta * tr(m.sigma_t, b - a) * self.surface_direct(h, d, albedo, day, rng);
+                }
+                let trv = tr(m.sigma_t, t - a);
+                let pdf_d = share * mean(m.sigma_t * trv);
+                *beta *= m.sigma_s * trv / pdf_d;
+                let p = o + t * d;
+                let phase = &m.phase;
+                let f = |w: DVec3| DVec3::splat(phase.eval(d.dot(w)));
+                let pdf = |w: DVec3| self.medium_pdf(d, w);
+                let pw = |i: usize, x: DVec3| {
+                    let seg = match segs.get(i) {
+                        Some(s) => *s,
+                        None => LampSeg::new(m, o, d, a, b, x, self.lamp_phase_sampling),
+                    };
+                    let pe = seg.equiangular_pdf(t);
+                    let pp = seg.phase_pdf(m, t);
+                    power3(pdf_d, pe, pp)
+                };
+                // With a column, daylight ends at a medium vertex (the column holds
+                // the light scattered in the water).
+                let sw = if self.column.is_some() || !day {
+                    0.0
+                } else {
+                    sun_rate.map_or(1.0, |k| power(pdf_d, k.pdf(t)))
+                };
+                *l += *beta * self.direct(p, f, pdf, pw, sw, rng);
+                let (nd, ppdf) = self.sample_medium(d, rng);
+                if ppdf <= 0.0 {
+                    return SegmentEnd::Ends;
+                }
+                *beta *= phase.eval(d.dot(nd)) / ppdf;
+                return SegmentEnd::Scattered {
+                    o: p,
+                    d: nd,
+                    pdf: ppdf,
+                };
+            }
+            let trv = tr(m.sigma_t, b - a);
+            let p_pass = if share >= 1.0 {
+                mean(trv)
+            } else {
+                (1.0 - share) + share * mean(trv)
+            };
+            if p_pass <= 0.0 {
+                return SegmentEnd::Ends;
+            }
+            let beta_nee = *beta * trv;
+            *beta *= trv / p_pass;
+            SegmentEnd::Passed { beta_nee }
+        } else {
+            *beta *= tr(m.sigma_t, b - a);
+            SegmentEnd::Passed { beta_nee: *beta }
+        }
     }
 
     /// A ray that meets nothing, leaving from `o` along `d`: adds the sky to `l` where the path

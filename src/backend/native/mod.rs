@@ -106,7 +106,6 @@ pub fn render_image(
     let cam_pos = model.world_from_camera(pose, cam).translation;
     let medium = medium::Medium::new(model, cam_pos);
     let lights = lights::Lights::at_pose(model, world_from_rig);
-    let integ = integrator::Integrator::new(scene, model, medium, lights);
     let passes: Vec<usize> = if model.needs.per_channel_passes {
         vec![0, 1, 2]
     } else {
@@ -116,101 +115,38 @@ pub fn render_image(
         .iter()
         .map(|&c| camera::CameraRays::new(model, pose, cam, c))
         .collect::<Result<_, _>>()?;
-    let image_id = (pose * model.cameras.len() + cam) as u64;
-    let (seed, kind) = (model.render.seed, model.render.sampler);
+    let px = Pixels {
+        model,
+        scene,
+        integ: integrator::Integrator::new(scene, model, medium, lights),
+        rays,
+        passes,
+        image_id: (pose * model.cameras.len() + cam) as u64,
+        width: w,
+        want_albedo: model.render.denoise_radius.is_some(),
+    };
     let spp = samples.max(1);
     let cam_from_world = model.world_from_camera(pose, cam).inverse();
-    let want_albedo = model.render.denoise_radius.is_some();
     let target = model
         .render
         .noise
         .map(|t| (t.relative, t.max_samples_for(spp)));
-    // `n` samples of pixel (i, j), pass `k`, from stream index `from` on: their mean and the
-    // variance of that mean; the first-hit albedo is added to `alb`.
-    let run = |i: u32, j: u32, k: usize, from: u32, n: u32, alb: &mut DVec3| {
-        let r = &rays[k];
-        let spread = footprint::PixelSpread::of(model, scene, r, i, j);
-        let pixel = j as u64 * w as u64 + i as u64;
-        let (mut acc, mut acc2) = (DVec3::ZERO, DVec3::ZERO);
-        for s in from as u64..(from + n) as u64 {
-            let mut rng = Sampler::for_sample(kind, seed, image_id, k, pixel, from, s);
-            let (du, dv) = rng.next2();
-            if let Some((o, d, wgt)) = r.ray(i as f64 + du, j as f64 + dv) {
-                if want_albedo && k == 0 {
-                    let ray = scene::Ray { origin: o, dir: d };
-                    if let Some(hit) = scene.intersect(&ray, f64::INFINITY) {
-                        *alb += integ.albedo(&hit);
-                    }
-                }
-                let v = integ.li_spread(o, d, spread.map(|s| s.shifted(du, dv)), &mut rng) * wgt;
-                if v.is_finite() {
-                    acc += v;
-                    acc2 += v * v;
-                }
-            }
-        }
-        let nf = n as f64;
-        acc /= nf;
-        // Unbiased sample variance of the samples, over n: that of their mean.
-        let v_mean = if n > 1 {
-            ((acc2 / nf - acc * acc) * (nf / (nf - 1.0)) / nf).max(DVec3::ZERO)
-        } else {
-            DVec3::ZERO
-        };
-        (acc, v_mean)
-    };
-    let channel_of = |k: usize| (passes.len() > 1).then_some(passes[k]);
     // With a noise target: every pixel's pilot, then how many fresh samples each one takes.
     let mut measure = adaptive::Measure::Relative;
     let counts: Vec<[u32; 3]> = match target {
         None => Vec::new(),
         Some((relative, max)) => {
-            let (run, channel_of, npass) = (&run, &channel_of, rays.len());
-            // Each pixel's pilot mean and variance of the mean (per-channel passes: each
-            // channel from its own pass).
-            let pilot: Vec<(DVec3, DVec3)> = (0..h)
-                .into_par_iter()
-                .flat_map_iter(|j| {
-                    (0..w).map(move |i| {
-                        let (mut m, mut v) = (DVec3::ZERO, DVec3::ZERO);
-                        for k in 0..npass {
-                            let (pm, pv) = run(i, j, k, 0, spp, &mut DVec3::default());
-                            match channel_of(k) {
-                                None => (m, v) = (pm, pv),
-                                Some(c) => (m[c], v[c]) = (pm[c], pv[c]),
-                            }
-                        }
-                        (m, v)
-                    })
-                })
-                .collect();
+            let pilot = px.pilot(h, spp);
             if model.render.noise.is_some_and(|t| t.against_sensor) {
-                let sensor = model.sensor.as_ref().ok_or_else(|| {
-                    "render.noise = \"sensor\" needs a sensor: add a [sensor] table or pass --sensor"
-                        .to_string()
-                })?;
-                let linear = crate::sensor::Linear {
-                    width: w,
-                    height: h,
-                    rgb: pilot
-                        .iter()
-                        .map(|(m, _)| [m.x as f32, m.y as f32, m.z as f32])
-                        .collect(),
-                };
-                let pitch = crate::sensor::files::pixel_pitch(camera, w);
-                let e = crate::sensor::expose(sensor, &linear, pitch);
-                measure = adaptive::Measure::Sensor {
-                    electrons_per_radiance: e.electrons_per_radiance,
-                    read_noise: sensor.read_noise,
-                    full_well: sensor.full_well,
-                };
+                measure = sensor_measure(model, camera, w, h, &pilot)?;
             }
+            let npass = px.rays.len();
             let rv: Vec<[f64; 3]> = pilot
                 .iter()
                 .map(|&(m, v)| {
                     let mut out = [0.0; 3];
                     for (k, o) in out.iter_mut().enumerate().take(npass) {
-                        *o = measure.squared(m, v, channel_of(k));
+                        *o = measure.squared(m, v, px.channel_of(k));
                     }
                     out
                 })
@@ -218,77 +154,14 @@ pub fn render_image(
             adaptive::plan(w as usize, h as usize, &rv, spp, relative, max)
         }
     };
-    type Row = (
-        Vec<[f32; 3]>,
-        Vec<f32>,
-        Vec<[f32; 3]>,
-        Vec<[f32; 3]>,
-        Vec<(u32, f32)>,
-    );
-    let rows: Vec<Row> = (0..h)
+    let rows: Vec<PixelRow> = (0..h)
         .into_par_iter()
         .map(|j| {
-            let mut row = Vec::with_capacity(w as usize);
-            let mut drow = Vec::with_capacity(w as usize);
-            let mut vrow = Vec::with_capacity(w as usize);
-            let mut arow = Vec::with_capacity(if want_albedo { w as usize } else { 0 });
-            let mut nrow = Vec::with_capacity(if target.is_some() { w as usize } else { 0 });
-            for i in 0..w {
-                let mut alb = DVec3::ZERO;
-                let mut alb_n = 0u32;
-                let pixel = j as usize * w as usize + i as usize;
-                let mut sum = DVec3::ZERO;
-                let mut var = DVec3::ZERO;
-                let mut taken = 0u32;
-                for k in 0..rays.len() {
-                    let channel = channel_of(k);
-                    // With a noise target the pilot (stream indices 0..spp) is dropped and the
-                    // pixel's fresh samples follow it, so that their number does not depend on
-                    // the samples averaged (unbiased).
-                    let (from, n) = match counts.get(pixel) {
-                        Some(c) => (spp, c[k]),
-                        None => (0, spp),
-                    };
-                    let (acc, v_mean) = run(i, j, k, from, n, &mut alb);
-                    if k == 0 {
-                        alb_n = n;
-                    }
-                    taken += n;
-                    match channel {
-                        None => {
-                            sum = acc;
-                            var = v_mean;
-                        }
-                        Some(c) => {
-                            sum[c] = acc[c];
-                            var[c] = v_mean[c];
-                        }
-                    }
-                }
-                if target.is_some() {
-                    let rel = measure.squared(sum, var, None).sqrt();
-                    nrow.push((taken / rays.len() as u32, rel as f32));
-                }
-                row.push([sum.x as f32, sum.y as f32, sum.z as f32]);
-                vrow.push([var.x as f32, var.y as f32, var.z as f32]);
-                if want_albedo {
-                    let a = alb / alb_n.max(1) as f64;
-                    arow.push([a.x as f32, a.y as f32, a.z as f32]);
-                }
-                // Depth through the pixel centre (green channel rays).
-                let r = &rays[if passes.len() == 1 { 0 } else { 1 }];
-                let z = r
-                    .ray(i as f64 + 0.5, j as f64 + 0.5)
-                    .and_then(|(o, d, _)| {
-                        scene.intersect(&scene::Ray { origin: o, dir: d }, f64::INFINITY)
-                    })
-                    .map_or(0.0, |hit| cam_from_world.transform_point(hit.point).z);
-                drow.push(z as f32);
-            }
+            let row = px.row(j, spp, &counts, target.is_some(), &measure, &cam_from_world);
             if let Some(pb) = progress {
                 pb.inc(1);
             }
-            (row, drow, vrow, arow, nrow)
+            row
         })
         .collect();
     let mut rgb = Vec::with_capacity((w * h) as usize);
@@ -313,6 +186,199 @@ pub fn render_image(
         noise: target
             .map(|(relative, max)| adaptive::Report::new(relative, spp, max, &measure, &per_pixel)),
     })
+}
+
+/// One row of an image: radiance, depth, variance of the mean, first-hit albedo (when
+/// denoising) and, with a noise target, each pixel's (samples, relative noise).
+type PixelRow = (
+    Vec<[f32; 3]>,
+    Vec<f32>,
+    Vec<[f32; 3]>,
+    Vec<[f32; 3]>,
+    Vec<(u32, f32)>,
+);
+
+/// The noise measure of `render.noise = "sensor"`: the pilot image exposed by the scene's
+/// sensor gives the electrons per unit of radiance.
+fn sensor_measure(
+    model: &Model,
+    camera: &crate::model::Camera,
+    w: u32,
+    h: u32,
+    pilot: &[(DVec3, DVec3)],
+) -> Result<adaptive::Measure, String> {
+    let sensor = model.sensor.as_ref().ok_or_else(|| {
+        "render.noise = \"sensor\" needs a sensor: add a [sensor] table or pass --sensor"
+            .to_string()
+    })?;
+    let linear = crate::sensor::Linear {
+        width: w,
+        height: h,
+        rgb: pilot
+            .iter()
+            .map(|(m, _)| [m.x as f32, m.y as f32, m.z as f32])
+            .collect(),
+    };
+    let pitch = crate::sensor::files::pixel_pitch(camera, w);
+    let e = crate::sensor::expose(sensor, &linear, pitch);
+    Ok(adaptive::Measure::Sensor {
+        electrons_per_radiance: e.electrons_per_radiance,
+        read_noise: sensor.read_noise,
+        full_well: sensor.full_well,
+    })
+}
+
+/// What sampling one image's pixels needs: the rays of each pass (one, or one per channel),
+/// the integrator, and the image's place in the random streams.
+struct Pixels<'a> {
+    model: &'a Model,
+    scene: &'a scene::Scene,
+    integ: integrator::Integrator<'a>,
+    rays: Vec<camera::CameraRays>,
+    /// The channel of each pass's indices.
+    passes: Vec<usize>,
+    image_id: u64,
+    width: u32,
+    want_albedo: bool,
+}
+
+impl Pixels<'_> {
+    /// The channel pass `k` stands for (`None`: a single RGB pass).
+    fn channel_of(&self, k: usize) -> Option<usize> {
+        (self.passes.len() > 1).then_some(self.passes[k])
+    }
+
+    /// `n` samples of pixel (i, j), pass `k`, from stream index `from` on: their mean and the
+    /// variance of that mean; the first-hit albedo is added to `alb`.
+    fn run(&self, i: u32, j: u32, k: usize, from: u32, n: u32, alb: &mut DVec3) -> (DVec3, DVec3) {
+        let (model, scene, integ) = (self.model, self.scene, &self.integ);
+        let (seed, kind) = (model.render.seed, model.render.sampler);
+        let r = &self.rays[k];
+        let spread = footprint::PixelSpread::of(model, scene, r, i, j);
+        let pixel = j as u64 * self.width as u64 + i as u64;
+        let (mut acc, mut acc2) = (DVec3::ZERO, DVec3::ZERO);
+        for s in from as u64..(from + n) as u64 {
+            let mut rng = Sampler::for_sample(kind, seed, self.image_id, k, pixel, from, s);
+            let (du, dv) = rng.next2();
+            if let Some((o, d, wgt)) = r.ray(i as f64 + du, j as f64 + dv) {
+                if self.want_albedo && k == 0 {
+                    let ray = scene::Ray { origin: o, dir: d };
+                    if let Some(hit) = scene.intersect(&ray, f64::INFINITY) {
+                        *alb += integ.albedo(&hit);
+                    }
+                }
+                let v = integ.li_spread(o, d, spread.map(|s| s.shifted(du, dv)), &mut rng) * wgt;
+                if v.is_finite() {
+                    acc += v;
+                    acc2 += v * v;
+                }
+            }
+        }
+        let nf = n as f64;
+        acc /= nf;
+        // Unbiased sample variance of the samples, over n: that of their mean.
+        let v_mean = if n > 1 {
+            ((acc2 / nf - acc * acc) * (nf / (nf - 1.0)) / nf).max(DVec3::ZERO)
+        } else {
+            DVec3::ZERO
+        };
+        (acc, v_mean)
+    }
+
+    /// Each pixel's pilot (`spp` samples) mean and variance of the mean, row by row
+    /// (per-channel passes: each channel from its own pass).
+    fn pilot(&self, h: u32, spp: u32) -> Vec<(DVec3, DVec3)> {
+        let (w, npass) = (self.width, self.rays.len());
+        (0..h)
+            .into_par_iter()
+            .flat_map_iter(|j| {
+                (0..w).map(move |i| {
+                    let (mut m, mut v) = (DVec3::ZERO, DVec3::ZERO);
+                    for k in 0..npass {
+                        let (pm, pv) = self.run(i, j, k, 0, spp, &mut DVec3::default());
+                        match self.channel_of(k) {
+                            None => (m, v) = (pm, pv),
+                            Some(c) => (m[c], v[c]) = (pm[c], pv[c]),
+                        }
+                    }
+                    (m, v)
+                })
+            })
+            .collect()
+    }
+
+    /// Row `j`: every pixel's samples (`counts` per pixel and pass with a noise target, else
+    /// `spp`), its depth through the pixel centre and, with a target, its noise by `measure`.
+    fn row(
+        &self,
+        j: u32,
+        spp: u32,
+        counts: &[[u32; 3]],
+        targeted: bool,
+        measure: &adaptive::Measure,
+        cam_from_world: &crate::model::Pose,
+    ) -> PixelRow {
+        let (w, want_albedo, rays) = (self.width, self.want_albedo, &self.rays);
+        let mut row = Vec::with_capacity(w as usize);
+        let mut drow = Vec::with_capacity(w as usize);
+        let mut vrow = Vec::with_capacity(w as usize);
+        let mut arow = Vec::with_capacity(if want_albedo { w as usize } else { 0 });
+        let mut nrow = Vec::with_capacity(if targeted { w as usize } else { 0 });
+        for i in 0..w {
+            let mut alb = DVec3::ZERO;
+            let mut alb_n = 0u32;
+            let pixel = j as usize * w as usize + i as usize;
+            let mut sum = DVec3::ZERO;
+            let mut var = DVec3::ZERO;
+            let mut taken = 0u32;
+            for k in 0..rays.len() {
+                let channel = self.channel_of(k);
+                // With a noise target the pilot (stream indices 0..spp) is dropped and the
+                // pixel's fresh samples follow it, so that their number does not depend on
+                // the samples averaged (unbiased).
+                let (from, n) = match counts.get(pixel) {
+                    Some(c) => (spp, c[k]),
+                    None => (0, spp),
+                };
+                let (acc, v_mean) = self.run(i, j, k, from, n, &mut alb);
+                if k == 0 {
+                    alb_n = n;
+                }
+                taken += n;
+                match channel {
+                    None => {
+                        sum = acc;
+                        var = v_mean;
+                    }
+                    Some(c) => {
+                        sum[c] = acc[c];
+                        var[c] = v_mean[c];
+                    }
+                }
+            }
+            if targeted {
+                let rel = measure.squared(sum, var, None).sqrt();
+                nrow.push((taken / rays.len() as u32, rel as f32));
+            }
+            row.push([sum.x as f32, sum.y as f32, sum.z as f32]);
+            vrow.push([var.x as f32, var.y as f32, var.z as f32]);
+            if want_albedo {
+                let a = alb / alb_n.max(1) as f64;
+                arow.push([a.x as f32, a.y as f32, a.z as f32]);
+            }
+            // Depth through the pixel centre (green channel rays).
+            let r = &rays[if self.passes.len() == 1 { 0 } else { 1 }];
+            let z = r
+                .ray(i as f64 + 0.5, j as f64 + 0.5)
+                .and_then(|(o, d, _)| {
+                    self.scene
+                        .intersect(&scene::Ray { origin: o, dir: d }, f64::INFINITY)
+                })
+                .map_or(0.0, |hit| cam_from_world.transform_point(hit.point).z);
+            drow.push(z as f32);
+        }
+        (row, drow, vrow, arow, nrow)
+    }
 }
 
 /// Linear float RGB → OpenEXR bytes on disk (atomic).

@@ -39,7 +39,39 @@ pub(super) fn render(
     // Raised to what the water column needs when not written (`super::default_bounces`).
     let max_bounces = r.u32(cx, "bounces", super::DEFAULT_BOUNCES);
     let dispersion = r.bool(cx, "dispersion", false);
-    let outputs = match r.get("outputs") {
+    let outputs = outputs(cx, &mut r);
+    let exposure = r.f64(cx, "exposure", Dim::Number, 1.0);
+    check::positive(cx, &r, "exposure", exposure, "");
+    let denoise = r
+        .choice(cx, "denoise", &["none", "illumination"])
+        .unwrap_or("none");
+    let radius = r.f64(cx, "denoise_radius", Dim::Number, 2.0);
+    check::positive(cx, &r, "denoise_radius", radius, "px");
+    let denoise_radius = (denoise == "illumination" && radius > 0.0).then_some(radius);
+    let noise = noise_target(cx, &mut r, samples);
+    let (daylight, texture_filter, surface_from_below, sampler) = estimators(cx, &mut r);
+    at.daylight = r.has("daylight").then(|| r.span_of("daylight"));
+    at.bounces = r.has("bounces").then(|| r.span_of("bounces"));
+    r.finish(cx);
+    RenderSettings {
+        samples,
+        seed,
+        max_bounces,
+        dispersion,
+        outputs,
+        exposure,
+        denoise_radius,
+        noise,
+        daylight,
+        texture_filter,
+        surface_from_below,
+        sampler,
+    }
+}
+
+/// `outputs`: which of `rgb`, `depth` and `truth` are written (all three by default).
+fn outputs(cx: &mut Cx, r: &mut Tab) -> Vec<String> {
+    match r.get("outputs") {
         None => vec!["rgb".to_string(), "depth".into(), "truth".into()],
         Some(n) => match &n.val {
             Val::Array(a) => {
@@ -76,15 +108,12 @@ pub(super) fn render(
                 vec![]
             }
         },
-    };
-    let exposure = r.f64(cx, "exposure", Dim::Number, 1.0);
-    check::positive(cx, &r, "exposure", exposure, "");
-    let denoise = r
-        .choice(cx, "denoise", &["none", "illumination"])
-        .unwrap_or("none");
-    let radius = r.f64(cx, "denoise_radius", Dim::Number, 2.0);
-    check::positive(cx, &r, "denoise_radius", radius, "px");
-    let denoise_radius = (denoise == "illumination" && radius > 0.0).then_some(radius);
+    }
+}
+
+/// `noise` and `max_samples`: the native renderer's noise target (a relative error, or
+/// "sensor"), checked against the pilot's `samples`.
+fn noise_target(cx: &mut Cx, r: &mut Tab, samples: u32) -> Option<NoiseTarget> {
     let against_sensor =
         matches!(r.get("noise"), Some(n) if matches!(&n.val, Val::Str(s) if s == "sensor"));
     let word = match r.get("noise") {
@@ -161,24 +190,7 @@ pub(super) fn render(
                 )),
         );
     }
-    let (daylight, texture_filter, surface_from_below, sampler) = estimators(cx, &mut r);
-    at.daylight = r.has("daylight").then(|| r.span_of("daylight"));
-    at.bounces = r.has("bounces").then(|| r.span_of("bounces"));
-    r.finish(cx);
-    RenderSettings {
-        samples,
-        seed,
-        max_bounces,
-        dispersion,
-        outputs,
-        exposure,
-        denoise_radius,
-        noise,
-        daylight,
-        texture_filter,
-        surface_from_below,
-        sampler,
-    }
+    noise
 }
 
 /// `daylight`, `texture_filter`, `surface_from_below` and `sampler`: the native renderer's
