@@ -659,19 +659,29 @@ impl Cx {
             .map_err(|e| e.to_string())
             .and_then(|r| r.decode().map_err(|e| e.to_string()))
             .map_err(|e| format!("{}: {}: {e}", k.loc, path.display()))?;
-        let rgb = img.to_rgb32f();
         let srgb = !matches!(
             img,
             image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
         );
-        let mut sum = [0.0f64; 3];
-        let n = (rgb.width() as f64 * rgb.height() as f64).max(1.0);
-        for p in rgb.pixels() {
-            for (acc, &v) in sum.iter_mut().zip(&p.0) {
-                let v = v as f64;
-                *acc += if srgb { srgb_to_linear(v) } else { v };
+        let n = (img.width() as f64 * img.height() as f64).max(1.0);
+        // 8-bit colour images (grey ones are widened to colour by a different conversion).
+        let rgb8 = matches!(
+            img,
+            image::DynamicImage::ImageRgb8(_) | image::DynamicImage::ImageRgba8(_)
+        );
+        let sum = if srgb && rgb8 {
+            sum_8bit_srgb(&img)
+        } else {
+            let rgb = img.to_rgb32f();
+            let mut sum = [0.0f64; 3];
+            for p in rgb.pixels() {
+                for (acc, &v) in sum.iter_mut().zip(&p.0) {
+                    let v = v as f64;
+                    *acc += if srgb { srgb_to_linear(v) } else { v };
+                }
             }
-        }
+            sum
+        };
         if mapped {
             return Ok(sum.map(|s| s / n));
         }
@@ -2700,6 +2710,26 @@ fn emitter(
     Ok(())
 }
 
+/// Per channel, the sum over an 8-bit image's pixels of their linear values (sRGB decoded):
+/// each of the 256 codes decoded once, through the very conversion (`to_rgb32f`) and decoding
+/// the general path applies per pixel, so the sums are the same numbers, without a `powf` per
+/// channel and pixel (a photogrammetric texture holds tens of millions).
+fn sum_8bit_srgb(img: &image::DynamicImage) -> [f64; 3] {
+    let codes = image::RgbImage::from_fn(256, 1, |i, _| image::Rgb([i as u8; 3]));
+    let as_f32 = image::DynamicImage::ImageRgb8(codes).to_rgb32f();
+    let lut: Vec<f64> = as_f32
+        .pixels()
+        .map(|p| srgb_to_linear(p.0[0] as f64))
+        .collect();
+    let mut sum = [0.0f64; 3];
+    for p in img.to_rgb8().pixels() {
+        for (acc, &v) in sum.iter_mut().zip(&p.0) {
+            *acc += lut[v as usize];
+        }
+    }
+    sum
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -2718,6 +2748,32 @@ mod tests {
             included: false,
             dir: PathBuf::from("."),
             doc: 0,
+        }
+    }
+
+    /// The 8-bit path's sums are the general path's, to the bit, for RGB and RGBA images.
+    #[test]
+    fn eight_bit_sums_are_the_general_paths() {
+        let mut h = 5u64;
+        let mut next = || {
+            h = h
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (h >> 56) as u8
+        };
+        let rgba =
+            image::RgbaImage::from_fn(37, 23, |_, _| image::Rgba([next(), next(), next(), next()]));
+        for img in [
+            image::DynamicImage::ImageRgba8(rgba.clone()),
+            image::DynamicImage::ImageRgb8(image::DynamicImage::ImageRgba8(rgba).to_rgb8()),
+        ] {
+            let mut general = [0.0f64; 3];
+            for p in img.to_rgb32f().pixels() {
+                for (acc, &v) in general.iter_mut().zip(&p.0) {
+                    *acc += srgb_to_linear(v as f64);
+                }
+            }
+            assert_eq!(sum_8bit_srgb(&img), general);
         }
     }
 
