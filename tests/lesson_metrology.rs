@@ -12,8 +12,7 @@
 use crate::support;
 
 use support::lesson::{
-    assert_self_contained, cell, dump_dom, f, row, rows, run_lesson_with, screenshot_variance,
-    slug,
+    assert_self_contained, cell, dump_dom, f, row, rows, run_lesson_with, screenshot_variance, slug,
 };
 
 #[test]

@@ -1765,7 +1765,10 @@ mod tests {
         });
         assert!(keys > 200, "only {keys} keys");
         let def = &v["$defs"][UNSET_DEF];
-        assert_eq!(def["properties"]["unset"]["const"], serde_json::Value::Bool(true));
+        assert_eq!(
+            def["properties"]["unset"]["const"],
+            serde_json::Value::Bool(true)
+        );
         assert_eq!(def["required"][0], "unset");
     }
 
