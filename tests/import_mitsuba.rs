@@ -21,9 +21,10 @@ fn scenes(sub: &str) -> Vec<PathBuf> {
         .collect()
 }
 
-/// Compile `scene` for Mitsuba, import (up to `max_views` views) and compare. `Ok(None)` when
-/// the Mitsuba backend refuses the scene or the comparison does not apply (with the reason).
-fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<String>, String> {
+/// Compile `scene` for Mitsuba (the poses `support::import::load_and_compile` keeps), import
+/// every view and compare. `Ok(None)` when the Mitsuba backend refuses the scene or the
+/// comparison does not apply (with the reason).
+fn round_trip(scene: &Path, dir: &Path) -> Result<Option<String>, String> {
     let mi = dir.join("mi");
     let model = match support::import::load_and_compile(scene, "mitsuba", &mi) {
         Ok(m) => m,
@@ -31,15 +32,7 @@ fn round_trip(scene: &Path, dir: &Path, max_views: usize) -> Result<Option<Strin
     };
     let manifest: Value =
         serde_json::from_slice(&std::fs::read(mi.join("manifest.json")).unwrap()).unwrap();
-    let views = manifest["views"].as_array().unwrap();
-    // Every camera's view of up to `max_views` rig poses, spread over the network.
-    let n_cams = model.cameras.len();
-    let n_poses = views.len() / n_cams;
-    let step = n_poses.div_ceil(max_views).max(1);
-    let picked: Vec<&Value> = views
-        .iter()
-        .filter(|v| (v["pose"].as_u64().unwrap() as usize).is_multiple_of(step))
-        .collect();
+    let picked: Vec<&Value> = manifest["views"].as_array().unwrap().iter().collect();
     let files: Vec<PathBuf> = picked
         .iter()
         .map(|v| {
@@ -89,7 +82,7 @@ fn round_trip_all(sub: &str) -> (Vec<String>, Vec<String>) {
     let scenes = scenes(sub);
     let results = support::map_parallel(&scenes, |scene| {
         let dir = tempfile::tempdir().unwrap();
-        round_trip(scene, dir.path(), 6)
+        round_trip(scene, dir.path())
     });
     for (scene, result) in scenes.iter().zip(results) {
         let name = scene.file_stem().unwrap().to_string_lossy().into_owned();
