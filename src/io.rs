@@ -40,6 +40,28 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     Ok(())
 }
 
+/// Put the finished folder `from` in place of `to`, replacing what `to` held: `to` is first
+/// renamed aside (to `to` + `.old`), `from` renamed onto `to`, the old one then removed. Both
+/// must be on the same file system (siblings, in poser's use). At every moment `to` is either
+/// the old complete folder, absent for the instant between the two renames, or the new one.
+pub fn replace_dir(from: &Path, to: &Path) -> std::io::Result<()> {
+    let mut aside = to.as_os_str().to_owned();
+    aside.push(".old");
+    let aside = std::path::PathBuf::from(aside);
+    if aside.exists() {
+        std::fs::remove_dir_all(&aside)?;
+    }
+    let had_old = to.exists();
+    if had_old {
+        std::fs::rename(to, &aside)?;
+    }
+    std::fs::rename(from, to)?;
+    if had_old {
+        std::fs::remove_dir_all(&aside)?;
+    }
+    Ok(())
+}
+
 /// Write with a closure that produces the file at a temporary path (for encoders that want a
 /// path, such as EXR writers), then rename onto `path`.
 pub fn write_atomic_with(
@@ -115,5 +137,26 @@ mod tests {
             assert_eq!(mode, 0o644);
         }
         assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_finished_folder_replaces_the_old_one_whole() {
+        let d = tempfile::tempdir().unwrap();
+        let (new, to) = (d.path().join("images.partial"), d.path().join("images"));
+        std::fs::create_dir_all(&to).unwrap();
+        std::fs::write(to.join("stale.png"), b"old").unwrap();
+        std::fs::create_dir_all(&new).unwrap();
+        std::fs::write(new.join("a.png"), b"new").unwrap();
+        replace_dir(&new, &to).unwrap();
+        assert!(!new.exists() && !d.path().join("images.old").exists());
+        let names: Vec<_> = std::fs::read_dir(&to)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, ["a.png"]);
+        // Without an old folder, it is a rename.
+        std::fs::create_dir_all(&new).unwrap();
+        replace_dir(&new, &d.path().join("fresh")).unwrap();
+        assert!(d.path().join("fresh").is_dir() && !new.exists());
     }
 }

@@ -9,7 +9,8 @@
 //! ends from outside, and [`export`] writing the model for other tools (a glTF preview of the
 //! whole scene). The [`cli`] sits on top and nothing in the library imports it: [`explain`]
 //! (the model for a person), [`points`] (the one point-list parser) and [`image`] (linear
-//! images, the EXR reader) serve the CLI, the Python module and the fuzz targets alike.
+//! images, the EXR reader) serve the CLI, the Python module and the fuzz targets alike;
+//! [`progress`] reports long jobs on stderr, with or without a terminal.
 
 // `!(x > 0.0)` is how poser rejects NaN together with the values out of range.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -31,6 +32,7 @@ pub mod model;
 pub mod pack;
 pub mod plan;
 pub mod points;
+pub mod progress;
 pub mod scene;
 pub mod sensor;
 pub mod slurm;

@@ -8,6 +8,7 @@ mod support;
 
 mod architecture;
 mod bench_render;
+mod bench_sensor;
 mod blender_snapshots;
 mod canonical_native;
 mod compile_out;
@@ -24,6 +25,7 @@ mod dive_safety;
 mod dive_trimix;
 mod docs_numbers;
 mod error_index;
+mod evaluate_images_folder;
 mod evaluate_precheck;
 mod fuzz_replay;
 mod georef_mesh;

@@ -8,9 +8,11 @@
 //! | [`parity`] | `poser bench parity`: every shipped scene in every backend, and whether they agree |
 //! | [`projection`] | `poser bench projection`: port solvers (scalar, batch) against the double-double reference |
 //! | [`render`] | `poser bench render`: speed against error of every render backend |
+//! | [`sensor`] | `poser bench sensor`: the cost of an image at the camera's own noise, per daylight estimator |
 
 pub mod evaluate;
 pub mod images;
 pub mod parity;
 pub mod projection;
 pub mod render;
+pub mod sensor;

@@ -1,4 +1,5 @@
-//! `poser bench`: speed-against-error reports (projection solvers; render backends), COLMAP on
+//! `poser bench`: speed-against-error reports (projection solvers; render backends), the cost
+//! of an image at the sensor's noise (`sensor`), COLMAP on
 //! rendered surveys (`images`), and the
 //! backends' agreement on every shipped scene (`parity`).
 use super::CliError;
@@ -8,7 +9,7 @@ use std::path::PathBuf;
 /// The arguments of `poser bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// What to benchmark: `projection`, `render`, `evaluate`, `parity` or `images`.
+    /// What to benchmark: `projection`, `render`, `sensor`, `evaluate`, `parity` or `images`.
     pub what: String,
     /// Write the report as JSON too.
     #[arg(long)]
@@ -25,10 +26,10 @@ pub struct Args {
     /// `render` only: replace the generated summary block of this Markdown file (the README).
     #[arg(long)]
     pub readme: Option<PathBuf>,
-    /// `render`, `parity` and `images`: only the scenes whose file name contains this.
+    /// `render`, `sensor`, `parity` and `images`: only the scenes whose file name contains this.
     #[arg(long)]
     pub only: Option<String>,
-    /// `parity` and `images`: keep the renders (and `parity`'s `poser compare` reports) here
+    /// `parity`, `sensor` and `images`: keep the renders (and `parity`'s `poser compare` reports) here
     /// (default: a temporary folder, removed afterwards).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -52,14 +53,14 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--backends applies to `poser bench render` and `poser bench parity` only".into(),
         ));
     }
-    if !matches!(what, "render" | "parity" | "images") && args.only.is_some() {
+    if !matches!(what, "render" | "sensor" | "parity" | "images") && args.only.is_some() {
         return Err(CliError::Usage(
-            "--only applies to `poser bench render`, `parity` and `images` only".into(),
+            "--only applies to `poser bench render`, `sensor`, `parity` and `images` only".into(),
         ));
     }
-    if !matches!(what, "parity" | "images") && args.out.is_some() {
+    if !matches!(what, "parity" | "sensor" | "images") && args.out.is_some() {
         return Err(CliError::Usage(
-            "--out applies to `poser bench parity` and `poser bench images` only".into(),
+            "--out applies to `poser bench parity`, `sensor` and `images` only".into(),
         ));
     }
     match what {
@@ -117,6 +118,21 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             print!("{}", crate::bench::parity::table(&rows));
             write_json(json.as_deref(), &rows)
         }
+        "sensor" => {
+            let (_tmp, out) = out_dir(args.out.as_ref())?;
+            let poser = std::env::current_exe().map_err(|e| CliError::Failed(e.to_string()))?;
+            let opts = crate::bench::sensor::Options {
+                scale: if quick { 0.25 } else { 1.0 },
+                pilots: [2, 8],
+                only: args.only.clone(),
+                poser,
+                out,
+            };
+            let root = crate::backend::python::repo_root();
+            let rows = crate::bench::sensor::run(&root, &opts).map_err(CliError::Failed)?;
+            print!("{}", crate::bench::sensor::table(&rows));
+            write_json(json.as_deref(), &rows)
+        }
         "images" => {
             let (_tmp, out) = out_dir(args.out.as_ref())?;
             let root = crate::backend::python::repo_root();
@@ -126,7 +142,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             write_json(json.as_deref(), &rows)
         }
         other => Err(CliError::Usage(format!(
-            "bench `{other}`: expected `projection`, `render`, `evaluate`, `parity` or `images`"
+            "bench `{other}`: expected `projection`, `render`, `sensor`, `evaluate`, `parity` or \
+             `images`"
         ))),
     }
 }

@@ -11,14 +11,14 @@
 //! | `--gcp-sigma [METRES]` | off (0.002 when given alone) | with `--gcp`: the control points enter the bundle adjustment as weighted constraints, each known to this σ per axis, as Metashape weights markers; no similarity after |
 //! | `--strict` | off | a health warning (images dropped, focal length not determined, outlier-driven RMS) is an error: exit status 1 after the report is written |
 //! | `--rig` | off | observations mode: the rig is calibrated beforehand — intrinsics held at the in-water-equivalent values, the cameras' poses in the rig held at the truth; the bundle adjuster solves one pose per rig position (its baseline sets the scale) |
-//! | `--images DIR` | render | images mode: use the images already rendered in DIR (any backend) |
+//! | `--images DIR` | render | images mode: use the images already rendered in DIR (any backend); without it the network is rendered into `OUT/images.partial/` and renamed to `OUT/images/` when complete (a run cut short resumes there) |
 //! | `--samples`, `--scale` | scene's | images mode: the native render's samples and resolution scale |
 use super::{CliError, SceneArgs, load_model};
 use crate::backend::{Backend, RenderOptions};
 use crate::evaluate::colmap::CameraModel;
 use crate::evaluate::{self, Mode, Options};
+use crate::progress::Progress;
 use clap::Args as ClapArgs;
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
 /// Arguments of `poser evaluate`.
@@ -162,20 +162,14 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         perturb_position: args.perturb_position,
         perturb_rotation: args.perturb_rotation.to_radians(),
     };
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(0)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} {elapsed}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    // The evaluation's own stages (observations, SIFT, matching, mapping, adjustment); the
+    // render in images mode reports its own progress first.
+    let bar = std::sync::OnceLock::new();
+    let bar = || bar.get_or_init(|| Progress::new(!args.quiet, "evaluating", "steps", 0));
     let progress = |what: &str, k: u64, n: u64| {
-        bar.set_message(what.to_string());
+        let bar = bar();
         bar.set_length(n);
+        bar.set_message(what);
         bar.set_position(k);
     };
     let ev = match args.mode {
@@ -183,37 +177,12 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         Mode::Images => {
             let dir = match &args.images {
                 Some(d) => d.clone(),
-                None => {
-                    // Refuse an untextured scene before spending the render on it.
-                    evaluate::check_images_texture(&model).map_err(CliError::Failed)?;
-                    let dir = args.out.join("images");
-                    bar.set_message(format!("rendering ({})", args.backend));
-                    args.backend
-                        .render(
-                            &model,
-                            &dir,
-                            &RenderOptions {
-                                samples: args.samples,
-                                poses: None,
-                                progress: false,
-                                resume: false,
-                            },
-                        )
-                        .map_err(CliError::Failed)?;
-                    if let Some(sensor) = &model.sensor {
-                        bar.set_message("sensor stage");
-                        let spp = args.samples.unwrap_or(model.render.samples).max(1);
-                        let poses: Vec<usize> = (0..model.poses.len()).collect();
-                        crate::sensor::files::apply(&model, sensor, &dir, &poses, spp)
-                            .map_err(CliError::Failed)?;
-                    }
-                    dir
-                }
+                None => render_images(&model, args)?,
             };
             evaluate::evaluate_images(&model, &dir, &opts, &progress)
         }
     };
-    bar.finish_and_clear();
+    bar().finish();
     let ev = ev.map_err(CliError::Failed)?;
     evaluate::report::write(&ev, &args.out).map_err(CliError::Failed)?;
     print_summary(&ev, &args.out);
@@ -233,6 +202,39 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+/// Images mode without `--images`: render the network into `OUT/images.partial/` and pass it
+/// through the camera, then rename it to `OUT/images/` (replacing an earlier run's), so that
+/// `OUT/images/` only ever holds a finished set. A run cut short leaves `images.partial/`, which
+/// the next run resumes (the native backend skips the images it finished with the same scene
+/// and samples).
+fn render_images(model: &crate::model::Model, args: &Args) -> Result<PathBuf, CliError> {
+    // Refuse an untextured scene before spending the render on it.
+    evaluate::check_images_texture(model).map_err(CliError::Failed)?;
+    let dir = args.out.join("images");
+    let partial = args.out.join("images.partial");
+    args.backend
+        .render(
+            model,
+            &partial,
+            &RenderOptions {
+                samples: args.samples,
+                poses: None,
+                progress: !args.quiet,
+                resume: true,
+            },
+        )
+        .map_err(CliError::Failed)?;
+    if let Some(sensor) = &model.sensor {
+        let spp = args.samples.unwrap_or(model.render.samples).max(1);
+        let poses: Vec<usize> = (0..model.poses.len()).collect();
+        crate::sensor::files::apply(model, sensor, &partial, &poses, spp)
+            .map_err(CliError::Failed)?;
+    }
+    crate::io::replace_dir(&partial, &dir)
+        .map_err(|e| CliError::Failed(format!("{}: {e}", dir.display())))?;
+    Ok(dir)
 }
 
 /// The target names of a comma-separated `--gcp`/`--check` list (none when absent).

@@ -225,18 +225,7 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         )
     })?;
     let total = (poses.len() * model.cameras.len()) as u64;
-    let bar = if opts.progress {
-        let b = indicatif::ProgressBar::new(total);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "cycles {bar:30.cyan/blue} {pos}/{len} images {msg} [{elapsed_precise}]",
-            )
-            .expect("valid template"),
-        );
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let bar = crate::progress::Progress::new(opts.progress, "cycles", "images", total);
     let stderr = child.stderr.take().expect("piped");
     let err_thread = std::thread::spawn(move || {
         let mut tail = std::collections::VecDeque::new();
@@ -260,7 +249,7 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
                 .next()
                 .and_then(|n| serde_json::from_str::<String>(n).ok())
             {
-                bar.set_message(name.clone());
+                bar.set_item(&name);
                 images.push(out.join(format!("{name}.exr")));
             }
             bar.set_position(done);
@@ -273,7 +262,7 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     }
     let status = child.wait().map_err(|e| e.to_string())?;
     let err_tail = err_thread.join().unwrap_or_default();
-    bar.finish_and_clear();
+    bar.finish();
     if !status.success() {
         let mut msg = format!("Cycles render failed ({status}); last output:\n");
         for l in tail.iter().chain(err_tail.iter()) {

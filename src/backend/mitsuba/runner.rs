@@ -67,17 +67,7 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         let _ = stderr.read_to_string(&mut s);
         s
     });
-    let bar = if opts.progress {
-        indicatif::ProgressBar::new(total as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "mitsuba {bar:30} {pos}/{len} passes {msg} [{elapsed}]",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
+    let bar = crate::progress::Progress::new(opts.progress, "mitsuba", "passes", total as u64);
     let mut images = Vec::new();
     if let Some(stdout) = child.stdout.take() {
         for line in BufReader::new(stdout).lines().map_while(Result::ok) {
@@ -86,8 +76,8 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
                 Some("progress") => {
                     let done: u64 = it.next().and_then(|s| s.parse().ok()).unwrap_or(0);
                     let _total = it.next();
+                    bar.set_item(it.next().unwrap_or(""));
                     bar.set_position(done);
-                    bar.set_message(it.next().unwrap_or("").to_string());
                 }
                 Some("image") => {
                     if let Some(p) = it.next() {
@@ -99,7 +89,7 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         }
     }
     let status = child.wait().map_err(|e| e.to_string())?;
-    bar.finish_and_clear();
+    bar.finish();
     let err = err_thread.join().unwrap_or_default();
     if !status.success() {
         let tail: Vec<&str> = err.lines().rev().take(15).collect();

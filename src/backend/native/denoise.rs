@@ -51,6 +51,13 @@ pub fn illumination(
     };
     let kind = |i: usize, c: usize| -> bool { depth[i] > 0.0 && albedo[i][c] as f64 >= MIN_ALBEDO };
     type Rows = Vec<(Vec<[f32; 3]>, Vec<[f32; 3]>)>;
+    // The spatial weights, once: the same `exp` of the same argument as per pair, so the
+    // same bits; the range weight is computed once per pair and shared by the channels.
+    let side = (2 * radius + 1) as usize;
+    let spatial: Vec<f64> = (-radius..=radius)
+        .flat_map(|dy| (-radius..=radius).map(move |dx| (dy, dx)))
+        .map(|(dy, dx)| (-((dx * dx + dy * dy) as f64) / two_s2).exp())
+        .collect();
     let rows: Rows = (0..h)
         .into_par_iter()
         .map(|y| {
@@ -59,35 +66,45 @@ pub fn illumination(
             for x in 0..w {
                 let p = (y * w + x) as usize;
                 let zp = depth[p] as f64;
+                let kp = [kind(p, 0), kind(p, 1), kind(p, 2)];
+                // Per channel: Σ w A, Σ w² var, Σ w L.
+                let mut acc = [[0.0f64; 3]; 3];
+                for dy in -radius..=radius {
+                    let qy = y + dy;
+                    if qy < 0 || qy >= h {
+                        continue;
+                    }
+                    let row = (dy + radius) as usize * side;
+                    for dx in -radius..=radius {
+                        let qx = x + dx;
+                        if qx < 0 || qx >= w {
+                            continue;
+                        }
+                        let q = (qy * w + qx) as usize;
+                        let ws = spatial[row + (dx + radius) as usize];
+                        let mut range = None;
+                        for c in 0..3 {
+                            if kind(q, c) != kp[c] {
+                                continue;
+                            }
+                            let mut wt = ws;
+                            if kp[c] {
+                                wt *= *range.get_or_insert_with(|| {
+                                    let rel = (depth[q] as f64 - zp) / zp;
+                                    (-(rel * rel) / two_t2).exp()
+                                });
+                            }
+                            let [sa, sw2v, se] = &mut acc[c];
+                            *se += wt * rgb[q][c] as f64;
+                            *sw2v += wt * wt * variance[q][c] as f64;
+                            *sa += wt * factor(q, c);
+                        }
+                    }
+                }
                 let mut o = [0f32; 3];
                 let mut v = [0f32; 3];
                 for c in 0..3 {
-                    let kp = kind(p, c);
-                    let (mut sa, mut sw2v, mut se) = (0.0f64, 0.0f64, 0.0f64);
-                    for dy in -radius..=radius {
-                        let qy = y + dy;
-                        if qy < 0 || qy >= h {
-                            continue;
-                        }
-                        for dx in -radius..=radius {
-                            let qx = x + dx;
-                            if qx < 0 || qx >= w {
-                                continue;
-                            }
-                            let q = (qy * w + qx) as usize;
-                            if kind(q, c) != kp {
-                                continue;
-                            }
-                            let mut wt = (-((dx * dx + dy * dy) as f64) / two_s2).exp();
-                            if kp {
-                                let rel = (depth[q] as f64 - zp) / zp;
-                                wt *= (-(rel * rel) / two_t2).exp();
-                            }
-                            se += wt * rgb[q][c] as f64;
-                            sw2v += wt * wt * variance[q][c] as f64;
-                            sa += wt * factor(q, c);
-                        }
-                    }
+                    let [sa, sw2v, se] = acc[c];
                     let fp = factor(p, c);
                     // sa ≥ factor(p, c) > 0: the pixel itself always counts.
                     o[c] = (fp * se / sa) as f32;

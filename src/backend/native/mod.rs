@@ -31,8 +31,8 @@ pub mod scene;
 
 use crate::backend::{RenderOptions, RenderReport};
 use crate::model::Model;
+use crate::progress::Progress;
 use glam::DVec3;
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use sampler::Sampler;
 use std::path::Path;
@@ -98,7 +98,7 @@ pub fn render_image(
     pose: usize,
     cam: usize,
     samples: u32,
-    progress: Option<&ProgressBar>,
+    progress: Option<&Progress>,
 ) -> Result<Image, String> {
     let camera = &model.cameras[cam];
     let (w, h) = (camera.width, camera.height);
@@ -431,20 +431,9 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
     }
     let rows_total: u64 =
         poses.len() as u64 * model.cameras.iter().map(|c| c.height as u64).sum::<u64>();
-    let pb = if opts.progress {
-        let pb = ProgressBar::new(rows_total);
-        pb.set_style(
-            ProgressStyle::with_template(
-                "{msg:>12} [{bar:40}] {pos}/{len} rows, {elapsed} (eta {eta})",
-            )
-            .map_err(|e| e.to_string())?
-            .progress_chars("=> "),
-        );
-        pb.set_message("rendering");
-        Some(pb)
-    } else {
-        None
-    };
+    let pb = opts
+        .progress
+        .then(|| Progress::new(true, "rendering", "rows", rows_total));
     let want_depth = model.render.outputs.iter().any(|o| o == "depth");
     let mut report = RenderReport::default();
     let mut manifest = resume::Manifest::open(out, &resume::fingerprint(model, samples));
@@ -524,7 +513,7 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
         }
     }
     if let Some(pb) = pb {
-        pb.finish_and_clear();
+        pb.finish();
     }
     if opts.resume {
         eprintln!(
