@@ -2364,7 +2364,12 @@ fn shape(
     let alb = match alb? {
         Ok(a) => a,
         Err(what) => {
-            // A medium boundary (the sea box) or glass: only around the camera.
+            // A medium boundary (the sea box) or glass: only around the camera. A `null`
+            // shape without a medium is invisible in Mitsuba too: its file is not read.
+            let medium = k.kids.iter().any(|c| c.attr("name") == Some("interior"));
+            if what == "null" && !medium {
+                return Ok(());
+            }
             let (lo, hi) = world_bounds(cx, k, &m)?;
             refuse_away_from_camera(cx, k, what, sensor_distance(lo, hi))?;
             if what == "null" {
