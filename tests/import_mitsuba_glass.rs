@@ -3,7 +3,8 @@
 //! so a glass object, or a medium inside a shape the camera is outside of, is refused up front
 //! (the shape's file, line and column, a `help:` line, nothing written) instead of being read
 //! as a housing or as water everywhere. Glass around the camera is still its port. Also:
-//! `--root` for mitsuba-data's shared `common/` folder, and the depth of a `direct` or a
+//! `--root` for a shared `common/` folder beside the scene's (Mitsuba's data repository's
+//! layout), and the depth of a `direct` or a
 //! wrapped integrator. No rendering, no Python.
 
 use std::path::{Path, PathBuf};
@@ -189,47 +190,51 @@ fn a_medium_around_the_camera_is_the_water() {
     assert!(text.contains("[water]"), "{text}");
 }
 
-fn data() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/import/mitsuba-data")
+/// A scene in the layout of Mitsuba's own data repository: `scenes/hello.xml` finds its mesh
+/// in `../common` through `<path>`, renders with the `direct` integrator (4 emitter samples)
+/// and two point lights. Returns the data folder.
+fn shared_common_layout(dir: &Path) -> PathBuf {
+    let data = dir.join("data");
+    std::fs::create_dir_all(data.join("scenes")).unwrap();
+    std::fs::create_dir_all(data.join("common/meshes")).unwrap();
+    std::fs::write(
+        data.join("common/meshes/quad.obj"),
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    std::fs::write(
+        data.join("scenes/hello.xml"),
+        r#"<scene version='2.0.0'>
+    <path value="../common"/>
+
+    <integrator type='direct'>
+        <integer name="emitter_samples" value="4"/>
+        <integer name="bsdf_samples" value="0"/>
+    </integrator>
+    <sensor type="perspective">
+        <float name="fov" value="45"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="48"/></film>
+    </sensor>
+    <shape type="obj"><string name="filename" value="meshes/quad.obj"/></shape>
+    <emitter type="point"><point name="position" x="1" y="1" z="3"/><rgb name="intensity" value="10"/></emitter>
+    <emitter type="point"><point name="position" x="-1" y="1" z="3"/><rgb name="intensity" value="10"/></emitter>
+</scene>
+"#,
+    )
+    .unwrap();
+    data
 }
 
-/// The two mitsuba-data scenes that `tests/import_mitsuba_data.rs` refuses, refused here too
-/// without rendering: the first shape poser cannot hold, located.
-#[test]
-fn the_mitsuba_data_media_scenes_are_refused_at_their_first_sphere() {
-    let media = "tests/scenes/participating_media";
-    for (xml, loc, what) in [
-        (
-            "test_homo_area_light_volpath.xml",
-            "test_homo_area_light_volpath.xml:14:5",
-            "`obj` shape with a `null` BSDF bounds medium `medium1`, and the camera is outside it",
-        ),
-        (
-            "test_homo_dielectric_envmap_volpath.xml",
-            "test_homo_dielectric_envmap_volpath.xml:18:5",
-            "`obj` shape with a `dielectric` BSDF bounds medium `medium1`",
-        ),
-    ] {
-        let dir = tempfile::tempdir().unwrap();
-        let file = data().join(media).join(xml);
-        let root = data();
-        let out = import(
-            dir.path(),
-            file.to_str().unwrap(),
-            &["--root", root.to_str().unwrap()],
-        );
-        assert_refused(dir.path(), &out, loc, what);
-    }
-}
-
-/// mitsuba-data's `hello.xml` finds its teapot in `../common` through `<path>`: outside the
-/// file's folder, refused with a hint at `--root`; with `--root` it imports, and its `direct`
-/// integrator (emitted and direct light) is `render.bounces = 1`, and its 4 emitter samples,
-/// each of a point light at full weight in Mitsuba, are noted.
+/// A scene whose `<path>` leads to a `../common` folder beside its own (as in Mitsuba's data
+/// repository): outside the file's folder, refused with a hint at `--root`; with `--root` it
+/// imports, and its `direct` integrator (emitted and direct light) is `render.bounces = 1`,
+/// and its 4 emitter samples, each of a point light at full weight in Mitsuba, are noted.
 #[test]
 fn root_widens_the_folder_and_direct_is_one_bounce() {
-    let hello = data().join("scenes/hello.xml");
     let dir = tempfile::tempdir().unwrap();
+    let data = shared_common_layout(dir.path());
+    let hello = data.join("scenes/hello.xml");
     let out = import(dir.path(), hello.to_str().unwrap(), &[]);
     let err = stderr(&out);
     assert!(!out.status.success(), "{err}");
@@ -237,11 +242,10 @@ fn root_widens_the_folder_and_direct_is_one_bounce() {
     assert!(err.contains("leaves the scene's folder"), "{err}");
     assert!(err.contains("--root"), "{err}");
 
-    let root = data();
     let out = import(
         dir.path(),
         hello.to_str().unwrap(),
-        &["--root", root.to_str().unwrap()],
+        &["--root", data.to_str().unwrap()],
     );
     let err = stderr(&out);
     assert!(out.status.success(), "{err}");
@@ -255,7 +259,7 @@ fn root_widens_the_folder_and_direct_is_one_bounce() {
     assert!(text.contains("bounces = 1"), "{text}");
     assert_eq!(text.matches("type = \"point\"").count(), 2, "{text}");
     // A file outside the root is still refused.
-    let narrow = data().join("scenes");
+    let narrow = data.join("scenes");
     let out = import(
         dir.path(),
         hello.to_str().unwrap(),
