@@ -15,6 +15,7 @@ mod exif_pycolmap;
 mod gltf_view;
 mod import_blender;
 mod import_cbox;
+mod import_mitsuba_data;
 mod import_verify;
 mod lesson;
 mod lesson_completeness_page;

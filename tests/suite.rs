@@ -34,6 +34,7 @@ mod hostile_input;
 mod hostile_names;
 mod import_mitsuba;
 mod import_mitsuba_files;
+mod import_mitsuba_glass;
 mod lesson_completeness;
 mod mitsuba_compile;
 mod native_amphora;

@@ -18,6 +18,10 @@ pub struct Args {
     /// Folder for the mesh assets (default: `<scene name>_assets` beside the scene file).
     #[arg(long)]
     pub assets: Option<PathBuf>,
+    /// Mitsuba: the folder every file the scene names must stay inside (default: the first
+    /// file's folder), for scenes whose `<path>` folders sit beside their own.
+    #[arg(long)]
+    pub root: Option<PathBuf>,
     /// Render the source in its own renderer (Mitsuba 3 for `.xml`, Cycles for `.blend`) and the imported scene
     /// natively (daylight traced), at a small size, print the difference per channel and per
     /// region, and fail when a channel's mean differs by more than `--tolerance`.
@@ -50,6 +54,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             )));
         }
     }
+    if blend && args.root.is_some() {
+        return Err(CliError::Usage(
+            "--root is for Mitsuba files: a Blender file is read by Blender".into(),
+        ));
+    }
     if blend && args.files.len() != 1 {
         return Err(CliError::Usage(
             "a Blender file is imported on its own: one .blend, no other file".into(),
@@ -74,7 +83,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         let work = tempfile::tempdir().map_err(|e| CliError::Failed(e.to_string()))?;
         crate::import::blender::import(&args.files[0], &rel, work.path())
     } else {
-        crate::import::mitsuba::import(&args.files, &rel)
+        crate::import::mitsuba::import_within(&args.files, &rel, args.root.as_deref())
     }
     .map_err(CliError::Failed)?;
     for n in &imported.notes {

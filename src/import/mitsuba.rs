@@ -7,18 +7,18 @@
 //! | `disk`, `obj`, `ply` | `mesh` objects, written as `.glb` assets | `to_world` baked into the vertices |
 //! | `diffuse` BSDF (`rgb`, `spectrum`, `bitmap`, `checkerboard` reflectance), `twosided` | `albedo` | a bitmap on an `obj`/`ply` with texture coordinates or on a `rectangle` becomes the mesh's image texture, elsewhere its mean albedo; a checkerboard the mean of its colours (noted); other BSDFs their diffuse reflectance, noted |
 //! | `spectrum` (one value, wavelength:value pairs, `.spd` file) | linear sRGB | as Mitsuba 3's RGB variants (`spectrum_list_to_srgb`): CIE 1931 2° observer, D65 for reflectances; noted |
-//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted |
+//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted. Glass 0.5 m or more from every sensor, or a shape holding an `interior` medium that no sensor is inside, is refused at the shape |
 //! | no glass at a sensor | `[camera.port] type = "none"` | |
 //! | `point`, `spot`, `directional`, `constant`, `area` on a `rectangle` | `point`, `spot`, `[sun]`, `ambient`, `area` lights | lights of a per-image file (not of an included world) are rig-mounted |
 //! | `homogeneous` medium (`sigma_t`, `albedo`, `scale`, `hg`/`isotropic`) | `[water]` `absorption`, `scattering`, `g` | the glass's `ext_ior` gives the water's index |
 //! | a `null` `cube` holding the water, top at z = 0 | `site.surface = "flat"` | the sun is refracted back into the air |
-//! | `integrator` `max_depth` (the file's, else an included file's) | `render.bounces` | |
+//! | `integrator` `max_depth` (the file's, else an included file's) | `render.bounces` | a wrapper (`moment`) gives its inner integrator's; `direct` is depth 2 |
 //! | `default`, `$name`, `include`, `<path>` | resolved while reading | files are found as Mitsuba's resolver finds them: the naming file's folder, the `<path>` folders (latest first), the main file's folder |
 //! | `ref`/`id` | the element referenced, wherever an element is expected | an unknown id or a cycle is refused |
 //!
 //! Safety: a document type declaration (and with it every entity) is refused; `include`,
 //! `filename` and `<path>` paths, resolved on disk (symbolic links included), must stay inside
-//! the first file's folder; counts are bounded (elements, references copied, depth); lines
+//! the first file's folder (or the folder `--root` names); counts are bounded (elements, references copied, depth); lines
 //! and columns are found in linear time; every file is
 //! read as the scene front end reads one (regular files only — never a device or a named pipe —
 //! of at most [`MAX_FILE`] bytes).
@@ -167,7 +167,8 @@ fn inside(root: &Path, dir: &Path, name: &str, loc: &str) -> Result<PathBuf, Str
 
 /// `name` as Mitsuba's file resolver finds it: the first of `dirs` (in order) where it exists,
 /// else the first one's (for the error of reading it). The path is resolved on disk (symbolic
-/// links included) and must stay inside `root`, the first file's folder (canonical).
+/// links included) and must stay inside `root`, the first file's folder or `--root`
+/// (canonical).
 fn resolve(root: &Path, dirs: &[&Path], name: &str, loc: &str) -> Result<PathBuf, String> {
     let p = Path::new(name);
     if p.is_absolute() || p.components().any(|c| matches!(c, Component::Prefix(_))) {
@@ -179,7 +180,7 @@ fn resolve(root: &Path, dirs: &[&Path], name: &str, loc: &str) -> Result<PathBuf
     let leaves = || {
         format!(
             "{loc}: `{name}` leaves the scene's folder ({})\n  help: copy the file into that \
-             folder",
+             folder, or name a folder that holds both with `poser import --root`",
             root.display()
         )
     };
@@ -1602,9 +1603,26 @@ fn disk_mesh(m: &DMat4) -> TriMesh {
 /// every file gives its sensors, in order, as the poses of the network. `assets` is how the
 /// scene file names the assets folder (relative to the scene file).
 pub fn import(files: &[PathBuf], assets: &str) -> Result<Imported, String> {
+    import_within(files, assets, None)
+}
+
+/// [`import`], with every file the scene names kept inside folder `root` (resolved on disk)
+/// instead of the first file's folder: for scenes whose `<path>` folders sit beside their
+/// own, such as mitsuba-data's `common/`.
+pub fn import_within(
+    files: &[PathBuf],
+    assets: &str,
+    root: Option<&Path>,
+) -> Result<Imported, String> {
     let first = files.first().ok_or("no input file")?;
-    let root = std::fs::canonicalize(first.parent().unwrap_or(Path::new(".")).join("."))
-        .map_err(|e| format!("{}: {e}", first.display()))?;
+    let root = match root {
+        Some(r) => std::fs::canonicalize(r).map_err(|e| format!("{}: {e}", r.display()))?,
+        None => std::fs::canonicalize(first.parent().unwrap_or(Path::new(".")).join("."))
+            .map_err(|e| format!("{}: {e}", first.display()))?,
+    };
+    if !root.is_dir() {
+        return Err(format!("{}: not a folder", root.display()));
+    }
     let (mut docs, search) = read_docs(files, &root)?;
     let mut cx = Cx {
         notes: Vec::new(),
@@ -1729,10 +1747,13 @@ struct World {
 /// Read the shapes, lights and integrator of the world (the first file; its included world for
 /// a poser view file) and the rig-mounted lights of the first view.
 fn world_of(cx: &mut Cx, docs: &[X], sensors: &[Sensor], assets: &str) -> Result<World, String> {
-    // Housing: dielectric and black shapes close to a sensor; the port's geometry.
-    let near_sensor = |m: &DMat4| -> bool {
-        let c = m.transform_point3(DVec3::ZERO);
-        sensors.iter().any(|s| (s.pos - c).length() < 0.5)
+    // Housing: dielectric and black shapes close to a sensor; the port's geometry. The
+    // distance from the nearest sensor to a box (zero for a sensor inside it).
+    let sensor_distance = |lo: DVec3, hi: DVec3| -> f64 {
+        sensors
+            .iter()
+            .map(|s| (s.pos.clamp(lo, hi) - s.pos).length())
+            .fold(f64::INFINITY, f64::min)
     };
 
     let mut objects: Vec<Value> = Vec::new();
@@ -1758,7 +1779,7 @@ fn world_of(cx: &mut Cx, docs: &[X], sensors: &[Sensor], assets: &str) -> Result
                     shape(
                         cx,
                         k,
-                        &near_sensor,
+                        &sensor_distance,
                         &mut objects,
                         &mut lights,
                         &mut assets_out,
@@ -1780,7 +1801,9 @@ fn world_of(cx: &mut Cx, docs: &[X], sensors: &[Sensor], assets: &str) -> Result
                 "integrator" if di == 0 && (!k.included || max_depth.is_none()) => {
                     let own = max_depth.as_ref().is_some_and(|(x, _)| !x.included);
                     if !own {
-                        max_depth = Some((k.clone(), cx.int(k, "max_depth", -1)?));
+                        let (x, depth) = integrator_depth(cx, k, 0)?;
+                        note_direct_delta_weight(cx, &x)?;
+                        max_depth = Some((x, depth));
                     }
                 }
                 other if di == 0 => cx.note(k, format!("<{other}> is not imported"), None),
@@ -1815,7 +1838,52 @@ fn world_of(cx: &mut Cx, docs: &[X], sensors: &[Sensor], assets: &str) -> Result
     })
 }
 
-/// Parse every input file (all inside `root`, the first file's folder), with the resolver
+/// Integrator `k` and its path depth as Mitsuba's `max_depth` counts it (−1: unbounded): a
+/// wrapper (`moment`, `aov`) gives its inner integrator's, `direct` (emitted and direct light
+/// only) is a path of depth 2.
+fn integrator_depth(cx: &Cx, k: &X, depth: usize) -> Result<(X, i64), String> {
+    if let Some(inner) = k
+        .kids
+        .iter()
+        .find(|c| c.tag == "integrator" || c.tag == "ref")
+        && depth < MAX_DEPTH
+    {
+        let inner = cx.deref(inner)?;
+        if inner.tag == "integrator" {
+            return integrator_depth(cx, inner, depth + 1);
+        }
+    }
+    match k.ty() {
+        "direct" => Ok((k.clone(), 2)),
+        _ => Ok((k.clone(), cx.int(k, "max_depth", -1)?)),
+    }
+}
+
+/// Mitsuba's `direct` integrator adds each of its `emitter_samples` samples of a point, spot
+/// or directional light at full weight (src/integrators/direct.cpp: `select(ds.delta, 1, …)`),
+/// so with N of them it renders such lights N times as bright as their intensity. poser
+/// imports the intensity as written; say so.
+fn note_direct_delta_weight(cx: &mut Cx, k: &X) -> Result<(), String> {
+    if k.ty() != "direct" {
+        return Ok(());
+    }
+    let shading = cx.int(k, "shading_samples", 1)?;
+    let n = cx.int(k, "emitter_samples", shading)?;
+    if n > 1 {
+        cx.note(
+            k,
+            format!(
+                "Mitsuba's `direct` integrator adds each of its {n} emitter samples of a point, \
+                 spot or directional light at full weight: it renders those lights {n}× as bright \
+                 as their intensity, which is imported as written"
+            ),
+            Some("`--verify` against this file differs by that factor; with emitter_samples = 1 it does not"),
+        );
+    }
+    Ok(())
+}
+
+/// Parse every input file (all inside `root`: the first file's folder, or `--root`), with the resolver
 /// state each leaves: its folder and its `<path>` folders.
 #[allow(clippy::type_complexity)]
 fn read_docs(
@@ -1828,7 +1896,8 @@ fn read_docs(
         let abs = std::fs::canonicalize(f).map_err(|e| format!("{}: {e}", f.display()))?;
         if !abs.starts_with(root) {
             return Err(format!(
-                "{}: every file of one import must be in the first file's folder ({})",
+                "{}: every file of one import must be in the first file's folder, or in \
+                 `--root` ({})",
                 f.display(),
                 root.display()
             ));
@@ -2259,7 +2328,7 @@ fn port_note(cx: &mut Cx, s: &Sensor, faces: &[(X, DMat4, f64, f64)]) {
 fn shape(
     cx: &mut Cx,
     k: &X,
-    near_sensor: &dyn Fn(&DMat4) -> bool,
+    sensor_distance: &dyn Fn(DVec3, DVec3) -> f64,
     objects: &mut Vec<Value>,
     lights: &mut Vec<Value>,
     assets_out: &mut Vec<(String, Vec<u8>)>,
@@ -2294,8 +2363,18 @@ fn shape(
     cx.mapped.clear();
     let alb = match alb? {
         Ok(a) => a,
-        Err("null") => return Ok(()), // a medium boundary (the sea box)
-        Err(_) => {
+        Err(what) => {
+            // A medium boundary (the sea box) or glass: only around the camera. A `null`
+            // shape without a medium is invisible in Mitsuba too: its file is not read.
+            let medium = k.kids.iter().any(|c| c.attr("name") == Some("interior"));
+            if what == "null" && !medium {
+                return Ok(());
+            }
+            let (lo, hi) = world_bounds(cx, k, &m)?;
+            refuse_away_from_camera(cx, k, what, sensor_distance(lo, hi))?;
+            if what == "null" {
+                return Ok(());
+            }
             let bsdf = k.kids.iter().find(|c| c.tag == "bsdf").cloned();
             let (ni, ne) = match bsdf {
                 Some(b) => (ior(cx, &b, "int_ior", 1.5)?, ior(cx, &b, "ext_ior", 1.0)?),
@@ -2307,7 +2386,8 @@ fn shape(
             return Ok(());
         }
     };
-    if alb == [0.0; 3] && near_sensor(&m) {
+    let origin = m.transform_point3(DVec3::ZERO);
+    if alb == [0.0; 3] && sensor_distance(origin, origin) < PORT_REACH {
         port_faces.push((k.clone(), m, 1.0, 1.0));
         return Ok(());
     }
@@ -2367,6 +2447,87 @@ fn shape(
     o.insert("albedo".into(), arr(alb));
     objects.push(Value::Table(o));
     Ok(())
+}
+
+/// How far from a sensor glass and black walls are read as its housing, metres.
+const PORT_REACH: f64 = 0.5;
+
+/// Refuse a `null` or dielectric shape (`what`) that poser cannot hold: glass `distance` m or
+/// more from every sensor (poser's only glass is the camera's port), or the boundary of an
+/// `interior` medium whose box no sensor is inside (poser's water fills the scene below z = 0).
+fn refuse_away_from_camera(cx: &Cx, k: &X, what: &str, distance: f64) -> Result<(), String> {
+    let medium = k.kids.iter().find(|c| c.attr("name") == Some("interior"));
+    let bsdf = shape_bsdf(cx, k)?
+        .map(|b| b.ty().to_string())
+        .unwrap_or_default();
+    let medium_id = medium.map(|r| match r.attr("id") {
+        Some(id) => format!("medium `{id}`"),
+        None => "a medium".to_string(),
+    });
+    match (what, medium_id) {
+        ("null", None) => Ok(()), // invisible in Mitsuba too
+        (_, Some(mid)) if distance > 0.0 => Err(format!(
+            "{}: this `{}` shape with a `{bsdf}` BSDF bounds {mid}, and the camera is outside \
+             it ({distance:.3} m away): the medium fills only the shape in Mitsuba, but poser's \
+             water fills the whole scene below z = 0\n  help: poser holds no volume of medium \
+             inside a shape; import a scene whose camera is inside the medium (a sea box around \
+             it), or remove the medium and the shape",
+            k.loc,
+            k.ty()
+        )),
+        ("null", Some(_)) => Ok(()),
+        (_, _) if distance >= PORT_REACH => Err(format!(
+            "{}: this `{}` shape with a `{bsdf}` BSDF is a glass object {distance:.3} m from \
+             the camera: poser's objects are opaque and diffuse, and its only glass is the \
+             camera's housing port (within {PORT_REACH} m of the camera)\n  help: give the \
+             shape a diffuse BSDF, or remove it, to import the rest of the scene",
+            k.loc,
+            k.ty()
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The box around shape `k` in the world (`m` its `to_world`): its vertices for a mesh, its
+/// local bounds transformed for Mitsuba's built-in shapes (`sphere`: `center`, `radius`;
+/// `cylinder`: `p0`, `p1`, `radius`), `to_world`'s origin for any other.
+fn world_bounds(cx: &Cx, k: &X, m: &DMat4) -> Result<(DVec3, DVec3), String> {
+    let corners = |lo: DVec3, hi: DVec3| -> Vec<DVec3> {
+        (0..8)
+            .map(|i| {
+                let pick = |b: usize, a: f64, z: f64| if i & b == 0 { a } else { z };
+                m.transform_point3(DVec3::new(
+                    pick(1, lo.x, hi.x),
+                    pick(2, lo.y, hi.y),
+                    pick(4, lo.z, hi.z),
+                ))
+            })
+            .collect()
+    };
+    let points = match k.ty() {
+        "obj" | "ply" => file_mesh(cx, k, m)?.positions,
+        "rectangle" | "disk" => corners(DVec3::new(-1.0, -1.0, 0.0), DVec3::new(1.0, 1.0, 0.0)),
+        "cube" => corners(-DVec3::ONE, DVec3::ONE),
+        "sphere" => {
+            let c = cx.point(k, "center", DVec3::ZERO)?;
+            let r = cx.float(k, "radius", 1.0)?.abs();
+            corners(c - DVec3::splat(r), c + DVec3::splat(r))
+        }
+        "cylinder" => {
+            let p0 = cx.point(k, "p0", DVec3::ZERO)?;
+            let p1 = cx.point(k, "p1", DVec3::Z)?;
+            let r = DVec3::splat(cx.float(k, "radius", 1.0)?.abs());
+            corners(p0.min(p1) - r, p0.max(p1) + r)
+        }
+        _ => vec![m.transform_point3(DVec3::ZERO)],
+    };
+    let lo = points.iter().copied().fold(DVec3::INFINITY, DVec3::min);
+    let hi = points.iter().copied().fold(DVec3::NEG_INFINITY, DVec3::max);
+    if !(lo.is_finite() && hi.is_finite()) {
+        let o = m.transform_point3(DVec3::ZERO);
+        return Ok((o, o));
+    }
+    Ok((lo, hi))
 }
 
 /// The area light of emitter `e` on shape `k` (a `rectangle`, or an `obj`/`ply` mesh of one
