@@ -8,7 +8,7 @@ use std::path::Path;
 /// --scale`): the poses, intrinsics, water and lights they compare are the same at any size,
 /// and the textures baked for the coarser pixels are 1/100 of the texels (a full-size
 /// dome_orbit bakes a 45 MB sand texture).
-pub const ROUND_TRIP_SCALE: f64 = 0.1;
+pub const ROUND_TRIP_SCALE: f64 = 0.05;
 
 /// Rig poses a round trip compiles, spread over the network (the first always among them): the
 /// poses, intrinsics, water and lights it compares are per view, and a shipped survey's
