@@ -139,6 +139,7 @@ impl Format {
 /// Read a mesh file (any [`Format`]) with its colours; `roots` are the folders its side files
 /// (MTL, images, buffers) may be in, besides the mesh's own ([`side_file`]). The file is read
 /// the front end's one way ([`crate::scene::source::read_capped`], at most
+/// [`MAX_MESH_BYTES`](crate::scene::source::MAX_MESH_BYTES); the files it names at most
 /// [`MAX_ASSET_BYTES`](crate::scene::source::MAX_ASSET_BYTES)).
 pub fn load(path: &Path, roots: &[PathBuf]) -> Result<MeshFile, String> {
     load_with(path, roots, true)
@@ -157,7 +158,7 @@ pub fn vertex_bounds(path: &Path) -> Result<Option<(DVec3, DVec3)>, String> {
     if Format::of(path) != Some(Format::Obj) {
         return Ok(load_geometry(path, &[])?.bounds());
     }
-    let bytes = read(path)?;
+    let bytes = read_mesh(path)?;
     let text = text_of(&bytes, &path.display().to_string())?;
     let mut out: Option<(DVec3, DVec3)> = None;
     for line in text.lines() {
@@ -185,7 +186,7 @@ fn load_with(path: &Path, roots: &[PathBuf], colours: bool) -> Result<MeshFile, 
     let shown = path.display().to_string();
     let format = Format::of(path)
         .ok_or_else(|| format!("`{shown}`: not a mesh file (.glb, .gltf, .obj or .ply)"))?;
-    let bytes = read(path)?;
+    let bytes = read_mesh(path)?;
     match format {
         Format::Gltf => read_gltf(&bytes, path, roots, colours),
         Format::Obj => {
@@ -208,6 +209,14 @@ fn load_with(path: &Path, roots: &[PathBuf], colours: bool) -> Result<MeshFile, 
 pub(crate) fn read(path: &Path) -> Result<Vec<u8>, String> {
     use crate::scene::source::{MAX_ASSET_BYTES, read_capped};
     read_capped(path, MAX_ASSET_BYTES)
+        .map_err(|r| format!("cannot read `{}`: {}", path.display(), r.reason()))
+}
+
+/// A mesh file a `mesh` object names, capped at
+/// [`MAX_MESH_BYTES`](crate::scene::source::MAX_MESH_BYTES).
+pub(crate) fn read_mesh(path: &Path) -> Result<Vec<u8>, String> {
+    use crate::scene::source::{MAX_MESH_BYTES, read_capped};
+    read_capped(path, MAX_MESH_BYTES)
         .map_err(|r| format!("cannot read `{}`: {}", path.display(), r.reason()))
 }
 

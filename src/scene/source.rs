@@ -15,8 +15,13 @@ pub const COMMAND_LINE: &str = "<command line>";
 /// memory (the parsed tree takes tens of times the text).
 pub const MAX_SCENE_BYTES: u64 = 16 << 20;
 
-/// Largest other file a scene names (a glTF mesh, a point list): 256 MiB.
+/// Largest other file a scene names (a point list, an MTL, an image, a glTF's buffer): 256 MiB.
 pub const MAX_ASSET_BYTES: u64 = 256 << 20;
+
+/// Largest mesh file a `mesh` object names (glTF, OBJ or PLY): 1 GiB. A photogrammetric model of
+/// 5 M triangles is about 380 MB of OBJ text (`poser bench mesh`); the loader's own limit is
+/// [`crate::geometry::meshfile::MAX_ELEMENTS`] vertices or triangles.
+pub const MAX_MESH_BYTES: u64 = 1 << 30;
 
 /// All source texts a scene was read from (the scene, its includes, the command line).
 #[derive(Default)]
