@@ -180,7 +180,16 @@ pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>, Refusal> {
 /// Where a file that should be text is not: the byte offset of its first NUL or invalid UTF-8
 /// byte, and that byte. `None` for text.
 pub fn not_text(bytes: &[u8]) -> Option<(usize, u8)> {
-    let nul = bytes.iter().position(|&b| b == 0);
+    // `contains` on bytes is a memchr; a byte-by-byte `position` took a third of a second on a
+    // 365 MB OBJ. Only the block that holds a NUL is searched byte by byte.
+    const BLOCK: usize = 1 << 16;
+    let nul = bytes
+        .chunks(BLOCK)
+        .position(|c| c.contains(&0))
+        .and_then(|k| {
+            let at = k * BLOCK;
+            bytes[at..].iter().position(|&b| b == 0).map(|p| at + p)
+        });
     let bad = std::str::from_utf8(bytes).err().map(|e| e.valid_up_to());
     let at = match (nul, bad) {
         (Some(a), Some(b)) => a.min(b),
