@@ -24,7 +24,10 @@ fn a_tiny_site_is_loaded_whole_and_rendered_with_its_texture() {
     // Two checkerboards (two triangles each) beside the site's triangles, none degenerate.
     assert_eq!(r.triangles_in_bvh, 20_004);
     // The image decoded whole; its 15.6 mm texels are coarser than the GSD: level 0 is used.
-    assert_eq!((r.texels_loaded, r.texels_used, r.level), (65_536, 65_536, 0));
+    assert_eq!(
+        (r.texels_loaded, r.texels_used, r.level),
+        (65_536, 65_536, 0)
+    );
     let names: Vec<&str> = r.stages.iter().map(|s| s.name.as_str()).collect();
     assert_eq!(names, ["write", "load", "bvh", "truth", "render"]);
     for s in &r.stages {
@@ -35,7 +38,12 @@ fn a_tiny_site_is_loaded_whole_and_rendered_with_its_texture() {
     }
     assert!((r.load_bvh_s - r.stages[1].wall_s - r.stages[2].wall_s).abs() < 1e-12);
     // The files are there, as a photogrammetry package writes them.
-    for f in ["scene.toml", "site/model.obj", "site/model.mtl", "site/model.jpg"] {
+    for f in [
+        "scene.toml",
+        "site/model.obj",
+        "site/model.mtl",
+        "site/model.jpg",
+    ] {
         assert!(keep.path().join(f).is_file(), "{f}");
     }
     assert!(keep.path().join("render/truth").is_dir());
@@ -46,7 +54,10 @@ fn a_tiny_site_is_loaded_whole_and_rendered_with_its_texture() {
     assert_eq!((c.width, c.height, c.samples), (640, 427, 2));
     assert!(c.mean.iter().all(|m| m.is_finite() && *m > 0.0), "{c:?}");
     assert!(c.texture_ratio > 10.0, "{c:?}");
-    assert!(c.render_ratio > 3.0 && c.render_ratio <= c.texture_ratio * 1.2, "{c:?}");
+    assert!(
+        c.render_ratio > 3.0 && c.render_ratio <= c.texture_ratio * 1.2,
+        "{c:?}"
+    );
     // The JSON the CLI writes is this report.
     let json = serde_json::to_value(&r).unwrap();
     assert_eq!(json["stages"].as_array().unwrap().len(), 5);

@@ -579,7 +579,12 @@ fn check_render(
     for (k, x) in [-PROBE_X, PROBE_X].into_iter().enumerate() {
         // A 10 cm square around the probe: the texture's mean there, the render's around its
         // projection.
-        for (dx, dy) in (0..25).map(|q| (0.1 * ((q % 5) as f64 / 4.0 - 0.5), 0.1 * ((q / 5) as f64 / 4.0 - 0.5))) {
+        for (dx, dy) in (0..25).map(|q| {
+            (
+                0.1 * ((q % 5) as f64 / 4.0 - 0.5),
+                0.1 * ((q / 5) as f64 / 4.0 - 0.5),
+            )
+        }) {
             let (px, py) = (x + dx, dy);
             let uv = [(px + HALF) / (2.0 * HALF), (HALF - py) / (2.0 * HALF)];
             let t = match look {

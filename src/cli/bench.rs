@@ -73,8 +73,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--out applies to `poser bench parity` and `poser bench images` only".into(),
         ));
     }
-    if what != "mesh"
-        && (args.triangles.is_some() || args.texture.is_some() || args.keep.is_some())
+    if what != "mesh" && (args.triangles.is_some() || args.texture.is_some() || args.keep.is_some())
     {
         return Err(CliError::Usage(
             "--triangles, --texture and --keep apply to `poser bench mesh` only".into(),
