@@ -344,7 +344,13 @@ fn write_site(dir: &Path, opts: &Options) -> Result<Written, String> {
                map_Kd model.jpg\n";
     crate::io::write_atomic(&site.join("model.mtl"), mtl.as_bytes())
         .map_err(|e| format!("model.mtl: {e}"))?;
-    let (vertices, obj_bytes) = write_obj(&site.join("model.obj"), opts.triangles)?;
+    // Streamed to a temporary file beside it, then renamed (the repo's one way to write).
+    let mut counts = (0, 0);
+    crate::io::write_atomic_with(&site.join("model.obj"), |tmp| {
+        counts = write_obj(tmp, opts.triangles)?;
+        Ok(())
+    })?;
+    let (vertices, obj_bytes) = counts;
     crate::io::write_atomic(&dir.join("scene.toml"), scene_text().as_bytes())
         .map_err(|e| format!("scene.toml: {e}"))?;
     Ok(Written {
