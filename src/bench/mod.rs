@@ -5,6 +5,7 @@
 //! |---|---|
 //! | [`evaluate`] | `poser bench evaluate`: CPU time and results of `poser evaluate` on the deformation lessons |
 //! | [`images`] | `poser bench images`: COLMAP's whole pipeline on native renders of the shipped survey scenes |
+//! | [`mesh`] | `poser bench mesh`: load, BVH, truth and a render of a generated 5 M-triangle textured site (OBJ + MTL + JPEG), with time and peak memory |
 //! | [`parity`] | `poser bench parity`: every shipped scene in every backend, and whether they agree |
 //! | [`projection`] | `poser bench projection`: port solvers (scalar, batch) against the double-double reference |
 //! | [`render`] | `poser bench render`: speed against error of every render backend |
@@ -12,6 +13,7 @@
 
 pub mod evaluate;
 pub mod images;
+pub mod mesh;
 pub mod parity;
 pub mod projection;
 pub mod render;

@@ -1,7 +1,7 @@
 //! `poser bench`: speed-against-error reports (projection solvers; render backends), the cost
-//! of an image at the sensor's noise (`sensor`), COLMAP on
-//! rendered surveys (`images`), and the
-//! backends' agreement on every shipped scene (`parity`).
+//! of an image at the sensor's noise (`sensor`), COLMAP on rendered surveys (`images`), the
+//! backends' agreement on every shipped scene (`parity`), and a large textured mesh's load,
+//! BVH, truth and render (`mesh`).
 use super::CliError;
 use crate::backend::Backend;
 use std::path::PathBuf;
@@ -9,7 +9,8 @@ use std::path::PathBuf;
 /// The arguments of `poser bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// What to benchmark: `projection`, `render`, `sensor`, `evaluate`, `parity` or `images`.
+    /// What to benchmark: `projection`, `render`, `sensor`, `evaluate`, `parity`, `images` or
+    /// `mesh`.
     pub what: String,
     /// Write the report as JSON too.
     #[arg(long)]
@@ -33,6 +34,16 @@ pub struct Args {
     /// (default: a temporary folder, removed afterwards).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// `mesh` only: triangles of the generated site (default 5 000 000; `--quick`: 500 000).
+    #[arg(long)]
+    pub triangles: Option<u64>,
+    /// `mesh` only: side of its square texture, texels (default 8192; `--quick`: 2048).
+    #[arg(long)]
+    pub texture: Option<u32>,
+    /// `mesh` only: keep the generated site, its scene and the render here (default: a
+    /// temporary folder, removed afterwards).
+    #[arg(long)]
+    pub keep: Option<PathBuf>,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
@@ -63,7 +74,27 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--out applies to `poser bench parity`, `sensor` and `images` only".into(),
         ));
     }
+    if what != "mesh" && (args.triangles.is_some() || args.texture.is_some() || args.keep.is_some())
+    {
+        return Err(CliError::Usage(
+            "--triangles, --texture and --keep apply to `poser bench mesh` only".into(),
+        ));
+    }
     match what {
+        "mesh" => {
+            if cfg!(debug_assertions) {
+                eprintln!(
+                    "warning: this is a debug build; speeds are not representative (use --release)"
+                );
+            }
+            let mut opts = crate::bench::mesh::Options::new(quick);
+            opts.triangles = args.triangles.unwrap_or(opts.triangles);
+            opts.texture = args.texture.unwrap_or(opts.texture);
+            opts.keep = args.keep.clone();
+            let report = crate::bench::mesh::run(&opts).map_err(CliError::Failed)?;
+            print!("{}", crate::bench::mesh::table(&report));
+            write_json(json.as_deref(), &report)
+        }
         "projection" => {
             if cfg!(debug_assertions) {
                 eprintln!(
@@ -142,8 +173,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             write_json(json.as_deref(), &rows)
         }
         other => Err(CliError::Usage(format!(
-            "bench `{other}`: expected `projection`, `render`, `sensor`, `evaluate`, `parity` or \
-             `images`"
+            "bench `{other}`: expected `projection`, `render`, `sensor`, `evaluate`, `parity`, \
+             `images` or `mesh`"
         ))),
     }
 }

@@ -182,11 +182,13 @@ impl Bvh {
 
     /// [`Bvh::from_meshes_uv`], keeping each triangle's index in its mesh when `keep_source`.
     fn build(meshes: Vec<UvMesh>, keep_source: bool) -> Bvh {
-        let mut tris = Vec::new();
-        let mut surface = Vec::new();
-        let mut uvs = Vec::new();
-        let mut source = Vec::new();
+        // Sized once: a 5 M-triangle mesh would otherwise double its way up to 8 M slots.
+        let n: usize = meshes.iter().map(|m| m.1.triangles.len()).sum();
         let any_uv = meshes.iter().any(|m| m.2.is_some());
+        let mut tris = Vec::with_capacity(n);
+        let mut surface = Vec::with_capacity(n);
+        let mut uvs = Vec::with_capacity(if any_uv { n } else { 0 });
+        let mut source = Vec::with_capacity(if keep_source { n } else { 0 });
         for (id, m, uv) in &meshes {
             for (k, t) in m.triangles.iter().enumerate() {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
@@ -208,6 +210,7 @@ impl Bvh {
                 }
             }
         }
+        drop(meshes);
         let mut s = Bvh {
             tris,
             surface,
@@ -404,6 +407,8 @@ impl Bvh {
             order[mid..e].copy_from_slice(&right);
             split(&mut nodes, &mut stack, ni, (lo, hi), (s, mid, e));
         }
+        // The per-triangle boxes are done with: free them before the triangles are copied.
+        drop((bounds, cent));
         self.tris = order.iter().map(|&i| self.tris[i as usize]).collect();
         self.surface = order.iter().map(|&i| self.surface[i as usize]).collect();
         if !self.uv.is_empty() {

@@ -557,7 +557,7 @@ pub fn boulders(width: f64, length: f64, count: u32, radius: f64, seed: u64) -> 
 /// transforms applied, converted from glTF's Y-up to poser's Z-up: the geometry of
 /// [`super::meshfile::read_gltf`].
 pub fn load_gltf(path: &Path) -> Result<TriMesh, String> {
-    let bytes = super::meshfile::read(path)?;
+    let bytes = super::meshfile::read_mesh(path)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     Ok(super::meshfile::read_gltf(&bytes, path, &[dir], false)?.mesh)
 }

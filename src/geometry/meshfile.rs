@@ -139,6 +139,7 @@ impl Format {
 /// Read a mesh file (any [`Format`]) with its colours; `roots` are the folders its side files
 /// (MTL, images, buffers) may be in, besides the mesh's own ([`side_file`]). The file is read
 /// the front end's one way ([`crate::scene::source::read_capped`], at most
+/// [`MAX_MESH_BYTES`](crate::scene::source::MAX_MESH_BYTES); the files it names at most
 /// [`MAX_ASSET_BYTES`](crate::scene::source::MAX_ASSET_BYTES)).
 pub fn load(path: &Path, roots: &[PathBuf]) -> Result<MeshFile, String> {
     load_with(path, roots, true)
@@ -157,7 +158,7 @@ pub fn vertex_bounds(path: &Path) -> Result<Option<(DVec3, DVec3)>, String> {
     if Format::of(path) != Some(Format::Obj) {
         return Ok(load_geometry(path, &[])?.bounds());
     }
-    let bytes = read(path)?;
+    let bytes = read_mesh(path)?;
     let text = text_of(&bytes, &path.display().to_string())?;
     let mut out: Option<(DVec3, DVec3)> = None;
     for line in text.lines() {
@@ -185,7 +186,7 @@ fn load_with(path: &Path, roots: &[PathBuf], colours: bool) -> Result<MeshFile, 
     let shown = path.display().to_string();
     let format = Format::of(path)
         .ok_or_else(|| format!("`{shown}`: not a mesh file (.glb, .gltf, .obj or .ply)"))?;
-    let bytes = read(path)?;
+    let bytes = read_mesh(path)?;
     match format {
         Format::Gltf => read_gltf(&bytes, path, roots, colours),
         Format::Obj => {
@@ -211,7 +212,22 @@ pub(crate) fn read(path: &Path) -> Result<Vec<u8>, String> {
         .map_err(|r| format!("cannot read `{}`: {}", path.display(), r.reason()))
 }
 
+/// A mesh file a `mesh` object names, capped at
+/// [`MAX_MESH_BYTES`](crate::scene::source::MAX_MESH_BYTES).
+pub(crate) fn read_mesh(path: &Path) -> Result<Vec<u8>, String> {
+    use crate::scene::source::{MAX_MESH_BYTES, read_capped};
+    read_capped(path, MAX_MESH_BYTES)
+        .map_err(|r| format!("cannot read `{}`: {}", path.display(), r.reason()))
+}
+
 fn text_of<'a>(bytes: &'a [u8], shown: &str) -> Result<&'a str, String> {
+    // The common case in one pass each (UTF-8, then a memchr for NUL); the error's position
+    // from `not_text`.
+    if let Ok(text) = std::str::from_utf8(bytes)
+        && !bytes.contains(&0)
+    {
+        return Ok(text);
+    }
     if let Some((at, b)) = crate::scene::source::not_text(bytes) {
         let line = 1 + bytes[..at].iter().filter(|&&c| c == b'\n').count();
         return Err(format!(
@@ -303,6 +319,7 @@ pub fn parse_obj(text: &str, file: &str) -> Result<Obj, String> {
     let mut current: Option<u32> = None;
     let mut mtllibs = Vec::new();
     let mut any_vt = false;
+    let mut idx: Vec<(u32, u32)> = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let ln = i + 1;
         let line = line.trim();
@@ -310,12 +327,8 @@ pub fn parse_obj(text: &str, file: &str) -> Result<Obj, String> {
         let rest = rest.trim();
         match key {
             "v" => {
-                let c: Vec<f64> = rest
-                    .split_whitespace()
-                    .take(3)
-                    .map(|s| s.parse().unwrap_or(f64::NAN))
-                    .collect();
-                if c.len() < 3 || c.iter().any(|x| !x.is_finite()) {
+                let (c, n) = numbers::<3>(rest);
+                if n < 3 || c.iter().any(|x| !x.is_finite()) {
                     return Err(format!(
                         "{file}:{ln}: a vertex needs three finite numbers (got `{}`)",
                         clip(line)
@@ -327,11 +340,8 @@ pub fn parse_obj(text: &str, file: &str) -> Result<Obj, String> {
                 positions.push(DVec3::new(c[0], c[1], c[2]));
             }
             "vt" => {
-                let c: Vec<f64> = rest
-                    .split_whitespace()
-                    .take(2)
-                    .map(|s| s.parse().unwrap_or(f64::NAN))
-                    .collect();
+                let (c, n) = numbers::<2>(rest);
+                let c = &c[..n];
                 if c.is_empty() || c.iter().any(|x| !x.is_finite()) {
                     return Err(format!(
                         "{file}:{ln}: a texture coordinate needs finite numbers (got `{}`)",
@@ -359,11 +369,19 @@ pub fn parse_obj(text: &str, file: &str) -> Result<Obj, String> {
                     }
                     Ok(k as u32)
                 };
-                let mut idx: Vec<(u32, u32)> = Vec::new();
+                idx.clear();
                 for corner in rest.split_whitespace() {
-                    let mut parts = corner.split('/');
-                    let v = index(parts.next().unwrap_or(""), nv, "vertex", "vertices")?;
-                    let t = match parts.next() {
+                    // `v`, `v/vt`, `v//vn`, `v/vt/vn`: the first two fields.
+                    let (vs, ts) = match corner.bytes().position(|b| b == b'/') {
+                        Some(p) => {
+                            let after = &corner[p + 1..];
+                            let end = after.bytes().position(|b| b == b'/');
+                            (&corner[..p], Some(&after[..end.unwrap_or(after.len())]))
+                        }
+                        None => (corner, None),
+                    };
+                    let v = index(vs, nv, "vertex", "vertices")?;
+                    let t = match ts {
                         Some(s) if !s.is_empty() => {
                             any_vt = true;
                             index(s, nt, "texture coordinate", "texture coordinates")?
@@ -408,8 +426,12 @@ pub fn parse_obj(text: &str, file: &str) -> Result<Obj, String> {
     let mut mesh = TriMesh::default();
     let mut uv = Vec::new();
     if any_vt {
-        let mut remap: std::collections::HashMap<(u32, u32), u32> =
-            std::collections::HashMap::new();
+        // Sized for every position once, hashed cheaply (only looked up, never iterated).
+        let mut remap: std::collections::HashMap<(u32, u32), u32, PairHash> =
+            std::collections::HashMap::with_capacity_and_hasher(
+                positions.len(),
+                PairHash::default(),
+            );
         for c in &corners {
             let tri = c.map(|(v, t)| {
                 *remap.entry((v, t)).or_insert_with(|| {
@@ -432,6 +454,42 @@ pub fn parse_obj(text: &str, file: &str) -> Result<Obj, String> {
         names,
         mtllibs,
     })
+}
+
+/// Up to `N` whitespace-separated numbers of `rest` (a word that is not a number reads as NaN),
+/// and how many there were.
+fn numbers<const N: usize>(rest: &str) -> ([f64; N], usize) {
+    let mut c = [f64::NAN; N];
+    let mut n = 0;
+    for w in rest.split_whitespace().take(N) {
+        c[n] = w.parse().unwrap_or(f64::NAN);
+        n += 1;
+    }
+    (c, n)
+}
+
+/// A multiply-rotate hash of the OBJ loader's (position, texture coordinate) pairs: SipHash's
+/// resistance to chosen keys buys nothing for indices bounded by the file's own counts.
+type PairHash = std::hash::BuildHasherDefault<PairHasher>;
+
+#[derive(Default)]
+struct PairHasher(u64);
+
+impl std::hash::Hasher for PairHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.write_u64(x as u64);
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
 }
 
 /// One `newmtl` of an MTL file.

@@ -246,7 +246,7 @@ fn boulders(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
 
 /// The mesh file `rel`, relative to the scene file that names it: it must be a readable glTF,
 /// OBJ or PLY file inside the scene's folder, a regular file of at most
-/// [`MAX_ASSET_BYTES`](crate::scene::source::MAX_ASSET_BYTES) read the front end's one way
+/// [`MAX_MESH_BYTES`](crate::scene::source::MAX_MESH_BYTES) read the front end's one way
 /// ([`read_capped`]), and so must every file it names (a `.gltf`'s buffers and images, an OBJ's
 /// MTL files and their images: [`crate::geometry::meshfile::probe`]); every image's header is
 /// read and its size checked (unless `colours` is false: then only the geometry will be read).
@@ -261,7 +261,7 @@ fn resolve_asset(
     colours: bool,
 ) -> (String, bool) {
     use crate::scene::source::{
-        MAX_ASSET_BYTES, Refusal, display, outside_diag, outside_root, read_capped,
+        MAX_MESH_BYTES, Refusal, display, outside_diag, outside_root, read_capped,
     };
     if rel.is_empty() {
         return (String::new(), false);
@@ -280,7 +280,7 @@ fn resolve_asset(
         .map(|e| e.to_string_lossy().to_lowercase())
         .unwrap_or_default();
     let mut textured = false;
-    match read_capped(&p, MAX_ASSET_BYTES) {
+    match read_capped(&p, MAX_MESH_BYTES) {
         Ok(bytes) => {
             // The model carries the canonical path, so every backend finds the file
             // wherever it runs from; it must stay inside the scene's directory tree.
