@@ -378,12 +378,7 @@ fn bottomless(s: &mut String, past: Option<f64>) {
 
 /// Daylight in the native renderer: the water column, or traced, and why.
 fn daylight(s: &mut String, m: &Model) {
-    // The scene's BVH only where the views can change the choice (a water column).
-    let past = m
-        .column_input()
-        .ok()
-        .and_then(|_| crate::geometry::Bvh::of_model(m).ok())
-        .and_then(|b| crate::geometry::seen::past_seabed(m, &b));
+    let past = crate::geometry::seen::views_past_seabed(m);
     let (column, why) = m.daylight_choice(past);
     let _ = writeln!(s, "daylight (native): {why}");
     if let Some(input) = &column {

@@ -63,17 +63,7 @@ impl Progress {
             bar.enable_steady_tick(Duration::from_millis(500));
             Mode::Bar(bar)
         } else {
-            let now = Instant::now();
-            Mode::Lines(Mutex::new(Lines {
-                label: label.to_string(),
-                unit: unit.to_string(),
-                msg: String::new(),
-                len,
-                pos: 0,
-                start: now,
-                last: now,
-                tenth: None,
-            }))
+            Mode::Lines(Mutex::new(Lines::new(label, unit, len)))
         };
         Progress {
             mode: Arc::new(mode),
@@ -180,6 +170,20 @@ fn lock(l: &Mutex<Lines>) -> std::sync::MutexGuard<'_, Lines> {
 }
 
 impl Lines {
+    fn new(label: &str, unit: &str, len: u64) -> Lines {
+        let now = Instant::now();
+        Lines {
+            label: label.to_string(),
+            unit: unit.to_string(),
+            msg: String::new(),
+            len,
+            pos: 0,
+            start: now,
+            last: now,
+            tenth: None,
+        }
+    }
+
     /// Print a line when the work crossed into a new tenth, when `changed` (a new stage), or
     /// when a minute passed since the last line.
     fn maybe_print(&mut self, changed: bool) {
@@ -241,17 +245,7 @@ mod tests {
     use super::*;
 
     fn lines(len: u64) -> Lines {
-        let now = Instant::now();
-        Lines {
-            label: "rendering".into(),
-            unit: "rows".into(),
-            msg: String::new(),
-            len,
-            pos: 0,
-            start: now,
-            last: now,
-            tenth: None,
-        }
+        Lines::new("rendering", "rows", len)
     }
 
     #[test]

@@ -106,3 +106,29 @@ fn readme_speed_table_is_the_render_bench_report_over_every_shipped_scene() {
         );
     }
 }
+
+/// docs/bench/sensor.md's table is `poser bench sensor --quick --json docs/bench/sensor.json`'s
+/// rows as the bench prints them (`POSER_UPDATE_DOCS=1` rewrites the table from the JSON), over
+/// the six survey scenes and three estimators.
+#[test]
+fn sensor_bench_table_is_its_json() {
+    let rows: Vec<poser::bench::sensor::Row> =
+        serde_json::from_str(&std::fs::read_to_string("docs/bench/sensor.json").unwrap()).unwrap();
+    assert_eq!(
+        rows.len(),
+        poser::bench::sensor::SCENES.len() * poser::bench::sensor::MODES.len()
+    );
+    let table = poser::bench::sensor::table(&rows);
+    let md = std::fs::read_to_string("docs/bench/sensor.md").unwrap();
+    let (begin, end) = ("<!-- table: begin -->\n", "<!-- table: end -->");
+    let (Some(b), Some(e)) = (md.find(begin), md.find(end)) else {
+        panic!("docs/bench/sensor.md lacks its table markers")
+    };
+    let current = &md[b + begin.len()..e];
+    if std::env::var_os("POSER_UPDATE_DOCS").is_some() {
+        let new = format!("{}{begin}{table}{}", &md[..b], &md[e..]);
+        std::fs::write("docs/bench/sensor.md", new).unwrap();
+        return;
+    }
+    assert_eq!(current, table, "rerun with POSER_UPDATE_DOCS=1");
+}

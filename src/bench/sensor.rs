@@ -4,7 +4,7 @@
 //! | mode | the native render's settings |
 //! |---|---|
 //! | `traced` | `render.daylight = "traced"`: daylight by random walks through the water, as Mitsuba and Cycles do |
-//! | `column` | the scene as shipped (`render.daylight = "auto"`: the solved water column where it applies) |
+//! | `column` | `render.daylight = "auto"` (the solved water column where it applies), no denoiser |
 //! | `column+denoise` | as `column`, with the illumination denoiser (`render.denoise = "illumination"`, σ = 2 px) |
 //!
 //! Each (scene, mode) renders pose 0 three times with `poser render` in a child process (so no
@@ -36,7 +36,7 @@ pub const SCENES: [&str; 6] = [
 /// The three estimators compared: name and `--set` overrides.
 pub const MODES: [(&str, &[&str]); 3] = [
     ("traced", &["render.daylight=traced", "render.denoise=none"]),
-    ("column", &[]),
+    ("column", &["render.denoise=none"]),
     (
         "column+denoise",
         &["render.denoise=illumination", "render.denoise_radius=2"],
@@ -200,12 +200,7 @@ fn measure(
 
 /// The native renderer's daylight estimator for `m`, as `poser explain` names it.
 fn daylight(m: &crate::model::Model) -> String {
-    let past = m
-        .column_input()
-        .ok()
-        .and_then(|_| crate::geometry::Bvh::of_model(m).ok())
-        .and_then(|b| crate::geometry::seen::past_seabed(m, &b));
-    let (column, why) = m.daylight_choice(past);
+    let (column, why) = m.daylight_choice(crate::geometry::seen::views_past_seabed(m));
     if column.is_some() {
         "column".into()
     } else {
@@ -285,7 +280,8 @@ fn render(
 /// `E[(d − r)²] = b² + var_r + var_d − 2 cov(d, r)`; the covariance (a pixel's own share of its
 /// filter, a few per cent of `var_r` at σ = 2 px) is neglected, which overstates the variance
 /// removed and so understates the bias slightly. Sums over every pixel and channel, relative to
-/// `Σ r²`; 0 when the difference is all noise.
+/// `Σ r²`; 0 when the difference is all noise, or the noise (whose variance estimates are
+/// themselves noisy at a few samples) hides the bias.
 pub fn denoiser_bias(
     raw: &crate::image::Linear,
     raw_var: &crate::image::Linear,
@@ -356,7 +352,11 @@ pub fn table(rows: &[Row]) -> String {
             r.ratio_rms,
             r.pilots[1],
             100.0 * r.sensor_relative,
-            r.bias.map_or("–".into(), |b| format!("{:.1} %", 100.0 * b)),
+            match r.bias {
+                None => "–".to_string(),
+                Some(b) if b > 0.0 => format!("≥ {:.1} %", 100.0 * b),
+                Some(_) => "not resolved".to_string(),
+            },
             r.spp_needed,
             if biased { " (noise only: the bias stays)" } else { "" },
             r.cpu_per_spp_s,

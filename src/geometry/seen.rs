@@ -30,6 +30,16 @@ pub fn past_seabed(model: &Model, scene: &Bvh) -> Option<f64> {
         .then(|| texture_seen(model, scene).bottomless)
 }
 
+/// [`past_seabed`] on the scene's own geometry: the BVH is built only where the views can
+/// change the daylight choice (a water column).
+pub fn views_past_seabed(model: &Model) -> Option<f64> {
+    model
+        .column_input()
+        .ok()
+        .and_then(|_| Bvh::of_model(model).ok())
+        .and_then(|b| past_seabed(model, &b))
+}
+
 /// Cast a 16 × 12 grid of exact camera rays through up to 64 evenly spread images of the
 /// network (every camera of the rig) and classify what each ray hits first.
 pub fn texture_seen(model: &Model, scene: &Bvh) -> TextureSeen {
