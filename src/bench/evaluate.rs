@@ -30,17 +30,25 @@ pub struct Row {
 
 /// CPU seconds (user + system) of this process and of its waited-for children.
 pub fn cpu_seconds() -> f64 {
-    let mut total = 0.0;
-    for who in [libc::RUSAGE_SELF, libc::RUSAGE_CHILDREN] {
-        // SAFETY: getrusage only writes the struct we hand it.
-        let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-        if unsafe { libc::getrusage(who, &mut u) } == 0 {
-            for t in [u.ru_utime, u.ru_stime] {
-                total += t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-            }
-        }
+    rusage_seconds(libc::RUSAGE_SELF) + rusage_seconds(libc::RUSAGE_CHILDREN)
+}
+
+/// CPU seconds (user + system) of this process alone, every thread.
+pub fn self_cpu_seconds() -> f64 {
+    rusage_seconds(libc::RUSAGE_SELF)
+}
+
+/// User + system seconds of `who` (`RUSAGE_SELF`, `RUSAGE_CHILDREN`); 0 where unavailable.
+fn rusage_seconds(who: libc::c_int) -> f64 {
+    // SAFETY: getrusage only writes the struct we hand it.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(who, &mut u) } != 0 {
+        return 0.0;
     }
-    total
+    [u.ru_utime, u.ru_stime]
+        .iter()
+        .map(|t| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6)
+        .sum()
 }
 
 const QUICK: [&str; 6] = [

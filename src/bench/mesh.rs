@@ -218,12 +218,15 @@ impl Clock {
     fn start() -> Clock {
         Clock {
             wall: Instant::now(),
-            cpu: cpu_seconds(),
+            cpu: super::evaluate::self_cpu_seconds(),
         }
     }
 
     fn lap(&mut self, name: &str) -> Stage {
-        let (wall, cpu) = (self.wall.elapsed().as_secs_f64(), cpu_seconds());
+        let (wall, cpu) = (
+            self.wall.elapsed().as_secs_f64(),
+            super::evaluate::self_cpu_seconds(),
+        );
         let stage = Stage {
             name: name.into(),
             wall_s: wall,
@@ -234,19 +237,6 @@ impl Clock {
         *self = Clock::start();
         stage
     }
-}
-
-/// User + system CPU seconds of this process (all its threads, no children).
-fn cpu_seconds() -> f64 {
-    // SAFETY: getrusage only writes the struct we hand it.
-    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-    if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
-        return 0.0;
-    }
-    [u.ru_utime, u.ru_stime]
-        .iter()
-        .map(|t| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6)
-        .sum()
 }
 
 /// A `kB` line of `/proc/self/status` in bytes (0 where there is none).

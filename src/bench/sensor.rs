@@ -105,13 +105,9 @@ pub fn run(root: &Path, opts: &Options) -> Result<Vec<Row>, String> {
             continue;
         }
         let path = root.join(scene);
-        let model = crate::scene::load(&path, &[])
-            .map_err(|f| f.render())?
-            .model
-            .with_resolution_scale(opts.scale);
         let mut traced_mean = None;
         for (mode, sets) in MODES {
-            let row = measure(&path, &stem, &model, mode, sets, opts, traced_mean)?;
+            let row = measure(&path, &stem, mode, sets, opts, traced_mean)?;
             if mode == "traced" {
                 traced_mean = Some(row.mean);
             }
@@ -138,7 +134,6 @@ struct Render {
 fn measure(
     path: &Path,
     stem: &str,
-    model: &crate::model::Model,
     mode: &str,
     sets: &[&str],
     opts: &Options,
@@ -166,21 +161,17 @@ fn measure(
     let extra = needed as f64 - f64::from(s2);
     let second_pose = (two.cpu_s - b.cpu_s).max(0.0);
     let mean_vs = |t: [f64; 3]| std::array::from_fn(|c| b.mean[c] / t[c] - 1.0);
-    let mut m = model.clone();
-    for s in sets {
-        if let Some(v) = s.strip_prefix("render.daylight=") {
-            m.render.daylight = if v == "traced" {
-                crate::model::Daylight::Traced
-            } else {
-                crate::model::Daylight::Auto
-            };
-        }
-    }
+    // The model the renders saw: the scene with the mode's overrides, as `poser render` loads it.
+    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+    let model = crate::scene::load(path, &sets)
+        .map_err(|f| f.render())?
+        .model
+        .with_resolution_scale(opts.scale);
     let cam = &model.cameras[0];
     Ok(Row {
         scene: stem.to_string(),
         mode: mode.to_string(),
-        daylight: daylight(&m),
+        daylight: daylight(&model),
         width: cam.width,
         height: cam.height,
         pilots: opts.pilots,
