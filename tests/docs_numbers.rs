@@ -111,6 +111,36 @@ fn readme_speed_table_is_the_render_bench_report_over_every_shipped_scene() {
 /// rows as the bench prints them (`POSER_UPDATE_DOCS=1` rewrites the table from the JSON), over
 /// the six survey scenes and three estimators.
 #[test]
+fn column_bench_table_is_its_json() {
+    let rows: Vec<poser::bench::column::Row> =
+        serde_json::from_str(&std::fs::read_to_string("docs/bench/column.json").unwrap()).unwrap();
+    let shipped = poser::bench::column::shipped_scenes(std::path::Path::new(".")).unwrap();
+    let benched: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    assert_eq!(
+        benched, shipped,
+        "every shipped scene is in the bench: rerun it"
+    );
+    table_in_markdown("docs/bench/column.md", &poser::bench::column::table(&rows));
+}
+
+/// Check (or with `POSER_UPDATE_DOCS=1` rewrite) the generated table between the markers of a
+/// Markdown file.
+fn table_in_markdown(path: &str, table: &str) {
+    let md = std::fs::read_to_string(path).unwrap();
+    let (begin, end) = ("<!-- table: begin -->\n", "<!-- table: end -->");
+    let (Some(b), Some(e)) = (md.find(begin), md.find(end)) else {
+        panic!("{path} lacks its table markers")
+    };
+    let current = &md[b + begin.len()..e];
+    if std::env::var_os("POSER_UPDATE_DOCS").is_some() {
+        let new = format!("{}{begin}{table}{}", &md[..b], &md[e..]);
+        std::fs::write(path, new).unwrap();
+        return;
+    }
+    assert_eq!(current, table, "{path}: rerun with POSER_UPDATE_DOCS=1");
+}
+
+#[test]
 fn sensor_bench_table_is_its_json() {
     let rows: Vec<poser::bench::sensor::Row> =
         serde_json::from_str(&std::fs::read_to_string("docs/bench/sensor.json").unwrap()).unwrap();
@@ -118,17 +148,5 @@ fn sensor_bench_table_is_its_json() {
         rows.len(),
         poser::bench::sensor::SCENES.len() * poser::bench::sensor::MODES.len()
     );
-    let table = poser::bench::sensor::table(&rows);
-    let md = std::fs::read_to_string("docs/bench/sensor.md").unwrap();
-    let (begin, end) = ("<!-- table: begin -->\n", "<!-- table: end -->");
-    let (Some(b), Some(e)) = (md.find(begin), md.find(end)) else {
-        panic!("docs/bench/sensor.md lacks its table markers")
-    };
-    let current = &md[b + begin.len()..e];
-    if std::env::var_os("POSER_UPDATE_DOCS").is_some() {
-        let new = format!("{}{begin}{table}{}", &md[..b], &md[e..]);
-        std::fs::write("docs/bench/sensor.md", new).unwrap();
-        return;
-    }
-    assert_eq!(current, table, "rerun with POSER_UPDATE_DOCS=1");
+    table_in_markdown("docs/bench/sensor.md", &poser::bench::sensor::table(&rows));
 }

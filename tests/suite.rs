@@ -7,6 +7,7 @@
 mod support;
 
 mod architecture;
+mod bench_column;
 mod bench_mesh;
 mod bench_render;
 mod bench_sensor;

@@ -3,6 +3,7 @@
 //!
 //! | module | what |
 //! |---|---|
+//! | [`column`] | `poser bench column`: the solved water column against random walks through the water, on every shipped scene it applies to |
 //! | [`evaluate`] | `poser bench evaluate`: CPU time and results of `poser evaluate` on the deformation lessons |
 //! | [`images`] | `poser bench images`: COLMAP's whole pipeline on native renders of the shipped survey scenes |
 //! | [`mesh`] | `poser bench mesh`: load, BVH, truth and a render of a generated 5 M-triangle textured site (OBJ + MTL + JPEG), with time and peak memory |
@@ -11,6 +12,7 @@
 //! | [`render`] | `poser bench render`: speed against error of every render backend |
 //! | [`sensor`] | `poser bench sensor`: the cost of an image at the camera's own noise, per daylight estimator |
 
+pub mod column;
 pub mod evaluate;
 pub mod images;
 pub mod mesh;

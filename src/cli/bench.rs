@@ -1,7 +1,7 @@
 //! `poser bench`: speed-against-error reports (projection solvers; render backends), the cost
-//! of an image at the sensor's noise (`sensor`), COLMAP on rendered surveys (`images`), the
-//! backends' agreement on every shipped scene (`parity`), and a large textured mesh's load,
-//! BVH, truth and render (`mesh`).
+//! of an image at the sensor's noise (`sensor`), the water column's bias (`column`), COLMAP on
+//! rendered surveys (`images`), the backends' agreement on every shipped scene (`parity`), and a
+//! large textured mesh's load, BVH, truth and render (`mesh`).
 use super::CliError;
 use crate::backend::Backend;
 use std::path::PathBuf;
@@ -9,8 +9,8 @@ use std::path::PathBuf;
 /// The arguments of `poser bench`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// What to benchmark: `projection`, `render`, `sensor`, `evaluate`, `parity`, `images` or
-    /// `mesh`.
+    /// What to benchmark: `projection`, `render`, `sensor`, `column`, `evaluate`, `parity`,
+    /// `images` or `mesh`.
     pub what: String,
     /// Write the report as JSON too.
     #[arg(long)]
@@ -27,10 +27,11 @@ pub struct Args {
     /// `render` only: replace the generated summary block of this Markdown file (the README).
     #[arg(long)]
     pub readme: Option<PathBuf>,
-    /// `render`, `sensor`, `parity` and `images`: only the scenes whose file name contains this.
+    /// `render`, `sensor`, `column`, `parity` and `images`: only the scenes whose file name
+    /// contains this.
     #[arg(long)]
     pub only: Option<String>,
-    /// `parity`, `sensor` and `images`: keep the renders (and `parity`'s `poser compare` reports) here
+    /// `parity`, `sensor`, `column` and `images`: keep the renders (and `parity`'s `poser compare` reports) here
     /// (default: a temporary folder, removed afterwards).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -64,14 +65,16 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--backends applies to `poser bench render` and `poser bench parity` only".into(),
         ));
     }
-    if !matches!(what, "render" | "sensor" | "parity" | "images") && args.only.is_some() {
+    if !matches!(what, "render" | "sensor" | "column" | "parity" | "images") && args.only.is_some()
+    {
         return Err(CliError::Usage(
-            "--only applies to `poser bench render`, `sensor`, `parity` and `images` only".into(),
+            "--only applies to `poser bench render`, `sensor`, `column`, `parity` and `images` only"
+                .into(),
         ));
     }
-    if !matches!(what, "parity" | "sensor" | "images") && args.out.is_some() {
+    if !matches!(what, "parity" | "sensor" | "column" | "images") && args.out.is_some() {
         return Err(CliError::Usage(
-            "--out applies to `poser bench parity`, `sensor` and `images` only".into(),
+            "--out applies to `poser bench parity`, `sensor`, `column` and `images` only".into(),
         ));
     }
     if what != "mesh" && (args.triangles.is_some() || args.texture.is_some() || args.keep.is_some())
@@ -164,6 +167,16 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             print!("{}", crate::bench::sensor::table(&rows));
             write_json(json.as_deref(), &rows)
         }
+        "column" => {
+            let (_tmp, out) = out_dir(args.out.as_ref())?;
+            let poser = std::env::current_exe().map_err(|e| CliError::Failed(e.to_string()))?;
+            let mut opts = crate::bench::column::Options::new(quick, poser, out);
+            opts.only = args.only.clone();
+            let root = crate::backend::python::repo_root();
+            let rows = crate::bench::column::run(&root, &opts).map_err(CliError::Failed)?;
+            print!("{}", crate::bench::column::table(&rows));
+            write_json(json.as_deref(), &rows)
+        }
         "images" => {
             let (_tmp, out) = out_dir(args.out.as_ref())?;
             let root = crate::backend::python::repo_root();
@@ -173,8 +186,8 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             write_json(json.as_deref(), &rows)
         }
         other => Err(CliError::Usage(format!(
-            "bench `{other}`: expected `projection`, `render`, `sensor`, `evaluate`, `parity`, \
-             `images` or `mesh`"
+            "bench `{other}`: expected `projection`, `render`, `sensor`, `column`, `evaluate`, \
+             `parity`, `images` or `mesh`"
         ))),
     }
 }
