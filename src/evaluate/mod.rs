@@ -11,7 +11,7 @@
 //! | [`Options`] | the knobs of one evaluation |
 //! | [`evaluate_observations`], [`evaluate_images`] | run one mode, return an [`Evaluation`] |
 //! | [`Evaluation`] | registered images, track length, reprojection error, recovered intrinsics against the in-water-equivalent truth, 3D errors, the fitted bowl |
-//! | [`health`] | the checks that flag a degenerate block (images dropped, a focal length the block does not determine, an RMS driven by outliers) |
+//! | [`health`] | the checks that flag a degenerate block (images dropped, a focal length the block does not determine — the probe and the adjustment's covariance — or that lands far from the nominal one, an RMS driven by outliers) |
 //! | [`gcp`] | the control/check split of `--gcp`: the similarity fitted on the control points, or the control points weighted in the adjustment (`--gcp-sigma`); every point's error after it |
 //! | [`report`] | `report.json`, `report.md`, `errors.csv`, `deformation.png`, `profile.svg` |
 //!
