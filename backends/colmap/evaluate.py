@@ -342,15 +342,19 @@ def bundle(pycolmap, req: dict) -> dict:
         for cam in req["cameras"]:
             config.set_constant_cam_intrinsics(int(cam["id"]))
         config.set_constant_rig_from_world_pose(min(rec.reg_frame_ids()))
-    adjuster = pycolmap.create_default_bundle_adjuster(opts, config, rec)
+    adjuster = pycolmap.create_default_ceres_bundle_adjuster(opts, config, rec)
     summary = adjuster.solve()
+    # The covariance of the problem just solved (its gauge, the control points' held views
+    # in it), before the views leave the reconstruction.
+    covariance = (
+        focal_covariance(pycolmap, rec, req, adjuster) if req.get("rig") is None else {}
+    )
     remove_gcp_views(rec, views)
     rec.update_point_3d_errors()
     # The focal probe, when the adjustment calibrated the camera itself (not a calibrated rig).
     sensitivity = (
         focal_sensitivity(pycolmap, rec, req) if req.get("rig") is None else None
     )
-    covariance = focal_covariance(pycolmap, rec, req) if req.get("rig") is None else {}
     result = export(rec, ids)
     survey_cameras = {int(c["id"]) for c in req["cameras"]}
     result["cameras"] = [c for c in result["cameras"] if c["id"] in survey_cameras]
@@ -505,13 +509,15 @@ def focal_sensitivity(pycolmap, rec, req: dict) -> float | None:
 COVARIANCE_MAX_IMAGES = 600
 
 
-def focal_covariance(pycolmap, rec, req: dict) -> dict:
+def focal_covariance(pycolmap, rec, req: dict, adjuster=None) -> dict:
     """How well the adjustment's normal matrix determines the focal length: the standard
     deviation of each focal length from COLMAP's covariance of the bundle adjustment (the
-    inverse normal matrix, the gauge fixed by two cameras as in the adjustment), relative to
-    the focal length, per pixel of image-measurement sigma (multiply by the pixels' sigma for
-    the focal length's own). A flat nadir block at one height leaves focal length and height
-    trading: the normal matrix is rank deficient, or the deviation large.
+    inverse normal matrix of `adjuster`'s problem; without one, of a self-calibrating
+    adjustment of the registered images with the gauge fixed by two cameras), relative to the
+    focal length, per pixel of image-measurement sigma (multiply by the pixels' sigma for the
+    focal length's own). A flat nadir block at one height leaves focal length and height
+    trading: the normal matrix is rank deficient, or the deviation large. Cameras held
+    constant (the control points' views) have no covariance and are skipped.
 
     Returns ``focal_sd`` (the largest over the cameras' focal lengths, or None) and
     ``focal_covariance``: ``"ok"``, ``"rank_deficient"`` (COLMAP could not invert it: a
@@ -519,13 +525,14 @@ def focal_covariance(pycolmap, rec, req: dict) -> dict:
     ``"not_computed"`` (too many images: COVARIANCE_MAX_IMAGES)."""
     if rec.num_reg_images() > COVARIANCE_MAX_IMAGES:
         return {"focal_sd": None, "focal_covariance": "not_computed"}
-    config = pycolmap.BundleAdjustmentConfig()
-    for image_id in sorted(rec.reg_image_ids()):
-        config.add_image(image_id)
-    config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
-    adjuster = pycolmap.create_default_ceres_bundle_adjuster(
-        ba_options(pycolmap, req), config, rec
-    )
+    if adjuster is None:
+        config = pycolmap.BundleAdjustmentConfig()
+        for image_id in sorted(rec.reg_image_ids()):
+            config.add_image(image_id)
+        config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
+        adjuster = pycolmap.create_default_ceres_bundle_adjuster(
+            ba_options(pycolmap, req), config, rec
+        )
     options = pycolmap.BACovarianceOptions()
     options.params = pycolmap.BACovarianceOptionsParams.ALL
     cov = pycolmap.estimate_ba_covariance(options, rec, adjuster)

@@ -202,9 +202,11 @@ fn focal_checks(ev: &Evaluation, regular: bool, out: &mut Vec<Warning>) {
                 evidence.join("; ")
             ),
             help: if regular {
-                "the network is perfectly regular (every image at one height, looking one way): \
-                 give the diver's hand-held wobble (`network.jitter_position`, \
-                 `jitter_rotation`), add obliques or relief, or calibrate beforehand (`--rig`)"
+                "the network is perfectly regular (every image at one height, looking one way, \
+                 where scaling the focal length and every depth below the cameras by one factor \
+                 changes no image, relief or not): give the diver's hand-held wobble \
+                 (`network.jitter_position`, `jitter_rotation`), add obliques or a second \
+                 height, or calibrate beforehand (`--rig`)"
                     .into()
             } else {
                 "add obliques, relief or a second height, or calibrate beforehand (`--rig`)".into()
