@@ -342,8 +342,13 @@ def bundle(pycolmap, req: dict) -> dict:
         for cam in req["cameras"]:
             config.set_constant_cam_intrinsics(int(cam["id"]))
         config.set_constant_rig_from_world_pose(min(rec.reg_frame_ids()))
-    adjuster = pycolmap.create_default_bundle_adjuster(opts, config, rec)
+    adjuster = pycolmap.create_default_ceres_bundle_adjuster(opts, config, rec)
     summary = adjuster.solve()
+    # The covariance of the problem just solved (its gauge, the control points' held views
+    # in it), before the views leave the reconstruction.
+    covariance = (
+        focal_covariance(pycolmap, rec, req, adjuster) if req.get("rig") is None else {}
+    )
     remove_gcp_views(rec, views)
     rec.update_point_3d_errors()
     # The focal probe, when the adjustment calibrated the camera itself (not a calibrated rig).
@@ -363,6 +368,7 @@ def bundle(pycolmap, req: dict) -> dict:
         "mean_track_length": rec.compute_mean_track_length(),
         "observations": rec.compute_num_observations(),
         "focal_sensitivity": sensitivity,
+        **covariance,
         "gcps_weighted": len(views) // 3,
         "colmap": pycolmap.COLMAP_version,
     }
@@ -445,6 +451,7 @@ def images(pycolmap, req: dict) -> dict:
     if hold:
         pycolmap.bundle_adjustment(rec, ba_options(pycolmap, req))
     sensitivity = focal_sensitivity(pycolmap, rec, req)
+    covariance = focal_covariance(pycolmap, rec, req)
     result = export(rec)
     keypoints = 0
     with pycolmap.Database.open(db) as database:
@@ -458,6 +465,7 @@ def images(pycolmap, req: dict) -> dict:
         "observations": rec.compute_num_observations(),
         "keypoints_per_image": keypoints / max(1, len(names)),
         "focal_sensitivity": sensitivity,
+        **covariance,
         "colmap": pycolmap.COLMAP_version,
     }
     return result
@@ -494,6 +502,70 @@ def focal_sensitivity(pycolmap, rec, req: dict) -> float | None:
         if math.isfinite(rise):
             rises.append(min(rise, RISE_CAP))
     return min(rises) if rises else None
+
+
+# Above this many registered images the focal covariance is not computed: COLMAP's estimate
+# inverts the dense Schur complement on the poses (6 per image), O(images^3).
+COVARIANCE_MAX_IMAGES = 600
+
+
+def focal_covariance(pycolmap, rec, req: dict, adjuster=None) -> dict:
+    """How well the adjustment's normal matrix determines the focal length: the standard
+    deviation of each focal length from COLMAP's covariance of the bundle adjustment (the
+    inverse normal matrix of `adjuster`'s problem; without one, of a self-calibrating
+    adjustment of the registered images with the gauge fixed by two cameras), relative to the
+    focal length, per pixel of image-measurement sigma (multiply by the pixels' sigma for the
+    focal length's own). A flat nadir block at one height leaves focal length and height
+    trading: the normal matrix is rank deficient, or the deviation large. Cameras held
+    constant (the control points' views) have no covariance and are skipped.
+
+    Returns ``focal_sd`` (the largest over the cameras' focal lengths, or None) and
+    ``focal_covariance``: ``"ok"``, ``"rank_deficient"`` (COLMAP could not invert it: a
+    direction of the camera's parameters and poses the images do not fix) or
+    ``"not_computed"`` (too many images: COVARIANCE_MAX_IMAGES)."""
+    if rec.num_reg_images() > COVARIANCE_MAX_IMAGES:
+        return {"focal_sd": None, "focal_covariance": "not_computed"}
+    if adjuster is None:
+        config = pycolmap.BundleAdjustmentConfig()
+        for image_id in sorted(rec.reg_image_ids()):
+            config.add_image(image_id)
+        config.fix_gauge(pycolmap.BundleAdjustmentGauge.TWO_CAMS_FROM_WORLD)
+        adjuster = pycolmap.create_default_ceres_bundle_adjuster(
+            ba_options(pycolmap, req), config, rec
+        )
+    options = pycolmap.BACovarianceOptions()
+    options.params = pycolmap.BACovarianceOptionsParams.ALL
+    cov = pycolmap.estimate_ba_covariance(options, rec, adjuster)
+    if cov is None:
+        return {"focal_sd": None, "focal_covariance": "rank_deficient"}
+    worst = None
+    for cam in rec.cameras.values():
+        c = cov.get_other_params_cov(cam.params)
+        if c is None:
+            continue
+        # The covariance omits the parameters held constant (the principal point unless
+        # refined): the free parameters in order, so a focal length's row is its index among
+        # them.
+        free = [i for i in range(len(cam.params)) if not held(cam, i, req)]
+        if len(free) != c.shape[0]:
+            continue
+        for i in cam.focal_length_idxs():
+            if i in free:
+                k = free.index(i)
+                sd = math.sqrt(max(float(c[k, k]), 0.0)) / abs(float(cam.params[i]))
+                worst = sd if worst is None else max(worst, sd)
+    return {
+        "focal_sd": worst,
+        "focal_covariance": "ok" if worst is not None else "not_computed",
+    }
+
+
+def held(cam, i: int, req: dict) -> bool:
+    """Whether camera parameter `i` is held constant by `ba_options` (the principal point,
+    unless the request refines it)."""
+    return i in cam.principal_point_idxs() and not bool(
+        req.get("refine_principal_point", False)
+    )
 
 
 def export(rec, ids: dict[int, int] | None = None) -> dict:

@@ -9,7 +9,7 @@
 //! | `--gcp [IDS]` | off | align on the targets' points (GCPs); with IDS (comma-separated target names) only those are control points and the other targets are check points; the default aligns on all points |
 //! | `--check IDS` | – | with `--gcp`: these targets are check points, held out of the alignment |
 //! | `--gcp-sigma [METRES]` | off (0.002 when given alone) | with `--gcp`: the control points enter the bundle adjustment as weighted constraints, each known to this σ per axis, as Metashape weights markers; no similarity after |
-//! | `--strict` | off | a health warning (images dropped, focal length not determined, outlier-driven RMS) is an error: exit status 1 after the report is written |
+//! | `--strict` | off | a health warning (images dropped, focal length not determined or far from the nominal, camera model not fitting, outlier-driven RMS) is an error: exit status 1 after the report is written |
 //! | `--rig` | off | observations mode: the rig is calibrated beforehand — intrinsics held at the in-water-equivalent values, the cameras' poses in the rig held at the truth; the bundle adjuster solves one pose per rig position (its baseline sets the scale) |
 //! | `--images DIR` | render | images mode: use the images already rendered in DIR (any backend); without it the network is rendered into `OUT/images.partial/` and renamed to `OUT/images/` when complete (a run cut short resumes there) |
 //! | `--samples`, `--scale` | scene's | images mode: the native render's samples and resolution scale |

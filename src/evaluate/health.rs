@@ -5,7 +5,9 @@
 //! | code | flags | threshold |
 //! |---|---|---|
 //! | `registered` | images that dropped out: not seen to have tie points (observations mode) or not registered by COLMAP | fewer than [`MIN_REGISTERED`] of the images |
-//! | `focal` | a self-calibrated focal length the block does not determine ([`super::Evaluation::focal_sensitivity`]) | a rise below [`super::FOCAL_DETERMINED`] |
+//! | `dropped` | images that dropped out, when at least [`MIN_REGISTERED`] are in: how many, their share and the first names | any image missing from the result |
+//! | `focal` | a self-calibrated focal length the block does not determine: the focal probe ([`super::Evaluation::focal_sensitivity`]) or the adjustment's covariance ([`super::Evaluation::focal_sd`], [`super::Evaluation::focal_singular`]) | a probe rise below [`super::FOCAL_DETERMINED`], a singular normal matrix, or a standard deviation above [`super::FOCAL_SD_MAX`] per pixel |
+//! | `focal_drift` | a self-calibrated focal length far from the nominal (in-water-equivalent) one | beyond ± [`super::FOCAL_DRIFT_MAX`] |
 //! | `fit` | a camera model that does not fit the images | a mean reprojection error above [`MAX_REPROJECTION_PX`] |
 //! | `outliers` | a height RMS driven by a few far points, not by the block | more than [`MAX_OUTLIERS`] of the tie points beyond 3 NMAD, and RMS Z over twice the NMAD |
 //!
@@ -54,13 +56,36 @@ pub fn regular_network(model: &Model) -> bool {
 }
 
 /// The checks on a finished evaluation. `self_calibrated`: COLMAP refined the intrinsics (not
-/// a calibrated rig), so the focal probe applies.
+/// a calibrated rig), so the focal checks apply.
 pub fn check(model: &Model, ev: &Evaluation, self_calibrated: bool) -> Vec<Warning> {
+    checks(ev, self_calibrated, regular_network(model))
+}
+
+/// The first five names of `names`, and how many more.
+fn first_names(names: &[String]) -> String {
+    let shown: Vec<&str> = names.iter().take(5).map(String::as_str).collect();
+    let more = names.len().saturating_sub(shown.len());
+    if shown.is_empty() {
+        return String::new();
+    }
+    format!(
+        "{}{}",
+        shown.join(", "),
+        if more > 0 {
+            format!(" and {more} more")
+        } else {
+            String::new()
+        }
+    )
+}
+
+/// [`check`] with the network's regularity given (`regular`: [`regular_network`]).
+pub fn checks(ev: &Evaluation, self_calibrated: bool, regular: bool) -> Vec<Warning> {
     let mut out = Vec::new();
     let share = ev.registered as f64 / ev.images.max(1) as f64;
+    let lost = ev.images.saturating_sub(ev.registered);
     if share < MIN_REGISTERED {
-        let names: Vec<&str> = ev.dropped.iter().take(5).map(String::as_str).collect();
-        let more = ev.dropped.len().saturating_sub(names.len());
+        let names = first_names(&ev.dropped);
         out.push(Warning {
             code: "registered",
             message: format!(
@@ -72,43 +97,37 @@ pub fn check(model: &Model, ev: &Evaluation, self_calibrated: bool) -> Vec<Warni
                 if names.is_empty() {
                     String::new()
                 } else {
-                    format!(
-                        "; dropped: {}{}",
-                        names.join(", "),
-                        if more > 0 {
-                            format!(" and {more} more")
-                        } else {
-                            String::new()
-                        }
-                    )
+                    format!("; dropped: {names}")
                 }
             ),
             help: "check that the strips cover the object (`poser plan` draws the footprints), \
                    raise the overlap, or texture the surfaces at the image's GSD"
                 .into(),
         });
-    }
-    if let Some(sens) = ev.focal_sensitivity().filter(|_| self_calibrated)
-        && sens < super::FOCAL_DETERMINED
-    {
+    } else if lost > 0 {
+        let names = first_names(&ev.dropped);
         out.push(Warning {
-            code: "focal",
+            code: "dropped",
             message: format!(
-                "the images do not determine the focal length: holding it 10 % off raises the \
-                 reprojection error by {:.3} % (below {:.1} %), so focal length and height trade \
-                 and the focal error and the bowl are not measurements",
-                100.0 * sens,
-                100.0 * super::FOCAL_DETERMINED
+                "{lost} of {} images ({:.1} %) dropped out of the result{}; the figures \
+                 describe the other {}",
+                ev.images,
+                100.0 * lost as f64 / ev.images.max(1) as f64,
+                if names.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({names})")
+                },
+                ev.registered
             ),
-            help: if regular_network(model) {
-                "the network is perfectly regular (every image at one height, looking one way): \
-                 give the diver's hand-held wobble (`network.jitter_position`, \
-                 `jitter_rotation`), add obliques or relief, or calibrate beforehand (`--rig`)"
-                    .into()
-            } else {
-                "add obliques, relief or a second height, or calibrate beforehand (`--rig`)".into()
-            },
+            help: "look at where the dropped images are (report.json's `dropped`; `poser plan` \
+                   draws the footprints): an image that sees too little of the object, or too \
+                   little overlap with its neighbours, leaves the block"
+                .into(),
         });
+    }
+    if self_calibrated {
+        focal_checks(ev, regular, &mut out);
     }
     if ev.reprojection_error > MAX_REPROJECTION_PX {
         out.push(Warning {
@@ -142,4 +161,233 @@ pub fn check(model: &Model, ev: &Evaluation, self_calibrated: bool) -> Vec<Warni
         });
     }
     out
+}
+
+/// The `focal` warning (the block does not determine the focal length: the probe, or the
+/// adjustment's covariance) and the `focal_drift` warning (the self-calibrated focal length far
+/// from the nominal one).
+fn focal_checks(ev: &Evaluation, regular: bool, out: &mut Vec<Warning>) {
+    let mut evidence = Vec::new();
+    if ev.focal_singular() {
+        evidence.push(
+            "the adjustment's normal matrix is singular (rank deficient) in the camera and the \
+             poses, so some change of focal length and poses leaves every image as it is"
+                .to_string(),
+        );
+    } else if let Some(sd) = ev.focal_sd()
+        && sd > super::FOCAL_SD_MAX
+    {
+        evidence.push(format!(
+            "the adjustment's covariance gives the focal length a standard deviation of {:.2} % \
+             per pixel of image noise (above {:.0} %)",
+            100.0 * sd,
+            100.0 * super::FOCAL_SD_MAX
+        ));
+    }
+    if let Some(sens) = ev.focal_sensitivity()
+        && sens < super::FOCAL_DETERMINED
+    {
+        evidence.push(format!(
+            "holding it 10 % off raises the reprojection error by {:.3} % (below {:.1} %)",
+            100.0 * sens,
+            100.0 * super::FOCAL_DETERMINED
+        ));
+    }
+    if !evidence.is_empty() {
+        out.push(Warning {
+            code: "focal",
+            message: format!(
+                "the images do not determine the focal length: {}; focal length and height \
+                 trade, so the focal error and the bowl are not measurements",
+                evidence.join("; ")
+            ),
+            help: if regular {
+                "the network is perfectly regular (every image at one height, looking one way, \
+                 where scaling the focal length and every depth below the cameras by one factor \
+                 changes no image, relief or not): give the diver's hand-held wobble \
+                 (`network.jitter_position`, `jitter_rotation`), add obliques or a second \
+                 height, or calibrate beforehand (`--rig`)"
+                    .into()
+            } else {
+                "add obliques, relief or a second height, or calibrate beforehand (`--rig`)".into()
+            },
+        });
+    }
+    if let Some(c) = ev
+        .cameras
+        .iter()
+        .filter(|c| c.focal_error.abs() > super::FOCAL_DRIFT_MAX)
+        .max_by(|a, b| a.focal_error.abs().total_cmp(&b.focal_error.abs()))
+    {
+        out.push(Warning {
+            code: "focal_drift",
+            message: format!(
+                "camera `{}` self-calibrated to a focal length {:+.1} % off the nominal one \
+                 ({:.1} px against {:.1} px in water, {:.1} px in air; beyond ±{:.0} %): the \
+                 adjustment bent the block to fit a wrong camera",
+                c.name,
+                100.0 * c.focal_error,
+                0.5 * (c.recovered[0] + c.recovered[1]),
+                0.5 * (c.truth[0] + c.truth[1]),
+                c.f_air,
+                100.0 * super::FOCAL_DRIFT_MAX
+            ),
+            help: "a camera's focal length in water is about n_water × f behind a flat port and \
+                   f behind a centred dome; one this far off says the block does not hold it: \
+                   add obliques, relief or the diver's wobble, or calibrate beforehand (`--rig`)"
+                .into(),
+        });
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::evaluate::align::{AxisStats, Similarity};
+    use crate::evaluate::colmap::CameraModel;
+    use crate::evaluate::{CameraEval, Mode};
+
+    /// A sound block as the flat port's quick form gives it (measured: 330 of 330 images,
+    /// focal +1.02 %, probe rise 930 %, covariance 0.08 % per px).
+    pub(crate) fn healthy() -> Evaluation {
+        Evaluation {
+            scene: "test".into(),
+            mode: Mode::Observations,
+            camera_model: CameraModel::Opencv,
+            conventions: "",
+            settings: serde_json::Value::Null,
+            images: 330,
+            registered: 330,
+            points: 1414,
+            observations: 10000,
+            mean_track_length: 7.5,
+            reprojection_error: 0.485,
+            cameras: vec![CameraEval {
+                name: "cam".into(),
+                f_air: 3000.0,
+                truth: [3992.6, 3992.6, 3000.0, 2000.0],
+                distance: 1.2,
+                recovered: [4033.5, 4033.0, 3000.0, 2000.0],
+                extra: Vec::new(),
+                focal_error: 0.0102,
+            }],
+            alignment: "all points".into(),
+            alignment_count: 1414,
+            gcp_sigma: None,
+            similarity: Similarity::identity(),
+            tie_errors: AxisStats::default(),
+            check_errors: None,
+            control_errors: None,
+            camera_errors: AxisStats::default(),
+            bowl: None,
+            colmap: serde_json::json!({
+                "focal_sensitivity": 9.3, "focal_sd": 0.00075, "focal_covariance": "ok"
+            }),
+            dropped: Vec::new(),
+            warnings: Vec::new(),
+            seconds: 1.0,
+            point_errors: Vec::new(),
+            centres: Vec::new(),
+        }
+    }
+
+    fn codes(ev: &Evaluation, regular: bool) -> Vec<&'static str> {
+        checks(ev, true, regular).iter().map(|w| w.code).collect()
+    }
+
+    #[test]
+    fn a_sound_block_gives_no_warning() {
+        assert_eq!(codes(&healthy(), false), Vec::<&str>::new());
+        assert_eq!(healthy().focal_determined(), Some(true));
+    }
+
+    #[test]
+    fn dropped_images_warn_with_their_count_share_and_names() {
+        // One image of 330 out: a `dropped` warning naming it, with its share.
+        let mut ev = healthy();
+        ev.registered = 329;
+        ev.dropped = vec!["img_0007".into()];
+        let w = checks(&ev, true, false);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].code, "dropped");
+        assert!(
+            w[0].message.contains("1 of 330 images (0.3 %)") && w[0].message.contains("img_0007"),
+            "{}",
+            w[0].message
+        );
+        // 25 of 330 (the strips moved off the plot, measured): `registered`, with five names.
+        ev.registered = 25;
+        ev.dropped = (0..305).map(|k| format!("img_{k:04}")).collect();
+        let w = checks(&ev, true, false);
+        assert_eq!(w[0].code, "registered", "{w:?}");
+        assert!(
+            w[0].message
+                .contains("only 25 of 330 images registered (8 %)")
+                && w[0].message.contains("img_0004 and 300 more"),
+            "{}",
+            w[0].message
+        );
+        assert!(w[0].to_string().contains("\n  help: "));
+    }
+
+    #[test]
+    fn each_sign_of_an_undetermined_focal_length_warns() {
+        // The dome flown without jitter (measured): singular normal matrix, probe −0.003 %,
+        // focal +75 %: `focal`, naming the regular network, and `focal_drift`.
+        let mut ev = healthy();
+        ev.colmap = serde_json::json!({
+            "focal_sensitivity": -2.8e-5, "focal_sd": null, "focal_covariance": "rank_deficient"
+        });
+        ev.cameras[0].focal_error = 0.752;
+        let w = checks(&ev, true, true);
+        assert_eq!(
+            w.iter().map(|w| w.code).collect::<Vec<_>>(),
+            ["focal", "focal_drift"]
+        );
+        assert!(w[0].message.contains("singular") && w[0].message.contains("-0.003 %"));
+        assert!(w[0].help.contains("jitter_position"));
+        assert!(w[1].message.contains("+75.2 %"), "{}", w[1].message);
+        assert_eq!(ev.focal_determined(), Some(false));
+        // The flat port flown without jitter (measured): the probe passes (24.8 %), the
+        // covariance does not (8.9 % per px), and the focal length is −59.5 % off.
+        ev.colmap = serde_json::json!({
+            "focal_sensitivity": 0.248, "focal_sd": 0.0889, "focal_covariance": "ok"
+        });
+        ev.cameras[0].focal_error = -0.595;
+        let w = checks(&ev, true, true);
+        assert_eq!(
+            w.iter().map(|w| w.code).collect::<Vec<_>>(),
+            ["focal", "focal_drift"]
+        );
+        assert!(
+            w[0].message.contains("8.89 % per pixel"),
+            "{}",
+            w[0].message
+        );
+        assert!(!w[0].message.contains("holding it"), "{}", w[0].message);
+        // Each sign alone warns; the drift alone is its own warning.
+        for (summary, drift, want) in [
+            (
+                serde_json::json!({"focal_sensitivity": 9.3, "focal_sd": 0.02}),
+                0.01,
+                vec!["focal"],
+            ),
+            (
+                serde_json::json!({"focal_sensitivity": 0.001, "focal_sd": 0.0008}),
+                0.01,
+                vec!["focal"],
+            ),
+            (
+                serde_json::json!({"focal_sensitivity": 9.3, "focal_sd": 0.0008}),
+                -0.12,
+                vec!["focal_drift"],
+            ),
+        ] {
+            ev.colmap = summary.clone();
+            ev.cameras[0].focal_error = drift;
+            assert_eq!(codes(&ev, false), want, "{summary} {drift}");
+        }
+        // A calibrated rig is not probed: no focal warning whatever the numbers.
+        assert!(checks(&ev, false, true).is_empty());
+    }
 }

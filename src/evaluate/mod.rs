@@ -11,7 +11,7 @@
 //! | [`Options`] | the knobs of one evaluation |
 //! | [`evaluate_observations`], [`evaluate_images`] | run one mode, return an [`Evaluation`] |
 //! | [`Evaluation`] | registered images, track length, reprojection error, recovered intrinsics against the in-water-equivalent truth, 3D errors, the fitted bowl |
-//! | [`health`] | the checks that flag a degenerate block (images dropped, a focal length the block does not determine, an RMS driven by outliers) |
+//! | [`health`] | the checks that flag a degenerate block (images dropped, a focal length the block does not determine — the probe and the adjustment's covariance — or that lands far from the nominal one, an RMS driven by outliers) |
 //! | [`gcp`] | the control/check split of `--gcp`: the similarity fitted on the control points, or the control points weighted in the adjustment (`--gcp-sigma`); every point's error after it |
 //! | [`report`] | `report.json`, `report.md`, `errors.csv`, `deformation.png`, `profile.svg` |
 //!
@@ -217,11 +217,47 @@ impl Evaluation {
             .and_then(|v| v.as_f64())
     }
 
-    /// Whether the block determines the focal length (`None`: not measured).
+    /// The focal length's standard deviation from the adjustment's covariance (the inverse
+    /// normal matrix, COLMAP's `estimate_ba_covariance`), relative to the focal length, per
+    /// pixel of image-measurement σ (`focal_covariance` in `backends/colmap/evaluate.py`).
+    /// `None` when not computed or when the normal matrix is singular ([`Self::focal_singular`]).
+    pub fn focal_sd(&self) -> Option<f64> {
+        self.colmap.get("focal_sd").and_then(|v| v.as_f64())
+    }
+
+    /// The adjustment's normal matrix is rank deficient: a direction of the camera's
+    /// parameters and the poses (focal length against height, over a flat block at one
+    /// height) the images do not fix at all.
+    pub fn focal_singular(&self) -> bool {
+        self.colmap.get("focal_covariance").and_then(|v| v.as_str()) == Some("rank_deficient")
+    }
+
+    /// Whether the block determines the focal length (`None`: not measured): the focal probe
+    /// rises by [`FOCAL_DETERMINED`] or more, and the covariance is neither singular nor above
+    /// [`FOCAL_SD_MAX`].
     pub fn focal_determined(&self) -> Option<bool> {
-        self.focal_sensitivity().map(|s| s >= FOCAL_DETERMINED)
+        let probe = self.focal_sensitivity().map(|s| s >= FOCAL_DETERMINED);
+        let cov = if self.focal_singular() {
+            Some(false)
+        } else {
+            self.focal_sd().map(|sd| sd <= FOCAL_SD_MAX)
+        };
+        match (probe, cov) {
+            (None, None) => None,
+            (a, b) => Some(a != Some(false) && b != Some(false)),
+        }
     }
 }
+
+/// Above this standard deviation of the focal length per pixel of image σ, relative to the
+/// focal length ([`Evaluation::focal_sd`]), the block does not determine the focal length.
+/// Measured on the quick forms: 0.08 % for the flat port and the dome flown with the diver's
+/// wobble, 8.9 % for the flat port flown without it (focal −59.5 %, which the probe passed).
+pub const FOCAL_SD_MAX: f64 = 0.01;
+/// Beyond this relative difference between the self-calibrated focal length and the nominal
+/// one (the in-water-equivalent truth: about n_water × f behind a flat port, f behind a centred
+/// dome), the calibration is reported as implausible. Healthy quick forms stay within 3.7 %.
+pub const FOCAL_DRIFT_MAX: f64 = 0.10;
 
 /// World-frame meshes of every object and target of the site, labelled (tie points are sampled
 /// on them; backdrop objects are scenery and left out), and the occlusion scene built from

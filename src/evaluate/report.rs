@@ -209,23 +209,46 @@ fn intrinsics(s: &mut String, ev: &Evaluation) {
             other.join(", ")
         );
     }
+    let mut evidence = Vec::new();
     if let Some(sens) = ev.focal_sensitivity() {
-        let _ = writeln!(
-            s,
-            "\nHolding the focal length 10 % off its estimate raises the mean reprojection error by \
-             {}: {}",
+        evidence.push(format!(
+            "holding the focal length 10 % off its estimate raises the mean reprojection error \
+             by {}",
             if sens >= super::FOCAL_RISE_CAP {
                 format!("more than {:.0} %", 100.0 * super::FOCAL_RISE_CAP)
             } else {
                 format!("{:.3} %", 100.0 * sens)
-            },
-            if sens >= super::FOCAL_DETERMINED {
+            }
+        ));
+    }
+    if ev.focal_singular() {
+        evidence.push(
+            "the adjustment's normal matrix is singular in the camera and the poses".to_string(),
+        );
+    } else if let Some(sd) = ev.focal_sd() {
+        evidence.push(format!(
+            "the adjustment's covariance gives it a standard deviation of {:.3} % per pixel of \
+             image noise (about {:.3} % at this block's reprojection error)",
+            100.0 * sd,
+            100.0 * sd * ev.reprojection_error
+        ));
+    }
+    if let Some(determined) = ev.focal_determined() {
+        let mut first = evidence.join("; ");
+        if let Some(c) = first.get_mut(..1) {
+            c.make_ascii_uppercase();
+        }
+        let _ = writeln!(
+            s,
+            "\n{first}: {}",
+            if determined {
                 "the images determine the focal length."
             } else {
                 "**the images do not determine the focal length** (a nearly flat block seen \
                  from above: focal length and height trade against each other), so the focal \
-                 error above is not a measurement. Relief, obliques, or a calibration beforehand \
-                 fix it."
+                 error above is not a measurement. Obliques, the diver's wobble, a second \
+                 height or a calibration beforehand fix it; relief helps only a block that is \
+                 not perfectly regular (every image at one height, looking one way)."
             }
         );
     }
@@ -236,8 +259,9 @@ fn health(s: &mut String, ev: &Evaluation) {
     if ev.warnings.is_empty() {
         let _ = writeln!(
             s,
-            "Health: no warning (images registered, focal length determined where \
-             self-calibrated, no outlier-driven RMS).\n"
+            "Health: no warning (every image registered; where self-calibrated, the focal \
+             length determined and near its nominal value; the camera model fits; no \
+             outlier-driven RMS).\n"
         );
         return;
     }
@@ -603,6 +627,70 @@ pub fn profile_svg(ev: &Evaluation) -> Result<String, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::evaluate::PointError;
+
+    fn point(label: &str, kind: &'static str, mm: [f64; 3]) -> PointError {
+        PointError {
+            id: 1,
+            label: label.into(),
+            kind,
+            truth: [0.0; 3],
+            error: mm.map(|v| v * 1e-3),
+            track: 5,
+        }
+    }
+
+    /// The row of `md`'s table titled `title` whose first cell is `first`, as its cells.
+    fn row(md: &str, title: &str, first: &str) -> Vec<String> {
+        let at = md
+            .find(title)
+            .unwrap_or_else(|| panic!("no {title} in\n{md}"));
+        let line = md[at..]
+            .lines()
+            .find(|l| l.starts_with(&format!("| {first} ")))
+            .unwrap_or_else(|| panic!("no row {first} under {title}"));
+        line.split('|').map(|c| c.trim().to_string()).collect()
+    }
+
+    /// Control and check points with known residuals: each point's X/Y/Z and 3D error, and the
+    /// RMSE of each table, as arithmetic gives them.
+    #[test]
+    fn control_and_check_tables_give_known_residuals_and_their_rmse() {
+        let mut ev = crate::evaluate::health::tests::healthy();
+        ev.alignment = "gcp".into();
+        ev.point_errors = vec![
+            point("tie", "tie", [9.0, 9.0, 9.0]),
+            point("G1/1", "gcp", [3.0, 4.0, 0.0]),
+            point("G2/1", "gcp", [-3.0, -4.0, 0.0]),
+            point("C1/1", "check", [0.0, 0.0, 12.0]),
+            point("C2/1", "check", [0.0, 0.0, -5.0]),
+        ];
+        let md = markdown(&ev);
+        let control = "### Control points (GCPs, used by the alignment)";
+        let check = "### Check points (held out of the alignment)";
+        assert_eq!(
+            row(&md, control, "G1/1")[1..6],
+            ["G1/1", "+3.00", "+4.00", "+0.00", "5.00"]
+        );
+        // RMSE X 3, Y 4, Z 0, 3D 5 mm over the two control points.
+        assert_eq!(
+            row(&md, control, "**RMSE**")[1..6],
+            ["**RMSE** (2)", "3.00", "4.00", "0.00", "5.00"]
+        );
+        // Z: √((12² + 5²)/2) = 9.19 mm; the tie point is in neither table.
+        assert_eq!(
+            row(&md, check, "**RMSE**")[1..6],
+            ["**RMSE** (2)", "0.00", "0.00", "9.19", "9.19"]
+        );
+        assert_eq!(row(&md, check, "C2/1")[4], "-5.00");
+        assert!(!md[md.find(control).unwrap()..].contains("| tie |"));
+        assert!(md.contains("**The check points' RMSE is the honest accuracy figure**"));
+        // Without check points the control RMSE is called a fit.
+        ev.point_errors.retain(|p| p.kind != "check");
+        let md = markdown(&ev);
+        assert!(!md.contains(check));
+        assert!(md.contains("**No check points: the control RMSE above is a fit"));
+    }
 
     /// The labels drawn beside the colour bar of a 300 px tall map: white text in the label
     /// column at the top, middle and bottom, and a different text for a different range.
