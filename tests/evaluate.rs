@@ -224,6 +224,27 @@ fn table_rmse(md: &str, title: &str) -> [f64; 4] {
     [cell(2), cell(3), cell(4), cell(5)]
 }
 
+/// `poser evaluate` of in_air over a 20 × 7 m block, GCPs at its corners and three check
+/// points in its middle, with `extra` arguments: the output and its stderr.
+fn evaluate_with_gcps(out: &std::path::Path, extra: &[&str]) -> (std::process::Output, String) {
+    let r = poser()
+        .args(["evaluate", "scenarios/lessons/in_air.toml", "-o"])
+        .arg(out)
+        .args(["--set", "network.length=20", "--set", "network.width=7"])
+        .args([
+            "--gcp",
+            "gcp_w2,gcp_e2,gcp_w3,gcp_e3",
+            "--check",
+            "gcp_w0,gcp_e0,gcp_n0",
+        ])
+        .args(extra)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr).into_owned();
+    (r, err)
+}
+
 #[test]
 fn exact_observations_give_zero_control_and_check_residuals_in_both_tables() {
     // In air with no pixel noise, the adjustment recovers the truth: every control and check
@@ -232,25 +253,7 @@ fn exact_observations_give_zero_control_and_check_residuals_in_both_tables() {
     // (`control_and_check_points_are_split_and_tabled_as_metashape_does`).
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("exact");
-    let r = poser()
-        .args(["evaluate", "scenarios/lessons/in_air.toml", "-o"])
-        .arg(&out)
-        .args([
-            "--set",
-            "network.length=20",
-            "--set",
-            "network.width=7",
-            "--gcp",
-            "gcp_w2,gcp_e2,gcp_w3,gcp_e3",
-            "--check",
-            "gcp_w0,gcp_e0,gcp_n0",
-            "--noise",
-            "0",
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&r.stderr);
+    let (r, err) = evaluate_with_gcps(&out, &["--noise", "0"]);
     assert!(r.status.success(), "{err}");
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     for title in ["### Control points", "### Check points"] {
@@ -271,23 +274,7 @@ fn control_and_check_points_are_split_and_tabled_as_metashape_does() {
     // bowl (measured: RMSE Z 0.18 mm control, 4.04 mm check).
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("gcp");
-    let r = poser()
-        .args(["evaluate", "scenarios/lessons/in_air.toml", "-o"])
-        .arg(&out)
-        .args([
-            "--set",
-            "network.length=20",
-            "--set",
-            "network.width=7",
-            "--gcp",
-            "gcp_w2,gcp_e2,gcp_w3,gcp_e3",
-            "--check",
-            "gcp_w0,gcp_e0,gcp_n0",
-            "--quiet",
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&r.stderr);
+    let (r, err) = evaluate_with_gcps(&out, &[]);
     assert!(r.status.success(), "{err}");
     let csv = std::fs::read_to_string(out.join("errors.csv")).unwrap();
     let rows = |kind: &str| -> Vec<f64> {

@@ -213,18 +213,7 @@ fn render(
     for s in sets {
         cmd.args(["--set", s]);
     }
-    let c0 = super::evaluate::cpu_seconds();
-    let o = cmd
-        .output()
-        .map_err(|e| format!("cannot run {}: {e}", opts.poser.display()))?;
-    let cpu_s = super::evaluate::cpu_seconds() - c0;
-    if !o.status.success() {
-        return Err(format!(
-            "poser render {} failed:\n{}",
-            scene.display(),
-            String::from_utf8_lossy(&o.stderr)
-        ));
-    }
+    let (_, cpu_s) = super::run_child(&mut cmd, &format!("poser render {}", scene.display()))?;
     let img = crate::image::read_exr(&out.join("img_0001.exr"))?;
     let var = crate::image::read_exr(&out.join("img_0001.variance.exr"))?;
     let n = img.rgb.len().max(1) as f64;

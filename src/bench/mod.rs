@@ -20,3 +20,24 @@ pub mod parity;
 pub mod projection;
 pub mod render;
 pub mod sensor;
+
+/// Run a `poser` child process (`what` names it in errors): its output and the CPU seconds it
+/// took (user + system of the children, so no cache of this process helps it). A child that
+/// fails is an error carrying its stderr.
+pub(crate) fn run_child(
+    cmd: &mut std::process::Command,
+    what: &str,
+) -> Result<(std::process::Output, f64), String> {
+    let c0 = evaluate::cpu_seconds();
+    let o = cmd
+        .output()
+        .map_err(|e| format!("cannot run {what}: {e}"))?;
+    let cpu_s = evaluate::cpu_seconds() - c0;
+    if !o.status.success() {
+        return Err(format!(
+            "{what} failed:\n{}",
+            String::from_utf8_lossy(&o.stderr)
+        ));
+    }
+    Ok((o, cpu_s))
+}

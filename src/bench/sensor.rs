@@ -220,18 +220,7 @@ fn render(
     for s in sets {
         cmd.args(["--set", s]);
     }
-    let c0 = super::evaluate::cpu_seconds();
-    let o = cmd
-        .output()
-        .map_err(|e| format!("cannot run {}: {e}", poser.display()))?;
-    let cpu_s = super::evaluate::cpu_seconds() - c0;
-    if !o.status.success() {
-        return Err(format!(
-            "poser render {} failed:\n{}",
-            scene.display(),
-            String::from_utf8_lossy(&o.stderr)
-        ));
-    }
+    let (_, cpu_s) = super::run_child(&mut cmd, &format!("poser render {}", scene.display()))?;
     let sidecar = first_with(&out.join("camera"), ".sensor.json")?;
     let json: serde_json::Value = serde_json::from_slice(
         &std::fs::read(&sidecar).map_err(|e| format!("{}: {e}", sidecar.display()))?,
