@@ -241,7 +241,7 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
                     dark = true;
                 } else if rr >= 0.8 * diameter && rr <= 1.25 * diameter {
                     // 8-bit code ring: sector s is black when bit s of the code is set.
-                    let code = (first_code as u64 + k as u64) as u32;
+                    let code = (first_code as u64 + k) as u32;
                     let a = dy.atan2(dx).rem_euclid(std::f64::consts::TAU);
                     let s = ((a / std::f64::consts::TAU * 8.0).floor() as u32).min(7);
                     dark = (code >> s) & 1 == 1;
