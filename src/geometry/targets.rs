@@ -146,6 +146,32 @@ fn grid(cols: u32, rows: u32, spacing: f64) -> Vec<(u32, u32, DVec3)> {
     v
 }
 
+/// Centre of disk (i, j) of a `cols × rows` grid of pitch `spacing`: `grid`'s arithmetic.
+#[inline]
+fn centre(i: u32, j: u32, cols: u32, rows: u32, spacing: f64) -> DVec3 {
+    let x = (i as f64 - (cols as f64 - 1.0) / 2.0) * spacing;
+    let y = (j as f64 - (rows as f64 - 1.0) / 2.0) * spacing;
+    DVec3::new(x, y, 0.0)
+}
+
+/// The indices, among `n` centred at pitch `spacing`, whose centre may lie within `reach` of
+/// `x` (one index of slack each side for rounding): [`reflectance`] tests those alone, with the
+/// same arithmetic, instead of every disk of the grid at every texel. Every index when the
+/// numbers do not allow the bound.
+fn near(n: u32, spacing: f64, x: f64, reach: f64) -> std::ops::Range<u32> {
+    let c0 = (n as f64 - 1.0) / 2.0;
+    let (lo, hi) = (
+        (x - reach) / spacing + c0 - 1.0,
+        (x + reach) / spacing + c0 + 1.0,
+    );
+    if !(spacing > 0.0 && reach >= 0.0 && lo.is_finite() && hi.is_finite()) {
+        return 0..n;
+    }
+    let lo = lo.floor().clamp(0.0, n as f64) as u32;
+    let hi = (hi.ceil() + 1.0).clamp(0.0, n as f64) as u32;
+    lo..hi.max(lo)
+}
+
 /// The target's points in the world: ids `"{name}/{id}"` (a disk's: `"{name}"`).
 pub fn points(name: &str, kind: &TargetKind, world_from_target: &Pose) -> Vec<TargetPoint> {
     local_points(kind)
@@ -179,9 +205,16 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
             rows,
             spacing,
             diameter,
-        } => grid(cols, rows, spacing)
-            .iter()
-            .any(|(_, _, p)| (x - p.x).hypot(y - p.y) <= diameter / 2.0),
+        } => {
+            let reach = diameter / 2.0;
+            let (is, js) = (near(cols, spacing, x, reach), near(rows, spacing, y, reach));
+            js.clone().any(|j| {
+                is.clone().any(|i| {
+                    let p = centre(i, j, cols, rows, spacing);
+                    (x - p.x).hypot(y - p.y) <= diameter / 2.0
+                })
+            })
+        }
         TargetKind::Coded {
             count,
             spacing,
@@ -190,10 +223,17 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
         } => {
             let (c, r) = coded_grid(count);
             let mut dark = false;
-            for (k, (_, _, p)) in grid(c, r, spacing)
-                .into_iter()
-                .take(count as usize)
-                .enumerate()
+            // Row-major, as `grid` lists them (a later disk or ring wins where they overlap);
+            // beyond 1.25 diameters a disk leaves `dark` as it is.
+            let reach = 1.25 * diameter;
+            let (is, js) = (near(c, spacing, x, reach), near(r, spacing, y, reach));
+            for (k, p) in js
+                .flat_map(|j| {
+                    is.clone()
+                        .map(move |i| (j as u64 * c as u64 + i as u64, (i, j)))
+                })
+                .filter(|&(k, _)| k < count as u64)
+                .map(|(k, (i, j))| (k, centre(i, j, c, r, spacing)))
             {
                 let (dx, dy) = (x - p.x, y - p.y);
                 let rr = dx.hypot(dy);
@@ -201,7 +241,7 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
                     dark = true;
                 } else if rr >= 0.8 * diameter && rr <= 1.25 * diameter {
                     // 8-bit code ring: sector s is black when bit s of the code is set.
-                    let code = (first_code as u64 + k as u64) as u32;
+                    let code = (first_code as u64 + k) as u32;
                     let a = dy.atan2(dx).rem_euclid(std::f64::consts::TAU);
                     let s = ((a / std::f64::consts::TAU * 8.0).floor() as u32).min(7);
                     dark = (code >> s) & 1 == 1;
@@ -226,18 +266,24 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
             }
         }
         TargetKind::Disk { diameter } => x.hypot(y) <= diameter / 2.0,
-        TargetKind::TestObject { .. } => local_points(kind)
-            .iter()
-            .any(|(_, p)| (x - p.x).hypot(y - p.y) <= test_object_diameter(kind) / 2.0),
+        // `local_points`' disks, without building their ids at every point.
+        TargetKind::TestObject {
+            size,
+            levels,
+            step,
+            diameter,
+        } => (0..levels).any(|k| {
+            let (side, z) = test_object_step(size, levels, step, k);
+            let a = (side / 2.0 - diameter).max(0.0);
+            [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .iter()
+                .any(|&(sx, sy)| {
+                    let p = DVec3::new(sx * a, sy * a, z);
+                    (x - p.x).hypot(y - p.y) <= diameter / 2.0
+                })
+        }),
     };
     if dark { BLACK } else { WHITE }
-}
-
-fn test_object_diameter(kind: &TargetKind) -> f64 {
-    match *kind {
-        TargetKind::TestObject { diameter, .. } => diameter,
-        _ => 0.0,
-    }
 }
 
 /// Largest texture side, px (a 16k texture is already 768 MB of RGB8).
@@ -272,6 +318,118 @@ pub fn texture(kind: &TargetKind, px_per_m: f64) -> image::RgbImage {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `reflectance` of the disk grids as it was before [`near`]: every disk at every point.
+    fn every_disk(kind: &TargetKind, x: f64, y: f64) -> bool {
+        match *kind {
+            TargetKind::CircleGrid {
+                cols,
+                rows,
+                spacing,
+                diameter,
+            } => grid(cols, rows, spacing)
+                .iter()
+                .any(|(_, _, p)| (x - p.x).hypot(y - p.y) <= diameter / 2.0),
+            TargetKind::Coded {
+                count,
+                spacing,
+                diameter,
+                first_code,
+            } => {
+                let (c, r) = coded_grid(count);
+                let mut dark = false;
+                for (k, (_, _, p)) in grid(c, r, spacing)
+                    .into_iter()
+                    .take(count as usize)
+                    .enumerate()
+                {
+                    let (dx, dy) = (x - p.x, y - p.y);
+                    let rr = dx.hypot(dy);
+                    if rr <= diameter / 2.0 {
+                        dark = true;
+                    } else if rr >= 0.8 * diameter && rr <= 1.25 * diameter {
+                        let code = (first_code as u64 + k as u64) as u32;
+                        let a = dy.atan2(dx).rem_euclid(std::f64::consts::TAU);
+                        let s = ((a / std::f64::consts::TAU * 8.0).floor() as u32).min(7);
+                        dark = (code >> s) & 1 == 1;
+                    }
+                }
+                dark
+            }
+            TargetKind::TestObject { diameter, .. } => local_points(kind)
+                .iter()
+                .any(|(_, p)| (x - p.x).hypot(y - p.y) <= diameter / 2.0),
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn disk_grids_test_only_the_near_disks_and_print_the_same() {
+        let kinds = [
+            TargetKind::CircleGrid {
+                cols: 7,
+                rows: 5,
+                spacing: 0.03,
+                diameter: 0.012,
+            },
+            // Overlapping disks, an even count, one column.
+            TargetKind::CircleGrid {
+                cols: 4,
+                rows: 1,
+                spacing: 0.01,
+                diameter: 0.025,
+            },
+            TargetKind::Coded {
+                count: 7,
+                spacing: 0.05,
+                diameter: 0.012,
+                first_code: 3,
+            },
+            // Rings reaching into the next disk's (a later disk wins).
+            TargetKind::Coded {
+                count: 10,
+                spacing: 0.02,
+                diameter: 0.012,
+                first_code: 200,
+            },
+            TargetKind::TestObject {
+                size: 0.2,
+                levels: 3,
+                step: 0.02,
+                diameter: 0.01,
+            },
+        ];
+        for kind in &kinds {
+            let (w, h) = extent(kind);
+            let n = 301;
+            let mut dark = 0;
+            for j in 0..n {
+                for i in 0..n {
+                    let x = (i as f64 / (n - 1) as f64 - 0.5) * 1.2 * w;
+                    let y = (j as f64 / (n - 1) as f64 - 0.5) * 1.2 * h;
+                    let fast = reflectance(kind, x, y) == BLACK;
+                    assert_eq!(fast, every_disk(kind, x, y), "{kind:?} at ({x}, {y})");
+                    dark += fast as u32;
+                }
+            }
+            assert!(dark > 100, "{kind:?}: {dark} dark samples");
+        }
+        // Exactly on a disk's edge, and not finite.
+        let k = &kinds[0];
+        let p = centre(2, 1, 7, 5, 0.03);
+        for (x, y) in [
+            (p.x + 0.006, p.y),
+            (p.x, p.y - 0.006),
+            (f64::NAN, 0.0),
+            (f64::INFINITY, 0.0),
+        ] {
+            assert_eq!(
+                reflectance(k, x, y) == BLACK,
+                every_disk(k, x, y),
+                "({x}, {y})"
+            );
+        }
+    }
 
     #[test]
     fn checkerboard_corners_sit_on_square_boundaries() {

@@ -16,10 +16,16 @@ pub const ROUND_TRIP_SCALE: f64 = 0.05;
 /// Blender scene) only repeat them.
 pub const ROUND_TRIP_POSES: usize = 6;
 
+/// Texel (m) of the textures a round trip bakes, at least: the poses, intrinsics, water and
+/// lights it compares do not depend on it, and at [`ROUND_TRIP_SCALE`] the planned texel
+/// (half the finest GSD) still made baking (the `noise` pattern's value noise) and the
+/// importer's 16-bit re-encoding of each texel most of a round trip's time.
+pub const ROUND_TRIP_TEXEL: f64 = 0.05;
+
 /// Load `scene`, scale its cameras by [`ROUND_TRIP_SCALE`], keep [`ROUND_TRIP_POSES`] of its
-/// rig poses and compile that model for `backend` into `out` (the library's
-/// `Backend::compile`, which `poser compile` calls); the compiled model, or why the backend
-/// refused the scene.
+/// rig poses, coarsen its baked textures to [`ROUND_TRIP_TEXEL`] and compile that model for
+/// `backend` into `out` (the library's `Backend::compile`, which `poser compile` calls); the
+/// compiled model, or why the backend refused the scene.
 pub fn load_and_compile(scene: &Path, backend: &str, out: &Path) -> Result<Model, String> {
     let mut model = poser::scene::load(scene, &[])
         .map_err(|e| e.render())
@@ -28,6 +34,13 @@ pub fn load_and_compile(scene: &Path, backend: &str, out: &Path) -> Result<Model
         .with_resolution_scale(ROUND_TRIP_SCALE);
     let step = model.poses.len().div_ceil(ROUND_TRIP_POSES).max(1);
     model.poses = model.poses.iter().step_by(step).cloned().collect();
+    // Baked textures at a coarse texel: the comparison reads none of their texels, and the
+    // import still reads (and re-encodes) every texture file the compile wrote.
+    for o in &mut model.objects {
+        if o.material.is_baked() {
+            o.material.texel = Some(o.material.texel.unwrap_or(0.0).max(ROUND_TRIP_TEXEL));
+        }
+    }
     let backend = poser::backend::Backend::parse(backend).expect("a backend name");
     match backend.compile(&model, out) {
         Ok(()) => Ok(model),
