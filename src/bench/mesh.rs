@@ -227,12 +227,16 @@ impl Clock {
             self.wall.elapsed().as_secs_f64(),
             super::evaluate::self_cpu_seconds(),
         );
+        // The resident size first, then the high-water mark, which the kernel updates lazily
+        // and other threads of the process may raise in between: the peak is at least the
+        // size read before it.
+        let rss_bytes = status_bytes("VmRSS:");
         let stage = Stage {
             name: name.into(),
             wall_s: wall,
             cpu_s: (cpu - self.cpu).max(0.0),
-            peak_rss_bytes: status_bytes("VmHWM:"),
-            rss_bytes: status_bytes("VmRSS:"),
+            peak_rss_bytes: status_bytes("VmHWM:").max(rss_bytes),
+            rss_bytes,
         };
         *self = Clock::start();
         stage
