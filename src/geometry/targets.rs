@@ -121,16 +121,27 @@ pub fn local_points(kind: &TargetKind) -> Vec<(String, DVec3)> {
             step,
             diameter,
         } => {
-            for k in 0..levels {
-                let (side, z) = test_object_step(size, levels, step, k);
-                let a = (side / 2.0 - diameter).max(0.0);
-                for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                    out.push((out.len().to_string(), DVec3::new(sx * a, sy * a, z)));
-                }
+            for p in test_object_disks(size, levels, step, diameter) {
+                out.push((out.len().to_string(), p));
             }
         }
     }
     out
+}
+
+/// The test object's disk centres, four corners per level, in `local_points`' order.
+fn test_object_disks(
+    size: f64,
+    levels: u32,
+    step: f64,
+    diameter: f64,
+) -> impl Iterator<Item = DVec3> {
+    (0..levels).flat_map(move |k| {
+        let (side, z) = test_object_step(size, levels, step, k);
+        let a = (side / 2.0 - diameter).max(0.0);
+        [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .map(|(sx, sy)| DVec3::new(sx * a, sy * a, z))
+    })
 }
 
 /// Centres of a `cols × rows` grid of pitch `spacing`, centred, row-major from (-x,-y).
@@ -138,15 +149,13 @@ fn grid(cols: u32, rows: u32, spacing: f64) -> Vec<(u32, u32, DVec3)> {
     let mut v = Vec::new();
     for j in 0..rows {
         for i in 0..cols {
-            let x = (i as f64 - (cols as f64 - 1.0) / 2.0) * spacing;
-            let y = (j as f64 - (rows as f64 - 1.0) / 2.0) * spacing;
-            v.push((i, j, DVec3::new(x, y, 0.0)));
+            v.push((i, j, centre(i, j, cols, rows, spacing)));
         }
     }
     v
 }
 
-/// Centre of disk (i, j) of a `cols × rows` grid of pitch `spacing`: `grid`'s arithmetic.
+/// Centre of disk (i, j) of a `cols × rows` grid of pitch `spacing`.
 #[inline]
 fn centre(i: u32, j: u32, cols: u32, rows: u32, spacing: f64) -> DVec3 {
     let x = (i as f64 - (cols as f64 - 1.0) / 2.0) * spacing;
@@ -272,16 +281,8 @@ pub fn reflectance(kind: &TargetKind, x: f64, y: f64) -> f64 {
             levels,
             step,
             diameter,
-        } => (0..levels).any(|k| {
-            let (side, z) = test_object_step(size, levels, step, k);
-            let a = (side / 2.0 - diameter).max(0.0);
-            [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
-                .iter()
-                .any(|&(sx, sy)| {
-                    let p = DVec3::new(sx * a, sy * a, z);
-                    (x - p.x).hypot(y - p.y) <= diameter / 2.0
-                })
-        }),
+        } => test_object_disks(size, levels, step, diameter)
+            .any(|p| (x - p.x).hypot(y - p.y) <= diameter / 2.0),
     };
     if dark { BLACK } else { WHITE }
 }
