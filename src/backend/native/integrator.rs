@@ -74,8 +74,12 @@ pub const COLUMN_FREE_FLIGHT: f64 = 0.25;
 /// past them the column's table stands for the water. Measured on the first pose of paper_survey (1 % of full size, column
 /// at 512 spp against traced at 2 048, G / B): without tracing the gather the column was
 /// brighter by +3.6 / +4.3 % and its image held 0.45 / 0.33 of the texture's contrast; one level
-/// +1.5 / +2.5 % and 0.8; three levels +0.4 / +1.0 % (± 0.3 / 0.2) and 0.99, for 1.7× the time
-/// and 1.4× the noise on an untextured seabed.
+/// +1.5 / +2.5 % and 0.8; two levels +0.7 / +1.3 % and 0.95 / 0.89; three levels +0.4 /
+/// +1.0 % (± 0.3 / 0.2) and 0.99 / 0.98. Three levels cost 1.5× the CPU time per sample on
+/// reef_strip (quarter size) and 1.4× the variance on an untextured seabed (more with a
+/// texture: the texture's own contrast, now in the image). Gathering the water again for half
+/// the directions only (the table's difference as a control variate for the rest) saved a
+/// tenth of the time for 1.4–1.8× the variance.
 pub const GATHER_LEVELS: u32 = 3;
 
 /// Share of the directions gathered along the camera ray drawn from the column's table (the
