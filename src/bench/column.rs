@@ -8,7 +8,7 @@
 //! |---|---|---|
 //! | resolution scale | 0.05 | 0.02 |
 //! | samples per pixel, both renders | 256 | 64 |
-//! | `render.bounces` of the traced reference | 64 | 64 |
+//! | `render.bounces` of the traced reference | 1000 | 1000 |
 //!
 //! Both renders are `poser render` child processes with `render.denoise = "none"`, strobes and
 //! everything else as shipped. The standard error of a mean is `√(Σ var) / N` over the
@@ -44,7 +44,7 @@ impl Options {
         Options {
             scale: if quick { 0.02 } else { 0.05 },
             samples: if quick { 64 } else { 256 },
-            bounces: 64,
+            bounces: 1000,
             only: None,
             poser,
             out,

@@ -110,6 +110,39 @@ fn mean(v: DVec3) -> f64 {
     (v.x + v.y + v.z) / 3.0
 }
 
+/// The odds of drawing a free flight's distance with each channel's σt (spectral one-sample
+/// MIS, the balance heuristic over the channels): in proportion to the path's throughput
+/// `beta`, uniform where it has none (a camera ray: uniform). With uniform odds a channel's
+/// weight at a vertex, `σs_c T_c / mean_k(σt_k T_k)`, reaches 3 ω_c where the other channels'
+/// light has died (blue, after red and green are absorbed), and over a long path the product
+/// grows without bound (blue weights of 10–1 400 on dome_orbit's traced paths of 8–21
+/// scatterings). With odds ∝ β the weights' sum never grows by more than the largest
+/// single-scattering albedo per vertex (measured: docs/native.md, "Water").
+fn channel_odds(beta: DVec3) -> DVec3 {
+    let s = beta.x + beta.y + beta.z;
+    if s > 0.0 && s.is_finite() && beta.min_element() >= 0.0 {
+        beta / s
+    } else {
+        DVec3::splat(1.0 / 3.0)
+    }
+}
+
+/// The channel drawn with odds `pc` by the uniform `u`.
+fn pick_channel(pc: DVec3, u: f64) -> usize {
+    if u < pc.x {
+        0
+    } else if u < pc.x + pc.y || pc.z <= 0.0 {
+        1
+    } else {
+        2
+    }
+}
+
+/// `Σ_c pc_c v_c`: a density or probability mixed over the channels with odds `pc`.
+fn odds_mean(pc: DVec3, v: DVec3) -> f64 {
+    pc.dot(v)
+}
+
 /// How a path's segment through the water ends ([`Integrator::medium_segment`]).
 enum SegmentEnd {
     /// The path ends.
@@ -607,6 +640,9 @@ impl<'a> Integrator<'a> {
         rng: &mut Sampler,
     ) -> SegmentEnd {
         if m.scatters() && can_scatter {
+            // The channel whose σt draws the free flight, in proportion to the throughput
+            // ([`channel_odds`]); every density of the free flight below uses the same odds.
+            let pc = channel_odds(*beta);
             // Equiangular in-scattering from point/spot lights on every segment: it
             // removes the 1/r² spikes of vertices that land near a strobe.
             // Each lamp's geometry relative to this segment, computed once and shared by
@@ -617,9 +653,9 @@ impl<'a> Integrator<'a> {
                 if let Some(c) = segs.get_mut(i) {
                     *c = seg;
                 }
-                *l += *beta * self.equiangular(m, pl, o, d, a, &seg, rng);
+                *l += *beta * self.equiangular(m, pl, o, d, a, &seg, pc, rng);
                 if self.lamp_phase_sampling {
-                    *l += *beta * self.lamp_phase(m, pl, o, d, a, b, &seg, rng);
+                    *l += *beta * self.lamp_phase(m, pl, o, d, a, b, &seg, pc, rng);
                 }
             }
             // Sun-aware distance sampling of the sunlight scattered along [a, b].
@@ -630,13 +666,13 @@ impl<'a> Integrator<'a> {
                 None
             };
             if let Some(k) = &sun_rate {
-                *l += *beta * self.sun_inscatter(m, k, o, d, a, b, rng);
+                *l += *beta * self.sun_inscatter(m, k, o, d, a, b, pc, rng);
             }
             // With a column only strobe light needs medium vertices: a share of the
             // free flights is tried (none without strobes), the rest pass analytically.
             let share = self.ff_share;
             let attempt = share >= 1.0 || (share > 0.0 && rng.next() < share);
-            let c = ((rng.next() * 3.0) as usize).min(2);
+            let c = pick_channel(pc, rng.next());
             let u = rng.next();
             let st = m.sigma_t[c];
             let t = if attempt && st > 0.0 {
@@ -651,7 +687,7 @@ impl<'a> Integrator<'a> {
                         *beta * tr(m.sigma_t, b - a) * self.surface_direct(h, d, albedo, day, rng);
                 }
                 let trv = tr(m.sigma_t, t - a);
-                let pdf_d = share * mean(m.sigma_t * trv);
+                let pdf_d = share * odds_mean(pc, m.sigma_t * trv);
                 *beta *= m.sigma_s * trv / pdf_d;
                 let p = o + t * d;
                 let phase = &m.phase;
@@ -687,9 +723,9 @@ impl<'a> Integrator<'a> {
             }
             let trv = tr(m.sigma_t, b - a);
             let p_pass = if share >= 1.0 {
-                mean(trv)
+                odds_mean(pc, trv)
             } else {
-                (1.0 - share) + share * mean(trv)
+                (1.0 - share) + share * odds_mean(pc, trv)
             };
             if p_pass <= 0.0 {
                 return SegmentEnd::Ends;
@@ -1066,6 +1102,7 @@ impl<'a> Integrator<'a> {
         d: DVec3,
         a: f64,
         b: f64,
+        pc: DVec3,
         rng: &mut Sampler,
     ) -> DVec3 {
         let Some(sun) = &self.lights.sun else {
@@ -1089,7 +1126,7 @@ impl<'a> Integrator<'a> {
             return DVec3::ZERO;
         }
         let trc = tr(m.sigma_t, t - a);
-        let pdf_d = mean(m.sigma_t * trc);
+        let pdf_d = odds_mean(pc, m.sigma_t * trc);
         // With a column no medium vertex gathers sunlight: this sampler is the only one.
         let w = if self.column.is_some() {
             1.0
@@ -1120,6 +1157,7 @@ impl<'a> Integrator<'a> {
         a: f64,
         b: f64,
         seg: &LampSeg,
+        pc: DVec3,
         rng: &mut Sampler,
     ) -> DVec3 {
         let (delta, dd) = (seg.delta, seg.dd);
@@ -1132,7 +1170,7 @@ impl<'a> Integrator<'a> {
         }
         let pdf_p = seg.phase_pdf(m, t);
         let pdf_e = seg.equiangular_pdf(t);
-        self.lamp_inscatter_at(m, pl, o, d, a, t, pdf_p, pdf_e)
+        self.lamp_inscatter_at(m, pl, o, d, a, t, pdf_p, pdf_e, pc)
     }
 
     /// One sample of a lamp's in-scattering at distance `t` on `[a, …]` of the ray, drawn
@@ -1149,6 +1187,7 @@ impl<'a> Integrator<'a> {
         t: f64,
         pdf_own: f64,
         pdf_other: f64,
+        pc: DVec3,
     ) -> DVec3 {
         if !(pdf_own > 0.0 && pdf_own.is_finite()) {
             return DVec3::ZERO;
@@ -1163,7 +1202,7 @@ impl<'a> Integrator<'a> {
         let r = r2.sqrt();
         let dir = wl / r;
         let trc = tr(m.sigma_t, t - a);
-        let pdf_d = self.ff_share * mean(m.sigma_t * trc);
+        let pdf_d = self.ff_share * odds_mean(pc, m.sigma_t * trc);
         let w = power3(pdf_own, pdf_d, pdf_other);
         if w <= 0.0 || self.scene.occluded(p, pl.pos) {
             return DVec3::ZERO;
@@ -1183,6 +1222,7 @@ impl<'a> Integrator<'a> {
         d: DVec3,
         a: f64,
         seg: &LampSeg,
+        pc: DVec3,
         rng: &mut Sampler,
     ) -> DVec3 {
         let (delta, dd, ta, tb) = (seg.delta, seg.dd, seg.ta, seg.tb);
@@ -1196,7 +1236,7 @@ impl<'a> Integrator<'a> {
         }
         let pdf_e = seg.equiangular_pdf(t);
         let pdf_p = seg.phase_pdf(m, t);
-        self.lamp_inscatter_at(m, pl, o, d, a, t, pdf_e, pdf_p)
+        self.lamp_inscatter_at(m, pl, o, d, a, t, pdf_e, pdf_p, pc)
     }
 }
 
