@@ -51,15 +51,20 @@ fn model(light: &str, daylight: &str) -> Model {
 /// The scene under `light`, with `render.daylight = daylight` and
 /// `render.surface_from_below = underside`.
 fn model_under(light: &str, daylight: &str, underside: &str) -> Model {
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join("scene.toml");
-    std::fs::write(&p, SCENE.replace("LIGHT", light)).unwrap();
-    let sets = vec![
+    let sets = [
         format!("render.daylight=\"{daylight}\""),
         format!("render.surface_from_below=\"{underside}\""),
         "render.bounces=200".to_string(),
     ];
-    poser::scene::load(&p, &sets).map(|l| l.model).unwrap()
+    load_text(&SCENE.replace("LIGHT", light), &sets)
+}
+
+/// The model of scene `text` with the `--set` overrides `sets`.
+fn load_text(text: &str, sets: &[String]) -> Model {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    poser::scene::load(&p, sets).map(|l| l.model).unwrap()
 }
 
 /// Mean radiance per channel and the image.
@@ -173,8 +178,6 @@ fn column_where_it_cannot_apply_is_a_located_error() {
 
 /// Coastal water (Jerlov 3C, σs ≈ 1 /m), the camera `height` above a flat seabed 5 m down.
 fn turbid(bounces: u32, daylight: &str, height: f64) -> Model {
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join("scene.toml");
     let text = SCENE
         .replace("LIGHT", SUN)
         .replace("jerlov = \"IB\"", "jerlov = \"3C\"")
@@ -184,16 +187,15 @@ fn turbid(bounces: u32, daylight: &str, height: f64) -> Model {
             "[0.0, 0.0, -10.0]",
             &format!("[0.0, 0.0, {}]", height - 5.0),
         );
-    std::fs::write(&p, text).unwrap();
     // The open surface, on which the share's tolerances below were measured; under the
     // reflecting surface the quick solve's share at 8 bounces reads 5.4 points of G high
     // (38.6 % against 33.1 % lost), not yet understood.
-    let sets = vec![
+    let sets = [
         format!("render.daylight=\"{daylight}\""),
         format!("render.bounces={bounces}"),
         "render.surface_from_below=\"open\"".to_string(),
     ];
-    poser::scene::load(&p, &sets).map(|l| l.model).unwrap()
+    load_text(&text, &sets)
 }
 
 /// What `render.bounces` cuts off, as the column measures it (W0239, `explain`:
@@ -351,14 +353,11 @@ type = "explicit"
 position = [0.0, 0.0, -16.5]
 "#;
     let load = |daylight: &str| {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("scene.toml");
-        std::fs::write(&p, TEXTURED).unwrap();
-        let sets = vec![
+        let sets = [
             format!("render.daylight=\"{daylight}\""),
             "render.bounces=64".to_string(),
         ];
-        poser::scene::load(&p, &sets).map(|l| l.model).unwrap()
+        load_text(TEXTURED, &sets)
     };
     let (mc, col) = render(&load("column"), 256);
     let (mt, traced) = render(&load("traced"), 1024);
