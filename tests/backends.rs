@@ -30,5 +30,6 @@ mod scenario_parity;
 mod slurm;
 mod surface_view;
 mod textured_mesh_backends;
+mod textured_site_colmap;
 mod textures_cross_backend;
 mod truth_pycolmap;

@@ -83,3 +83,55 @@ fn the_mesh_options_belong_to_the_mesh_bench() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--triangles 1"));
 }
+
+/// `--site DIR` writes the site's three files alone, at the sizes asked for, and the same bytes
+/// twice; it refuses the bench's own options.
+#[test]
+fn the_site_alone_is_written_with_site() {
+    let tmp = tempfile::tempdir().unwrap();
+    let write = |dir: &std::path::Path| {
+        let out = poser()
+            .args([
+                "bench",
+                "mesh",
+                "--triangles",
+                "500",
+                "--texture",
+                "64",
+                "--site",
+            ])
+            .arg(dir)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(String::from_utf8_lossy(&out.stdout).contains("500 triangles"));
+    };
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    write(&a);
+    write(&b);
+    let mut names: Vec<String> = std::fs::read_dir(&a)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["model.jpg", "model.mtl", "model.obj"]);
+    for n in &names {
+        assert!(
+            std::fs::read(a.join(n)).unwrap() == std::fs::read(b.join(n)).unwrap(),
+            "{n}"
+        );
+    }
+    let obj = std::fs::read_to_string(a.join("model.obj")).unwrap();
+    assert_eq!(obj.lines().filter(|l| l.starts_with("f ")).count(), 500);
+    let out = poser()
+        .args(["bench", "mesh", "--quick", "--site"])
+        .arg(tmp.path().join("c"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!tmp.path().join("c").exists());
+}

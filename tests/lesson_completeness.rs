@@ -204,7 +204,7 @@ fn bad_coral_keys_are_located_errors_with_help() {
     );
     let e = err("objects.1.radius=\"-1 m\"");
     assert!(e.contains("objects[1].radius"), "{e}");
-    // A completeness lesson without a coral says what to add.
+    // A completeness lesson without a coral or a mesh says what to add.
     let tmp = tempfile::tempdir().unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_poser"))
         .args([
@@ -221,7 +221,7 @@ fn bad_coral_keys_are_located_errors_with_help() {
         .unwrap();
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
-        !o.status.success() && e.contains("needs a coral object") && e.contains("help:"),
+        !o.status.success() && e.contains("needs a coral or a mesh object") && e.contains("help:"),
         "{e}"
     );
 }

@@ -1,4 +1,4 @@
-//! Every example scene under `scenarios/` loads with no errors and no warnings, and resolves
+//! Every example scene under `scenarios/` (and `scenarios/lessons/`, `scenarios/sites/`) loads with no errors and no warnings, and resolves
 //! to a model with cameras and poses. A scenario whose lesson is a warning declares it in a
 //! header line `# expect-warnings: W0300 …`: then exactly those warnings must appear.
 use std::path::Path;
@@ -6,7 +6,7 @@ use std::path::Path;
 #[test]
 fn every_example_scene_validates() {
     let mut n = 0;
-    let mut entries: Vec<_> = ["scenarios", "scenarios/lessons"]
+    let mut entries: Vec<_> = ["scenarios", "scenarios/lessons", "scenarios/sites"]
         .iter()
         .flat_map(|d| std::fs::read_dir(d).unwrap())
         .map(|e| e.unwrap().path())

@@ -38,6 +38,7 @@ mod import_mitsuba;
 mod import_mitsuba_files;
 mod import_mitsuba_glass;
 mod lesson_completeness;
+mod lesson_textured_site;
 mod mitsuba_compile;
 mod native_amphora;
 mod native_caustics;

@@ -45,6 +45,12 @@ pub struct Args {
     /// temporary folder, removed afterwards).
     #[arg(long)]
     pub keep: Option<PathBuf>,
+    /// `mesh` only: write the site alone (`model.obj`, `model.mtl`, `model.jpg`) into this
+    /// folder and stop, no bench; sizes from `--triangles` and `--texture`, by default the
+    /// shipped site's (40 000 triangles, 1024²): `poser bench mesh --site
+    /// scenarios/sites/assets/textured_bommie` rewrites it.
+    #[arg(long)]
+    pub site: Option<PathBuf>,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
@@ -77,13 +83,18 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--out applies to `poser bench parity`, `sensor`, `column` and `images` only".into(),
         ));
     }
-    if what != "mesh" && (args.triangles.is_some() || args.texture.is_some() || args.keep.is_some())
+    if what != "mesh"
+        && (args.triangles.is_some()
+            || args.texture.is_some()
+            || args.keep.is_some()
+            || args.site.is_some())
     {
         return Err(CliError::Usage(
-            "--triangles, --texture and --keep apply to `poser bench mesh` only".into(),
+            "--triangles, --texture, --keep and --site apply to `poser bench mesh` only".into(),
         ));
     }
     match what {
+        "mesh" if args.site.is_some() => site_only(args),
         "mesh" => {
             if cfg!(debug_assertions) {
                 eprintln!(
@@ -213,4 +224,27 @@ fn write_json(
     let text = serde_json::to_string_pretty(rows).map_err(|e| CliError::Failed(e.to_string()))?;
     crate::io::write_atomic(path, text.as_bytes())
         .map_err(|e| CliError::Failed(format!("{}: {e}", path.display())))
+}
+
+/// `poser bench mesh --site DIR`: the site's files alone, at the shipped sizes unless given.
+fn site_only(args: &Args) -> Result<(), CliError> {
+    use crate::geometry::bommie;
+    if args.keep.is_some() || args.json.is_some() || args.quick {
+        return Err(CliError::Usage(
+            "--site writes the site alone: without --keep, --json or --quick".into(),
+        ));
+    }
+    let dir = args.site.as_deref().unwrap_or(std::path::Path::new("."));
+    let triangles = args.triangles.unwrap_or(bommie::SHIPPED_TRIANGLES);
+    let texture = args.texture.unwrap_or(bommie::SHIPPED_TEXTURE);
+    let w = bommie::write(dir, triangles, texture).map_err(CliError::Failed)?;
+    println!(
+        "{}: model.obj ({triangles} triangles, {} vertices, {} bytes), model.mtl, model.jpg \
+         ({texture}², {} bytes)",
+        dir.display(),
+        w.vertices,
+        w.obj_bytes,
+        w.image_bytes
+    );
+    Ok(())
 }

@@ -7,10 +7,12 @@
 //! | [`mesh`] | triangle meshes of every scene shape (glTF, primitives, seabed, boulders), patterns, PLY |
 //! | [`meshfile`] | mesh files with their colours: OBJ + MTL, PLY with vertex colours, glTF with base-colour textures |
 //! | [`coral`] | procedural coral colonies (branching, massive) as closed meshes |
+//! | [`bommie`] | a generated textured site (a coral bommie on rubble) written as OBJ + MTL + JPEG, as a photogrammetry package exports it |
 //! | [`targets`] | calibration targets: 3D points, printed reflectance, textures |
 //! | [`bvh`] | [`Bvh`]: every triangle of a model in one BVH; [`Ray`], [`Hit`], [`SurfaceId`] |
 //! | [`seen`] | what the cameras see: a grid of exact camera rays classified by what they hit (texture, nothing below: views past the seabed) |
 
+pub mod bommie;
 pub mod bvh;
 pub mod coral;
 pub mod mesh;

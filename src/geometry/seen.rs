@@ -5,7 +5,7 @@
 //! light differently, docs/column.md).
 
 use crate::geometry::{Bvh, Ray, SurfaceId};
-use crate::model::Model;
+use crate::model::{Model, Shape};
 
 /// What the cameras see, as shares of a grid of sampled pixels over the network's images.
 #[derive(Debug, Clone, Copy)]
@@ -13,7 +13,8 @@ pub struct TextureSeen {
     /// Pixels whose ray hits any surface.
     pub surface: f64,
     /// Pixels whose ray hits a textured surface: an object with a pattern or colour variation,
-    /// or a printed target.
+    /// a mesh whose file gives its colours (image textures, material or vertex colours: a
+    /// photogrammetric model), or a printed target.
     pub textured: f64,
     /// Pixels whose ray heads downward and hits nothing: past the scene's seabed into water
     /// without a bottom.
@@ -66,7 +67,9 @@ pub fn texture_seen(model: &Model, scene: &Bvh) -> TextureSeen {
                     hit += 1;
                     let tex = match h.surface {
                         SurfaceId::Object(k) => model.objects.get(k as usize).is_some_and(|o| {
-                            o.material.pattern.is_some() || o.material.variation > 0.0
+                            o.material.pattern.is_some()
+                                || o.material.variation > 0.0
+                                || matches!(o.shape, Shape::Mesh { textured: true, .. })
                         }),
                         SurfaceId::Target(_) => true,
                         #[allow(unreachable_patterns)]

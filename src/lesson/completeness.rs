@@ -1,11 +1,12 @@
-//! Lesson kind `completeness`: how much of a coral colony's surface a camera network covers
-//! well enough to be modelled. Each case's corals (the scene's `shape = "coral"` objects) are
-//! sampled uniformly by area (seeded by `render.seed`); a sample counts as *covered* when at
-//! least [`MIN_IMAGES`] images see it within [`MAX_ANGLE_DEG`] of its normal.
+//! Lesson kind `completeness`: how much of a coral colony's surface, or of a photogrammetric
+//! model's, a camera network covers well enough to be modelled. Each case's subject (the
+//! scene's `shape = "coral"` and `shape = "mesh"` objects) is sampled uniformly by area (seeded
+//! by `render.seed`); a sample counts as *covered* when at least [`MIN_IMAGES`] images see it
+//! within [`MAX_ANGLE_DEG`] of its normal.
 //!
 //! | item | meaning |
 //! |---|---|
-//! | surface | the corals' triangles above their base plane (object-frame z > 0: the buried base and the part hidden in the substrate are not surface to photograph) |
+//! | surface | the corals' triangles above their base plane (object-frame z > 0: the buried base and the part hidden in the substrate are not surface to photograph), and every triangle of every mesh object (a model of a site is all surface to photograph) |
 //! | sample | a point uniform by area on that surface, with its triangle's outward normal |
 //! | seen by an image | its exact refractive projection (G channel, [`crate::optics::project::Projector`]) lands on the sensor; the water path from the point to where that pixel's ray leaves the port is not blocked by anything of the scene ([`crate::geometry::Bvh::occluded`], the ground truth's occlusion test); and that path is within [`MAX_ANGLE_DEG`] of the normal |
 //! | completeness | the share of samples (so of the area) seen by ≥ [`MIN_IMAGES`] images |
@@ -68,16 +69,23 @@ pub struct Sample {
     pub normal: DVec3,
 }
 
-/// The corals' surface above their base plane, in the world frame.
+/// The subject's surface in the world frame: the corals' above their base plane, and every
+/// mesh object's whole.
 pub fn coral_surface(model: &Model) -> Result<TriMesh, String> {
     let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
     let mut out = TriMesh::default();
     for o in &model.objects {
-        if !matches!(o.shape, Shape::Coral { .. }) {
-            continue;
-        }
+        let whole = match o.shape {
+            Shape::Coral { .. } => false,
+            Shape::Mesh { .. } => true,
+            _ => continue,
+        };
         let local = shape_mesh(&o.shape, base).map_err(|e| format!("object `{}`: {e}", o.name))?;
         let world = local.transformed(&o.pose, o.scale);
+        if whole {
+            out.append(&world);
+            continue;
+        }
         let mut part = TriMesh {
             positions: world.positions,
             triangles: Vec::new(),
@@ -96,8 +104,8 @@ pub fn coral_surface(model: &Model) -> Result<TriMesh, String> {
     }
     if out.triangles.is_empty() {
         return Err(
-            "a completeness lesson needs a coral object\n  help: add `[[objects]]` with `shape = \
-             \"coral\"` (see docs/format.md)"
+            "a completeness lesson needs a coral or a mesh object\n  help: add `[[objects]]` with \
+             `shape = \"coral\"`, or `shape = \"mesh\"` and the model's `path` (see docs/format.md)"
                 .into(),
         );
     }
@@ -297,8 +305,8 @@ pub fn section(rows: &[Row]) -> String {
     let mut s = String::new();
     let _ = write!(
         s,
-        "<h2>The numbers</h2>\n<p>The coral surface above the substrate is sampled uniformly by \
-         area. A point counts as seen by an image when its exact projection through the port \
+        "<h2>The numbers</h2>\n<p>The subject's surface (a coral above the substrate, or a whole \
+         model) is sampled uniformly by area. A point counts as seen by an image when its exact projection through the port \
          lands on the sensor, nothing blocks its line of sight to the port, and that line is \
          within {MAX_ANGLE_DEG:.0}° of the surface normal. <b>Completeness</b> is the share of \
          the surface seen by at least {MIN_IMAGES} images.</p>\n<table><tr><th>case</th>\
