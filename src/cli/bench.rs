@@ -47,7 +47,7 @@ pub struct Args {
     pub keep: Option<PathBuf>,
     /// `mesh` only: write the site alone (`model.obj`, `model.mtl`, `model.jpg`) into this
     /// folder and stop, no bench; sizes from `--triangles` and `--texture`, by default the
-    /// shipped site's (40 000 triangles, 1024²): `poser bench mesh --site
+    /// shipped site's (32 000 triangles, 2048²): `poser bench mesh --site
     /// scenarios/sites/assets/textured_bommie` rewrites it.
     #[arg(long)]
     pub site: Option<PathBuf>,
