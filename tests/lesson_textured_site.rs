@@ -10,19 +10,11 @@
 //! (the model's edges and the bommie's flanks), and a dome of rings around the bommie covers
 //! less of the whole model than the lawnmower over it.
 
+use crate::support::lesson::row;
 use std::path::Path;
 use std::process::Command;
 
 const SCENE: &str = "scenarios/sites/textured_bommie.toml";
-
-fn row<'a>(json: &'a serde_json::Value, label: &str) -> &'a serde_json::Value {
-    json["results"]["rows"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|r| r["label"] == label)
-        .unwrap_or_else(|| panic!("no row `{label}`"))
-}
 
 #[test]
 fn the_lesson_reads_the_shipped_model_with_its_texture() {
