@@ -305,7 +305,7 @@ pub fn is_safe_stem(s: &str) -> bool {
 }
 
 /// The one difference from poser's housing policy that Mitsuba cannot avoid
-/// (docs/render-conventions.md, "The housing casts no shadow"): its port glass and housing
+/// (docs/render-conventions.md, §5 "The housing is a measuring device"): its port glass and housing
 /// walls are ordinary surfaces, so they shadow the sun. `Some(one line)` when the scene has a
 /// sun and a rendered port housing.
 pub fn housing_shadow_warning(model: &Model) -> Option<String> {

@@ -138,11 +138,6 @@ fn pick_channel(pc: DVec3, u: f64) -> usize {
     }
 }
 
-/// `Σ_c pc_c v_c`: a density or probability mixed over the channels with odds `pc`.
-fn odds_mean(pc: DVec3, v: DVec3) -> f64 {
-    pc.dot(v)
-}
-
 /// How a path's segment through the water ends ([`Integrator::medium_segment`]).
 enum SegmentEnd {
     /// The path ends.
@@ -475,6 +470,23 @@ impl<'a> Integrator<'a> {
         }
     }
 
+    /// What the ray `o + t d` meets first: the scene's hit, the distance to what ends it (∞:
+    /// nothing), and the area light that ends it before any surface, if one does.
+    fn first_hit(&self, o: DVec3, d: DVec3) -> (Option<Hit>, f64, Option<usize>) {
+        let hit = self
+            .scene
+            .intersect(&Ray { origin: o, dir: d }, f64::INFINITY);
+        let mut t_end = hit.as_ref().map_or(f64::INFINITY, |h| h.t);
+        let mut area_hit = None;
+        for (i, a) in self.lights.areas.iter().enumerate() {
+            if let Some(t) = a.intersect(o, d, t_end) {
+                t_end = t;
+                area_hit = Some(i);
+            }
+        }
+        (hit, t_end, area_hit)
+    }
+
     /// [`Integrator::li`] of a camera ray with its pixel's differentials (`spread`): the
     /// textures at its first hit are averaged over the pixel's footprint
     /// ([`super::footprint`]).
@@ -493,17 +505,7 @@ impl<'a> Integrator<'a> {
         // The path still carries daylight; with a column, a medium vertex ends that.
         let mut day = true;
         loop {
-            let hit = self
-                .scene
-                .intersect(&Ray { origin: o, dir: d }, f64::INFINITY);
-            let mut t_end = hit.as_ref().map_or(f64::INFINITY, |h| h.t);
-            let mut area_hit = None;
-            for (i, a) in self.lights.areas.iter().enumerate() {
-                if let Some(t) = a.intersect(o, d, t_end) {
-                    t_end = t;
-                    area_hit = Some(i);
-                }
-            }
+            let (hit, t_end, area_hit) = self.first_hit(o, d);
             let can_scatter = depth < self.max_bounces;
             rng.segment(depth);
             // The column's light scattered along the camera ray. At the surfaces its light
@@ -687,7 +689,7 @@ impl<'a> Integrator<'a> {
                         *beta * tr(m.sigma_t, b - a) * self.surface_direct(h, d, albedo, day, rng);
                 }
                 let trv = tr(m.sigma_t, t - a);
-                let pdf_d = share * odds_mean(pc, m.sigma_t * trv);
+                let pdf_d = share * pc.dot(m.sigma_t * trv);
                 *beta *= m.sigma_s * trv / pdf_d;
                 let p = o + t * d;
                 let phase = &m.phase;
@@ -723,9 +725,9 @@ impl<'a> Integrator<'a> {
             }
             let trv = tr(m.sigma_t, b - a);
             let p_pass = if share >= 1.0 {
-                odds_mean(pc, trv)
+                pc.dot(trv)
             } else {
-                (1.0 - share) + share * odds_mean(pc, trv)
+                (1.0 - share) + share * pc.dot(trv)
             };
             if p_pass <= 0.0 {
                 return SegmentEnd::Ends;
@@ -900,16 +902,8 @@ impl<'a> Integrator<'a> {
         rng: &mut Sampler,
     ) -> DVec3 {
         let z = -x.z;
-        let hit = self
-            .scene
-            .intersect(&Ray { origin: x, dir: w }, f64::INFINITY);
-        let area = self
-            .lights
-            .areas
-            .iter()
-            .filter_map(|a| a.intersect(x, w, hit.as_ref().map_or(f64::INFINITY, |h| h.t)))
-            .fold(f64::INFINITY, f64::min);
-        if let Some(h) = hit.filter(|h| h.t < area) {
+        let (hit, t_end, area_hit) = self.first_hit(x, w);
+        if let Some(h) = hit.filter(|_| area_hit.is_none()) {
             let albedo = self.albedo(&h);
             let lit = if albedo == DVec3::ZERO {
                 DVec3::ZERO
@@ -924,10 +918,10 @@ impl<'a> Integrator<'a> {
             };
             return water + self.tr_seg(x, w, h.t) * lit;
         }
-        if area.is_finite() {
+        if area_hit.is_some() {
             // An area light is no daylight: the water up to it.
             return self
-                .column_between(col, x, w, area, |z, v| col.radiance(z, v, true))
+                .column_between(col, x, w, t_end, |z, v| col.radiance(z, v, true))
                 .max(DVec3::ZERO);
         }
         let lw = col.radiance(z, w, true);
@@ -1126,7 +1120,7 @@ impl<'a> Integrator<'a> {
             return DVec3::ZERO;
         }
         let trc = tr(m.sigma_t, t - a);
-        let pdf_d = odds_mean(pc, m.sigma_t * trc);
+        let pdf_d = pc.dot(m.sigma_t * trc);
         // With a column no medium vertex gathers sunlight: this sampler is the only one.
         let w = if self.column.is_some() {
             1.0
@@ -1202,7 +1196,7 @@ impl<'a> Integrator<'a> {
         let r = r2.sqrt();
         let dir = wl / r;
         let trc = tr(m.sigma_t, t - a);
-        let pdf_d = self.ff_share * odds_mean(pc, m.sigma_t * trc);
+        let pdf_d = self.ff_share * pc.dot(m.sigma_t * trc);
         let w = power3(pdf_own, pdf_d, pdf_other);
         if w <= 0.0 || self.scene.occluded(p, pl.pos) {
             return DVec3::ZERO;
