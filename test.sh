@@ -52,15 +52,29 @@ rm -rf target/wheels
   -m crates/poser-py/Cargo.toml -o target/wheels -i .venv/bin/python
 .venv/bin/pip install --quiet --force-reinstall --no-deps target/wheels/poser-*.whl
 time cargo test --locked --test backends --no-run
-step "full tier: Python tests"
+step "full tier: Python tests (in the background) and cargo test --test backends"
 .venv/bin/ruff check backends crates/poser-py
+# The Python tests (one process, mostly one core) run beside the backends tests; their output
+# is shown, and their result checked, when those finish.
+pytest_log="$(mktemp)"
 OPENCV_IO_ENABLE_OPENEXR=1 POSER_BIN="$PWD/target/debug/poser" \
-  .venv/bin/python -m pytest -q -p no:cacheprovider backends crates/poser-py/tests
+  .venv/bin/python -m pytest -q -p no:cacheprovider backends crates/poser-py/tests \
+  > "$pytest_log" 2>&1 &
+pytest_pid=$!
 # Four tests at a time on two cores: most of these wait on single-threaded work (Python and
 # Blender start-up, scene building, COLMAP's matching), so two at a time left a core idle
 # (measured: 1.07 cores busy on average over the run).
-step "full tier: cargo test --test backends"
-time cargo test --locked --test backends -- --test-threads 4
+backends_status=0
+time cargo test --locked --test backends -- --test-threads 4 || backends_status=$?
+step "full tier: the Python tests' output"
+pytest_status=0
+wait "$pytest_pid" || pytest_status=$?
+cat "$pytest_log"
+rm -f "$pytest_log"
+if [ "$pytest_status" -ne 0 ] || [ "$backends_status" -ne 0 ]; then
+  echo "error: the full tier failed (pytest exit $pytest_status, cargo test --test backends exit $backends_status)" >&2
+  exit 1
+fi
 
 if [ -n "${POSER_FUZZ_SECONDS:-}" ]; then
   step "fuzzing each target for $POSER_FUZZ_SECONDS s"

@@ -536,19 +536,20 @@ fn images_mode_processes_the_shipped_archaeology_survey() {
     // 36 images of 600 × 400 px, through COLMAP's whole pipeline. `poser bench images` reports
     // the same on every shipped survey (docs/bench/images.md).
     //
-    // Rendered at 2 spp and 4 bounces instead of the scene's 16 spp and 9 bounces, to keep the
-    // test short on 2 cores (the render is half of its CPU time): COLMAP's result does not
+    // Rendered at 1 spp and 4 bounces instead of the scene's 16 spp and 9 bounces, to keep the
+    // test short on 2 cores (the render is most of its CPU time): COLMAP's result does not
     // hinge on the 7 % of green light the lower limit cuts off, nor on the noise (measured with
     // the Sobol sampler: 36 of 36 registered, 0.11 px, focal −0.06 %, focal sensitivity 31 %
-    // at 8 spp; 36, 0.13 px, −0.01 % and 24 % at 4 spp; 36, 0.16 px, +0.05 % and 16 % at
-    // 2 spp, 6 min 26 s of CPU against about 9 at 4 spp).
+    // at 8 spp; 36, 0.13 px, −0.01 % and 24 % at 4 spp; after the column's gather was traced
+    // through the geometry (1.5× the CPU per sample), 36, 0.17 px, +0.07 % and 520 CPU-s at
+    // 2 spp; 36, 0.21 px, +0.14 %, focal sensitivity 10 % and 280 CPU-s at 1 spp).
     let report = images_report(
         "scenarios/lessons/archaeology.toml",
         &[
             "--scale",
             "0.1",
             "--samples",
-            "2",
+            "1",
             "--set",
             "render.bounces=4",
             "--set",

@@ -1,6 +1,6 @@
 //! COLMAP on the shipped textured model (issue 36's done-when row): the quick form of
 //! `poser bench images` on `scenarios/sites/textured_bommie.toml` (the model's OBJ + MTL +
-//! JPEG rendered by the native backend, 28 nadir images of 400 × 300 px over the bommie's
+//! JPEG rendered by the native backend, 28 nadir images of 320 × 240 px over the bommie's
 //! 1.6 × 1.6 m centre, through the default camera, then the real pycolmap's SIFT, matching,
 //! mapping and a self-calibrating bundle adjustment; `src/bench/images.rs`). At least 95 % of
 //! the images must be registered with a mean reprojection error under half a pixel. (A nadir
