@@ -222,6 +222,9 @@ pub struct Site {
     pub surface: SeaSurface,
     /// Altitude above sea level of the water surface, m (for dive planning at altitude).
     pub altitude: f64,
+    /// Seed of the site's generated content: the waves, and the default seed of generated
+    /// objects (+ their index). Never `render.seed`: a render's noise does not move the site.
+    pub seed: u64,
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
@@ -950,7 +953,7 @@ impl Model {
                     wavelength,
                     wind_speed,
                     WIND_DIRECTION,
-                    self.render.seed,
+                    self.site.seed,
                 ),
                 n_water,
             }),

@@ -225,3 +225,74 @@ fn readme_main_job_renders_previews_with_truth() {
     ]);
     assert_eq!(bad.status.code(), Some(2), "--scale 0 is a usage error");
 }
+
+/// `render.seed` draws the noise; `site.seed` the site. A new render seed must not move a
+/// generated seabed or the waves (it once did: objects without a `seed` took render seed +
+/// index, so two renders meant to differ only by their noise showed two different seabeds).
+#[test]
+fn the_render_seed_draws_noise_not_the_site() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    // Two generated objects without a `seed` of their own, and one with.
+    std::fs::write(
+        &scene,
+        r#"
+[site]
+depth = "6 m"
+[water]
+jerlov = "II"
+[camera]
+width = 64
+height = 48
+pixel_pitch = "5 µm"
+focal_length = "8 mm"
+[[objects]]
+shape = "seabed"
+width = "4 m"
+length = "4 m"
+[[objects]]
+shape = "boulders"
+width = "4 m"
+length = "4 m"
+[[objects]]
+shape = "coral"
+seed = 40
+position = [0.0, 0.0, -6.0]
+[network]
+type = "lawnmower"
+width = "2 m"
+length = "2 m"
+altitude = "1.5 m"
+"#,
+    )
+    .unwrap();
+    let seeds = |sets: &[&str]| -> Vec<u64> {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let m = poser::scene::load(&scene, &sets)
+            .unwrap_or_else(|f| panic!("{}", f.render()))
+            .model;
+        m.objects
+            .iter()
+            .map(|o| match o.shape {
+                poser::model::Shape::Seabed { seed, .. }
+                | poser::model::Shape::Boulders { seed, .. }
+                | poser::model::Shape::Coral { seed, .. } => seed,
+                ref s => panic!("not generated: {s:?}"),
+            })
+            .collect()
+    };
+    assert_eq!(seeds(&[]), [0, 1, 40]);
+    assert_eq!(seeds(&["render.seed=12345"]), [0, 1, 40]);
+    assert_eq!(seeds(&["site.seed=7"]), [7, 8, 40]);
+    // Waves: the wavy lesson's sea follows `site.seed` alone.
+    let sea = |sets: &[&str]| {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let m = poser::scene::load(Path::new("scenarios/lessons/uav_through_waves.toml"), &sets)
+            .unwrap_or_else(|f| panic!("{}", f.render()))
+            .model;
+        format!("{:?}", m.sea_interface(1).unwrap().field)
+    };
+    let waves = sea(&[]);
+    assert_eq!(sea(&["render.seed=99"]), waves);
+    assert_ne!(sea(&["site.seed=99"]), waves);
+}

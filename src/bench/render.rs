@@ -133,6 +133,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
             depth: 20.0,
             surface: SeaSurface::None,
             altitude: 0.0,
+            seed: 0,
         },
         sun: None,
         cameras: vec![Camera {

@@ -187,6 +187,11 @@ pub struct Site {
     /// Altitude of the water surface above sea level (dive planning). **Unit:** m.
     /// **Default:** 0.
     pub altitude: Option<Length>,
+    /// Seed of what the site generates: the waves, and the relief of every seabed, boulders
+    /// and coral object without a `seed` of its own (this seed + the object's index). Apart
+    /// from `render.seed`, so that a new render seed gives new noise on the same site.
+    /// **Default:** 0.
+    pub seed: Option<u64>,
 }
 
 /// Sea surface model.
@@ -560,7 +565,8 @@ pub struct Object {
     /// (a lumpy, grooved dome, brain-like). The colony stands on the object's xy plane, its
     /// base buried below it. **Default:** `"branching"`.
     pub growth: Option<CoralGrowthKind>,
-    /// Seabed, boulders, coral: random seed. **Default:** render seed + object index.
+    /// Seabed, boulders, coral: random seed of the shape. **Default:** `site.seed` + the
+    /// object's index.
     pub seed: Option<u64>,
     /// Position of the object's origin (world). **Unit:** m. **Default:** `[0, 0, 0]`;
     /// seabed and boulders: `[0, 0, -site.depth]`.
@@ -926,7 +932,8 @@ pub struct CylinderTable {
 pub struct Render {
     /// Samples per pixel (≥ 1). **Default:** 64.
     pub samples: Option<u32>,
-    /// Seed of every random choice of every backend. **Default:** 0.
+    /// Seed of the renderers' random choices (samples, the column's photons, sensor noise); it
+    /// changes the noise, never the site (that is `site.seed`). **Default:** 0.
     pub seed: Option<u64>,
     /// Most scattering vertices (surface or medium) on a path. **Default:** 8, raised to what
     /// keeps 99 % of the daylight the cameras see where the scene's water is a column whose

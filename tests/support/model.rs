@@ -161,6 +161,7 @@ pub fn model(name: &str, cam: Camera, water: Option<Water>, world_from_rig: Pose
             depth: 10.0,
             surface: SeaSurface::None,
             altitude: 0.0,
+            seed: 0,
         },
         sun: None,
         cameras: vec![cam],

@@ -8,7 +8,7 @@
 //! | `wavelength` (`site.wave_length`) | m | 10 | peak wavelength `λp`: the peak of the frequency spectrum is at `ωp = √(g·2π/λp)` (deep water) |
 //! | `wind_speed` (`site.wind_speed`) | m/s | 5 | sets the directional spread (Mitsuyasu); the spectrum's *shape* is Pierson–Moskowitz, its level is set by `height` |
 //! | `wind_direction` | rad | 0 ([`WIND_DIRECTION`]) | direction the waves travel to, counter-clockwise from +x (east) |
-//! | `seed` | – | `render.seed` | phases and directions; same seed → same surface |
+//! | `seed` | – | `site.seed` | phases and directions; same seed → same surface |
 //!
 //! Model (a "linear random sea", frozen in time):
 //!

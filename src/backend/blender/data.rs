@@ -351,7 +351,7 @@ fn wave_field_json(model: &Model) -> Value {
                 wavelength,
                 wind_speed,
                 crate::optics::waves::WIND_DIRECTION,
-                model.render.seed,
+                model.site.seed,
             );
             let comps: Vec<[f64; 4]> = f
                 .components

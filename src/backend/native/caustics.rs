@@ -4,7 +4,7 @@
 //!
 //! | item | value | meaning |
 //! |---|---|---|
-//! | surface | [`crate::optics::waves::WaveField`] | periodic (period `P = 4·λp`), seeded with `render.seed` |
+//! | surface | [`crate::optics::waves::WaveField`] | periodic (period `P = 4·λp`), seeded with `site.seed` |
 //! | [`CELLS`] | 512 | histogram cells per period side (cell = `P/512`, 7.8 cm for λp = 10 m) |
 //! | [`RAYS_PER_CELL_SIDE`] | 2 | sun rays per cell side (4 per cell, 1 048 576 rays per volume) |
 //! | [`PLANES`] | 32 | horizontal planes from just below the lowest trough to below the deepest geometry |
@@ -98,7 +98,7 @@ impl CausticVolume {
             wavelength,
             wind_speed,
             WIND_DIRECTION,
-            model.render.seed,
+            model.site.seed,
         );
         Some(CausticVolume::build(
             &field,

@@ -46,11 +46,13 @@ pub(super) fn site(cx: &mut Cx, t: &mut Tab, water: bool) -> Site {
         _ => SeaSurface::Flat,
     };
     let altitude = s.f64(cx, "altitude", Dim::Length, 0.0);
+    let seed = s.opt_u64(cx, "seed").unwrap_or(0);
     s.finish(cx);
     Site {
         depth: depth.max(0.0),
         surface,
         altitude,
+        seed,
     }
 }
 

@@ -108,13 +108,7 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
     let sensor = super::sensor::sensor(cx, t.get("sensor"), f_number, top);
     let lights = lights::lights(cx, &mut t, &mut spans);
     let objects = objects::objects(
-        cx,
-        &mut t,
-        &site,
-        sources,
-        scene_path,
-        &mut spans,
-        render.seed,
+        cx, &mut t, &site, sources, scene_path, &mut spans, site.seed,
     );
     let targets = targets::targets(cx, &mut t, &mut spans, &objects, &site, sources, scene_path);
     let diver = diver::diver(cx, t.get("diver"), top);

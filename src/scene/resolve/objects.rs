@@ -14,7 +14,7 @@ use crate::units::Dim;
 use glam::DVec3;
 use std::path::Path;
 
-/// Every `[[objects]]` entry; generated objects without a `seed` get `seed0` + their index.
+/// Every `[[objects]]` entry; generated objects without a `seed` get `seed0` (`site.seed`) + their index.
 pub(super) fn objects(
     cx: &mut Cx,
     t: &mut Tab,
