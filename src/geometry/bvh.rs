@@ -1,5 +1,5 @@
 //! The geometry service: every triangle of the model's objects and targets in one
-//! bounding-volume hierarchy (binned SAH, f64), with closest-hit and shadow (occlusion) queries.
+//! bounding-volume hierarchy (binned SAH, f64, built on every core: the same tree at any thread count), with closest-hit and shadow (occlusion) queries.
 //! Used by the ground truth (occlusion), the survey planner (coverage) and the native renderer.
 //!
 //! | item | meaning |
@@ -284,140 +284,42 @@ impl Bvh {
     }
 
     fn build_bvh(&mut self) {
+        use rayon::prelude::*;
         let n = self.tris.len();
         if n == 0 {
             return;
         }
         let bounds: Vec<(DVec3, DVec3)> = self
             .tris
-            .iter()
+            .par_iter()
             .map(|t| {
                 let (b, c) = (t.v0 + t.e1, t.v0 + t.e2);
                 (t.v0.min(b).min(c), t.v0.max(b).max(c))
             })
             .collect();
-        let cent: Vec<DVec3> = bounds.iter().map(|(l, h)| 0.5 * (*l + *h)).collect();
+        let cent: Vec<DVec3> = bounds.par_iter().map(|(l, h)| 0.5 * (*l + *h)).collect();
         let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * n / LEAF_SIZE + 1);
-        nodes.push(Node {
-            lo: DVec3::ZERO,
-            hi: DVec3::ZERO,
-            start: 0,
-            count: 0,
-        });
-        // Explicit stack: (node index, range start, range end).
-        let mut stack = vec![(0usize, 0usize, n)];
-        while let Some((ni, s, e)) = stack.pop() {
-            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-            let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-            for &i in &order[s..e] {
-                let (l, h) = bounds[i as usize];
-                lo = lo.min(l);
-                hi = hi.max(h);
-                clo = clo.min(cent[i as usize]);
-                chi = chi.max(cent[i as usize]);
-            }
-            nodes[ni].lo = lo;
-            nodes[ni].hi = hi;
-            let count = e - s;
-            let make_leaf = |nodes: &mut Vec<Node>| {
-                nodes[ni].start = s as u32;
-                nodes[ni].count = count as u32;
-            };
-            if count <= LEAF_SIZE {
-                make_leaf(&mut nodes);
-                continue;
-            }
-            // Binned SAH over the widest centroid axis.
-            let ext = chi - clo;
-            let axis = if ext.x >= ext.y && ext.x >= ext.z {
-                0
-            } else if ext.y >= ext.z {
-                1
-            } else {
-                2
-            };
-            if ext[axis] <= 0.0 {
-                // All centroids coincide: split in the middle of the list.
-                let mid = s + count / 2;
-                split(&mut nodes, &mut stack, ni, (lo, hi), (s, mid, e));
-                continue;
-            }
-            let bin_of = |c: DVec3| {
-                (((c[axis] - clo[axis]) / ext[axis] * BINS as f64) as usize).min(BINS - 1)
-            };
-            let mut bcount = [0usize; BINS];
-            let mut blo = [DVec3::INFINITY; BINS];
-            let mut bhi = [DVec3::NEG_INFINITY; BINS];
-            for &i in &order[s..e] {
-                let b = bin_of(cent[i as usize]);
-                bcount[b] += 1;
-                blo[b] = blo[b].min(bounds[i as usize].0);
-                bhi[b] = bhi[b].max(bounds[i as usize].1);
-            }
-            let area = |l: DVec3, h: DVec3| {
-                let d = (h - l).max(DVec3::ZERO);
-                d.x * d.y + d.y * d.z + d.z * d.x
-            };
-            // Prefix/suffix sweeps.
-            let mut left_area = [0.0; BINS];
-            let mut left_n = [0usize; BINS];
-            let (mut l, mut h, mut c) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0);
-            for b in 0..BINS {
-                l = l.min(blo[b]);
-                h = h.max(bhi[b]);
-                c += bcount[b];
-                left_area[b] = if c > 0 { area(l, h) } else { 0.0 };
-                left_n[b] = c;
-            }
-            let (mut best, mut best_cost) = (usize::MAX, f64::INFINITY);
-            let (mut l, mut h, mut c) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0);
-            for b in (1..BINS).rev() {
-                l = l.min(blo[b]);
-                h = h.max(bhi[b]);
-                c += bcount[b];
-                let cost = left_area[b - 1] * left_n[b - 1] as f64 + area(l, h) * c as f64;
-                if left_n[b - 1] > 0 && c > 0 && cost < best_cost {
-                    best_cost = cost;
-                    best = b;
-                }
-            }
-            let leaf_cost = area(lo, hi) * count as f64;
-            if best != usize::MAX && best_cost >= leaf_cost && count <= 4 * LEAF_SIZE {
-                make_leaf(&mut nodes);
-                continue;
-            }
-            if best == usize::MAX {
-                // Cannot separate by bins: median split along the axis.
-                order[s..e].sort_by(|&a, &b| {
-                    cent[a as usize][axis]
-                        .total_cmp(&cent[b as usize][axis])
-                        .then(a.cmp(&b))
-                });
-                let mid = s + count / 2;
-                split(&mut nodes, &mut stack, ni, (lo, hi), (s, mid, e));
-                continue;
-            }
-            // Partition (stable, deterministic).
-            let (left, right): (Vec<u32>, Vec<u32>) = order[s..e]
-                .iter()
-                .partition(|&&i| bin_of(cent[i as usize]) < best);
-            let mid = s + left.len();
-            order[s..mid].copy_from_slice(&left);
-            order[mid..e].copy_from_slice(&right);
-            split(&mut nodes, &mut stack, ni, (lo, hi), (s, mid, e));
+        let mut scratch = vec![0u32; n];
+        let nodes = Builder {
+            bounds: &bounds,
+            cent: &cent,
         }
+        .subtree(&mut order, &mut scratch, 0, 0);
         // The per-triangle boxes are done with: free them before the triangles are copied.
-        drop((bounds, cent));
-        self.tris = order.iter().map(|&i| self.tris[i as usize]).collect();
-        self.surface = order.iter().map(|&i| self.surface[i as usize]).collect();
+        drop((bounds, cent, scratch));
+        let tris = &self.tris;
+        self.tris = order.par_iter().map(|&i| tris[i as usize]).collect();
+        let surface = &self.surface;
+        self.surface = order.par_iter().map(|&i| surface[i as usize]).collect();
         if !self.uv.is_empty() {
-            self.uv = order.iter().map(|&i| self.uv[i as usize]).collect();
+            let uv = &self.uv;
+            self.uv = order.par_iter().map(|&i| uv[i as usize]).collect();
         }
         if !self.source.is_empty() {
-            self.source = order.iter().map(|&i| self.source[i as usize]).collect();
+            let source = &self.source;
+            self.source = order.par_iter().map(|&i| source[i as usize]).collect();
         }
-        self.nodes = nodes.iter().map(FNode::from_node).collect();
+        self.nodes = nodes.par_iter().map(FNode::from_node).collect();
     }
 
     #[inline]
@@ -582,26 +484,214 @@ impl Bvh {
 
 /// Turn node `ni` (bounds `lo`, `hi`) into an inner node whose two new children cover
 /// `order[s..mid]` and `order[mid..e]`, and queue them (left first).
-fn split(
-    nodes: &mut Vec<Node>,
-    stack: &mut Vec<(usize, usize, usize)>,
-    ni: usize,
-    (lo, hi): (DVec3, DVec3),
-    (s, mid, e): (usize, usize, usize),
-) {
-    let l = nodes.len();
-    for _ in 0..2 {
+/// Ranges of at least this many triangles build their two halves in parallel (above that, down
+/// to [`PARALLEL_DEPTH`] levels).
+const PARALLEL_MIN: usize = 1 << 16;
+/// Deepest level split in parallel: 2^6 subtrees keep two cores busy whatever the SAH's
+/// imbalance; each level copies the nodes below it once.
+const PARALLEL_DEPTH: u32 = 6;
+
+/// What the binned SAH decides for one node's range (the range is reordered in place).
+enum Decision {
+    Leaf,
+    /// Split after this many triangles of the range.
+    Split(usize),
+}
+
+/// The BVH builder over the per-triangle boxes and centroids.
+///
+/// Deterministic, and the same tree at any thread count: a subtree is the nodes the serial
+/// depth-first build allocates for it (its root at index 0, then each split's two children
+/// appended, left subtree first), so two halves built in parallel are joined by shifting
+/// their child indices.
+struct Builder<'a> {
+    bounds: &'a [(DVec3, DVec3)],
+    cent: &'a [DVec3],
+}
+
+impl Builder<'_> {
+    /// The nodes of the subtree over `order` (the triangles `base..base + order.len()` of the
+    /// final order), its root first.
+    fn subtree(
+        &self,
+        order: &mut [u32],
+        scratch: &mut [u32],
+        base: usize,
+        depth: u32,
+    ) -> Vec<Node> {
+        if order.len() < PARALLEL_MIN || depth >= PARALLEL_DEPTH {
+            return self.serial(order, scratch, base);
+        }
+        let (lo, hi, decision) = self.decide(order, scratch);
+        let mid = match decision {
+            Decision::Leaf => return vec![leaf(lo, hi, base, order.len())],
+            Decision::Split(mid) => mid,
+        };
+        let (ol, or) = order.split_at_mut(mid);
+        let (sl, sr) = scratch.split_at_mut(mid);
+        let (left, right) = rayon::join(
+            || self.subtree(ol, sl, base, depth + 1),
+            || self.subtree(or, sr, base + mid, depth + 1),
+        );
+        // Layout: the root, its children at 1 and 2, the left child's descendants from 3, then
+        // the right child's.
+        let nl = left.len() as u32;
+        let shift = |by: u32| {
+            move |n: &Node| Node {
+                start: if n.count == 0 { n.start + by } else { n.start },
+                ..*n
+            }
+        };
+        let (sl, sr) = (shift(2), shift(nl + 1));
+        let mut nodes = Vec::with_capacity(1 + left.len() + right.len());
         nodes.push(Node {
             lo,
             hi,
-            start: 0,
+            start: 1,
             count: 0,
         });
+        nodes.push(sl(&left[0]));
+        nodes.push(sr(&right[0]));
+        nodes.extend(left[1..].iter().map(sl));
+        drop(left);
+        nodes.extend(right[1..].iter().map(sr));
+        nodes
     }
-    nodes[ni].start = l as u32;
-    nodes[ni].count = 0;
-    stack.push((l + 1, mid, e));
-    stack.push((l, s, mid));
+
+    /// [`Builder::subtree`] on one thread: depth first, left child first.
+    fn serial(&self, order: &mut [u32], scratch: &mut [u32], base: usize) -> Vec<Node> {
+        let mut nodes = Vec::with_capacity(2 * order.len() / LEAF_SIZE + 1);
+        nodes.push(leaf(DVec3::ZERO, DVec3::ZERO, 0, 0));
+        // Explicit stack: (node index, range start, range end) within `order`.
+        let mut stack = vec![(0usize, 0usize, order.len())];
+        while let Some((ni, s, e)) = stack.pop() {
+            let (lo, hi, decision) = self.decide(&mut order[s..e], &mut scratch[s..e]);
+            match decision {
+                Decision::Leaf => nodes[ni] = leaf(lo, hi, base + s, e - s),
+                Decision::Split(mid) => {
+                    let l = nodes.len();
+                    nodes.push(leaf(lo, hi, 0, 0));
+                    nodes.push(leaf(lo, hi, 0, 0));
+                    nodes[ni] = Node {
+                        lo,
+                        hi,
+                        start: l as u32,
+                        count: 0,
+                    };
+                    stack.push((l + 1, s + mid, e));
+                    stack.push((l, s, s + mid));
+                }
+            }
+        }
+        nodes
+    }
+
+    /// The bounds of `order`'s triangles and the binned SAH's decision; a split reorders
+    /// `order` (stable: each side keeps its order), with `scratch` as room.
+    fn decide(&self, order: &mut [u32], scratch: &mut [u32]) -> (DVec3, DVec3, Decision) {
+        let (bounds, cent) = (self.bounds, self.cent);
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let (mut clo, mut chi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for &i in order.iter() {
+            let (l, h) = bounds[i as usize];
+            lo = lo.min(l);
+            hi = hi.max(h);
+            clo = clo.min(cent[i as usize]);
+            chi = chi.max(cent[i as usize]);
+        }
+        let count = order.len();
+        if count <= LEAF_SIZE {
+            return (lo, hi, Decision::Leaf);
+        }
+        // Binned SAH over the widest centroid axis.
+        let ext = chi - clo;
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        if ext[axis] <= 0.0 {
+            // All centroids coincide: split in the middle of the list.
+            return (lo, hi, Decision::Split(count / 2));
+        }
+        let bin_of =
+            |c: DVec3| (((c[axis] - clo[axis]) / ext[axis] * BINS as f64) as usize).min(BINS - 1);
+        let mut bcount = [0usize; BINS];
+        let mut blo = [DVec3::INFINITY; BINS];
+        let mut bhi = [DVec3::NEG_INFINITY; BINS];
+        for &i in order.iter() {
+            let b = bin_of(cent[i as usize]);
+            bcount[b] += 1;
+            blo[b] = blo[b].min(bounds[i as usize].0);
+            bhi[b] = bhi[b].max(bounds[i as usize].1);
+        }
+        let area = |l: DVec3, h: DVec3| {
+            let d = (h - l).max(DVec3::ZERO);
+            d.x * d.y + d.y * d.z + d.z * d.x
+        };
+        // Prefix/suffix sweeps.
+        let mut left_area = [0.0; BINS];
+        let mut left_n = [0usize; BINS];
+        let (mut l, mut h, mut c) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0);
+        for b in 0..BINS {
+            l = l.min(blo[b]);
+            h = h.max(bhi[b]);
+            c += bcount[b];
+            left_area[b] = if c > 0 { area(l, h) } else { 0.0 };
+            left_n[b] = c;
+        }
+        let (mut best, mut best_cost) = (usize::MAX, f64::INFINITY);
+        let (mut l, mut h, mut c) = (DVec3::INFINITY, DVec3::NEG_INFINITY, 0);
+        for b in (1..BINS).rev() {
+            l = l.min(blo[b]);
+            h = h.max(bhi[b]);
+            c += bcount[b];
+            let cost = left_area[b - 1] * left_n[b - 1] as f64 + area(l, h) * c as f64;
+            if left_n[b - 1] > 0 && c > 0 && cost < best_cost {
+                best_cost = cost;
+                best = b;
+            }
+        }
+        let leaf_cost = area(lo, hi) * count as f64;
+        if best != usize::MAX && best_cost >= leaf_cost && count <= 4 * LEAF_SIZE {
+            return (lo, hi, Decision::Leaf);
+        }
+        if best == usize::MAX {
+            // Cannot separate by bins: median split along the axis.
+            order.sort_by(|&a, &b| {
+                cent[a as usize][axis]
+                    .total_cmp(&cent[b as usize][axis])
+                    .then(a.cmp(&b))
+            });
+            return (lo, hi, Decision::Split(count / 2));
+        }
+        // Partition, stable: the left side's count is known from the bins.
+        let mid = left_n[best - 1];
+        let (mut nl, mut nr) = (0, mid);
+        for &i in order.iter() {
+            if bin_of(cent[i as usize]) < best {
+                scratch[nl] = i;
+                nl += 1;
+            } else {
+                scratch[nr] = i;
+                nr += 1;
+            }
+        }
+        order.copy_from_slice(scratch);
+        (lo, hi, Decision::Split(mid))
+    }
+}
+
+/// A leaf over the triangles `start..start + count` (a placeholder with `count` 0).
+fn leaf(lo: DVec3, hi: DVec3, start: usize, count: usize) -> Node {
+    Node {
+        lo,
+        hi,
+        start: start as u32,
+        count: count as u32,
+    }
 }
 
 /// A target's printed face as a plane mesh in the world frame (its extent from
@@ -720,5 +810,72 @@ mod tests {
             )
             .is_none()
         );
+    }
+
+    /// A digest of the tree (nodes and triangle order), to compare builds.
+    fn digest(b: &Bvh) -> u64 {
+        let mut h = 0u64;
+        let mut eat = |x: u64| h = crate::geometry::mesh::mix64(h ^ x);
+        for n in &b.nodes {
+            for v in [n.lo.x, n.lo.y, n.lo.z, n.hi.x, n.hi.y, n.hi.z] {
+                eat(v.to_bits() as u64);
+            }
+            eat(((n.start as u64) << 32) | n.count as u64);
+        }
+        for t in &b.tris {
+            for v in [t.v0.x, t.v0.y, t.v0.z, t.e1.x, t.e2.z] {
+                eat(v.to_bits());
+            }
+        }
+        h
+    }
+
+    /// A large mesh with every case of the builder: SAH splits, coincident centroids (a
+    /// stack of copies of one triangle) and bins that cannot separate.
+    fn large() -> Vec<(SurfaceId, TriMesh)> {
+        let mut stack = mesh::plane(0.01, 0.01);
+        for _ in 0..6 {
+            let c = stack.clone();
+            stack.append(&c);
+        }
+        vec![
+            (
+                SurfaceId::Object(0),
+                mesh::seabed(8.0, 8.0, 0.05, 0.02, 3).unwrap(),
+            ),
+            (SurfaceId::Object(1), mesh::boulders(6.0, 6.0, 300, 0.2, 4)),
+            (SurfaceId::Target(0), stack),
+        ]
+    }
+
+    /// The parallel build gives the tree of the serial one, at any thread count: the digest is
+    /// that of the one-thread depth-first builder this replaced (so renders keep their bytes).
+    #[test]
+    fn parallel_build_is_the_serial_tree() {
+        let build = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| Bvh::from_meshes(large()))
+        };
+        let (one, four) = (build(1), build(4));
+        assert_eq!((one.nodes.len(), one.tris.len()), (424_923, 704_128));
+        assert_eq!(digest(&one), 0xec53_2b1f_3e60_94a4);
+        assert_eq!(digest(&four), digest(&one));
+        // And it finds what brute force finds.
+        let meshes = large();
+        let mut h = 777u64;
+        let mut rnd = || {
+            h = crate::geometry::mesh::mix64(h);
+            (h >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..50 {
+            let o = DVec3::new(rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0, 2.0);
+            let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, -1.0).normalize();
+            let ray = Ray { origin: o, dir: d };
+            let a = four.intersect(&ray, f64::INFINITY).map(|h| h.t);
+            assert_eq!(a, brute(&meshes, &ray));
+        }
     }
 }

@@ -160,26 +160,70 @@ pub fn vertex_bounds(path: &Path) -> Result<Option<(DVec3, DVec3)>, String> {
     }
     let bytes = read_mesh(path)?;
     let text = text_of(&bytes, &path.display().to_string())?;
-    let mut out: Option<(DVec3, DVec3)> = None;
-    for line in text.lines() {
-        let line = line.trim_start();
-        let (key, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
-        if key != "v" {
-            continue;
+    use rayon::prelude::*;
+    let merge = |a: Option<(DVec3, DVec3)>, b: Option<(DVec3, DVec3)>| match (a, b) {
+        (Some((l0, h0)), Some((l1, h1))) => Some((l0.min(l1), h0.max(h1))),
+        (a, b) => a.or(b),
+    };
+    // Pieces scanned in parallel; min and max are exact, so the result is the serial one.
+    Ok(line_chunks(text)
+        .par_iter()
+        .map(|&(_, chunk)| {
+            let mut out: Option<(DVec3, DVec3)> = None;
+            for line in chunk.lines() {
+                let line = line.trim_start();
+                let Some(rest) = line.strip_prefix('v') else {
+                    continue;
+                };
+                if !rest.starts_with(char::is_whitespace) {
+                    continue;
+                }
+                let (c, n) = numbers::<3>(rest);
+                if n == 3 && c.iter().all(|v| v.is_finite()) {
+                    let p = DVec3::new(c[0], c[1], c[2]);
+                    out = Some(out.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
+                }
+            }
+            out
+        })
+        .reduce(|| None, merge))
+}
+
+/// Size of the pieces an OBJ's text is cut into for the scans run in parallel (fixed, so that
+/// the pieces do not depend on the number of threads).
+const CHUNK_BYTES: usize = 4 << 20;
+
+/// `text` cut at line ends into pieces of about [`CHUNK_BYTES`], each with the number
+/// (1-based, as `str::lines` counts) of its first line.
+fn line_chunks(text: &str) -> Vec<(usize, &str)> {
+    use rayon::prelude::*;
+    let mut pieces = Vec::new();
+    let mut start = 0;
+    while start < text.len() {
+        let mut end = (start + CHUNK_BYTES).min(text.len());
+        if end < text.len() {
+            end = match text.as_bytes()[end..].iter().position(|&c| c == b'\n') {
+                Some(k) => end + k + 1,
+                None => text.len(),
+            };
         }
-        let c: Vec<f64> = rest
-            .split_whitespace()
-            .take(3)
-            .filter_map(|s| s.parse().ok())
-            .collect();
-        if let [x, y, z] = c[..]
-            && [x, y, z].iter().all(|v| v.is_finite())
-        {
-            let p = DVec3::new(x, y, z);
-            out = Some(out.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
-        }
+        pieces.push(&text[start..end]);
+        start = end;
     }
-    Ok(out)
+    let newlines: Vec<usize> = pieces
+        .par_iter()
+        .map(|p| p.bytes().filter(|&b| b == b'\n').count())
+        .collect();
+    let mut line = 1;
+    pieces
+        .into_iter()
+        .zip(newlines)
+        .map(|(p, n)| {
+            let first = line;
+            line += n;
+            (first, p)
+        })
+        .collect()
 }
 
 fn load_with(path: &Path, roots: &[PathBuf], colours: bool) -> Result<MeshFile, String> {
@@ -629,6 +673,54 @@ pub fn obj_mtls(
     }
     Ok(out)
 }
+
+/// The images an OBJ's materials name, found from the `mtllib` lines of its first
+/// [`EARLY_BYTES`] (where exporters write them), each with its wrap: what a loader may start
+/// decoding while the faces are parsed. Only a hint: a library named later is missed, and an
+/// error is an empty list (the full load reports it).
+pub fn obj_images_early(path: &Path, roots: &[PathBuf]) -> Vec<(PathBuf, Wrap)> {
+    use std::io::Read;
+    let mut head = Vec::new();
+    let read =
+        std::fs::File::open(path).and_then(|f| f.take(EARLY_BYTES as u64).read_to_end(&mut head));
+    if read.is_err() {
+        return Vec::new();
+    }
+    // Whole lines only.
+    let end = head.iter().rposition(|&b| b == b'\n').map_or(0, |k| k + 1);
+    let Ok(text) = std::str::from_utf8(&head[..end]) else {
+        return Vec::new();
+    };
+    let mut obj = Obj::default();
+    for (i, line) in text.lines().enumerate() {
+        if let Some(rest) = line.trim_start().strip_prefix("mtllib")
+            && rest.starts_with(char::is_whitespace)
+            && !rest.trim().is_empty()
+        {
+            obj.mtllibs.push((rest.trim().to_string(), i + 1));
+        }
+    }
+    let Ok(mtls) = obj_mtls(&obj, path, roots) else {
+        return Vec::new();
+    };
+    let mut out: Vec<(PathBuf, Wrap)> = Vec::new();
+    for (mtl, entries) in &mtls {
+        for e in entries {
+            if let Some((file, _)) = &e.map_kd
+                && let Ok(p) = side_file(mtl, file, roots)
+            {
+                let wrap = if e.clamp { Wrap::Clamp } else { Wrap::Repeat };
+                if !out.contains(&(p.clone(), wrap)) {
+                    out.push((p, wrap));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// How much of an OBJ [`obj_images_early`] reads.
+const EARLY_BYTES: usize = 64 << 10;
 
 /// Turn a parsed OBJ into a [`MeshFile`]: look up every `usemtl` in its MTL files (a name not
 /// defined there is an error at its line), apply `map_Kd`'s `-o`/`-s` to the texture
@@ -1454,17 +1546,34 @@ pub fn probe(bytes: &[u8], path: &Path, roots: &[PathBuf]) -> Result<Probe, Stri
             let text = text_of(bytes, &shown)?;
             let mut obj = Obj::default();
             let mut used: Vec<(String, usize)> = Vec::new();
-            for (i, line) in text.lines().enumerate() {
-                let line = line.trim_start();
-                if let Some(rest) = line.strip_prefix("mtllib") {
-                    if rest.starts_with(char::is_whitespace) && !rest.trim().is_empty() {
-                        obj.mtllibs.push((rest.trim().to_string(), i + 1));
+            // Pieces scanned in parallel, merged in the file's order.
+            use rayon::prelude::*;
+            let found: Vec<_> = line_chunks(text)
+                .par_iter()
+                .map(|&(first, chunk)| {
+                    let (mut libs, mut uses) = (Vec::new(), Vec::<(String, usize)>::new());
+                    for (i, line) in chunk.lines().enumerate() {
+                        let line = line.trim_start();
+                        if let Some(rest) = line.strip_prefix("mtllib") {
+                            if rest.starts_with(char::is_whitespace) && !rest.trim().is_empty() {
+                                libs.push((rest.trim().to_string(), first + i));
+                            }
+                        } else if let Some(rest) = line.strip_prefix("usemtl")
+                            && rest.starts_with(char::is_whitespace)
+                            && !uses.iter().any(|(n, _)| n == rest.trim())
+                        {
+                            uses.push((rest.trim().to_string(), first + i));
+                        }
                     }
-                } else if let Some(rest) = line.strip_prefix("usemtl")
-                    && rest.starts_with(char::is_whitespace)
-                    && !used.iter().any(|(n, _)| n == rest.trim())
-                {
-                    used.push((rest.trim().to_string(), i + 1));
+                    (libs, uses)
+                })
+                .collect();
+            for (libs, uses) in found {
+                obj.mtllibs.extend(libs);
+                for (name, ln) in uses {
+                    if !used.iter().any(|(n, _)| *n == name) {
+                        used.push((name, ln));
+                    }
                 }
             }
             let mtls = obj_mtls(&obj, path, roots)?;
@@ -1893,5 +2002,51 @@ mod tests {
         );
         let e = load(&nan, &[]).unwrap_err();
         assert!(e.contains("vertex 0 has a non-finite position"), "{e}");
+    }
+
+    /// The prefetch finds the images a shipped OBJ names in its first lines; it misses a
+    /// library named past its window and refuses one outside the roots (a hint only: the full
+    /// load reports both).
+    #[test]
+    fn early_images_of_an_obj() {
+        let dir = Path::new("scenarios/sites/assets/textured_bommie")
+            .canonicalize()
+            .unwrap();
+        let found = obj_images_early(&dir.join("model.obj"), std::slice::from_ref(&dir));
+        assert_eq!(found, [(dir.join("model.jpg"), Wrap::Repeat)]);
+        let tmp = tempfile::tempdir().unwrap();
+        let root = tmp.path().canonicalize().unwrap();
+        std::fs::write(root.join("m.mtl"), "newmtl a\nmap_Kd -clamp on t.png\n").unwrap();
+        std::fs::write(root.join("t.png"), b"not read here").unwrap();
+        let late = format!("{}mtllib m.mtl\n", "v 0 0 0\n".repeat(EARLY_BYTES / 8 + 1));
+        std::fs::write(root.join("late.obj"), late).unwrap();
+        std::fs::write(root.join("early.obj"), "mtllib m.mtl\nv 0 0 0\n").unwrap();
+        std::fs::write(root.join("out.obj"), "mtllib ../m.mtl\n").unwrap();
+        let roots = [root.clone()];
+        assert_eq!(
+            obj_images_early(&root.join("early.obj"), &roots),
+            [(root.join("t.png"), Wrap::Clamp)]
+        );
+        assert!(obj_images_early(&root.join("late.obj"), &roots).is_empty());
+        assert!(obj_images_early(&root.join("out.obj"), &roots).is_empty());
+    }
+
+    /// The parallel scans of an OBJ's text (vertex bounds, material lines) number lines as
+    /// `str::lines` does, across the pieces they are cut into.
+    #[test]
+    fn line_chunks_keep_line_numbers() {
+        let text: String = (0..1_000_000).map(|i| format!("v {i} 0 0\r\n")).collect();
+        let chunks = line_chunks(&text);
+        assert!(chunks.len() > 2);
+        assert_eq!(chunks.iter().map(|c| c.1).collect::<String>(), text);
+        for (first, c) in &chunks {
+            let want = format!("v {} 0 0", first - 1);
+            assert_eq!(c.lines().next().unwrap(), want);
+        }
+        let tmp = tempfile::tempdir().unwrap();
+        let p = tmp.path().join("big.obj");
+        std::fs::write(&p, &text).unwrap();
+        let (lo, hi) = vertex_bounds(&p).unwrap().unwrap();
+        assert_eq!((lo.x, hi.x), (0.0, 999_999.0));
     }
 }

@@ -647,14 +647,17 @@ pub fn prepare_object(model: &Model, index: usize) -> Result<Option<Arc<Prepared
             return Ok(Some(p));
         }
     }
-    let Some(plan) = plan_object(model, index)? else {
+    // The images the file's first lines name are decoded while its faces are parsed (a
+    // prefetch: what it misses is decoded below, the same way).
+    let (plan, mut early) = rayon::join(|| plan_object(model, index), || prefetch(model, index));
+    let Some(plan) = plan? else {
         return Ok(None);
     };
     let err = |e: String| format!("object `{}`: {e}", o.name);
     let mut decoded: HashMap<(String, u32, [u64; 3], u8), Arc<Image16>> = HashMap::new();
     let mut looks = Vec::new();
     for (m, p) in plan.file.materials.iter().zip(&plan.materials) {
-        looks.push(look(m, p, o.material.albedo, &mut decoded).map_err(err)?);
+        looks.push(look(m, p, o.material.albedo, &mut decoded, &mut early).map_err(err)?);
     }
     let mips = looks.iter().map(pyramid).collect();
     let p = Arc::new(Prepared { plan, looks, mips });
@@ -662,6 +665,32 @@ pub fn prepare_object(model: &Model, index: usize) -> Result<Option<Arc<Prepared
     g.get_or_insert_with(HashMap::new)
         .insert(key, Arc::downgrade(&p));
     Ok(Some(p))
+}
+
+/// Images decoded ahead ([`prefetch`]): file, wrap, the image until it is taken.
+type Early = Vec<(PathBuf, Wrap, Option<Image16>)>;
+
+/// The images an OBJ object's first lines name, decoded
+/// ([`crate::geometry::meshfile::obj_images_early`]); one that fails is left to the load to
+/// report.
+fn prefetch(model: &Model, index: usize) -> Early {
+    let (base, roots) = roots(model);
+    let Some(path) = mesh_path(&model.objects[index], &base) else {
+        return Vec::new();
+    };
+    if crate::geometry::meshfile::Format::of(&path) != Some(crate::geometry::meshfile::Format::Obj)
+    {
+        return Vec::new();
+    }
+    crate::geometry::meshfile::obj_images_early(&path, &roots)
+        .into_iter()
+        .map(|(p, wrap)| {
+            let image = crate::geometry::meshfile::read(&p)
+                .and_then(|b| decode(&b, &p.display().to_string(), wrap))
+                .ok();
+            (p, wrap, image)
+        })
+        .collect()
 }
 
 /// Largest image (texels) given mip levels: the levels cost 4 bytes per texel of the image
@@ -700,6 +729,7 @@ fn look(
     p: &MaterialPlan,
     albedo: [f64; 3],
     decoded: &mut HashMap<(String, u32, [u64; 3], u8), Arc<Image16>>,
+    early: &mut Early,
 ) -> Result<Look, String> {
     if m.vertex_colors {
         return Ok(Look::VertexColors);
@@ -718,12 +748,23 @@ fn look(
     if let Some(i) = decoded.get(&key) {
         return Ok(Look::Image(i.clone()));
     }
-    let bytes = match &img.source {
-        ImageSource::File(path) => crate::geometry::meshfile::read(path)?,
-        ImageSource::Bytes(b) => b.to_vec(),
+    let prefetched = match &img.source {
+        ImageSource::File(path) => early
+            .iter_mut()
+            .find(|(p, w, _)| p == path && *w == m.wrap)
+            .and_then(|(_, _, i)| i.take()),
+        ImageSource::Bytes(_) => None,
     };
-    let mut image = decode(&bytes, &shown, m.wrap)?;
-    drop(bytes);
+    let mut image = match prefetched {
+        Some(image) => image,
+        None => {
+            let bytes = match &img.source {
+                ImageSource::File(path) => crate::geometry::meshfile::read(path)?,
+                ImageSource::Bytes(b) => b.to_vec(),
+            };
+            decode(&bytes, &shown, m.wrap)?
+        }
+    };
     for _ in 0..p.level {
         image = image.half();
     }
