@@ -52,7 +52,11 @@ fn images_bench_table_matches_its_json() {
     let bench: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string("docs/bench/images.json").unwrap()).unwrap();
     let rows = bench.as_array().unwrap();
-    assert_eq!(rows.len(), 6, "the five shipped survey scenes and the textured site");
+    assert_eq!(
+        rows.len(),
+        6,
+        "the five shipped survey scenes and the textured site"
+    );
     for r in rows {
         let denoised = r["denoise_radius"]
             .as_f64()
