@@ -224,6 +224,7 @@ pub struct Site {
     pub altitude: f64,
     /// Seed of the site's generated content: the waves, and the default seed of generated
     /// objects (+ their index). Never `render.seed`: a render's noise does not move the site.
+    #[serde(default, skip_serializing_if = "is_default")]
     pub seed: u64,
 }
 
@@ -377,6 +378,10 @@ pub enum UpAxis {
 
 fn is_zero(v: &DVec3) -> bool {
     *v == DVec3::ZERO
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
