@@ -1,6 +1,7 @@
 //! The geometry service: every triangle of the model's objects and targets in one
-//! bounding-volume hierarchy (binned SAH, f64, built on every core: the same tree at any thread count), with closest-hit and shadow (occlusion) queries.
-//! Used by the ground truth (occlusion), the survey planner (coverage) and the native renderer.
+//! bounding-volume hierarchy (binned SAH, f64, built on every core: the same tree at any
+//! thread count), with closest-hit and shadow (occlusion) queries. Used by the ground truth
+//! (occlusion), the survey planner (coverage) and the native renderer.
 //!
 //! | item | meaning |
 //! |---|---|
@@ -482,8 +483,6 @@ impl Bvh {
     }
 }
 
-/// Turn node `ni` (bounds `lo`, `hi`) into an inner node whose two new children cover
-/// `order[s..mid]` and `order[mid..e]`, and queue them (left first).
 /// Ranges of at least this many triangles build their two halves in parallel (above that, down
 /// to [`PARALLEL_DEPTH`] levels).
 const PARALLEL_MIN: usize = 1 << 16;
@@ -732,6 +731,15 @@ mod tests {
     use super::*;
     use crate::geometry::mesh;
 
+    /// Deterministic uniform numbers in [0, 1) from `seed`.
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut h = seed;
+        move || {
+            h = crate::geometry::mesh::mix64(h);
+            (h >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     fn brute(meshes: &[(SurfaceId, TriMesh)], ray: &Ray) -> Option<f64> {
         let mut best: Option<f64> = None;
         for (_, m) in meshes {
@@ -762,11 +770,7 @@ mod tests {
             ),
         ];
         let scene = Bvh::from_meshes(meshes.clone());
-        let mut h = 12345u64;
-        let mut rnd = || {
-            h = crate::geometry::mesh::mix64(h);
-            (h >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(12345);
         for _ in 0..400 {
             let o = DVec3::new(rnd() * 6.0 - 3.0, rnd() * 6.0 - 3.0, 2.0);
             let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, -1.0).normalize();
@@ -865,11 +869,7 @@ mod tests {
         assert_eq!(digest(&four), digest(&one));
         // And it finds what brute force finds.
         let meshes = large();
-        let mut h = 777u64;
-        let mut rnd = || {
-            h = crate::geometry::mesh::mix64(h);
-            (h >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(777);
         for _ in 0..50 {
             let o = DVec3::new(rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0, 2.0);
             let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, -1.0).normalize();

@@ -693,11 +693,8 @@ pub fn obj_images_early(path: &Path, roots: &[PathBuf]) -> Vec<(PathBuf, Wrap)> 
     };
     let mut obj = Obj::default();
     for (i, line) in text.lines().enumerate() {
-        if let Some(rest) = line.trim_start().strip_prefix("mtllib")
-            && rest.starts_with(char::is_whitespace)
-            && !rest.trim().is_empty()
-        {
-            obj.mtllibs.push((rest.trim().to_string(), i + 1));
+        if let Some(lib) = mtllib_of(line.trim_start()) {
+            obj.mtllibs.push((lib.to_string(), i + 1));
         }
     }
     let Ok(mtls) = obj_mtls(&obj, path, roots) else {
@@ -717,6 +714,14 @@ pub fn obj_images_early(path: &Path, roots: &[PathBuf]) -> Vec<(PathBuf, Wrap)> 
         }
     }
     out
+}
+
+/// The library an OBJ line (its leading space trimmed) names with `mtllib`, if it is one.
+fn mtllib_of(line: &str) -> Option<&str> {
+    line.strip_prefix("mtllib")
+        .filter(|rest| rest.starts_with(char::is_whitespace))
+        .map(str::trim)
+        .filter(|lib| !lib.is_empty())
 }
 
 /// How much of an OBJ [`obj_images_early`] reads.
@@ -1554,9 +1559,9 @@ pub fn probe(bytes: &[u8], path: &Path, roots: &[PathBuf]) -> Result<Probe, Stri
                     let (mut libs, mut uses) = (Vec::new(), Vec::<(String, usize)>::new());
                     for (i, line) in chunk.lines().enumerate() {
                         let line = line.trim_start();
-                        if let Some(rest) = line.strip_prefix("mtllib") {
-                            if rest.starts_with(char::is_whitespace) && !rest.trim().is_empty() {
-                                libs.push((rest.trim().to_string(), first + i));
+                        if line.starts_with("mtllib") {
+                            if let Some(lib) = mtllib_of(line) {
+                                libs.push((lib.to_string(), first + i));
                             }
                         } else if let Some(rest) = line.strip_prefix("usemtl")
                             && rest.starts_with(char::is_whitespace)

@@ -107,9 +107,7 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
     let f_number = cameras.first().and_then(|c| c.f_number);
     let sensor = super::sensor::sensor(cx, t.get("sensor"), f_number, top);
     let lights = lights::lights(cx, &mut t, &mut spans);
-    let objects = objects::objects(
-        cx, &mut t, &site, sources, scene_path, &mut spans, site.seed,
-    );
+    let objects = objects::objects(cx, &mut t, &site, sources, scene_path, &mut spans);
     let targets = targets::targets(cx, &mut t, &mut spans, &objects, &site, sources, scene_path);
     let diver = diver::diver(cx, t.get("diver"), top);
     let lesson = super::lesson::lesson(cx, t.get("lesson"), sources, &name, &description, top);

@@ -14,7 +14,7 @@ use crate::units::Dim;
 use glam::DVec3;
 use std::path::Path;
 
-/// Every `[[objects]]` entry; generated objects without a `seed` get `seed0` (`site.seed`) + their index.
+/// Every `[[objects]]` entry; generated objects without a `seed` get `site.seed` + their index.
 pub(super) fn objects(
     cx: &mut Cx,
     t: &mut Tab,
@@ -22,7 +22,6 @@ pub(super) fn objects(
     sources: &Sources,
     scene: &Path,
     spans: &mut Spans,
-    seed0: u64,
 ) -> Vec<Object> {
     let mut out = Vec::new();
     for (i, n) in t.tables(cx, "objects").into_iter().enumerate() {
@@ -42,7 +41,7 @@ pub(super) fn objects(
             .unwrap_or("box");
         let seed = o
             .opt_u64(cx, "seed")
-            .unwrap_or(seed0.wrapping_add(i as u64));
+            .unwrap_or(site.seed.wrapping_add(i as u64));
         let errors = cx.diags.iter().filter(|d| d.is_error()).count();
         let shape = shape(cx, &mut o, shape_kind, seed, sources, scene);
         let mesh_ok = cx.diags.iter().filter(|d| d.is_error()).count() == errors;
