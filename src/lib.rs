@@ -28,7 +28,6 @@ pub mod image;
 pub mod import;
 pub mod io;
 pub mod lesson;
-pub mod model;
 pub mod pack;
 pub mod plan;
 pub mod points;
@@ -40,6 +39,9 @@ pub mod texture;
 pub mod truth;
 pub mod units;
 
+/// The resolved model, its own crate (`crates/poser-model`) on the optics only: the
+/// compiler keeps it free of the scene format, the back ends and the CLI.
+pub use poser_model as model;
 /// The optics core, its own crate (`crates/poser-optics`): pure math on its own value types,
 /// which the compiler keeps free of the scene, the model and the back ends.
 pub use poser_optics as optics;

@@ -638,8 +638,13 @@ fn fn_lengths(code: &str) -> Vec<(String, usize)> {
 
 /// The source trees the per-file rules cover (function length, headers), each with the prefix
 /// its files are named by: `src/` by the path inside it (`plan/dive.rs`), the optics crate by
-/// the path from the repository root (`crates/poser-optics/src/column.rs`).
-const TREES: [(&str, &str); 2] = [("src", ""), (OPTICS_SRC, "crates/poser-optics/src/")];
+/// the path from the repository root (`crates/poser-optics/src/column.rs`), and so the model
+/// crate. The third number: the fewest files the scan must find there (fewer means it missed some).
+const TREES: [(&str, &str, usize); 3] = [
+    ("src", "", 100),
+    (OPTICS_SRC, "crates/poser-optics/src/", 10),
+    ("crates/poser-model/src", "crates/poser-model/src/", 2),
+];
 
 /// The optics crate's sources.
 const OPTICS_SRC: &str = "crates/poser-optics/src";
@@ -647,13 +652,13 @@ const OPTICS_SRC: &str = "crates/poser-optics/src";
 /// Every source file of [`TREES`] as (name, full text).
 fn tree_files() -> Vec<(String, String)> {
     let mut all = Vec::new();
-    for (dir, prefix) in TREES {
+    for (dir, prefix, fewest) in TREES {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
         let mut files = Vec::new();
         rust_files(&root, &mut files);
         files.sort();
         assert!(
-            files.len() > 10,
+            files.len() >= fewest,
             "found only {} files in {dir}",
             files.len()
         );
@@ -821,16 +826,36 @@ fn probe_a_file_without_a_header() {
 
 // ---- The optics crate's dependencies ------------------------------------------------------
 
-/// The external crates the optics may use: vectors, serialisation of its value types, and the
-/// thread pool of the water-column solver.
-const OPTICS_DEPS: [&str; 3] = ["glam", "rayon", "serde"];
+/// A stage crate's allowed dependencies: `deps`, the crates it may name; `paths`, those of
+/// them that may be path dependencies (the stages below it).
+struct Stage {
+    name: &'static str,
+    deps: &'static [&'static str],
+    paths: &'static [&'static str],
+}
 
-/// What breaks the optics crate's isolation in its manifest `manifest`, with the workspace's
-/// manifest `workspace` (for `workspace = true` entries): any dependency by path (`poser`
-/// itself, or a stage crate above it), or a crate not in [`OPTICS_DEPS`], in any dependency
-/// table (normal, dev, build, per target). That the optics code names nothing of the scene or
-/// the model is then the compiler's to enforce: it cannot see them.
-fn optics_manifest_violations(manifest: &str, workspace: &str) -> Vec<String> {
+/// The optics: vectors, serialisation of its value types, and the thread pool of the
+/// water-column solver; no stage of poser.
+const OPTICS: Stage = Stage {
+    name: "the optics",
+    deps: &["glam", "rayon", "serde"],
+    paths: &[],
+};
+
+/// The model: the optics (its value types), vectors and serialisation; nothing above it.
+const MODEL: Stage = Stage {
+    name: "the model",
+    deps: &["glam", "poser-optics", "serde"],
+    paths: &["poser-optics"],
+};
+
+/// What breaks a stage crate's isolation in its manifest `manifest`, with the workspace's
+/// manifest `workspace` (for `workspace = true` entries): a dependency by path other than the
+/// stage's `paths` (`poser` itself, or a stage above it), or a crate not in its `deps`, in any
+/// dependency table (normal, dev, build, per target). That the optics code names nothing of
+/// the scene or the model, and the model nothing of the scene or the back ends, is then the
+/// compiler's to enforce: they cannot see them.
+fn manifest_violations(manifest: &str, workspace: &str, stage: &Stage) -> Vec<String> {
     let m: toml::Table = toml::from_str(manifest).expect("the optics manifest parses");
     let w: toml::Table = toml::from_str(workspace).expect("the workspace manifest parses");
     let shared = w
@@ -864,18 +889,22 @@ fn optics_manifest_violations(manifest: &str, workspace: &str) -> Vec<String> {
             } else {
                 Some(spec)
             };
-            if resolved.is_some_and(|r| r.get("path").is_some()) {
-                bad.push(format!(
-                    "[{kind}] {name}: a path dependency (the optics sees no stage)"
-                ));
-            }
             let crate_name = spec
                 .get("package")
                 .and_then(toml::Value::as_str)
                 .unwrap_or(name);
-            if !OPTICS_DEPS.contains(&crate_name) {
+            if resolved.is_some_and(|r| r.get("path").is_some())
+                && !stage.paths.contains(&crate_name)
+            {
                 bad.push(format!(
-                    "[{kind}] {name}: not one of the optics' crates {OPTICS_DEPS:?}"
+                    "[{kind}] {name}: a path dependency ({} sees only {:?})",
+                    stage.name, stage.paths
+                ));
+            }
+            if !stage.deps.contains(&crate_name) {
+                bad.push(format!(
+                    "[{kind}] {name}: not one of {}'s crates {:?}",
+                    stage.name, stage.deps
                 ));
             }
         }
@@ -892,7 +921,7 @@ fn read_manifest(rel: &str) -> String {
 #[test]
 fn optics_crate_depends_on_no_stage() {
     let manifest = read_manifest("crates/poser-optics/Cargo.toml");
-    let bad = optics_manifest_violations(&manifest, &read_manifest("Cargo.toml"));
+    let bad = manifest_violations(&manifest, &read_manifest("Cargo.toml"), &OPTICS);
     assert!(
         bad.is_empty(),
         "crates/poser-optics/Cargo.toml:\n{}",
@@ -922,7 +951,7 @@ fn optics_crate_depends_on_no_stage() {
 fn probe_optics_crate_dependencies() {
     let workspace = "[workspace.dependencies]\nglam = \"0.34\"\nmodel = { path = \"crates/m\" }\n";
     let ok = "[dependencies]\nglam = { workspace = true }\nserde = \"1\"\n";
-    assert!(optics_manifest_violations(ok, workspace).is_empty());
+    assert!(manifest_violations(ok, workspace, &OPTICS).is_empty());
     for (planted, what) in [
         (
             "[dependencies]\nposer = { path = \"../..\" }\n",
@@ -942,7 +971,7 @@ fn probe_optics_crate_dependencies() {
         ),
         (
             "[dependencies]\ntoml = \"1\"\n",
-            "toml: not one of the optics' crates",
+            "toml: not one of the optics's crates",
         ),
         (
             "[dependencies]\nv = { package = \"nalgebra\", version = \"0.34\" }\n",
@@ -953,7 +982,59 @@ fn probe_optics_crate_dependencies() {
             "[target.cfg(unix).dependencies] libc",
         ),
     ] {
-        let bad = optics_manifest_violations(planted, workspace);
+        let bad = manifest_violations(planted, workspace, &OPTICS);
+        assert!(
+            bad.iter().any(|b| b.contains(what)),
+            "`{planted}` was not caught ({what}): {bad:?}"
+        );
+    }
+}
+
+// ---- The model crate's dependencies -------------------------------------------------------
+
+/// The model crate depends on the optics crate, glam and serde only, so that it cannot name
+/// the scene format, a back end or the CLI; `src/` keeps no model of its own (`poser::model`
+/// is the crate, re-exported).
+#[test]
+fn model_crate_depends_on_the_optics_only() {
+    let manifest = read_manifest("crates/poser-model/Cargo.toml");
+    let bad = manifest_violations(&manifest, &read_manifest("Cargo.toml"), &MODEL);
+    assert!(
+        bad.is_empty(),
+        "crates/poser-model/Cargo.toml:\n{}",
+        bad.join("\n")
+    );
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    assert!(
+        !root.join("src/model.rs").exists() && !root.join("src/model").exists(),
+        "src/model is back: the model lives in its crate"
+    );
+    assert!(
+        read_manifest("src/lib.rs").contains("pub use poser_model as model;"),
+        "poser::model is not re-exported"
+    );
+}
+
+#[test]
+fn probe_model_crate_dependencies() {
+    let workspace = "[workspace.dependencies]\nglam = \"0.34\"\n";
+    let ok = "[dependencies]\nglam = { workspace = true }\nposer-optics = { path = \"../poser-optics\" }\n";
+    assert!(manifest_violations(ok, workspace, &MODEL).is_empty());
+    for (planted, what) in [
+        (
+            "[dependencies]\nposer = { path = \"../..\" }\n",
+            "poser: a path dependency",
+        ),
+        (
+            "[dependencies]\ntoml = \"1\"\n",
+            "toml: not one of the model's crates",
+        ),
+        (
+            "[dev-dependencies]\nposer-scene = { path = \"../poser-scene\" }\n",
+            "[dev-dependencies] poser-scene: a path dependency",
+        ),
+    ] {
+        let bad = manifest_violations(planted, workspace, &MODEL);
         assert!(
             bad.iter().any(|b| b.contains(what)),
             "`{planted}` was not caught ({what}): {bad:?}"

@@ -1,7 +1,9 @@
-//! The full tier's own suites, one binary (`cargo test --test backends`):
-//! the ones that run the real Mitsuba 3, Blender/Cycles, COLMAP, OpenCV and headless Chromium
-//! (`./test.sh` sets them up). Each module is one file of `tests/`; run one
-//! with `cargo test --test backends NAME::`.
+//! The full tier's own suites, one binary (`cargo test --test backends`): the ones that run
+//! the real Mitsuba 3, Blender/Cycles, COLMAP, OpenCV and headless Chromium (`./test.sh` sets
+//! them up), and the native renderer's statistical checks against itself and its brute-force
+//! transport (`native_column_convergence`, `native_convergence`: no Python, but about a minute
+//! and a half of CPU, which would make the fast tier a minute slower). Each module is one file
+//! of `tests/`; run one with `cargo test --test backends NAME::`.
 
 #[allow(dead_code)]
 mod support;
@@ -24,6 +26,8 @@ mod lesson_dive;
 mod lesson_metrology;
 mod lesson_surface;
 mod mitsuba_render;
+mod native_column_convergence;
+mod native_convergence;
 mod opencv_export;
 mod pack_python;
 mod scenario_parity;

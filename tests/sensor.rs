@@ -492,56 +492,6 @@ fn the_sidecar_records_what_was_applied() {
 
 // ---- the native renderer's variance, and the CLI -------------------------------------------
 
-fn tiny_reef() -> Model {
-    let loaded = poser::scene::load(Path::new("scenarios/reef_strip.toml"), &[]).unwrap();
-    loaded.model.with_resolution_scale(0.04)
-}
-
-#[test]
-fn the_native_variance_estimate_agrees_with_independent_renders() {
-    // K renders with independent seeds give each pixel's empirical variance of the mean; the
-    // renderer's own estimate (sample variance / n) must agree on average over the image. The
-    // bound: the mean over ~1400 pixel-channels of variance estimates with 7 (empirical) and
-    // 7 (estimate) degrees of freedom has a relative standard error of a few percent, but path
-    // tracing noise is heavy-tailed (rare bright paths), so the bound is 20 %. The estimate
-    // assumes independent samples: under the Sobol sampler (the default) the samples of a
-    // pixel stratify each other and the mean errs less than it says, by the gain of
-    // docs/native.md ("The sampler": 1.3–1.5× in variance), so there it must not fall short.
-    let ratio = |sampler: SamplerKind| {
-        let mut model = tiny_reef();
-        model.render.sampler = sampler;
-        let samples = 8;
-        let k = 8;
-        let scene = poser::backend::native::scene::Scene::build(&model).unwrap();
-        let mut renders = Vec::new();
-        for seed in 0..k {
-            model.render.seed = 1000 + seed;
-            renders.push(
-                poser::backend::native::render_image(&model, &scene, 0, 0, samples, None).unwrap(),
-            );
-        }
-        let n = renders[0].rgb.len();
-        let (mut empirical, mut estimated) = (0.0, 0.0);
-        for i in 0..n {
-            for c in 0..3 {
-                let v: Vec<f64> = renders.iter().map(|r| r.rgb[i][c] as f64).collect();
-                let m = v.iter().sum::<f64>() / k as f64;
-                empirical += v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k as f64 - 1.0);
-                estimated +=
-                    renders.iter().map(|r| r.variance[i][c] as f64).sum::<f64>() / k as f64;
-            }
-        }
-        assert!(empirical > 0.0);
-        let ratio = estimated / empirical;
-        eprintln!("{sampler:?}: estimated / empirical render variance: {ratio:.4} over {n} pixels");
-        ratio
-    };
-    let independent = ratio(SamplerKind::Independent);
-    assert!((independent - 1.0).abs() < 0.2, "ratio {independent}");
-    let sobol = ratio(SamplerKind::Sobol);
-    assert!((0.8..2.0).contains(&sobol), "Sobol: ratio {sobol}");
-}
-
 fn poser(args: &[&str]) -> std::process::Output {
     std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
         .args(args)

@@ -40,6 +40,7 @@ mod import_mitsuba_glass;
 mod lesson_completeness;
 mod lesson_textured_site;
 mod mitsuba_compile;
+mod model_valid;
 mod native_amphora;
 mod native_caustics;
 mod native_column;

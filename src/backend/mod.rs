@@ -8,7 +8,9 @@
 //! | [`Backend::Mitsuba`] | [`mitsuba`] | Mitsuba 3 XML + meshes | the real Mitsuba 3 (`scalar_rgb`) | Python with `mitsuba` ([`python`]) |
 //! | [`Backend::Blender`] | [`blender`] | a self-contained bpy script | Blender/Cycles (`bpy`) | Python with `bpy` ([`python`]) |
 //!
-//! Backends write images only; the ground truth beside them (`OUT/truth/`) is written once by
+//! Both `compile` and `render` first validate the model ([`Model::validate`]: finite numbers,
+//! rotations, positive sizes), so a model built in Rust (the bench's, the Python module's) is
+//! checked as the front end checks a scene. Backends write images only; the ground truth beside them (`OUT/truth/`) is written once by
 //! the `render` command, the same for every backend.
 
 pub mod blender;
@@ -110,6 +112,7 @@ impl Backend {
 
     /// Write the scene for the outside renderer into `out` (`poser compile`).
     pub fn compile(self, model: &Model, out: &Path) -> Result<(), String> {
+        model.validate().map_err(|e| e.to_string())?;
         self.refuse(model)?;
         match self {
             Backend::Native => Err(
@@ -128,6 +131,7 @@ impl Backend {
         out: &Path,
         opts: &RenderOptions,
     ) -> Result<RenderReport, String> {
+        model.validate().map_err(|e| e.to_string())?;
         self.refuse(model)?;
         match self {
             Backend::Native => native::render(model, out, opts),

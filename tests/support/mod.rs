@@ -5,6 +5,7 @@
 //! |---|---|
 //! | [`model`] | the one model builder: cameras, ports, water, planes, lights, a minimal model |
 //! | [`canonical`] | the canonical scenes of `tests/canonical/`, the analytic radiance oracle, and the geometry / radiometry checks every backend runs |
+//! | [`column`] | the native column tests' scene (sun or sky over a flat seabed, turbid water) and one native render's means |
 //! | [`lesson`] | running a lesson's quick form; its page in headless Chromium |
 //! | [`mitsuba`], [`blender`], [`native`], [`plan`] | each suite's preset models, built with [`model`] |
 //! | [`bench`] | `poser bench render --quick` run into a temporary folder, its report checked |
@@ -16,6 +17,7 @@
 pub mod bench;
 pub mod blender;
 pub mod canonical;
+pub mod column;
 pub mod import;
 pub mod lesson;
 pub mod mitsuba;

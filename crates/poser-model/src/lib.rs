@@ -1,6 +1,6 @@
 //! The resolved model: the one explicit structure every backend consumes.
 //!
-//! A scene file (see [`crate::scene`]) is parsed, validated and *resolved* into a [`Model`]:
+//! A scene file (see `poser::scene`) is parsed, validated and *resolved* into a [`Model`]:
 //! SI units everywhere, every preset, include and command-line override applied, camera
 //! networks expanded into poses, and optical constants computed per colour channel. The model
 //! also records what the scene *needs* ([`Needs`]) so that backends emit only that.
@@ -17,14 +17,19 @@
 //! * Angles in radians, lengths in metres, times in seconds, pressures in pascal, volumes in m³,
 //!   temperatures in °C (the one non-SI exception, as everyone writes them), salinity in PSU.
 
-use crate::optics::project::Projector;
+// `!(x > 0.0)` is how poser rejects NaN together with the values out of range.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod valid;
+
 use glam::DVec3;
+use poser_optics::project::Projector;
 use serde::{Deserialize, Serialize};
 
 /// Representative wavelengths of the R, G and B channels, in nanometres.
 pub const CHANNEL_WAVELENGTHS_NM: [f64; 3] = [650.0, 550.0, 450.0];
 
-pub use crate::optics::types::{Pose, Rgb};
+pub use poser_optics::types::{Pose, Rgb};
 
 /// The whole resolved scene.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -103,13 +108,13 @@ pub enum LessonKind {
     /// As `Dive`, plus `poser evaluate` (observations mode, GCPs): the expected accuracy.
     Survey,
     /// Surface coverage: the share of the corals' surface seen by enough images, near enough
-    /// to its normal ([`crate::lesson::completeness`]).
+    /// to its normal (`poser::lesson::completeness`).
     Completeness,
     /// A stereo rig's lighting (backscatter, contrast) and its measurement accuracy (`poser
-    /// evaluate` with the rig calibrated) per variant ([`crate::lesson::metrology`]).
+    /// evaluate` with the rig calibrated) per variant (`poser::lesson::metrology`).
     Metrology,
     /// A camera above the water: how far the waves move targets in the image, and the
-    /// caustics' contrast against depth ([`crate::lesson::surface`]).
+    /// caustics' contrast against depth (`poser::lesson::surface`).
     Surface,
 }
 
@@ -195,12 +200,12 @@ pub enum Phase {
 impl Phase {
     /// The optics' phase function for this one, as the renderers and the water column use it:
     /// HG with `g` kept inside (-0.999, 0.999), FF as its table.
-    pub fn phase_fn(&self) -> crate::optics::phase::PhaseFn {
+    pub fn phase_fn(&self) -> poser_optics::phase::PhaseFn {
         match *self {
-            Phase::HenyeyGreenstein { g } => crate::optics::phase::PhaseFn::Hg {
+            Phase::HenyeyGreenstein { g } => poser_optics::phase::PhaseFn::Hg {
                 g: g.clamp(-0.999, 0.999),
             },
-            Phase::FournierForand { n, mu, .. } => crate::optics::phase::ff_table(n, mu),
+            Phase::FournierForand { n, mu, .. } => poser_optics::phase::ff_table(n, mu),
         }
     }
 }
@@ -272,11 +277,11 @@ pub struct SunTime {
 }
 
 // ------------------------------------------------------------------------------------------
-// Cameras, lenses, ports: value types of the optics core ([`crate::optics::types`]), re-exported
+// Cameras, lenses, ports: value types of the optics core ([`poser_optics::types`]), re-exported
 // here so the model reads as one structure.
 // ------------------------------------------------------------------------------------------
 
-pub use crate::optics::types::{Camera, Distortion, Glass, GlassLayer, LensModel, Port};
+pub use poser_optics::types::{Camera, Distortion, Glass, GlassLayer, LensModel, Port};
 
 // ------------------------------------------------------------------------------------------
 // Lights
@@ -389,11 +394,11 @@ fn is_default<T: Default + PartialEq>(v: &T) -> bool {
 pub enum Shape {
     /// Triangle mesh from a glTF, OBJ or PLY file (path resolved, relative to the scene file,
     /// and checked to stay inside the scene's directory tree; see
-    /// [`crate::geometry::meshfile`]).
+    /// `poser::geometry::meshfile`).
     Mesh {
         path: String,
         /// The albedo comes from the file: its image textures, material colours and vertex
-        /// colours ([`crate::texture::mapped`]); faces the file gives no colour take the
+        /// colours (`poser::texture::mapped`); faces the file gives no colour take the
         /// object's `albedo`. `false`: the object's `albedo` everywhere.
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         textured: bool,
@@ -403,7 +408,7 @@ pub enum Shape {
         offset: DVec3,
         /// Which axis of the file points up; `None`: the format's own (glTF +Y, OBJ and PLY
         /// +Z). Applied after `offset`, before the object's scale and pose
-        /// ([`crate::geometry::mesh::georeferenced`]).
+        /// (`poser::geometry::mesh::georeferenced`).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         up_axis: Option<UpAxis>,
     },
@@ -443,7 +448,7 @@ pub enum Shape {
         seed: u64,
     },
     /// Procedural coral colony standing on the object's xy plane (base buried below z = 0):
-    /// `growth` form, colony `radius`, from `seed` ([`crate::geometry::coral`]).
+    /// `growth` form, colony `radius`, from `seed` (`poser::geometry::coral`).
     Coral {
         growth: CoralGrowth,
         radius: f64,
@@ -469,11 +474,11 @@ pub struct Material {
     pub pattern: Option<Pattern>,
     /// Colour variation between objects (and between the rocks of a boulder field): each part's
     /// albedo is multiplied by a brightness and hue jitter of this relative size, from the
-    /// pattern's seed (see [`crate::texture`]). 0 = none.
+    /// pattern's seed (see `poser::texture`). 0 = none.
     #[serde(default)]
     pub variation: f64,
     /// Texel size of the baked texture, m; `None`: half the finest ground sample distance of
-    /// the scene's cameras on this object (see [`crate::texture::bake`]).
+    /// the scene's cameras on this object (see `poser::texture::bake`).
     #[serde(default)]
     pub texel: Option<f64>,
     /// Lines of a survey grid (string or tape) drawn over a baked pattern.
@@ -501,7 +506,7 @@ impl Material {
 }
 
 /// A procedural albedo pattern. Lengths in metres, measured in the object frame after scale;
-/// see `docs/textures.md` and [`crate::texture`] for the formulas.
+/// see `docs/textures.md` and `poser::texture` for the formulas.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case")]
 pub enum Pattern {
@@ -802,10 +807,10 @@ pub struct RenderSettings {
     /// Exposure multiplier applied to the PNG preview only (EXR stays linear).
     pub exposure: f64,
     /// The native renderer's optional illumination denoiser (`None`: off): the Gaussian
-    /// radius in pixels ([`crate::backend::native::denoise`]).
+    /// radius in pixels (`poser::backend::native::denoise`).
     pub denoise_radius: Option<f64>,
     /// The native renderer's noise target (`None`: `samples` per pixel everywhere)
-    /// ([`crate::backend::native::adaptive`]).
+    /// (`poser::backend::native::adaptive`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise: Option<NoiseTarget>,
     /// How the native renderer carries daylight through the water (`render.daylight`).
@@ -825,7 +830,7 @@ pub struct RenderSettings {
 }
 
 /// `render.sampler`: how the native renderer draws the random numbers of a pixel's samples
-/// ([`crate::backend::native::sampler`]).
+/// (`poser::backend::native::sampler`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SamplerKind {
@@ -868,7 +873,7 @@ impl Underside {
 #[serde(rename_all = "snake_case")]
 pub enum TextureFilter {
     /// The default: the texture averaged over the pixel's footprint on the surface (mip
-    /// levels, [`crate::texture::mip`]).
+    /// levels, `poser::texture::mip`).
     #[default]
     Footprint,
     /// One bilinear lookup at the hit per sample (the samples average the pixel).
@@ -889,7 +894,7 @@ pub enum Daylight {
     /// on the scene's seabed ([`Model::daylight_choice`]), else traced.
     #[default]
     Auto,
-    /// Light the scene with the solved water column ([`crate::optics::column`]).
+    /// Light the scene with the solved water column ([`poser_optics::column`]).
     Column,
     /// Random walks through the water, as Mitsuba and Cycles do.
     Traced,
@@ -938,12 +943,18 @@ pub struct Needs {
 }
 
 impl Model {
+    /// Checks what every back end relies on (finite numbers, rotations, positive sizes, …;
+    /// [`valid`]), naming each offending value by its path in the model.
+    pub fn validate(&self) -> Result<(), valid::Invalid> {
+        valid::validate(self)
+    }
+
     /// The air–water interface for channel `ch` (0 = R, 1 = G, 2 = B) that a camera above the
     /// water looks through: the flat surface, or the waves (the same seeded field as the
     /// native renderer's caustics). `None` without water or without a modelled surface.
-    pub fn sea_interface(&self, ch: usize) -> Option<crate::optics::surface::SeaInterface> {
-        use crate::optics::surface::SeaInterface;
-        use crate::optics::waves::{WIND_DIRECTION, WaveField};
+    pub fn sea_interface(&self, ch: usize) -> Option<poser_optics::surface::SeaInterface> {
+        use poser_optics::surface::SeaInterface;
+        use poser_optics::waves::{WIND_DIRECTION, WaveField};
         let n_water = self.water.as_ref()?.ior[ch.min(2)];
         match self.site.surface {
             SeaSurface::None => None,
@@ -1067,7 +1078,7 @@ impl Model {
 }
 
 // ------------------------------------------------------------------------------------------
-// Sensor (the camera after the lens; applied by [`crate::sensor`])
+// Sensor (the camera after the lens; applied by `poser::sensor`)
 // ------------------------------------------------------------------------------------------
 
 /// A camera sensor and its image pipeline (see `docs/sensor.md`).
@@ -1191,7 +1202,7 @@ pub fn is_safe_file_name(s: &str) -> bool {
 // The water column's light
 // ------------------------------------------------------------------------------------------
 
-/// Photons per channel of the column solve ([`crate::optics::column`]).
+/// Photons per channel of the column solve ([`poser_optics::column`]).
 pub const COLUMN_PHOTONS: usize = 400_000;
 /// Photons per channel of the quick column solve that measures what a bounce limit cuts off
 /// ([`Model::bounce_cut`]): shares to a few tenths of a point, in tens of milliseconds.
@@ -1246,7 +1257,7 @@ impl Model {
     /// not one: water everywhere below a flat or wavy surface, scattering and absorbing in
     /// every channel, lit by the sun or the sky, over a seabed at `site.depth`. The bottom's
     /// albedo is the largest horizontal plane or seabed's (else the mean of the objects').
-    pub fn column_input(&self) -> Result<crate::optics::column::ColumnInput, String> {
+    pub fn column_input(&self) -> Result<poser_optics::column::ColumnInput, String> {
         let input = self.column_physics()?;
         let above = (0..self.poses.len())
             .flat_map(|p| (0..self.cameras.len()).map(move |c| (p, c)))
@@ -1260,8 +1271,8 @@ impl Model {
     /// The sea surface as the light from below meets it in the native renderer: reflecting
     /// (Fresnel, the water's index per channel) where the scene has water under a flat or wavy
     /// surface and `render.surface_from_below = "fresnel"`, else open.
-    pub fn underside(&self) -> crate::optics::column::Top {
-        use crate::optics::column::Top;
+    pub fn underside(&self) -> poser_optics::column::Top {
+        use poser_optics::column::Top;
         match &self.water {
             Some(w)
                 if self.render.surface_from_below == Underside::Fresnel
@@ -1283,7 +1294,7 @@ impl Model {
                 .lights
                 .iter()
                 .any(|l| matches!(l.kind, LightKind::Ambient { .. }));
-        (daylight && self.underside() != crate::optics::column::Top::Open).then(|| {
+        (daylight && self.underside() != poser_optics::column::Top::Open).then(|| {
             format!(
                 "{backend} has the sea surface open from below: no Snell's window and no \
                  reflection of the light coming up, which the native renderer models (a \
@@ -1323,8 +1334,8 @@ impl Model {
 
     /// The plane-parallel column of the scene's water and daylight, wherever its cameras are
     /// ([`Model::column_input`] without the cameras' check).
-    pub fn column_physics(&self) -> Result<crate::optics::column::ColumnInput, String> {
-        use crate::optics::column::{ColumnInput, ColumnSun};
+    pub fn column_physics(&self) -> Result<poser_optics::column::ColumnInput, String> {
+        use poser_optics::column::{ColumnInput, ColumnSun};
         let w = self.water.as_ref().ok_or("the scene has no water")?;
         if !w.scattering.iter().any(|s| *s > 0.0) {
             return Err("the water does not scatter: daylight needs no column".into());
@@ -1384,7 +1395,7 @@ impl Model {
     /// What `render.bounces` cuts off of traced daylight, measured on the scene's water column
     /// solved quickly ([`BOUNCE_PHOTONS`], one round): per channel, the worst share over the
     /// cameras' depths of the light seen looking down
-    /// ([`crate::optics::column::Column::share_seen_beyond`]), and the bounces that would cut
+    /// ([`poser_optics::column::Column::share_seen_beyond`]), and the bounces that would cut
     /// off at most [`BOUNCE_CUT_WARN`]. `None` where the scene is not a column
     /// ([`Model::column_physics`]) or the column cannot be solved.
     pub fn bounce_cut(&self) -> Option<BounceCut> {
@@ -1396,7 +1407,7 @@ impl Model {
             .map(|(p, c)| {
                 let z = -self.world_from_camera(p, c).translation.z;
                 // one depth per layer of the table
-                let dz = col.depth / crate::optics::column::NZ as f64;
+                let dz = col.depth / poser_optics::column::NZ as f64;
                 ((z.clamp(0.0, col.depth) / dz).floor() + 0.5) * dz
             })
             .collect();
@@ -1426,21 +1437,21 @@ impl Model {
     /// window, as a share of E_d there under the open surface (Mitsuba's and Cycles' model;
     /// the native renderer's is [`Model::underside`]). `explain` prints it (docs/column.md).
     /// `None` where the scene is not a column.
-    /// A channel black at the seabed ([`crate::optics::column::Column::visible_at_bottom`]) is
+    /// A channel black at the seabed ([`poser_optics::column::Column::visible_at_bottom`]) is
     /// `None`.
     pub fn surface_reflection_gain(&self) -> Option<[Option<f64>; 3]> {
-        use crate::optics::column::Top;
+        use poser_optics::column::Top;
         let mut open = self.column_physics().ok()?;
         open.photons = BOUNCE_PHOTONS;
         open.top = Top::Open;
         let n = self.water.as_ref()?.ior;
-        let fresnel = crate::optics::column::ColumnInput {
+        let fresnel = poser_optics::column::ColumnInput {
             top: Top::Fresnel(n),
             ..open.clone()
         };
         let a = quick_column(&open, 4)?;
         let b = quick_column(&fresnel, 4)?;
-        let nz = crate::optics::column::NZ;
+        let nz = poser_optics::column::NZ;
         // Both solves draw the same photons until the first reflection at the surface, so
         // their difference is far less noisy than either (±0.5 points measured).
         Some([0, 1, 2].map(|c| {
@@ -1485,14 +1496,14 @@ impl Model {
 
     /// The column the native renderer lights this scene with (`None`: daylight is traced), and
     /// why. `past_seabed` is the share of the cameras' view that heads down and hits nothing
-    /// ([`crate::geometry::seen`]; `None`: not measured, taken as none): under `"auto"` any such
+    /// (`poser::geometry::seen`; `None`: not measured, taken as none): under `"auto"` any such
     /// view keeps daylight traced, because the column lights that water as if the seabed went on
     /// while Mitsuba, Cycles and traced daylight leave it bottomless (docs/column.md, "Views past
     /// the seabed").
     pub fn daylight_choice(
         &self,
         past_seabed: Option<f64>,
-    ) -> (Option<crate::optics::column::ColumnInput>, String) {
+    ) -> (Option<poser_optics::column::ColumnInput>, String) {
         if self.render.daylight == Daylight::Traced {
             return (
                 None,
@@ -1533,7 +1544,7 @@ impl Model {
     }
 }
 
-/// A quick column solve ([`crate::optics::column::solve_rounds`]), remembered for the life of
+/// A quick column solve ([`poser_optics::column::solve_rounds`]), remembered for the life of
 /// the process: resolution measures the bounce limit of every scene lit through a column
 /// ([`Model::bounce_cut`]), and a process that loads one site many times (a test binary, the
 /// Python module, a lesson's variants, the dive planner's alternatives) then solves its column
@@ -1541,10 +1552,10 @@ impl Model {
 /// `f64` exactly), so a hit is the very column a solve would return: no result depends on the
 /// cache. The few most recent columns are kept.
 fn quick_column(
-    input: &crate::optics::column::ColumnInput,
+    input: &poser_optics::column::ColumnInput,
     rounds: usize,
-) -> Option<std::sync::Arc<crate::optics::column::Column>> {
-    use crate::optics::column::Column;
+) -> Option<std::sync::Arc<poser_optics::column::Column>> {
+    use poser_optics::column::Column;
     use std::sync::{Arc, Mutex};
     static CACHE: Mutex<Vec<(String, Arc<Column>)>> = Mutex::new(Vec::new());
     const KEEP: usize = 8;
@@ -1553,7 +1564,7 @@ fn quick_column(
     if let Some(col) = find(&CACHE.lock().unwrap_or_else(|p| p.into_inner())) {
         return Some(col);
     }
-    let col = Arc::new(crate::optics::column::solve_rounds(input, rounds).ok()?);
+    let col = Arc::new(poser_optics::column::solve_rounds(input, rounds).ok()?);
     let mut cache = CACHE.lock().unwrap_or_else(|p| p.into_inner());
     if find(&cache).is_none() {
         if cache.len() == KEEP {
