@@ -1,14 +1,16 @@
 //! The full tier's own suites, one binary (`cargo test --test backends`): the ones that run
 //! the real Mitsuba 3, Blender/Cycles, COLMAP, OpenCV and headless Chromium (`./test.sh` sets
-//! them up), and the native renderer's statistical checks against itself and its brute-force
-//! transport (`native_column_convergence`, `native_convergence`: no Python, but about a minute
-//! and a half of CPU, which would make the fast tier a minute slower). Each module is one file
-//! of `tests/`; run one with `cargo test --test backends NAME::`.
+//! them up), and the native renderer's slow checks, which need no Python but minutes of CPU
+//! that would make the fast tier a minute slower: its statistics against itself and its
+//! brute-force transport (`native_column_convergence`, `native_convergence`) and `poser bench
+//! sensor` (`bench_sensor`). Each module is one file of `tests/`; run one with
+//! `cargo test --test backends NAME::`.
 
 #[allow(dead_code)]
 mod support;
 
 mod bench_render_backends;
+mod bench_sensor;
 mod blender;
 mod compare_cli;
 mod cross_backend;

@@ -1,6 +1,7 @@
 //! `poser bench sensor` on a tiny reef_strip (60 × 40 px): the three daylight estimators are
 //! measured, the column and the denoiser lower the noise, the costs add up, and the column's
-//! mean stays with the traced render's. No Python.
+//! mean stays with the traced render's. No Python, but nine renders of the reef, each with its
+//! column solve and textures: the full tier runs it.
 
 use poser::bench::sensor::{Options, run, table};
 

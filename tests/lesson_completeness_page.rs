@@ -1,8 +1,9 @@
 //! The coral self-occlusion lesson's page opened in real headless Chromium (Debian's
 //! `chromium`, installed by backends/setup.sh when run as root): every number of
 //! `lesson.json` in its `data-key` cell of the DOM Chromium builds, formatted as the page
-//! formats it; the seen/unseen maps decoded as images; the screenshot not blank. The physics
-//! bands are checked in the fast tier (`lesson_completeness.rs`).
+//! formats it; the seen/unseen maps decoded as images; the screenshot not blank; the same
+//! numbers on one thread. The physics bands are checked in the fast tier
+//! (`lesson_completeness.rs`).
 
 use crate::support;
 
@@ -58,6 +59,36 @@ fn completeness_lesson_page_shows_every_number_and_map_in_chromium() {
         assert!(img.pixels().any(|p| p != first), "a blank map");
     }
     assert!(dom.contains("Try next"));
+    // Same scene, same seed, one thread: the same numbers (the timings aside).
+    let again = tempfile::tempdir().unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
+        .args([
+            "lesson",
+            "scenarios/lessons/coral_self_occlusion.toml",
+            "-o",
+        ])
+        .arg(again.path().join("coral"))
+        .arg("--quiet")
+        .env("RAYON_NUM_THREADS", "1")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let one: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(again.path().join("coral/lesson.json")).unwrap())
+            .unwrap();
+    let numbers = |json: &serde_json::Value| -> Vec<serde_json::Value> {
+        let mut rows = json["results"]["rows"].as_array().unwrap().clone();
+        for r in &mut rows {
+            r.as_object_mut().unwrap().remove("seconds");
+        }
+        rows
+    };
+    assert_eq!(
+        numbers(&json),
+        numbers(&one),
+        "one thread gave other numbers"
+    );
     let var = screenshot_variance(&page, &out);
     assert!(
         var > 200.0,

@@ -106,6 +106,9 @@ fn a_back_end_refuses_an_invalid_model_and_writes_nothing() {
         "{err}"
     );
     assert!(!dir.exists(), "nothing may be written");
+    // The in-memory render (the Python module's `Scene.render`) checks it too.
+    let err = poser::backend::native::render_one(&model, 0, 0, Some(1)).unwrap_err();
+    assert!(err.contains("cameras[0].cy"), "{err}");
     for backend in [Backend::Mitsuba, Backend::Blender] {
         let err = backend.compile(&model, &dir).unwrap_err();
         assert!(err.contains("cameras[0].cy"), "{backend}: {err}");

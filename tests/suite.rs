@@ -10,7 +10,6 @@ mod architecture;
 mod bench_column;
 mod bench_mesh;
 mod bench_render;
-mod bench_sensor;
 mod blender_snapshots;
 mod canonical_native;
 mod compile_out;

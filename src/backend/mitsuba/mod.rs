@@ -167,6 +167,7 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
     for c in &model.cameras {
         view::check_camera(c)?;
     }
+    world::check_sun(model)?;
     let mut files = BTreeMap::new();
     let mut warnings = Vec::new();
     let shapes = world::shapes(model, &mut files, &mut warnings)?;

@@ -55,11 +55,10 @@ pub fn world(model: &Model, shapes: Vec<El>) -> Result<El, String> {
     Ok(root)
 }
 
-fn sun(model: &Model) -> Result<Option<El>, String> {
-    let Some(sun) = &model.sun else {
-        return Ok(None);
-    };
-    if model.needs.caustics {
+/// What Mitsuba cannot render of the sun: sunlight through a wavy surface. Checked first by
+/// [`super::build`], before any texture is baked.
+pub(super) fn check_sun(model: &Model) -> Result<(), String> {
+    if model.sun.is_some() && model.needs.caustics {
         return Err(
             "the wavy sea surface (caustics) cannot be rendered by the Mitsuba backend: \
                     sunlight refracted through a wavy dielectric surface is a caustic that \
@@ -68,6 +67,14 @@ fn sun(model: &Model) -> Result<Option<El>, String> {
                 .into(),
         );
     }
+    Ok(())
+}
+
+fn sun(model: &Model) -> Result<Option<El>, String> {
+    check_sun(model)?;
+    let Some(sun) = &model.sun else {
+        return Ok(None);
+    };
     let (dir, e, note) = if model.water.is_some() {
         (
             sun.direction_water,

@@ -86,6 +86,9 @@ pub fn render_one(
             model.cameras.len()
         ));
     }
+    // The entry point of the Python module, which reaches the renderer without `Backend`:
+    // the same validation first.
+    model.validate().map_err(|e| e.to_string())?;
     let samples = checked_samples(samples.unwrap_or(model.render.samples))?;
     let scene = scene::Scene::build(model)?;
     render_image(model, &scene, pose, cam, samples, None)
