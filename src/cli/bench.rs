@@ -1,206 +1,222 @@
 //! `poser bench`: speed-against-error reports (projection solvers; render backends), the cost
 //! of an image at the sensor's noise (`sensor`), the water column's bias (`column`), COLMAP on
 //! rendered surveys (`images`), the backends' agreement on every shipped scene (`parity`), and a
-//! large textured mesh's load, BVH, truth and render (`mesh`).
+//! large textured mesh's load, BVH, truth and render (`mesh`). One clap subcommand per report,
+//! each with its own `Args`.
 use super::CliError;
 use crate::backend::Backend;
 use std::path::PathBuf;
 
-/// The arguments of `poser bench`.
+/// The arguments of `poser bench`: one subcommand per report, each with only its own options
+/// (clap refuses another report's option, e.g. `poser bench projection --triangles 10`).
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// What to benchmark: `projection`, `render`, `sensor`, `column`, `evaluate`, `parity`,
-    /// `images` or `mesh`.
-    pub what: String,
+    #[command(subcommand)]
+    pub what: What,
+}
+
+/// Which report.
+#[derive(clap::Subcommand, Debug)]
+pub enum What {
+    /// The port solvers: speed against error of the exact and fast projections.
+    Projection(Common),
+    /// The render backends: speed against error on every shipped scene.
+    Render(RenderArgs),
+    /// The cost of an image at the sensor's own noise, per daylight estimator.
+    Sensor(ScenesArgs),
+    /// The water column's bias and noise against the random walks.
+    Column(ScenesArgs),
+    /// COLMAP on the lessons' surveys, against the truth.
+    Evaluate(Common),
+    /// The backends' agreement on every shipped scene.
+    Parity(ParityArgs),
+    /// COLMAP on rendered surveys: registered share, reprojection error, focal length.
+    Images(ScenesArgs),
+    /// A large textured mesh: load, BVH, truth and render, with the peak memory.
+    Mesh(MeshArgs),
+}
+
+/// The options every report has.
+#[derive(clap::Args, Debug)]
+pub struct Common {
     /// Write the report as JSON too.
     #[arg(long)]
     pub json: Option<PathBuf>,
     /// Smaller, quicker run.
     #[arg(long)]
     pub quick: bool,
-    /// `render` and `parity`: the backends to compare (default: all three).
-    #[arg(long, value_enum, value_delimiter = ',')]
-    pub backends: Vec<Backend>,
-    /// `render` only: write the speed-against-error curves as an SVG plot.
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    /// `render` only: replace the generated summary block of this Markdown file (the README).
-    #[arg(long)]
-    pub readme: Option<PathBuf>,
-    /// `render`, `sensor`, `column`, `parity` and `images`: only the scenes whose file name
-    /// contains this.
+}
+
+/// `sensor`, `column` and `images`.
+#[derive(clap::Args, Debug)]
+pub struct ScenesArgs {
+    #[command(flatten)]
+    pub common: Common,
+    /// Only the scenes whose file name contains this.
     #[arg(long)]
     pub only: Option<String>,
-    /// `parity`, `sensor`, `column` and `images`: keep the renders (and `parity`'s `poser compare` reports) here
-    /// (default: a temporary folder, removed afterwards).
+    /// Keep the renders here (default: a temporary folder, removed afterwards).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// `mesh` only: triangles of the generated site (default 5 000 000; `--quick`: 500 000).
+}
+
+/// `render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub common: Common,
+    /// The backends to compare (default: all three).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub backends: Vec<Backend>,
+    /// Only the scenes whose file name contains this.
+    #[arg(long)]
+    pub only: Option<String>,
+    /// Write the speed-against-error curves as an SVG plot.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Replace the generated summary block of this Markdown file (the README).
+    #[arg(long)]
+    pub readme: Option<PathBuf>,
+}
+
+/// `parity`.
+#[derive(clap::Args, Debug)]
+pub struct ParityArgs {
+    #[command(flatten)]
+    pub scenes: ScenesArgs,
+    /// The backends to compare (default: all three).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub backends: Vec<Backend>,
+}
+
+/// `mesh`.
+#[derive(clap::Args, Debug)]
+pub struct MeshArgs {
+    #[command(flatten)]
+    pub common: Common,
+    /// Triangles of the generated site (default 5 000 000; `--quick`: 500 000).
     #[arg(long)]
     pub triangles: Option<u64>,
-    /// `mesh` only: side of its square texture, texels (default 8192; `--quick`: 2048).
+    /// Side of its square texture, texels (default 8192; `--quick`: 2048).
     #[arg(long)]
     pub texture: Option<u32>,
-    /// `mesh` only: keep the generated site, its scene and the render here (default: a
-    /// temporary folder, removed afterwards).
+    /// Keep the generated site, its scene and the render here (default: a temporary folder,
+    /// removed afterwards).
     #[arg(long)]
     pub keep: Option<PathBuf>,
-    /// `mesh` only: write the site alone (`model.obj`, `model.mtl`, `model.jpg`) into this
-    /// folder and stop, no bench; sizes from `--triangles` and `--texture`, by default the
-    /// shipped site's (32 000 triangles, 2048²): `poser bench mesh --site
+    /// Write the site alone (`model.obj`, `model.mtl`, `model.jpg`) into this folder and stop,
+    /// no bench; sizes from `--triangles` and `--texture`, by default the shipped site's
+    /// (32 000 triangles, 2048²): `poser bench mesh --site
     /// scenarios/sites/assets/textured_bommie` rewrites it.
     #[arg(long)]
     pub site: Option<PathBuf>,
 }
 
 pub fn run(args: &Args) -> Result<(), CliError> {
-    let (what, json, quick, backends, plot) = (
-        args.what.as_str(),
-        args.json.clone(),
-        args.quick,
-        args.backends.clone(),
-        args.plot.clone(),
-    );
-    if what != "render" && (plot.is_some() || args.readme.is_some()) {
-        return Err(CliError::Usage(
-            "--plot and --readme apply to `poser bench render` only".into(),
-        ));
-    }
-    if !matches!(what, "render" | "parity") && !backends.is_empty() {
-        return Err(CliError::Usage(
-            "--backends applies to `poser bench render` and `poser bench parity` only".into(),
-        ));
-    }
-    if !matches!(what, "render" | "sensor" | "column" | "parity" | "images") && args.only.is_some()
-    {
-        return Err(CliError::Usage(
-            "--only applies to `poser bench render`, `sensor`, `column`, `parity` and `images` only"
-                .into(),
-        ));
-    }
-    if !matches!(what, "parity" | "sensor" | "column" | "images") && args.out.is_some() {
-        return Err(CliError::Usage(
-            "--out applies to `poser bench parity`, `sensor`, `column` and `images` only".into(),
-        ));
-    }
-    if what != "mesh"
-        && (args.triangles.is_some()
-            || args.texture.is_some()
-            || args.keep.is_some()
-            || args.site.is_some())
-    {
-        return Err(CliError::Usage(
-            "--triangles, --texture, --keep and --site apply to `poser bench mesh` only".into(),
-        ));
-    }
-    match what {
-        "mesh" if args.site.is_some() => site_only(args),
-        "mesh" => {
-            if cfg!(debug_assertions) {
-                eprintln!(
-                    "warning: this is a debug build; speeds are not representative (use --release)"
-                );
-            }
-            let mut opts = crate::bench::mesh::Options::new(quick);
-            opts.triangles = args.triangles.unwrap_or(opts.triangles);
-            opts.texture = args.texture.unwrap_or(opts.texture);
-            opts.keep = args.keep.clone();
+    let root = crate::backend::python::repo_root;
+    match &args.what {
+        What::Mesh(a) if a.site.is_some() => site_only(a),
+        What::Mesh(a) => {
+            speed_warning();
+            let mut opts = crate::bench::mesh::Options::new(a.common.quick);
+            opts.triangles = a.triangles.unwrap_or(opts.triangles);
+            opts.texture = a.texture.unwrap_or(opts.texture);
+            opts.keep = a.keep.clone();
             let report = crate::bench::mesh::run(&opts).map_err(CliError::Failed)?;
             print!("{}", crate::bench::mesh::table(&report));
-            write_json(json.as_deref(), &report)
+            write_json(a.common.json.as_deref(), &report)
         }
-        "projection" => {
-            if cfg!(debug_assertions) {
-                eprintln!(
-                    "warning: this is a debug build; speeds are not representative (use --release)"
-                );
-            }
-            let rows = crate::bench::projection::run(quick);
+        What::Projection(c) => {
+            speed_warning();
+            let rows = crate::bench::projection::run(c.quick);
             println!(
                 "batch solvers: {} lanes, {} build\n",
                 crate::optics::port::LANES,
                 crate::optics::port::Simd::detect().name()
             );
             print!("{}", crate::bench::projection::table(&rows));
-            write_json(json.as_deref(), &rows)
+            write_json(c.json.as_deref(), &rows)
         }
-        "render" => {
-            if cfg!(debug_assertions) {
-                eprintln!(
-                    "warning: this is a debug build; speeds are not representative (use --release)"
-                );
-            }
+        What::Render(a) => {
+            speed_warning();
             let opts = crate::bench::render::BenchOptions {
-                quick,
-                backends,
-                only: args.only.clone(),
-                json,
-                plot,
-                readme: args.readme.clone(),
+                quick: a.common.quick,
+                backends: a.backends.clone(),
+                only: a.only.clone(),
+                json: a.common.json.clone(),
+                plot: a.plot.clone(),
+                readme: a.readme.clone(),
             };
-            let root = crate::backend::python::repo_root();
-            crate::bench::render::run(&root, &opts)
+            crate::bench::render::run(&root(), &opts)
                 .map(|_| ())
                 .map_err(CliError::Failed)
         }
-        "evaluate" => {
-            let lessons = crate::backend::python::repo_root().join("scenarios/lessons");
-            let rows = crate::bench::evaluate::run(&lessons, quick).map_err(CliError::Failed)?;
+        What::Evaluate(c) => {
+            let lessons = root().join("scenarios/lessons");
+            let rows = crate::bench::evaluate::run(&lessons, c.quick).map_err(CliError::Failed)?;
             print!("{}", crate::bench::evaluate::table(&rows));
-            write_json(json.as_deref(), &rows)
+            write_json(c.json.as_deref(), &rows)
         }
-        "parity" => {
-            let backends = if backends.is_empty() {
+        What::Parity(a) => {
+            let backends = if a.backends.is_empty() {
                 Backend::ALL.to_vec()
             } else {
-                backends
+                a.backends.clone()
             };
-            let (_tmp, out) = out_dir(args.out.as_ref())?;
-            let root = crate::backend::python::repo_root();
-            let rows =
-                crate::bench::parity::run(&root, &backends, quick, args.only.as_deref(), &out)
-                    .map_err(CliError::Failed)?;
+            let s = &a.scenes;
+            let (_tmp, out) = out_dir(s.out.as_ref())?;
+            let rows = crate::bench::parity::run(
+                &root(),
+                &backends,
+                s.common.quick,
+                s.only.as_deref(),
+                &out,
+            )
+            .map_err(CliError::Failed)?;
             print!("{}", crate::bench::parity::table(&rows));
-            write_json(json.as_deref(), &rows)
+            write_json(s.common.json.as_deref(), &rows)
         }
-        "sensor" => {
-            let (_tmp, out) = out_dir(args.out.as_ref())?;
-            let poser = std::env::current_exe().map_err(|e| CliError::Failed(e.to_string()))?;
+        What::Sensor(a) => {
+            let (_tmp, out) = out_dir(a.out.as_ref())?;
             let opts = crate::bench::sensor::Options {
-                scale: if quick { 0.25 } else { 1.0 },
+                scale: if a.common.quick { 0.25 } else { 1.0 },
                 pilots: [2, 8],
-                only: args.only.clone(),
-                poser,
+                only: a.only.clone(),
+                poser: this_program()?,
                 out,
             };
-            let root = crate::backend::python::repo_root();
-            let rows = crate::bench::sensor::run(&root, &opts).map_err(CliError::Failed)?;
+            let rows = crate::bench::sensor::run(&root(), &opts).map_err(CliError::Failed)?;
             print!("{}", crate::bench::sensor::table(&rows));
-            write_json(json.as_deref(), &rows)
+            write_json(a.common.json.as_deref(), &rows)
         }
-        "column" => {
-            let (_tmp, out) = out_dir(args.out.as_ref())?;
-            let poser = std::env::current_exe().map_err(|e| CliError::Failed(e.to_string()))?;
-            let mut opts = crate::bench::column::Options::new(quick, poser, out);
-            opts.only = args.only.clone();
-            let root = crate::backend::python::repo_root();
-            let rows = crate::bench::column::run(&root, &opts).map_err(CliError::Failed)?;
+        What::Column(a) => {
+            let (_tmp, out) = out_dir(a.out.as_ref())?;
+            let mut opts = crate::bench::column::Options::new(a.common.quick, this_program()?, out);
+            opts.only = a.only.clone();
+            let rows = crate::bench::column::run(&root(), &opts).map_err(CliError::Failed)?;
             print!("{}", crate::bench::column::table(&rows));
-            write_json(json.as_deref(), &rows)
+            write_json(a.common.json.as_deref(), &rows)
         }
-        "images" => {
-            let (_tmp, out) = out_dir(args.out.as_ref())?;
-            let root = crate::backend::python::repo_root();
-            let rows = crate::bench::images::run(&root, quick, args.only.as_deref(), &out)
+        What::Images(a) => {
+            let (_tmp, out) = out_dir(a.out.as_ref())?;
+            let rows = crate::bench::images::run(&root(), a.common.quick, a.only.as_deref(), &out)
                 .map_err(CliError::Failed)?;
             print!("{}", crate::bench::images::table(&rows));
-            write_json(json.as_deref(), &rows)
+            write_json(a.common.json.as_deref(), &rows)
         }
-        other => Err(CliError::Usage(format!(
-            "bench `{other}`: expected `projection`, `render`, `sensor`, `column`, `evaluate`, \
-             `parity`, `images` or `mesh`"
-        ))),
     }
+}
+
+/// The reports that time code say so when the build is not optimised for speed.
+fn speed_warning() {
+    if cfg!(debug_assertions) {
+        eprintln!("warning: this is a debug build; speeds are not representative (use --release)");
+    }
+}
+
+/// This `poser` executable, which the benches that measure whole runs start as a child.
+fn this_program() -> Result<PathBuf, CliError> {
+    std::env::current_exe().map_err(|e| CliError::Failed(e.to_string()))
 }
 
 /// `--out DIR`, else a temporary folder (removed when the returned guard drops).
@@ -227,9 +243,9 @@ fn write_json(
 }
 
 /// `poser bench mesh --site DIR`: the site's files alone, at the shipped sizes unless given.
-fn site_only(args: &Args) -> Result<(), CliError> {
+fn site_only(args: &MeshArgs) -> Result<(), CliError> {
     use crate::geometry::bommie;
-    if args.keep.is_some() || args.json.is_some() || args.quick {
+    if args.keep.is_some() || args.common.json.is_some() || args.common.quick {
         return Err(CliError::Usage(
             "--site writes the site alone: without --keep, --json or --quick".into(),
         ));

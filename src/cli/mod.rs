@@ -111,7 +111,8 @@ pub enum Command {
     Plan(plan::Args),
     /// Render with several backends and report target-position and radiometric agreement.
     Compare(compare::Args),
-    /// Speed-against-error reports: `projection` (port solvers) or `render` (backends).
+    /// Benchmarks: speed against error of the port solvers (`projection`) and the backends
+    /// (`render`); `sensor`, `column`, `evaluate`, `parity`, `images`, `mesh`.
     Bench(bench::Args),
     /// Process the simulated survey with COLMAP; errors against the truth, the bowl, a report.
     Evaluate(evaluate::Args),
