@@ -15,20 +15,6 @@ use std::process::Command;
 
 const SCENE: &str = "scenarios/lessons/coral_self_occlusion.toml";
 
-fn run(out: &Path) -> serde_json::Value {
-    let o = Command::new(env!("CARGO_BIN_EXE_poser"))
-        .args(["lesson", SCENE, "-o", out.to_str().unwrap(), "--quiet"])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run poser");
-    assert!(
-        o.status.success(),
-        "poser lesson failed:\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&std::fs::read(out.join("lesson.json")).unwrap()).unwrap()
-}
-
 fn row<'a>(json: &'a serde_json::Value, label: &str) -> &'a serde_json::Value {
     json["results"]["rows"]
         .as_array()
@@ -44,9 +30,7 @@ fn f(v: &serde_json::Value) -> f64 {
 
 #[test]
 fn quick_form_measures_coral_completeness_in_the_physical_bands_and_shows_it() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("coral");
-    let json = run(&out);
+    let (_tmp, out, json) = crate::support::lesson::run_lesson(SCENE, "coral");
     assert_eq!(json["results"]["kind"], "completeness");
     assert_eq!(json["form"], "quick");
     let rows = json["results"]["rows"].as_array().unwrap();

@@ -8,11 +8,15 @@
 use crate::support;
 
 use base64::Engine as _;
-use support::lesson::{assert_self_contained, cell, dump_dom, run_lesson, screenshot_variance};
+use support::lesson::{
+    assert_self_contained, cell, dump_dom, run_lesson, run_lesson_on_threads, screenshot_variance,
+};
+
+const SCENE: &str = "scenarios/lessons/coral_self_occlusion.toml";
 
 #[test]
 fn completeness_lesson_page_shows_every_number_and_map_in_chromium() {
-    let (_tmp, out, json) = run_lesson("scenarios/lessons/coral_self_occlusion.toml", "coral");
+    let (_tmp, out, json) = run_lesson(SCENE, "coral");
     let page = out.join("index.html");
     assert_self_contained(&std::fs::read_to_string(&page).unwrap());
     let dom = dump_dom(&page, &out);
@@ -60,25 +64,9 @@ fn completeness_lesson_page_shows_every_number_and_map_in_chromium() {
     }
     assert!(dom.contains("Try next"));
     // Same scene, same seed, one thread: the same numbers (the timings aside).
-    let again = tempfile::tempdir().unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
-        .args([
-            "lesson",
-            "scenarios/lessons/coral_self_occlusion.toml",
-            "-o",
-        ])
-        .arg(again.path().join("coral"))
-        .arg("--quiet")
-        .env("RAYON_NUM_THREADS", "1")
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let one: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(again.path().join("coral/lesson.json")).unwrap())
-            .unwrap();
+    let (_one_tmp, _, one) = run_lesson_on_threads(SCENE, "coral", 1);
     let numbers = |json: &serde_json::Value| -> Vec<serde_json::Value> {
-        let mut rows = json["results"]["rows"].as_array().unwrap().clone();
+        let mut rows = support::lesson::rows(json).clone();
         for r in &mut rows {
             r.as_object_mut().unwrap().remove("seconds");
         }

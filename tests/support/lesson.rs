@@ -4,21 +4,13 @@
 //!
 //! | item | what |
 //! |---|---|
-//! | [`run_lesson`] | `poser lesson SCENE` into a temporary folder; its `lesson.json` |
+//! | [`run_lesson`], [`run_lesson_with`], [`run_lesson_on_threads`] | `poser lesson SCENE` into a temporary folder (with `--set` overrides; on N threads); its `lesson.json` |
 //! | [`check_page`] | the page is self-contained, shows its images, plots and try-next lines, and its screenshot is not blank; returns Chromium's DOM |
 //! | [`cell`] | the text of a `data-key` cell of the DOM |
 //! | [`dump_dom`], [`screenshot_variance`] | Chromium's DOM and the grey-level variance of its screenshot |
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-pub fn poser(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_poser"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run poser")
-}
 
 pub fn chromium() -> PathBuf {
     for name in ["chromium", "chromium-browser"] {
@@ -105,13 +97,36 @@ pub fn run_lesson_with(
     name: &str,
     sets: &[&str],
 ) -> (tempfile::TempDir, PathBuf, serde_json::Value) {
+    run_lesson_in(scene, name, sets, None)
+}
+
+/// [`run_lesson`] on a pool of `threads` threads (`RAYON_NUM_THREADS`).
+pub fn run_lesson_on_threads(
+    scene: &str,
+    name: &str,
+    threads: usize,
+) -> (tempfile::TempDir, PathBuf, serde_json::Value) {
+    run_lesson_in(scene, name, &[], Some(threads))
+}
+
+fn run_lesson_in(
+    scene: &str,
+    name: &str,
+    sets: &[&str],
+    threads: Option<usize>,
+) -> (tempfile::TempDir, PathBuf, serde_json::Value) {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join(name);
     let mut args = vec!["lesson", scene, "-o", out.to_str().unwrap(), "--quiet"];
     for s in sets {
         args.extend(["--set", s]);
     }
-    let o = poser(&args);
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_poser"));
+    cmd.args(&args).current_dir(env!("CARGO_MANIFEST_DIR"));
+    if let Some(n) = threads {
+        cmd.env("RAYON_NUM_THREADS", n.to_string());
+    }
+    let o = cmd.output().expect("run poser");
     assert!(
         o.status.success(),
         "poser lesson {scene} failed:\n{}",

@@ -178,7 +178,7 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let world_doc = world::world(model, shapes)?;
+    let world_doc = world::world(model, shapes);
     let has_world = world_doc
         .children
         .iter()

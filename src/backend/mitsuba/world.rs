@@ -37,13 +37,13 @@ pub fn shapes(
 
 /// World content shared by every view: sun, world-mounted lights, objects, targets.
 /// `shapes` are the already-built object/target shapes (they need asset files).
-pub fn world(model: &Model, shapes: Vec<El>) -> Result<El, String> {
+pub fn world(model: &Model, shapes: Vec<El>) -> El {
     let mut root = El::new("scene").attr("version", "3.0.0");
     root.push_comment(format!(
         "poser scene `{}`: world content shared by every view",
         model.name
     ));
-    if let Some(s) = sun(model)? {
+    if let Some(s) = sun(model) {
         root.push(s);
     }
     for l in model.lights.iter().filter(|l| l.mount == Mount::World) {
@@ -52,11 +52,12 @@ pub fn world(model: &Model, shapes: Vec<El>) -> Result<El, String> {
     for s in shapes {
         root.push(s);
     }
-    Ok(root)
+    root
 }
 
-/// What Mitsuba cannot render of the sun: sunlight through a wavy surface. Checked first by
-/// [`super::build`], before any texture is baked.
+/// What Mitsuba cannot render of the sun: sunlight through a wavy surface. Checked by
+/// [`super::build`] before anything is baked or written (the sun's emitter, [`sun`], then
+/// needs no check of its own).
 pub(super) fn check_sun(model: &Model) -> Result<(), String> {
     if model.sun.is_some() && model.needs.caustics {
         return Err(
@@ -70,11 +71,8 @@ pub(super) fn check_sun(model: &Model) -> Result<(), String> {
     Ok(())
 }
 
-fn sun(model: &Model) -> Result<Option<El>, String> {
-    check_sun(model)?;
-    let Some(sun) = &model.sun else {
-        return Ok(None);
-    };
+fn sun(model: &Model) -> Option<El> {
+    let sun = model.sun.as_ref()?;
     let (dir, e, note) = if model.water.is_some() {
         (
             sun.direction_water,
@@ -84,7 +82,7 @@ fn sun(model: &Model) -> Result<Option<El>, String> {
     } else {
         (sun.direction_air, sun.irradiance, "in air")
     };
-    Ok(Some(
+    Some(
         El::typed("emitter", "directional")
             .comment(format!(
                 "sun at elevation {:.3}°, azimuth {:.3}°: {note}",
@@ -97,7 +95,7 @@ fn sun(model: &Model) -> Result<Option<El>, String> {
                     .attr("value", super::xml::triple(dir.normalize().to_array())),
             )
             .rgb("irradiance", e),
-    ))
+    )
 }
 
 /// One light in the world frame: `world_from_mount` is the identity for a world-mounted light
