@@ -7,7 +7,8 @@
 //! [`geometry`] service (meshes, targets, BVH) shared by the truth, the planner and the native
 //! renderer, [`plan`] for survey and dive planning, [`compare`] / [`bench`] driving the back
 //! ends from outside, and [`export`] writing the model for other tools (a glTF preview of the
-//! whole scene). The [`cli`] sits on top and nothing in the library imports it: [`explain`]
+//! whole scene); [`pipeline`] runs render → truth → camera for every command that makes
+//! images. The [`cli`] sits on top and nothing in the library imports it: [`explain`]
 //! (the model for a person), [`points`] (the one point-list parser) and [`image`] (linear
 //! images, the EXR reader) serve the CLI, the Python module and the fuzz targets alike;
 //! [`progress`] reports long jobs on stderr, with or without a terminal.
@@ -29,6 +30,7 @@ pub mod import;
 pub mod io;
 pub mod lesson;
 pub mod pack;
+pub mod pipeline;
 pub mod plan;
 pub mod points;
 pub mod progress;

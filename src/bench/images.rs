@@ -158,10 +158,9 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
         .with_resolution_scale(scale);
     // Every image goes through a camera: the scene's `[sensor]`, else the default one (as
     // `poser render --sensor`), which also writes the render's variance for the noise column.
-    let sensor = model
+    model
         .sensor
-        .get_or_insert_with(crate::model::Sensor::default)
-        .clone();
+        .get_or_insert_with(crate::model::Sensor::default);
     let stem = Path::new(case.scene)
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -195,18 +194,17 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
     }
     let dir = out.join(&stem);
     let t0 = std::time::Instant::now();
-    Backend::Native.render(
-        &model,
-        &dir,
-        &RenderOptions {
-            samples: Some(samples),
-            poses: None,
-            progress: false,
-            resume: false,
-        },
-    )?;
-    let poses: Vec<usize> = (0..model.poses.len()).collect();
-    let developed = crate::sensor::files::apply(&model, &sensor, &dir, &poses, samples)?;
+    let opts = RenderOptions {
+        samples: Some(samples),
+        poses: None,
+        progress: false,
+        resume: false,
+    };
+    let steps = crate::pipeline::Steps {
+        truth: false,
+        camera: true,
+    };
+    let developed = crate::pipeline::run(&model, Backend::Native, &dir, &opts, steps)?.developed;
     row.render_wall_s = t0.elapsed().as_secs_f64();
     // Median over the images of each one's median √var / L, as its sidecar reports it.
     row.render_noise = crate::sensor::percentile(

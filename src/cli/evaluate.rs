@@ -214,24 +214,17 @@ fn render_images(model: &crate::model::Model, args: &Args) -> Result<PathBuf, Cl
     evaluate::check_images_texture(model).map_err(CliError::Failed)?;
     let dir = args.out.join("images");
     let partial = args.out.join("images.partial");
-    args.backend
-        .render(
-            model,
-            &partial,
-            &RenderOptions {
-                samples: args.samples,
-                poses: None,
-                progress: !args.quiet,
-                resume: true,
-            },
-        )
-        .map_err(CliError::Failed)?;
-    if let Some(sensor) = &model.sensor {
-        let spp = args.samples.unwrap_or(model.render.samples).max(1);
-        let poses: Vec<usize> = (0..model.poses.len()).collect();
-        crate::sensor::files::apply(model, sensor, &partial, &poses, spp)
-            .map_err(CliError::Failed)?;
-    }
+    let opts = RenderOptions {
+        samples: args.samples,
+        poses: None,
+        progress: !args.quiet,
+        resume: true,
+    };
+    let steps = crate::pipeline::Steps {
+        truth: false,
+        camera: true,
+    };
+    crate::pipeline::run(model, args.backend, &partial, &opts, steps).map_err(CliError::Failed)?;
     crate::io::replace_dir(&partial, &dir)
         .map_err(|e| CliError::Failed(format!("{}: {e}", dir.display())))?;
     Ok(dir)

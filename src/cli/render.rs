@@ -129,23 +129,21 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         progress: !quiet,
         resume: args.resume,
     };
-    let report = backend
-        .render(&model, out, &opts)
-        .map_err(CliError::Failed)?;
-    // The ground truth beside the images, the same for every backend.
-    if !args.skip_truth {
-        crate::truth::write(&model, &out.join("truth")).map_err(CliError::Failed)?;
-    }
+    // Render, the ground truth beside the images (the same for every backend), the camera.
+    let steps = crate::pipeline::Steps {
+        truth: !args.skip_truth,
+        camera: true,
+    };
+    let done =
+        crate::pipeline::run(&model, backend, out, &opts, steps).map_err(CliError::Failed)?;
     eprintln!(
         "rendered {} image(s) into {} in {:.2} s",
-        report.images.len(),
+        done.report.images.len(),
         out.display(),
-        report.seconds
+        done.report.seconds
     );
-    if let Some(s) = &model.sensor {
-        let spp = opts.samples.unwrap_or(model.render.samples).max(1);
-        let list = opts.pose_indices(model.poses.len());
-        super::sensor::after_render(&model, s, out, &list, spp)?;
+    if model.sensor.is_some() {
+        super::sensor::report(&done.developed, out);
     }
     Ok(())
 }

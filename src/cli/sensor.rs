@@ -1,20 +1,14 @@
 //! `poser sensor`: the camera's sensor stage on one linear EXR ([`crate::sensor`]), and the
 //! hook `poser render` calls after rendering when the scene has a `[sensor]` (or `--sensor`).
 use super::{CliError, SceneArgs, load_model};
-use crate::model::{Model, Sensor, SensorFormat};
+use crate::model::SensorFormat;
 use std::path::Path;
 use std::path::PathBuf;
 
-/// After `poser render`: the sensor stage on every image, a summary line, and one warning line
-/// when the render noise of images exceeds the sensor's (naming the image when there is one).
-pub fn after_render(
-    model: &Model,
-    sensor: &Sensor,
-    out: &Path,
-    poses: &[usize],
-    samples: u32,
-) -> Result<(), CliError> {
-    let done = crate::sensor::files::apply(model, sensor, out, poses, samples)?;
+/// After `poser render`'s camera step ([`crate::pipeline`]): a summary line, and one warning
+/// line when the render noise of images exceeds the sensor's (naming the image when there is
+/// one).
+pub fn report(done: &[crate::sensor::files::Done], out: &Path) {
     let noisy: Vec<&crate::sensor::files::Done> =
         done.iter().filter(|d| d.warning.is_some()).collect();
     match noisy.as_slice() {
@@ -53,7 +47,6 @@ pub fn after_render(
             .map(|r| format!("; render/sensor noise (RMS ratio) up to {r:.2}×"))
             .unwrap_or_default()
     );
-    Ok(())
 }
 
 /// The arguments of `poser sensor`.

@@ -149,16 +149,8 @@ pub fn run(
             c.label,
             m.poses.len()
         ));
-        Backend::Native.render(
-            m,
-            &images_dir,
-            &RenderOptions {
-                samples: None,
-                poses: None,
-                progress: false,
-                resume: false,
-            },
-        )?;
+        let opts = RenderOptions::default();
+        crate::pipeline::run(m, Backend::Native, &images_dir, &opts, Default::default())?;
         let mut images: Vec<PathBuf> = std::fs::read_dir(&images_dir)
             .map_err(|e| format!("{}: {e}", images_dir.display()))?
             .filter_map(|e| e.ok().map(|e| e.path()))

@@ -441,19 +441,17 @@ pub fn view(
     // The solved water column where it applies, as for the page's image ([`super::view`]):
     // a turbid variant's many-times-scattered daylight is what makes a traced preview slow.
     small.render.daylight = crate::model::Daylight::Auto;
-    Backend::Native.render(
-        &small,
-        dir,
-        &RenderOptions {
-            samples: Some(samples),
-            poses: Some(vec![pose]),
-            progress: false,
-            resume: false,
-        },
-    )?;
-    if let Some(sensor) = &small.sensor {
-        crate::sensor::files::apply(&small, sensor, dir, &[pose], samples)?;
-    }
+    let opts = RenderOptions {
+        samples: Some(samples),
+        poses: Some(vec![pose]),
+        progress: false,
+        resume: false,
+    };
+    let steps = crate::pipeline::Steps {
+        truth: false,
+        camera: true,
+    };
+    crate::pipeline::run(&small, Backend::Native, dir, &opts, steps)?;
     // The camera's own file when the scene has a [sensor] (auto exposure, white balance),
     // else the renderer's preview.
     let png_in = |d: &Path| {

@@ -64,17 +64,13 @@ pub fn view(case: &Case, out: &Path, full: bool) -> Result<Vec<u8>, String> {
     // samples in a deep, sky-lit scene (docs/column.md).
     model.render.daylight = crate::model::Daylight::Auto;
     let dir = out.join("view");
-    Backend::Native
-        .render(
-            &model,
-            &dir,
-            &RenderOptions {
-                samples: Some(samples),
-                poses: Some(vec![0]),
-                progress: false,
-                resume: false,
-            },
-        )
+    let opts = RenderOptions {
+        samples: Some(samples),
+        poses: Some(vec![0]),
+        progress: false,
+        resume: false,
+    };
+    crate::pipeline::run(&model, Backend::Native, &dir, &opts, Default::default())
         .map_err(|e| format!("the page's camera image: {e}"))?;
     // Auto-exposed: a deep scene's radiance is far below the preview's fixed exposure.
     let exr = dir.join(format!("{}.exr", model.image_name(0, 0)));
