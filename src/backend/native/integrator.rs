@@ -603,7 +603,7 @@ impl<'a> Integrator<'a> {
             }
             let p = h.point + n * SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
             rng.surface(depth);
-            l += beta_nee * self.surface_direct(&h, d, albedo, day, rng);
+            l += beta_nee * self.surface_direct(&h, d, albedo, day, depth == 0, rng);
             // f·cos/pdf = albedo·(cos/π)/pdf (= albedo for pure cosine sampling).
             let (nd, pdf) = self.sample_surface(n, rng);
             let cos = n.dot(nd);
@@ -685,8 +685,8 @@ impl<'a> Integrator<'a> {
             if t < b {
                 if let Some(h) = surface {
                     let albedo = self.albedo_over(h, self.footprint(spread, depth, o, d, h));
-                    *l +=
-                        *beta * tr(m.sigma_t, b - a) * self.surface_direct(h, d, albedo, day, rng);
+                    let lit = self.surface_direct(h, d, albedo, day, depth == 0, rng);
+                    *l += *beta * tr(m.sigma_t, b - a) * lit;
                 }
                 let trv = tr(m.sigma_t, t - a);
                 let pdf_d = share * pc.dot(m.sigma_t * trv);
@@ -908,7 +908,7 @@ impl<'a> Integrator<'a> {
             let lit = if albedo == DVec3::ZERO {
                 DVec3::ZERO
             } else {
-                self.surface_light(&h, w, albedo, false, true, rng)
+                self.surface_light(&h, w, albedo, false, true, false, rng)
             };
             let water = if level + 1 < GATHER_LEVELS {
                 self.column_gather(col, x, w, h.t, level + 1, rng)
@@ -936,20 +936,24 @@ impl<'a> Integrator<'a> {
 
     /// Next-event estimate of the light reflected at surface hit `h` (of albedo `albedo`,
     /// [`Integrator::albedo`]) towards `-d` (no path weight). `day`: the path still carries
-    /// daylight (sun, and the column's light when there is one).
+    /// daylight (sun, and the column's light when there is one). `first`: the camera ray's own
+    /// hit, where the column's light is estimated per channel ([`Integrator::column_nee`]).
     fn surface_direct(
         &self,
         h: &Hit,
         d: DVec3,
         albedo: DVec3,
         day: bool,
+        first: bool,
         rng: &mut Sampler,
     ) -> DVec3 {
-        self.surface_light(h, d, albedo, true, day, rng)
+        self.surface_light(h, d, albedo, true, day, first, rng)
     }
 
     /// [`Integrator::surface_direct`] from the lamps (strobes, area lights) when `lamps`, and
-    /// from daylight (the sun, and the column's light) when `day`.
+    /// from daylight (the sun, and the column's light) when `day`; the column's light per
+    /// channel when `per_channel`.
+    #[allow(clippy::too_many_arguments)]
     fn surface_light(
         &self,
         h: &Hit,
@@ -957,6 +961,7 @@ impl<'a> Integrator<'a> {
         albedo: DVec3,
         lamps: bool,
         day: bool,
+        per_channel: bool,
         rng: &mut Sampler,
     ) -> DVec3 {
         let n = if h.normal.dot(d) > 0.0 {
@@ -985,7 +990,11 @@ impl<'a> Integrator<'a> {
             DVec3::ZERO
         };
         if day && let Some(col) = self.column {
-            l += self.column_nee(col, p, n, &f, rng);
+            l += if per_channel {
+                self.column_nee_per_channel(col, p, n, &f, rng)
+            } else {
+                self.column_nee(col, p, n, &f, None, rng)
+            };
         }
         l
     }
@@ -1004,18 +1013,26 @@ impl<'a> Integrator<'a> {
         p: DVec3,
         n: DVec3,
         f: &impl Fn(DVec3) -> DVec3,
+        channel: Option<usize>,
         rng: &mut Sampler,
     ) -> DVec3 {
-        let (u0, u1, u2) = (rng.next(), rng.next(), rng.next());
         let z = -p.z;
+        let sample = |up: bool, u: [f64; 3]| match channel {
+            Some(c) => col.sample_channel(c, z, up, u),
+            None => col.sample(z, up, u[0], u[1], u[2]),
+        };
+        let pdf_of = |up: bool, w: DVec3| match channel {
+            Some(c) => col.pdf_channel(c, z, up, w),
+            None => col.pdf(z, up, w),
+        };
+        let (u0, u1, u2) = (rng.next(), rng.next(), rng.next());
         let table = 1.0 - COLUMN_NEE_COSINE;
         let p_up = table * 0.5 * (1.0 + n.z.clamp(-1.0, 1.0));
         let p_down = table - p_up;
         let w = if u0 < p_up {
-            col.sample(z, true, u0 / p_up, u1, u2).map(|s| s.0)
+            sample(true, [u0 / p_up, u1, u2]).map(|s| s.0)
         } else if u0 < table {
-            col.sample(z, false, (u0 - p_up) / p_down, u1, u2)
-                .map(|s| s.0)
+            sample(false, [(u0 - p_up) / p_down, u1, u2]).map(|s| s.0)
         } else {
             let r = u1.sqrt();
             let phi = 2.0 * PI * u2;
@@ -1028,8 +1045,8 @@ impl<'a> Integrator<'a> {
         if fv == DVec3::ZERO {
             return DVec3::ZERO;
         }
-        let pdf = p_up * col.pdf(z, true, w)
-            + p_down * col.pdf(z, false, w)
+        let pdf = p_up * pdf_of(true, w)
+            + p_down * pdf_of(false, w)
             + COLUMN_NEE_COSINE * n.dot(w).max(0.0) / PI;
         if !(pdf > 0.0) {
             return DVec3::ZERO;
@@ -1039,6 +1056,37 @@ impl<'a> Integrator<'a> {
             .intersect(&Ray { origin: p, dir: w }, f64::INFINITY)
             .map_or(f64::INFINITY, |h| h.t);
         fv * self.column_seen(col, p, w, t) / pdf
+    }
+
+    /// [`Integrator::column_nee`] with each bright channel's light estimated from a direction
+    /// drawn from its own distribution ([`crate::optics::column::Column::bright_channels`]),
+    /// the dark channels' from the brightest's: one direction per bright channel instead of
+    /// one for all. Drawn in proportion to the channels' summed light, a channel whose light
+    /// is spread otherwise than the sum's gets uneven weights. Measured at the camera ray's
+    /// hit (quarter size, 8 spp, relative noise of the pixel means): a flat untextured sand
+    /// bed at 12 m in Jerlov IB, green 2.61 → 1.24 %, blue 1.37 → 1.27 %; reef_strip's
+    /// samples to the sensor's noise 146 → 128, archaeology's (8 % size) 68 → 41; for about
+    /// a tenth more time per sample.
+    fn column_nee_per_channel(
+        &self,
+        col: &crate::optics::column::Column,
+        p: DVec3,
+        n: DVec3,
+        f: &impl Fn(DVec3) -> DVec3,
+        rng: &mut Sampler,
+    ) -> DVec3 {
+        let (bright, lead) = col.bright_channels(-p.z);
+        let mut out = DVec3::ZERO;
+        for c in (0..3).filter(|&c| bright[c]) {
+            let e = self.column_nee(col, p, n, f, Some(c), rng);
+            out[c] = e[c];
+            if c == lead {
+                for k in (0..3).filter(|&k| !bright[k]) {
+                    out[k] = e[k];
+                }
+            }
+        }
+        out
     }
 
     /// The column's whole diffuse light reaching `o` along `d` from up to `t_end` (as
