@@ -397,6 +397,11 @@ fn illumination_denoiser_feeds_the_camera_and_keeps_the_mean() {
             "0",
             "--sensor",
             "--quiet",
+            // Coarse textures: the bake at the scene's texel would be most of the test's time.
+            "--set",
+            "objects.0.pattern.texel=\"2 cm\"",
+            "--set",
+            "objects.1.pattern.texel=\"1 cm\"",
         ])
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .status()
