@@ -12,6 +12,7 @@ mod bench_mesh;
 mod bench_render;
 mod blender_snapshots;
 mod canonical_native;
+mod compare_targets;
 mod compile_out;
 mod diagnostics;
 mod dive_advice;

@@ -164,6 +164,20 @@ pub fn expected_disk(
 /// Measured disks: (id, image name, measured − expected in px), and how many were expected.
 pub type Measured = (Vec<(String, String, [f64; 2])>, usize);
 
+/// One disk expected in one image: where the exact truth puts its centre and where the image
+/// shows it.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TargetResidual {
+    /// The disk's id (`<target>` or `<target>:<index>`).
+    pub id: String,
+    /// The image's name.
+    pub image: String,
+    /// The exact centre, px, pixel centres at +0.5 (COLMAP's convention).
+    pub truth: [f64; 2],
+    /// Measured − truth, px; `None` where no disk was found.
+    pub offset: Option<[f64; 2]>,
+}
+
 /// Measure every visible disk in the rendered images of `dir` in the G channel: returns
 /// (id, image name, measured − expected in px) for each disk found, and how many were expected.
 pub fn measure_targets(model: &Model, dir: &Path) -> Result<Measured, String> {
@@ -177,10 +191,25 @@ pub fn measure_targets_in_channel(
     dir: &Path,
     channel: usize,
 ) -> Result<Measured, String> {
+    let all = target_residuals(model, dir, channel)?;
+    let expected = all.len();
+    let found = all
+        .into_iter()
+        .filter_map(|r| r.offset.map(|o| (r.id, r.image, o)))
+        .collect();
+    Ok((found, expected))
+}
+
+/// Every disk expected in the rendered images of `dir`, found or not, in channel `channel`
+/// against that channel's exact projection, in the order of the cameras, poses and disks.
+pub fn target_residuals(
+    model: &Model,
+    dir: &Path,
+    channel: usize,
+) -> Result<Vec<TargetResidual>, String> {
     let disks = disks(model);
     let dark = crate::geometry::targets::BLACK / crate::geometry::targets::WHITE;
-    let mut found = Vec::new();
-    let mut expected = 0;
+    let mut out = Vec::new();
     for cam in 0..model.cameras.len() {
         let proj = model.projector(cam, channel)?;
         for pose in 0..model.poses.len() {
@@ -204,14 +233,19 @@ pub fn measure_targets_in_channel(
                 let Some((c, half)) = expected_disk(&proj, surface.as_ref(), pose, d) else {
                     continue;
                 };
-                expected += 1;
-                if let Ok(m) = detect::disk_centroid(&gray, c, half, dark) {
-                    found.push((d.id.clone(), name.clone(), [m[0] - c[0], m[1] - c[1]]));
-                }
+                let offset = detect::disk_centroid(&gray, c, half, dark)
+                    .ok()
+                    .map(|m| [m[0] - c[0], m[1] - c[1]]);
+                out.push(TargetResidual {
+                    id: d.id.clone(),
+                    image: name.clone(),
+                    truth: c,
+                    offset,
+                });
             }
         }
     }
-    Ok((found, expected))
+    Ok(out)
 }
 
 /// Render with each backend and compare; writes `report.md`, `report.json`, `report.svg` (the
@@ -246,14 +280,15 @@ pub fn run(
             Ok(rep) => {
                 r.seconds = t0.elapsed().as_secs_f64();
                 r.images = rep.images.len();
-                let (found, expected) = measure_targets(model, &dir)?;
-                r.targets_expected = expected;
-                r.targets_measured = found.len();
-                if !found.is_empty() {
-                    let d2: Vec<f64> = found
-                        .iter()
-                        .map(|(_, _, d)| d[0] * d[0] + d[1] * d[1])
-                        .collect();
+                r.targets = target_residuals(model, &dir, 1)?;
+                r.targets_expected = r.targets.len();
+                let d2: Vec<f64> = r
+                    .targets
+                    .iter()
+                    .filter_map(|t| t.offset.map(|d| d[0] * d[0] + d[1] * d[1]))
+                    .collect();
+                r.targets_measured = d2.len();
+                if !d2.is_empty() {
                     r.target_rms_px = Some((d2.iter().sum::<f64>() / d2.len() as f64).sqrt());
                     r.target_max_px = Some(d2.iter().cloned().fold(0.0, f64::max).sqrt());
                 }

@@ -19,6 +19,9 @@ pub struct BackendResult {
     pub targets_expected: usize,
     /// Position error of measured target centroids against the exact truth, px.
     pub target_rms_px: Option<f64>,
+    /// Every disk expected in its images, with its offset from the truth where it was found
+    /// (G channel).
+    pub targets: Vec<super::TargetResidual>,
     pub target_max_px: Option<f64>,
     /// Mean linear value per channel over all pixels of all images.
     pub mean_rgb: [f64; 3],
@@ -115,6 +118,7 @@ impl Report {
                 analytic
             ));
         }
+        s.push_str(&self.targets_markdown());
         if !self.pairs.is_empty() {
             s.push_str("\n| pair | Δmean R | Δmean G | Δmean B | per-pixel RMS / mean |\n|---|---|---|---|---|\n");
             for p in &self.pairs {
@@ -128,6 +132,76 @@ impl Report {
                     p.rms_rel_diff
                 ));
             }
+        }
+        s
+    }
+
+    /// Per disk and image: the exact centre and each backend's offset from it (Δu, Δv and
+    /// its length, px), "not found" where a backend's image shows no disk there. Empty when
+    /// no backend expected a disk.
+    fn targets_markdown(&self) -> String {
+        let shown: Vec<&BackendResult> = self
+            .backends
+            .iter()
+            .filter(|b| b.error.is_none() && !b.targets.is_empty())
+            .collect();
+        if shown.is_empty() {
+            return String::new();
+        }
+        // Every (disk, image) any backend expected, in the order met; each backend's own.
+        type Key<'a> = (&'a str, &'a str);
+        let mut rows: Vec<(Key, [f64; 2])> = Vec::new();
+        let mut seen = std::collections::BTreeSet::new();
+        let by_backend: Vec<std::collections::BTreeMap<Key, Option<[f64; 2]>>> = shown
+            .iter()
+            .map(|b| {
+                b.targets
+                    .iter()
+                    .map(|t| ((t.id.as_str(), t.image.as_str()), t.offset))
+                    .collect()
+            })
+            .collect();
+        for b in &shown {
+            for t in &b.targets {
+                let key = (t.id.as_str(), t.image.as_str());
+                if seen.insert(key) {
+                    rows.push((key, t.truth));
+                }
+            }
+        }
+        let mut s = String::from(
+            "\nPer target (G channel; pixel centres at +0.5, COLMAP's convention; OpenCV's \
+             are these − 0.5): the exact centre and each backend's measured − exact offset \
+             Δu, Δv and its length, px.\n\n| target | image | exact u, v |",
+        );
+        for b in &shown {
+            s.push_str(&format!(" {} Δu, Δv (px) |", b.backend));
+        }
+        s.push_str("\n|---|---|---|");
+        s.push_str(&"---|".repeat(shown.len()));
+        s.push('\n');
+        for ((id, image), truth) in &rows {
+            s.push_str(&format!(
+                "| {} | {} | {:.3}, {:.3} |",
+                id.replace('|', "/"),
+                image,
+                truth[0],
+                truth[1]
+            ));
+            for b in &by_backend {
+                let cell = match b.get(&(*id, *image)) {
+                    Some(Some(d)) => format!(
+                        "{:+.4}, {:+.4} ({:.4})",
+                        d[0],
+                        d[1],
+                        (d[0] * d[0] + d[1] * d[1]).sqrt()
+                    ),
+                    Some(None) => "not found".to_string(),
+                    None => "–".to_string(),
+                };
+                s.push_str(&format!(" {cell} |"));
+            }
+            s.push('\n');
         }
         s
     }

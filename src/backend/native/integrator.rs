@@ -990,7 +990,9 @@ impl<'a> Integrator<'a> {
             DVec3::ZERO
         };
         if day && let Some(col) = self.column {
-            l += if per_channel {
+            // Per channel under the sun only: its aureole's width differs per channel; a
+            // sky-lit column's channels are alike, and their own draws cost without gain.
+            l += if per_channel && self.lights.sun.is_some() {
                 self.column_nee_per_channel(col, p, n, &f, rng)
             } else {
                 self.column_nee(col, p, n, &f, None, rng)
@@ -1064,9 +1066,11 @@ impl<'a> Integrator<'a> {
     /// one for all. Drawn in proportion to the channels' summed light, a channel whose light
     /// is spread otherwise than the sum's gets uneven weights. Measured at the camera ray's
     /// hit (quarter size, 8 spp, relative noise of the pixel means): a flat untextured sand
-    /// bed at 12 m in Jerlov IB, green 2.61 → 1.24 %, blue 1.37 → 1.27 %; reef_strip's
-    /// samples to the sensor's noise 146 → 128, archaeology's (8 % size) 68 → 41; for about
-    /// a tenth more time per sample.
+    /// bed at 12 m in Jerlov IB, green 2.61 → 1.24 %, blue 1.37 → 1.27 %; samples to the
+    /// sensor's noise: reef_strip 146 → 127, archaeology (8 % size) 68 → 41,
+    /// flat_port_deformation (8 %) 39 → 22; for 10–20 % more time per sample. Used under a
+    /// sun only: on the deep scenes lit by the sky alone (paper_survey, two_gas_dive) the
+    /// samples did not move and the time rose.
     fn column_nee_per_channel(
         &self,
         col: &crate::optics::column::Column,
