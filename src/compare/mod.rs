@@ -168,7 +168,7 @@ pub type Measured = (Vec<(String, String, [f64; 2])>, usize);
 /// shows it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TargetResidual {
-    /// The disk's id (`<target>` or `<target>:<index>`).
+    /// The disk's id, as [`Disk::id`] (`dots/0`: a grid's first disk).
     pub id: String,
     /// The image's name.
     pub image: String,

@@ -19,10 +19,10 @@ pub struct BackendResult {
     pub targets_expected: usize,
     /// Position error of measured target centroids against the exact truth, px.
     pub target_rms_px: Option<f64>,
+    pub target_max_px: Option<f64>,
     /// Every disk expected in its images, with its offset from the truth where it was found
     /// (G channel).
     pub targets: Vec<super::TargetResidual>,
-    pub target_max_px: Option<f64>,
     /// Mean linear value per channel over all pixels of all images.
     pub mean_rgb: [f64; 3],
     /// Rendered / analytic radiance − 1 per channel over the central window of the first image

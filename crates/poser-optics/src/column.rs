@@ -613,6 +613,7 @@ fn build_cdf(table: &[Vec<f32>; 3], input: &ColumnInput, bottom: DVec3) -> Vec<[
         .collect()
 }
 
+/// One batch of one channel: its tallies in W/m² (normalised to the batch's photons).
 fn run_batch(input: &ColumnInput, c: usize, batch: usize, n: usize, az: DVec3) -> Tally {
     let mut h0 = SplitMix64(input.seed ^ 0xC01A_0000);
     let mut h1 = SplitMix64(h0.next_u64() ^ (c as u64) << 32 ^ batch as u64);
