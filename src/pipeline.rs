@@ -47,6 +47,13 @@ pub fn run(
     opts: &RenderOptions,
     steps: Steps,
 ) -> Result<Output, String> {
+    if steps.camera && model.sensor.is_some() && model.render.crop.is_some() {
+        return Err(
+            "the camera step (`[sensor]`, `--sensor`) develops whole images, and the render is \
+             cropped: drop `--crop`, or the sensor"
+                .into(),
+        );
+    }
     let report = backend.render(model, out, opts)?;
     if steps.truth {
         crate::truth::write(model, &out.join("truth"))?;

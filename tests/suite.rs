@@ -14,6 +14,7 @@ mod blender_snapshots;
 mod canonical_native;
 mod compare_targets;
 mod compile_out;
+mod crop;
 mod diagnostics;
 mod dive_advice;
 mod dive_cli;

@@ -212,6 +212,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
             texture_filter: Default::default(),
             sampler: Default::default(),
             surface_from_below: Default::default(),
+            crop: None,
         },
         sensor: None,
         lesson: None,

@@ -69,6 +69,47 @@ pub fn apply_scale(model: Model, scale: Option<f64>) -> Result<Model, CliError> 
     }
 }
 
+/// Apply `--crop` (after `--scale`): the rectangle must lie inside every camera's image.
+pub fn apply_crop(model: &mut Model, crop: Option<crate::model::Crop>) -> Result<(), CliError> {
+    let Some(c) = crop else { return Ok(()) };
+    if let Some(cam) = model
+        .cameras
+        .iter()
+        .find(|cam| !c.fits(cam.width, cam.height))
+    {
+        return Err(CliError::Usage(format!(
+            "--crop {},{},{},{}: the rectangle leaves camera `{}`'s {}×{} image\n  help: X + W ≤ {} and Y + H ≤ {} (pixels of the image as rendered, after --scale)",
+            c.x, c.y, c.width, c.height, cam.name, cam.width, cam.height, cam.width, cam.height
+        )));
+    }
+    model.render.crop = Some(c);
+    Ok(())
+}
+
+/// `--crop X,Y,W,H`: four whole numbers, the width and height at least 1.
+pub fn parse_crop(s: &str) -> Result<crate::model::Crop, String> {
+    let err = || format!("`{s}`: expected X,Y,W,H in whole pixels, e.g. `--crop 100,80,64,48`");
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<u32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| err())?;
+    let [x, y, width, height] = v[..] else {
+        return Err(err());
+    };
+    if width == 0 || height == 0 {
+        return Err(format!(
+            "`{s}`: the rectangle is empty (W and H must be at least 1)"
+        ));
+    }
+    Ok(crate::model::Crop {
+        x,
+        y,
+        width,
+        height,
+    })
+}
+
 /// `--samples N`: samples per pixel, at least one (a zero is refused, as `render.samples = 0`
 /// is in a scene, instead of silently rendering one).
 pub fn parse_samples(s: &str) -> Result<u32, String> {

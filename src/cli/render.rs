@@ -22,6 +22,11 @@ pub struct Args {
     /// lens and port; the ground truth is written for the scaled images.
     #[arg(long)]
     pub scale: Option<f64>,
+    /// Render only this rectangle of every image, `X,Y,W,H` in pixels of the image as
+    /// rendered (after `--scale`), from the top-left corner; the same pixels as in the whole
+    /// image, in every backend. The ground truth stays in the whole image's pixels.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = super::common::parse_crop)]
+    pub crop: Option<crate::model::Crop>,
     /// Hide the progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -79,6 +84,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         args.sensor,
     );
     let mut model = super::common::apply_scale(load_model(scene)?, scale)?;
+    super::common::apply_crop(&mut model, args.crop)?;
     if let Some(p) = poses
         .as_ref()
         .and_then(|p| p.iter().find(|&&i| i >= model.poses.len()))

@@ -20,6 +20,9 @@ use crate::model::{LightKind, Model, Mount, Port, SeaSurface, Shape};
 
 /// Why the scene has no analytic radiance, or `Ok` when it has one.
 pub fn applies(model: &Model) -> Result<(), String> {
+    if model.render.crop.is_some() {
+        return Err("a cropped render (the oracle's window is the whole image's centre)".into());
+    }
     let water = model
         .water
         .as_ref()

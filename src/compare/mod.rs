@@ -161,6 +161,67 @@ pub fn expected_disk(
     Some((c, half))
 }
 
+/// The rectangle of image (`pose`, camera 0) around the disks nearest its centre, at most
+/// `max_side` px on a side: the disk nearest the centre, then the next nearest to it while
+/// their windows still fit, with a 2 px margin. A crop render there (`render.crop`) measures
+/// targets at the full image size for a small share of its cost (`poser compare --crop
+/// targets`). `None` when no disk can be measured in that image.
+pub fn target_crop(
+    model: &Model,
+    pose: usize,
+    max_side: u32,
+) -> Result<Option<crate::model::Crop>, String> {
+    let proj = model.projector(0, 1)?;
+    let surface = model
+        .above_surface(pose, 0)
+        .then(|| model.sea_interface(1))
+        .flatten();
+    let mut windows: Vec<([f64; 2], f64)> = disks(model)
+        .iter()
+        .filter_map(|d| expected_disk(&proj, surface.as_ref(), pose, d))
+        .collect();
+    let centre = [proj.width / 2.0, proj.height / 2.0];
+    let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    let Some(first) = windows
+        .iter()
+        .min_by(|a, b| dist(a.0, centre).total_cmp(&dist(b.0, centre)))
+        .copied()
+    else {
+        return Ok(None);
+    };
+    windows.sort_by(|a, b| dist(a.0, first.0).total_cmp(&dist(b.0, first.0)));
+    let (w, h) = (proj.width, proj.height);
+    // Pixel bounds [x0, x1) × [y0, y1) of a window, with the margin, inside the image.
+    let bounds = |(c, half): ([f64; 2], f64)| {
+        [
+            (c[0] - half - 2.0).floor().max(0.0),
+            (c[1] - half - 2.0).floor().max(0.0),
+            (c[0] + half + 3.0).ceil().min(w),
+            (c[1] + half + 3.0).ceil().min(h),
+        ]
+    };
+    let mut b = bounds(first);
+    for &win in &windows[1..] {
+        let n = bounds(win);
+        let grown = [
+            b[0].min(n[0]),
+            b[1].min(n[1]),
+            b[2].max(n[2]),
+            b[3].max(n[3]),
+        ];
+        if grown[2] - grown[0] > max_side as f64 || grown[3] - grown[1] > max_side as f64 {
+            continue;
+        }
+        b = grown;
+    }
+    Ok(Some(crate::model::Crop {
+        x: b[0] as u32,
+        y: b[1] as u32,
+        width: (b[2] - b[0]) as u32,
+        height: (b[3] - b[1]) as u32,
+    }))
+}
+
 /// Measured disks: (id, image name, measured − expected in px), and how many were expected.
 pub type Measured = (Vec<(String, String, [f64; 2])>, usize);
 
@@ -202,6 +263,7 @@ pub fn measure_targets_in_channel(
 
 /// Every disk expected in the rendered images of `dir`, found or not, in channel `channel`
 /// against that channel's exact projection, in the order of the cameras, poses and disks.
+/// Images of a crop (`render.crop`) hold the disks whose window lies inside the rectangle.
 pub fn target_residuals(
     model: &Model,
     dir: &Path,
@@ -233,9 +295,23 @@ pub fn target_residuals(
                 let Some((c, half)) = expected_disk(&proj, surface.as_ref(), pose, d) else {
                     continue;
                 };
-                let offset = detect::disk_centroid(&gray, c, half, dark)
+                // In the rendered rectangle's pixels (the whole image's without a crop).
+                let (x0, y0) = model
+                    .render
+                    .crop
+                    .map_or((0.0, 0.0), |k| (k.x as f64, k.y as f64));
+                let local = [c[0] - x0, c[1] - y0];
+                if model.render.crop.is_some()
+                    && (local[0] - half < 1.0
+                        || local[1] - half < 1.0
+                        || local[0] + half > img.width as f64 - 1.0
+                        || local[1] + half > img.height as f64 - 1.0)
+                {
+                    continue;
+                }
+                let offset = detect::disk_centroid(&gray, local, half, dark)
                     .ok()
-                    .map(|m| [m[0] - c[0], m[1] - c[1]]);
+                    .map(|m| [m[0] - local[0], m[1] - local[1]]);
                 out.push(TargetResidual {
                     id: d.id.clone(),
                     image: name.clone(),

@@ -142,6 +142,7 @@ pub fn render_settings(samples: u32) -> RenderSettings {
         texture_filter: Default::default(),
         sampler: Default::default(),
         surface_from_below: Default::default(),
+        crop: None,
     }
 }
 

@@ -398,8 +398,29 @@ def prepare_image(built, pose_index, cam_index):
     scene.camera = built.cameras[cam_index]
     scene.render.resolution_x = int(cam["width"])
     scene.render.resolution_y = int(cam["height"])
+    _apply_crop(scene, desc["render"].get("crop"), int(cam["width"]), int(cam["height"]))
     scene.cycles.seed = image_seed(desc, pose_index, cam_index)
     _apply_emitters(built, _emitter_scale(desc, cam, bool(desc.get("per_channel_passes"))))
+
+
+def _apply_crop(scene, crop, width, height):
+    """`render.crop` ([x, y, w, h] px from the top-left corner, or None): a border render
+    cropped to the border, so that the image written is the rectangle alone, on the whole
+    image's pixel grid. Blender takes the border as fractions of the image from the bottom-left
+    corner and truncates fraction x size to whole pixels; a quarter pixel inside each edge keeps
+    that truncation on the intended pixel whichever way the float rounds."""
+    r = scene.render
+    if crop is None:
+        r.use_border = False
+        r.use_crop_to_border = False
+        return
+    x, y, w, h = (int(v) for v in crop)
+    r.use_border = True
+    r.use_crop_to_border = True
+    r.border_min_x = (x + 0.25) / width
+    r.border_max_x = (x + w + 0.25) / width
+    r.border_min_y = (height - y - h + 0.25) / height
+    r.border_max_y = (height - y + 0.25) / height
 
 
 def _flat(matrices):

@@ -827,6 +827,43 @@ pub struct RenderSettings {
     /// The native renderer's numbers for a pixel's samples (`render.sampler`).
     #[serde(default, skip_serializing_if = "SamplerKind::is_sobol")]
     pub sampler: SamplerKind,
+    /// Render only this rectangle of every image (`poser render --crop`; `None`: the whole
+    /// image).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crop: Option<Crop>,
+}
+
+/// A rectangle of an image rendered alone (`poser render --crop X,Y,W,H`), in pixels of the
+/// image as rendered: `x` to the right and `y` down from the top-left corner. Every backend
+/// samples the rectangle's pixels as it samples them in the whole image (the native renderer
+/// with the very same random numbers), and writes an image of `width` × `height`: its pixel
+/// (i, j) is the whole image's pixel (x + i, y + j). The ground truth stays in the whole
+/// image's pixel coordinates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Crop {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Crop {
+    /// Whether the rectangle is non-empty and lies inside a `width` × `height` image.
+    pub fn fits(&self, width: u32, height: u32) -> bool {
+        self.width >= 1
+            && self.height >= 1
+            && self.x as u64 + self.width as u64 <= width as u64
+            && self.y as u64 + self.height as u64 <= height as u64
+    }
+
+    /// The rectangle of `cam`'s image that is rendered: `(x, y, width, height)`, the whole
+    /// image without a crop.
+    pub fn region(crop: Option<Crop>, cam: &Camera) -> (u32, u32, u32, u32) {
+        match crop {
+            Some(c) => (c.x, c.y, c.width, c.height),
+            None => (0, 0, cam.width, cam.height),
+        }
+    }
 }
 
 /// `render.sampler`: how the native renderer draws the random numbers of a pixel's samples

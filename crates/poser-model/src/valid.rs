@@ -18,7 +18,7 @@
 //! | sun, lights | unit directions, irradiance, intensity and radiance ≥ 0, sizes > 0, cone half-angle in (0, π/2] |
 //! | objects | sizes and scale > 0, albedo ≥ 0 |
 //! | targets | sizes > 0, at least one row and column |
-//! | render | `samples` ≥ 1, `exposure` > 0, a noise target > 0 |
+//! | render | `samples` ≥ 1, `exposure` > 0, a noise target > 0, a crop inside every camera's image |
 
 use crate::{Light, LightKind, Model, Object, Phase, Port, Pose, Rgb, Shape, Target, TargetKind};
 use glam::DVec3;
@@ -99,6 +99,19 @@ pub fn validate(model: &Model) -> Result<(), Invalid> {
     }
     if let Some(n) = &r.noise {
         c.positive("render.noise.relative", n.relative);
+    }
+    if let Some(k) = r.crop {
+        for (i, cam) in model.cameras.iter().enumerate() {
+            if !k.fits(cam.width, cam.height) {
+                c.push(
+                    "render.crop",
+                    format!(
+                        "{}×{} px at ({}, {}) is not a non-empty part of cameras[{i}]'s {}×{} image",
+                        k.width, k.height, k.x, k.y, cam.width, cam.height
+                    ),
+                );
+            }
+        }
     }
     if c.problems.is_empty() {
         Ok(())

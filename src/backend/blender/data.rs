@@ -120,7 +120,7 @@ pub fn describe(model: &Model) -> Result<Description, String> {
 
     let targets = targets_json(model, &mut assets)?;
 
-    let json = json!({
+    let mut json = json!({
         "format": FORMAT,
         "name": model.name,
         "description": model.description,
@@ -146,6 +146,11 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         "objects": objects,
         "targets": targets,
     });
+    if let Some(c) = model.render.crop {
+        // `render.crop`, [x, y, width, height] in pixels from the top-left corner: Cycles'
+        // border render, cropped to the border (`builder.prepare_image`).
+        json["render"]["crop"] = json!([c.x, c.y, c.width, c.height]);
+    }
     Ok(Description {
         json,
         assets,

@@ -49,7 +49,7 @@
 //! | camera (rectilinear, no distortion) | `perspective` sensor, `fov` from fx (`fov_axis` x), `principal_point_offset_x/y` | `to_world = [R_cv·diag(-1,-1,1) \| C]` (Mitsuba's +X points left) |
 //! | camera with focus distance and f-number | `thinlens`, `aperture_radius = f/(2N)` | only with a centred principal point (thinlens has no offset) |
 //! | fisheye lens, Brown distortion, fx ≠ fy | — | error naming the camera |
-//! | film | `hdrfilm`, rgb, float32, `box` rfilter; `independent` sampler | |
+//! | film | `hdrfilm`, rgb, float32, `box` rfilter; `independent` sampler | `render.crop`: `crop_offset_x/y`, `crop_width/height` |
 //! | flat port | closed slab: 6 `rectangle`s, `dielectric`; housing: 5 black `rectangle`s behind it | inner face air→glass, other faces glass→water; the walls absorb light reflected back into the housing |
 //! | dome port | two `sphere`s: inner air→glass, outer glass→water; housing: a black `disk` across the inner sphere behind the pupil | full spheres; the disk absorbs light the glass reflects back into the housing |
 //! | cylinder port | two `cylinder`s closed by `disk` caps | length covers the field of view with margin |

@@ -365,14 +365,25 @@ fn sensor(model: &Model, spec: &ViewSpec, near_clip: f64, in_water: bool) -> El 
             .integer("sample_count", model.render.samples.max(1) as i64)
             .integer("seed", spec.seed as i64),
     )
-    .child(
-        El::typed("film", "hdrfilm")
-            .integer("width", cam.width as i64)
-            .integer("height", cam.height as i64)
-            .string("pixel_format", "rgb")
-            .string("component_format", "float32")
-            .child(El::typed("rfilter", "box")),
-    )
+    .child(film(model, cam))
+}
+
+/// The `hdrfilm`: the camera's whole image, or the rectangle of `render.crop` (Mitsuba's
+/// `crop_offset_*` and `crop_*` keep the whole image's pixel grid).
+fn film(model: &Model, cam: &Camera) -> El {
+    let mut film = El::typed("film", "hdrfilm")
+        .integer("width", cam.width as i64)
+        .integer("height", cam.height as i64);
+    if let Some(c) = model.render.crop {
+        film = film
+            .integer("crop_offset_x", c.x as i64)
+            .integer("crop_offset_y", c.y as i64)
+            .integer("crop_width", c.width as i64)
+            .integer("crop_height", c.height as i64);
+    }
+    film.string("pixel_format", "rgb")
+        .string("component_format", "float32")
+        .child(El::typed("rfilter", "box"))
 }
 
 /// `(aperture radius, focus distance)` when the camera has depth of field.

@@ -104,7 +104,8 @@ pub fn render_image(
     progress: Option<&Progress>,
 ) -> Result<Image, String> {
     let camera = &model.cameras[cam];
-    let (w, h) = (camera.width, camera.height);
+    // A crop renders its rectangle alone, each pixel with the whole image's random numbers.
+    let (x0, y0, w, h) = crate::model::Crop::region(model.render.crop, camera);
     let world_from_rig = &model.poses[pose].world_from_rig;
     let cam_pos = model.world_from_camera(pose, cam).translation;
     let medium = medium::Medium::new(model, cam_pos);
@@ -125,6 +126,8 @@ pub fn render_image(
         rays,
         passes,
         image_id: (pose * model.cameras.len() + cam) as u64,
+        full_width: camera.width,
+        origin: (x0, y0),
         width: w,
         want_albedo: model.render.denoise_radius.is_some(),
     };
@@ -222,7 +225,8 @@ fn sensor_measure(
             .map(|(m, _)| [m.x as f32, m.y as f32, m.z as f32])
             .collect(),
     };
-    let pitch = crate::sensor::files::pixel_pitch(camera, w);
+    // The camera's own pitch: a crop's pixels are the whole image's.
+    let pitch = camera.pixel_pitch;
     let e = crate::sensor::expose(sensor, &linear, pitch);
     Ok(adaptive::Measure::Sensor {
         electrons_per_radiance: e.electrons_per_radiance,
@@ -241,6 +245,10 @@ struct Pixels<'a> {
     /// The channel of each pass's indices.
     passes: Vec<usize>,
     image_id: u64,
+    /// The whole image's width (a pixel's place in the random streams).
+    full_width: u32,
+    /// The rendered rectangle's top-left pixel in the whole image, and its width.
+    origin: (u32, u32),
     width: u32,
     want_albedo: bool,
 }
@@ -251,14 +259,17 @@ impl Pixels<'_> {
         (self.passes.len() > 1).then_some(self.passes[k])
     }
 
-    /// `n` samples of pixel (i, j), pass `k`, from stream index `from` on: their mean and the
-    /// variance of that mean; the first-hit albedo is added to `alb`.
+    /// `n` samples of pixel (i, j) of the rendered rectangle, pass `k`, from stream index
+    /// `from` on: their mean and the variance of that mean; the first-hit albedo is added to
+    /// `alb`.
     fn run(&self, i: u32, j: u32, k: usize, from: u32, n: u32, alb: &mut DVec3) -> (DVec3, DVec3) {
         let (model, scene, integ) = (self.model, self.scene, &self.integ);
         let (seed, kind) = (model.render.seed, model.render.sampler);
         let r = &self.rays[k];
+        // The pixel in the whole image.
+        let (i, j) = (i + self.origin.0, j + self.origin.1);
         let spread = footprint::PixelSpread::of(model, scene, r, i, j);
-        let pixel = j as u64 * self.width as u64 + i as u64;
+        let pixel = j as u64 * self.full_width as u64 + i as u64;
         let (mut acc, mut acc2) = (DVec3::ZERO, DVec3::ZERO);
         for s in from as u64..(from + n) as u64 {
             let mut rng = Sampler::for_sample(kind, seed, self.image_id, k, pixel, from, s);
@@ -371,8 +382,9 @@ impl Pixels<'_> {
             }
             // Depth through the pixel centre (green channel rays).
             let r = &rays[if self.passes.len() == 1 { 0 } else { 1 }];
+            let (x, y) = (i + self.origin.0, j + self.origin.1);
             let z = r
-                .ray(i as f64 + 0.5, j as f64 + 0.5)
+                .ray(x as f64 + 0.5, y as f64 + 0.5)
                 .and_then(|(o, d, _)| {
                     self.scene
                         .intersect(&scene::Ray { origin: o, dir: d }, f64::INFINITY)
@@ -432,8 +444,8 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
             eprintln!("warning: object `{}`: texture {}", o.name, b.summary());
         }
     }
-    let rows_total: u64 =
-        poses.len() as u64 * model.cameras.iter().map(|c| c.height as u64).sum::<u64>();
+    let rows = |c: &crate::model::Camera| crate::model::Crop::region(model.render.crop, c).3 as u64;
+    let rows_total: u64 = poses.len() as u64 * model.cameras.iter().map(rows).sum::<u64>();
     let pb = opts
         .progress
         .then(|| Progress::new(true, "rendering", "rows", rows_total));
@@ -453,7 +465,7 @@ pub fn render(model: &Model, out: &Path, opts: &RenderOptions) -> Result<RenderR
             let exr = out.join(format!("{name}.exr"));
             if opts.resume && manifest.is_done(out, &name) {
                 if let Some(pb) = &pb {
-                    pb.inc(model.cameras[c].height as u64);
+                    pb.inc(rows(&model.cameras[c]));
                 }
                 report.images.push(exr);
                 resumed += 1;

@@ -66,6 +66,7 @@ pub(super) fn render(
         texture_filter,
         surface_from_below,
         sampler,
+        crop: None,
     }
 }
 
