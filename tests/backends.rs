@@ -35,6 +35,7 @@ mod pack_python;
 mod scenario_parity;
 mod slurm;
 mod surface_view;
+mod target_parity;
 mod textured_mesh_backends;
 mod textured_site_colmap;
 mod textures_cross_backend;
