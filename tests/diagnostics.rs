@@ -183,6 +183,26 @@ fn set_errors_point_at_the_command_line() {
     assert!(r.contains("did you mean `temperature`?"));
 }
 
+#[test]
+fn an_absurd_survey_area_is_an_error_not_an_overflow() {
+    // Found by `fuzz::garbled_scenes_never_panic` (a `1e308` spliced into a lawnmower's
+    // length): the strip and image counts overflowed (`usize::MAX + 1`) instead of meeting
+    // the pose limit's error. Each case must be refused with that error.
+    for set in [
+        "network.length=1e300",
+        "network.width=1e300",
+        "network.length=1e15",
+    ] {
+        let f = match poser::scene::load(Path::new("scenarios/reef_strip.toml"), &[set.to_string()])
+        {
+            Ok(_) => panic!("{set}: loaded"),
+            Err(f) => f,
+        };
+        let text = f.render();
+        assert!(text.contains("more than"), "{set}: {text}");
+    }
+}
+
 mod fuzz {
     use super::*;
     use proptest::prelude::*;

@@ -412,7 +412,8 @@ pub fn expand(
             let bcoef = turn / std::f64::consts::TAU;
             let theta_end = radius / bcoef;
             let s_end = spiral_arc(bcoef, theta_end);
-            let n = (s_end / along + 1e-9).floor() as usize + 1;
+            // Saturating: an absurd radius gives a count `check_count` refuses, not an overflow.
+            let n = ((s_end / along + 1e-9).floor() as usize).saturating_add(1);
             check_count(n, 1)?;
             let c0 = DVec3::new(center.x, center.y, ctx.seabed_z + altitude);
             spiral_poses(&mut b, c0, bcoef, along, n);
@@ -499,7 +500,7 @@ fn lawnmower_strips(
                 if w <= 0.0 {
                     1
                 } else {
-                    (w / s - 1e-9).ceil() as usize + 1
+                    ((w / s - 1e-9).ceil() as usize).saturating_add(1)
                 }
             }
         };
@@ -510,7 +511,8 @@ fn lawnmower_strips(
             0.0
         };
         strip_spacing_used.get_or_insert(ss);
-        let per_strip = (l / along + 1e-9).floor() as usize + 1;
+        // Saturating: an absurd length gives a count `check_count` refuses, not an overflow.
+        let per_strip = ((l / along + 1e-9).floor() as usize).saturating_add(1);
         check_count(n_strips, per_strip)?;
         let span = (per_strip - 1) as f64 * along;
         for i in 0..n_strips {
