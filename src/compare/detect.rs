@@ -88,9 +88,7 @@ pub fn disk_centroid(
     let plane = if plane_fit {
         background_plane(&samples)
     } else {
-        let mut levels: Vec<f64> = samples.iter().map(|s| s[2]).collect();
-        levels.sort_by(|a, b| a.total_cmp(b));
-        levels.get(levels.len() / 2).map(|&m| [m, 0.0, 0.0])
+        median_level(&samples).map(|m| [m, 0.0, 0.0])
     };
     let Some(plane) = plane else {
         return Err(Miss::NoContrast);
@@ -119,6 +117,13 @@ pub fn disk_centroid(
     Ok([sx / sw, sy / sw])
 }
 
+/// The median of border samples' values `[x, y, v]` (`None` without samples).
+fn median_level(samples: &[[f64; 3]]) -> Option<f64> {
+    let mut levels: Vec<f64> = samples.iter().map(|s| s[2]).collect();
+    levels.sort_by(|a, b| a.total_cmp(b));
+    levels.get(levels.len() / 2).copied()
+}
+
 /// The half-size (px) from which a window's white level is a fitted plane, not one number.
 pub const PLANE_WINDOW_PX: f64 = 16.0;
 
@@ -128,9 +133,7 @@ pub const PLANE_WINDOW_PX: f64 = 16.0;
 /// median absolute deviations of the current plane and fit it again by least squares. `None`
 /// when the samples do not determine it.
 fn background_plane(samples: &[[f64; 3]]) -> Option<[f64; 3]> {
-    let mut levels: Vec<f64> = samples.iter().map(|s| s[2]).collect();
-    levels.sort_by(|a, b| a.total_cmp(b));
-    let mut plane = [*levels.get(levels.len() / 2)?, 0.0, 0.0];
+    let mut plane = [median_level(samples)?, 0.0, 0.0];
     for _ in 0..2 {
         let off = |s: &[f64; 3]| (s[2] - (plane[0] + plane[1] * s[0] + plane[2] * s[1])).abs();
         let mut dev: Vec<f64> = samples.iter().map(off).collect();
