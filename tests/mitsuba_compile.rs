@@ -27,6 +27,79 @@ fn showcase_snapshot() {
     insta::assert_snapshot!("showcase_manifest", text(&c, "manifest.json"));
 }
 
+/// Per-view coordinates (docs/backends.md): each view sets `$poser_origin_*` to minus its
+/// camera's centre before it includes the world, and every placed element of every document
+/// (shapes, sensors, point and spot lights) ends its `to_world` with the translation by them,
+/// so that the camera and its port sit at Mitsuba's origin, where its ray offsets are smallest.
+#[test]
+fn each_view_puts_its_camera_at_the_origin() {
+    let model = showcase();
+    let c = mitsuba::build(&model).unwrap();
+    for job in &c.manifest.views {
+        let cam = model
+            .cameras
+            .iter()
+            .position(|k| k.name == job.camera)
+            .unwrap();
+        let centre = model.world_from_camera(job.pose, cam).translation;
+        assert!(
+            centre.length() > 0.1,
+            "the showcase's cameras are off the origin"
+        );
+        let xml = text(&c, &job.passes[0].xml);
+        let default = |axis: &str| -> f64 {
+            let key = format!(r#"<default name="poser_origin_{axis}" value=""#);
+            let at = xml
+                .find(&key)
+                .unwrap_or_else(|| panic!("{key} in {}", job.image));
+            assert!(
+                at < xml.find("<include").unwrap(),
+                "the defaults precede the include"
+            );
+            let rest = &xml[at + key.len()..];
+            rest[..rest.find('"').unwrap()].parse().unwrap()
+        };
+        let origin = DVec3::new(default("x"), default("y"), default("z"));
+        assert!((origin + centre).length() < 1e-12, "{origin} vs {centre}");
+    }
+    let shift = r#"<translate x="$poser_origin_x" y="$poser_origin_y" z="$poser_origin_z"/>"#;
+    let mut kinds = std::collections::BTreeSet::new();
+    for (name, _) in c.files.iter().filter(|(n, _)| n.ends_with(".xml")) {
+        let xml = text(&c, name);
+        let blocks: Vec<&str> = xml
+            .split(r#"<transform name="to_world">"#)
+            .skip(1)
+            .collect();
+        for b in &blocks {
+            let body = &b[..b.find("</transform>").unwrap()];
+            assert!(body.trim_end().ends_with(shift), "{name}: {body}");
+        }
+        let mut placed = 0;
+        for kind in [
+            "<shape type=\"",
+            "<sensor type=\"",
+            "<emitter type=\"point\"",
+            "<emitter type=\"spot\"",
+        ] {
+            let n = xml.matches(kind).count();
+            if n > 0 {
+                kinds.insert(kind);
+            }
+            placed += n;
+        }
+        assert_eq!(
+            placed,
+            blocks.len(),
+            "{name}: one to_world per placed element"
+        );
+    }
+    assert_eq!(
+        kinds.len(),
+        4,
+        "shapes, sensors, point and spot lights all seen: {kinds:?}"
+    );
+}
+
 #[test]
 fn cylinder_port_and_fournier_forand_snapshot() {
     let mut m = base(

@@ -13,7 +13,7 @@
 //! | `homogeneous` medium (`sigma_t`, `albedo`, `scale`, `hg`/`isotropic`) | `[water]` `absorption`, `scattering`, `g` | the glass's `ext_ior` gives the water's index |
 //! | a `null` `cube` holding the water, top at z = 0 | `site.surface = "flat"` | the sun is refracted back into the air |
 //! | `integrator` `max_depth` (the file's, else an included file's) | `render.bounces` | a wrapper (`moment`) gives its inner integrator's; `direct` is depth 2 |
-//! | `default`, `$name`, `include`, `<path>` | resolved while reading | files are found as Mitsuba's resolver finds them: the naming file's folder, the `<path>` folders (latest first), the main file's folder |
+//! | `default`, `$name`, `include`, `<path>` | resolved while reading | files are found as Mitsuba's resolver finds them: the naming file's folder, the `<path>` folders (latest first), the main file's folder; `$poser_origin_x/y/z` (the per-view coordinates of poser's own views) are read as 0, the world frame |
 //! | `ref`/`id` | the element referenced, wherever an element is expected | an unknown id or a cycle is refused |
 //!
 //! Safety: a document type declaration (and with it every entity) is refused; `include`,
@@ -1903,10 +1903,16 @@ fn read_docs(
             ));
         }
         let main = abs.parent().unwrap_or(root).to_path_buf();
+        // poser's own views move the world by `$poser_origin_*` (per-view coordinates); read
+        // at 0, every file of a set comes back in the one world frame.
+        let params = crate::backend::mitsuba::xml::ORIGIN_PARAMS
+            .iter()
+            .map(|n| (n.to_string(), "0".to_string()))
+            .collect();
         let mut r = Reader {
             root: root.to_path_buf(),
             elements: 0,
-            params: HashMap::new(),
+            params,
             doc: di,
             main: main.clone(),
             paths: Vec::new(),

@@ -79,6 +79,15 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
 
     let mut root = El::new("scene").attr("version", "3.0.0");
     root.push_comment(spec.title.clone());
+    // Per-view coordinates: the camera at Mitsuba's origin (xml::ORIGIN_PARAMS).
+    root.push_comment(
+        "per-view coordinates: the world's origin lies at ($poser_origin_x, _y, _z), minus the \
+         camera's centre, so that the port's glass sits at Mitsuba's origin, where its float32 \
+         ray offsets are smallest; every placed element's to_world ends with that translation",
+    );
+    for d in super::xml::origin_defaults(-cam_pos) {
+        root.push(d);
+    }
     // With water, `volpathmis`: free-flight distances sampled with spectral MIS over the
     // three channels. `volpath` samples them in one channel picked per path and reweights the
     // others, and in deep, strongly chromatic water the paths sampled in red almost never
@@ -132,6 +141,7 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
     for l in model.lights.iter().filter(|l| l.mount == Mount::Rig) {
         root.push(light(l, &world_from_rig));
     }
+    super::xml::place_at_origin(&mut root);
     Ok(root)
 }
 

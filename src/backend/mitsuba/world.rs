@@ -36,22 +36,31 @@ pub fn shapes(
 }
 
 /// World content shared by every view: sun, world-mounted lights, objects, targets.
-/// `shapes` are the already-built object/target shapes (they need asset files).
+/// `shapes` are the already-built object/target shapes (they need asset files). With any
+/// content, the document opens with the origin parameters at 0 (world coordinates, unless a
+/// view that includes it sets them) and its placed elements end with their translation
+/// ([`xml::place_at_origin`]).
 pub fn world(model: &Model, shapes: Vec<El>) -> El {
     let mut root = El::new("scene").attr("version", "3.0.0");
     root.push_comment(format!(
         "poser scene `{}`: world content shared by every view",
         model.name
     ));
-    if let Some(s) = sun(model) {
-        root.push(s);
-    }
+    let mut content: Vec<El> = sun(model).into_iter().collect();
     for l in model.lights.iter().filter(|l| l.mount == Mount::World) {
-        root.push(light(l, &Pose::IDENTITY));
+        content.push(light(l, &Pose::IDENTITY));
     }
-    for s in shapes {
-        root.push(s);
+    content.extend(shapes);
+    if content.is_empty() {
+        return root;
     }
+    for d in xml::origin_defaults(DVec3::ZERO) {
+        root.push(d);
+    }
+    for c in content {
+        root.push(c);
+    }
+    xml::place_at_origin(&mut root);
     root
 }
 
@@ -108,7 +117,7 @@ pub(super) fn light(l: &Light, world_from_mount: &Pose) -> El {
             intensity,
         } => El::typed("emitter", "point")
             .comment(comment)
-            .point("position", world_from_mount.transform_point(*position))
+            .to_world(DMat3::IDENTITY, world_from_mount.transform_point(*position))
             .rgb("intensity", *intensity),
         LightKind::Spot {
             position,

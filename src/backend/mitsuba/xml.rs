@@ -175,6 +175,64 @@ pub fn xml_chars(t: &str) -> String {
         .collect()
 }
 
+/// The parameters that place the world's origin in a document's coordinates
+/// (`$poser_origin_x`, `_y`, `_z`). Every placed element (shape, sensor, point or spot emitter)
+/// ends its `to_world` with `<translate x="$poser_origin_x" …/>` ([`place_at_origin`]). A view
+/// sets them to minus its camera's centre, so that the camera and its port sit at Mitsuba's
+/// origin; `world.xml` defaults them to 0 (world coordinates). The translation changes no
+/// light path; it keeps Mitsuba's float32 ray offsets, (1 + max |coordinate|) × 8.94e-5 m, at
+/// their smallest at the port's glass (docs/backends.md, "Per-view coordinates").
+pub const ORIGIN_PARAMS: [&str; 3] = ["poser_origin_x", "poser_origin_y", "poser_origin_z"];
+
+/// `<default name="poser_origin_*" value="…"/>` for the world's origin at `origin` (in the
+/// document's coordinates).
+pub fn origin_defaults(origin: DVec3) -> [El; 3] {
+    std::array::from_fn(|i| {
+        El::new("default")
+            .attr("name", ORIGIN_PARAMS[i])
+            .attr("value", num(origin[i]))
+    })
+}
+
+/// End the `to_world` of every placed top-level element of `doc` (shapes, sensors, point and
+/// spot emitters; one without a `to_world` gets one) with the translation by
+/// [`ORIGIN_PARAMS`]. Directional and constant emitters have no place.
+pub fn place_at_origin(doc: &mut El) {
+    let shift = || {
+        let [x, y, z] = ORIGIN_PARAMS.map(|n| format!("${n}"));
+        El::new("translate").attr("x", x).attr("y", y).attr("z", z)
+    };
+    for c in &mut doc.children {
+        let Node::El(e) = c else { continue };
+        let ty = e
+            .attrs
+            .iter()
+            .find(|(k, _)| *k == "type")
+            .map(|(_, v)| v.as_str());
+        let placed = match e.name {
+            "shape" | "sensor" => true,
+            "emitter" => matches!(ty, Some("point" | "spot")),
+            _ => false,
+        };
+        if !placed {
+            continue;
+        }
+        let tw = e.children.iter_mut().find_map(|k| match k {
+            Node::El(t)
+                if t.name == "transform"
+                    && t.attrs.iter().any(|(k, v)| *k == "name" && v == "to_world") =>
+            {
+                Some(t)
+            }
+            _ => None,
+        });
+        match tw {
+            Some(t) => t.push(shift()),
+            None => e.push(El::new("transform").attr("name", "to_world").child(shift())),
+        }
+    }
+}
+
 /// Deterministic short decimal for a float: 15 significant digits (every f64 is read back
 /// within 5e-15 relative; a decimal like 0.3 stays `0.3`), `-0` printed as `0`.
 pub fn num(x: f64) -> String {
