@@ -59,6 +59,7 @@
 //! | point / spot | `point` / `spot` (W/sr; `cutoff_angle` = half angle, sharp edge) | |
 //! | area | `rectangle` + `area` emitter (one-sided, +z) + `null` BSDF | casts no shadow, reflects nothing |
 //! | ambient | `constant` | |
+//! | world coordinates | per view: every placed element's `to_world` ends with a translation by `$poser_origin_x/y/z` ([`xml::place_at_origin`]), which the view sets to minus its camera's centre (`world.xml` defaults them to 0) | Mitsuba's float32 ray offset, (1 + max \|coordinate\|) × 8.94e-5, is smallest at the port's glass; `poser import` reads them as 0 |
 //! | integrator | `volpathmis` with water (spectral MIS over the channels), else `volpath`; `max_depth = max_bounces + 1 + port interfaces` | Mitsuba counts every vertex, glass faces included |
 
 mod runner;
