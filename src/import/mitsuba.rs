@@ -2972,43 +2972,20 @@ mod tests {
 
     #[test]
     fn a_rotation_axis_is_used_as_written_as_mitsuba_3_does() {
-        let rot = |axis: &str, angle: &str| {
-            let (x, y, z) = {
-                let v: Vec<&str> = axis.split(',').collect();
-                (v[0], v[1], v[2])
-            };
-            let t = X {
-                tag: "transform".into(),
-                attrs: vec![("name".into(), "to_world".into())],
-                kids: vec![X {
-                    tag: "rotate".into(),
-                    attrs: vec![
-                        ("x".into(), x.into()),
-                        ("y".into(), y.into()),
-                        ("z".into(), z.into()),
-                        ("angle".into(), angle.into()),
-                    ],
-                    kids: vec![],
-                    comment: None,
-                    loc: "t.xml:1:1".into(),
-                    included: false,
-                    dir: PathBuf::new(),
-                    doc: 0,
-                }],
-                comment: None,
-                loc: "t.xml:1:1".into(),
-                included: false,
-                dir: PathBuf::new(),
-                doc: 0,
-            };
-            transform(&t).unwrap()
+        let rot = |(ax, ay, az): (&str, &str, &str), angle: &str| {
+            let op = x(
+                "rotate",
+                &[("x", ax), ("y", ay), ("z", az), ("angle", angle)],
+                vec![],
+            );
+            transform(&x("transform", &[("name", "to_world")], vec![op])).unwrap()
         };
         // A unit axis: the rotation (90° about z takes x to y).
-        let m = rot("0,0,1", "90");
+        let m = rot(("0", "0", "1"), "90");
         assert!((m.transform_vector3(DVec3::X) - DVec3::Y).length() < 1e-12);
         // Axis (0, 2, 0), 90°: Rodrigues with the axis as written gives, by hand,
         // [[0, 0, 2], [0, 4, 0], [-2, 0, 0]] (rows); a normalised axis would give a rotation.
-        let m = rot("0,2,0", "90");
+        let m = rot(("0", "2", "0"), "90");
         let want = DMat3::from_cols(
             DVec3::new(0.0, 0.0, -2.0),
             DVec3::new(0.0, 4.0, 0.0),

@@ -17,7 +17,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::world::{light, scene_bounds};
-use super::xml::El;
+use super::xml::{self, El};
 use super::{SEA_MARGIN, TABPHASE_SAMPLES, WATER_ID, basis};
 use crate::model::*;
 use crate::optics::phase::ff_cdf;
@@ -85,7 +85,7 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
          camera's centre, so that the port's glass sits at Mitsuba's origin, where its float32 \
          ray offsets are smallest; every placed element's to_world ends with that translation",
     );
-    for d in super::xml::origin_defaults(-cam_pos) {
+    for d in xml::origin_defaults(-cam_pos) {
         root.push(d);
     }
     // With water, `volpathmis`: free-flight distances sampled with spectral MIS over the
@@ -141,7 +141,7 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
     for l in model.lights.iter().filter(|l| l.mount == Mount::Rig) {
         root.push(light(l, &world_from_rig));
     }
-    super::xml::place_at_origin(&mut root);
+    xml::place_at_origin(&mut root);
     Ok(root)
 }
 

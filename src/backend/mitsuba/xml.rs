@@ -40,6 +40,13 @@ impl El {
         self.attrs.push((key, value.into()));
         self
     }
+    /// The value of attribute `key`, if set.
+    pub fn get(&self, key: &str) -> Option<&str> {
+        self.attrs
+            .iter()
+            .find(|(k, _)| *k == key)
+            .map(|(_, v)| v.as_str())
+    }
     pub fn child(mut self, c: El) -> El {
         self.children.push(Node::El(c));
         self
@@ -204,26 +211,16 @@ pub fn place_at_origin(doc: &mut El) {
     };
     for c in &mut doc.children {
         let Node::El(e) = c else { continue };
-        let ty = e
-            .attrs
-            .iter()
-            .find(|(k, _)| *k == "type")
-            .map(|(_, v)| v.as_str());
         let placed = match e.name {
             "shape" | "sensor" => true,
-            "emitter" => matches!(ty, Some("point" | "spot")),
+            "emitter" => matches!(e.get("type"), Some("point" | "spot")),
             _ => false,
         };
         if !placed {
             continue;
         }
         let tw = e.children.iter_mut().find_map(|k| match k {
-            Node::El(t)
-                if t.name == "transform"
-                    && t.attrs.iter().any(|(k, v)| *k == "name" && v == "to_world") =>
-            {
-                Some(t)
-            }
+            Node::El(t) if t.name == "transform" && t.get("name") == Some("to_world") => Some(t),
             _ => None,
         });
         match tw {
@@ -277,11 +274,7 @@ pub fn validate_finite(root: &El) -> Result<(), String> {
                 t.eq_ignore_ascii_case("nan") || t.eq_ignore_ascii_case("inf") || t == "-inf"
             })
         {
-            let name = el
-                .attrs
-                .iter()
-                .find(|(k, _)| *k == "name")
-                .map(|(_, v)| v.as_str());
+            let name = el.get("name");
             bad = Some(format!(
                 "the Mitsuba scene would contain a non-finite number in <{}{}>: {v}",
                 el.name,
