@@ -464,10 +464,14 @@ fn the_command_writes_its_report_and_refuses_bad_input_without_writing() {
 /// report.md is printed for the test's log).
 fn images_report(scene: &str, args: &[&str]) -> serde_json::Value {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("img");
+    images_report_in(&dir.path().join("img"), scene, args)
+}
+
+/// [`images_report`] into `out`.
+fn images_report_in(out: &std::path::Path, scene: &str, args: &[&str]) -> serde_json::Value {
     let r = poser()
         .args(["evaluate", scene, "-o"])
-        .arg(&out)
+        .arg(out)
         .args(["--mode", "images", "--quiet"])
         .args(args)
         .output()
@@ -482,35 +486,73 @@ fn images_report(scene: &str, args: &[&str]) -> serde_json::Value {
 
 #[test]
 fn images_mode_registers_every_image_of_a_small_textured_survey() {
-    // 21 images of 420 × 280 px rendered by the native backend, then COLMAP's SIFT, matching
-    // and incremental mapping.
-    let report = images_report(
+    // 21 images of 420 × 280 px rendered by the native backend and developed by the default
+    // camera (8-bit JPEGs with their EXIF), then COLMAP's SIFT, matching and incremental
+    // mapping twice on the same files: first as COLMAP ships (`--stock`: the camera from the
+    // EXIF, COLMAP's defaults but the initial pair's angle), then poser's pipeline.
+    let dir = tempfile::tempdir().unwrap();
+    let sets = [
+        "--scale",
+        "0.07",
+        "--set",
+        "network.length=2",
+        "--set",
+        "network.width=1.5",
+        // The overlap SfM wants for matching (the lesson's plot has less, like the paper's).
+        "--set",
+        r#"network.overlap="80 %""#,
+        "--set",
+        r#"network.sidelap="60 %""#,
+        "--set",
+        r#"objects.0.pattern={type="noise", size="0.015 m", amount=0.8, seed=4}"#,
+    ];
+    let stock_out = dir.path().join("stock");
+    let stock = images_report_in(
+        &stock_out,
         "scenarios/lessons/in_air.toml",
-        &[
-            "--scale",
-            "0.07",
-            "--samples",
-            "4",
-            "--set",
-            "network.length=2",
-            "--set",
-            "network.width=1.5",
-            // The overlap SfM wants for matching (the lesson's plot has less, like the paper's).
-            "--set",
-            r#"network.overlap="80 %""#,
-            "--set",
-            r#"network.sidelap="60 %""#,
-            "--set",
-            r#"objects.0.pattern={type="noise", size="0.015 m", amount=0.8, seed=4}"#,
-        ],
+        &[&sets[..], &["--samples", "4", "--stock"]].concat(),
+    );
+    let images = stock_out.join("images");
+    assert!(
+        images.join("camera/img_0001.jpg").is_file(),
+        "--stock develops camera JPEGs when the scene has no [sensor]"
+    );
+    // COLMAP read the focal length from the JPEGs' EXIF (in air, f = 210 px at this size;
+    // measured 209.98), not its guess of 1.2 × 420 px.
+    let exif = stock["colmap"]["exif_focal_px"]
+        .as_f64()
+        .expect("EXIF focal length");
+    assert!((exif / 210.0 - 1.0).abs() < 0.01, "EXIF focal {exif} px");
+    assert_eq!(stock["colmap"]["models"], 1);
+    assert!(
+        stock["settings"]["colmap_options"]
+            .as_str()
+            .unwrap()
+            .starts_with("stock"),
+        "{}",
+        stock["settings"]
+    );
+    // COLMAP's own camera model, self-calibrated (measured: 21 of 21, 0.118 px, focal
+    // −0.04 %, σ_f 0.41 % per px).
+    assert_eq!(stock["camera_model"], "simple_radial");
+    assert_eq!(stock["registered"], stock["images"]);
+    assert!(stock["reprojection_error"].as_f64().unwrap() < 1.0);
+    let focal = stock["cameras"][0]["focal_error"].as_f64().unwrap();
+    assert!(focal.abs() < 0.05, "stock focal error {focal}");
+
+    let images_arg = images.to_string_lossy().into_owned();
+    let report = images_report_in(
+        &dir.path().join("img"),
+        "scenarios/lessons/in_air.toml",
+        &[&sets[..], &["--images", &images_arg]].concat(),
     );
     assert!(report["images"].as_u64().unwrap() >= 15);
     assert_eq!(report["registered"], report["images"]);
     assert!(report["reprojection_error"].as_f64().unwrap() < 1.0);
     let focal = report["cameras"][0]["focal_error"].as_f64().unwrap();
     assert!(focal.abs() < 0.05, "focal error {focal}");
-    // The adjustment's covariance is computed in images mode too (measured: σ_f 0.40 % of f
-    // per px of image noise, within the 1 % bar; the probe's rise 32 %).
+    // The adjustment's covariance is computed in images mode too (measured: σ_f 0.41 % of f
+    // per px of image noise, within the 1 % bar; the probe's rise 25 %).
     assert_eq!(report["colmap"]["focal_covariance"], "ok");
     let sd = report["colmap"]["focal_sd"].as_f64().unwrap();
     assert!(sd > 0.0 && sd < evaluate::FOCAL_SD_MAX, "{sd}");
@@ -527,6 +569,32 @@ fn images_mode_registers_every_image_of_a_small_textured_survey() {
     // Camera centres within 2 mm after the similarity (the cameras are 1.2 m above the bed).
     let rms = report["camera_errors"]["rms_3d"].as_f64().unwrap();
     assert!(rms < 2e-3, "camera-centre RMS {rms} m");
+}
+
+#[test]
+fn stock_is_refused_outside_images_mode_and_with_another_model() {
+    let dir = tempfile::tempdir().unwrap();
+    for (args, says) in [
+        (&["--stock"][..], "--mode images"),
+        (
+            &["--mode", "images", "--stock", "--model", "opencv"][..],
+            "simple-radial",
+        ),
+    ] {
+        let r = poser()
+            .args(["evaluate", "scenarios/lessons/in_air.toml", "-o"])
+            .arg(dir.path().join("x"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(r.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.contains(says), "{args:?}: {err}");
+        assert!(
+            !dir.path().join("x").exists(),
+            "nothing written for {args:?}"
+        );
+    }
 }
 
 #[test]

@@ -389,6 +389,8 @@ def images(pycolmap, req: dict) -> dict:
         raise EvaluateError(
             f"{len(missing)} image(s) missing in {image_dir}, e.g. {missing[0]}"
         )
+    if req.get("stock") is not None:
+        return images_stock(pycolmap, req, image_dir, work, db, names)
     cam = req["cameras"][0]
     model, params = MODELS[req["model"]]
     p = params(float(cam["fx"]), float(cam["fy"]), float(cam["cx"]), float(cam["cy"]))
@@ -452,6 +454,11 @@ def images(pycolmap, req: dict) -> dict:
         pycolmap.bundle_adjustment(rec, ba_options(pycolmap, req))
     sensitivity = focal_sensitivity(pycolmap, rec, req)
     covariance = focal_covariance(pycolmap, rec, req)
+    return summarise(pycolmap, rec, req, db, names, sensitivity, covariance)
+
+
+def summarise(pycolmap, rec, req, db, names, sensitivity, covariance) -> dict:
+    """The reconstruction `rec` as plain JSON data with its summary."""
     result = export(rec)
     keypoints = 0
     with pycolmap.Database.open(db) as database:
@@ -468,6 +475,59 @@ def images(pycolmap, req: dict) -> dict:
         **covariance,
         "colmap": pycolmap.COLMAP_version,
     }
+    return result
+
+
+def images_stock(pycolmap, req: dict, image_dir: Path, work: Path, db: Path, names) -> dict:
+    """Images mode as another user of COLMAP would run it on poser's image files: no
+    intrinsics handed over (COLMAP reads the focal length from the EXIF and starts from its
+    default SIMPLE_RADIAL camera), default feature extraction, exhaustive matching and
+    incremental mapping with COLMAP's defaults, self-calibrating throughout, the largest
+    model kept. The one change is the initial pair's minimum triangulation angle
+    (`req["stock"]`, degrees; COLMAP's default 16). Threads and the random seed are set,
+    which changes no result's quality, only its reproducibility."""
+    threads = int(req.get("threads", os.cpu_count() or 1))
+    pycolmap.set_random_seed(int(req.get("seed", 0)))
+    extraction = pycolmap.FeatureExtractionOptions()
+    extraction.num_threads = threads
+    pycolmap.extract_features(
+        db,
+        image_dir,
+        image_names=names,
+        camera_mode=pycolmap.CameraMode.AUTO,
+        reader_options=pycolmap.ImageReaderOptions(),
+        extraction_options=extraction,
+        device=pycolmap.Device.cpu,
+    )
+    # The focal length COLMAP took from the EXIF (none: it guessed 1.2 × the image's size).
+    with pycolmap.Database.open(db) as database:
+        priors = [
+            float(c.params[0])
+            for c in database.read_all_cameras()
+            if c.has_prior_focal_length
+        ]
+    matching = pycolmap.FeatureMatchingOptions()
+    matching.num_threads = threads
+    matching.use_gpu = False
+    pycolmap.match_exhaustive(db, matching_options=matching)
+    mapper = pycolmap.IncrementalPipelineOptions()
+    mapper.num_threads = threads
+    mapper.random_seed = int(req.get("seed", 0))
+    mapper.mapper.init_min_tri_angle = float(req["stock"])
+    sparse = work / "sparse"
+    sparse.mkdir(exist_ok=True)
+    maps = pycolmap.incremental_mapping(db, image_dir, sparse, options=mapper)
+    if not maps:
+        raise EvaluateError(
+            "stock COLMAP registered no images: too few matches between them (help: check "
+            "that the scene is textured at the image's GSD, raise samples, or add overlap)"
+        )
+    rec = max(maps.values(), key=lambda r: r.num_reg_images())
+    sensitivity = focal_sensitivity(pycolmap, rec, req)
+    covariance = focal_covariance(pycolmap, rec, req)
+    result = summarise(pycolmap, rec, req, db, names, sensitivity, covariance)
+    result["summary"]["models"] = len(maps)
+    result["summary"]["exif_focal_px"] = priors[0] if priors else None
     return result
 
 

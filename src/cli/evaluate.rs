@@ -13,6 +13,7 @@
 //! | `--rig` | off | observations mode: the rig is calibrated beforehand — intrinsics held at the in-water-equivalent values, the cameras' poses in the rig held at the truth; the bundle adjuster solves one pose per rig position (its baseline sets the scale) |
 //! | `--images DIR` | render | images mode: use the images already rendered in DIR (any backend); without it the network is rendered into `OUT/images.partial/` and renamed to `OUT/images/` when complete (a run cut short resumes there) |
 //! | `--samples`, `--scale` | scene's | images mode: the native render's samples and resolution scale |
+//! | `--stock` | off | images mode: COLMAP as it ships, fed only the image files: the camera from their EXIF (`simple-radial`), default extraction, exhaustive matching and mapping, except the initial pair's triangulation angle ([`crate::evaluate::STOCK_INIT_ANGLE_DEG`]) |
 use super::{CliError, SceneArgs, load_model};
 use crate::backend::{Backend, RenderOptions};
 use crate::evaluate::colmap::CameraModel;
@@ -88,6 +89,13 @@ pub struct Args {
     /// Images mode: render at this fraction of the cameras' resolution.
     #[arg(long)]
     pub scale: Option<f64>,
+    /// Images mode: run COLMAP as it ships, fed only the image files. The camera comes from
+    /// their EXIF (COLMAP's `simple-radial`, self-calibrated throughout); extraction,
+    /// exhaustive matching and mapping keep COLMAP's defaults, except the initial pair's
+    /// minimum triangulation angle (8° for COLMAP's 16°, which a survey's neighbours do not
+    /// reach). What another user of COLMAP gets from poser's images.
+    #[arg(long)]
+    pub stock: bool,
     /// Hide the progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -141,14 +149,36 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             "--gcp-sigma {s}: expected the control points' accuracy in metres, > 0, e.g. 0.002"
         )));
     }
+    if args.stock && args.mode != Mode::Images {
+        return Err(CliError::Usage(
+            "--stock runs COLMAP's own pipeline on images: give `--mode images` too".into(),
+        ));
+    }
+    if args.stock && args.model.is_some_and(|m| m != CameraModel::SimpleRadial) {
+        return Err(CliError::Usage(
+            "--stock uses COLMAP's default camera model (simple-radial, from the images' EXIF); \
+             drop --model, or drop --stock to choose the model"
+                .into(),
+        ));
+    }
     if args.gcp.is_some() && args.mode == Mode::Images {
         return Err(CliError::Usage(
             "--gcp belongs to `--mode observations` (images mode aligns on the camera centres)"
                 .into(),
         ));
     }
+    if args.stock && args.images.is_none() && model.sensor.is_none() {
+        // What another user of COLMAP has: camera files with their EXIF (the default camera
+        // of `poser render --sensor`), not the backend's previews.
+        model.sensor = Some(crate::model::Sensor::default());
+    }
     let opts = Options {
-        model: args.model.unwrap_or(args.mode.default_model()),
+        model: if args.stock {
+            CameraModel::SimpleRadial
+        } else {
+            args.model.unwrap_or(args.mode.default_model())
+        },
+        stock: args.stock,
         noise: args.noise,
         density: args.density,
         gcp: args.gcp.is_some(),
@@ -186,6 +216,13 @@ pub fn run(args: &Args) -> Result<(), CliError> {
     let ev = ev.map_err(CliError::Failed)?;
     evaluate::report::write(&ev, &args.out).map_err(CliError::Failed)?;
     print_summary(&ev, &args.out);
+    if args.stock && ev.colmap.get("exif_focal_px").is_some_and(|v| v.is_null()) {
+        eprintln!(
+            "note: COLMAP found no focal length in the images' EXIF and started from its guess \
+             (1.2 × the image's larger side)\n  help: give it the sensor stage's camera images \
+             (`poser render SCENE --sensor`, `OUT/camera/*.jpg`), which carry the focal length"
+        );
+    }
     for w in &ev.warnings {
         eprintln!("warning: {w}");
     }

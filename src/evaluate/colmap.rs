@@ -116,6 +116,10 @@ pub struct Request {
     /// A calibrated rig (observations mode, `--rig`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rig: Option<RequestRig>,
+    /// Images mode, `--stock`: run COLMAP with its defaults (the camera from the images'
+    /// EXIF), except this initial-pair triangulation angle, degrees.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stock: Option<f64>,
 }
 
 /// A rig calibrated beforehand: each camera's pose in the rig (camera 1 is the reference,

@@ -102,7 +102,16 @@ pub struct Options {
     pub perturb_position: f64,
     pub perturb_rotation: f64,
     pub progress: bool,
+    /// Images mode: COLMAP as it ships ([`STOCK_INIT_ANGLE_DEG`]): the images' EXIF for the
+    /// camera, no intrinsics handed over, COLMAP's default options throughout.
+    pub stock: bool,
 }
+
+/// The one option `--stock` changes from COLMAP's defaults: the initial pair's minimum
+/// triangulation angle, degrees (COLMAP's default 16°). Neighbours in a survey strip at 80 %
+/// overlap are about 8° apart, so no pair reaches 16° early in a strip; with 16° stock COLMAP
+/// registered 3 of 16 images of a reef strip. poser's own pipeline uses the same 8°.
+pub const STOCK_INIT_ANGLE_DEG: f64 = 8.0;
 
 impl Default for Options {
     fn default() -> Options {
@@ -120,6 +129,7 @@ impl Default for Options {
             perturb_position: 0.02,
             perturb_rotation: 1f64.to_radians(),
             progress: false,
+            stock: false,
         }
     }
 }
@@ -482,6 +492,7 @@ pub fn evaluate_observations(
         work_dir: None,
         matcher: None,
         threads: rayon::current_num_threads(),
+        stock: None,
     };
     progress("bundle adjustment (COLMAP)", 0, 0);
     let work = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
@@ -772,28 +783,16 @@ pub fn rendered_images(model: &Model, dir: &Path) -> Result<(PathBuf, Vec<ImageF
     })
 }
 
-/// Images mode: COLMAP's pipeline on the rendered images in `image_dir`.
-pub fn evaluate_images(
+/// The COLMAP job of images mode on the image files in `abs_dir`: poser's pipeline or,
+/// with `opts.stock`, COLMAP's own.
+fn images_request(
     model: &Model,
-    image_dir: &Path,
+    files: &[ImageFile],
+    abs_dir: &Path,
+    work: &Path,
     opts: &Options,
-    progress: &(dyn Fn(&str, u64, u64) + Sync),
-) -> Result<Evaluation, String> {
-    let t0 = std::time::Instant::now();
-    let (image_dir, files) = rendered_images(model, image_dir)?;
-    let image_dir = image_dir.as_path();
-    if files.len() < 3 {
-        return Err(format!(
-            "images mode needs at least 3 images; the network has {}",
-            files.len()
-        ));
-    }
-    let (_, scene) = surfaces(model)?;
-    check_texture_seen(texture_seen(model, &scene))?;
-    let abs_dir: PathBuf =
-        std::fs::canonicalize(image_dir).map_err(|e| format!("{}: {e}", image_dir.display()))?;
-    let work = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
-    let req = Request {
+) -> Request {
+    Request {
         job: "images",
         model: opts.model,
         refine_principal_point: opts.refine_principal_point,
@@ -816,15 +815,40 @@ pub fn evaluate_images(
         gcps: Vec::new(),
         tie_sigma_px: None,
         image_dir: Some(abs_dir.to_string_lossy().into_owned()),
-        work_dir: Some(work.path().to_string_lossy().into_owned()),
+        work_dir: Some(work.to_string_lossy().into_owned()),
         rig: None,
-        matcher: Some(if files.len() > 40 {
+        matcher: Some(if files.len() > 40 && !opts.stock {
             "sequential"
         } else {
             "exhaustive"
         }),
         threads: rayon::current_num_threads(),
-    };
+        stock: opts.stock.then_some(STOCK_INIT_ANGLE_DEG),
+    }
+}
+
+/// Images mode: COLMAP's pipeline on the rendered images in `image_dir`.
+pub fn evaluate_images(
+    model: &Model,
+    image_dir: &Path,
+    opts: &Options,
+    progress: &(dyn Fn(&str, u64, u64) + Sync),
+) -> Result<Evaluation, String> {
+    let t0 = std::time::Instant::now();
+    let (image_dir, files) = rendered_images(model, image_dir)?;
+    let image_dir = image_dir.as_path();
+    if files.len() < 3 {
+        return Err(format!(
+            "images mode needs at least 3 images; the network has {}",
+            files.len()
+        ));
+    }
+    let (_, scene) = surfaces(model)?;
+    check_texture_seen(texture_seen(model, &scene))?;
+    let abs_dir: PathBuf =
+        std::fs::canonicalize(image_dir).map_err(|e| format!("{}: {e}", image_dir.display()))?;
+    let work = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
+    let req = images_request(model, &files, &abs_dir, work.path(), opts);
     progress("features, matching and mapping (COLMAP)", 0, 0);
     let rec = colmap::run(&req, work.path())?;
     let names: HashMap<String, (usize, usize)> = files
@@ -891,6 +915,11 @@ pub fn evaluate_images(
                 "seed": opts.seed,
                 "refine_principal_point": opts.refine_principal_point,
                 "matcher": req.matcher,
+                "colmap_options": if opts.stock {
+                    format!("stock: COLMAP's defaults, camera from EXIF, init_min_tri_angle {STOCK_INIT_ANGLE_DEG}°")
+                } else {
+                    "poser's: intrinsics held at the prior while mapping, one self-calibrating adjustment at the end".to_string()
+                },
                 "keypoints_per_image": rec.summary.get("keypoints_per_image"),
             }),
             images: files.len(),
