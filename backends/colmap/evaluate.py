@@ -441,15 +441,7 @@ def images(pycolmap, req: dict) -> dict:
         mapper.ba_refine_principal_point = False
         mapper.mapper.abs_pose_refine_focal_length = False
         mapper.mapper.abs_pose_refine_extra_params = False
-    sparse = work / "sparse"
-    sparse.mkdir(exist_ok=True)
-    maps = pycolmap.incremental_mapping(db, image_dir, sparse, options=mapper)
-    if not maps:
-        raise EvaluateError(
-            "COLMAP registered no images: too few matches between them (help: check that the "
-            "scene is textured at the image's GSD, raise samples, or add overlap)"
-        )
-    rec = max(maps.values(), key=lambda r: r.num_reg_images())
+    rec, _ = largest_model(pycolmap, db, image_dir, work, mapper, "COLMAP")
     if hold:
         pycolmap.bundle_adjustment(rec, ba_options(pycolmap, req))
     sensitivity = focal_sensitivity(pycolmap, rec, req)
@@ -478,7 +470,22 @@ def summarise(pycolmap, rec, req, db, names, sensitivity, covariance) -> dict:
     return result
 
 
-def images_stock(pycolmap, req: dict, image_dir: Path, work: Path, db: Path, names) -> dict:
+def largest_model(pycolmap, db, image_dir: Path, work: Path, mapper, who: str):
+    """Incremental mapping into `work/sparse`: the model with the most images, and all."""
+    sparse = work / "sparse"
+    sparse.mkdir(exist_ok=True)
+    maps = pycolmap.incremental_mapping(db, image_dir, sparse, options=mapper)
+    if not maps:
+        raise EvaluateError(
+            f"{who} registered no images: too few matches between them (help: check that "
+            "the scene is textured at the image's GSD, raise samples, or add overlap)"
+        )
+    return max(maps.values(), key=lambda r: r.num_reg_images()), maps
+
+
+def images_stock(
+    pycolmap, req: dict, image_dir: Path, work: Path, db: Path, names
+) -> dict:
     """Images mode as another user of COLMAP would run it on poser's image files: no
     intrinsics handed over (COLMAP reads the focal length from the EXIF and starts from its
     default SIMPLE_RADIAL camera), default feature extraction, exhaustive matching and
@@ -514,15 +521,7 @@ def images_stock(pycolmap, req: dict, image_dir: Path, work: Path, db: Path, nam
     mapper.num_threads = threads
     mapper.random_seed = int(req.get("seed", 0))
     mapper.mapper.init_min_tri_angle = float(req["stock"])
-    sparse = work / "sparse"
-    sparse.mkdir(exist_ok=True)
-    maps = pycolmap.incremental_mapping(db, image_dir, sparse, options=mapper)
-    if not maps:
-        raise EvaluateError(
-            "stock COLMAP registered no images: too few matches between them (help: check "
-            "that the scene is textured at the image's GSD, raise samples, or add overlap)"
-        )
-    rec = max(maps.values(), key=lambda r: r.num_reg_images())
+    rec, maps = largest_model(pycolmap, db, image_dir, work, mapper, "stock COLMAP")
     sensitivity = focal_sensitivity(pycolmap, rec, req)
     covariance = focal_covariance(pycolmap, rec, req)
     result = summarise(pycolmap, rec, req, db, names, sensitivity, covariance)
