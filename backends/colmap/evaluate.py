@@ -488,9 +488,10 @@ def images_stock(
 ) -> dict:
     """Images mode as another user of COLMAP would run it on poser's image files: no
     intrinsics handed over (COLMAP reads the focal length from the EXIF and starts from its
-    default SIMPLE_RADIAL camera), default feature extraction, exhaustive matching and
+    default SIMPLE_RADIAL camera), default feature extraction, matching (exhaustive, or
+    COLMAP's sequential matcher with its defaults when `req["matcher"]` says so) and
     incremental mapping with COLMAP's defaults, self-calibrating throughout, the largest
-    model kept. The one change is the initial pair's minimum triangulation angle
+    model kept. The one option changed is the initial pair's minimum triangulation angle
     (`req["stock"]`, degrees; COLMAP's default 16). Threads and the random seed are set,
     which changes no result's quality, only its reproducibility."""
     threads = int(req.get("threads", os.cpu_count() or 1))
@@ -516,7 +517,11 @@ def images_stock(
     matching = pycolmap.FeatureMatchingOptions()
     matching.num_threads = threads
     matching.use_gpu = False
-    pycolmap.match_exhaustive(db, matching_options=matching)
+    if req.get("matcher", "exhaustive") == "sequential":
+        # COLMAP's matcher for images taken in order, with its default overlap (10).
+        pycolmap.match_sequential(db, matching_options=matching)
+    else:
+        pycolmap.match_exhaustive(db, matching_options=matching)
     mapper = pycolmap.IncrementalPipelineOptions()
     mapper.num_threads = threads
     mapper.random_seed = int(req.get("seed", 0))

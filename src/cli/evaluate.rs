@@ -13,7 +13,7 @@
 //! | `--rig` | off | observations mode: the rig is calibrated beforehand — intrinsics held at the in-water-equivalent values, the cameras' poses in the rig held at the truth; the bundle adjuster solves one pose per rig position (its baseline sets the scale) |
 //! | `--images DIR` | render | images mode: use the images already rendered in DIR (any backend); without it the network is rendered into `OUT/images.partial/` and renamed to `OUT/images/` when complete (a run cut short resumes there) |
 //! | `--samples`, `--scale` | scene's | images mode: the native render's samples and resolution scale |
-//! | `--stock` | off | images mode: COLMAP as it ships, fed only the image files: the camera from their EXIF (`simple-radial`), default extraction, exhaustive matching and mapping, except the initial pair's triangulation angle ([`crate::evaluate::STOCK_INIT_ANGLE_DEG`]) |
+//! | `--stock` | off | images mode: COLMAP as it ships, fed only the image files: the camera from their EXIF (`simple-radial`), default extraction, matching (exhaustive, sequential above [`crate::evaluate::EXHAUSTIVE_MAX_IMAGES`] images) and mapping, except the initial pair's triangulation angle ([`crate::evaluate::STOCK_INIT_ANGLE_DEG`]) |
 use super::{CliError, SceneArgs, load_model};
 use crate::backend::{Backend, RenderOptions};
 use crate::evaluate::colmap::CameraModel;
@@ -91,9 +91,10 @@ pub struct Args {
     pub scale: Option<f64>,
     /// Images mode: run COLMAP as it ships, fed only the image files. The camera comes from
     /// their EXIF (COLMAP's `simple-radial`, self-calibrated throughout); extraction,
-    /// exhaustive matching and mapping keep COLMAP's defaults, except the initial pair's
-    /// minimum triangulation angle (8° for COLMAP's 16°, which a survey's neighbours do not
-    /// reach). What another user of COLMAP gets from poser's images.
+    /// matching (exhaustive; sequential above 40 images) and mapping keep COLMAP's defaults,
+    /// except the initial pair's minimum triangulation angle (8° for COLMAP's 16°, which a
+    /// survey's neighbours do not reach). What another user of COLMAP gets from poser's
+    /// images.
     #[arg(long)]
     pub stock: bool,
     /// Hide the progress bar.
