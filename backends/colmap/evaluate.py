@@ -410,17 +410,7 @@ def images(pycolmap, req: dict) -> dict:
         extraction_options=extraction,
         device=pycolmap.Device.cpu,
     )
-    matching = pycolmap.FeatureMatchingOptions()
-    matching.num_threads = extraction.num_threads
-    matching.use_gpu = False
-    if req.get("matcher", "exhaustive") == "sequential":
-        pairing = pycolmap.SequentialPairingOptions()
-        pairing.overlap = int(req.get("sequential_overlap", 10))
-        pycolmap.match_sequential(
-            db, matching_options=matching, pairing_options=pairing
-        )
-    else:
-        pycolmap.match_exhaustive(db, matching_options=matching)
+    match_images(pycolmap, db, req, extraction.num_threads)
     mapper = pycolmap.IncrementalPipelineOptions()
     mapper.num_threads = extraction.num_threads
     mapper.multiple_models = False
@@ -470,6 +460,23 @@ def summarise(pycolmap, rec, req, db, names, sensitivity, covariance) -> dict:
     return result
 
 
+def match_images(pycolmap, db, req: dict, threads: int):
+    """Match the features in `db` on the CPU: every pair, or with `req["matcher"]` =
+    "sequential" each image with its `sequential_overlap` (10, COLMAP's default) neighbours
+    in the request's order."""
+    matching = pycolmap.FeatureMatchingOptions()
+    matching.num_threads = threads
+    matching.use_gpu = False
+    if req.get("matcher", "exhaustive") == "sequential":
+        pairing = pycolmap.SequentialPairingOptions()
+        pairing.overlap = int(req.get("sequential_overlap", 10))
+        pycolmap.match_sequential(
+            db, matching_options=matching, pairing_options=pairing
+        )
+    else:
+        pycolmap.match_exhaustive(db, matching_options=matching)
+
+
 def largest_model(pycolmap, db, image_dir: Path, work: Path, mapper, who: str):
     """Incremental mapping into `work/sparse`: the model with the most images, and all."""
     sparse = work / "sparse"
@@ -514,14 +521,7 @@ def images_stock(
             for c in database.read_all_cameras()
             if c.has_prior_focal_length
         ]
-    matching = pycolmap.FeatureMatchingOptions()
-    matching.num_threads = threads
-    matching.use_gpu = False
-    if req.get("matcher", "exhaustive") == "sequential":
-        # COLMAP's matcher for images taken in order, with its default overlap (10).
-        pycolmap.match_sequential(db, matching_options=matching)
-    else:
-        pycolmap.match_exhaustive(db, matching_options=matching)
+    match_images(pycolmap, db, req, threads)
     mapper = pycolmap.IncrementalPipelineOptions()
     mapper.num_threads = threads
     mapper.random_seed = int(req.get("seed", 0))

@@ -4,7 +4,7 @@
 //! Rays come from the optics core ([`crate::optics::project::Projector`]): lens model and
 //! distortion, then exact refraction through every surface of the port, with the product of the
 //! Fresnel transmittances. The weight is that transmittance times the n² radiance law
-//! (docs/render-conventions.md §3.4): a camera in air behind a port sees water radiance scaled by
+//! (docs/render-conventions.md, §3.4 "The n² law"): a camera in air behind a port sees water radiance scaled by
 //! `(n_air/n_water)²`; a camera without a port sits in the medium and sees it unscaled. A
 //! camera in the air above the sea surface (a drone) sees the water through the surface: its
 //! rays refract where they meet it ([`crate::optics::surface`]), weighted by the Fresnel

@@ -1,6 +1,6 @@
 //! The lights of one rig pose in the world frame (rig-mounted lights moved with the rig).
 //!
-//! | light | radiometry (docs/render-conventions.md §2.2) |
+//! | light | radiometry (docs/render-conventions.md, §2.2 "Light units") |
 //! |---|---|
 //! | point | intensity `I` W/sr per channel, irradiance `I·cos/r²` |
 //! | spot | point light restricted to the sharp cone `angle(direction, x − p) ≤ half_angle` |
