@@ -27,10 +27,12 @@ fn showcase_snapshot() {
     insta::assert_snapshot!("showcase_manifest", text(&c, "manifest.json"));
 }
 
-/// Per-view coordinates (docs/backends.md): each view sets `$poser_origin_*` to minus its
-/// camera's centre before it includes the world, and every placed element of every document
-/// (shapes, sensors, point and spot lights) ends its `to_world` with the translation by them,
-/// so that the camera and its port sit at Mitsuba's origin, where its ray offsets are smallest.
+/// Per-view coordinates (docs/backends.md): each view sets `$poser_unit` to millimetres and
+/// `$poser_origin_*` to minus its camera's centre (in millimetres) before it includes the
+/// world, and every placed element of every document (shapes, sensors, point and spot lights)
+/// ends its `to_world` with the scale and the translation by them, so that the camera and its
+/// port sit at Mitsuba's origin, where its ray offsets are smallest. A sensor, which may not
+/// scale, also starts with the inverse scale.
 #[test]
 fn each_view_puts_its_camera_at_the_origin() {
     let model = showcase();
@@ -47,8 +49,8 @@ fn each_view_puts_its_camera_at_the_origin() {
             "the showcase's cameras are off the origin"
         );
         let xml = text(&c, &job.passes[0].xml);
-        let default = |axis: &str| -> f64 {
-            let key = format!(r#"<default name="poser_origin_{axis}" value=""#);
+        let default = |name: &str| -> f64 {
+            let key = format!(r#"<default name="{name}" value=""#);
             let at = xml
                 .find(&key)
                 .unwrap_or_else(|| panic!("{key} in {}", job.image));
@@ -59,10 +61,24 @@ fn each_view_puts_its_camera_at_the_origin() {
             let rest = &xml[at + key.len()..];
             rest[..rest.find('"').unwrap()].parse().unwrap()
         };
-        let origin = DVec3::new(default("x"), default("y"), default("z"));
-        assert!((origin + centre).length() < 1e-12, "{origin} vs {centre}");
+        let unit = default("poser_unit");
+        assert_eq!(unit, 1000.0, "views are in millimetres");
+        assert_eq!(default("poser_per_unit"), 1e-3);
+        let origin = DVec3::new(
+            default("poser_origin_x"),
+            default("poser_origin_y"),
+            default("poser_origin_z"),
+        );
+        assert!(
+            (origin / unit + centre).length() < 1e-12,
+            "{origin} vs {centre}"
+        );
     }
-    let shift = r#"<translate x="$poser_origin_x" y="$poser_origin_y" z="$poser_origin_z"/>"#;
+    let shift = concat!(
+        r#"<scale value="$poser_unit"/>"#,
+        r#"<translate x="$poser_origin_x" y="$poser_origin_y" z="$poser_origin_z"/>"#
+    );
+    let inverse = r#"<scale value="$poser_per_unit"/>"#;
     let mut kinds = std::collections::BTreeSet::new();
     for (name, _) in c.files.iter().filter(|(n, _)| n.ends_with(".xml")) {
         let xml = text(&c, name);
@@ -71,8 +87,17 @@ fn each_view_puts_its_camera_at_the_origin() {
             .skip(1)
             .collect();
         for b in &blocks {
-            let body = &b[..b.find("</transform>").unwrap()];
-            assert!(body.trim_end().ends_with(shift), "{name}: {body}");
+            let body: String = b[..b.find("</transform>").unwrap()]
+                .lines()
+                .map(str::trim)
+                .collect();
+            assert!(body.ends_with(shift), "{name}: {body}");
+        }
+        // Sensors: the inverse scale first (their to_world may not scale).
+        for s in xml.split("<sensor type=\"").skip(1) {
+            let tw = &s[s.find(r#"<transform name="to_world">"#).unwrap()..];
+            let first = tw.lines().nth(1).unwrap().trim();
+            assert_eq!(first, inverse, "{name}: a sensor's to_world");
         }
         let mut placed = 0;
         for kind in [
@@ -317,6 +342,27 @@ fn fisheye_distortion_and_nonsquare_pixels_are_clear_errors() {
     assert!(
         v.contains("<sensor type=\"thinlens\">") && v.contains("aperture_radius"),
         "{v}"
+    );
+    // The view is in millimetres; the importer gives the lens back in metres.
+    assert!(
+        v.contains(r#"<float name="focus_distance" value="2000"/>"#),
+        "{v}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    mitsuba::write(&c, dir.path()).unwrap();
+    let back = poser::import::mitsuba::import(&[dir.path().join("left_img_0000.xml")], "assets")
+        .unwrap()
+        .toml;
+    let cam: toml::Table = toml::from_str(&back).unwrap();
+    let cam = cam["camera"].as_table().unwrap();
+    assert_eq!(cam["focus_distance"].as_float(), Some(2.0), "{back}");
+    // The aperture's radius: the importer derives the focal length from fx and the pitch.
+    let radius =
+        cam["focal_length"].as_float().unwrap() / (2.0 * cam["f_number"].as_float().unwrap());
+    let expected = m.cameras[0].focal_length / 16.0;
+    assert!(
+        (radius / expected - 1.0).abs() < 1e-12,
+        "{radius} vs {expected}"
     );
 }
 

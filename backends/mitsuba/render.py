@@ -6,8 +6,9 @@ its pass(es) with variant ``scalar_rgb`` and writes ``{image}.exr`` (linear RGB,
 A view with three passes (dispersion) takes channel c of pass c and combines them into one RGB
 image. Files are written atomically (temporary name, then rename).
 
-When the manifest has ``"depth": true``, also writes ``{image}.depth.exr``: the camera-frame z
-(m) of the first surface hit through each pixel centre, 0 where nothing is hit (the native
+The compiled views are in ``manifest["unit"]`` length units per metre (poser writes them in
+millimetres). When the manifest has ``"depth": true``, also writes ``{image}.depth.exr``: the
+camera-frame z (m) of the first surface hit through each pixel centre, 0 where nothing is hit (the native
 backend's definition). The pixel-centre ray is traced exactly through the port: dielectric
 surfaces are crossed by their refracted (transmitted) direction, `null` surfaces (the water's
 bounds, area lights) passed through.
@@ -37,7 +38,7 @@ def load_manifest(scene_dir: Path) -> dict:
     """The job list written by the compiler."""
     with open(scene_dir / "manifest.json", encoding="utf-8") as f:
         manifest = json.load(f)
-    if manifest.get("format") != "poser-mitsuba/1":
+    if manifest.get("format") != "poser-mitsuba/2":
         raise ValueError(f"{scene_dir}/manifest.json: unknown format {manifest.get('format')!r}")
     return manifest
 
@@ -97,8 +98,9 @@ def render_pass(mi, xml: Path, seed: int, spp: int) -> np.ndarray:
     return np.array(img, dtype=np.float32)
 
 
-def depth_image(mi, xml: Path) -> np.ndarray:
-    """Camera-frame z of the first opaque surface through each pixel centre (H×W, 0: none)."""
+def depth_image(mi, xml: Path, unit: float) -> np.ndarray:
+    """Camera-frame z (m) of the first opaque surface through each pixel centre (H×W, 0: none);
+    the document is in ``unit`` length units per metre."""
     scene = mi.load_file(str(xml))
     sensor = scene.sensors()[0]
     width, height = sensor.film().crop_size()
@@ -125,7 +127,7 @@ def depth_image(mi, xml: Path) -> np.ndarray:
                         break  # total internal reflection: no surface seen
                     ray = si.spawn_ray(si.to_world(bs.wo))
                     continue
-                out[j, i] = (cam_from_world @ si.p)[2]
+                out[j, i] = (cam_from_world @ si.p)[2] / unit
                 break
     return out
 
@@ -161,7 +163,8 @@ def run(scene_dir: Path, out: Path, poses: list[int] | None, spp: int | None, lo
         written.append(exr)
         if manifest.get("depth"):
             # Geometry only: the first pass's document (indices of its channel).
-            write_depth(mi, depth_image(mi, scene_dir / v["passes"][0]["xml"]), out, v["image"])
+            xml = scene_dir / v["passes"][0]["xml"]
+            write_depth(mi, depth_image(mi, xml, float(manifest["unit"])), out, v["image"])
         log(f"image {exr.name}", flush=True)
     return written
 

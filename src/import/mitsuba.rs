@@ -13,7 +13,7 @@
 //! | `homogeneous` medium (`sigma_t`, `albedo`, `scale`, `hg`/`isotropic`) | `[water]` `absorption`, `scattering`, `g` | the glass's `ext_ior` gives the water's index |
 //! | a `null` `cube` holding the water, top at z = 0 | `site.surface = "flat"` | the sun is refracted back into the air |
 //! | `integrator` `max_depth` (the file's, else an included file's) | `render.bounces` | a wrapper (`moment`) gives its inner integrator's; `direct` is depth 2 |
-//! | `default`, `$name`, `include`, `<path>` | resolved while reading | files are found as Mitsuba's resolver finds them: the naming file's folder, the `<path>` folders (latest first), the main file's folder; `$poser_origin_x/y/z` (the per-view coordinates of poser's own views) are read as 0, the world frame |
+//! | `default`, `$name`, `include`, `<path>` | resolved while reading | files are found as Mitsuba's resolver finds them: the naming file's folder, the `<path>` folders (latest first), the main file's folder; `$poser_origin_x/y/z`, `$poser_unit` and `$poser_per_unit` (the per-view coordinates of poser's own views, in millimetres) are read as 0, 1 and 1: the world frame, in metres; a thin lens's lengths and point and spot intensities are divided by the unit a file declares (`Cx::units`) |
 //! | `ref`/`id` | the element referenced, wherever an element is expected | an unknown id or a cycle is refused |
 //!
 //! Safety: a document type declaration (and with it every entity) is refused; `include`,
@@ -27,6 +27,7 @@ use super::{
     Imported, Note, arr, euler_xyz, explicit_network, finish, meshes, safe_file_name, sun_table,
     unrefract,
 };
+use crate::backend::mitsuba::xml::{ORIGIN_PARAMS, PER_UNIT_PARAM, UNIT_PARAM};
 use crate::geometry::mesh::TriMesh;
 use glam::{DMat3, DMat4, DVec3};
 use quick_xml::events::Event;
@@ -246,6 +247,9 @@ struct Reader {
     main: PathBuf,
     /// `<path>` folders (canonical), the latest first: Mitsuba prepends each to its resolver.
     paths: Vec<PathBuf>,
+    /// The length unit the input file declares (`$poser_unit`, units per metre; poser's views
+    /// are in millimetres), read apart from the parameter, which placements read as 1.
+    unit: Option<f64>,
 }
 
 impl Reader {
@@ -375,6 +379,20 @@ impl Reader {
                 let (Some(n), Some(v)) = (x.attr("name"), x.attr("value")) else {
                     return Err(format!("{}: <default> needs `name` and `value`", x.loc));
                 };
+                if n == UNIT_PARAM && self.unit.is_none() {
+                    let u = v
+                        .trim()
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|u| *u > 0.0 && u.is_finite());
+                    self.unit = Some(u.ok_or_else(|| {
+                        format!(
+                            "{}: `{UNIT_PARAM}` is `{v}`, not a length unit\n  help: poser's \
+                             views give the units per metre, such as 1000",
+                            x.loc
+                        )
+                    })?);
+                }
                 self.params
                     .entry(n.to_string())
                     .or_insert_with(|| v.to_string());
@@ -479,6 +497,9 @@ struct Cx {
     root: PathBuf,
     /// Per input file: its folder and its `<path>` folders (the resolver's state at the end).
     search: Vec<(PathBuf, Vec<PathBuf>)>,
+    /// Per input file: its declared length unit, units per metre (`$poser_unit`; 1 when it
+    /// declares none, as third-party files).
+    units: Vec<f64>,
     /// Ids that a `<ref>` names.
     referenced: std::collections::HashSet<String>,
     /// Locations of the bitmaps the shape being read carries as its image texture (their
@@ -1179,8 +1200,8 @@ fn sensor(cx: &mut Cx, x: &X) -> Result<Option<Sensor>, String> {
     let thin = match x.ty() {
         "perspective" => None,
         "thinlens" => Some((
-            cx.float(x, "aperture_radius", 0.0)?,
-            cx.float(x, "focus_distance", 0.0)?,
+            cx.float(x, "aperture_radius", 0.0)? / cx.units[x.doc],
+            cx.float(x, "focus_distance", 0.0)? / cx.units[x.doc],
         )),
         t => {
             cx.note(
@@ -1649,13 +1670,14 @@ pub fn import_within(
     if !root.is_dir() {
         return Err(format!("{}: not a folder", root.display()));
     }
-    let (mut docs, search) = read_docs(files, &root)?;
+    let (mut docs, search, units) = read_docs(files, &root)?;
     let mut cx = Cx {
         notes: Vec::new(),
         targets: Vec::new(),
         ids: HashMap::new(),
         root: root.clone(),
         search,
+        units,
         referenced: Default::default(),
         mapped: Default::default(),
     };
@@ -1912,12 +1934,14 @@ fn note_direct_delta_weight(cx: &mut Cx, k: &X) -> Result<(), String> {
 /// Parse every input file (all inside `root`: the first file's folder, or `--root`), with the resolver
 /// state each leaves: its folder and its `<path>` folders.
 #[allow(clippy::type_complexity)]
-fn read_docs(
-    files: &[PathBuf],
-    root: &Path,
-) -> Result<(Vec<X>, Vec<(PathBuf, Vec<PathBuf>)>), String> {
+/// The input files, parsed: their elements, their resolver's state and their declared length
+/// units (units per metre).
+type Docs = (Vec<X>, Vec<(PathBuf, Vec<PathBuf>)>, Vec<f64>);
+
+fn read_docs(files: &[PathBuf], root: &Path) -> Result<Docs, String> {
     let mut docs = Vec::new();
     let mut search = Vec::new();
+    let mut units = Vec::new();
     for (di, f) in files.iter().enumerate() {
         let abs = std::fs::canonicalize(f).map_err(|e| format!("{}: {e}", f.display()))?;
         if !abs.starts_with(root) {
@@ -1929,11 +1953,15 @@ fn read_docs(
             ));
         }
         let main = abs.parent().unwrap_or(root).to_path_buf();
-        // poser's own views move the world by `$poser_origin_*` (per-view coordinates); read
-        // at 0, every file of a set comes back in the one world frame.
-        let params = crate::backend::mitsuba::xml::ORIGIN_PARAMS
+        // poser's own views move the world by `$poser_origin_*` and scale it by `$poser_unit`
+        // (per-view coordinates in millimetres); read at 0 and 1, every file of a set comes
+        // back in the one world frame, in metres. The few lengths a view writes as numbers
+        // (a thin lens's) and its point lights' intensities are converted with the declared
+        // unit (`Cx::units`).
+        let params = ORIGIN_PARAMS
             .iter()
             .map(|n| (n.to_string(), "0".to_string()))
+            .chain([UNIT_PARAM, PER_UNIT_PARAM].map(|n| (n.to_string(), "1".to_string())))
             .collect();
         let mut r = Reader {
             root: root.to_path_buf(),
@@ -1942,6 +1970,7 @@ fn read_docs(
             doc: di,
             main: main.clone(),
             paths: Vec::new(),
+            unit: None,
         };
         let mut doc = r.parse_file(&abs, 0, false)?;
         // Keep the given spelling of the path in locations.
@@ -1955,8 +1984,9 @@ fn read_docs(
         }
         docs.push(doc);
         search.push((main, r.paths));
+        units.push(r.unit.unwrap_or(1.0));
     }
-    Ok((docs, search))
+    Ok((docs, search, units))
 }
 
 /// Every sensor of every file, in file order; a file's only sensor takes the (pose, camera)
@@ -2773,6 +2803,16 @@ fn shape_geometry(
 
 /// A light (not an area emitter). `view`: the camera (rotation, centre) of the view file the
 /// light comes from, for a rig-mounted light.
+/// A point or spot light's intensity (W/sr) in metres: a document in `u` units per metre
+/// gives it × u² (the irradiance falls as 1/distance²).
+fn point_intensity(cx: &mut Cx, k: &X) -> Result<[f64; 3], String> {
+    let u = cx.units[k.doc];
+    Ok(cx
+        .colour(k, "intensity")?
+        .unwrap_or([1.0; 3])
+        .map(|c| c / (u * u)))
+}
+
 fn emitter(
     cx: &mut Cx,
     k: &X,
@@ -2825,10 +2865,7 @@ fn emitter(
             );
             l.insert("type".into(), Value::String("point".into()));
             place(&mut l, pos, None);
-            l.insert(
-                "intensity".into(),
-                arr(cx.colour(k, "intensity")?.unwrap_or([1.0; 3])),
-            );
+            l.insert("intensity".into(), arr(point_intensity(cx, k)?));
         }
         "spot" => {
             let cutoff = cx.float(k, "cutoff_angle", 20.0)?;
@@ -2850,10 +2887,7 @@ fn emitter(
                 "beam_angle".into(),
                 Value::Float((2.0 * cutoff).to_radians()),
             );
-            l.insert(
-                "intensity".into(),
-                arr(cx.colour(k, "intensity")?.unwrap_or([1.0; 3])),
-            );
+            l.insert("intensity".into(), arr(point_intensity(cx, k)?));
         }
         "directional" => {
             let dir = if k.named("direction").is_some() {

@@ -23,8 +23,8 @@ SCENE = """<?xml version="1.0" encoding="utf-8"?>
 
 
 def write_scene(tmp_path, views):
-    manifest = {"format": "poser-mitsuba/1", "scene": "t", "variant": "scalar_rgb", "exposure": 2.0,
-                "views": views}
+    manifest = {"format": "poser-mitsuba/2", "scene": "t", "variant": "scalar_rgb", "exposure": 2.0,
+                "unit": 1.0, "views": views}
     (tmp_path / "manifest.json").write_text(json.dumps(manifest))
 
 
@@ -136,6 +136,8 @@ def test_depth_crosses_glass_and_null_surfaces(driver, tmp_path):
     mi.set_variant(driver.VARIANT)
     xml = tmp_path / "d.xml"
     xml.write_text(DEPTH_SCENE)
-    z = driver.depth_image(mi, xml)
+    z = driver.depth_image(mi, xml, 1.0)
     assert z.shape == (7, 9)
     assert np.allclose(z, 3.0, atol=1e-5), z
+    # The same document read as millimetres: 3 mm.
+    assert np.allclose(driver.depth_image(mi, xml, 1000.0), 3e-3, atol=1e-8)

@@ -59,7 +59,7 @@
 //! | point / spot | `point` / `spot` (W/sr; `cutoff_angle` = half angle, sharp edge) | |
 //! | area | `rectangle` + `area` emitter (one-sided, +z) + `null` BSDF | casts no shadow, reflects nothing |
 //! | ambient | `constant` | |
-//! | world coordinates | per view: every placed element's `to_world` ends with a translation by `$poser_origin_x/y/z` ([`xml::place_at_origin`]), which the view sets to minus its camera's centre (`world.xml` defaults them to 0) | Mitsuba's float32 ray offset, (1 + max \|coordinate\|) × 8.94e-5, is smallest at the port's glass; `poser import` reads them as 0 |
+//! | world coordinates | per view, in millimetres: every placed element's `to_world` ends with a scale by `$poser_unit` and a translation by `$poser_origin_x/y/z` ([`xml::place_at_origin`]), which the view sets to 1000 and minus its camera's centre (`world.xml` defaults them to 1 and 0); the water's `scale`, clip and focus distances and point intensities follow the unit | Mitsuba's float32 ray offset, (1 + max \|coordinate\|) × 8.94e-5 units, is smallest at the port's glass; `poser import` reads them as 1 and 0 |
 //! | integrator | `volpathmis` with water (spectral MIS over the channels), else `volpath`; `max_depth = max_bounces + 1 + port interfaces` | Mitsuba counts every vertex, glass faces included |
 
 mod runner;
@@ -109,6 +109,8 @@ pub struct Manifest {
     pub variant: &'static str,
     /// Multiplier for the PNG previews (EXR stays linear).
     pub exposure: f64,
+    /// Length units per metre of the view documents ([`xml::VIEW_UNIT`]).
+    pub unit: f64,
     /// Write `{image}.depth.exr` (camera-frame z through each pixel centre) too.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub depth: bool,
@@ -260,7 +262,8 @@ pub fn build(model: &Model) -> Result<Compiled, String> {
         }
     }
     let manifest = Manifest {
-        format: "poser-mitsuba/1",
+        format: "poser-mitsuba/2",
+        unit: xml::VIEW_UNIT,
         scene: model.name.clone(),
         variant: "scalar_rgb",
         exposure: model.render.exposure,

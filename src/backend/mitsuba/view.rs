@@ -16,7 +16,7 @@
 // `!(x > y)` is deliberate: it rejects NaN as well as the failing comparison.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::world::{light, scene_bounds};
+use super::world::{Intensity, light, point_intensity, scene_bounds};
 use super::xml::{self, El};
 use super::{SEA_MARGIN, TABPHASE_SAMPLES, WATER_ID, basis};
 use crate::model::*;
@@ -79,14 +79,27 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
 
     let mut root = El::new("scene").attr("version", "3.0.0");
     root.push_comment(spec.title.clone());
-    // Per-view coordinates: the camera at Mitsuba's origin (xml::ORIGIN_PARAMS).
+    // Per-view coordinates: the camera at Mitsuba's origin, in millimetres
+    // (xml::ORIGIN_PARAMS).
     root.push_comment(
-        "per-view coordinates: the world's origin lies at ($poser_origin_x, _y, _z), minus the \
-         camera's centre, so that the port's glass sits at Mitsuba's origin, where its float32 \
-         ray offsets are smallest; every placed element's to_world ends with that translation",
+        "per-view coordinates: millimetres ($poser_unit per metre), the world's origin at \
+         ($poser_origin_x, _y, _z), minus the camera's centre, so that the port's glass sits at \
+         Mitsuba's origin, where its float32 ray offsets are smallest; every placed element's \
+         to_world ends with that scale and translation",
     );
-    for d in xml::origin_defaults(-cam_pos) {
+    let unit = xml::VIEW_UNIT;
+    for d in xml::placement_defaults(-cam_pos * unit, unit) {
         root.push(d);
+    }
+    // World-mounted point and spot lights (in world.xml) in this document's unit.
+    for (i, l) in model.lights.iter().enumerate() {
+        if let (Mount::World, Some(v)) = (l.mount, point_intensity(l)) {
+            root.push(
+                El::new("default")
+                    .attr("name", xml::intensity_param(i))
+                    .attr("value", xml::triple(v.map(|c| c * unit * unit))),
+            );
+        }
     }
     // With water, `volpathmis`: free-flight distances sampled with spectral MIS over the
     // three channels. `volpath` samples them in one channel picked per path and reweights the
@@ -132,14 +145,14 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
             );
         }
     }
-    root.push(sensor(model, spec, near_clip, in_water));
+    root.push(sensor(model, spec, near_clip, unit, in_water));
     if let Some(p) = port {
         for s in p.shapes {
             root.push(s);
         }
     }
     for l in model.lights.iter().filter(|l| l.mount == Mount::Rig) {
-        root.push(light(l, &world_from_rig));
+        root.push(light(l, &world_from_rig, Intensity::In(unit)));
     }
     xml::place_at_origin(&mut root);
     Ok(root)
@@ -287,7 +300,12 @@ fn water_medium(water: &Water) -> El {
                 .rgb("value", water.extinction()),
         )
         .rgb("albedo", water.albedo())
-        .float("scale", 1.0)
+        .comment("σt is per metre; scale = metres per length unit of the document")
+        .child(
+            El::new("float")
+                .attr("name", "scale")
+                .attr("value", format!("${}", xml::PER_UNIT_PARAM)),
+        )
         .child(phase)
 }
 
@@ -338,7 +356,8 @@ pub fn table_backscatter(values: &[f64]) -> f64 {
     back / total
 }
 
-fn sensor(model: &Model, spec: &ViewSpec, near_clip: f64, in_water: bool) -> El {
+/// The sensor; `near_clip` in metres, lengths written in `unit`s per metre.
+fn sensor(model: &Model, spec: &ViewSpec, near_clip: f64, unit: f64, in_water: bool) -> El {
     let cam = &model.cameras[spec.camera];
     let pose = model.world_from_camera(spec.pose, spec.camera);
     let (w, h) = (cam.width as f64, cam.height as f64);
@@ -350,8 +369,8 @@ fn sensor(model: &Model, spec: &ViewSpec, near_clip: f64, in_water: bool) -> El 
                 "f/{} focused at {focus} m",
                 cam.f_number.unwrap_or(0.0)
             ))
-            .float("aperture_radius", aperture)
-            .float("focus_distance", focus),
+            .float("aperture_radius", aperture * unit)
+            .float("focus_distance", focus * unit),
         None => El::typed("sensor", "perspective"),
     };
     s = s.float("fov", fov).string("fov_axis", "x");
@@ -361,8 +380,8 @@ fn sensor(model: &Model, spec: &ViewSpec, near_clip: f64, in_water: bool) -> El 
             .float("principal_point_offset_y", 0.5 - cam.cy / h);
     }
     s = s
-        .float("near_clip", near_clip)
-        .float("far_clip", 1e6)
+        .float("near_clip", near_clip * unit)
+        .float("far_clip", 1e6 * unit)
         .comment(
             "OpenCV camera axes: Mitsuba's +X points left, so to_world = [R·diag(-1,-1,1) | C]",
         )

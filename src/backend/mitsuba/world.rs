@@ -37,9 +37,10 @@ pub fn shapes(
 
 /// World content shared by every view: sun, world-mounted lights, objects, targets.
 /// `shapes` are the already-built object/target shapes (they need asset files). With any
-/// content, the document opens with the origin parameters at 0 (world coordinates, unless a
-/// view that includes it sets them) and its placed elements end with their translation
-/// ([`xml::place_at_origin`]).
+/// content, the document opens with the placement parameters at metres and 0 (world
+/// coordinates, unless a view that includes it sets them) and the intensities of world-mounted
+/// point and spot lights ([`xml::intensity_param`]), and its placed elements end with their
+/// scale and translation ([`xml::place_at_origin`]).
 pub fn world(model: &Model, shapes: Vec<El>) -> El {
     let mut root = El::new("scene").attr("version", "3.0.0");
     root.push_comment(format!(
@@ -47,14 +48,29 @@ pub fn world(model: &Model, shapes: Vec<El>) -> El {
         model.name
     ));
     let mut content: Vec<El> = sun(model).into_iter().collect();
-    for l in model.lights.iter().filter(|l| l.mount == Mount::World) {
-        content.push(light(l, &Pose::IDENTITY));
+    let mut intensities = Vec::new();
+    for (i, l) in model.lights.iter().enumerate() {
+        if l.mount != Mount::World {
+            continue;
+        }
+        let param = xml::intensity_param(i);
+        if let Some(v) = point_intensity(l) {
+            intensities.push(
+                El::new("default")
+                    .attr("name", param.clone())
+                    .attr("value", xml::triple(v)),
+            );
+        }
+        content.push(light(l, &Pose::IDENTITY, Intensity::Param(&param)));
     }
     content.extend(shapes);
     if content.is_empty() {
         return root;
     }
-    for d in xml::origin_defaults(DVec3::ZERO) {
+    for d in xml::placement_defaults(DVec3::ZERO, 1.0) {
+        root.push(d);
+    }
+    for d in intensities {
         root.push(d);
     }
     for c in content {
@@ -107,18 +123,49 @@ fn sun(model: &Model) -> Option<El> {
     )
 }
 
+/// How a point or spot light's intensity is written.
+pub(super) enum Intensity<'a> {
+    /// The value in a document of this many length units per metre (× unit²).
+    In(f64),
+    /// `$name`: a parameter that each document sets in its own unit (world-mounted lights).
+    Param(&'a str),
+}
+
+impl Intensity<'_> {
+    fn write(&self, e: El, v: [f64; 3]) -> El {
+        match self {
+            Intensity::In(unit) => e.rgb("intensity", v.map(|c| c * unit * unit)),
+            Intensity::Param(name) => e.child(
+                El::new("rgb")
+                    .attr("name", "intensity")
+                    .attr("value", format!("${name}")),
+            ),
+        }
+    }
+}
+
+/// The intensity of a point or spot light (W/sr), else `None`.
+pub(super) fn point_intensity(l: &Light) -> Option<[f64; 3]> {
+    match &l.kind {
+        LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => Some(*intensity),
+        LightKind::Area { .. } | LightKind::Ambient { .. } => None,
+    }
+}
+
 /// One light in the world frame: `world_from_mount` is the identity for a world-mounted light
 /// and the rig's pose for a rig-mounted one (emitted by each view).
-pub(super) fn light(l: &Light, world_from_mount: &Pose) -> El {
+pub(super) fn light(l: &Light, world_from_mount: &Pose, intensity_as: Intensity) -> El {
     let comment = format!("light `{}`", l.name);
     match &l.kind {
         LightKind::Point {
             position,
             intensity,
-        } => El::typed("emitter", "point")
-            .comment(comment)
-            .to_world(DMat3::IDENTITY, world_from_mount.transform_point(*position))
-            .rgb("intensity", *intensity),
+        } => intensity_as.write(
+            El::typed("emitter", "point")
+                .comment(comment)
+                .to_world(DMat3::IDENTITY, world_from_mount.transform_point(*position)),
+            *intensity,
+        ),
         LightKind::Spot {
             position,
             direction,
@@ -129,14 +176,16 @@ pub(super) fn light(l: &Light, world_from_mount: &Pose) -> El {
             let z = world_from_mount.transform_vector(*direction).normalize();
             let (x, y) = basis(z);
             let cutoff = half_angle.to_degrees();
-            El::typed("emitter", "spot")
-                .comment(format!(
-                    "{comment}: sharp cone (beam_width = cutoff_angle - 0.001°)"
-                ))
-                .to_world(DMat3::from_cols(x, y, z), p)
-                .float("cutoff_angle", cutoff)
-                .float("beam_width", (cutoff - 1e-3).max(0.999 * cutoff))
-                .rgb("intensity", *intensity)
+            intensity_as.write(
+                El::typed("emitter", "spot")
+                    .comment(format!(
+                        "{comment}: sharp cone (beam_width = cutoff_angle - 0.001°)"
+                    ))
+                    .to_world(DMat3::from_cols(x, y, z), p)
+                    .float("cutoff_angle", cutoff)
+                    .float("beam_width", (cutoff - 1e-3).max(0.999 * cutoff)),
+                *intensity,
+            )
         }
         LightKind::Area {
             frame,

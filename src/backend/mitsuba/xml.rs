@@ -183,28 +183,59 @@ pub fn xml_chars(t: &str) -> String {
 }
 
 /// The parameters that place the world's origin in a document's coordinates
-/// (`$poser_origin_x`, `_y`, `_z`). Every placed element (shape, sensor, point or spot emitter)
-/// ends its `to_world` with `<translate x="$poser_origin_x" …/>` ([`place_at_origin`]). A view
-/// sets them to minus its camera's centre, so that the camera and its port sit at Mitsuba's
-/// origin; `world.xml` defaults them to 0 (world coordinates). The translation changes no
-/// light path; it keeps Mitsuba's float32 ray offsets, (1 + max |coordinate|) × 8.94e-5 m, at
-/// their smallest at the port's glass (docs/backends.md, "Per-view coordinates").
+/// (`$poser_origin_x`, `_y`, `_z`, in the document's length unit). Every placed element
+/// (shape, sensor, point or spot emitter) ends its `to_world` with
+/// `<scale value="$poser_unit"/>` and `<translate x="$poser_origin_x" …/>`
+/// ([`place_at_origin`]). A view sets the unit to [`VIEW_UNIT`] (millimetres) and the origin
+/// to minus its camera's centre, so that the camera and its port sit at Mitsuba's origin;
+/// `world.xml` defaults them to metres and 0 (world coordinates). The similarity changes no
+/// light path; it keeps Mitsuba's float32 ray offsets, (1 + max |coordinate|) × 8.94e-5
+/// document units, at their smallest at the port's glass (docs/backends.md, "Per-view
+/// coordinates").
 pub const ORIGIN_PARAMS: [&str; 3] = ["poser_origin_x", "poser_origin_y", "poser_origin_z"];
 
-/// `<default name="poser_origin_*" value="…"/>` for the world's origin at `origin` (in the
-/// document's coordinates).
-pub fn origin_defaults(origin: DVec3) -> [El; 3] {
-    std::array::from_fn(|i| {
+/// Document length units per metre (`$poser_unit`): 1 in `world.xml`, [`VIEW_UNIT`] in a
+/// view.
+pub const UNIT_PARAM: &str = "poser_unit";
+
+/// Its inverse, metres per document unit (`$poser_per_unit`): the water medium's `scale`
+/// (σt is given per metre) and the first factor of a sensor's `to_world`.
+pub const PER_UNIT_PARAM: &str = "poser_per_unit";
+
+/// A view's length unit, units per metre: millimetres. The constant part of Mitsuba's ray
+/// offset, 8.94e-5 units, is then 0.09 µm instead of 89 µm (docs/backends.md).
+pub const VIEW_UNIT: f64 = 1000.0;
+
+/// `<default …/>` for a document in `unit` (units per metre) whose world origin lies at
+/// `origin` (in those units): the origin, the unit and its inverse.
+pub fn placement_defaults(origin: DVec3, unit: f64) -> Vec<El> {
+    let default = |name: &str, value: String| {
         El::new("default")
-            .attr("name", ORIGIN_PARAMS[i])
-            .attr("value", num(origin[i]))
-    })
+            .attr("name", name.to_string())
+            .attr("value", value)
+    };
+    let mut d: Vec<El> = (0..3)
+        .map(|i| default(ORIGIN_PARAMS[i], num(origin[i])))
+        .collect();
+    d.push(default(UNIT_PARAM, num(unit)));
+    d.push(default(PER_UNIT_PARAM, num(1.0 / unit)));
+    d
+}
+
+/// The parameter holding the intensity of world-mounted point or spot light `i` in
+/// `world.xml` (W/sr in metres; a view overrides it with the value in its own unit, × unit²,
+/// since a point light's irradiance falls as 1/distance²).
+pub fn intensity_param(i: usize) -> String {
+    format!("poser_intensity_{i}")
 }
 
 /// End the `to_world` of every placed top-level element of `doc` (shapes, sensors, point and
-/// spot emitters; one without a `to_world` gets one) with the translation by
-/// [`ORIGIN_PARAMS`]. Directional and constant emitters have no place.
+/// spot emitters; one without a `to_world` gets one) with the scale by [`UNIT_PARAM`] and
+/// the translation by [`ORIGIN_PARAMS`]. A sensor's `to_world` may not scale, so it also
+/// starts with the scale by [`PER_UNIT_PARAM`]: `T(o)·S(u)·T(C)·R·S(1/u) = T(o + u·C)·R`.
+/// Directional and constant emitters have no place.
 pub fn place_at_origin(doc: &mut El) {
+    let scale = |p: &str| El::new("scale").attr("value", format!("${p}"));
     let shift = || {
         let [x, y, z] = ORIGIN_PARAMS.map(|n| format!("${n}"));
         El::new("translate").attr("x", x).attr("y", y).attr("z", z)
@@ -219,14 +250,26 @@ pub fn place_at_origin(doc: &mut El) {
         if !placed {
             continue;
         }
+        let sensor = e.name == "sensor";
         let tw = e.children.iter_mut().find_map(|k| match k {
             Node::El(t) if t.name == "transform" && t.get("name") == Some("to_world") => Some(t),
             _ => None,
         });
-        match tw {
-            Some(t) => t.push(shift()),
-            None => e.push(El::new("transform").attr("name", "to_world").child(shift())),
+        let t = match tw {
+            Some(t) => t,
+            None => {
+                e.push(El::new("transform").attr("name", "to_world"));
+                let Some(Node::El(t)) = e.children.last_mut() else {
+                    unreachable!("just pushed")
+                };
+                t
+            }
+        };
+        if sensor {
+            t.children.insert(0, Node::El(scale(PER_UNIT_PARAM)));
         }
+        t.push(scale(UNIT_PARAM));
+        t.push(shift());
     }
 }
 
