@@ -16,7 +16,7 @@
 // `!(x > y)` is deliberate: it rejects NaN as well as the failing comparison.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::world::{Intensity, light, point_intensity, scene_bounds};
+use super::world::{Intensity, intensity_defaults, light, scene_bounds};
 use super::xml::{self, El};
 use super::{SEA_MARGIN, TABPHASE_SAMPLES, WATER_ID, basis};
 use crate::model::*;
@@ -92,14 +92,8 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
         root.push(d);
     }
     // World-mounted point and spot lights (in world.xml) in this document's unit.
-    for (i, l) in model.lights.iter().enumerate() {
-        if let (Mount::World, Some(v)) = (l.mount, point_intensity(l)) {
-            root.push(
-                El::new("default")
-                    .attr("name", xml::intensity_param(i))
-                    .attr("value", xml::triple(v.map(|c| c * unit * unit))),
-            );
-        }
+    for d in intensity_defaults(model, unit) {
+        root.push(d);
     }
     // With water, `volpathmis`: free-flight distances sampled with spectral MIS over the
     // three channels. `volpath` samples them in one channel picked per path and reweights the

@@ -48,20 +48,11 @@ pub fn world(model: &Model, shapes: Vec<El>) -> El {
         model.name
     ));
     let mut content: Vec<El> = sun(model).into_iter().collect();
-    let mut intensities = Vec::new();
     for (i, l) in model.lights.iter().enumerate() {
-        if l.mount != Mount::World {
-            continue;
+        if l.mount == Mount::World {
+            let param = xml::intensity_param(i);
+            content.push(light(l, &Pose::IDENTITY, Intensity::Param(&param)));
         }
-        let param = xml::intensity_param(i);
-        if let Some(v) = point_intensity(l) {
-            intensities.push(
-                El::new("default")
-                    .attr("name", param.clone())
-                    .attr("value", xml::triple(v)),
-            );
-        }
-        content.push(light(l, &Pose::IDENTITY, Intensity::Param(&param)));
     }
     content.extend(shapes);
     if content.is_empty() {
@@ -70,7 +61,7 @@ pub fn world(model: &Model, shapes: Vec<El>) -> El {
     for d in xml::placement_defaults(DVec3::ZERO, 1.0) {
         root.push(d);
     }
-    for d in intensities {
+    for d in intensity_defaults(model, 1.0) {
         root.push(d);
     }
     for c in content {
@@ -144,12 +135,25 @@ impl Intensity<'_> {
     }
 }
 
-/// The intensity of a point or spot light (W/sr), else `None`.
-pub(super) fn point_intensity(l: &Light) -> Option<[f64; 3]> {
-    match &l.kind {
-        LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => Some(*intensity),
-        LightKind::Area { .. } | LightKind::Ambient { .. } => None,
+/// `<default name="poser_intensity_N" …/>` for every world-mounted point or spot light, in a
+/// document of `unit` length units per metre (W/sr × unit²): `world.xml` sets them in metres,
+/// each view overrides them in its own unit ([`xml::intensity_param`]).
+pub(super) fn intensity_defaults(model: &Model, unit: f64) -> Vec<El> {
+    let mut out = Vec::new();
+    for (i, l) in model.lights.iter().enumerate() {
+        let intensity = match &l.kind {
+            LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => intensity,
+            LightKind::Area { .. } | LightKind::Ambient { .. } => continue,
+        };
+        if l.mount == Mount::World {
+            out.push(
+                El::new("default")
+                    .attr("name", xml::intensity_param(i))
+                    .attr("value", xml::triple(intensity.map(|c| c * unit * unit))),
+            );
+        }
     }
+    out
 }
 
 /// One light in the world frame: `world_from_mount` is the identity for a world-mounted light
