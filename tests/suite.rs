@@ -35,6 +35,7 @@ mod georef_mesh;
 mod gltf_export;
 mod hostile_input;
 mod hostile_names;
+mod housing_shadow;
 mod import_mitsuba;
 mod import_mitsuba_files;
 mod import_mitsuba_glass;

@@ -11,6 +11,7 @@
 //! | [`targets`] | calibration targets: 3D points, printed reflectance, textures |
 //! | [`bvh`] | [`Bvh`]: every triangle of a model in one BVH; [`Ray`], [`Hit`], [`SurfaceId`] |
 //! | [`seen`] | what the cameras see: a grid of exact camera rays classified by what they hit (texture, nothing below: views past the seabed) |
+//! | [`shadow`] | where a camera housing's sun shadow would fall: the images and target points it covers (Mitsuba casts it) |
 
 pub mod bommie;
 pub mod bvh;
@@ -18,6 +19,7 @@ pub mod coral;
 pub mod mesh;
 pub mod meshfile;
 pub mod seen;
+pub mod shadow;
 pub mod targets;
 
 pub use bvh::{Bvh, Hit, RAY_EPSILON, Ray, SurfaceId};

@@ -312,19 +312,25 @@ pub fn is_safe_stem(s: &str) -> bool {
 /// The one difference from poser's housing policy that Mitsuba cannot avoid
 /// (docs/render-conventions.md, §5 "The housing is a measuring device"): its port glass and housing
 /// walls are ordinary surfaces, so they shadow the sun. `Some(one line)` when the scene has a
-/// sun and a rendered port housing.
+/// sun and a rendered port housing, saying where the shadow falls
+/// ([`crate::geometry::shadow`]: the images it enters, the target points it covers).
 pub fn housing_shadow_warning(model: &Model) -> Option<String> {
     let cam = model
         .cameras
         .iter()
         .find(|c| !matches!(c.port, Port::None))?;
-    (model.sun.is_some() && model.needs.refraction).then(|| {
-        format!(
-            "the housing of camera `{}` casts a sun shadow in Mitsuba (Mitsuba 3 has no \
-             shadow-ray visibility; native and Blender cast none): see docs/backends.md",
-            cam.name
-        )
-    })
+    if model.sun.is_none() || !model.needs.refraction {
+        return None;
+    }
+    let place = crate::geometry::Bvh::of_model(model)
+        .ok()
+        .and_then(|scene| crate::geometry::shadow::housing_shadow(model, &scene))
+        .map_or_else(String::new, |s| format!("; {}", s.describe()));
+    Some(format!(
+        "the housing of camera `{}` casts a sun shadow in Mitsuba (Mitsuba 3 has no \
+         shadow-ray visibility; native and Blender cast none){place}: see docs/backends.md",
+        cam.name
+    ))
 }
 
 /// A file-name fragment derived from a scene name (anything else becomes `_`).
