@@ -26,6 +26,7 @@ fn seabed(depth: f64) -> Object {
             variation: 0.0,
             texel: None,
             grid: None,
+            glass: None,
         },
     }
 }
@@ -109,6 +110,7 @@ fn coverage_sees_occlusion_under_a_box() {
             variation: 0.0,
             texel: None,
             grid: None,
+            glass: None,
         },
     });
     let site = Site::new(&m);

@@ -32,6 +32,7 @@ mod evaluate_images_folder;
 mod evaluate_precheck;
 mod fuzz_replay;
 mod georef_mesh;
+mod glass_objects;
 mod gltf_export;
 mod hostile_input;
 mod hostile_names;

@@ -50,6 +50,7 @@ fn occluded_and_back_facing_points_are_left_out() {
             variation: 0.0,
             texel: None,
             grid: None,
+            glass: None,
         },
     });
     let cams: Vec<DVec3> = (0..model.poses.len())

@@ -169,6 +169,7 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
         return;
     }
     ports_overlap(cx, m, spans);
+    glass_objects(cx, m, spans);
     wide_lens_behind_flat_port(cx, m, spans);
     overlap_delivered(cx, m, spans);
     seabed_seen(cx, m, spans);
@@ -200,6 +201,103 @@ fn target_inside_port(cx: &mut Cx, m: &Model, spans: &Spans) -> bool {
         }
     }
     false
+}
+
+/// The glass objects ([`crate::model::Material::glass`], boxes): they need water everywhere or
+/// none (E0404: a water box around the camera would cut them), no camera's pupil may be inside
+/// one (E0405), and a target seen through one gets a warning (W0406: the ground truth projects
+/// through the port only, not through glass objects, so its pixels there are not exact).
+fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
+    let glass: Vec<(usize, &crate::model::Object, glam::DVec3)> = m
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| o.material.glass.is_some())
+        .filter_map(|(i, o)| match o.shape {
+            crate::model::Shape::Box { size } => Some((i, o, 0.5 * size * o.scale)),
+            _ => None,
+        })
+        .collect();
+    let Some(&(first, o, _)) = glass.first() else {
+        return;
+    };
+    let at = |i: usize| spans.objects.get(i).copied().unwrap_or(spans.network);
+    if let Some(w) = &m.water
+        && matches!(w.extent, crate::model::WaterExtent::BoxAroundCamera { .. })
+    {
+        cx.push(
+            Diagnostic::error(
+                "E0404",
+                format!("glass object `{}` in a water box around the camera", o.name),
+            )
+            .label(
+                at(first),
+                "a glass object needs water everywhere, or no water",
+            )
+            .help("remove the water's `extent`, so that the water fills the scene"),
+        );
+        return;
+    }
+    // Inside the box `(i, o, half)`: in its own frame, within the half-sizes.
+    let local = |o: &crate::model::Object, p: glam::DVec3| o.pose.inverse().transform_point(p);
+    let mut seen_through: Option<(usize, String, String, usize)> = None;
+    for (pi, pose) in m.poses.iter().enumerate().take(2000) {
+        for ci in 0..m.cameras.len() {
+            let c = m.world_from_camera(pi, ci).translation;
+            for &(i, o, half) in &glass {
+                if local(o, c).abs().cmplt(half).all() {
+                    cx.push(
+                        Diagnostic::error("E0405", format!("camera `{}` is inside glass object `{}`", m.cameras[ci].name, o.name))
+                            .label(at(i), format!("the camera's pupil is inside it at pose {}", pose.name))
+                            .help("move the camera or the glass: cameras look at glass from the water (or the air)"),
+                    );
+                    return;
+                }
+                for t in &m.targets {
+                    for p in &t.points {
+                        let (a, b) = (local(o, c), local(o, p.world));
+                        if segment_meets_box(a, b, half) {
+                            let e = seen_through.get_or_insert((
+                                i,
+                                t.name.clone(),
+                                pose.name.clone(),
+                                0,
+                            ));
+                            e.3 += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    if let Some((i, target, pose, n)) = seen_through {
+        cx.push(
+            Diagnostic::warning("W0406", format!("target `{target}` is seen through glass object `{}`", m.objects[i].name))
+                .label(at(i), format!("{n} line(s) of sight from a camera to a target point cross it (first at pose {pose})"))
+                .help("the ground truth refracts through the port only: those target pixels are not exact; move the target or the glass"),
+        );
+    }
+}
+
+/// Whether the segment from `a` to `b` crosses the box `|x| ≤ half` (slab test).
+fn segment_meets_box(a: glam::DVec3, b: glam::DVec3, half: glam::DVec3) -> bool {
+    let d = b - a;
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for k in 0..3 {
+        if d[k].abs() < 1e-300 {
+            if a[k].abs() > half[k] {
+                return false;
+            }
+            continue;
+        }
+        let (u, v) = ((-half[k] - a[k]) / d[k], (half[k] - a[k]) / d[k]);
+        t0 = t0.max(u.min(v));
+        t1 = t1.min(u.max(v));
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
 }
 
 /// Overlapping port surfaces between cameras of a rig: two housings intersecting (E0401).

@@ -519,6 +519,13 @@ pub struct Object {
     /// `poser evaluate` and the texture checks leave it out. A 2 km plane under the site keeps
     /// every view on a bottom (docs/column.md, "Views past the seabed"). **Default:** false.
     pub backdrop: Option<bool>,
+    /// A clear glass solid instead of a coloured surface: the catalogue glass it is made of
+    /// (`"N-BK7"`, `"PMMA"` or `"acrylic"`, `"fused_silica"`, `"sapphire"`). Light reflects and
+    /// refracts at its faces (Fresnel, Snell) and crosses it unabsorbed: a tank's window, a
+    /// slab, an acrylic block. A box only; it takes no `albedo` or `pattern`. Its daylight is
+    /// traced, not read from the water column (docs/column.md). See docs/scenes.md, "Glass
+    /// objects". **Default:** none (an opaque Lambertian object).
+    pub glass: Option<String>,
     /// Mesh: glTF (`.glb`/`.gltf`), OBJ (with its MTL files) or PLY file, relative to the file
     /// that names it. Every file it names (MTL, images, buffers) must be beside it or elsewhere
     /// inside the scene's folder. See `docs/textures.md`, "Textured meshes".

@@ -854,6 +854,7 @@ mod tests {
                 variation: 0.2,
                 texel: None,
                 grid: None,
+                glass: None,
             },
         }
     }

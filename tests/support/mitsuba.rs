@@ -130,6 +130,7 @@ pub fn showcase() -> Model {
                 variation: 0.0,
                 texel: None,
                 grid: None,
+                glass: None,
             },
         },
         Object {
@@ -149,6 +150,7 @@ pub fn showcase() -> Model {
                 variation: 0.0,
                 texel: None,
                 grid: None,
+                glass: None,
             },
         },
         Object {
@@ -169,6 +171,7 @@ pub fn showcase() -> Model {
                 variation: 0.0,
                 texel: None,
                 grid: None,
+                glass: None,
             },
         },
     ];

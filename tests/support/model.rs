@@ -113,6 +113,7 @@ pub fn plane(name: &str, z: f64, size: f64, albedo: Rgb) -> Object {
             variation: 0.0,
             texel: None,
             grid: None,
+            glass: None,
         },
     }
 }

@@ -90,6 +90,7 @@ pub fn busy_model() -> Model {
             variation: 0.0,
             texel: None,
             grid: None,
+            glass: None,
         },
     });
     m.lights.push(rig_spot(DVec3::new(0.25, 0.0, 0.0), 10.0));

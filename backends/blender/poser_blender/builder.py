@@ -736,6 +736,7 @@ def _water_mesh(desc, pose_index, shells):
     parts = [box]
     for m, shell in _shells_at(desc, pose_index, shells):
         parts.append(geo.reverse_mesh(geo.transform_mesh(shell, m)))
+    parts += _glass_cutouts(desc)
     return geo.merge_meshes(parts)
 
 
@@ -754,6 +755,7 @@ def _water_verts(desc, pose_index, shells):
     parts = [geo.box_mesh(lo, hi, 0)["verts"]]
     parts += [geo.transform_points(shell["verts"], m)
               for m, shell in _shells_at(desc, pose_index, shells)]
+    parts += [c["verts"] for c in _glass_cutouts(desc)]
     return np.concatenate(parts)
 
 
@@ -1006,12 +1008,43 @@ def _build_objects(built, coll, desc, base_dir):
         elif shape.get("texture"):
             path = os.path.join(base_dir, shape["texture"])
             me.materials.append(_texture_material(name, path, "Linear"))
+        elif ob["material"].get("glass"):
+            me.materials.append(_glass_object_material(built, name, ob["material"]["glass"], desc))
         else:
             me.materials.append(_diffuse_material(name, ob["material"], scale))
         obj = _new_object(coll, name, me)
         obj.matrix_world = _matrix(ob["matrix"])
         obj["poser_basis"] = _flat([ob["matrix"]])
         _caustics_receiver(obj, desc)
+
+
+def _glass_object_material(built, name, glass, desc):
+    """GLASS_OBJECTS: a glass object's faces, smooth Glass BSDF of IOR n_glass / n_around
+    (normals outward), per channel with the passes. In water its box is carved out of the water
+    mesh WATER_GAP further out (`_glass_cutouts`), as a port's outer face is: inside it there
+    is no water, and the glass shader stays off the volume stack."""
+    water = desc.get("water")
+    n_out = [float(x) for x in water["ior"]] if water else [1.0, 1.0, 1.0]
+    n_g = [float(x) for x in glass["ior"]]
+    ref = int(desc.get("reference_channel", 1))
+    mat, node = _glass_material(f"glass:{name}", n_g[ref] / n_out[ref])
+    built.glass_nodes.append((node, lambda c, g=n_g, w=n_out: g[c] / w[c]))
+    return mat
+
+
+def _glass_cutouts(desc):
+    """GLASS_OBJECTS: every glass box (world frame), WATER_GAP larger, normals into it: holes
+    of the water mesh, in the order `_water_mesh` and `_water_verts` both use."""
+    out = []
+    for ob in desc.get("objects", []):
+        if not ob["material"].get("glass") or ob["shape"]["type"] != "box":
+            continue
+        m = geo.mat4(ob["matrix"])
+        # WATER_GAP further out in the world, whatever the object's scale (the matrix's columns).
+        half = 0.5 * np.asarray(ob["shape"]["size"], dtype=float)
+        half = half + WATER_GAP / np.linalg.norm(m[:3, :3], axis=0)
+        out.append(geo.reverse_mesh(geo.transform_mesh(geo.box_mesh(-half, half, 0), m)))
+    return out
 
 
 def _caustics_receiver(obj, desc):

@@ -484,6 +484,12 @@ pub struct Material {
     /// Lines of a survey grid (string or tape) drawn over a baked pattern.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub grid: Option<Grid>,
+    /// A clear glass solid instead of a Lambertian surface (`glass = "N-BK7"`): a smooth
+    /// dielectric boundary (Fresnel reflection and refraction) between the water (or air)
+    /// around it and the glass inside, which neither absorbs nor scatters. `albedo` and
+    /// `pattern` do not apply.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glass: Option<Glass>,
 }
 
 /// Lines along the object's x and y axes every `spacing` m, `width` m wide, of albedo `albedo`
@@ -1547,7 +1553,16 @@ impl Model {
                 "traced (render.daylight = \"traced\"): random walks through the water".into(),
             );
         }
+        let glass = self.objects.iter().find(|o| o.material.glass.is_some());
         match self.column_input() {
+            Ok(_) if self.render.daylight == Daylight::Auto && glass.is_some() => (
+                None,
+                format!(
+                    "traced: glass object `{}` refracts the daylight, which the column's light \
+                     (next-event estimated with shadow rays) would miss behind it",
+                    glass.map_or("", |o| o.name.as_str())
+                ),
+            ),
             Ok(_)
                 if self.render.daylight == Daylight::Auto
                     && past_seabed.is_some_and(|p| p > 0.0) =>

@@ -16,7 +16,7 @@
 //! | ports | glass and layer thicknesses > 0, radii > 0, axis and normal unit vectors, glass index ≥ 1 |
 //! | water | index ≥ 1, absorption and scattering ≥ 0, phase parameters in range |
 //! | sun, lights | unit directions, irradiance, intensity and radiance ≥ 0, sizes > 0, cone half-angle in (0, π/2] |
-//! | objects | sizes and scale > 0, albedo ≥ 0 |
+//! | objects | sizes and scale > 0, albedo ≥ 0, a glass object's index ≥ 1 |
 //! | targets | sizes > 0, at least one row and column |
 //! | render | `samples` ≥ 1, `exposure` > 0, a noise target > 0, a crop inside every camera's image |
 
@@ -274,6 +274,9 @@ fn object(c: &mut Checker, at: &str, o: &Object) {
         c.positive(&format!("{at}.scale.{axis}"), v);
     }
     c.non_negative_rgb(&format!("{at}.material.albedo"), o.material.albedo);
+    if let Some(g) = &o.material.glass {
+        c.index(&format!("{at}.material.glass.ior"), g.ior);
+    }
     let sizes: Vec<(&str, f64)> = match &o.shape {
         Shape::Mesh { offset, .. } => {
             c.finite_vec(&format!("{at}.shape.offset"), *offset);

@@ -145,6 +145,9 @@ pub fn view(model: &Model, spec: &ViewSpec) -> Result<El, String> {
             root.push(s);
         }
     }
+    for s in glass_objects(model, spec.channel, region) {
+        root.push(s);
+    }
     for l in model.lights.iter().filter(|l| l.mount == Mount::Rig) {
         root.push(light(l, &world_from_rig, Intensity::In(unit)));
     }
@@ -512,6 +515,34 @@ fn port_shapes(
         clearance: h.clearance,
         extent: h.extent,
     }))
+}
+
+/// The glass objects ([`crate::model::Material::glass`]; boxes): a `cube` with a smooth
+/// `dielectric` BSDF of the glass's and the surrounding water's (or air's) indices in
+/// `channel`, and the water medium as its exterior when the box stands in it. In the view,
+/// not in world.xml, since the medium is declared here.
+fn glass_objects(model: &Model, channel: usize, region: MediumRegion) -> Vec<El> {
+    let n_out = model.ambient_ior()[channel];
+    model
+        .objects
+        .iter()
+        .filter_map(|o| {
+            let g = o.material.glass.as_ref()?;
+            let crate::model::Shape::Box { size } = o.shape else {
+                return None;
+            };
+            let m = o.pose.rotation * DMat3::from_diagonal(o.scale * size * 0.5);
+            let el = El::typed("shape", "cube")
+                .comment(format!("object `{}`: {} glass", o.name, g.name))
+                .to_world(m, o.pose.translation)
+                .child(dielectric(g.ior[channel], n_out));
+            Some(if region.contains(o.pose.translation) {
+                el.reference("exterior", WATER_ID)
+            } else {
+                el
+            })
+        })
+        .collect()
 }
 
 /// The inside of a housing: black on both sides.

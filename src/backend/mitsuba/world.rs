@@ -4,7 +4,7 @@
 //! |---|---|---|
 //! | sun | `sun` | `directional` (refracted direction and irradiance in water) |
 //! | world-mounted lights | `light` (also used by the views for rig-mounted lights) | `point`, `spot`, area `rectangle`, `constant` |
-//! | objects | [`shapes`] → `object_shapes`, `textured_shape`, `diffuse` | analytic shapes or world-frame `ply`, two-sided `diffuse` |
+//! | objects | [`shapes`] → `object_shapes`, `textured_shape`, `diffuse` | analytic shapes or world-frame `ply`, two-sided `diffuse`; glass objects are in each view (`view::glass_objects`) |
 //! | targets | [`shapes`] → `target_shapes`, `white_card`, `lambert` | textured `rectangle`, or exact black `disk`s/`rectangle`s on a white card |
 //!
 //! Object and target shapes are built first (they write their meshes and textures into the
@@ -26,8 +26,12 @@ pub fn shapes(
     warnings: &mut Vec<String>,
 ) -> Result<Vec<El>, String> {
     let mut shapes = Vec::new();
+    // Glass objects go into each view, whose water medium their faces name as exterior
+    // (`view::glass_objects`).
     for (i, o) in model.objects.iter().enumerate() {
-        shapes.extend(object_shapes(model, o, files, i, warnings)?);
+        if o.material.glass.is_none() {
+            shapes.extend(object_shapes(model, o, files, i, warnings)?);
+        }
     }
     for (i, t) in model.targets.iter().enumerate() {
         shapes.extend(target_shapes(model, t, files, i)?);

@@ -148,6 +148,18 @@ enum SegmentEnd {
     Scattered { o: DVec3, d: DVec3, pdf: f64 },
 }
 
+/// A path's state with respect to the glass objects
+/// ([`crate::model::Material::glass`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct GlassPath {
+    /// Between a glass object's faces: no water there.
+    inside: bool,
+    /// The channel whose indices the path follows through glass when each channel is rendered
+    /// alone (`needs.per_channel_passes`): drawn uniformly at the first glass face, with the
+    /// path's weight that channel's alone ×3; `None` before, or when one index serves all.
+    channel: Option<usize>,
+}
+
 /// Everything needed to estimate radiance along camera rays of one image.
 pub struct Integrator<'a> {
     pub scene: &'a Scene,
@@ -175,6 +187,11 @@ pub struct Integrator<'a> {
     /// The water's index per channel where the sea surface reflects the light coming up to
     /// it and shows the sky through Snell's window ([`Model::underside`]); `None`: open.
     pub underside: Option<DVec3>,
+    /// Per object: the index of its glass per channel ([`crate::model::Material::glass`]),
+    /// `None` for an opaque object.
+    glass: Vec<Option<DVec3>>,
+    /// The index around the glass objects per channel: the water's, or air's.
+    n_around: DVec3,
     object_from_world: Vec<Pose>,
     target_from_world: Vec<Pose>,
 }
@@ -224,6 +241,12 @@ impl<'a> Integrator<'a> {
                 crate::optics::column::Top::Fresnel(n) => Some(DVec3::from_array(n)),
                 crate::optics::column::Top::Open => None,
             },
+            glass: model
+                .objects
+                .iter()
+                .map(|o| o.material.glass.as_ref().map(|g| DVec3::from_array(g.ior)))
+                .collect(),
+            n_around: DVec3::from_array(model.ambient_ior()),
             object_from_world: model.objects.iter().map(|o| o.pose.inverse()).collect(),
             target_from_world: model.targets.iter().map(|t| t.pose.inverse()).collect(),
         }
@@ -487,6 +510,72 @@ impl<'a> Integrator<'a> {
         (hit, t_end, area_hit)
     }
 
+    /// The index per channel of the glass object `h` lies on, if it is one.
+    fn glass_of(&self, h: &Hit) -> Option<DVec3> {
+        match h.surface {
+            SurfaceId::Object(k) => self.glass.get(k as usize).copied().flatten(),
+            #[allow(unreachable_patterns)]
+            _ => None,
+        }
+    }
+
+    /// The bounce of a path along `d` at a glass object's face `h` (indices `ior`): Fresnel
+    /// reflection or Snell refraction, one of them drawn with the reflectance's odds (total
+    /// internal reflection always reflects). Returns the new origin, just off the face on the
+    /// side the path goes on, and direction; `glass` tracks whether the path is inside.
+    /// With each channel rendered alone (dispersion), a path follows one channel's indices,
+    /// drawn at its first glass face, its weight that channel's alone ×3 ([`GlassPath`]).
+    /// Radiance's n² factors cancel: a path that enters a glass object leaves it into the
+    /// same water.
+    fn glass_bounce(
+        &self,
+        h: &Hit,
+        d: DVec3,
+        ior: DVec3,
+        glass: &mut GlassPath,
+        beta: &mut DVec3,
+        rng: &mut Sampler,
+    ) -> Option<(DVec3, DVec3)> {
+        let c = if self.model.needs.per_channel_passes {
+            *glass.channel.get_or_insert_with(|| {
+                let c = ((rng.next() * 3.0) as usize).min(2);
+                let mut only = DVec3::ZERO;
+                only[c] = 3.0;
+                *beta *= only;
+                c
+            })
+        } else {
+            1
+        };
+        let (n_glass, n_out) = (ior[c], self.n_around[c]);
+        let (n1, n2) = if glass.inside {
+            (n_glass, n_out)
+        } else {
+            (n_out, n_glass)
+        };
+        // The face's normal on the side the path comes from.
+        let n = if h.normal.dot(d) > 0.0 {
+            -h.normal
+        } else {
+            h.normal
+        };
+        let cos_i = -n.dot(d);
+        let reflect = d + 2.0 * cos_i * n;
+        let off = SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
+        let r = match crate::optics::interface::refract(d, -n, n1 / n2) {
+            Some((t, cos_t)) => {
+                let tr = crate::optics::interface::fresnel_transmittance(n1, n2, cos_i, cos_t);
+                if rng.next() >= 1.0 - tr {
+                    glass.inside = !glass.inside;
+                    return Some((h.point - n * off, t.normalize()));
+                }
+                reflect
+            }
+            None => reflect,
+        };
+        Some((h.point + n * off, r.normalize()))
+    }
+
     /// [`Integrator::li`] of a camera ray with its pixel's differentials (`spread`): the
     /// textures at its first hit are averaged over the pixel's footprint
     /// ([`super::footprint`]).
@@ -504,6 +593,9 @@ impl<'a> Integrator<'a> {
         let mut depth = 0u32;
         // The path still carries daylight; with a column, a medium vertex ends that.
         let mut day = true;
+        // Inside a glass object (no water there), and the channel whose indices a path
+        // through glass follows when each channel is rendered with its own ([`GlassPath`]).
+        let mut glass = GlassPath::default();
         loop {
             let (hit, t_end, area_hit) = self.first_hit(o, d);
             let can_scatter = depth < self.max_bounces;
@@ -522,14 +614,13 @@ impl<'a> Integrator<'a> {
             // transmittance, whichever way the free flight below goes (both branches add it
             // exactly once), so direct light on surfaces carries no free-flight noise.
             let mut beta_nee = beta;
-            if let Some(m) = &self.medium
+            if let Some(m) = self.medium.as_ref().filter(|_| !glass.inside)
                 && let Some((a, b)) = m.interval(o, d, 0.0, t_end)
             {
-                let surface = if area_hit.is_none() {
-                    hit.as_ref()
-                } else {
-                    None
-                };
+                // A glass face takes no next-event estimate (it is a delta BSDF).
+                let surface = hit
+                    .as_ref()
+                    .filter(|h| area_hit.is_none() && self.glass_of(h).is_none());
                 let at = (o, d, depth, day);
                 match self.medium_segment(
                     m,
@@ -591,6 +682,20 @@ impl<'a> Integrator<'a> {
             };
             if !can_scatter {
                 break;
+            }
+            if let Some(ior) = self.glass_of(&h) {
+                // A smooth dielectric: reflect or refract, chosen by the Fresnel reflectance
+                // (the weight stays: the choice's odds are the reflectance itself).
+                let Some((no, nd)) = self.glass_bounce(&h, d, ior, &mut glass, &mut beta, rng)
+                else {
+                    break;
+                };
+                (o, d, prev_pdf) = (no, nd, 0.0);
+                depth += 1;
+                if !self.roulette(&mut beta, depth, rng) {
+                    break;
+                }
+                continue;
             }
             let n = if h.normal.dot(d) > 0.0 {
                 -h.normal

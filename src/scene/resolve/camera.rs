@@ -337,19 +337,9 @@ fn glass(cx: &mut Cx, p: &mut Tab, default: &str, cs: &mut CameraSpans) -> Glass
     let name = p
         .opt_str(cx, "material")
         .unwrap_or_else(|| default.to_string());
-    let canonical = match name.to_lowercase().as_str() {
-        "acrylic" | "pmma" => "PMMA".to_string(),
-        "bk7" | "n-bk7" => "N-BK7".to_string(),
-        "fused silica" | "fused_silica" | "quartz" => "fused_silica".to_string(),
-        "sapphire" => "sapphire".to_string(),
-        _ => name.clone(),
-    };
-    match CHANNEL_WAVELENGTHS_NM.map(|l| optics::glass::catalogue_ior(&canonical, l)) {
-        [Some(r), Some(g), Some(b)] => Glass {
-            name: canonical,
-            ior: [r, g, b],
-        },
-        _ => {
+    match catalogue_glass(&name) {
+        Some(g) => g,
+        None => {
             let mut d = Diagnostic::error("E0241", format!("unknown port material `{name}`"))
                 .label(
                     mspan,
@@ -368,6 +358,25 @@ fn glass(cx: &mut Cx, p: &mut Tab, default: &str, cs: &mut CameraSpans) -> Glass
                 ior: [1.5168; 3],
             }
         }
+    }
+}
+
+/// The catalogue glass `name` (with the common aliases: acrylic, BK7, quartz, …) with its
+/// index per channel; `None` when the catalogue does not have it.
+pub(super) fn catalogue_glass(name: &str) -> Option<Glass> {
+    let canonical = match name.to_lowercase().as_str() {
+        "acrylic" | "pmma" => "PMMA".to_string(),
+        "bk7" | "n-bk7" => "N-BK7".to_string(),
+        "fused silica" | "fused_silica" | "quartz" => "fused_silica".to_string(),
+        "sapphire" => "sapphire".to_string(),
+        _ => name.to_string(),
+    };
+    match CHANNEL_WAVELENGTHS_NM.map(|l| optics::glass::catalogue_ior(&canonical, l)) {
+        [Some(r), Some(g), Some(b)] => Some(Glass {
+            name: canonical,
+            ior: [r, g, b],
+        }),
+        _ => None,
     }
 }
 

@@ -83,7 +83,8 @@ pub(super) fn objects(
         {
             super::georef::warn_far(cx, Path::new(path), *up_axis, scale, o.span_of("path"));
         }
-        let material = material(cx, &mut o, 0.3);
+        let mut material = material(cx, &mut o, 0.3);
+        material.glass = glass(cx, &mut o, shape_kind);
         spans.objects.push(o.span);
         o.finish_as(cx, Some(&format!("a {shape_kind} object (`{path}`)")));
         out.push(Object {
@@ -522,7 +523,54 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
         variation,
         texel,
         grid,
+        glass: None,
     }
+}
+
+/// `glass = "N-BK7"`: the object is a clear glass solid ([`crate::model::Material::glass`]).
+/// Only a box for now: a sphere or a cylinder would need smooth normals in all three back
+/// ends (their triangle meshes would refract at flat facets); a box is what a tank's window or
+/// an acrylic block is. A glass object takes no `albedo` or `pattern`.
+fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str) -> Option<crate::model::Glass> {
+    let span = o.span_of("glass");
+    let name = o.opt_str(cx, "glass")?;
+    let Some(g) = super::camera::catalogue_glass(&name) else {
+        let d = Diagnostic::error("E0299", format!("unknown glass `{name}`")).label(
+            span,
+            format!("catalogue: {}", crate::optics::glass::CATALOGUE.join(", ")),
+        );
+        let d = match crate::scene::reader::did_you_mean(
+            &name,
+            crate::optics::glass::CATALOGUE.iter().copied(),
+        ) {
+            Some(s) => d.help(format!("did you mean `{s}`?")),
+            None => d.help("pick a catalogue glass: `glass = \"N-BK7\"` or `\"PMMA\"` (acrylic)"),
+        };
+        cx.push(d);
+        return None;
+    };
+    if shape_kind != "box" {
+        cx.push(
+            Diagnostic::error("E0296", "a glass object must be a box")
+                .label(span, format!("on a {shape_kind}"))
+                .help(
+                    "make it `shape = \"box\"` (a window, a slab, a block); glass spheres and \
+                     cylinders are not supported yet",
+                ),
+        );
+        return None;
+    }
+    for key in ["albedo", "pattern"] {
+        if o.has(key) {
+            let sp = o.key_span(key);
+            cx.push(
+                Diagnostic::error("E0292", format!("a glass object has no `{key}`"))
+                    .label(sp, "clear glass reflects and refracts; it has no colour")
+                    .help(format!("remove `{key}`, or `glass` for an opaque object")),
+            );
+        }
+    }
+    Some(g)
 }
 
 /// Default albedo of a pattern's grid lines: a pale yellow string.
