@@ -201,10 +201,15 @@ fn site_group(
         }
         bounds.add_mesh(&mesh);
         let a = o.material.albedo;
+        // A glass object looks like the port's glass.
+        let (colour, look) = match &o.material.glass {
+            Some(_) => ([0.75, 0.88, 1.0, 0.3], Look::Glass),
+            None => ([a[0], a[1], a[2], 1.0], Look::Opaque),
+        };
         let mat = b.material(
             &o.name,
-            [a[0], a[1], a[2], 1.0],
-            Look::Opaque,
+            colour,
+            look,
             None,
             &format!("object `{}`", o.name),
         )?;
