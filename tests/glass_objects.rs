@@ -200,3 +200,48 @@ fn blender_describes_the_glass_and_its_indices() {
     }
     assert!(d.json["objects"][0]["material"].get("glass").is_none());
 }
+
+/// Compiled to Mitsuba and imported back (`poser import` of a view), the block is the same
+/// glass object: PMMA, its size, place and orientation.
+#[test]
+fn a_glass_object_survives_the_round_trip_through_mitsuba() {
+    let m = load_text(&format!("{SUN_SEABED}{BLOCK}"), &[]);
+    let dir = tempfile::tempdir().unwrap();
+    poser::backend::mitsuba::compile(&m, &dir.path().join("m")).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
+        .current_dir(dir.path())
+        .args(["import", "m/img_0001.xml", "-o", "back/scene.toml"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let back = poser::scene::load(&dir.path().join("back/scene.toml"), &[])
+        .map_err(|f| f.render())
+        .unwrap()
+        .model;
+    let (a, b) = (
+        &m.objects[1],
+        back.objects.iter().find(|o| o.name == "block").unwrap(),
+    );
+    assert_eq!(
+        b.material.glass.as_ref().map(|g| g.name.as_str()),
+        Some("PMMA")
+    );
+    let (poser::model::Shape::Box { size: sa }, poser::model::Shape::Box { size: sb }) =
+        (&a.shape, &b.shape)
+    else {
+        panic!("{:?}", b.shape)
+    };
+    assert!((*sa * a.scale - *sb * b.scale).abs().max_element() < 1e-9);
+    assert!((a.pose.translation - b.pose.translation).length() < 1e-9);
+    let r = a.pose.rotation.transpose() * b.pose.rotation;
+    assert!(
+        (r - glam::DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .all(|x| x.abs() < 1e-9)
+    );
+}

@@ -1,8 +1,10 @@
 //! `poser import` of Mitsuba scenes with glass and media away from the camera (issue 37):
-//! poser's only glass is the camera's housing port and its water fills the scene below z = 0,
-//! so a glass object, or a medium inside a shape the camera is outside of, is refused up front
-//! (the shape's file, line and column, a `help:` line, nothing written) instead of being read
-//! as a housing or as water everywhere. Glass around the camera is still its port. Also:
+//! a `cube` of smooth `dielectric` away from the camera is a glass object (`glass = …`, a box of
+//! the nearest catalogue glass); other glass away from the camera (a sphere, thin or rough
+//! glass, an index no catalogue glass has), or a medium inside a shape the camera is outside
+//! of, is refused up front (the shape's file, line and column, a `help:` line, nothing written)
+//! instead of being read as a housing or as water everywhere, since poser's water fills the
+//! scene below z = 0. Glass around the camera is still its port. Also:
 //! `--root` for a shared `common/` folder beside the scene's (Mitsuba's data repository's
 //! layout), and the depth of a `direct` or a
 //! wrapped integrator. No rendering, no Python.
@@ -111,6 +113,68 @@ fn thin_and_rough_glass_objects_are_refused() {
             &format!("with a `{bsdf}` BSDF is a glass object"),
         );
     }
+}
+
+const GLASS_CUBE: &str = r#"    <shape type="cube">
+        <transform name="to_world">
+            <scale x="0.5" y="0.3" z="0.02"/>
+            <rotate x="1" angle="20"/>
+            <translate x="0.1" y="0" z="3"/>
+        </transform>
+        <bsdf type="dielectric"><string name="int_ior" value="acrylic glass"/></bsdf>
+    </shape>"#;
+
+/// A cube of smooth glass 3 m in front of the camera (a window) is a glass object: a box of
+/// the catalogue glass nearest its index (Mitsuba's "acrylic glass", 1.49: PMMA), noted.
+#[test]
+fn a_glass_cube_in_front_of_the_camera_is_a_glass_object() {
+    let dir = tempfile::tempdir().unwrap();
+    scene(dir.path(), "0, 0, 0", GLASS_CUBE);
+    let out = import(dir.path(), "s.xml", &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(dir.path().join("out/scene.toml")).unwrap();
+    assert!(text.contains("glass = \"PMMA\""), "{text}");
+    assert!(text.contains("shape = \"box\""), "{text}");
+    assert!(
+        text.contains("as the catalogue glass PMMA"),
+        "the note: {text}"
+    );
+    let m = poser::scene::load(&dir.path().join("out/scene.toml"), &[])
+        .map_err(|f| f.render())
+        .unwrap()
+        .model;
+    let o = m
+        .objects
+        .iter()
+        .find(|o| o.material.glass.is_some())
+        .expect(&text);
+    let poser::model::Shape::Box { size } = o.shape else {
+        panic!("{:?}", o.shape)
+    };
+    // Mitsuba's cube spans [-1, 1]: the scale is the half-size.
+    let full = size * o.scale;
+    assert!(
+        (full - glam::DVec3::new(1.0, 0.6, 0.04))
+            .abs()
+            .max_element()
+            < 1e-9,
+        "{full}"
+    );
+    assert!((o.pose.translation - glam::DVec3::new(0.1, 0.0, 3.0)).length() < 1e-9);
+}
+
+/// Glass no catalogue glass matches (diamond, 2.419) is refused, naming the catalogue.
+#[test]
+fn a_glass_cube_of_an_unknown_index_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    scene(
+        dir.path(),
+        "0, 0, 0",
+        &GLASS_CUBE.replace("acrylic glass", "diamond"),
+    );
+    let out = import(dir.path(), "s.xml", &[]);
+    assert_refused(dir.path(), &out, "s.xml:14:9", "glass of index 2.4190");
+    assert!(stderr(&out).contains("N-BK7"), "{}", stderr(&out));
 }
 
 /// Glass around the camera (a dome of 10 cm) is still its housing port: dropped, with the note

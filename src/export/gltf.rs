@@ -206,13 +206,7 @@ fn site_group(
             Some(_) => ([0.75, 0.88, 1.0, 0.3], Look::Glass),
             None => ([a[0], a[1], a[2], 1.0], Look::Opaque),
         };
-        let mat = b.material(
-            &o.name,
-            colour,
-            look,
-            None,
-            &format!("object `{}`", o.name),
-        )?;
+        let mat = b.material(&o.name, colour, look, None, &format!("object `{}`", o.name))?;
         let prim = b.triangles(&mesh, None, mat, &format!("object `{}`", o.name))?;
         s.triangles += mesh.triangles.len();
         site.push(b.mesh_node(&o.name, vec![prim], None));

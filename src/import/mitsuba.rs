@@ -7,7 +7,7 @@
 //! | `disk`, `obj`, `ply` | `mesh` objects, written as `.glb` assets | `to_world` baked into the vertices |
 //! | `diffuse` BSDF (`rgb`, `spectrum`, `bitmap`, `checkerboard` reflectance), `twosided` | `albedo` | a bitmap on an `obj`/`ply` with texture coordinates or on a `rectangle` becomes the mesh's image texture, elsewhere its mean albedo; a checkerboard the mean of its colours (noted); other BSDFs their diffuse reflectance, noted |
 //! | `spectrum` (one value, wavelength:value pairs, `.spd` file) | linear sRGB | as Mitsuba 3's RGB variants (`spectrum_list_to_srgb`): CIE 1931 2° observer, D65 for reflectances; noted |
-//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted. Glass 0.5 m or more from every sensor, or a shape holding an `interior` medium that no sensor is inside, is refused at the shape |
+//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted. A `cube` with a smooth `dielectric` 0.5 m or more from every sensor is a glass object (`glass = …`, the catalogue glass nearest its `int_ior`, within 0.02); other glass that far, or a shape holding an `interior` medium that no sensor is inside, is refused at the shape |
 //! | no glass at a sensor | `[camera.port] type = "none"` | |
 //! | `point`, `spot`, `directional`, `constant`, `area` on a `rectangle` | `point`, `spot`, `[sun]`, `ambient`, `area` lights | lights of a per-image file (not of an included world) are rig-mounted |
 //! | `homogeneous` medium (`sigma_t`, `albedo`, `scale`, `hg`/`isotropic`) | `[water]` `absorption`, `scattering`, `g` | the glass's `ext_ior` gives the water's index |
@@ -2433,7 +2433,16 @@ fn shape(
                 return Ok(());
             }
             let (lo, hi) = world_bounds(cx, k, &m)?;
-            refuse_away_from_camera(cx, k, what, sensor_distance(lo, hi))?;
+            let distance = sensor_distance(lo, hi);
+            if what == "dielectric" && distance >= PORT_REACH && !medium && kind == "cube" {
+                let name = unique(
+                    comment_name(k, "object")
+                        .or_else(|| k.attr("id").map(str::to_string))
+                        .unwrap_or_else(|| kind.clone()),
+                );
+                return glass_object(cx, k, &m, &name, objects, assets_out, assets);
+            }
+            refuse_away_from_camera(cx, k, what, distance)?;
             if what == "null" {
                 return Ok(());
             }
@@ -2511,6 +2520,72 @@ fn shape(
     Ok(())
 }
 
+/// A smooth `dielectric` `cube` away from every sensor: a glass object (`glass = …`, a box)
+/// of the catalogue glass whose green index is nearest its `int_ior` (within
+/// [`GLASS_MATCH`]; noted when it differs by more than 0.001). Its `ext_ior` is the water's or
+/// air's, which the scene declares. A rough or thin dielectric, or an index no catalogue glass
+/// has, is refused with the catalogue.
+fn glass_object(
+    cx: &mut Cx,
+    k: &X,
+    m: &DMat4,
+    name: &str,
+    objects: &mut Vec<Value>,
+    assets_out: &mut Vec<(String, Vec<u8>)>,
+    assets: &str,
+) -> Result<(), String> {
+    let Some(b) = shape_bsdf(cx, k)? else {
+        return Err(format!("{}: a dielectric cube without its BSDF", k.loc));
+    };
+    if b.ty() != "dielectric" {
+        return Err(format!(
+            "{}: this `cube` has a `{}` BSDF: poser's glass objects are smooth, thick glass\n  \
+             help: make it a smooth `dielectric`, or give it a diffuse BSDF",
+            k.loc,
+            b.ty()
+        ));
+    }
+    let n = ior(cx, &b, "int_ior", 1.5046)?;
+    let catalogue = crate::optics::glass::CATALOGUE.iter().filter_map(|g| {
+        crate::optics::glass::catalogue_ior(g, crate::model::CHANNEL_WAVELENGTHS_NM[1])
+            .map(|n_g| (*g, n_g))
+    });
+    let Some((glass, n_g)) = catalogue
+        .min_by(|a, b| (a.1 - n).abs().total_cmp(&(b.1 - n).abs()))
+        .filter(|(_, n_g)| (n_g - n).abs() <= GLASS_MATCH)
+    else {
+        return Err(format!(
+            "{}: glass of index {n:.4}: poser's glass objects are made of a catalogue glass \
+             ({})\n  help: set `int_ior` to one of them, or give the shape a diffuse BSDF",
+            b.loc,
+            crate::optics::glass::CATALOGUE.join(", ")
+        ));
+    };
+    if (n_g - n).abs() > 1e-3 {
+        cx.note(
+            &b,
+            format!(
+                "int_ior {n:.4} is imported as the catalogue glass {glass} ({n_g:.4} in green)"
+            ),
+            Some(
+                "poser's glass objects take a catalogue glass (docs/scenes.md, \"Glass objects\")",
+            ),
+        );
+    }
+    let mut o = Table::new();
+    o.insert("name".into(), Value::String(name.to_string()));
+    if !shape_geometry(cx, k, m, "cube", name, &mut o, assets_out, assets)? {
+        return Ok(());
+    }
+    o.insert("glass".into(), Value::String(glass.to_string()));
+    objects.push(Value::Table(o));
+    Ok(())
+}
+
+/// How far, in index, a dielectric's `int_ior` may be from a catalogue glass's (green) to be
+/// imported as it: Mitsuba's `bk7` (1.5046) is N-BK7 (1.5168), its `acrylic glass` (1.49) PMMA.
+const GLASS_MATCH: f64 = 0.02;
+
 /// How far from a sensor glass and black walls are read as its housing, metres.
 const PORT_REACH: f64 = 0.5;
 
@@ -2540,9 +2615,10 @@ fn refuse_away_from_camera(cx: &Cx, k: &X, what: &str, distance: f64) -> Result<
         ("null", Some(_)) => Ok(()),
         (_, _) if distance >= PORT_REACH => Err(format!(
             "{}: this `{}` shape with a `{bsdf}` BSDF is a glass object {distance:.3} m from \
-             the camera: poser's objects are opaque and diffuse, and its only glass is the \
-             camera's housing port (within {PORT_REACH} m of the camera)\n  help: give the \
-             shape a diffuse BSDF, or remove it, to import the rest of the scene",
+             the camera: poser's glass objects are boxes of smooth glass (a `cube` with a \
+             `dielectric` BSDF imports as one), and glass within {PORT_REACH} m of the camera \
+             is its housing port\n  help: make it a `cube` with a `dielectric` BSDF, or give \
+             the shape a diffuse BSDF, or remove it, to import the rest of the scene",
             k.loc,
             k.ty()
         )),
