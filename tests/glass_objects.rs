@@ -245,3 +245,29 @@ fn a_glass_object_survives_the_round_trip_through_mitsuba() {
             .all(|x| x.abs() < 1e-9)
     );
 }
+
+/// The ground truth does not refract through glass: it counts a glass object as opaque, so a
+/// target behind a window is left out of the truth of the images that see it through the glass
+/// (W0406 says so when the scene is loaded), and is in it without the window.
+#[test]
+fn the_truth_leaves_out_what_glass_hides() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/invalid/warn_target_behind_glass.toml");
+    let loaded = poser::scene::load(&path, &[])
+        .map_err(|f| f.render())
+        .unwrap();
+    assert!(loaded.warnings.iter().any(|w| w.code == "W0406"));
+    let with = poser::truth::compute(&loaded.model).unwrap();
+    let mut bare = loaded.model.clone();
+    bare.objects.retain(|o| o.material.glass.is_none());
+    let without = poser::truth::compute(&bare).unwrap();
+    let count = |t: &poser::truth::Truth| {
+        t.images
+            .iter()
+            .flat_map(|i| &i.points)
+            .filter(|p| p.target == "grid")
+            .count()
+    };
+    assert_eq!(count(&without), 6);
+    assert_eq!(count(&with), 0);
+}

@@ -205,8 +205,9 @@ fn target_inside_port(cx: &mut Cx, m: &Model, spans: &Spans) -> bool {
 
 /// The glass objects ([`crate::model::Material::glass`], boxes): they need water everywhere or
 /// none (E0404: a water box around the camera would cut them), no camera's pupil may be inside
-/// one (E0405), and a target seen through one gets a warning (W0406: the ground truth projects
-/// through the port only, not through glass objects, so its pixels there are not exact).
+/// one (E0405), and a target seen through one gets a warning (W0406: the ground truth does not
+/// refract through glass objects; it counts them as opaque, so those observations are left
+/// out of the truth, while the images show the target through the glass).
 fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
     let glass: Vec<(usize, &crate::model::Object, glam::DVec3)> = m
         .objects
@@ -274,7 +275,7 @@ fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
         cx.push(
             Diagnostic::warning("W0406", format!("target `{target}` is seen through glass object `{}`", m.objects[i].name))
                 .label(at(i), format!("{n} line(s) of sight from a camera to a target point cross it (first at pose {pose})"))
-                .help("the ground truth refracts through the port only: those target pixels are not exact; move the target or the glass"),
+                .help("the ground truth does not refract through glass objects: it counts them as opaque, so those points are left out of the truth where glass hides them; move the target or the glass"),
         );
     }
 }
