@@ -94,3 +94,56 @@ fn single_scattering_behind_a_port_means_the_same_in_every_backend() {
         }
     }
 }
+
+/// An area light seen directly by a camera without a port, in water: Blender 5 makes a new
+/// light invisible to camera rays, so Cycles rendered it black (0 against native's 0.46 in
+/// green) until the builder set its camera visibility (AREA_SEEN in builder.py). Behind a port
+/// the camera's rays reach it as transmission rays, which were always visible.
+#[test]
+fn an_area_light_seen_by_a_camera_without_a_port_is_seen_in_every_backend() {
+    let model = support::column::load_text(
+        r#"name = "area_seen"
+[site]
+depth = "10 m"
+surface = "none"
+[water]
+ior = 1.34
+absorption = [0.5, 0.1, 0.05]
+scattering = 0.0
+[camera]
+width = 48
+height = 36
+sensor_width = "36 mm"
+focal_length = "28 mm"
+[camera.port]
+type = "none"
+[[lights]]
+name = "panel"
+type = "area"
+mount = "world"
+position = [0.0, 0.0, -9.0]
+aim = [0.0, 0.0, 1.0]
+width = "0.8 m"
+height = "0.8 m"
+radiance = 1.0
+[network]
+type = "explicit"
+[[network.poses]]
+position = [0.0, 0.0, -8.0]
+look_at = [0.0, 0.0, -10.0]
+up = [0.0, 1.0, 0.0]
+[render]
+samples = 16
+seed = 1
+"#,
+        &[],
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let native = image_mean("native", &model, &tmp.path().join("native"), 16);
+    let cycles = image_mean("blender", &model, &tmp.path().join("blender"), 16);
+    assert!(native[1] > 0.3, "{native:?}");
+    for c in 0..3 {
+        let rel = cycles[c] / native[c] - 1.0;
+        assert!(rel.abs() < 0.01, "channel {c}: {cycles:?} vs {native:?}");
+    }
+}

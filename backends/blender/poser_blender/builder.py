@@ -900,6 +900,10 @@ def _build_lights(built, coll, desc):
         if hasattr(data, "use_soft_falloff"):
             data.use_soft_falloff = False
         obj = _new_object(coll, name, data)
+        # AREA_SEEN: a light object's camera visibility is off by default in Blender 5; an area
+        # light seen directly by a camera without a port (a camera ray, not a transmission ray
+        # through the port's glass) rendered black, where native and Mitsuba see its radiance.
+        obj.visible_camera = True
         if light.get("mount") == "rig":
             obj.parent = built.rig
             obj.matrix_parent_inverse.identity()
