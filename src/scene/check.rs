@@ -209,17 +209,25 @@ fn target_inside_port(cx: &mut Cx, m: &Model, spans: &Spans) -> bool {
 /// refract through glass objects; it counts them as opaque, so those observations are left
 /// out of the truth, while the images show the target through the glass).
 fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
-    let glass: Vec<(usize, &crate::model::Object, glam::DVec3)> = m
+    // (index, object, half-sizes, object_from_world) of every glass box.
+    let glass: Vec<(
+        usize,
+        &crate::model::Object,
+        glam::DVec3,
+        crate::model::Pose,
+    )> = m
         .objects
         .iter()
         .enumerate()
         .filter(|(_, o)| o.material.glass.is_some())
         .filter_map(|(i, o)| match o.shape {
-            crate::model::Shape::Box { size } => Some((i, o, 0.5 * size * o.scale)),
+            crate::model::Shape::Box { size } => {
+                Some((i, o, 0.5 * size * o.scale, o.pose.inverse()))
+            }
             _ => None,
         })
         .collect();
-    let Some(&(first, o, _)) = glass.first() else {
+    let Some(&(first, o, _, _)) = glass.first() else {
         return;
     };
     let at = |i: usize| spans.objects.get(i).copied().unwrap_or(spans.network);
@@ -239,14 +247,14 @@ fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
         );
         return;
     }
-    // Inside the box `(i, o, half)`: in its own frame, within the half-sizes.
-    let local = |o: &crate::model::Object, p: glam::DVec3| o.pose.inverse().transform_point(p);
     let mut seen_through: Option<(usize, String, String, usize)> = None;
     for (pi, pose) in m.poses.iter().enumerate().take(2000) {
         for ci in 0..m.cameras.len() {
             let c = m.world_from_camera(pi, ci).translation;
-            for &(i, o, half) in &glass {
-                if local(o, c).abs().cmplt(half).all() {
+            for &(i, o, half, from_world) in &glass {
+                // The pupil in the box's own frame: inside it within the half-sizes.
+                let a = from_world.transform_point(c);
+                if a.abs().cmplt(half).all() {
                     cx.push(
                         Diagnostic::error("E0405", format!("camera `{}` is inside glass object `{}`", m.cameras[ci].name, o.name))
                             .label(at(i), format!("the camera's pupil is inside it at pose {}", pose.name))
@@ -256,8 +264,7 @@ fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
                 }
                 for t in &m.targets {
                     for p in &t.points {
-                        let (a, b) = (local(o, c), local(o, p.world));
-                        if segment_meets_box(a, b, half) {
+                        if segment_meets_box(a, from_world.transform_point(p.world), half) {
                             let e = seen_through.get_or_insert((
                                 i,
                                 t.name.clone(),
