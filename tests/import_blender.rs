@@ -505,3 +505,155 @@ bpy.ops.wm.save_as_mainfile(filepath="sea.blend")
         s.direction_water
     );
 }
+
+/// Glass boxes (issue 37): poser's own glass object comes back from its saved .blend as the
+/// same glass box; a user's Glass BSDF cube in the water comes in as the catalogue glass its
+/// IOR means in Cycles (relative to the water around it); a glass sphere and a rough glass
+/// cube are named in the notes and not imported.
+#[test]
+fn glass_boxes_import_as_glass_objects() {
+    use glam::DVec3;
+    use poser::model::CHANNEL_WAVELENGTHS_NM;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+
+    // poser → .blend → poser.
+    let scene = d.join("block.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{}\n[[objects]]\nname = \"block\"\nshape = \"box\"\nsize = [0.4, 0.3, 0.2]\n\
+             position = [0.3, 0.2, -4.5]\nrotation = [10.0, 20.0, 30.0]\nglass = \"PMMA\"\n",
+            include_str!("canonical/sun_seabed.toml")
+        ),
+    )
+    .unwrap();
+    assert_eq!(round_trip(&scene, d), Ok(None));
+    let model = poser::scene::load(&scene, &[]).unwrap().model;
+    let back = poser::scene::load(&d.join("imported.toml"), &[])
+        .map_err(|e| e.render())
+        .unwrap()
+        .model;
+    let glass: Vec<_> = back
+        .objects
+        .iter()
+        .filter(|o| o.material.glass.is_some())
+        .collect();
+    assert_eq!(glass.len(), 1, "{:?}", back.objects);
+    let (a, b) = (&model.objects[1], glass[0]);
+    assert_eq!(b.material.glass.as_ref().unwrap().name, "PMMA");
+    let poser::model::Shape::Box { size } = b.shape else {
+        panic!("{:?}", b.shape)
+    };
+    let poser::model::Shape::Box { size: want } = a.shape else {
+        panic!()
+    };
+    assert!(
+        (size * b.scale - want * a.scale).abs().max_element() < 1e-6,
+        "{size}"
+    );
+    assert!((b.pose.translation - a.pose.translation).length() < 1e-6);
+    let dr = (b.pose.rotation - a.pose.rotation).to_cols_array();
+    assert!(dr.iter().all(|x| x.abs() < 1e-6), "{:?}", b.pose.rotation);
+
+    // A user's file: a camera 2 m down in a water box whose top is the surface, a PMMA cube
+    // (scaled and turned) 4 m down, a glass sphere and a rough glass cube beside it.
+    let n_pmma = poser::optics::glass::catalogue_ior("PMMA", CHANNEL_WAVELENGTHS_NM[1]).unwrap();
+    let n_w = poser::optics::water::seawater_ior(20.0, 35.0, 0.0, 550.0);
+    bpy_script(
+        d,
+        &format!(
+            r#"
+import bpy, math
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scene = bpy.context.scene
+cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+scene.collection.objects.link(cam)
+cam.location = (0.0, 0.0, -2.0)
+scene.camera = cam
+bpy.ops.mesh.primitive_cube_add(size=40.0, location=(0, 0, -20.0))
+sea = bpy.context.object
+sea.name = "Sea"
+m = bpy.data.materials.new("Water")
+m.use_nodes = True
+nodes = m.node_tree.nodes
+nodes.remove(nodes["Principled BSDF"])
+v = nodes.new("ShaderNodeVolumeScatter")
+v.inputs["Density"].default_value = 0.1
+m.node_tree.links.new(v.outputs[0], nodes["Material Output"].inputs["Volume"])
+sea.data.materials.append(m)
+
+def glass(name, rough):
+    g = bpy.data.materials.new(name)
+    g.use_nodes = True
+    nodes = g.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    b = nodes.new("ShaderNodeBsdfGlass")
+    b.inputs["IOR"].default_value = {rel}
+    b.inputs["Roughness"].default_value = rough
+    g.node_tree.links.new(b.outputs[0], nodes["Material Output"].inputs["Surface"])
+    return g
+
+bpy.ops.mesh.primitive_cube_add(size=2.0, location=(0.5, -0.2, -4.0))
+block = bpy.context.object
+block.name = "Block"
+block.scale = (0.5, 0.3, 0.2)
+block.rotation_euler = (0.0, 0.0, math.radians(30.0))
+block.data.materials.append(glass("Acrylic", 0.0))
+bpy.ops.mesh.primitive_uv_sphere_add(radius=0.3, location=(2.0, 0.0, -4.0))
+bpy.context.object.name = "Ball"
+bpy.context.object.data.materials.append(glass("Ball glass", 0.0))
+bpy.ops.mesh.primitive_cube_add(size=0.5, location=(-2.0, 0.0, -4.0))
+bpy.context.object.name = "Frosted"
+bpy.context.object.data.materials.append(glass("Frosted glass", 0.3))
+bpy.ops.wm.save_as_mainfile(filepath="user.blend")
+"#,
+            rel = n_pmma / n_w
+        ),
+    );
+    let toml = d.join("user.toml");
+    let out = import(&d.join("user.blend"), &toml);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let text = std::fs::read_to_string(&toml).unwrap();
+    let m = poser::scene::load(&toml, &[])
+        .map_err(|e| e.render())
+        .unwrap()
+        .model;
+    let glass: Vec<_> = m
+        .objects
+        .iter()
+        .filter(|o| o.material.glass.is_some())
+        .collect();
+    assert_eq!(glass.len(), 1, "{text}");
+    let o = glass[0];
+    assert_eq!(o.name, "Block");
+    assert_eq!(o.material.glass.as_ref().unwrap().name, "PMMA");
+    let poser::model::Shape::Box { size } = o.shape else {
+        panic!("{:?}", o.shape)
+    };
+    assert!(
+        (size * o.scale - DVec3::new(1.0, 0.6, 0.4))
+            .abs()
+            .max_element()
+            < 1e-5,
+        "{size}"
+    );
+    assert!((o.pose.translation - DVec3::new(0.5, -0.2, -4.0)).length() < 1e-5);
+    let x = o.pose.rotation.x_axis;
+    assert!((x.y.atan2(x.x).to_degrees() - 30.0).abs() < 1e-4, "{x}");
+    // The notes say what the IOR meant and name what was left out.
+    for want in [
+        "relative to the water",
+        "imported as the catalogue glass PMMA",
+        "`Ball`",
+        "not a box",
+        "`Frosted`",
+        "rough",
+    ] {
+        assert!(
+            text.contains(want) || err.contains(want),
+            "{want}:\n{text}\n{err}"
+        );
+    }
+}

@@ -457,8 +457,8 @@ def read(bpy, blend, work):
     if scene.get("poser_bounces") is not None:
         render["bounces"] = int(scene["poser_bounces"])
 
-    # Meshes, water, port glass.
-    meshes, water = [], None
+    # Meshes, water, port glass, glass objects.
+    meshes, water, glass = [], None, []
     cam_centres = [worlds[(ci, 0)][:3, 3] for ci in range(len(cams))]
     for o in scene.objects:
         if o.hide_render or o.type not in ("MESH", "CURVE", "SURFACE", "META", "FONT"):
@@ -486,7 +486,9 @@ def read(bpy, blend, work):
                        "declare it as `[camera.port]` (type = \"flat\" or \"dome\", with its "
                        "thickness, radius and material) so that poser refracts through it exactly")
             else:
-                r.note(where, "a glass object is not imported", "poser's objects are diffuse")
+                g = glass_box(r, o, mats[0], bpy.context.evaluated_depsgraph_get(), where)
+                if g is not None:
+                    glass.append(g)
             continue
         if kind != "diffuse":
             continue
@@ -573,9 +575,67 @@ def read(bpy, blend, work):
         "lights": lights,
         "water": water,
         "meshes": meshes,
+        "glass": glass,
         "port_glass": r.port_glass,
         "notes": r.notes,
     }
+
+
+def glass_ior(mat):
+    """The smooth, clear Glass or Refraction BSDF feeding `mat`'s surface: (IOR, None), or
+    (None, why not)."""
+    nt = mat.node_tree if mat is not None else None
+    out = output_node(nt) if nt is not None else None
+    surf = linked(out.inputs.get("Surface")) if out is not None else None
+    if surf is None or surf.bl_idname not in ("ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction"):
+        return None, "its glass is not a Glass or Refraction BSDF on the material's output"
+    if linked(surf.inputs["IOR"]) is not None:
+        return None, "its glass's IOR is driven by a node"
+    rough = surf.inputs.get("Roughness")
+    if rough is not None and (linked(rough) is not None or float(rough.default_value) > 1e-4):
+        return None, "its glass is rough (poser's glass objects are smooth)"
+    colour = surf.inputs.get("Color")
+    if colour is not None and (linked(colour) is not None
+                               or any(abs(float(c) - 1.0) > 1e-4 for c in colour.default_value[:3])):
+        return None, "its glass is tinted (poser's glass objects are clear)"
+    return float(surf.inputs["IOR"].default_value), None
+
+
+def glass_box(r, o, mat, depsgraph, where):
+    """A glass object away from the cameras: when its mesh is a box (every vertex at a corner
+    of its bounding box in the object's frame, all eight corners used) and its glass smooth and
+    clear, {"name", "cube": world matrix of the cube [-1, 1]³, row-major, "ior": Cycles' IOR
+    (relative to the medium around it)}; else None, with a note."""
+    help_ = "poser's glass objects are smooth, clear boxes (docs/scenes.md, \"Glass objects\")"
+    ior, why = glass_ior(mat)
+    if ior is None:
+        r.note(where, f"this glass object is not imported: {why}", help_)
+        return None
+    ev = o.evaluated_get(depsgraph)
+    me = ev.to_mesh()
+    try:
+        co = np.empty(len(me.vertices) * 3, dtype=np.float32)
+        me.vertices.foreach_get("co", co)
+    finally:
+        ev.to_mesh_clear()
+    local = co.reshape(-1, 3).astype(float)
+    exact = o.get("poser_vertices")
+    if exact is not None and len(exact) == local.size:
+        local = r.shadow(o, "poser_vertices", local.ravel(), where).reshape(-1, 3)
+    if len(local) < 8:
+        r.note(where, "this glass object is not imported: its mesh is not a box", help_)
+        return None
+    lo, hi = local.min(axis=0), local.max(axis=0)
+    ext = hi - lo
+    tol = 1e-5 * max(1.0, float(np.max(np.abs(local))))
+    at_lo, at_hi = np.abs(local - lo) <= tol, np.abs(local - hi) <= tol
+    corners = {tuple(c) for c in at_hi.astype(int).tolist()}
+    if np.min(ext) <= tol or not np.all(at_lo | at_hi) or len(corners) != 8:
+        r.note(where, "this glass object is not imported: its mesh is not a box", help_)
+        return None
+    cube = np.diag([0.5 * ext[0], 0.5 * ext[1], 0.5 * ext[2], 1.0])
+    cube[:3, 3] = 0.5 * (lo + hi)
+    return {"name": strip(o.name, "object:"), "cube": (r.world(o, 0) @ cube).tolist(), "ior": ior}
 
 
 def _ancestors(o):

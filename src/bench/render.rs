@@ -25,6 +25,7 @@
 //! | spp of the curve | 1, 4 | 1, 8, 64 |
 //! | reference | 2 × 32 spp | 2 × 256 spp |
 //! | poses | the first | the first |
+//! | native | the scene's own daylight estimator; where the water column lights it, a second curve `native_traced` (`render.daylight = "traced"`, the brute force) whose reference measures the column's bias ([`Bias`]), counted in the column's error ([`Curve::count_bias`]) | the same |
 //!
 //! The two benchmark scenes isolate the estimators:
 //!
@@ -360,6 +361,17 @@ pub struct Curve {
     pub reference_residual: f64,
     /// Per-channel means of the reference, linear radiance.
     pub reference_means: [f64; 3],
+    /// Standard error of each of those means (from the two renders' per-pixel difference).
+    #[serde(default)]
+    pub reference_mean_se: [f64; 3],
+    /// The native renderer's daylight estimator in this curve (`column` or `traced`; empty for
+    /// the other backends).
+    #[serde(default)]
+    pub daylight: String,
+    /// For native lit by the water column: its mean's difference from the brute-force
+    /// reference (native, traced), counted in its error ([`Curve::count_bias`]).
+    #[serde(default)]
+    pub bias: Option<Bias>,
     pub points: Vec<Point>,
     /// Fixed start-up seconds and seconds per spp of the fit `t = t0 + k·spp`.
     pub startup_seconds: f64,
@@ -379,6 +391,9 @@ impl Curve {
             reference_seconds: 0.0,
             reference_residual: 0.0,
             reference_means: [0.0; 3],
+            reference_mean_se: [0.0; 3],
+            daylight: String::new(),
+            bias: None,
             points: vec![],
             startup_seconds: 0.0,
             seconds_per_spp: 0.0,
@@ -401,6 +416,74 @@ impl Curve {
         let falls = self.points.windows(2).all(|w| w[1].rmse < w[0].rmse);
         let last = self.points.last().map_or(0.0, |p| p.rmse);
         !falls || self.reference_residual > 0.5 * last
+    }
+
+    /// Count a bias against the brute-force reference in the error: the error at `spp` is
+    /// √(noise(spp)² + b²), `b` the bias's RMS over the channels, so a target `e` needs the
+    /// noise to reach √(e² − b²); a target at or under `b` is never reached (no entry).
+    pub fn count_bias(&mut self, bias: Bias) {
+        let b = bias.rms();
+        self.to_target.clear();
+        for target in TARGETS {
+            if target <= b {
+                continue;
+            }
+            let noise = (target * target - b * b).sqrt();
+            if let Some((spp, extrapolated)) = spp_to(&self.points, noise) {
+                self.to_target.push(ToTarget {
+                    rmse: target,
+                    spp,
+                    extrapolated,
+                    seconds: self.startup_seconds + self.seconds_per_spp * spp,
+                    render_seconds: self.seconds_per_spp * spp,
+                });
+            }
+        }
+        self.bias = Some(bias);
+    }
+}
+
+/// The difference of a column-lit native reference's channel means from the brute-force
+/// (traced) reference's, relative to the latter, with its standard error (both references'
+/// noise). Only the image means are compared: a brute-force reference of the deep sky-lit
+/// scenes keeps 50–70 % noise per pixel at 2 × 256 spp, but its mean is known to about 1 %.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Bias {
+    pub relative: [f64; 3],
+    pub se: [f64; 3],
+}
+
+impl Bias {
+    /// `column`'s reference means against `traced`'s (`None` where a traced mean is 0).
+    pub fn between(column: &Curve, traced: &Curve) -> Option<Bias> {
+        let (c, t) = (column.reference_means, traced.reference_means);
+        if t.iter().any(|&m| m <= 0.0) {
+            return None;
+        }
+        let (cs, ts) = (column.reference_mean_se, traced.reference_mean_se);
+        Some(Bias {
+            relative: std::array::from_fn(|i| c[i] / t[i] - 1.0),
+            se: std::array::from_fn(|i| {
+                ((cs[i] / t[i]).powi(2) + (c[i] * ts[i] / (t[i] * t[i])).powi(2)).sqrt()
+            }),
+        })
+    }
+
+    /// RMS over the channels: the bias counted in the error. The reference's noise is not
+    /// taken off: what is counted is at most the bias plus that noise (conservative).
+    pub fn rms(&self) -> f64 {
+        (self.relative.iter().map(|b| b * b).sum::<f64>() / 3.0).sqrt()
+    }
+
+    /// "−1.2, +0.4, +0.9 % (± 0.6)": per channel, with the largest standard error.
+    pub fn text(&self) -> String {
+        let se = self.se.iter().copied().fold(0.0, f64::max);
+        let v: Vec<String> = self
+            .relative
+            .iter()
+            .map(|b| format!("{:+.1}", 100.0 * b))
+            .collect();
+        format!("{} % (± {:.1})", v.join(", "), 100.0 * se)
     }
 }
 
@@ -493,6 +576,17 @@ fn render_rgb(
     Ok((img.rgb.into_flattened(), secs))
 }
 
+/// Standard error of each channel's mean of the average of two independent RGB renders: per
+/// pixel the average's variance is (a − b)² / 4.
+fn mean_se(a: &[f32], b: &[f32]) -> [f64; 3] {
+    let mut sum = [0.0f64; 3];
+    for (k, (x, y)) in a.iter().zip(b).enumerate() {
+        sum[k % 3] += (*x as f64 - *y as f64).powi(2) / 4.0;
+    }
+    let n = (a.len() / 3).max(1) as f64;
+    sum.map(|s| s.sqrt() / n)
+}
+
 /// Below this reference mean an image counts as black (nothing reaches the camera).
 const DARK: f64 = 1e-9;
 /// The error of a curve on a scene black at its first pose.
@@ -500,10 +594,40 @@ const BLACK: &str = "black at the first pose";
 /// The start of the error of a backend that refuses a scene.
 const REFUSED: &str = "refused: ";
 
-/// One backend's curve on one scene: two references, then the form's spp in turn (stopping
-/// once the error is under half the smallest target).
-fn curve(backend: Backend, model: &Model, form: &Form, threads: usize) -> Curve {
-    let mut c = Curve::empty(backend.name(), form.reference_spp);
+/// The curves of one backend on one scene: one ([`curve`]), or for native lit by the water
+/// column two: the column (the scene's default, its bias against the other counted in its
+/// error) and the brute force (`render.daylight = "traced"`, named `native_traced`).
+fn curves_of(backend: Backend, model: &Model, form: &Form, threads: usize) -> Vec<Curve> {
+    if backend != Backend::Native {
+        return vec![curve(backend, backend.name(), model, form, threads)];
+    }
+    let seen = crate::geometry::seen::views_past_seabed(model);
+    let column = model.daylight_choice(seen).0.is_some();
+    let mut native = curve(backend, backend.name(), model, form, threads);
+    native.daylight = if column { "column" } else { "traced" }.into();
+    if !column {
+        return vec![native];
+    }
+    let mut m = model.clone();
+    m.render.daylight = crate::model::Daylight::Traced;
+    let mut traced = curve(backend, TRACED, &m, form, threads);
+    traced.daylight = "traced".into();
+    if native.error.is_none()
+        && traced.error.is_none()
+        && let Some(b) = Bias::between(&native, &traced)
+    {
+        native.count_bias(b);
+    }
+    vec![native, traced]
+}
+
+/// The name of native's brute-force curve beside its column-lit one.
+pub const TRACED: &str = "native_traced";
+
+/// One backend's curve on one scene (`name` in the report): two references, then the form's
+/// spp in turn (stopping once the error is under half the smallest target).
+fn curve(backend: Backend, name: &str, model: &Model, form: &Form, threads: usize) -> Curve {
+    let mut c = Curve::empty(name, form.reference_spp);
     let run = |c: &mut Curve| -> Result<(), String> {
         let tmp = tempfile::tempdir().map_err(|e| e.to_string())?;
         // A backend that does not take the scene says so when it compiles it (not timed);
@@ -521,7 +645,7 @@ fn curve(backend: Backend, model: &Model, form: &Form, threads: usize) -> Curve 
             m.render.seed = seed;
             let dir = tmp.path().join(format!("ref{k}"));
             let (img, secs) = render_rgb(backend, &m, ref_spp, &dir)?;
-            eprintln!("  {backend:>8} reference {k}: {ref_spp} spp {secs:8.2} s");
+            eprintln!("  {name:>13} reference {k}: {ref_spp} spp {secs:8.2} s");
             timings.push((ref_spp as f64, secs));
             c.reference_seconds = secs;
             refs.push(img);
@@ -529,6 +653,7 @@ fn curve(backend: Backend, model: &Model, form: &Form, threads: usize) -> Curve 
         let reference = Reference::new(&refs[0], &refs[1]);
         c.reference_residual = reference.residual();
         c.reference_means = crate::compare::channel_means(&reference.image);
+        c.reference_mean_se = mean_se(&refs[0], &refs[1]);
         if reference.mean < DARK {
             return Err(BLACK.into());
         }
@@ -537,7 +662,7 @@ fn curve(backend: Backend, model: &Model, form: &Form, threads: usize) -> Curve 
             let dir = tmp.path().join(format!("s{spp}"));
             let (img, secs) = render_rgb(backend, model, spp, &dir)?;
             let rmse = reference.error_of(&img);
-            eprintln!("  {backend:>8} {spp:>5} spp  {secs:>8.3} s  rel. RMSE {rmse:.4}");
+            eprintln!("  {name:>13} {spp:>5} spp  {secs:>8.3} s  rel. RMSE {rmse:.4}");
             timings.push((spp as f64, secs));
             c.points.push(Point {
                 spp,
@@ -576,6 +701,7 @@ fn display(backend: &str) -> &str {
     match backend {
         "mitsuba" => "Mitsuba",
         "blender" => "Cycles",
+        TRACED => "native, traced",
         other => other,
     }
 }
@@ -596,7 +722,15 @@ fn times(v: Option<f64>) -> String {
 }
 
 impl SceneReport {
-    /// native's speed-up to `target` over the faster of the others: (wall, render only).
+    /// The native curve (the scene's own daylight estimator), when it rendered.
+    fn native(&self) -> Option<&Curve> {
+        self.curves
+            .iter()
+            .find(|c| c.backend == "native" && c.error.is_none())
+    }
+
+    /// native's speed-up to `target` over the faster of Mitsuba and Cycles: (wall, render
+    /// only).
     pub fn speedup(&self, target: f64) -> (Option<f64>, Option<f64>) {
         let ok = |c: &&Curve| c.error.is_none();
         let native = self
@@ -608,7 +742,7 @@ impl SceneReport {
             .curves
             .iter()
             .filter(ok)
-            .filter(|c| c.backend != "native")
+            .filter(|c| c.backend != "native" && c.backend != TRACED)
             .collect();
         let best = |f: fn(&ToTarget) -> f64| -> Option<f64> {
             let n = f(native?.at(target)?);
@@ -686,6 +820,12 @@ impl SceneReport {
                 times(render)
             );
         }
+        if let Some(b) = self.native().and_then(|c| c.bias) {
+            s += &format!(
+                "native lit by the water column, its mean against native traced (brute force): {}; counted in its error.\n",
+                b.text()
+            );
+        }
         s += "\n| backend | reference | residual noise | mean R, G, B | vs native |\n|---|---|---|---|---|\n";
         let native = self
             .curves
@@ -741,18 +881,30 @@ impl Report {
         let ts = ts.join(" / ");
         let last = self.targets.last().copied().unwrap_or(0.0);
         let mut s = format!(
-            "| scene | size | native, s to {ts} | Mitsuba, s to {ts} | Cycles, s to {ts} | native core-µs per path | native's speed-up to {:.0} %, wall (render only) |\n|---|---|---|---|---|---|---|\n",
+            "| scene | size | native daylight | native, s to {ts} | native traced, s to {ts} | Mitsuba, s to {ts} | Cycles, s to {ts} | column's mean vs traced (R, G, B) | native core-µs per path | native's speed-up to {:.0} %, wall (render only) |\n|---|---|---|---|---|---|---|---|---|---|\n",
             100.0 * last
         );
         for sc in &self.scenes {
             let size = format!("{}×{}", sc.width, sc.height);
             if sc.dark {
-                s += &format!("| `{}` | {size} | {BLACK} | | | | |\n", sc.scene);
+                s += &format!("| `{}` | {size} | {BLACK} | | | | | | | |\n", sc.scene);
                 continue;
             }
+            let native = sc.curves.iter().find(|c| c.backend == "native");
+            let daylight = native.map_or("–", |c| {
+                if c.daylight.is_empty() {
+                    "–"
+                } else {
+                    &c.daylight
+                }
+            });
             let col = |b: &str| -> String {
                 let Some(c) = sc.curves.iter().find(|c| c.backend == b) else {
-                    return "not run".into();
+                    return if b == TRACED && native.is_some_and(|c| c.daylight == "traced") {
+                        "as native".into()
+                    } else {
+                        "not run".into()
+                    };
                 };
                 if let Some(e) = &c.error {
                     return if e.starts_with(REFUSED) {
@@ -776,19 +928,22 @@ impl Report {
                 v.join(" / ")
             };
             let us = sc
-                .curves
-                .iter()
-                .find(|c| c.backend == "native" && c.error.is_none())
+                .native()
                 .map_or("–".into(), |c| format!("{:.1}", c.core_us_per_path));
+            let bias = sc
+                .native()
+                .and_then(|c| c.bias)
+                .map_or("–".into(), |b| b.text());
             let (wall, render) = sc.speedup(last);
             let heavy = sc
                 .curves
                 .iter()
                 .any(|c| c.error.is_none() && c.heavy_tailed());
             s += &format!(
-                "| `{}` | {size} | {} | {} | {} | {us} | {} ({}){} |\n",
+                "| `{}` | {size} | {daylight} | {} | {} | {} | {} | {bias} | {us} | {} ({}){} |\n",
                 sc.scene,
                 col("native"),
+                col(TRACED),
                 col("mitsuba"),
                 col("blender"),
                 times(wall),
@@ -799,7 +954,10 @@ impl Report {
         s += "\n\\* extrapolated past the last measured point with RMSE ∝ spp^-½. \
               † heavy-tailed noise (fireflies): the error did not fall at every step, or the \
               reference is not converged enough to measure it; the time is an order of \
-              magnitude, not a measurement.\n";
+              magnitude, not a measurement. native renders each scene with its own daylight \
+              estimator: the water column where it applies (its mean's difference from the \
+              brute-force render, ± its standard error, is counted in its error: a target \
+              below it is never reached, –), else traced.\n";
         s
     }
 
@@ -844,6 +1002,7 @@ impl Report {
             let panels = root.split_evenly((rows, cols));
             let colour = |b: &str| match b {
                 "native" => RGBColor(200, 40, 40),
+                TRACED => RGBColor(110, 20, 90),
                 "mitsuba" => RGBColor(20, 80, 200),
                 _ => RGBColor(230, 130, 20),
             };
@@ -995,7 +1154,7 @@ pub fn run(root: &Path, opts: &BenchOptions) -> Result<Report, String> {
                 "bench render: {} ({width}×{height}) with {b} (reference 2 × {} spp)",
                 bs.name, form.reference_spp
             );
-            curves.push(curve(*b, model, &form, threads));
+            curves.extend(curves_of(*b, model, &form, threads));
         }
         let dark = curves.iter().any(|c| c.error.as_deref() == Some(BLACK))
             && curves.iter().all(|c| c.error.is_some());
@@ -1152,7 +1311,7 @@ mod tests {
         let row = s.lines().find(|l| l.starts_with("| `s` |")).unwrap();
         assert_eq!(
             row,
-            "| `s` | 128×96 | 1.00 / 6.25 | 30.0* / 188* | 12.0 / 75.0 | 2.5 | 12.0× (12.0×) |"
+            "| `s` | 128×96 | – | 1.00 / 6.25 | not run | 30.0* / 188* | 12.0 / 75.0 | – | 2.5 | 12.0× (12.0×) |"
         );
         let row = s.lines().find(|l| l.starts_with("| `r` |")).unwrap();
         assert!(row.contains("| refused |"), "{row}");
@@ -1191,7 +1350,69 @@ mod tests {
         let s = r.summary();
         let row = s.lines().find(|l| l.starts_with("| `s` |")).unwrap();
         assert!(row.ends_with("(12.0×) † |"), "{row}");
-        assert!(row.contains("| 1.00† / 6.25† | 30.0* / 188* |"), "{row}");
+        assert!(
+            row.contains("| 1.00† / 6.25† | not run | 30.0* / 188* |"),
+            "{row}"
+        );
+    }
+
+    /// A column-lit native curve with its bias against the traced one counted: the target
+    /// needs the noise to fall to √(e² − b²), and a target at or under the bias is never met.
+    #[test]
+    fn the_columns_bias_is_counted_in_its_error() {
+        let mut c = curve_to("native", 1.0);
+        c.daylight = "column".into();
+        c.points = vec![pt(1, 0.2), pt(8, 0.2 / 8f64.sqrt()), pt(64, 0.025)];
+        (c.startup_seconds, c.seconds_per_spp) = (1.0, 0.5);
+        let mut traced = curve_to(TRACED, 1.0);
+        traced.daylight = "traced".into();
+        traced.reference_means = [1.0, 1.0, 1.0];
+        traced.reference_mean_se = [0.005; 3];
+        // 1.2 % on every channel: the 2 % target needs 1.6 % of noise.
+        c.reference_means = [1.012; 3];
+        let b = Bias::between(&c, &traced).unwrap();
+        assert!((b.rms() - 0.012).abs() < 1e-12);
+        assert!(
+            b.text().starts_with("+1.2, +1.2, +1.2 % (± 0.5)"),
+            "{}",
+            b.text()
+        );
+        let mut biased = c.clone();
+        biased.count_bias(b);
+        let (free, with) = (
+            spp_to(&c.points, 0.02).unwrap().0,
+            biased.at(0.02).unwrap().spp,
+        );
+        assert!(
+            (with / free - (0.02f64 / 0.016).powi(2)).abs() < 1e-9,
+            "{free} {with}"
+        );
+        assert_eq!(biased.at(0.02).unwrap().seconds, 1.0 + 0.5 * with);
+        // 2.5 %: the 2 % target is out of reach, the 5 % one is not.
+        let mut far = c.clone();
+        far.reference_means = [1.025; 3];
+        let b = Bias::between(&far, &traced).unwrap();
+        far.count_bias(b);
+        assert!(far.at(0.02).is_none() && far.at(0.05).is_some());
+        // The summary names the estimator and the bias, and the traced curve beside it.
+        let mut r = report();
+        r.scenes[0].curves[0] = biased;
+        r.scenes[0].curves.insert(1, traced);
+        let s = r.summary();
+        let row = s.lines().find(|l| l.starts_with("| `s` |")).unwrap();
+        assert!(row.starts_with("| `s` | 128×96 | column |"), "{row}");
+        assert!(row.contains("| 1.00 / 6.25 | 30.0* / 188* |"), "{row}");
+        assert!(row.contains("| +1.2, +1.2, +1.2 % (± 0.5) |"), "{row}");
+        // The traced curve is not one of the backends native is compared with.
+        assert_eq!(
+            r.scenes[0].speedup(0.05).0,
+            Some(12.0 / (1.0 + 0.5 * far_spp(&r)))
+        );
+    }
+
+    /// The 5 % target's spp of the scene's native curve (for the speed-up above).
+    fn far_spp(r: &Report) -> f64 {
+        r.scenes[0].native().unwrap().at(0.05).unwrap().spp
     }
 
     #[test]

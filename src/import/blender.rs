@@ -12,6 +12,7 @@
 //! | meshes with a Principled or Diffuse BSDF | `.glb` assets, albedo = base colour |
 //! | an Image Texture (UV map, a still image) feeding the base colour | a textured `.glb` and its image as a PNG beside it |
 //! | glass at a camera | a note with the `[camera.port]` to declare; without it `[camera.port] type = "none"` |
+//! | a box mesh with a smooth, clear Glass or Refraction BSDF away from the cameras | a glass object (`shape = "box"`, `glass =` the catalogue glass nearest IOR × the water's index, Cycles' IOR being relative to the medium around it; within 0.02, noted); another glass mesh: a note, not imported |
 //!
 //! A file poser saved (`--save-blend`) carries poser's exact values as custom properties; the
 //! reader uses each while it agrees with Blender's float32 value, so the round trip is exact.
@@ -40,6 +41,9 @@ struct Read {
     lights: Vec<serde_json::Map<String, serde_json::Value>>,
     water: Option<ReadWater>,
     meshes: Vec<ReadMesh>,
+    /// Glass boxes away from the cameras.
+    #[serde(default)]
+    glass: Vec<ReadGlass>,
     /// Glass (or poser's housing) at a camera: the housing port the scene should declare.
     #[serde(default)]
     port_glass: bool,
@@ -111,6 +115,16 @@ struct ReadTexture {
     height: u32,
     encoding: String,
     wrap: String,
+}
+
+/// A smooth, clear glass box away from every camera, as the reader found it.
+#[derive(Deserialize)]
+struct ReadGlass {
+    name: String,
+    /// World matrix (row-major) of the cube [-1, 1]³ the box is.
+    cube: [[f64; 4]; 4],
+    /// The Glass BSDF's IOR: in Cycles the index relative to the medium around the glass.
+    ior: f64,
 }
 
 #[derive(Deserialize)]
@@ -230,6 +244,19 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
         notes.extend(more);
         assets_out.extend(files);
         objects.push(o);
+    }
+    for g in &read.glass {
+        let at_object = format!("{shown}: object `{}`", g.name);
+        let in_water = read.water.is_some();
+        match glass_object(g, dz, in_water.then_some(n_water[1]), &at_object) {
+            Ok((o, note)) => {
+                let mut o = o;
+                o.insert("name".into(), Value::String(unique(&g.name)));
+                notes.extend(note);
+                objects.push(Value::Table(o));
+            }
+            Err(note) => notes.push(note),
+        }
     }
     if !objects.is_empty() {
         t.insert("objects".into(), Value::Array(objects));
@@ -677,6 +704,77 @@ fn mesh_object(
     Ok((assets_out, notes, Value::Table(o)))
 }
 
+/// Glass box `g` (moved by `dz` along z) as a glass object (`shape = "box"`, `glass = …`, no
+/// name yet) of the catalogue glass nearest its index, with a note on the index; or the note
+/// saying why it is not imported. Cycles' Glass IOR is the index relative to the medium
+/// around the glass: in the water (`n_water`, the water's green index, when the scene has
+/// water; the box's centre below z = 0) the glass's own index is
+/// IOR × n_water, which is what poser's own files hold (n_glass / n_water).
+fn glass_object(
+    g: &ReadGlass,
+    dz: f64,
+    n_water: Option<f64>,
+    at: &str,
+) -> Result<(Table, Option<Note>), Note> {
+    let here = || Some(at.to_string());
+    let help =
+        "poser's glass objects are boxes of a catalogue glass (docs/scenes.md, \"Glass objects\")";
+    let mut m = mat(&g.cube);
+    m.w_axis.z += dz;
+    // Blender holds the matrix in float32: columns orthogonal to 1e-6, not to f64's 1e-9.
+    let (len, _, _, _) = super::decompose(&m);
+    let u = [m.x_axis, m.y_axis, m.z_axis].map(|c| c.truncate().normalize_or_zero());
+    let sheared = [(0, 1), (0, 2), (1, 2)]
+        .iter()
+        .any(|&(a, b)| u[a].dot(u[b]).abs() > 1e-6);
+    let (frame, _) = frame_of(&m);
+    let finite = m.to_cols_array().iter().all(|v| v.is_finite()) && g.ior.is_finite();
+    if !finite || sheared || !(len.min_element() > 0.0) {
+        return Err(Note::new(
+            here(),
+            "this glass object is not imported: its transform shears the box",
+        )
+        .help(help));
+    }
+    // Below the surface (z = 0) the medium around the glass is the water.
+    let n_water = n_water.filter(|_| m.w_axis.z < 0.0);
+    let n = g.ior * n_water.unwrap_or(1.0);
+    let relative = match n_water {
+        Some(w) => format!(
+            "Cycles' IOR {:.4} is the index relative to the water ({w:.4}): glass of index \
+             {n:.4}",
+            g.ior
+        ),
+        None => format!("glass of index {n:.4}"),
+    };
+    let Some((glass, n_g)) = super::catalogue_glass_near(n) else {
+        return Err(Note::new(
+            here(),
+            format!(
+                "this glass object is not imported: {relative}, which no catalogue glass has \
+                 within {} ({})",
+                super::GLASS_MATCH,
+                crate::optics::glass::CATALOGUE.join(", ")
+            ),
+        )
+        .help(help));
+    };
+    let note = ((n_g - n).abs() > 1e-3 || n_water.is_some()).then(|| {
+        Note::new(
+            here(),
+            format!("{relative}, imported as the catalogue glass {glass} ({n_g:.4} in green)"),
+        )
+        .help(help)
+    });
+    let mut o = Table::new();
+    o.insert("shape".into(), Value::String("box".into()));
+    o.insert("size".into(), arr((2.0 * len).to_array()));
+    o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+    o.insert("rotation".into(), arr(euler_xyz(frame)));
+    o.insert("glass".into(), Value::String(glass.to_string()));
+    Ok((o, note))
+}
+
 /// The PNG file (its asset name and bytes) of the texture the reader wrote for object `name`:
 /// an 8-bit sRGB image keeps its bytes (an 8-bit PNG), any other image becomes a 16-bit sRGB
 /// PNG of its linear values; rows turned so that the image's top is the first.
@@ -923,5 +1021,68 @@ mod tests {
         let (back, t) = frame_of(&mat(&rows));
         assert!((back - r).to_cols_array().iter().all(|d| d.abs() < 1e-15));
         assert_eq!(t, DVec3::new(1.0, 2.0, 3.0));
+    }
+
+    /// A glass box's cube matrix becomes a glass object: its size, place and turn, and the
+    /// catalogue glass its IOR means (relative to the water below z = 0, absolute above);
+    /// a shear or an index no glass has is a note instead.
+    #[test]
+    fn a_glass_box_is_a_glass_object_of_the_glass_its_ior_means() {
+        let n_pmma =
+            crate::optics::glass::catalogue_ior("PMMA", crate::model::CHANNEL_WAVELENGTHS_NM[1])
+                .unwrap();
+        let r = DMat3::from_rotation_z(0.5);
+        let cube = |at: DVec3, lin: DMat3| {
+            DMat4::from_mat3_translation(lin, at)
+                .transpose()
+                .to_cols_array_2d()
+        };
+        let half = DMat3::from_diagonal(DVec3::new(0.5, 0.3, 0.2));
+        let n_w = 1.34;
+        let g = ReadGlass {
+            name: "Block".into(),
+            cube: cube(DVec3::new(1.0, 2.0, -3.0), r * half),
+            ior: n_pmma / n_w,
+        };
+        let (o, note) = glass_object(&g, 0.0, Some(n_w), "x.blend: object `Block`").unwrap();
+        assert_eq!(o["glass"].as_str(), Some("PMMA"));
+        assert_eq!(o["shape"].as_str(), Some("box"));
+        let f = |k: &str| -> Vec<f64> {
+            o[k].as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_float().unwrap())
+                .collect()
+        };
+        for (a, b) in f("size").iter().zip([1.0, 0.6, 0.4]) {
+            assert!((a - b).abs() < 1e-12, "{:?}", f("size"));
+        }
+        assert_eq!(f("position"), [1.0, 2.0, -3.0]);
+        assert!(
+            (f("rotation")[2] - 0.5).abs() < 1e-12,
+            "{:?}",
+            f("rotation")
+        );
+        assert!(note.unwrap().message.contains("relative to the water"));
+        // Moved up out of the water by the scene's offset: the IOR is the glass's own, and
+        // 1.116 is no catalogue glass.
+        let why = glass_object(&g, 5.0, Some(n_w), "at").unwrap_err();
+        assert!(
+            why.message.contains("no catalogue glass"),
+            "{}",
+            why.message
+        );
+        // In air the IOR is the index itself.
+        let air = ReadGlass { ior: n_pmma, ..g };
+        let (o, note) = glass_object(&air, 0.0, None, "at").unwrap();
+        assert_eq!((o["glass"].as_str(), note.is_none()), (Some("PMMA"), true));
+        // A sheared box is not a box.
+        let shear = DMat3::from_cols(DVec3::X, DVec3::new(0.3, 1.0, 0.0), DVec3::Z);
+        let sheared = ReadGlass {
+            cube: cube(DVec3::new(0.0, 0.0, -3.0), shear),
+            ..air
+        };
+        let why = glass_object(&sheared, 0.0, None, "at").unwrap_err();
+        assert!(why.message.contains("shears"), "{}", why.message);
     }
 }

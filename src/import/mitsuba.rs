@@ -24,8 +24,8 @@
 //! of at most [`MAX_FILE`] bytes).
 
 use super::{
-    Imported, Note, arr, euler_xyz, explicit_network, finish, meshes, safe_file_name, sun_table,
-    unrefract,
+    Imported, Note, arr, decompose, euler_xyz, explicit_network, finish, meshes, safe_file_name,
+    sun_table, unrefract,
 };
 use crate::backend::mitsuba::xml::{ORIGIN_PARAMS, PER_UNIT_PARAM, UNIT_PARAM};
 use crate::geometry::mesh::TriMesh;
@@ -876,23 +876,6 @@ fn transform(t: &X) -> Result<DMat4, String> {
         return Err(format!("{}: the transform is not finite", t.loc));
     }
     Ok(m)
-}
-
-/// `m`'s linear part split into column lengths and an orthonormal frame (`None` when the
-/// columns are not orthogonal: a shear), with a flag for a mirror.
-fn decompose(m: &DMat4) -> (DVec3, DMat3, bool, bool) {
-    let c = [
-        m.x_axis.truncate(),
-        m.y_axis.truncate(),
-        m.z_axis.truncate(),
-    ];
-    let len = DVec3::new(c[0].length(), c[1].length(), c[2].length());
-    let u = [0, 1, 2].map(|i| c[i] / len[i]);
-    let mirror = u[0].cross(u[1]).dot(u[2]) < 0.0;
-    let z = u[0].cross(u[1]);
-    let sheared =
-        u[0].dot(u[1]).abs() > 1e-9 || u[0].dot(u[2]).abs() > 1e-9 || u[1].dot(u[2]).abs() > 1e-9;
-    (len, DMat3::from_cols(u[0], u[1], z), mirror, sheared)
 }
 
 // ---- spectra ----------------------------------------------------------------------------
@@ -2522,7 +2505,7 @@ fn shape(
 
 /// A smooth `dielectric` `cube` away from every sensor: a glass object (`glass = …`, a box)
 /// of the catalogue glass whose green index is nearest its `int_ior` (within
-/// [`GLASS_MATCH`]; noted when it differs by more than 0.001). Its `ext_ior` is the water's or
+/// [`super::GLASS_MATCH`]; noted when it differs by more than 0.001). Its `ext_ior` is the water's or
 /// air's, which the scene declares. A rough or thin dielectric, or an index no catalogue glass
 /// has, is refused with the catalogue.
 fn glass_object(
@@ -2546,14 +2529,7 @@ fn glass_object(
         ));
     }
     let n = ior(cx, &b, "int_ior", 1.5046)?;
-    let catalogue = crate::optics::glass::CATALOGUE.iter().filter_map(|g| {
-        crate::optics::glass::catalogue_ior(g, crate::model::CHANNEL_WAVELENGTHS_NM[1])
-            .map(|n_g| (*g, n_g))
-    });
-    let Some((glass, n_g)) = catalogue
-        .min_by(|a, b| (a.1 - n).abs().total_cmp(&(b.1 - n).abs()))
-        .filter(|(_, n_g)| (n_g - n).abs() <= GLASS_MATCH)
-    else {
+    let Some((glass, n_g)) = super::catalogue_glass_near(n) else {
         return Err(format!(
             "{}: glass of index {n:.4}: poser's glass objects are made of a catalogue glass \
              ({})\n  help: set `int_ior` to one of them, or give the shape a diffuse BSDF",
@@ -2581,10 +2557,6 @@ fn glass_object(
     objects.push(Value::Table(o));
     Ok(())
 }
-
-/// How far, in index, a dielectric's `int_ior` may be from a catalogue glass's (green) to be
-/// imported as it: Mitsuba's `bk7` (1.5046) is N-BK7 (1.5168), its `acrylic glass` (1.49) PMMA.
-const GLASS_MATCH: f64 = 0.02;
 
 /// How far from a sensor glass and black walls are read as its housing, metres.
 const PORT_REACH: f64 = 0.5;

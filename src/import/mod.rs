@@ -19,7 +19,7 @@ pub mod meshes;
 pub mod mitsuba;
 pub mod verify;
 
-use glam::{DMat3, DVec3, EulerRot};
+use glam::{DMat3, DMat4, DVec3, EulerRot};
 use std::path::{Path, PathBuf};
 use toml::{Table, Value};
 
@@ -99,6 +99,40 @@ pub(crate) fn finish(
 
 /// Rotations about x, y, z (x first, as the scene format composes them) of an orthonormal
 /// frame.
+/// `m`'s linear part split into column lengths and an orthonormal frame (`None` when the
+/// columns are not orthogonal: a shear), with a flag for a mirror.
+pub(crate) fn decompose(m: &DMat4) -> (DVec3, DMat3, bool, bool) {
+    let c = [
+        m.x_axis.truncate(),
+        m.y_axis.truncate(),
+        m.z_axis.truncate(),
+    ];
+    let len = DVec3::new(c[0].length(), c[1].length(), c[2].length());
+    let u = [0, 1, 2].map(|i| c[i] / len[i]);
+    let mirror = u[0].cross(u[1]).dot(u[2]) < 0.0;
+    let z = u[0].cross(u[1]);
+    let sheared =
+        u[0].dot(u[1]).abs() > 1e-9 || u[0].dot(u[2]).abs() > 1e-9 || u[1].dot(u[2]).abs() > 1e-9;
+    (len, DMat3::from_cols(u[0], u[1], z), mirror, sheared)
+}
+
+/// The catalogue glass whose green index is nearest `n`, with that index, when it is within
+/// [`GLASS_MATCH`]: what an imported glass object is made of.
+pub(crate) fn catalogue_glass_near(n: f64) -> Option<(&'static str, f64)> {
+    crate::optics::glass::CATALOGUE
+        .iter()
+        .filter_map(|g| {
+            crate::optics::glass::catalogue_ior(g, crate::model::CHANNEL_WAVELENGTHS_NM[1])
+                .map(|n_g| (*g, n_g))
+        })
+        .min_by(|a, b| (a.1 - n).abs().total_cmp(&(b.1 - n).abs()))
+        .filter(|(_, n_g)| (n_g - n).abs() <= GLASS_MATCH)
+}
+
+/// How far, in index, an imported glass may be from a catalogue glass's (green) to be
+/// imported as it: Mitsuba's `bk7` (1.5046) is N-BK7 (1.5168), its `acrylic glass` (1.49) PMMA.
+pub(crate) const GLASS_MATCH: f64 = 0.02;
+
 pub(crate) fn euler_xyz(r: DMat3) -> [f64; 3] {
     let (z, y, x) = r.to_euler(EulerRot::ZYX);
     [x, y, z].map(|a| a + 0.0)
