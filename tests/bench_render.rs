@@ -66,3 +66,54 @@ fn a_readme_without_the_markers_is_refused_before_any_rendering() {
         "# no markers here\n"
     );
 }
+
+/// A scene the water column lights is timed twice by native: with the column (the scene's
+/// default) and by brute force (`native_traced`); the column's error counts its bias, the
+/// difference of the two references' means, so its times are those of a noise target
+/// √(e² − b²) on its own curve, and a target under the bias is never reached.
+#[test]
+fn the_column_is_timed_with_its_bias_against_the_brute_force() {
+    use poser::bench::render::{Bias, TRACED, spp_to};
+    let (_dir, report) = bench("coral_self_occlusion", "native");
+    let sc = &report.scenes[0];
+    let names: Vec<&str> = sc.curves.iter().map(|c| c.backend.as_str()).collect();
+    assert_eq!(names, ["native", TRACED]);
+    let (column, traced) = (&sc.curves[0], &sc.curves[1]);
+    assert_eq!(
+        (column.daylight.as_str(), traced.daylight.as_str()),
+        ("column", "traced")
+    );
+    assert!(column.error.is_none() && traced.error.is_none());
+    let bias = column.bias.expect("the column's bias");
+    // (The report went through JSON: equal to its last bit or two.)
+    let again = Bias::between(column, traced).unwrap();
+    for c in 0..3 {
+        assert!(
+            (again.relative[c] - bias.relative[c]).abs() < 1e-12,
+            "{bias:?}"
+        );
+        assert!((again.se[c] - bias.se[c]).abs() < 1e-12, "{bias:?}");
+    }
+    assert!(bias.se.iter().all(|&s| s > 0.0 && s < 0.1), "{bias:?}");
+    let b = bias.rms();
+    for &t in &TARGETS {
+        match column.at(t) {
+            Some(x) => {
+                let (spp, _) = spp_to(&column.points, (t * t - b * b).sqrt()).unwrap();
+                assert!((x.spp - spp).abs() <= 1e-9 * spp, "{t}: {} vs {spp}", x.spp);
+            }
+            None => assert!(t <= b, "{t} not reached with a bias of {b}"),
+        }
+    }
+    // The summary names the estimator and gives the brute force's times beside it.
+    let row = report
+        .summary()
+        .lines()
+        .find(|l| l.starts_with("| `coral_self_occlusion` |"))
+        .unwrap()
+        .to_string();
+    assert!(
+        row.contains("| column |") && row.contains(&bias.text()),
+        "{row}"
+    );
+}

@@ -77,6 +77,10 @@ pub struct RenderArgs {
     /// Replace the generated summary block of this Markdown file (the README).
     #[arg(long)]
     pub readme: Option<PathBuf>,
+    /// Rebuild the report, its JSON, plot and README block from a saved JSON report, without
+    /// rendering (the column's bias counted again).
+    #[arg(long, value_name = "JSON")]
+    pub from: Option<PathBuf>,
 }
 
 /// `parity`.
@@ -146,6 +150,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 json: a.common.json.clone(),
                 plot: a.plot.clone(),
                 readme: a.readme.clone(),
+                from: a.from.clone(),
             };
             crate::bench::render::run(&root(), &opts)
                 .map(|_| ())
