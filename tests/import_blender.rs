@@ -35,6 +35,26 @@ fn bpy_script(dir: &Path, code: &str) {
     );
 }
 
+/// The start of a user's bpy script: an empty scene, its camera 2 m down in a 40 m box whose
+/// top is the sea surface, and the box's material `m` ("Water") with its node tree `nodes`
+/// emptied of the default BSDF, for the script to fill with a volume.
+const SEA: &str = r#"
+import bpy, math
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scene = bpy.context.scene
+cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+scene.collection.objects.link(cam)
+cam.location = (0.0, 0.0, -2.0)
+scene.camera = cam
+bpy.ops.mesh.primitive_cube_add(size=40.0, location=(0, 0, -20.0))
+sea = bpy.context.object
+sea.name = "Sea"
+m = bpy.data.materials.new("Water")
+m.use_nodes = True
+nodes = m.node_tree.nodes
+nodes.remove(nodes["Principled BSDF"])
+"#;
+
 fn import(blend: &Path, toml: &Path) -> std::process::Output {
     poser()
         .arg("import")
@@ -436,21 +456,9 @@ fn a_principled_volume_box_below_z0_becomes_the_water() {
     let d = dir.path();
     bpy_script(
         d,
-        r#"
-import bpy, math
-bpy.ops.wm.read_factory_settings(use_empty=True)
-scene = bpy.context.scene
-cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-scene.collection.objects.link(cam)
-cam.location = (0.0, 0.0, -2.0)
-scene.camera = cam
-bpy.ops.mesh.primitive_cube_add(size=40.0, location=(0, 0, -20.0))
-sea = bpy.context.object
-sea.name = "Sea"
-m = bpy.data.materials.new("Water")
-m.use_nodes = True
-nodes = m.node_tree.nodes
-nodes.remove(nodes["Principled BSDF"])
+        &format!(
+            "{SEA}{}",
+            r#"
 v = nodes.new("ShaderNodeVolumePrincipled")
 v.inputs["Color"].default_value = (0.1, 0.2, 0.3, 1.0)
 v.inputs["Absorption Color"].default_value = (0.25, 0.64, 0.81, 1.0)
@@ -463,7 +471,8 @@ sun.data.energy = 3.0
 sun.rotation_euler = (math.radians(20), 0.0, 0.0)
 scene.collection.objects.link(sun)
 bpy.ops.wm.save_as_mainfile(filepath="sea.blend")
-"#,
+"#
+        ),
     );
     let toml = d.join("sea.toml");
     let out = import(&d.join("sea.blend"), &toml);
@@ -563,22 +572,7 @@ fn glass_boxes_import_as_glass_objects() {
     bpy_script(
         d,
         &format!(
-            r#"
-import bpy, math
-bpy.ops.wm.read_factory_settings(use_empty=True)
-scene = bpy.context.scene
-cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-scene.collection.objects.link(cam)
-cam.location = (0.0, 0.0, -2.0)
-scene.camera = cam
-bpy.ops.mesh.primitive_cube_add(size=40.0, location=(0, 0, -20.0))
-sea = bpy.context.object
-sea.name = "Sea"
-m = bpy.data.materials.new("Water")
-m.use_nodes = True
-nodes = m.node_tree.nodes
-nodes.remove(nodes["Principled BSDF"])
-v = nodes.new("ShaderNodeVolumeScatter")
+            r#"{SEA}v = nodes.new("ShaderNodeVolumeScatter")
 v.inputs["Density"].default_value = 0.1
 m.node_tree.links.new(v.outputs[0], nodes["Material Output"].inputs["Volume"])
 sea.data.materials.append(m)
@@ -608,7 +602,7 @@ bpy.context.object.name = "Frosted"
 bpy.context.object.data.materials.append(glass("Frosted glass", 0.3))
 bpy.ops.wm.save_as_mainfile(filepath="user.blend")
 "#,
-            rel = n_pmma / n_w
+            rel = n_pmma / n_w,
         ),
     );
     let toml = d.join("user.toml");
