@@ -8,7 +8,7 @@ The description (format `poser-blender/1`) is written by `poser compile --backen
 | rig pose | Empty `poser_rig`, keyframed once per pose (frame = pose index, constant interpolation) |
 | camera | Empty (OpenCV frame) child of the rig + Camera child; exact intrinsics via lens/shift |
 | distortion, fx != fy | CUSTOM camera running poser's fixed OSL shader `camera.osl` (parameters only): Newton inverse of Brown-Conrady per film sample, as crates/poser-optics/src/lens.rs; exact, no resampling |
-| port | inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g); black housing walls inside it (HOUSING_INSIDE); no housing shadow (HOUSING_SHADOW) |
+| port | the housing poser computed (PLY assets `cameras[].housing`, read by `geometry.read_ply`): inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g); black housing walls inside it (HOUSING_INSIDE); no housing shadow (HOUSING_SHADOW) |
 | water | one closed mesh `poser_water` (box minus housings), Volume Coefficients node; per pose a shape key |
 | lights | point/spot (P = 4 pi I, radius 0, blend 0), sun (angle 0), area (P = L pi A), ambient = world |
 | objects | Blender primitives (plane/box/sphere/cylinder) or imported PLY assets; Diffuse BSDF |
@@ -279,6 +279,9 @@ def validate(desc):
         raise ValueError("the scene has no camera")
     if not desc.get("poses"):
         raise ValueError("the scene has no pose")
+    for cam in desc["cameras"]:
+        if cam.get("port", {}).get("kind", "none") != "none" and not cam.get("housing"):
+            raise ValueError(f"camera {cam.get('name')!r} has a port but no housing meshes")
 
 
 def _channel(values, c):
@@ -335,11 +338,12 @@ def build(desc, base_dir=".", scene=None):
         obj.matrix_basis = _matrix(geo.CV_TO_BLENDER)
         obj["poser_basis"] = _flat([geo.CV_TO_BLENDER])
         built.cameras.append(obj)
-        h = geo.housing(cam)
+        h = cam.get("housing") if cam["port"].get("kind", "none") != "none" else None
         if h is None:
             shells.append(None)
             continue
-        shell, inner = h
+        shell = geo.read_ply(os.path.join(base_dir, h["shell"]))
+        inner = geo.read_ply(os.path.join(base_dir, h["inner"]))
         glass = cam["port"]["glass"]["ior"]
         mat_in, node_in = _glass_material(f"glass air->glass:{cam['name']}", glass[ref])
         built.glass_nodes.append((node_in, lambda c, g=glass: g[c]))

@@ -9,10 +9,11 @@ Everything here works in the conventions of poser's resolved model: OpenCV camer
 | `fisheye_params` | fx, W, lens model -> Cycles panoramic parameters |
 | `light_power` | radiant intensity I (W/sr, per channel) -> Blender power P = 4 pi I and colour |
 | `emitter_scale` | the n^2 correction (n_cam / n_water)^2 per channel for emitters in water |
-| `housing_*` | closed housing shells and glass surfaces for flat, dome and cylinder ports |
+| `read_ply` | a port housing's shell or inner glass face, from the PLY poser writes |
 """
 
 import math
+import struct
 
 import numpy as np
 
@@ -121,53 +122,21 @@ def compose(rotation, translation):
 
 
 # ------------------------------------------------------------------------------------------
-# Camera rays (for sizing the housings)
-# ------------------------------------------------------------------------------------------
-
-
-def camera_ray(cam, u, v):
-    """Unit ray direction in the camera frame through pixel position (u, v)."""
-    x = (u - cam["cx"]) / cam["fx"]
-    y = (v - cam["cy"]) / cam["fy"]
-    lens = cam.get("lens", "rectilinear")
-    if lens == "rectilinear":
-        d = np.array([x, y, 1.0])
-        return d / np.linalg.norm(d)
-    r = math.hypot(x, y)
-    if lens == "fisheye_equidistant":
-        theta = r
-    else:
-        theta = 2.0 * math.asin(min(r / 2.0, 1.0))
-    if r == 0.0:
-        return np.array([0.0, 0.0, 1.0])
-    s = math.sin(theta)
-    return np.array([s * x / r, s * y / r, math.cos(theta)])
-
-
-def border_rays(cam, n=8):
-    """Ray directions through points along the image border (and the centre)."""
-    w, h = cam["width"], cam["height"]
-    pts = [(w / 2.0, h / 2.0)]
-    for i in range(n + 1):
-        t = i / n
-        pts += [(t * w, 0.0), (t * w, h), (0.0, t * h), (w, t * h)]
-    return [camera_ray(cam, u, v) for (u, v) in pts]
-
-
-def max_field_angle(cam):
-    return max(math.acos(max(-1.0, min(1.0, d[2]))) for d in border_rays(cam))
-
-
-# ------------------------------------------------------------------------------------------
-# Housings. Each builder returns two meshes in the OpenCV camera frame:
+# Housings. poser writes each camera's housing (crates/poser-optics, `housing_shell`) as two
+# PLY files in the OpenCV camera frame (src/backend/blender/housing.rs):
 #   shell: closed surface around the camera, normals pointing OUT of the housing (into the
-#          water); faces tagged 1 (outer glass face) or 2 (opaque housing body).
-#   inner: the air->glass surface, normals pointing TOWARDS the camera (into the air).
+#          water); faces tagged GLASS_OUTER (outer glass face) or BODY (opaque housing body).
+#   inner: the air->glass surface (tag INNER), normals pointing TOWARDS the camera (into the air).
 # A mesh is a dict {verts: (N,3), faces: [tuple], tags: [int], normals: (N,3) or None}.
 # ------------------------------------------------------------------------------------------
 
+INNER = 0
 GLASS_OUTER = 1
 BODY = 2
+
+_PLY_VERTEX = ("property double x", "property double y", "property double z")
+_PLY_NORMAL = ("property double nx", "property double ny", "property double nz")
+_PLY_FACE = ("property list uint uint vertex_indices", "property uchar tag")
 
 
 def _mesh(verts, faces, tags, normals=None):
@@ -175,179 +144,63 @@ def _mesh(verts, faces, tags, normals=None):
             "normals": None if normals is None else np.asarray(normals, dtype=float)}
 
 
-def _basis(n):
-    n = np.asarray(n, dtype=float)
-    n = n / np.linalg.norm(n)
-    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = helper - helper.dot(n) * n
-    u /= np.linalg.norm(u)
-    v = np.cross(n, u)
-    return u, v, n
+def read_ply(path):
+    """A housing mesh from poser's PLY (binary little-endian; vertices `double x y z` and
+    optionally `double nx ny nz`; faces `list uint uint vertex_indices` and `uchar tag`). Any
+    other layout is refused with ValueError."""
+    with open(path, "rb") as f:
+        data = f.read()
+    marker = b"end_header\n"
+    end = data.find(marker)
+    if not data.startswith(b"ply\n") or end < 0:
+        raise ValueError(f"{path}: not a PLY file")
+    lines = [ln for ln in data[:end].decode("ascii", "replace").split("\n")
+             if ln and not ln.startswith("comment")]
 
+    def fail(why):
+        raise ValueError(f"{path}: not a poser housing PLY ({why})")
 
-def housing_flat(cam, port):
-    """Flat port: glass slab between the planes n.x = d and n.x = d + t."""
-    u, v, n = _basis(port["normal"])
-    d, t = float(port["distance"]), float(port["thickness"])
-    dd = d + 2.0 * t
-    a_vals, b_vals = [0.0], [0.0]
-    max_tilt = math.radians(80.0)
-    for ray in border_rays(cam):
-        c = ray.dot(n)
-        if c < math.cos(max_tilt):
-            # Clamp grazing rays to 80 degrees from the port normal.
-            tang = ray - c * n
-            tang /= max(np.linalg.norm(tang), 1e-12)
-            ray = math.cos(max_tilt) * n + math.sin(max_tilt) * tang
-            c = ray.dot(n)
-        p = ray * dd / c
-        a_vals.append(p.dot(u))
-        b_vals.append(p.dot(v))
-    span = max(max(a_vals) - min(a_vals), max(b_vals) - min(b_vals))
-    margin = 0.1 * span + 2.0 * t + 1e-3
-    a0, a1 = min(a_vals) - margin, max(a_vals) + margin
-    b0, b1 = min(b_vals) - margin, max(b_vals) + margin
-    back = -(0.5 * span + 0.02)
-
-    def corner(a, b, h):
-        return a * u + b * v + h * n
-
-    def quad_ring(h):
-        return [corner(a0, b0, h), corner(a1, b0, h), corner(a1, b1, h), corner(a0, b1, h)]
-
-    # Shell: 8 corners; front (h = d + t) and back (h = back) rings.
-    verts = quad_ring(d + t) + quad_ring(back)
-    # Winding chosen so that normals point outwards (right-hand rule, u x v = n).
-    faces = [(0, 1, 2, 3)]  # front face, normal +n
-    tags = [GLASS_OUTER]
-    faces.append((4, 7, 6, 5))  # back, normal -n
-    tags.append(BODY)
-    for i in range(4):
-        j = (i + 1) % 4
-        faces.append((i, i + 4, j + 4, j))
-        tags.append(BODY)
-    shell = _mesh(verts, faces, tags)
-    inner = _mesh(quad_ring(d), [(0, 3, 2, 1)], [0])  # normal -n (towards the camera)
-    return shell, inner
-
-
-def _sphere_cap(center, radius, alpha, n_phi, n_theta, outward):
-    """Spherical cap about +z, polar angle 0..alpha; returns verts, faces, normals, rim ids."""
-    c = np.asarray(center, dtype=float)
-    th = alpha * np.arange(1, n_theta + 1) / n_theta
-    ph = 2.0 * math.pi * np.arange(n_phi) / n_phi
-    t, p = np.meshgrid(th, ph, indexing="ij")
-    dirs = np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
-    normals = np.concatenate([[[0.0, 0.0, 1.0]], dirs.reshape(-1, 3)])
-    verts = c + radius * normals
-    j = np.arange(n_phi)
-    k = (j + 1) % n_phi
-    faces = [(0, 1 + a, 1 + b) for a, b in zip(j, k)]
-    for i in range(1, n_theta):
-        r0, r1 = 1 + (i - 1) * n_phi, 1 + i * n_phi
-        faces += list(zip((r0 + j).tolist(), (r1 + j).tolist(), (r1 + k).tolist(),
-                          (r0 + k).tolist()))
-    if not outward:
-        faces = [tuple(reversed(f)) for f in faces]
-        normals = -normals
-    rim = (1 + (n_theta - 1) * n_phi + j).tolist()
-    return list(verts), faces, normals, rim
-
-
-def housing_dome(cam, port, n_phi=384, n_theta=96):
-    """Dome port: spherical caps of radii r and r + t about `center`, opening towards +z."""
-    c = np.asarray(port["center"], dtype=float)
-    r_in = float(port["inner_radius"])
-    r_out = r_in + float(port["thickness"])
-    alpha = min(max(max_field_angle(cam) + math.radians(15.0), math.radians(60.0)),
-                math.radians(170.0))
-    verts, faces, normals, rim = _sphere_cap(c, r_out, alpha, n_phi, n_theta, True)
-    verts = list(verts)
-    normals = list(normals)
-    tags = [GLASS_OUTER] * len(faces)
-    rim_z = c[2] + r_out * math.cos(alpha)
-    rim_r = r_out * math.sin(alpha)
-    back_z = min(rim_z, 0.0) - max(0.5 * r_out, 0.02)
-    base = len(verts)
-    for j in range(n_phi):
-        ph = 2.0 * math.pi * j / n_phi
-        verts.append(np.array([c[0] + rim_r * math.cos(ph), c[1] + rim_r * math.sin(ph), back_z]))
-        normals.append(np.array([math.cos(ph), math.sin(ph), 0.0]))
-    # Body: cylinder from the rim back to back_z, then a back disk (normal -z).
-    for j in range(n_phi):
-        k = (j + 1) % n_phi
-        faces.append((rim[j], base + j, base + k, rim[k]))
-        tags.append(BODY)
-    faces.append(tuple(base + j for j in reversed(range(n_phi))))
-    tags.append(BODY)
-    shell = _mesh(verts, faces, tags, normals)
-    iv, if_, inorm, _ = _sphere_cap(c, r_in, alpha, n_phi, n_theta, False)
-    inner = _mesh(iv, if_, [0] * len(if_), inorm)
-    return shell, inner
-
-
-def housing_cylinder(cam, port, n_phi=512):
-    """Cylindrical port: coaxial tubes of radii r and r + t about the port axis."""
-    a = np.asarray(port["axis"], dtype=float)
-    a = a / np.linalg.norm(a)
-    p0 = np.asarray(port["axis_point"], dtype=float)
-    r_in = float(port["inner_radius"])
-    r_out = r_in + float(port["thickness"])
-    # Centre the tube on the point of the axis nearest to the entrance pupil.
-    centre = p0 + (-p0).dot(a) * a
-    off = np.linalg.norm(-p0 - (-p0).dot(a) * a)
-    worst = 0.0
-    for ray in border_rays(cam):
-        ca = min(abs(ray.dot(a)), math.cos(math.radians(10.0)))
-        worst = max(worst, ca / math.sqrt(1.0 - ca * ca))
-    half = (r_out + off) * worst * 1.3 + 2.0 * r_out
-    u, v, _ = _basis(a)
-
-    def ring(radius, h, sign):
-        vs, ns = [], []
-        for j in range(n_phi):
-            ph = 2.0 * math.pi * j / n_phi
-            radial = math.cos(ph) * u + math.sin(ph) * v
-            vs.append(centre + radius * radial + h * a)
-            ns.append(sign * radial)
-        return vs, ns
-
-    def tube(radius, outward):
-        sign = 1.0 if outward else -1.0
-        v0, n0 = ring(radius, -half, sign)
-        v1, n1 = ring(radius, half, sign)
-        faces = []
-        for j in range(n_phi):
-            k = (j + 1) % n_phi
-            f = (j, k, n_phi + k, n_phi + j)  # outward for u x v = a
-            faces.append(f if outward else tuple(reversed(f)))
-        return v0 + v1, faces, n0 + n1
-
-    sv, sf, sn = tube(r_out, True)
-    tags = [GLASS_OUTER] * len(sf)
-    sf.append(tuple(reversed(range(n_phi))))  # end cap at -half, normal -a
-    tags.append(BODY)
-    sf.append(tuple(n_phi + j for j in range(n_phi)))  # end cap at +half, normal +a
-    tags.append(BODY)
-    shell = _mesh(sv, sf, tags, sn)
-    iv, ifc, inn = tube(r_in, False)
-    inner = _mesh(iv, ifc, [0] * len(ifc), inn)
-    return shell, inner
-
-
-def housing(cam):
-    """(shell, inner) for the camera's port, or None when it has no port."""
-    port = cam["port"]
-    kind = port["kind"]
-    if kind == "none":
-        return None
-    if kind == "flat":
-        return housing_flat(cam, port)
-    if kind == "dome":
-        return housing_dome(cam, port)
-    if kind == "cylinder":
-        return housing_cylinder(cam, port)
-    raise ValueError(f"unknown port kind {kind!r}")
+    if lines[:2] != ["ply", "format binary_little_endian 1.0"]:
+        fail("format")
+    head = lines[2].split()
+    if len(head) != 3 or head[:2] != ["element", "vertex"] or not head[2].isdigit():
+        fail("vertex element")
+    n_verts = int(head[2])
+    props = tuple(lines[3:6])
+    with_normals = tuple(lines[6:9]) == _PLY_NORMAL
+    rest = lines[9:] if with_normals else lines[6:]
+    if props != _PLY_VERTEX or len(rest) != 3:
+        fail("vertex properties")
+    face = rest[0].split()
+    if face[:2] != ["element", "face"] or len(face) != 3 or not face[2].isdigit():
+        fail("face element")
+    if tuple(rest[1:]) != _PLY_FACE:
+        fail("face properties")
+    n_faces = int(face[2])
+    width = 6 if with_normals else 3
+    body = data[end + len(marker):]
+    size = n_verts * width * 8
+    if len(body) < size:
+        fail("truncated vertices")
+    vdata = np.frombuffer(body[:size], dtype="<f8").reshape(n_verts, width)
+    faces, tags = [], []
+    at = size
+    for _ in range(n_faces):
+        if at + 4 > len(body):
+            fail("truncated faces")
+        (count,) = struct.unpack_from("<I", body, at)
+        if count < 3 or at + 4 + 4 * count + 1 > len(body):
+            fail("bad face")
+        idx = struct.unpack_from(f"<{count}I", body, at + 4)
+        if max(idx) >= n_verts:
+            fail("vertex index out of range")
+        faces.append(idx)
+        tags.append(body[at + 4 + 4 * count])
+        at += 4 + 4 * count + 1
+    if at != len(body):
+        fail("trailing bytes")
+    return _mesh(vdata[:, :3].copy(), faces, tags,
+                 vdata[:, 3:].copy() if with_normals else None)
 
 
 def transform_points(points, m):

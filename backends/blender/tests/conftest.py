@@ -1,4 +1,5 @@
-"""Shared fixtures: the builder package on sys.path and a small scene description."""
+"""Shared fixtures: the builder package on sys.path, a small scene description, and port
+housings computed by poser itself (the `poser` module compiles tiny scenes for Cycles)."""
 
 import copy
 import os
@@ -25,8 +26,7 @@ SCENE = {
         "fx": 30.0, "fy": 30.0, "cx": 17.5, "cy": 11.0,
         "focus_distance": None, "f_number": None,
         "rig_from_camera": IDENTITY,
-        "port": {"kind": "flat", "normal": [0.0, 0.0, 1.0], "distance": 0.02, "thickness": 0.01,
-                 "glass": {"name": "N-BK7", "ior": [1.514, 1.518, 1.525]}},
+        # "port", "housing": the flat port of `housings` (scene_desc puts them in)
     }],
     "poses": [
         {"name": "p0", "world_from_rig": DOWN, "images": ["p0"], "time": 0.0},
@@ -52,6 +52,70 @@ SCENE = {
 }
 
 
+# The fixture camera (32 x 24 px, fx = 30 px, principal point (17.5, 11)) behind each kind of
+# port, in water; `housings` compiles one scene per port with the poser module.
+_HOUSING_SCENE = """
+name = "housing fixture"
+[site]
+depth = "10 m"
+surface = "none"
+[water]
+ior = 1.334
+absorption = [0.4, 0.1, 0.05]
+scattering = [0.0, 0.0, 0.0]
+[camera]
+width = 32
+height = 24
+sensor_width = "32 mm"
+focal_length = "30 mm"
+principal_point = [17.5, 11.0]
+[[lights]]
+type = "ambient"
+radiance = 0.2
+[network]
+type = "explicit"
+[[network.poses]]
+position = [0.0, 0.0, -8.0]
+look_at = [0.0, 1.0, -8.0]
+[camera.port]
+material = "N-BK7"
+"""
+_PORTS = {
+    "flat": 'type = "flat"\nthickness = "10 mm"\npupil_distance = "20 mm"\n',
+    "dome": 'type = "dome"\ninner_radius = "50 mm"\nthickness = "6 mm"\n'
+            "decentering = [0.0, 0.0, 0.002]\n",
+    "cylinder": 'type = "cylinder"\ninner_radius = "50 mm"\nthickness = "5 mm"\n'
+                "axis = [0.0, 1.0, 0.0]\n",
+}
+
+
+@pytest.fixture(scope="session")
+def housings(tmp_path_factory):
+    """Per port kind, the fixture camera's `port` and `housing` (absolute PLY paths) as
+    `poser compile --backend blender` describes them."""
+    import json
+
+    import poser  # the wheel the test tier installs; fails, never skips, without it
+
+    out = {}
+    for kind, port in _PORTS.items():
+        d = tmp_path_factory.mktemp(f"housing_{kind}")
+        (d / "scene.toml").write_text(_HOUSING_SCENE + port)
+        poser.load(str(d / "scene.toml")).compile("blender", str(d / "out"))
+        cam = json.loads((d / "out" / "scene.json").read_text())["cameras"][0]
+        out[kind] = {"port": cam["port"],
+                     "housing": {k: str(d / "out" / v) for k, v in cam["housing"].items()}}
+    return out
+
+
+def put_port(camera, housed):
+    """Give `camera` (a description's camera) the port and housing of `housed`."""
+    camera["port"] = copy.deepcopy(housed["port"])
+    camera["housing"] = dict(housed["housing"])
+
+
 @pytest.fixture
-def scene_desc():
-    return copy.deepcopy(SCENE)
+def scene_desc(housings):
+    d = copy.deepcopy(SCENE)
+    put_port(d["cameras"][0], housings["flat"])
+    return d

@@ -8,6 +8,7 @@ import bpy
 import numpy as np
 import pytest
 from bpy_extras.object_utils import world_to_camera_view
+from conftest import put_port
 from mathutils import Vector
 from poser_blender import builder as pbuild
 from poser_blender import geometry as geo
@@ -36,19 +37,12 @@ def test_camera_projects_like_opencv(scene_desc):
         assert v == pytest.approx(cam["fy"] * p_cam[1] / p_cam[2] + cam["cy"], abs=1e-4)
 
 
-@pytest.mark.parametrize("port", [
-    None,  # the fixture's flat port
-    {"kind": "dome", "center": [0.0, 0.0, 0.002], "inner_radius": 0.05, "thickness": 0.006},
-    {"kind": "cylinder", "axis_point": [0.0, 0.0, 0.0], "axis": [0.0, 1.0, 0.0],
-     "inner_radius": 0.05, "thickness": 0.005},
-])
-def test_light_reflected_into_the_housing_ends_on_its_walls(scene_desc, port):
+@pytest.mark.parametrize("port", ["flat", "dome", "cylinder"])
+def test_light_reflected_into_the_housing_ends_on_its_walls(scene_desc, housings, port):
     # HOUSING_INSIDE: whatever the port glass reflects back into the housing must meet the
     # black walls before the water's cut-out. On a dome the walls once lay exactly on the
     # cut-out's back, the water boundary won, and the reflected light reached the sky.
-    if port is not None:
-        port["glass"] = scene_desc["cameras"][0]["port"]["glass"]
-        scene_desc["cameras"][0]["port"] = port
+    put_port(scene_desc["cameras"][0], housings[port])
     scene = _fresh()
     pbuild.build(scene_desc, ".", scene)
     scene.frame_set(0)
@@ -105,6 +99,7 @@ def test_the_sea_under_a_surface_has_black_sides_and_bottom(scene_desc):
 def test_water_port_lights_and_poses_are_built(scene_desc):
     scene = _fresh()
     built = pbuild.build(scene_desc, ".", scene)
+    n_g = scene_desc["cameras"][0]["port"]["glass"]["ior"][1]  # N-BK7, 550 nm
     water = bpy.data.objects["poser_water"]
     names = [m.name for m in water.data.materials]
     # The housing body is a pure volume boundary too (no housing shadow, HOUSING_SHADOW).
@@ -117,10 +112,10 @@ def test_water_port_lights_and_poses_are_built(scene_desc):
     # Glass -> water face: IOR n_w/n_g (Cycles takes the ratio inside/outside per surface).
     outer = bpy.data.objects["port outer:cam"].data.materials[0].node_tree.nodes
     glass = [n for n in outer if n.bl_idname == "ShaderNodeBsdfGlass"][0]
-    assert glass.inputs["IOR"].default_value == pytest.approx(1.334 / 1.518, rel=1e-6)
+    assert glass.inputs["IOR"].default_value == pytest.approx(1.334 / n_g, rel=1e-6)
     inner = bpy.data.objects["port inner:cam"].data.materials[0].node_tree.nodes
     glass = [n for n in inner if n.bl_idname == "ShaderNodeBsdfGlass"][0]
-    assert glass.inputs["IOR"].default_value == pytest.approx(1.518, rel=1e-6)
+    assert glass.inputs["IOR"].default_value == pytest.approx(n_g, rel=1e-6)
     # One shape key per pose (+ basis) moves the housing cut-out with the rig.
     assert len(water.data.shape_keys.key_blocks) == 1 + len(scene_desc["poses"])
     # HOUSING_INSIDE: black walls inside the cut-out end the light the port reflects back into
@@ -288,17 +283,15 @@ def test_custom_camera_projects_with_distortion(lens, tmp_path):
         assert abs(eu) < 0.15 and abs(ev) < 0.15, (lens, errs)
 
 
-def test_every_feature_builds_and_renders(scene_desc, tmp_path):
+def test_every_feature_builds_and_renders(scene_desc, housings, tmp_path):
     # Two cameras (dome, cylinder), water in a box around them, waves with caustics and the
     # sun above, area + point lights, a checker pattern, per-channel passes, a saved .blend.
     d = scene_desc
     cam2 = json.loads(json.dumps(d["cameras"][0]))
     cam2["name"] = "right"
     cam2["rig_from_camera"] = [[1, 0, 0, 0.1], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
-    cam2["port"] = {"kind": "cylinder", "axis_point": [0, 0, 0], "axis": [0, 1, 0],
-                    "inner_radius": 0.05, "thickness": 0.005, "glass": cam2["port"]["glass"]}
-    d["cameras"][0]["port"] = {"kind": "dome", "center": [0, 0, 0.002], "inner_radius": 0.05,
-                               "thickness": 0.006, "glass": cam2["port"]["glass"]}
+    put_port(cam2, housings["cylinder"])
+    put_port(d["cameras"][0], housings["dome"])
     d["cameras"].append(cam2)
     for p in d["poses"]:
         p["images"] = ["left_" + p["name"], "right_" + p["name"]]
@@ -377,9 +370,8 @@ def test_per_pose_water_vertices_are_the_whole_meshs(scene_desc):
     moved[0][3] += 0.5
     moved[2][3] -= 0.25
     scene_desc["poses"][1]["world_from_rig"] = moved
-    housings = [geo.housing(cam) for cam in scene_desc["cameras"]]
-    shells = [None if h is None else (ci, geo.inflate(h[0], pbuild.WATER_GAP), None)
-              for ci, h in enumerate(housings)]
+    shells = [(ci, geo.inflate(geo.read_ply(cam["housing"]["shell"]), pbuild.WATER_GAP), None)
+              for ci, cam in enumerate(scene_desc["cameras"])]
     assert any(s is not None for s in shells), "the fixture has a port"
     for i in range(len(scene_desc["poses"])):
         whole = pbuild._water_mesh(scene_desc, i, shells)["verts"]

@@ -1,4 +1,4 @@
-"""Pure conversions and housing meshes (no rendering)."""
+"""Pure conversions and the housing meshes poser writes (no rendering)."""
 
 import math
 from collections import Counter
@@ -6,9 +6,6 @@ from collections import Counter
 import numpy as np
 import pytest
 from poser_blender import geometry as geo
-
-CAM = {"width": 160, "height": 120, "fx": 150.0, "fy": 150.0, "cx": 83.7, "cy": 57.2,
-       "lens": "rectilinear"}
 
 
 def test_intrinsics_follow_the_tested_recipe():
@@ -49,21 +46,15 @@ def _closed_and_outward(mesh):
     return vol
 
 
-@pytest.mark.parametrize("port", [
-    {"kind": "flat", "normal": [0.0, 0.0, 1.0], "distance": 0.02, "thickness": 0.01},
-    {"kind": "flat", "normal": [0.0, math.sin(0.1), math.cos(0.1)], "distance": 0.05,
-     "thickness": 0.012},
-    {"kind": "dome", "center": [0.0, 0.0, 0.004], "inner_radius": 0.1, "thickness": 0.01},
-    {"kind": "cylinder", "axis_point": [0.0, 0.0, 0.0], "axis": [0.0, 1.0, 0.0],
-     "inner_radius": 0.08, "thickness": 0.008},
-])
-def test_housings_are_closed_outward_and_hold_the_camera(port):
-    cam = dict(CAM, port=port)
-    shell, inner = geo.housing(cam)
+@pytest.mark.parametrize("kind", ["flat", "dome", "cylinder"])
+def test_housings_poser_writes_read_back_closed_outward_and_holding_the_camera(housings, kind):
+    # The shells are built and tested in crates/poser-optics (port/housing.rs); here: the PLY
+    # that `poser compile --backend blender` writes reads back as such a shell.
+    shell = geo.read_ply(housings[kind]["housing"]["shell"])
+    inner = geo.read_ply(housings[kind]["housing"]["inner"])
+    assert set(shell["tags"]) == {geo.GLASS_OUTER, geo.BODY} and set(inner["tags"]) == {geo.INNER}
     assert _closed_and_outward(shell) > 0.0, "shell normals must point into the water"
-    # The camera (origin) is inside: a ray along -x crosses the shell an odd number of times
-    # (checked with the signed volume of the shell seen from the origin instead: the solid
-    # angle subtended is 4 pi when the origin is inside).
+    # The camera (origin) is inside: the solid angle the shell subtends from it is 4 pi.
     v = shell["verts"]
     tris = np.array([(f[0], f[i], f[i + 1]) for f in shell["faces"] for i in range(1, len(f) - 1)])
     a, b, c = v[tris[:, 0]], v[tris[:, 1]], v[tris[:, 2]]
@@ -73,6 +64,10 @@ def test_housings_are_closed_outward_and_hold_the_camera(port):
            + np.einsum("ij,ij->i", b, c) * la)
     omega = float(np.sum(2.0 * np.arctan2(num, den)))
     assert omega == pytest.approx(4.0 * math.pi, rel=1e-6)
+    # Curved glass carries unit shading normals; the flat port none.
+    assert (shell["normals"] is None) == (kind == "flat")
+    if shell["normals"] is not None:
+        assert np.allclose(np.linalg.norm(shell["normals"], axis=1), 1.0)
     # Inner (air->glass) faces look at the camera.
     iv = inner["verts"]
     for f in inner["faces"][:50]:
@@ -80,17 +75,20 @@ def test_housings_are_closed_outward_and_hold_the_camera(port):
         assert np.dot(n, iv[f[0]]) < 0.0
 
 
-def test_every_camera_ray_meets_the_outer_glass():
-    # Rays through the image border must leave the housing through the glass, not the body.
-    cam = dict(CAM, port={"kind": "flat", "normal": [0.0, 0.0, 1.0], "distance": 0.02,
-                          "thickness": 0.01})
-    shell, _ = geo.housing(cam)
-    front = [f for f, t in zip(shell["faces"], shell["tags"]) if t == geo.GLASS_OUTER][0]
-    pts = shell["verts"][list(front)]
-    for ray in geo.border_rays(cam):
-        p = ray * 0.03 / ray[2]
-        assert pts[:, 0].min() < p[0] < pts[:, 0].max()
-        assert pts[:, 1].min() < p[1] < pts[:, 1].max()
+def test_a_ply_of_another_layout_is_refused(housings, tmp_path):
+    good = open(housings["dome"]["housing"]["shell"], "rb").read()
+    cases = {
+        "ascii": good.replace(b"binary_little_endian", b"ascii", 1),
+        "float": good.replace(b"property double x", b"property float x", 1),
+        "truncated": good[:-7],
+        "trailing": good + b"\0",
+        "not a ply": b"solid x\n",
+    }
+    for name, data in cases.items():
+        path = tmp_path / f"{name.replace(' ', '_')}.ply"
+        path.write_bytes(data)
+        with pytest.raises(ValueError, match="PLY"):
+            geo.read_ply(str(path))
 
 
 def test_srgb_encoding():

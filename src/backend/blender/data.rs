@@ -8,7 +8,7 @@
 //! | `render` | `samples`, `seed`, `max_bounces`, `exposure`, `outputs` |
 //! | `reference_channel` | channel whose indices a single RGB pass uses (1 = G, 550 nm) |
 //! | `per_channel_passes` | one pass per channel with that channel's indices (dispersion) |
-//! | `cameras[]` | `name`, `width`, `height`, `lens`, `fx`, `fy`, `cx`, `cy`, `focus_distance`, `f_number`, `focal_length` (m; thin-lens aperture radius = focal_length / 2N), `distortion` (`k1`, `k2`, `k3`, `p1`, `p2`), `r2_max` (lens field, `null`: unbounded), `rig_from_camera` (4×4), `port` (camera frame, as in the model) |
+//! | `cameras[]` | `name`, `width`, `height`, `lens`, `fx`, `fy`, `cx`, `cy`, `focus_distance`, `f_number`, `focal_length` (m; thin-lens aperture radius = focal_length / 2N), `distortion` (`k1`, `k2`, `k3`, `p1`, `p2`), `r2_max` (lens field, `null`: unbounded), `rig_from_camera` (4×4), `port` (camera frame, as in the model), `housing` (`shell`, `inner`: PLY asset paths, [`super::housing`]; `null` without a port) |
 //! | `poses[]` | `name`, `world_from_rig` (4×4), `images` (one name per camera), `time`, `seeds` (one Cycles seed per camera, [`cycles_seed`]) |
 //! | `water` | the model's water (indices, σa, σs per channel, phase, extent) or `null` |
 //! | `surface` | the sea surface (`none`, `flat`, `waves`) |
@@ -91,7 +91,13 @@ pub fn describe(model: &Model) -> Result<Description, String> {
         .parent()
         .map(|p| p.to_path_buf())
         .unwrap_or_default();
-    let cameras = cameras_json(model);
+    let mut cameras = cameras_json(model);
+    for (c, h) in cameras
+        .iter_mut()
+        .zip(super::housing::housings_json(model, &mut assets))
+    {
+        c["housing"] = h;
+    }
     let poses = poses_json(model);
 
     let caustics = model.needs.caustics && matches!(model.site.surface, SeaSurface::Waves { .. });

@@ -7,7 +7,7 @@
 //! |---|---|
 //! | `scene.py` | the builder package `backends/blender/poser_blender` (embedded source, with its fixed OSL camera shader `camera.osl`) + the scene description as a JSON string literal, decoded with `json.loads` |
 //! | `scene.json` | the same description, pretty-printed (for the Blender add-on and for diffing) |
-//! | `assets/` | PLY meshes and target textures the description refers to |
+//! | `assets/` | PLY meshes (objects, port housings) and target textures the description refers to |
 //!
 //! The script runs as `python scene.py [--out DIR] [--samples N] [--poses 0,2] [--save-blend
 //! FILE] [--no-render]` with the `bpy` package, or as `blender -b -P scene.py -- [options]`.
@@ -19,6 +19,7 @@
 //! truth beside the images is the `render` command's ([`crate::backend`]).
 
 pub mod data;
+pub mod housing;
 pub mod pyliteral;
 
 use super::{RenderOptions, RenderReport};

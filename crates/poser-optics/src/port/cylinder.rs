@@ -4,8 +4,8 @@
 use super::PortRay;
 use super::flat::Slabs;
 use super::housing::{
-    Face, Housing, HousingMesh, MESH_SEGMENTS, Part, Shape, border_directions, border_rays,
-    revolve, z_to,
+    Face, Housing, HousingMesh, HousingShell, MESH_SEGMENTS, Part, Shape, TaggedMesh, basis,
+    border_directions, border_rays, field_directions, revolve, z_to,
 };
 use crate::NoSolution;
 use crate::interface::{fresnel_transmittance, refract};
@@ -375,6 +375,63 @@ pub fn housing(
         clearance: r - w.length(),
         extent: axis_point.length() + (half_len + t).hypot(r + t),
     })
+}
+
+/// Segments of [`housing_shell`]'s tubes: fine enough that Cycles' smooth shading of the
+/// facets (with the cylinder's exact normals) stays on the cylinder.
+const SHELL_SEGMENTS: u32 = 512;
+
+/// A cylinder port's closed housing for a mesh renderer ([`HousingShell`]): the outer tube
+/// centred on the axis point nearest the pupil, long enough that the field of view (rays within
+/// 80° of the axis) leaves through it with 30 % to spare + 2 outer radii, closed by two disks;
+/// the inner face is the inner tube of the same length.
+pub fn housing_shell(cam: &Camera, axis_point: DVec3, axis: DVec3, r: f64, t: f64) -> HousingShell {
+    let a = axis.normalize();
+    let r_out = r + t;
+    let centre = axis_point + (-axis_point).dot(a) * a;
+    let off = (-axis_point - (-axis_point).dot(a) * a).length();
+    let cos_max = 10f64.to_radians().cos();
+    let worst = field_directions(cam, 8)
+        .iter()
+        .map(|d| {
+            let c = d.dot(a).abs().min(cos_max);
+            c / (1.0 - c * c).sqrt()
+        })
+        .fold(0.0, f64::max);
+    let half = (r_out + off) * worst * 1.3 + 2.0 * r_out;
+    // (e2, −e1): the orientation the Blender builder used when it built this shell itself.
+    let (e1, e2) = basis(a);
+    let (u, v) = (e2, -e1);
+    let seg = SHELL_SEGMENTS;
+    let tube = |radius: f64, outward: bool, tag: Face| {
+        let sign = if outward { 1.0 } else { -1.0 };
+        let mut m = TaggedMesh::default();
+        let mut normals = Vec::with_capacity(2 * seg as usize);
+        for h in [-half, half] {
+            for j in 0..seg {
+                let phi = std::f64::consts::TAU * j as f64 / seg as f64;
+                let radial = phi.cos() * u + phi.sin() * v;
+                m.positions.push(centre + radius * radial + h * a);
+                normals.push(sign * radial);
+            }
+        }
+        m.normals = Some(normals);
+        for j in 0..seg {
+            let k = (j + 1) % seg;
+            // Counter-clockwise seen from outside, for u × v = a.
+            let mut f = vec![j, k, seg + k, seg + j];
+            if !outward {
+                f.reverse();
+            }
+            m.push(f, tag);
+        }
+        m
+    };
+    let mut shell = tube(r_out, true, Face::Outer);
+    shell.push((0..seg).rev().collect(), Face::Wall);
+    shell.push((0..seg).map(|j| seg + j).collect(), Face::Wall);
+    let inner = tube(r, false, Face::Inner { glass_inside: true });
+    HousingShell { shell, inner }
 }
 
 /// A cylinder port's glass as a tube shell, for display: the field of view's reach along the

@@ -3,7 +3,8 @@
 
 use super::PortRay;
 use super::housing::{
-    Face, Housing, HousingMesh, MESH_SEGMENTS, Part, Shape, border_directions, border_rays, revolve,
+    Face, Housing, HousingMesh, HousingShell, MESH_SEGMENTS, Part, Shape, TaggedMesh,
+    border_directions, border_rays, field_directions, revolve,
 };
 use crate::NoSolution;
 use crate::interface::{fresnel_transmittance, refract};
@@ -514,6 +515,94 @@ pub fn housing(cam: &Camera, center: DVec3, r: f64, t: f64) -> Result<Housing, H
         clearance: r - center.length(),
         extent: center.length() + r + t,
     })
+}
+
+/// Polar and azimuthal segments of [`housing_shell`]'s spherical caps: fine enough that
+/// Cycles' smooth shading of the facets (with the sphere's exact normals) stays on the sphere.
+const SHELL_RINGS: u32 = 96;
+const SHELL_SEGMENTS: u32 = 384;
+
+/// A dome port's closed housing for a mesh renderer ([`HousingShell`]): the outer sphere as a
+/// cap about +z over the field of view seen from the pupil + 15° (at least 60°, at most 170°),
+/// a cylindrical body from its rim back to behind the pupil (half the outer radius, at least
+/// 2 cm), closed by a disk; the inner face is the inner sphere's cap of the same angle.
+pub fn housing_shell(cam: &Camera, center: DVec3, r: f64, t: f64) -> HousingShell {
+    let r_out = r + t;
+    let field = field_directions(cam, 8)
+        .iter()
+        .map(|d| d.z.clamp(-1.0, 1.0).acos())
+        .fold(0.0, f64::max);
+    let alpha = (field + 15f64.to_radians())
+        .max(60f64.to_radians())
+        .min(170f64.to_radians());
+    let (mut shell, rim) = sphere_cap(center, r_out, alpha, true, Face::Outer);
+    let rim_z = center.z + r_out * alpha.cos();
+    let rim_r = r_out * alpha.sin();
+    let back_z = rim_z.min(0.0) - (0.5 * r_out).max(0.02);
+    let base = shell.positions.len() as u32;
+    let normals = shell.normals.get_or_insert_with(Vec::new);
+    for j in 0..SHELL_SEGMENTS {
+        let phi = std::f64::consts::TAU * j as f64 / SHELL_SEGMENTS as f64;
+        let radial = DVec3::new(phi.cos(), phi.sin(), 0.0);
+        shell
+            .positions
+            .push(DVec3::new(center.x, center.y, back_z) + rim_r * radial);
+        normals.push(radial);
+    }
+    for j in 0..SHELL_SEGMENTS {
+        let k = (j + 1) % SHELL_SEGMENTS;
+        shell.push(
+            vec![rim[j as usize], base + j, base + k, rim[k as usize]],
+            Face::Wall,
+        );
+    }
+    shell.push((0..SHELL_SEGMENTS).rev().map(|j| base + j).collect(), Face::Wall);
+    let (inner, _) = sphere_cap(center, r, alpha, false, Face::Inner { glass_inside: true });
+    HousingShell { shell, inner }
+}
+
+/// The cap of the sphere (`center`, `radius`) about +z, polar angle 0..`alpha`: the pole, then
+/// [`SHELL_RINGS`] rings of [`SHELL_SEGMENTS`] vertices, each polygon tagged `tag`, with the
+/// sphere's normals (outward, or inward and the polygons reversed). Also the last ring's
+/// vertex indices (the rim).
+fn sphere_cap(center: DVec3, radius: f64, alpha: f64, outward: bool, tag: Face) -> (TaggedMesh, Vec<u32>) {
+    let (rings, seg) = (SHELL_RINGS, SHELL_SEGMENTS);
+    let mut dirs = vec![DVec3::Z];
+    for i in 1..=rings {
+        let theta = alpha * i as f64 / rings as f64;
+        for j in 0..seg {
+            let phi = std::f64::consts::TAU * j as f64 / seg as f64;
+            dirs.push(DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            ));
+        }
+    }
+    let sign = if outward { 1.0 } else { -1.0 };
+    let mut m = TaggedMesh {
+        positions: dirs.iter().map(|&d| center + radius * d).collect(),
+        normals: Some(dirs.iter().map(|&d| sign * d).collect()),
+        ..TaggedMesh::default()
+    };
+    let mut push = |mut f: Vec<u32>| {
+        if !outward {
+            f.reverse();
+        }
+        m.push(f, tag);
+    };
+    for j in 0..seg {
+        push(vec![0, 1 + j, 1 + (j + 1) % seg]);
+    }
+    for i in 1..rings {
+        let (r0, r1) = (1 + (i - 1) * seg, 1 + i * seg);
+        for j in 0..seg {
+            let k = (j + 1) % seg;
+            push(vec![r0 + j, r1 + j, r1 + k, r0 + k]);
+        }
+    }
+    let rim = (0..seg).map(|j| 1 + (rings - 1) * seg + j).collect();
+    (m, rim)
 }
 
 /// A dome port's glass as a spherical cap shell, for display: the cap covers the field of

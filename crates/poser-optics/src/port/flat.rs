@@ -3,7 +3,8 @@
 
 use super::PortRay;
 use super::housing::{
-    Face, Housing, HousingMesh, MESH_SEGMENTS, Part, Shape, basis, border_directions, border_rays,
+    Face, Housing, HousingMesh, HousingShell, MESH_SEGMENTS, Part, Shape, TaggedMesh, basis,
+    border_directions, border_rays, field_directions,
     revolve, z_to,
 };
 use crate::NoSolution;
@@ -680,6 +681,55 @@ pub fn housing(
         clearance: d,
         extent: ((d + t).powi(2) + 2.0 * half * half).sqrt(),
     })
+}
+
+/// A flat port's closed housing for a mesh renderer ([`HousingShell`]): a box whose front is
+/// the glass's outer face (`normal·x = distance + thickness`), wide enough that every ray of
+/// the field of view (tilted at most 80° from the normal) crosses it with a margin of 10 % of
+/// the span + 2 thicknesses + 1 mm, and whose back lies half the span + 2 cm behind the pupil;
+/// the inner face is one rectangle of the same size at `distance`. Flat faces: no normals.
+pub fn housing_shell(cam: &Camera, normal: DVec3, distance: f64, thickness: f64) -> HousingShell {
+    let n = normal.normalize();
+    // (e2, −e1): the orientation the Blender builder used when it built this shell itself.
+    let (e1, e2) = basis(n);
+    let (u, v) = (e2, -e1);
+    let (d, t) = (distance, thickness);
+    // Extents where the field meets the plane two thicknesses beyond the glass.
+    let reach = d + 2.0 * t;
+    let max_tilt = 80f64.to_radians();
+    let (mut a0, mut a1, mut b0, mut b1) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for ray in field_directions(cam, 8) {
+        let mut ray = ray;
+        if ray.dot(n) < max_tilt.cos() {
+            let side = (ray - ray.dot(n) * n).normalize_or(u);
+            ray = max_tilt.cos() * n + max_tilt.sin() * side;
+        }
+        let p = ray * (reach / ray.dot(n));
+        (a0, a1) = (a0.min(p.dot(u)), a1.max(p.dot(u)));
+        (b0, b1) = (b0.min(p.dot(v)), b1.max(p.dot(v)));
+    }
+    let span = (a1 - a0).max(b1 - b0);
+    let margin = 0.1 * span + 2.0 * t + 1e-3;
+    let (a0, a1, b0, b1) = (a0 - margin, a1 + margin, b0 - margin, b1 + margin);
+    let back = -(0.5 * span + 0.02);
+    let ring = |h: f64| [(a0, b0), (a1, b0), (a1, b1), (a0, b1)].map(|(a, b)| a * u + b * v + h * n);
+    let mut shell = TaggedMesh {
+        positions: [ring(d + t), ring(back)].concat(),
+        ..TaggedMesh::default()
+    };
+    // u × v = n: the front ring counter-clockwise seen from the water.
+    shell.push(vec![0, 1, 2, 3], Face::Outer);
+    shell.push(vec![4, 7, 6, 5], Face::Wall);
+    for i in 0..4 {
+        let j = (i + 1) % 4;
+        shell.push(vec![i, i + 4, j + 4, j], Face::Wall);
+    }
+    let mut inner = TaggedMesh {
+        positions: ring(d).to_vec(),
+        ..TaggedMesh::default()
+    };
+    inner.push(vec![0, 3, 2, 1], Face::Inner { glass_inside: true });
+    HousingShell { shell, inner }
 }
 
 /// A flat port's glass as a disc, for display: the radius the field of view needs (where the

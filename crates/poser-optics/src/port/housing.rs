@@ -1,9 +1,10 @@
 //! A housing's geometry in the camera frame (metres, f64), for the backends and the glTF
 //! export to draw: [`Housing`] (the exact glass surfaces and the black housing walls, as
-//! primitives: what Mitsuba renders) and [`HousingMesh`] (a triangle mesh of the glass shell,
-//! what the glTF export shows). Each port type builds both in its own file
-//! ([`super::flat`], [`super::dome`], [`super::cylinder`]); [`housing`] and [`housing_mesh`]
-//! dispatch on the [`Port`].
+//! primitives: what Mitsuba renders), [`HousingShell`] (the same as closed polygon meshes with
+//! shading normals: what Cycles renders) and [`HousingMesh`] (a triangle mesh of the glass
+//! shell, what the glTF export shows). Each port type builds all three in its own file
+//! ([`super::flat`], [`super::dome`], [`super::cylinder`]); [`housing`], [`housing_shell`] and
+//! [`housing_mesh`] dispatch on the [`Port`].
 
 use super::{cylinder, dome, flat};
 use crate::lens::Lens;
@@ -129,6 +130,64 @@ pub fn housing(cam: &Camera) -> Result<Option<Housing>, HousingError> {
         } => cylinder::housing(cam, *axis_point, *axis, *inner_radius, *thickness)
             .map_err(HousingError::Cylinder)?,
     }))
+}
+
+/// A polygon mesh with a [`Face`] per polygon, camera frame (metres).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TaggedMesh {
+    pub positions: Vec<DVec3>,
+    /// Unit shading normals per vertex (curved glass, shaded smooth), or `None` (flat faces).
+    pub normals: Option<Vec<DVec3>>,
+    /// Polygons of vertex indices, counter-clockwise seen from the side the normals face.
+    pub faces: Vec<Vec<u32>>,
+    /// What each polygon is.
+    pub tags: Vec<Face>,
+}
+
+impl TaggedMesh {
+    /// Append a polygon.
+    pub(super) fn push(&mut self, face: Vec<u32>, tag: Face) {
+        self.faces.push(face);
+        self.tags.push(tag);
+    }
+}
+
+/// A housing as a mesh renderer draws it (Cycles), camera frame. `shell` is closed around the
+/// camera with its normals pointing into the water: the port glass's outer face
+/// ([`Face::Outer`]) and the opaque body ([`Face::Wall`]), sized so that every ray of the
+/// field of view leaves through the glass. `inner` is the glass's air side
+/// ([`Face::Inner`]), normals towards the camera. Curved glass is finely tessellated and
+/// carries its exact normals, for smooth shading.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HousingShell {
+    pub shell: TaggedMesh,
+    pub inner: TaggedMesh,
+}
+
+/// The closed housing of `cam`'s port as polygon meshes (`None` without a port).
+pub fn housing_shell(cam: &Camera) -> Option<HousingShell> {
+    Some(match &cam.port {
+        Port::None => return None,
+        Port::Flat {
+            normal,
+            distance,
+            thickness,
+            ..
+        } => flat::housing_shell(cam, *normal, *distance, *thickness),
+        Port::Dome {
+            center,
+            inner_radius,
+            thickness,
+            ..
+        } => dome::housing_shell(cam, *center, *inner_radius, *thickness),
+        Port::Cylinder {
+            axis_point,
+            axis,
+            inner_radius,
+            thickness,
+            ..
+        } => cylinder::housing_shell(cam, *axis_point, *axis, *inner_radius, *thickness),
+    })
 }
 
 /// An indexed triangle mesh, camera frame (f64 positions; triangles counter-clockwise seen
@@ -261,6 +320,23 @@ pub(super) fn border_rays(cam: &Camera) -> Vec<DVec3> {
         .collect()
 }
 
+/// Unit directions of the field of view from the pupil, camera frame, through the lens model:
+/// the image centre and `per_side + 1` points along each edge (the sizes of
+/// [`housing_shell`]'s shells). Points outside a fisheye's field are left out.
+pub(super) fn field_directions(cam: &Camera, per_side: usize) -> Vec<DVec3> {
+    let lens = Lens::from_camera(cam);
+    let (w, h) = (cam.width as f64, cam.height as f64);
+    let mut pts = vec![(0.5 * w, 0.5 * h)];
+    for i in 0..=per_side {
+        let s = i as f64 / per_side.max(1) as f64;
+        pts.extend([(s * w, 0.0), (s * w, h), (0.0, s * h), (w, s * h)]);
+    }
+    pts.into_iter()
+        .filter_map(|(u, v)| lens.unproject(u, v).ok())
+        .map(DVec3::normalize)
+        .collect()
+}
+
 /// Unit directions of the field of view's border (corners and edge midpoints) from the pupil,
 /// camera frame, through the lens model (for the display meshes).
 pub(super) fn border_directions(cam: &Camera) -> Vec<DVec3> {
@@ -282,4 +358,151 @@ pub(super) fn border_directions(cam: &Camera) -> Vec<DVec3> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::types::{Distortion, Glass, LensModel};
+    use std::collections::HashMap;
+
+    /// A small wide camera (a 94° diagonal field), principal point off centre.
+    fn camera(port: Port, lens: LensModel) -> Camera {
+        Camera {
+            name: "c".into(),
+            width: 160,
+            height: 120,
+            pixel_pitch: 1e-5,
+            focal_length: 7.5e-4,
+            fx: 75.0,
+            fy: 75.0,
+            cx: 83.7,
+            cy: 57.2,
+            lens,
+            distortion: Distortion::default(),
+            focus_distance: None,
+            f_number: None,
+            port,
+            rig_from_camera: Pose::IDENTITY,
+        }
+    }
+
+    fn ports() -> Vec<Port> {
+        let glass = Glass {
+            name: "custom".into(),
+            ior: [1.5; 3],
+        };
+        vec![
+            Port::Flat {
+                normal: DVec3::Z,
+                distance: 0.02,
+                thickness: 0.01,
+                glass: glass.clone(),
+                outer_layers: vec![],
+            },
+            Port::Flat {
+                normal: DVec3::new(0.0, 0.1f64.sin(), 0.1f64.cos()),
+                distance: 0.05,
+                thickness: 0.012,
+                glass: glass.clone(),
+                outer_layers: vec![],
+            },
+            Port::Dome {
+                center: DVec3::new(0.001, -0.002, 0.004),
+                inner_radius: 0.1,
+                thickness: 0.01,
+                glass: glass.clone(),
+            },
+            Port::Cylinder {
+                axis_point: DVec3::new(0.002, 0.0, 0.0),
+                axis: DVec3::Y,
+                inner_radius: 0.08,
+                thickness: 0.008,
+                glass,
+            },
+        ]
+    }
+
+    fn triangles(m: &TaggedMesh) -> impl Iterator<Item = ([DVec3; 3], Face)> + '_ {
+        m.faces.iter().zip(&m.tags).flat_map(move |(f, &tag)| {
+            (1..f.len() - 1).map(move |i| {
+                let p = |k: usize| m.positions[f[k] as usize];
+                ([p(0), p(i), p(i + 1)], tag)
+            })
+        })
+    }
+
+    /// Nearest hit of the ray (origin, `d`) on `m`: distance and face tag.
+    fn first_hit(m: &TaggedMesh, d: DVec3) -> Option<(f64, Face)> {
+        triangles(m)
+            .filter_map(|([a, b, c], tag)| {
+                // Möller–Trumbore.
+                let (e1, e2) = (b - a, c - a);
+                let p = d.cross(e2);
+                let det = e1.dot(p);
+                if det.abs() < 1e-18 {
+                    return None;
+                }
+                let s = -a;
+                let u = s.dot(p) / det;
+                let q = s.cross(e1);
+                let v = d.dot(q) / det;
+                let t = e2.dot(q) / det;
+                (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0).then_some((t, tag))
+            })
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+    }
+
+    #[test]
+    fn shells_are_closed_outward_hold_the_pupil_and_pass_the_field_through_glass() {
+        for lens in [LensModel::Rectilinear, LensModel::FisheyeEquidistant] {
+            for port in ports() {
+                let cam = camera(port, lens);
+                let what = format!("{lens:?} {:?}", cam.port);
+                let h = housing_shell(&cam).expect("a port has a shell");
+                let shell = &h.shell;
+                assert_eq!(shell.faces.len(), shell.tags.len());
+                // Closed and consistently oriented: each directed edge has one reverse twin.
+                let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+                for f in &shell.faces {
+                    for i in 0..f.len() {
+                        *edges.entry((f[i], f[(i + 1) % f.len()])).or_default() += 1;
+                    }
+                }
+                for (&(a, b), &n) in &edges {
+                    assert!(n == 1 && edges.get(&(b, a)) == Some(&1), "{what}: edge {a}-{b}");
+                }
+                // Outward (positive volume), and the pupil inside: the solid angle it sees
+                // the shell under is 4π (Van Oosterom–Strackee per triangle).
+                let (mut volume, mut omega) = (0.0, 0.0);
+                for ([a, b, c], _) in triangles(shell) {
+                    volume += a.dot(b.cross(c)) / 6.0;
+                    let (la, lb, lc) = (a.length(), b.length(), c.length());
+                    let num = a.dot(b.cross(c));
+                    let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+                    omega += 2.0 * num.atan2(den);
+                }
+                assert!(volume > 0.0, "{what}: normals point into the housing");
+                let four_pi = 4.0 * std::f64::consts::PI;
+                assert!((omega - four_pi).abs() < 1e-6 * four_pi, "{what}: Ω = {omega}");
+                // Smooth normals: unit, and on the side the polygons face.
+                if let Some(normals) = &shell.normals {
+                    assert_eq!(normals.len(), shell.positions.len());
+                    assert!(normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-12));
+                }
+                // The inner face looks at the pupil.
+                for ([a, b, c], tag) in triangles(&h.inner) {
+                    assert_eq!(tag, Face::Inner { glass_inside: true });
+                    assert!((b - a).cross(c - a).dot(a) < 0.0, "{what}: inner face");
+                }
+                // Every ray of the field crosses the inner face, then leaves through the glass.
+                for d in field_directions(&cam, 16) {
+                    let (t_in, _) = first_hit(&h.inner, d).expect("the inner face is crossed");
+                    let (t_out, tag) = first_hit(shell, d).expect("the shell is closed");
+                    assert_eq!(tag, Face::Outer, "{what}: the ray {d} meets the housing body");
+                    assert!(t_in < t_out, "{what}: inner face at {t_in}, outer at {t_out}");
+                }
+            }
+        }
+    }
 }

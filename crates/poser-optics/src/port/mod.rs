@@ -8,8 +8,9 @@
 //! | [`CylinderPort`] (`cylinder.rs`) | axis point, unit axis, inner radius, thickness | on its axis: the flat q-equation in the meridional plane; off it: 2-D Newton (skew rays) from two starts, then continuation in the decentring |
 //!
 //! Each type's file also builds its housing: [`housing`] (the exact glass surfaces and black
-//! walls, what Mitsuba renders) and [`housing_mesh`] (the glass shell as triangles, what the
-//! glTF export shows), with the typed [`HousingError`]s; shared types in `port/housing.rs`.
+//! walls, what Mitsuba renders), [`housing_shell`] (the same as closed polygon meshes, what
+//! Cycles renders) and [`housing_mesh`] (the glass shell as triangles, what the glTF export
+//! shows), with the typed [`HousingError`]s; shared types in `port/housing.rs`.
 //!
 //! [`PortSolver::forward_many`] (in `port/batch.rs`) solves [`LANES`] points at a time in SIMD
 //! lanes, AVX2 where the CPU has it: the same results bit for bit as [`PortSolver::forward`],
@@ -33,8 +34,8 @@ pub use dome::DomePort;
 pub use flat::{FlatPort, MAX_LAYERS};
 use flat::{REFINE_AT, Slabs};
 pub use housing::{
-    Face, Housing, HousingError, HousingMesh, MESH_SEGMENTS, Part, Shape, basis, housing,
-    housing_mesh, revolve, z_to,
+    Face, Housing, HousingError, HousingMesh, HousingShell, MESH_SEGMENTS, Part, Shape,
+    TaggedMesh, basis, housing, housing_mesh, housing_shell, revolve, z_to,
 };
 
 use super::NoSolution;
