@@ -1,6 +1,8 @@
 //! The geometry service: every triangle of the model's objects and targets in one
 //! bounding-volume hierarchy (binned SAH, f64, built on every core: the same tree at any
-//! thread count), with closest-hit and shadow (occlusion) queries. Used by the ground truth
+//! thread count), with closest-hit and shadow (occlusion) queries. Glass spheres are not
+//! tessellated: they are intersected exactly beside the tree (refraction needs the true
+//! surface and normal). Used by the ground truth
 //! (occlusion), the survey planner (coverage) and the native renderer.
 //!
 //! | item | meaning |
@@ -109,6 +111,41 @@ pub struct Bvh {
     /// only those look up per-triangle materials and vertex colours).
     source: Vec<u32>,
     nodes: Vec<FNode>,
+    /// The glass spheres, intersected exactly.
+    spheres: Vec<Sphere>,
+}
+
+/// The [`Hit::triangle`] of a hit on a glass sphere (it has no triangle).
+pub const NO_TRIANGLE: u32 = u32::MAX;
+
+/// A glass sphere ([`crate::model::Material::glass`] on a [`crate::model::Shape::Sphere`],
+/// uniformly scaled), world frame.
+#[derive(Debug, Clone, Copy)]
+struct Sphere {
+    centre: DVec3,
+    radius: f64,
+    surface: SurfaceId,
+}
+
+impl Sphere {
+    /// The smallest `t ∈ (RAY_EPSILON, tmax)` where the ray meets the sphere (the roots of
+    /// |o + t d − c|² = r², in the cancellation-free form).
+    fn hit(&self, ray: &Ray, tmax: f64) -> Option<f64> {
+        let oc = ray.origin - self.centre;
+        let a = ray.dir.length_squared();
+        let b = oc.dot(ray.dir);
+        let c = oc.length_squared() - self.radius * self.radius;
+        let disc = b * b - a * c;
+        if !(disc >= 0.0 && a > 0.0) {
+            return None;
+        }
+        let q = -(b + disc.sqrt().copysign(b));
+        let t1 = q / a;
+        let t2 = if q != 0.0 { c / q } else { t1 };
+        [t1.min(t2), t1.max(t2)]
+            .into_iter()
+            .find(|&t| t > RAY_EPSILON && t < tmax)
+    }
 }
 
 const LEAF_SIZE: usize = 4;
@@ -135,6 +172,7 @@ impl Bvh {
         let mut meshes = Vec::new();
         let mut textures = Vec::new();
         let mut prepared = Vec::new();
+        let mut spheres = Vec::new();
         for (i, o) in model.objects.iter().enumerate() {
             // Textured meshes keep their file's triangles (the geometry `object_mesh` reads);
             // baked objects use the baked mesh (same triangles, vertices split at UV seams).
@@ -155,6 +193,19 @@ impl Bvh {
                     (f.mesh.transformed(&o.pose, o.scale), uv)
                 }
                 (None, Some(b)) => (b.mesh.transformed(&o.pose, o.scale), Some(b.uv.clone())),
+                (None, None) if o.material.glass.is_some() => {
+                    if let crate::model::Shape::Sphere { radius } = o.shape {
+                        spheres.push(Sphere {
+                            centre: o.pose.translation,
+                            radius: radius * o.scale.x,
+                            surface: SurfaceId::Object(i as u32),
+                        });
+                        textures.push(None);
+                        prepared.push(None);
+                        continue;
+                    }
+                    (object_mesh(o, base)?, None)
+                }
                 (None, None) => (object_mesh(o, base)?, None),
             };
             meshes.push((SurfaceId::Object(i as u32), mesh, uv));
@@ -168,6 +219,7 @@ impl Bvh {
         let mut s = Bvh::build(meshes, any_mapped);
         s.textures = textures;
         s.meshes = prepared;
+        s.spheres = spheres;
         Ok(s)
     }
 
@@ -220,6 +272,7 @@ impl Bvh {
             meshes: Vec::new(),
             source,
             nodes: Vec::new(),
+            spheres: Vec::new(),
         };
         s.build_bvh();
         s
@@ -228,7 +281,9 @@ impl Bvh {
     /// Barycentric weights of a hit's point on its triangle's corners (`[1, 0, 0]` for a
     /// degenerate triangle).
     pub fn barycentric(&self, h: &Hit) -> [f64; 3] {
-        let t = &self.tris[h.triangle as usize];
+        let Some(t) = self.tris.get(h.triangle as usize) else {
+            return [1.0, 0.0, 0.0];
+        };
         let d = h.point - t.v0;
         let (d11, d12, d22) = (t.e1.dot(t.e1), t.e1.dot(t.e2), t.e2.dot(t.e2));
         let (r1, r2) = (d.dot(t.e1), d.dot(t.e2));
@@ -275,13 +330,18 @@ impl Bvh {
 
     /// Bounds of all geometry (`None` when empty).
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
-        self.nodes
+        let tris = self
+            .nodes
             .first()
             .filter(|_| !self.tris.is_empty())
             .map(|n| {
                 let f = |v: Vec3A| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
                 (f(n.lo), f(n.hi))
-            })
+            });
+        self.spheres.iter().fold(tris, |b, s| {
+            let (lo, hi) = (s.centre - s.radius, s.centre + s.radius);
+            Some(b.map_or((lo, hi), |(a, z)| (a.min(lo), z.max(hi))))
+        })
     }
 
     fn build_bvh(&mut self) {
@@ -452,7 +512,25 @@ impl Bvh {
 
     /// Closest hit with `t ∈ (RAY_EPSILON, tmax)`.
     pub fn intersect(&self, ray: &Ray, tmax: f64) -> Option<Hit> {
-        let (t, k) = self.traverse(ray, tmax, false)?;
+        let tri = self.traverse(ray, tmax, false);
+        let t_tri = tri.map_or(tmax, |(t, _)| t);
+        let mut sphere = None;
+        for s in &self.spheres {
+            if let Some(t) = s.hit(ray, sphere.map_or(t_tri, |(t, _): (f64, &Sphere)| t)) {
+                sphere = Some((t, s));
+            }
+        }
+        if let Some((t, s)) = sphere {
+            let point = ray.origin + t * ray.dir;
+            return Some(Hit {
+                t,
+                point,
+                normal: ((point - s.centre) / s.radius).normalize(),
+                triangle: NO_TRIANGLE,
+                surface: s.surface,
+            });
+        }
+        let (t, k) = tri?;
         let tri = &self.tris[k as usize];
         Some(Hit {
             t,
@@ -465,7 +543,8 @@ impl Bvh {
 
     /// Whether anything is hit along `ray` with `t ∈ (RAY_EPSILON, tmax)`.
     pub fn occluded_ray(&self, ray: &Ray, tmax: f64) -> bool {
-        self.traverse(ray, tmax, true).is_some()
+        self.spheres.iter().any(|s| s.hit(ray, tmax).is_some())
+            || self.traverse(ray, tmax, true).is_some()
     }
 
     /// Whether anything blocks the open segment between `a` and `b` (both ends excluded by a
@@ -477,9 +556,7 @@ impl Bvh {
             return false;
         }
         let margin = 1e-6 * (1.0 + a.abs().max_element().max(b.abs().max_element())) / len;
-        let o = a + d * margin;
-        self.traverse(&Ray { origin: o, dir: d }, 1.0 - 2.0 * margin, true)
-            .is_some()
+        self.occluded_ray(&Ray { origin: a + d * margin, dir: d }, 1.0 - 2.0 * margin)
     }
 }
 

@@ -356,7 +356,7 @@ def build(desc, base_dir=".", scene=None):
         shells.append((ci, shell, glass))
 
     scene.camera = built.cameras[0]  # the saved .blend opens looking through camera 0
-    _build_water(built, coll, desc, shells, n_w, ref)
+    _build_water(built, coll, desc, shells, n_w, ref, base_dir)
     _build_lights(built, coll, desc)
     _build_objects(built, coll, desc, base_dir)
     _build_targets(built, coll, desc, base_dir)
@@ -732,7 +732,7 @@ def _sea_below_surface(desc):
             and desc.get("surface", {}).get("kind") in ("flat", "waves"))
 
 
-def _water_mesh(desc, pose_index, shells):
+def _water_mesh(desc, pose_index, shells, cutouts):
     lo, hi = _water_box(desc, pose_index)
     box = geo.box_mesh(lo, hi, 0)
     if _sea_below_surface(desc):
@@ -740,7 +740,7 @@ def _water_mesh(desc, pose_index, shells):
     parts = [box]
     for m, shell in _shells_at(desc, pose_index, shells):
         parts.append(geo.reverse_mesh(geo.transform_mesh(shell, m)))
-    parts += _glass_cutouts(desc)
+    parts += cutouts
     return geo.merge_meshes(parts)
 
 
@@ -751,19 +751,20 @@ def _shells_at(desc, pose_index, shells):
             for ci, shell, _ in (s for s in shells if s is not None)]
 
 
-def _water_verts(desc, pose_index, shells):
-    """The vertices of `_water_mesh(desc, pose_index, shells)`, in its order, without building
-    its faces: one shape key per pose (a survey has hundreds; building each pose's whole mesh
-    in Python took 70 s for flat_port_deformation_dome's 891 poses)."""
+def _water_verts(desc, pose_index, shells, cutouts):
+    """The vertices of `_water_mesh(desc, pose_index, shells, cutouts)`, in its order, without
+    building its faces: one shape key per pose (a survey has hundreds; building each pose's
+    whole mesh in Python took 70 s for flat_port_deformation_dome's 891 poses). The glass
+    objects' `cutouts` (`_glass_cutouts`) stand still; the shells follow the rig."""
     lo, hi = _water_box(desc, pose_index)
     parts = [geo.box_mesh(lo, hi, 0)["verts"]]
     parts += [geo.transform_points(shell["verts"], m)
               for m, shell in _shells_at(desc, pose_index, shells)]
-    parts += [c["verts"] for c in _glass_cutouts(desc)]
+    parts += [c["verts"] for c in cutouts]
     return np.concatenate(parts)
 
 
-def _build_water(built, coll, desc, shells, n_w, ref):
+def _build_water(built, coll, desc, shells, n_w, ref, base_dir):
     water = desc.get("water")
     if water is None:
         # Air: the outer port face is a standalone glass surface (normals outward, IOR n_g).
@@ -803,7 +804,8 @@ def _build_water(built, coll, desc, shells, n_w, ref):
         obj.matrix_parent_inverse.identity()
         _housing_inside(built, coll, ci, shell)
     gapped = [None if s is None else (s[0], geo.inflate(s[1], WATER_GAP), s[2]) for s in shells]
-    mesh = _water_mesh(desc, 0, gapped)
+    cutouts = _glass_cutouts(desc, base_dir)
+    mesh = _water_mesh(desc, 0, gapped, cutouts)
     me = _mesh_from("poser_water", mesh, smooth=True)
     boundary = _volume_only_material("water boundary", water)
     boundary["poser_water"] = {
@@ -829,7 +831,7 @@ def _build_water(built, coll, desc, shells, n_w, ref):
         obj.shape_key_add(name="basis", from_mix=False)
         for i in range(n_poses):
             key = obj.shape_key_add(name=f"pose {i}", from_mix=False)
-            verts = _water_verts(desc, i, gapped) if i else mesh["verts"]
+            verts = _water_verts(desc, i, gapped, cutouts) if i else mesh["verts"]
             key.data.foreach_set("co", np.asarray(verts, dtype=np.float32).ravel())
             # Constant interpolation: 0 before pose i, 1 at pose i, 0 after (O(1) keys each).
             for f, value in ((0, 0.0), (i, 1.0), (i + 1, 0.0)):
@@ -997,6 +999,10 @@ def _build_objects(built, coll, desc, base_dir):
                 me.polygons.foreach_set("use_smooth", [True] * len(me.polygons))
         elif kind == "ply_parts":
             me = _import_parts(base_dir, shape["parts"], name)
+        elif kind == "shaded_ply":
+            # A glass sphere: poser's mesh with the sphere's own normals (GLASS_OBJECTS).
+            me = _mesh_from(name, geo.read_ply(os.path.join(base_dir, shape["path"])),
+                            smooth=True)
         else:
             me = bpy.data.meshes.new(name)
             bm = bmesh.new()
@@ -1040,18 +1046,24 @@ def _glass_object_material(built, name, glass, desc):
     return mat
 
 
-def _glass_cutouts(desc):
-    """GLASS_OBJECTS: every glass box (world frame), WATER_GAP larger, normals into it: holes
-    of the water mesh, in the order `_water_mesh` and `_water_verts` both use."""
+def _glass_cutouts(desc, base_dir):
+    """GLASS_OBJECTS: every glass box and sphere (world frame), WATER_GAP larger, normals into
+    it: holes of the water mesh, in the order `_water_mesh` and `_water_verts` both use."""
     out = []
     for ob in desc.get("objects", []):
-        if not ob["material"].get("glass") or ob["shape"]["type"] != "box":
+        kind = ob["shape"]["type"]
+        if not ob["material"].get("glass") or kind not in ("box", "shaded_ply"):
             continue
         m = geo.mat4(ob["matrix"])
         # WATER_GAP further out in the world, whatever the object's scale (the matrix's columns).
-        half = 0.5 * np.asarray(ob["shape"]["size"], dtype=float)
-        half = half + WATER_GAP / np.linalg.norm(m[:3, :3], axis=0)
-        out.append(geo.reverse_mesh(geo.transform_mesh(geo.box_mesh(-half, half, 0), m)))
+        scale = np.linalg.norm(m[:3, :3], axis=0)
+        if kind == "box":
+            half = 0.5 * np.asarray(ob["shape"]["size"], dtype=float) + WATER_GAP / scale
+            hole = geo.box_mesh(-half, half, 0)
+        else:  # a glass sphere, scaled uniformly: out along its normals
+            hole = geo.inflate(geo.read_ply(os.path.join(base_dir, ob["shape"]["path"])),
+                               WATER_GAP / scale[0])
+        out.append(geo.reverse_mesh(geo.transform_mesh(hole, m)))
     return out
 
 

@@ -374,8 +374,8 @@ def test_per_pose_water_vertices_are_the_whole_meshs(scene_desc):
               for ci, cam in enumerate(scene_desc["cameras"])]
     assert any(s is not None for s in shells), "the fixture has a port"
     for i in range(len(scene_desc["poses"])):
-        whole = pbuild._water_mesh(scene_desc, i, shells)["verts"]
-        assert np.array_equal(pbuild._water_verts(scene_desc, i, shells), whole)
+        whole = pbuild._water_mesh(scene_desc, i, shells, [])["verts"]
+        assert np.array_equal(pbuild._water_verts(scene_desc, i, shells, []), whole)
 
 
 def test_depth_pass_is_camera_z_through_the_port(scene_desc, tmp_path):

@@ -16,7 +16,7 @@
 //! | `bounds` | world box holding everything, with a margin: the extent of scene-filling water |
 //! | `sun` | `direction` (propagation), `irradiance` (W/m² normal to it), `in_water`, `angle`, `caustics` |
 //! | `lights[]` | `name`, `mount`, `type` + the model's parameters; poses as 4×4 |
-//! | `objects[]` | `name`, `shape` (primitive or `{type: ply, path}`; baked objects: `{type: ply, path, texture}`, the PLY with `s`, `t` and the PNG of linear albedo), `scale`, `matrix` (world, scale included), `material` |
+//! | `objects[]` | `name`, `shape` (primitive or `{type: ply, path}`; baked objects: `{type: ply, path, texture}`, the PLY with `s`, `t` and the PNG of linear albedo; glass spheres: `{type: shaded_ply, path}`, the PLY of [`super::housing`]'s layout with the sphere's normals), `scale`, `matrix` (world, scale included), `material` |
 //! | `targets[]` | printed targets: `name`, `texture` (PNG path), `width`, `height`, `origin`, `matrix`; 3D test objects: `name`, `kind` = `"test_object"`, `steps[]` (`size`, `center`: boxes in the target frame), `disks[]` (`id`, `center`, `radius`), `white`, `black` (reflectances), `matrix` |
 //!
 //! Matrices are row-major 4×4 nested arrays.
@@ -27,6 +27,10 @@ use serde_json::{Value, json};
 
 /// Format tag checked by the Python builder.
 pub const FORMAT: &str = "poser-blender/1";
+
+/// Longitude segments of a glass sphere's mesh for Cycles (latitude rings: half of it): as
+/// fine as a dome port's glass ([`crate::optics::port::housing_shell`]).
+const GLASS_SPHERE_SEGMENTS: u32 = 384;
 
 /// Angular diameter of the sun, rad (used only when the sun shines through a wavy surface).
 const SUN_ANGLE: f64 = 0.00935;
@@ -309,6 +313,26 @@ fn object_json(
                     .map_err(|e| format!("object `{}`: {e}", o.name))?,
             });
             json!({"type": "ply", "path": path, "smooth": false, "texture": texture})
+        }
+        (Shape::Sphere { radius }, None) if o.material.glass.is_some() => {
+            // GLASS_OBJECTS: a glass sphere refracts at its true normals; finely tessellated
+            // (as a dome port's glass), with the sphere's normals for smooth shading, in the
+            // housings' PLY layout ([`super::housing::ply_bytes`]).
+            let path = format!("assets/object_{i}.ply");
+            let mesh = crate::geometry::mesh::sphere(*radius, GLASS_SPHERE_SEGMENTS);
+            let normals = mesh.positions.iter().map(|p| p.normalize()).collect();
+            let faces = mesh.triangles.iter().map(|t| t.to_vec()).collect();
+            let shaded = crate::optics::port::TaggedMesh {
+                tags: vec![crate::optics::port::Face::Outer; mesh.triangles.len()],
+                positions: mesh.positions,
+                normals: Some(normals),
+                faces,
+            };
+            assets.push(Asset {
+                path: path.clone(),
+                bytes: super::housing::ply_bytes(&shaded),
+            });
+            json!({"type": "shaded_ply", "path": path})
         }
         (shape, None) => match shape {
             Shape::Plane { .. } | Shape::Box { .. } => {

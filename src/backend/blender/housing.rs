@@ -10,7 +10,8 @@
 //! The layout, one fixed form (the reader refuses any other): binary little-endian; vertices
 //! `double x, y, z` and, on curved glass, `double nx, ny, nz` (unit shading normals);
 //! faces `list uint uint vertex_indices` (polygons, counter-clockwise seen from the side the
-//! normals face) and `uchar tag`.
+//! normals face) and `uchar tag`. Glass spheres are written in it too (`data.rs`): their
+//! exact normals make Cycles refract as at the true sphere.
 
 use super::data::Asset;
 use crate::model::Model;

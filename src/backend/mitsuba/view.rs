@@ -517,8 +517,8 @@ fn port_shapes(
     }))
 }
 
-/// The glass objects ([`crate::model::Material::glass`]; boxes): a `cube` with a smooth
-/// `dielectric` BSDF of the glass's and the surrounding water's (or air's) indices in
+/// The glass objects ([`crate::model::Material::glass`]): a `cube` (a box) or a `sphere` with
+/// a smooth `dielectric` BSDF of the glass's and the surrounding water's (or air's) indices in
 /// `channel`, and the water medium as its exterior when the box stands in it. In the view,
 /// not in world.xml, since the medium is declared here.
 fn glass_objects(model: &Model, channel: usize, region: MediumRegion) -> Vec<El> {
@@ -528,11 +528,14 @@ fn glass_objects(model: &Model, channel: usize, region: MediumRegion) -> Vec<El>
         .iter()
         .filter_map(|o| {
             let g = o.material.glass.as_ref()?;
-            let crate::model::Shape::Box { size } = o.shape else {
-                return None;
+            let (kind, half) = match o.shape {
+                crate::model::Shape::Box { size } => ("cube", size * 0.5),
+                // Uniformly scaled (the front end's rule): Mitsuba's exact sphere.
+                crate::model::Shape::Sphere { radius } => ("sphere", DVec3::splat(radius)),
+                _ => return None,
             };
-            let m = o.pose.rotation * DMat3::from_diagonal(o.scale * size * 0.5);
-            let el = El::typed("shape", "cube")
+            let m = o.pose.rotation * DMat3::from_diagonal(o.scale * half);
+            let el = El::typed("shape", kind)
                 .comment(format!("object `{}`: {} glass", o.name, g.name))
                 .to_world(m, o.pose.translation)
                 .child(dielectric(g.ior[channel], n_out));

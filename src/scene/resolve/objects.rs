@@ -84,7 +84,7 @@ pub(super) fn objects(
             super::georef::warn_far(cx, Path::new(path), *up_axis, scale, o.span_of("path"));
         }
         let mut material = material(cx, &mut o, 0.3);
-        material.glass = glass(cx, &mut o, shape_kind);
+        material.glass = glass(cx, &mut o, shape_kind, scale);
         spans.objects.push(o.span);
         o.finish_as(cx, Some(&format!("a {shape_kind} object (`{path}`)")));
         out.push(Object {
@@ -528,10 +528,13 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
 }
 
 /// `glass = "N-BK7"`: the object is a clear glass solid ([`crate::model::Material::glass`]).
-/// Only a box for now: a sphere or a cylinder would need smooth normals in all three back
-/// ends (their triangle meshes would refract at flat facets); a box is what a tank's window or
-/// an acrylic block is. A glass object takes no `albedo` or `pattern`.
-fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str) -> Option<crate::model::Glass> {
+/// A box (a tank's window, an acrylic block) or a sphere (a ball lens, a float), each exact
+/// in all three back ends: native intersects a glass sphere analytically, Mitsuba has its
+/// own `sphere`, Cycles a finely tessellated one with the sphere's normals. A sphere must be
+/// scaled uniformly (Mitsuba's sphere takes no other scale). A cylinder or a mesh would
+/// refract at flat facets, differently in each back end. A glass object takes no `albedo`
+/// or `pattern`.
+fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str, scale: DVec3) -> Option<crate::model::Glass> {
     let span = o.span_of("glass");
     let name = o.opt_str(cx, "glass")?;
     let Some(g) = super::camera::catalogue_glass(&name) else {
@@ -549,13 +552,27 @@ fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str) -> Option<crate::model::Gla
         cx.push(d);
         return None;
     };
-    if shape_kind != "box" {
+    if shape_kind != "box" && shape_kind != "sphere" {
         cx.push(
-            Diagnostic::error("E0296", "a glass object must be a box")
+            Diagnostic::error("E0296", "a glass object must be a box or a sphere")
                 .label(span, format!("on a {shape_kind}"))
                 .help(
-                    "make it `shape = \"box\"` (a window, a slab, a block); glass spheres and \
-                     cylinders are not supported yet",
+                    "make it `shape = \"box\"` (a window, a slab, a block) or `\"sphere\"`; \
+                     other glass shapes would refract at the flat facets of their meshes",
+                ),
+        );
+        return None;
+    }
+    if shape_kind == "sphere" && scale.max_element() > scale.min_element() {
+        cx.push(
+            Diagnostic::error("E0301", "a glass sphere must be scaled uniformly")
+                .label(
+                    o.span_of("scale"),
+                    format!("scaled by {} × {} × {}", scale.x, scale.y, scale.z),
+                )
+                .help(
+                    "give one `scale` for all three axes, or set the `radius`; a glass \
+                     ellipsoid is not supported",
                 ),
         );
         return None;
