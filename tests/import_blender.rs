@@ -515,12 +515,13 @@ bpy.ops.wm.save_as_mainfile(filepath="sea.blend")
     );
 }
 
-/// Glass boxes (issue 37): poser's own glass object comes back from its saved .blend as the
-/// same glass box; a user's Glass BSDF cube in the water comes in as the catalogue glass its
-/// IOR means in Cycles (relative to the water around it); a glass sphere and a rough glass
+/// Glass boxes and spheres (issue 37): poser's own glass objects come back from its saved
+/// .blend as the same glass box and ball; a user's Glass BSDF cube and UV sphere in the water
+/// come in as the catalogue glass their IOR means in Cycles (relative to the water around
+/// them), the sphere's facets as the exact sphere, noted; a squashed sphere and a rough glass
 /// cube are named in the notes and not imported.
 #[test]
-fn glass_boxes_import_as_glass_objects() {
+fn glass_boxes_and_spheres_import_as_glass_objects() {
     use glam::DVec3;
     use poser::model::CHANNEL_WAVELENGTHS_NM;
     let dir = tempfile::tempdir().unwrap();
@@ -532,7 +533,9 @@ fn glass_boxes_import_as_glass_objects() {
         &scene,
         format!(
             "{}\n[[objects]]\nname = \"block\"\nshape = \"box\"\nsize = [0.4, 0.3, 0.2]\n\
-             position = [0.3, 0.2, -4.5]\nrotation = [10.0, 20.0, 30.0]\nglass = \"PMMA\"\n",
+             position = [0.3, 0.2, -4.5]\nrotation = [10.0, 20.0, 30.0]\nglass = \"PMMA\"\n\
+             [[objects]]\nname = \"ball\"\nshape = \"sphere\"\nradius = 0.15\n\
+             position = [-0.5, 0.35, -4.7]\nglass = \"N-BK7\"\n",
             include_str!("canonical/sun_seabed.toml")
         ),
     )
@@ -548,8 +551,15 @@ fn glass_boxes_import_as_glass_objects() {
         .iter()
         .filter(|o| o.material.glass.is_some())
         .collect();
-    assert_eq!(glass.len(), 1, "{:?}", back.objects);
-    let (a, b) = (&model.objects[1], glass[0]);
+    assert_eq!(glass.len(), 2, "{:?}", back.objects);
+    let ball = glass.iter().find(|o| o.name == "ball").expect("the ball");
+    assert_eq!(ball.material.glass.as_ref().unwrap().name, "N-BK7");
+    let poser::model::Shape::Sphere { radius } = ball.shape else {
+        panic!("{:?}", ball.shape)
+    };
+    assert!((radius * ball.scale.x - 0.15).abs() < 1e-6, "{radius}");
+    assert!((ball.pose.translation - model.objects[2].pose.translation).length() < 1e-6);
+    let (a, b) = (&model.objects[1], *glass.iter().find(|o| o.name == "block").unwrap());
     assert_eq!(b.material.glass.as_ref().unwrap().name, "PMMA");
     let poser::model::Shape::Box { size } = b.shape else {
         panic!("{:?}", b.shape)
@@ -566,7 +576,8 @@ fn glass_boxes_import_as_glass_objects() {
     assert!(dr.iter().all(|x| x.abs() < 1e-6), "{:?}", b.pose.rotation);
 
     // A user's file: a camera 2 m down in a water box whose top is the surface, a PMMA cube
-    // (scaled and turned) 4 m down, a glass sphere and a rough glass cube beside it.
+    // (scaled and turned) 4 m down, a glass sphere, a squashed one and a rough glass cube
+    // beside it.
     let n_pmma = poser::optics::glass::catalogue_ior("PMMA", CHANNEL_WAVELENGTHS_NM[1]).unwrap();
     let n_w = poser::optics::water::seawater_ior(20.0, 35.0, 0.0, 550.0);
     bpy_script(
@@ -597,6 +608,10 @@ block.data.materials.append(glass("Acrylic", 0.0))
 bpy.ops.mesh.primitive_uv_sphere_add(radius=0.3, location=(2.0, 0.0, -4.0))
 bpy.context.object.name = "Ball"
 bpy.context.object.data.materials.append(glass("Ball glass", 0.0))
+bpy.ops.mesh.primitive_uv_sphere_add(radius=0.2, location=(0.0, 2.0, -4.0))
+bpy.context.object.name = "Egg"
+bpy.context.object.scale = (1.0, 1.0, 0.6)
+bpy.context.object.data.materials.append(glass("Egg glass", 0.0))
 bpy.ops.mesh.primitive_cube_add(size=0.5, location=(-2.0, 0.0, -4.0))
 bpy.context.object.name = "Frosted"
 bpy.context.object.data.materials.append(glass("Frosted glass", 0.3))
@@ -619,9 +634,15 @@ bpy.ops.wm.save_as_mainfile(filepath="user.blend")
         .iter()
         .filter(|o| o.material.glass.is_some())
         .collect();
-    assert_eq!(glass.len(), 1, "{text}");
-    let o = glass[0];
-    assert_eq!(o.name, "Block");
+    assert_eq!(glass.len(), 2, "{text}");
+    let ball = glass.iter().find(|o| o.name == "Ball").expect(&text);
+    assert_eq!(ball.material.glass.as_ref().unwrap().name, "PMMA");
+    let poser::model::Shape::Sphere { radius } = ball.shape else {
+        panic!("{:?}", ball.shape)
+    };
+    assert!((radius * ball.scale.x - 0.3).abs() < 1e-5, "{radius}");
+    assert!((ball.pose.translation - DVec3::new(2.0, 0.0, -4.0)).length() < 1e-5);
+    let o = *glass.iter().find(|o| o.name == "Block").expect(&text);
     assert_eq!(o.material.glass.as_ref().unwrap().name, "PMMA");
     let poser::model::Shape::Box { size } = o.shape else {
         panic!("{:?}", o.shape)
@@ -641,7 +662,9 @@ bpy.ops.wm.save_as_mainfile(filepath="user.blend")
         "relative to the water",
         "imported as the catalogue glass PMMA",
         "`Ball`",
-        "not a box",
+        "vertices on a sphere is imported as the exact sphere",
+        "`Egg`",
+        "scaled unevenly",
         "`Frosted`",
         "rough",
     ] {

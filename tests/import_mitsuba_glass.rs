@@ -1,8 +1,8 @@
 //! `poser import` of Mitsuba scenes with glass and media away from the camera (issue 37):
-//! a `cube` of smooth `dielectric` away from the camera is a glass object (`glass = …`, a box of
-//! the nearest catalogue glass); other glass away from the camera (a sphere, thin or rough
-//! glass, an index no catalogue glass has), or a medium inside a shape the camera is outside
-//! of, is refused up front (the shape's file, line and column, a `help:` line, nothing written)
+//! a `cube` or a `sphere` of smooth `dielectric` away from the camera is a glass object
+//! (`glass = …`, a box or a sphere of the nearest catalogue glass); other glass away from the
+//! camera (thin or rough glass, a sphere scaled unevenly, an index no catalogue glass has), or
+//! a medium inside a shape the camera is outside of, is refused up front (the shape's file, line and column, a `help:` line, nothing written)
 //! instead of being read as a housing or as water everywhere, since poser's water fills the
 //! scene below z = 0. Glass around the camera is still its port. Also:
 //! `--root` for a shared `common/` folder beside the scene's (Mitsuba's data repository's
@@ -64,19 +64,42 @@ const GLASS_SPHERE: &str = r#"    <shape type="sphere">
     </shape>"#;
 
 /// The issue's case: a glass sphere 4 m in front of the camera was dropped as "glass around
-/// the camera". It is refused, 3 m away (its radius is 1 m).
+/// the camera". It is a glass sphere of N-BK7 (Mitsuba's `bk7`), its radius and centre kept.
 #[test]
-fn a_glass_sphere_in_front_of_the_camera_is_refused() {
+fn a_glass_sphere_in_front_of_the_camera_is_a_glass_object() {
     let dir = tempfile::tempdir().unwrap();
     scene(dir.path(), "0, 0, 0", GLASS_SPHERE);
     let out = import(dir.path(), "s.xml", &[]);
-    assert_refused(
-        dir.path(),
-        &out,
-        "s.xml:8:5",
-        "`sphere` shape with a `dielectric` BSDF is a glass object 3.000 m from the camera",
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(dir.path().join("out/scene.toml")).unwrap();
+    let m = poser::scene::load(&dir.path().join("out/scene.toml"), &[])
+        .map_err(|f| f.render())
+        .unwrap()
+        .model;
+    let o = m
+        .objects
+        .iter()
+        .find(|o| o.material.glass.is_some())
+        .expect(&text);
+    assert_eq!(o.material.glass.as_ref().unwrap().name, "N-BK7", "{text}");
+    let poser::model::Shape::Sphere { radius } = o.shape else {
+        panic!("{:?}", o.shape)
+    };
+    assert!((radius * o.scale.x - 1.0).abs() < 1e-9, "{text}");
+    assert!((o.pose.translation - glam::DVec3::new(0.0, 0.0, 4.0)).length() < 1e-9);
+}
+
+/// A glass sphere scaled unevenly (an ellipsoid) is refused at the shape.
+#[test]
+fn an_uneven_glass_sphere_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let squashed = GLASS_SPHERE.replace(
+        r#"<point name="center" x="0" y="0" z="4"/>"#,
+        r#"<transform name="to_world"><scale x="1" y="1" z="0.5"/><translate z="4"/></transform>"#,
     );
-    assert!(stderr(&out).contains("give the shape a diffuse BSDF"));
+    scene(dir.path(), "0, 0, 0", &squashed);
+    let out = import(dir.path(), "s.xml", &[]);
+    assert_refused(dir.path(), &out, "s.xml:8:5", "scaled unevenly");
 }
 
 /// The same glass with a diffuse BSDF imports, as the help says.
@@ -110,7 +133,7 @@ fn thin_and_rough_glass_objects_are_refused() {
             dir.path(),
             &out,
             "s.xml:8:5",
-            &format!("with a `{bsdf}` BSDF is a glass object"),
+            &format!("has a `{bsdf}` BSDF: poser's glass objects are smooth, thick glass"),
         );
     }
 }

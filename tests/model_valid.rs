@@ -90,6 +90,18 @@ fn every_broken_rule_is_found_and_named_by_its_path() {
         paths(&model),
         ["cameras[0].port.normal", "cameras[0].port.glass.ior"]
     );
+    // A glass object is a box or a uniformly scaled sphere.
+    let glass = Some(Glass {
+        name: "N-BK7".into(),
+        ior: [1.52; 3],
+    });
+    let mut model = built();
+    model.objects[0].material.glass = glass.clone();
+    assert_eq!(paths(&model), ["objects[0].shape"], "a glass plane");
+    model.objects[0].shape = Shape::Sphere { radius: 0.1 };
+    assert_eq!(paths(&model), Vec::<String>::new(), "a glass sphere");
+    model.objects[0].scale = DVec3::new(1.0, 1.0, 0.5);
+    assert_eq!(paths(&model), ["objects[0].scale"], "a squashed glass sphere");
 }
 
 #[test]

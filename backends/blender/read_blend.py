@@ -602,11 +602,14 @@ def glass_ior(mat):
 
 
 def glass_box(r, o, mat, depsgraph, where):
-    """A glass object away from the cameras: when its mesh is a box (every vertex at a corner
-    of its bounding box in the object's frame, all eight corners used) and its glass smooth and
-    clear, {"name", "cube": world matrix of the cube [-1, 1]³, row-major, "ior": Cycles' IOR
-    (relative to the medium around it)}; else None, with a note."""
-    help_ = "poser's glass objects are smooth, clear boxes (docs/scenes.md, \"Glass objects\")"
+    """A glass object away from the cameras, when its glass is smooth and clear: a box (every
+    vertex at a corner of its bounding box in the object's frame, all eight corners used):
+    {"name", "cube": world matrix of the cube [-1, 1]^3, row-major, "ior": Cycles' IOR
+    (relative to the medium around it)}; or a sphere (every vertex, at least 32, at one
+    distance from its bounding box's centre, the box a cube): {"name", "sphere": world matrix
+    of the unit sphere, "ior", "vertices"}; else None, with a note."""
+    help_ = ("poser's glass objects are smooth, clear boxes and spheres (docs/scenes.md, "
+             "\"Glass objects\")")
     ior, why = glass_ior(mat)
     if ior is None:
         r.note(where, f"this glass object is not imported: {why}", help_)
@@ -622,20 +625,31 @@ def glass_box(r, o, mat, depsgraph, where):
     exact = o.get("poser_vertices")
     if exact is not None and len(exact) == local.size:
         local = r.shadow(o, "poser_vertices", local.ravel(), where).reshape(-1, 3)
+    not_solid = "this glass object is not imported: its mesh is neither a box nor a sphere"
     if len(local) < 8:
-        r.note(where, "this glass object is not imported: its mesh is not a box", help_)
+        r.note(where, not_solid, help_)
         return None
     lo, hi = local.min(axis=0), local.max(axis=0)
     ext = hi - lo
     tol = 1e-5 * max(1.0, float(np.max(np.abs(local))))
     at_lo, at_hi = np.abs(local - lo) <= tol, np.abs(local - hi) <= tol
     corners = {tuple(c) for c in at_hi.astype(int).tolist()}
-    if np.min(ext) <= tol or not np.all(at_lo | at_hi) or len(corners) != 8:
-        r.note(where, "this glass object is not imported: its mesh is not a box", help_)
-        return None
-    cube = np.diag([0.5 * ext[0], 0.5 * ext[1], 0.5 * ext[2], 1.0])
-    cube[:3, 3] = 0.5 * (lo + hi)
-    return {"name": strip(o.name, "object:"), "cube": (r.world(o, 0) @ cube).tolist(), "ior": ior}
+    centre = 0.5 * (lo + hi)
+    name = strip(o.name, "object:")
+    if np.min(ext) > tol and np.all(at_lo | at_hi) and len(corners) == 8:
+        cube = np.diag([0.5 * ext[0], 0.5 * ext[1], 0.5 * ext[2], 1.0])
+        cube[:3, 3] = centre
+        return {"name": name, "cube": (r.world(o, 0) @ cube).tolist(), "ior": ior}
+    radius = 0.5 * float(ext[0])
+    dist = np.linalg.norm(local - centre, axis=1)
+    if (len(local) >= 32 and radius > tol and np.all(np.abs(ext - 2.0 * radius) <= 2.0 * tol)
+            and np.all(np.abs(dist - radius) <= tol)):
+        ball = np.diag([radius, radius, radius, 1.0])
+        ball[:3, 3] = centre
+        return {"name": name, "sphere": (r.world(o, 0) @ ball).tolist(), "ior": ior,
+                "vertices": len(local)}
+    r.note(where, not_solid, help_)
+    return None
 
 
 def _ancestors(o):

@@ -118,11 +118,18 @@ struct ReadTexture {
 }
 
 /// A smooth, clear glass box away from every camera, as the reader found it.
-#[derive(Deserialize)]
+#[derive(Deserialize, Clone)]
 struct ReadGlass {
     name: String,
-    /// World matrix (row-major) of the cube [-1, 1]³ the box is.
-    cube: [[f64; 4]; 4],
+    /// World matrix (row-major) of the cube [-1, 1]³ the box is (a box).
+    #[serde(default)]
+    cube: Option<[[f64; 4]; 4]>,
+    /// World matrix (row-major) of the unit sphere the mesh lies on (a sphere).
+    #[serde(default)]
+    sphere: Option<[[f64; 4]; 4]>,
+    /// The sphere mesh's vertex count (for the note).
+    #[serde(default)]
+    vertices: usize,
     /// The Glass BSDF's IOR: in Cycles the index relative to the medium around the glass.
     ior: f64,
 }
@@ -704,8 +711,9 @@ fn mesh_object(
     Ok((assets_out, notes, Value::Table(o)))
 }
 
-/// Glass box `g` (moved by `dz` along z) as a glass object (`shape = "box"`, `glass = …`, no
-/// name yet) of the catalogue glass nearest its index, with a note on the index; or the note
+/// Glass box or sphere `g` (moved by `dz` along z) as a glass object (`shape = "box"` or
+/// `"sphere"`, `glass = …`, no name yet) of the catalogue glass nearest its index, with a note
+/// on the index (and, for a sphere, that its facets became the exact sphere); or the note
 /// saying why it is not imported. Cycles' Glass IOR is the index relative to the medium
 /// around the glass: in the water (`n_water`, the water's green index, when the scene has
 /// water; the box's centre below z = 0) the glass's own index is
@@ -717,9 +725,12 @@ fn glass_object(
     at: &str,
 ) -> Result<(Table, Option<Note>), Note> {
     let here = || Some(at.to_string());
-    let help =
-        "poser's glass objects are boxes of a catalogue glass (docs/scenes.md, \"Glass objects\")";
-    let mut m = mat(&g.cube);
+    let help = "poser's glass objects are boxes and spheres of a catalogue glass (docs/scenes.md, \
+                \"Glass objects\")";
+    let Some(rows) = g.cube.or(g.sphere) else {
+        return Err(Note::new(here(), "this glass object is not imported: no shape").help(help));
+    };
+    let mut m = mat(&rows);
     m.w_axis.z += dz;
     // Blender holds the matrix in float32: columns orthogonal to 1e-6, not to f64's 1e-9.
     let (len, _, _, _) = super::decompose(&m);
@@ -732,7 +743,20 @@ fn glass_object(
     if !finite || sheared || !(len.min_element() > 0.0) {
         return Err(Note::new(
             here(),
-            "this glass object is not imported: its transform shears the box",
+            "this glass object is not imported: its transform shears it",
+        )
+        .help(help));
+    }
+    let ball = g.cube.is_none();
+    // Float32 in Blender: one scale within 1e-5.
+    if ball && len.max_element() - len.min_element() > 1e-5 * len.max_element() {
+        return Err(Note::new(
+            here(),
+            format!(
+                "this glass object is not imported: a sphere scaled unevenly ({:.4} × {:.4} × \
+                 {:.4}), an ellipsoid",
+                len.x, len.y, len.z
+            ),
         )
         .help(help));
     }
@@ -759,19 +783,29 @@ fn glass_object(
         )
         .help(help));
     };
-    let note = ((n_g - n).abs() > 1e-3 || n_water.is_some()).then(|| {
-        Note::new(
-            here(),
-            format!("{relative}, imported as the catalogue glass {glass} ({n_g:.4} in green)"),
-        )
-        .help(help)
-    });
+    let mut says = Vec::new();
+    if (n_g - n).abs() > 1e-3 || n_water.is_some() {
+        says.push(format!(
+            "{relative}, imported as the catalogue glass {glass} ({n_g:.4} in green)"
+        ));
+    }
     let mut o = Table::new();
-    o.insert("shape".into(), Value::String("box".into()));
-    o.insert("size".into(), arr((2.0 * len).to_array()));
-    o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
-    o.insert("rotation".into(), arr(euler_xyz(frame)));
+    if ball {
+        says.push(format!(
+            "its mesh of {} vertices on a sphere is imported as the exact sphere",
+            g.vertices
+        ));
+        o.insert("shape".into(), Value::String("sphere".into()));
+        o.insert("radius".into(), Value::Float(len.element_sum() / 3.0));
+        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+    } else {
+        o.insert("shape".into(), Value::String("box".into()));
+        o.insert("size".into(), arr((2.0 * len).to_array()));
+        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+        o.insert("rotation".into(), arr(euler_xyz(frame)));
+    }
     o.insert("glass".into(), Value::String(glass.to_string()));
+    let note = (!says.is_empty()).then(|| Note::new(here(), says.join("; ")).help(help));
     Ok((o, note))
 }
 
@@ -1041,7 +1075,9 @@ mod tests {
         let n_w = 1.34;
         let g = ReadGlass {
             name: "Block".into(),
-            cube: cube(DVec3::new(1.0, 2.0, -3.0), r * half),
+            cube: Some(cube(DVec3::new(1.0, 2.0, -3.0), r * half)),
+            sphere: None,
+            vertices: 8,
             ior: n_pmma / n_w,
         };
         let (o, note) = glass_object(&g, 0.0, Some(n_w), "x.blend: object `Block`").unwrap();
@@ -1079,10 +1115,27 @@ mod tests {
         // A sheared box is not a box.
         let shear = DMat3::from_cols(DVec3::X, DVec3::new(0.3, 1.0, 0.0), DVec3::Z);
         let sheared = ReadGlass {
-            cube: cube(DVec3::new(0.0, 0.0, -3.0), shear),
-            ..air
+            cube: Some(cube(DVec3::new(0.0, 0.0, -3.0), shear)),
+            ..air.clone()
         };
         let why = glass_object(&sheared, 0.0, None, "at").unwrap_err();
         assert!(why.message.contains("shears"), "{}", why.message);
+        // A sphere: its radius and centre, the exact sphere noted; squashed, refused.
+        let ball = ReadGlass {
+            cube: None,
+            sphere: Some(cube(DVec3::new(0.5, 0.0, -2.0), r * 0.25)),
+            vertices: 482,
+            ..air.clone()
+        };
+        let (o, note) = glass_object(&ball, 0.0, None, "at").unwrap();
+        assert_eq!(o["shape"].as_str(), Some("sphere"));
+        assert!((o["radius"].as_float().unwrap() - 0.25).abs() < 1e-12);
+        assert!(note.unwrap().message.contains("482 vertices on a sphere"));
+        let egg = ReadGlass {
+            sphere: Some(cube(DVec3::ZERO, r * DMat3::from_diagonal(DVec3::new(0.2, 0.2, 0.1)))),
+            ..ball
+        };
+        let why = glass_object(&egg, 0.0, None, "at").unwrap_err();
+        assert!(why.message.contains("scaled unevenly"), "{}", why.message);
     }
 }

@@ -7,7 +7,7 @@
 //! | `disk`, `obj`, `ply` | `mesh` objects, written as `.glb` assets | `to_world` baked into the vertices |
 //! | `diffuse` BSDF (`rgb`, `spectrum`, `bitmap`, `checkerboard` reflectance), `twosided` | `albedo` | a bitmap on an `obj`/`ply` with texture coordinates or on a `rectangle` becomes the mesh's image texture, elsewhere its mean albedo; a checkerboard the mean of its colours (noted); other BSDFs their diffuse reflectance, noted |
 //! | `spectrum` (one value, wavelength:value pairs, `.spd` file) | linear sRGB | as Mitsuba 3's RGB variants (`spectrum_list_to_srgb`): CIE 1931 2° observer, D65 for reflectances; noted |
-//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted. A `cube` with a smooth `dielectric` 0.5 m or more from every sensor is a glass object (`glass = …`, the catalogue glass nearest its `int_ior`, within 0.02); other glass that far, or a shape holding an `interior` medium that no sensor is inside, is refused at the shape |
+//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted. A `cube` or a `sphere` with a smooth `dielectric` 0.5 m or more from every sensor is a glass object (`glass = …`, the catalogue glass nearest its `int_ior`, within 0.02); other glass that far, or a shape holding an `interior` medium that no sensor is inside, is refused at the shape |
 //! | no glass at a sensor | `[camera.port] type = "none"` | |
 //! | `point`, `spot`, `directional`, `constant`, `area` on a `rectangle` | `point`, `spot`, `[sun]`, `ambient`, `area` lights | lights of a per-image file (not of an included world) are rig-mounted |
 //! | `homogeneous` medium (`sigma_t`, `albedo`, `scale`, `hg`/`isotropic`) | `[water]` `absorption`, `scattering`, `g` | the glass's `ext_ior` gives the water's index |
@@ -1510,6 +1510,13 @@ const IOR_NAMES: [(&str, f64); 23] = [
     ("diamond", 2.419),
 ];
 
+/// Mitsuba's named materials that are glasses of poser's catalogue (its names, lower case).
+const MITSUBA_GLASSES: [(&str, &str); 3] = [
+    ("bk7", "N-BK7"),
+    ("acrylic glass", "PMMA"),
+    ("fused quartz", "fused_silica"),
+];
+
 /// A dielectric's index `name`: a number, one of Mitsuba's named materials, or (not Mitsuba's,
 /// but written by hand) a colour or spectrum per channel, imported as its mean with a note.
 fn ior(cx: &mut Cx, b: &X, name: &str, default: f64) -> Result<f64, String> {
@@ -2417,13 +2424,17 @@ fn shape(
             }
             let (lo, hi) = world_bounds(cx, k, &m)?;
             let distance = sensor_distance(lo, hi);
-            if what == "dielectric" && distance >= PORT_REACH && !medium && kind == "cube" {
+            if what == "dielectric"
+                && distance >= PORT_REACH
+                && !medium
+                && (kind == "cube" || kind == "sphere")
+            {
                 let name = unique(
                     comment_name(k, "object")
                         .or_else(|| k.attr("id").map(str::to_string))
                         .unwrap_or_else(|| kind.clone()),
                 );
-                return glass_object(cx, k, &m, &name, objects, assets_out, assets);
+                return glass_object(cx, k, &m, &kind, &name, objects, assets_out, assets);
             }
             refuse_away_from_camera(cx, k, what, distance)?;
             if what == "null" {
@@ -2503,33 +2514,49 @@ fn shape(
     Ok(())
 }
 
-/// A smooth `dielectric` `cube` away from every sensor: a glass object (`glass = …`, a box)
-/// of the catalogue glass whose green index is nearest its `int_ior` (within
-/// [`super::GLASS_MATCH`]; noted when it differs by more than 0.001). Its `ext_ior` is the water's or
-/// air's, which the scene declares. A rough or thin dielectric, or an index no catalogue glass
-/// has, is refused with the catalogue.
+/// A smooth `dielectric` `cube` or `sphere` (`kind`) away from every sensor: a glass object
+/// (`glass = …`, a box or a sphere) of the catalogue glass Mitsuba names ([`MITSUBA_GLASSES`])
+/// or else whose green index is nearest its `int_ior` (within [`super::GLASS_MATCH`]); noted
+/// when the indices differ by more than 0.001. Its
+/// `ext_ior` is the water's or air's, which the scene declares. A rough or thin dielectric, an
+/// index no catalogue glass has, or a sphere scaled unevenly, is refused with the reason.
+#[allow(clippy::too_many_arguments)]
 fn glass_object(
     cx: &mut Cx,
     k: &X,
     m: &DMat4,
+    kind: &str,
     name: &str,
     objects: &mut Vec<Value>,
     assets_out: &mut Vec<(String, Vec<u8>)>,
     assets: &str,
 ) -> Result<(), String> {
     let Some(b) = shape_bsdf(cx, k)? else {
-        return Err(format!("{}: a dielectric cube without its BSDF", k.loc));
+        return Err(format!("{}: a dielectric {kind} without its BSDF", k.loc));
     };
     if b.ty() != "dielectric" {
         return Err(format!(
-            "{}: this `cube` has a `{}` BSDF: poser's glass objects are smooth, thick glass\n  \
+            "{}: this `{kind}` has a `{}` BSDF: poser's glass objects are smooth, thick glass\n  \
              help: make it a smooth `dielectric`, or give it a diffuse BSDF",
             k.loc,
             b.ty()
         ));
     }
     let n = ior(cx, &b, "int_ior", 1.5046)?;
-    let Some((glass, n_g)) = super::catalogue_glass_near(n) else {
+    // Mitsuba's named glasses that are catalogue glasses are those, whatever their one index
+    // says (`bk7`'s 1.5046 is nearer PMMA's index than N-BK7's in green); no `int_ior` is `bk7`.
+    let named = match b.named("int_ior") {
+        Some(v) if v.tag == "string" => v.attr("value").map(|v| v.trim().to_ascii_lowercase()),
+        Some(_) => None,
+        None => Some("bk7".to_string()),
+    };
+    let by_name = named
+        .and_then(|v| MITSUBA_GLASSES.iter().find(|(m, _)| *m == v))
+        .and_then(|&(_, g)| {
+            crate::optics::glass::catalogue_ior(g, crate::model::CHANNEL_WAVELENGTHS_NM[1])
+                .map(|n_g| (g, n_g))
+        });
+    let Some((glass, n_g)) = by_name.or_else(|| super::catalogue_glass_near(n)) else {
         return Err(format!(
             "{}: glass of index {n:.4}: poser's glass objects are made of a catalogue glass \
              ({})\n  help: set `int_ior` to one of them, or give the shape a diffuse BSDF",
@@ -2550,8 +2577,17 @@ fn glass_object(
     }
     let mut o = Table::new();
     o.insert("name".into(), Value::String(name.to_string()));
-    if !shape_geometry(cx, k, m, "cube", name, &mut o, assets_out, assets)? {
+    if !shape_geometry(cx, k, m, kind, name, &mut o, assets_out, assets)? {
         return Ok(());
+    }
+    let want = if kind == "cube" { "box" } else { "sphere" };
+    if o.get("shape").and_then(Value::as_str) != Some(want) {
+        return Err(format!(
+            "{}: this glass `{kind}` is sheared, mirrored or (a sphere) scaled unevenly: \
+             poser's glass objects are boxes and round spheres\n  help: give the shape a \
+             rotation, a translation and one scale only",
+            k.loc
+        ));
     }
     o.insert("glass".into(), Value::String(glass.to_string()));
     objects.push(Value::Table(o));
@@ -2587,10 +2623,11 @@ fn refuse_away_from_camera(cx: &Cx, k: &X, what: &str, distance: f64) -> Result<
         ("null", Some(_)) => Ok(()),
         (_, _) if distance >= PORT_REACH => Err(format!(
             "{}: this `{}` shape with a `{bsdf}` BSDF is a glass object {distance:.3} m from \
-             the camera: poser's glass objects are boxes of smooth glass (a `cube` with a \
-             `dielectric` BSDF imports as one), and glass within {PORT_REACH} m of the camera \
-             is its housing port\n  help: make it a `cube` with a `dielectric` BSDF, or give \
-             the shape a diffuse BSDF, or remove it, to import the rest of the scene",
+             the camera: poser's glass objects are boxes and spheres of smooth glass (a \
+             `cube` or a `sphere` with a `dielectric` BSDF imports as one), and glass within \
+             {PORT_REACH} m of the camera is its housing port\n  help: make it a `cube` or a \
+             `sphere` with a `dielectric` BSDF, or give the shape a diffuse BSDF, or remove \
+             it, to import the rest of the scene",
             k.loc,
             k.ty()
         )),

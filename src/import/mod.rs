@@ -130,7 +130,7 @@ pub(crate) fn catalogue_glass_near(n: f64) -> Option<(&'static str, f64)> {
 }
 
 /// How far, in index, an imported glass may be from a catalogue glass's (green) to be
-/// imported as it: Mitsuba's `bk7` (1.5046) is N-BK7 (1.5168), its `acrylic glass` (1.49) PMMA.
+/// imported as it (Mitsuba's named glasses, `bk7` and `acrylic glass`, go by their names).
 pub(crate) const GLASS_MATCH: f64 = 0.02;
 
 pub(crate) fn euler_xyz(r: DMat3) -> [f64; 3] {

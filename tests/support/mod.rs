@@ -3,6 +3,7 @@
 //!
 //! | module | what |
 //! |---|---|
+//! | [`ball`] | the ball-lens scene (a glass sphere imaging a square) and its exact image |
 //! | [`model`] | the one model builder: cameras, ports, water, planes, lights, a minimal model |
 //! | [`canonical`] | the canonical scenes of `tests/canonical/`, the analytic radiance oracle, and the geometry / radiometry checks every backend runs |
 //! | [`column`] | the native column tests' scene (sun or sky over a flat seabed, turbid water) and one native render's means |
@@ -14,6 +15,7 @@
 //! | [`textured`] | the textured-mesh site: loading it, the disk printed in its texture against the truth |
 #![allow(dead_code)]
 
+pub mod ball;
 pub mod bench;
 pub mod blender;
 pub mod canonical;

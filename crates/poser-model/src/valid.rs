@@ -16,7 +16,7 @@
 //! | ports | glass and layer thicknesses > 0, radii > 0, axis and normal unit vectors, glass index ≥ 1 |
 //! | water | index ≥ 1, absorption and scattering ≥ 0, phase parameters in range |
 //! | sun, lights | unit directions, irradiance, intensity and radiance ≥ 0, sizes > 0, cone half-angle in (0, π/2] |
-//! | objects | sizes and scale > 0, albedo ≥ 0, a glass object's index ≥ 1 |
+//! | objects | sizes and scale > 0, albedo ≥ 0, a glass object's index ≥ 1, a glass object a box or a uniformly scaled sphere |
 //! | targets | sizes > 0, at least one row and column |
 //! | render | `samples` ≥ 1, `exposure` > 0, a noise target > 0, a crop inside every camera's image |
 
@@ -276,6 +276,19 @@ fn object(c: &mut Checker, at: &str, o: &Object) {
     c.non_negative_rgb(&format!("{at}.material.albedo"), o.material.albedo);
     if let Some(g) = &o.material.glass {
         c.index(&format!("{at}.material.glass.ior"), g.ior);
+        match o.shape {
+            Shape::Box { .. } => {}
+            // The back ends' exact spheres (Mitsuba's `sphere`) take no other scale.
+            Shape::Sphere { .. } if o.scale.max_element() > o.scale.min_element() => c.push(
+                &format!("{at}.scale"),
+                format!("a glass sphere must be scaled uniformly (got {})", o.scale),
+            ),
+            Shape::Sphere { .. } => {}
+            _ => c.push(
+                &format!("{at}.shape"),
+                "a glass object must be a box or a sphere".into(),
+            ),
+        }
     }
     let sizes: Vec<(&str, f64)> = match &o.shape {
         Shape::Mesh { offset, .. } => {
