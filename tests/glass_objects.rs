@@ -279,7 +279,11 @@ fn a_glass_object_survives_the_round_trip_through_mitsuba() {
     let poser::model::Shape::Sphere { radius } = ball.shape else {
         panic!("{:?}", ball.shape)
     };
-    assert!((radius * ball.scale.x - 0.225).abs() < 1e-9, "{radius} × {}", ball.scale);
+    assert!(
+        (radius * ball.scale.x - 0.225).abs() < 1e-9,
+        "{radius} × {}",
+        ball.scale
+    );
     assert!((ball.pose.translation - m.objects[2].pose.translation).length() < 1e-9);
 }
 

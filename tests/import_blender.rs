@@ -559,7 +559,10 @@ fn glass_boxes_and_spheres_import_as_glass_objects() {
     };
     assert!((radius * ball.scale.x - 0.15).abs() < 1e-6, "{radius}");
     assert!((ball.pose.translation - model.objects[2].pose.translation).length() < 1e-6);
-    let (a, b) = (&model.objects[1], *glass.iter().find(|o| o.name == "block").unwrap());
+    let (a, b) = (
+        &model.objects[1],
+        *glass.iter().find(|o| o.name == "block").unwrap(),
+    );
     assert_eq!(b.material.glass.as_ref().unwrap().name, "PMMA");
     let poser::model::Shape::Box { size } = b.shape else {
         panic!("{:?}", b.shape)

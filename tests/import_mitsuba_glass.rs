@@ -58,6 +58,22 @@ fn assert_refused(dir: &Path, out: &Output, loc: &str, what: &str) {
     assert!(!dir.join("out").exists(), "nothing written: {err}");
 }
 
+/// The imported scene's text (`dir/out/scene.toml`) and its first glass object.
+fn imported_glass(dir: &Path) -> (String, poser::model::Object) {
+    let path = dir.join("out/scene.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let m = poser::scene::load(&path, &[])
+        .map_err(|f| f.render())
+        .unwrap()
+        .model;
+    let o = m
+        .objects
+        .into_iter()
+        .find(|o| o.material.glass.is_some())
+        .expect(&text);
+    (text, o)
+}
+
 const GLASS_SPHERE: &str = r#"    <shape type="sphere">
         <point name="center" x="0" y="0" z="4"/>
         <bsdf type="dielectric"><string name="int_ior" value="bk7"/></bsdf>
@@ -71,16 +87,7 @@ fn a_glass_sphere_in_front_of_the_camera_is_a_glass_object() {
     scene(dir.path(), "0, 0, 0", GLASS_SPHERE);
     let out = import(dir.path(), "s.xml", &[]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let text = std::fs::read_to_string(dir.path().join("out/scene.toml")).unwrap();
-    let m = poser::scene::load(&dir.path().join("out/scene.toml"), &[])
-        .map_err(|f| f.render())
-        .unwrap()
-        .model;
-    let o = m
-        .objects
-        .iter()
-        .find(|o| o.material.glass.is_some())
-        .expect(&text);
+    let (text, o) = imported_glass(dir.path());
     assert_eq!(o.material.glass.as_ref().unwrap().name, "N-BK7", "{text}");
     let poser::model::Shape::Sphere { radius } = o.shape else {
         panic!("{:?}", o.shape)
@@ -155,22 +162,13 @@ fn a_glass_cube_in_front_of_the_camera_is_a_glass_object() {
     scene(dir.path(), "0, 0, 0", GLASS_CUBE);
     let out = import(dir.path(), "s.xml", &[]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let text = std::fs::read_to_string(dir.path().join("out/scene.toml")).unwrap();
+    let (text, o) = imported_glass(dir.path());
     assert!(text.contains("glass = \"PMMA\""), "{text}");
     assert!(text.contains("shape = \"box\""), "{text}");
     assert!(
         text.contains("as the catalogue glass PMMA"),
         "the note: {text}"
     );
-    let m = poser::scene::load(&dir.path().join("out/scene.toml"), &[])
-        .map_err(|f| f.render())
-        .unwrap()
-        .model;
-    let o = m
-        .objects
-        .iter()
-        .find(|o| o.material.glass.is_some())
-        .expect(&text);
     let poser::model::Shape::Box { size } = o.shape else {
         panic!("{:?}", o.shape)
     };

@@ -101,7 +101,11 @@ fn every_broken_rule_is_found_and_named_by_its_path() {
     model.objects[0].shape = Shape::Sphere { radius: 0.1 };
     assert_eq!(paths(&model), Vec::<String>::new(), "a glass sphere");
     model.objects[0].scale = DVec3::new(1.0, 1.0, 0.5);
-    assert_eq!(paths(&model), ["objects[0].scale"], "a squashed glass sphere");
+    assert_eq!(
+        paths(&model),
+        ["objects[0].scale"],
+        "a squashed glass sphere"
+    );
 }
 
 #[test]

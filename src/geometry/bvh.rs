@@ -556,7 +556,13 @@ impl Bvh {
             return false;
         }
         let margin = 1e-6 * (1.0 + a.abs().max_element().max(b.abs().max_element())) / len;
-        self.occluded_ray(&Ray { origin: a + d * margin, dir: d }, 1.0 - 2.0 * margin)
+        self.occluded_ray(
+            &Ray {
+                origin: a + d * margin,
+                dir: d,
+            },
+            1.0 - 2.0 * margin,
+        )
     }
 }
 

@@ -1132,7 +1132,10 @@ mod tests {
         assert!((o["radius"].as_float().unwrap() - 0.25).abs() < 1e-12);
         assert!(note.unwrap().message.contains("482 vertices on a sphere"));
         let egg = ReadGlass {
-            sphere: Some(cube(DVec3::ZERO, r * DMat3::from_diagonal(DVec3::new(0.2, 0.2, 0.1)))),
+            sphere: Some(cube(
+                DVec3::ZERO,
+                r * DMat3::from_diagonal(DVec3::new(0.2, 0.2, 0.1)),
+            )),
             ..ball
         };
         let why = glass_object(&egg, 0.0, None, "at").unwrap_err();

@@ -556,7 +556,10 @@ pub fn housing_shell(cam: &Camera, center: DVec3, r: f64, t: f64) -> HousingShel
             Face::Wall,
         );
     }
-    shell.push((0..SHELL_SEGMENTS).rev().map(|j| base + j).collect(), Face::Wall);
+    shell.push(
+        (0..SHELL_SEGMENTS).rev().map(|j| base + j).collect(),
+        Face::Wall,
+    );
     let (inner, _) = sphere_cap(center, r, alpha, false, Face::Inner { glass_inside: true });
     HousingShell { shell, inner }
 }
@@ -565,7 +568,13 @@ pub fn housing_shell(cam: &Camera, center: DVec3, r: f64, t: f64) -> HousingShel
 /// [`SHELL_RINGS`] rings of [`SHELL_SEGMENTS`] vertices, each polygon tagged `tag`, with the
 /// sphere's normals (outward, or inward and the polygons reversed). Also the last ring's
 /// vertex indices (the rim).
-fn sphere_cap(center: DVec3, radius: f64, alpha: f64, outward: bool, tag: Face) -> (TaggedMesh, Vec<u32>) {
+fn sphere_cap(
+    center: DVec3,
+    radius: f64,
+    alpha: f64,
+    outward: bool,
+    tag: Face,
+) -> (TaggedMesh, Vec<u32>) {
     let (rings, seg) = (SHELL_RINGS, SHELL_SEGMENTS);
     let mut dirs = vec![DVec3::Z];
     for i in 1..=rings {

@@ -4,8 +4,7 @@
 use super::PortRay;
 use super::housing::{
     Face, Housing, HousingMesh, HousingShell, MESH_SEGMENTS, Part, Shape, TaggedMesh, basis,
-    border_directions, border_rays, field_directions,
-    revolve, z_to,
+    border_directions, border_rays, field_directions, revolve, z_to,
 };
 use crate::NoSolution;
 use crate::interface::{fresnel_transmittance, refract};
@@ -712,7 +711,8 @@ pub fn housing_shell(cam: &Camera, normal: DVec3, distance: f64, thickness: f64)
     let margin = 0.1 * span + 2.0 * t + 1e-3;
     let (a0, a1, b0, b1) = (a0 - margin, a1 + margin, b0 - margin, b1 + margin);
     let back = -(0.5 * span + 0.02);
-    let ring = |h: f64| [(a0, b0), (a1, b0), (a1, b1), (a0, b1)].map(|(a, b)| a * u + b * v + h * n);
+    let ring =
+        |h: f64| [(a0, b0), (a1, b0), (a1, b1), (a0, b1)].map(|(a, b)| a * u + b * v + h * n);
     let mut shell = TaggedMesh {
         positions: [ring(d + t), ring(back)].concat(),
         ..TaggedMesh::default()

@@ -470,7 +470,10 @@ mod tests {
                     }
                 }
                 for (&(a, b), &n) in &edges {
-                    assert!(n == 1 && edges.get(&(b, a)) == Some(&1), "{what}: edge {a}-{b}");
+                    assert!(
+                        n == 1 && edges.get(&(b, a)) == Some(&1),
+                        "{what}: edge {a}-{b}"
+                    );
                 }
                 // Outward (positive volume), and the pupil inside: the solid angle it sees
                 // the shell under is 4π (Van Oosterom–Strackee per triangle).
@@ -484,7 +487,10 @@ mod tests {
                 }
                 assert!(volume > 0.0, "{what}: normals point into the housing");
                 let four_pi = 4.0 * std::f64::consts::PI;
-                assert!((omega - four_pi).abs() < 1e-6 * four_pi, "{what}: Ω = {omega}");
+                assert!(
+                    (omega - four_pi).abs() < 1e-6 * four_pi,
+                    "{what}: Ω = {omega}"
+                );
                 // Smooth normals: unit, and on the side the polygons face.
                 if let Some(normals) = &shell.normals {
                     assert_eq!(normals.len(), shell.positions.len());
@@ -499,8 +505,15 @@ mod tests {
                 for d in field_directions(&cam, 16) {
                     let (t_in, _) = first_hit(&h.inner, d).expect("the inner face is crossed");
                     let (t_out, tag) = first_hit(shell, d).expect("the shell is closed");
-                    assert_eq!(tag, Face::Outer, "{what}: the ray {d} meets the housing body");
-                    assert!(t_in < t_out, "{what}: inner face at {t_in}, outer at {t_out}");
+                    assert_eq!(
+                        tag,
+                        Face::Outer,
+                        "{what}: the ray {d} meets the housing body"
+                    );
+                    assert!(
+                        t_in < t_out,
+                        "{what}: inner face at {t_in}, outer at {t_out}"
+                    );
                 }
             }
         }

@@ -34,8 +34,8 @@ pub use dome::DomePort;
 pub use flat::{FlatPort, MAX_LAYERS};
 use flat::{REFINE_AT, Slabs};
 pub use housing::{
-    Face, Housing, HousingError, HousingMesh, HousingShell, MESH_SEGMENTS, Part, Shape,
-    TaggedMesh, basis, housing, housing_mesh, housing_shell, revolve, z_to,
+    Face, Housing, HousingError, HousingMesh, HousingShell, MESH_SEGMENTS, Part, Shape, TaggedMesh,
+    basis, housing, housing_mesh, housing_shell, revolve, z_to,
 };
 
 use super::NoSolution;
