@@ -2,8 +2,8 @@
 //! bounding-volume hierarchy (binned SAH, f64, built on every core: the same tree at any
 //! thread count), with closest-hit and shadow (occlusion) queries. Glass spheres are not
 //! tessellated: they are intersected exactly beside the tree (refraction needs the true
-//! surface and normal). Used by the ground truth
-//! (occlusion), the survey planner (coverage) and the native renderer.
+//! surface and normal). Used by the ground truth (occlusion), the survey planner (coverage)
+//! and the native renderer.
 //!
 //! | item | meaning |
 //! |---|---|
