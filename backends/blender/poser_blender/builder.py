@@ -11,7 +11,7 @@ The description (format `poser-blender/1`) is written by `poser compile --backen
 | port | the housing poser computed (PLY assets `cameras[].housing`, read by `geometry.read_ply`): inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g); black housing walls inside it (HOUSING_INSIDE); no housing shadow (HOUSING_SHADOW) |
 | water | one closed mesh `poser_water` (box minus housings), Volume Coefficients node; per pose a shape key |
 | lights | point/spot (P = 4 pi I, radius 0, blend 0), sun (angle 0), area (P = L pi A), ambient = world |
-| objects | Blender primitives (plane/box/sphere/cylinder) or imported PLY assets; Diffuse BSDF |
+| objects | Blender primitives (plane/box) or imported PLY assets; Diffuse BSDF; glass objects (GLASS_OBJECTS): Glass BSDF, a glass sphere from poser's PLY with its normals (`shaded_ply`, `geometry.read_ply`), carved out of the water |
 | targets | planes with the target's PNG texture; 3D test objects as white boxes + black disks |
 | sea waves | the native backend's periodic height field (`wave_field`): one period as a smooth glass mesh, instanced; caustics by MNEE (surface = caster, objects and targets = receivers, sun = caustics light) |
 | seed | one Cycles seed per image (`poses[].seeds`, derived by poser from the scene seed) |
