@@ -3,8 +3,8 @@
 //! Blender compilers write for them. The three renderers against each other are in the full
 //! tier (`glass_backends`).
 
-use crate::support::ball;
 use crate::support::column::load_text;
+use crate::support::glass_lens;
 use glam::DVec3;
 use poser::backend::native::render_one;
 use poser::model::Model;
@@ -141,22 +141,44 @@ fn a_tilted_slab_shifts_the_image_as_snell_says() {
     );
 }
 
+/// The exact and the native image of a glass-lens scene: (flux px, centroid px) of each.
+fn lens_images(lens: glass_lens::Lens) -> ((f64, [f64; 2]), (f64, [f64; 2])) {
+    let m = glass_lens::scene(lens);
+    let img = render_one(&m, 0, 0, None).unwrap();
+    let want = glass_lens::exact_image(lens, &m);
+    let got: Vec<f64> = img.rgb.iter().map(|p| p[1] as f64).collect();
+    let w = img.width as usize;
+    let (exact, native) = (
+        glass_lens::flux_centroid(&want, w),
+        glass_lens::flux_centroid(&got, w),
+    );
+    eprintln!("{lens:?}: exact {exact:?}, native {native:?}");
+    (exact, native)
+}
+
 #[test]
 fn a_glass_ball_images_the_panel_where_exact_refraction_puts_it() {
     // The square's image through the ball lens: its flux and centroid by 16 × 16 rays per
     // pixel, traced exactly with every Fresnel branch, against the native render at 256 spp.
     // Measured: flux 26.946 px against 26.951, centroid within 0.022 px. The 64-segment mesh
     // of an opaque sphere in its place moved the centroid by 0.42 px: facets refract.
-    let m = ball::ball_lens();
-    let img = render_one(&m, 0, 0, None).unwrap();
-    let want = ball::exact_image(&m);
-    let got: Vec<f64> = img.rgb.iter().map(|p| p[1] as f64).collect();
-    let (fw, cw) = ball::flux_centroid(&want, img.width as usize);
-    let (fg, cg) = ball::flux_centroid(&got, img.width as usize);
-    eprintln!("flux: exact {fw:.4} px, native {fg:.4} px; centroid: exact {cw:?}, native {cg:?}");
+    let ((fw, cw), (fg, cg)) = lens_images(glass_lens::Lens::Ball);
     // Inverted: the square lies at +x, +y (right of and above the image centre when seen
     // directly); its image through the ball lies left of and below the ball's centre.
     assert!(cw[0] < 100.0 && cw[1] > 75.0, "{cw:?}");
+    assert!((fg / fw - 1.0).abs() < 0.02, "flux {fg} vs {fw}");
+    assert!(
+        (cg[0] - cw[0]).abs() < 0.05 && (cg[1] - cw[1]).abs() < 0.05,
+        "native {cg:?}, exact {cw:?}"
+    );
+}
+
+#[test]
+fn a_glass_rod_images_the_panel_where_exact_refraction_puts_it() {
+    // The same with a 30 cm rod along x: a cylindrical lens, inverting across its axis only
+    // (the image below the centre, still right of it), exact through its side and caps.
+    let ((fw, cw), (fg, cg)) = lens_images(glass_lens::Lens::Rod);
+    assert!(cw[0] > 100.0 && cw[1] > 75.0, "{cw:?}");
     assert!((fg / fw - 1.0).abs() < 0.02, "flux {fg} vs {fw}");
     assert!(
         (cg[0] - cw[0]).abs() < 0.05 && (cg[1] - cw[1]).abs() < 0.05,

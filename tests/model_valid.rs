@@ -90,7 +90,7 @@ fn every_broken_rule_is_found_and_named_by_its_path() {
         paths(&model),
         ["cameras[0].port.normal", "cameras[0].port.glass.ior"]
     );
-    // A glass object is a box or a uniformly scaled sphere.
+    // A glass object is a box, a uniformly scaled sphere or a round cylinder.
     let glass = Some(Glass {
         name: "N-BK7".into(),
         ior: [1.52; 3],
@@ -105,6 +105,21 @@ fn every_broken_rule_is_found_and_named_by_its_path() {
         paths(&model),
         ["objects[0].scale"],
         "a squashed glass sphere"
+    );
+    model.objects[0].shape = Shape::Cylinder {
+        radius: 0.1,
+        height: 0.3,
+    };
+    assert_eq!(
+        paths(&model),
+        Vec::<String>::new(),
+        "a glass cylinder, stretched"
+    );
+    model.objects[0].scale = DVec3::new(1.0, 0.5, 1.0);
+    assert_eq!(
+        paths(&model),
+        ["objects[0].scale"],
+        "an elliptic glass cylinder"
     );
 }
 

@@ -1,8 +1,8 @@
 //! The geometry service: every triangle of the model's objects and targets in one
 //! bounding-volume hierarchy (binned SAH, f64, built on every core: the same tree at any
-//! thread count), with closest-hit and shadow (occlusion) queries. Glass spheres are not
-//! tessellated: they are intersected exactly beside the tree (refraction needs the true
-//! surface and normal). Used by the ground truth (occlusion), the survey planner (coverage)
+//! thread count), with closest-hit and shadow (occlusion) queries. Glass spheres and cylinders
+//! are not tessellated: they are intersected exactly beside the tree (refraction needs the
+//! true surface and normal). Used by the ground truth (occlusion), the survey planner (coverage)
 //! and the native renderer.
 //!
 //! | item | meaning |
@@ -111,40 +111,103 @@ pub struct Bvh {
     /// only those look up per-triangle materials and vertex colours).
     source: Vec<u32>,
     nodes: Vec<FNode>,
-    /// The glass spheres, intersected exactly.
-    spheres: Vec<Sphere>,
+    /// The glass spheres and cylinders, intersected exactly.
+    solids: Vec<Solid>,
 }
 
-/// The [`Hit::triangle`] of a hit on a glass sphere (it has no triangle).
+/// The [`Hit::triangle`] of a hit on a glass sphere or cylinder (it has no triangle).
 pub const NO_TRIANGLE: u32 = u32::MAX;
 
-/// A glass sphere ([`crate::model::Material::glass`] on a [`crate::model::Shape::Sphere`],
-/// uniformly scaled), world frame.
+/// A glass sphere or cylinder ([`crate::model::Material::glass`] on a
+/// [`crate::model::Shape::Sphere`] scaled uniformly, or a [`crate::model::Shape::Cylinder`]
+/// scaled alike across its axis), world frame.
 #[derive(Debug, Clone, Copy)]
-struct Sphere {
+struct Solid {
     centre: DVec3,
+    /// World from object rotation (the cylinder's axis is its z).
+    rotation: glam::DMat3,
     radius: f64,
+    /// A cylinder's half-height; `None`: a sphere.
+    half_height: Option<f64>,
     surface: SurfaceId,
 }
 
-impl Sphere {
-    /// The smallest `t ∈ (RAY_EPSILON, tmax)` where the ray meets the sphere (the roots of
-    /// |o + t d − c|² = r², in the cancellation-free form).
-    fn hit(&self, ray: &Ray, tmax: f64) -> Option<f64> {
+/// The roots of a t² + 2 b t + c = 0 in increasing order, cancellation-free (`None`: no real
+/// root).
+fn roots(a: f64, b: f64, c: f64) -> Option<[f64; 2]> {
+    let disc = b * b - a * c;
+    if !(disc >= 0.0 && a > 0.0) {
+        return None;
+    }
+    let q = -(b + disc.sqrt().copysign(b));
+    let t1 = q / a;
+    let t2 = if q != 0.0 { c / q } else { t1 };
+    Some([t1.min(t2), t1.max(t2)])
+}
+
+impl Solid {
+    /// The smallest `t ∈ (RAY_EPSILON, tmax)` where the ray meets the solid's surface, with the
+    /// surface's outward unit normal there.
+    fn hit(&self, ray: &Ray, tmax: f64) -> Option<(f64, DVec3)> {
+        let in_range = |t: f64| t > RAY_EPSILON && t < tmax;
         let oc = ray.origin - self.centre;
-        let a = ray.dir.length_squared();
-        let b = oc.dot(ray.dir);
-        let c = oc.length_squared() - self.radius * self.radius;
-        let disc = b * b - a * c;
-        if !(disc >= 0.0 && a > 0.0) {
-            return None;
-        }
-        let q = -(b + disc.sqrt().copysign(b));
-        let t1 = q / a;
-        let t2 = if q != 0.0 { c / q } else { t1 };
-        [t1.min(t2), t1.max(t2)]
+        let Some(hz) = self.half_height else {
+            let t = roots(
+                ray.dir.length_squared(),
+                oc.dot(ray.dir),
+                oc.length_squared() - self.radius * self.radius,
+            )?
             .into_iter()
-            .find(|&t| t > RAY_EPSILON && t < tmax)
+            .find(|&t| in_range(t))?;
+            let n = (ray.origin + t * ray.dir - self.centre) / self.radius;
+            return Some((t, n.normalize()));
+        };
+        // In the cylinder's frame: its side x² + y² = r², |z| ≤ hz; its caps z = ±hz.
+        let to_local = self.rotation.transpose();
+        let (o, d) = (to_local * oc, to_local * ray.dir);
+        let mut best: Option<(f64, DVec3)> = None;
+        let mut take = |t: f64, n: DVec3| {
+            if in_range(t) && best.is_none_or(|(b, _)| t < b) {
+                best = Some((t, n));
+            }
+        };
+        let r2 = self.radius * self.radius;
+        if let Some(ts) = roots(
+            d.x * d.x + d.y * d.y,
+            o.x * d.x + o.y * d.y,
+            o.x * o.x + o.y * o.y - r2,
+        ) {
+            for t in ts {
+                let p = o + t * d;
+                if p.z.abs() <= hz {
+                    take(t, DVec3::new(p.x, p.y, 0.0) / self.radius);
+                }
+            }
+        }
+        if d.z != 0.0 {
+            for side in [-1.0, 1.0] {
+                let t = (side * hz - o.z) / d.z;
+                let p = o + t * d;
+                if p.x * p.x + p.y * p.y <= r2 {
+                    take(t, DVec3::new(0.0, 0.0, side));
+                }
+            }
+        }
+        best.map(|(t, n)| (t, (self.rotation * n).normalize()))
+    }
+
+    /// The world box holding the solid.
+    fn bounds(&self) -> (DVec3, DVec3) {
+        let extent = match self.half_height {
+            None => DVec3::splat(self.radius),
+            // Per world axis: the disk's reach r·√(1 − a²) plus the axis's, |a|·hz.
+            Some(hz) => {
+                let a = self.rotation.z_axis;
+                let disk = (DVec3::ONE - a * a).max(DVec3::ZERO);
+                DVec3::new(disk.x.sqrt(), disk.y.sqrt(), disk.z.sqrt()) * self.radius + a.abs() * hz
+            }
+        };
+        (self.centre - extent, self.centre + extent)
     }
 }
 
@@ -172,7 +235,7 @@ impl Bvh {
         let mut meshes = Vec::new();
         let mut textures = Vec::new();
         let mut prepared = Vec::new();
-        let mut spheres = Vec::new();
+        let mut solids = Vec::new();
         for (i, o) in model.objects.iter().enumerate() {
             // Textured meshes keep their file's triangles (the geometry `object_mesh` reads);
             // baked objects use the baked mesh (same triangles, vertices split at UV seams).
@@ -194,10 +257,19 @@ impl Bvh {
                 }
                 (None, Some(b)) => (b.mesh.transformed(&o.pose, o.scale), Some(b.uv.clone())),
                 (None, None) if o.material.glass.is_some() => {
-                    if let crate::model::Shape::Sphere { radius } = o.shape {
-                        spheres.push(Sphere {
+                    let (radius, half_height) = match o.shape {
+                        crate::model::Shape::Sphere { radius } => (radius, None),
+                        crate::model::Shape::Cylinder { radius, height } => {
+                            (radius, Some(0.5 * height * o.scale.z))
+                        }
+                        _ => (0.0, None),
+                    };
+                    if radius > 0.0 {
+                        solids.push(Solid {
                             centre: o.pose.translation,
+                            rotation: o.pose.rotation,
                             radius: radius * o.scale.x,
+                            half_height,
                             surface: SurfaceId::Object(i as u32),
                         });
                         textures.push(None);
@@ -219,7 +291,7 @@ impl Bvh {
         let mut s = Bvh::build(meshes, any_mapped);
         s.textures = textures;
         s.meshes = prepared;
-        s.spheres = spheres;
+        s.solids = solids;
         Ok(s)
     }
 
@@ -272,7 +344,7 @@ impl Bvh {
             meshes: Vec::new(),
             source,
             nodes: Vec::new(),
-            spheres: Vec::new(),
+            solids: Vec::new(),
         };
         s.build_bvh();
         s
@@ -338,8 +410,8 @@ impl Bvh {
                 let f = |v: Vec3A| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
                 (f(n.lo), f(n.hi))
             });
-        self.spheres.iter().fold(tris, |b, s| {
-            let (lo, hi) = (s.centre - s.radius, s.centre + s.radius);
+        self.solids.iter().fold(tris, |b, s| {
+            let (lo, hi) = s.bounds();
             Some(b.map_or((lo, hi), |(a, z)| (a.min(lo), z.max(hi))))
         })
     }
@@ -514,20 +586,19 @@ impl Bvh {
     pub fn intersect(&self, ray: &Ray, tmax: f64) -> Option<Hit> {
         let tri = self.traverse(ray, tmax, false);
         let t_tri = tri.map_or(tmax, |(t, _)| t);
-        let mut sphere = None;
-        for s in &self.spheres {
-            if let Some(t) = s.hit(ray, sphere.map_or(t_tri, |(t, _): (f64, &Sphere)| t)) {
-                sphere = Some((t, s));
+        let mut solid: Option<(f64, DVec3, SurfaceId)> = None;
+        for s in &self.solids {
+            if let Some((t, n)) = s.hit(ray, solid.map_or(t_tri, |h| h.0)) {
+                solid = Some((t, n, s.surface));
             }
         }
-        if let Some((t, s)) = sphere {
-            let point = ray.origin + t * ray.dir;
+        if let Some((t, normal, surface)) = solid {
             return Some(Hit {
                 t,
-                point,
-                normal: ((point - s.centre) / s.radius).normalize(),
+                point: ray.origin + t * ray.dir,
+                normal,
                 triangle: NO_TRIANGLE,
-                surface: s.surface,
+                surface,
             });
         }
         let (t, k) = tri?;
@@ -543,7 +614,7 @@ impl Bvh {
 
     /// Whether anything is hit along `ray` with `t ∈ (RAY_EPSILON, tmax)`.
     pub fn occluded_ray(&self, ray: &Ray, tmax: f64) -> bool {
-        self.spheres.iter().any(|s| s.hit(ray, tmax).is_some())
+        self.solids.iter().any(|s| s.hit(ray, tmax).is_some())
             || self.traverse(ray, tmax, true).is_some()
     }
 

@@ -522,8 +522,8 @@ pub struct Object {
     /// A clear glass solid instead of a coloured surface: the catalogue glass it is made of
     /// (`"N-BK7"`, `"PMMA"` or `"acrylic"`, `"fused_silica"`, `"sapphire"`). Light reflects and
     /// refracts at its faces (Fresnel, Snell) and crosses it unabsorbed: a tank's window, a
-    /// slab, an acrylic block, a ball lens. A box or a uniformly scaled sphere only; it takes
-    /// no `albedo` or `pattern`. Its daylight is
+    /// slab, an acrylic block, a ball lens, a rod. A box, a uniformly scaled sphere or a
+    /// cylinder scaled alike on x and y only; it takes no `albedo` or `pattern`. Its daylight is
     /// traced, not read from the water column (docs/column.md). See docs/scenes.md, "Glass
     /// objects". **Default:** none (an opaque Lambertian object).
     pub glass: Option<String>,

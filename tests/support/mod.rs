@@ -3,7 +3,7 @@
 //!
 //! | module | what |
 //! |---|---|
-//! | [`ball`] | the ball-lens scene (a glass sphere imaging a square) and its exact image |
+//! | [`glass_lens`] | the glass-lens scenes (a glass ball or rod imaging a square) and their exact images |
 //! | [`model`] | the one model builder: cameras, ports, water, planes, lights, a minimal model |
 //! | [`canonical`] | the canonical scenes of `tests/canonical/`, the analytic radiance oracle, and the geometry / radiometry checks every backend runs |
 //! | [`column`] | the native column tests' scene (sun or sky over a flat seabed, turbid water) and one native render's means |
@@ -15,11 +15,11 @@
 //! | [`textured`] | the textured-mesh site: loading it, the disk printed in its texture against the truth |
 #![allow(dead_code)]
 
-pub mod ball;
 pub mod bench;
 pub mod blender;
 pub mod canonical;
 pub mod column;
+pub mod glass_lens;
 pub mod import;
 pub mod lesson;
 pub mod mitsuba;

@@ -11,7 +11,7 @@ The description (format `poser-blender/1`) is written by `poser compile --backen
 | port | the housing poser computed (PLY assets `cameras[].housing`, read by `geometry.read_ply`): inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g); black housing walls inside it (HOUSING_INSIDE); no housing shadow (HOUSING_SHADOW) |
 | water | one closed mesh `poser_water` (box minus housings), Volume Coefficients node; per pose a shape key |
 | lights | point/spot (P = 4 pi I, radius 0, blend 0), sun (angle 0), area (P = L pi A), ambient = world |
-| objects | Blender primitives (plane/box) or imported PLY assets; Diffuse BSDF; glass objects (GLASS_OBJECTS): Glass BSDF, a glass sphere from poser's PLY with its normals (`shaded_ply`, `geometry.read_ply`), carved out of the water |
+| objects | Blender primitives (plane/box) or imported PLY assets; Diffuse BSDF; glass objects (GLASS_OBJECTS): Glass BSDF, a glass sphere or cylinder from poser's PLY with its normals (`shaded_ply`, `geometry.read_ply`), carved out of the water |
 | targets | planes with the target's PNG texture; 3D test objects as white boxes + black disks |
 | sea waves | the native backend's periodic height field (`wave_field`): one period as a smooth glass mesh, instanced; caustics by MNEE (surface = caster, objects and targets = receivers, sun = caustics light) |
 | seed | one Cycles seed per image (`poses[].seeds`, derived by poser from the scene seed) |
@@ -1000,7 +1000,7 @@ def _build_objects(built, coll, desc, base_dir):
         elif kind == "ply_parts":
             me = _import_parts(base_dir, shape["parts"], name)
         elif kind == "shaded_ply":
-            # A glass sphere: poser's mesh with the sphere's own normals (GLASS_OBJECTS).
+            # A glass sphere or cylinder: poser's mesh with its true normals (GLASS_OBJECTS).
             me = _mesh_from(name, geo.read_ply(os.path.join(base_dir, shape["path"])),
                             smooth=True)
         else:
@@ -1047,8 +1047,9 @@ def _glass_object_material(built, name, glass, desc):
 
 
 def _glass_cutouts(desc, base_dir):
-    """GLASS_OBJECTS: every glass box and sphere (world frame), WATER_GAP larger, normals into
-    it: holes of the water mesh, in the order `_water_mesh` and `_water_verts` both use."""
+    """GLASS_OBJECTS: every glass box, sphere and cylinder (world frame), WATER_GAP larger,
+    normals into it: holes of the water mesh, in the order `_water_mesh` and `_water_verts`
+    both use."""
     out = []
     for ob in desc.get("objects", []):
         kind = ob["shape"]["type"]
@@ -1060,9 +1061,11 @@ def _glass_cutouts(desc, base_dir):
         if kind == "box":
             half = 0.5 * np.asarray(ob["shape"]["size"], dtype=float) + WATER_GAP / scale
             hole = geo.box_mesh(-half, half, 0)
-        else:  # a glass sphere, scaled uniformly: out along its normals
-            hole = geo.inflate(geo.read_ply(os.path.join(base_dir, ob["shape"]["path"])),
-                               WATER_GAP / scale[0])
+        else:  # a glass sphere or cylinder, centred on its frame's origin: grown per axis
+            solid = geo.read_ply(os.path.join(base_dir, ob["shape"]["path"]))
+            half = np.max(np.abs(solid["verts"]), axis=0)
+            grow = (half + WATER_GAP / scale) / half
+            hole = {**solid, "verts": solid["verts"] * grow}
         out.append(geo.reverse_mesh(geo.transform_mesh(hole, m)))
     return out
 

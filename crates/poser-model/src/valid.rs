@@ -16,7 +16,7 @@
 //! | ports | glass and layer thicknesses > 0, radii > 0, axis and normal unit vectors, glass index ≥ 1 |
 //! | water | index ≥ 1, absorption and scattering ≥ 0, phase parameters in range |
 //! | sun, lights | unit directions, irradiance, intensity and radiance ≥ 0, sizes > 0, cone half-angle in (0, π/2] |
-//! | objects | sizes and scale > 0, albedo ≥ 0, a glass object's index ≥ 1, a glass object a box or a uniformly scaled sphere |
+//! | objects | sizes and scale > 0, albedo ≥ 0, a glass object's index ≥ 1, a glass object a box, a uniformly scaled sphere or a round cylinder |
 //! | targets | sizes > 0, at least one row and column |
 //! | render | `samples` ≥ 1, `exposure` > 0, a noise target > 0, a crop inside every camera's image |
 
@@ -283,10 +283,17 @@ fn object(c: &mut Checker, at: &str, o: &Object) {
                 &format!("{at}.scale"),
                 format!("a glass sphere must be scaled uniformly (got {})", o.scale),
             ),
-            Shape::Sphere { .. } => {}
+            Shape::Cylinder { .. } if o.scale.x != o.scale.y => c.push(
+                &format!("{at}.scale"),
+                format!(
+                    "a glass cylinder must be scaled alike on x and y (got {})",
+                    o.scale
+                ),
+            ),
+            Shape::Sphere { .. } | Shape::Cylinder { .. } => {}
             _ => c.push(
                 &format!("{at}.shape"),
-                "a glass object must be a box or a sphere".into(),
+                "a glass object must be a box, a sphere or a cylinder".into(),
             ),
         }
     }

@@ -16,7 +16,7 @@
 //! | `bounds` | world box holding everything, with a margin: the extent of scene-filling water |
 //! | `sun` | `direction` (propagation), `irradiance` (W/m² normal to it), `in_water`, `angle`, `caustics` |
 //! | `lights[]` | `name`, `mount`, `type` + the model's parameters; poses as 4×4 |
-//! | `objects[]` | `name`, `shape` (primitive or `{type: ply, path}`; baked objects: `{type: ply, path, texture}`, the PLY with `s`, `t` and the PNG of linear albedo; glass spheres: `{type: shaded_ply, path}`, the PLY of [`super::housing`]'s layout with the sphere's normals), `scale`, `matrix` (world, scale included), `material` |
+//! | `objects[]` | `name`, `shape` (primitive or `{type: ply, path}`; baked objects: `{type: ply, path, texture}`, the PLY with `s`, `t` and the PNG of linear albedo; glass spheres and cylinders: `{type: shaded_ply, path}`, the PLY of [`super::housing`]'s layout with the shape's normals), `scale`, `matrix` (world, scale included), `material` |
 //! | `targets[]` | printed targets: `name`, `texture` (PNG path), `width`, `height`, `origin`, `matrix`; 3D test objects: `name`, `kind` = `"test_object"`, `steps[]` (`size`, `center`: boxes in the target frame), `disks[]` (`id`, `center`, `radius`), `white`, `black` (reflectances), `matrix` |
 //!
 //! Matrices are row-major 4×4 nested arrays.
@@ -28,8 +28,8 @@ use serde_json::{Value, json};
 /// Format tag checked by the Python builder.
 pub const FORMAT: &str = "poser-blender/1";
 
-/// Longitude segments of a glass sphere's mesh for Cycles (latitude rings: half of it): as
-/// fine as a dome port's glass ([`crate::optics::port::housing_shell`]).
+/// Longitude segments of a glass sphere's or cylinder's mesh for Cycles (a sphere's latitude
+/// rings: half of it): as fine as a dome port's glass ([`crate::optics::port::housing_shell`]).
 const GLASS_SPHERE_SEGMENTS: u32 = 384;
 
 /// Angular diameter of the sun, rad (used only when the sun shines through a wavy surface).
@@ -45,6 +45,70 @@ pub fn cycles_seed(scene_seed: u64, pose: usize, camera: usize) -> u32 {
     h = SplitMix64(h ^ pose as u64).next_u64();
     h = SplitMix64(h ^ ((camera as u64) << 32)).next_u64();
     (h >> 33) as u32
+}
+
+/// A glass sphere or cylinder (object frame, scale not applied) as a [`TaggedMesh`] with the
+/// exact normals: the sphere as [`GLASS_SPHERE_SEGMENTS`] × half as many facets, the cylinder
+/// as as many side quads with radial normals and two flat caps (their own vertices, normals
+/// along the axis). Other shapes: empty.
+fn glass_solid_mesh(shape: &Shape) -> crate::optics::port::TaggedMesh {
+    use crate::optics::port::{Face, TaggedMesh};
+    let mut m = TaggedMesh {
+        normals: Some(Vec::new()),
+        ..TaggedMesh::default()
+    };
+    match *shape {
+        Shape::Sphere { radius } => {
+            let mesh = crate::geometry::mesh::sphere(radius, GLASS_SPHERE_SEGMENTS);
+            m.normals = Some(mesh.positions.iter().map(|p| p.normalize()).collect());
+            m.faces = mesh.triangles.iter().map(|t| t.to_vec()).collect();
+            m.positions = mesh.positions;
+        }
+        Shape::Cylinder { radius, height } => {
+            let (seg, hz) = (GLASS_SPHERE_SEGMENTS, 0.5 * height);
+            let ring = |z: f64| {
+                (0..seg).map(move |j| {
+                    let phi = std::f64::consts::TAU * j as f64 / seg as f64;
+                    DVec3::new(radius * phi.cos(), radius * phi.sin(), z)
+                })
+            };
+            let mut normals = Vec::new();
+            // The side: two rings, radial normals.
+            for z in [-hz, hz] {
+                for p in ring(z) {
+                    m.positions.push(p);
+                    normals.push(DVec3::new(p.x, p.y, 0.0) / radius);
+                }
+            }
+            for j in 0..seg {
+                let k = (j + 1) % seg;
+                m.faces.push(vec![j, k, seg + k, seg + j]);
+            }
+            // The caps: their own rings and centres, normals along the axis.
+            for (side, z) in [(-1.0, -hz), (1.0, hz)] {
+                let base = m.positions.len() as u32;
+                m.positions.push(DVec3::new(0.0, 0.0, z));
+                m.positions.extend(ring(z));
+                normals.extend(std::iter::repeat_n(
+                    DVec3::new(0.0, 0.0, side),
+                    seg as usize + 1,
+                ));
+                for j in 0..seg {
+                    let (a, b) = (base + 1 + j, base + 1 + (j + 1) % seg);
+                    // Counter-clockwise seen from outside.
+                    m.faces.push(if side > 0.0 {
+                        vec![base, a, b]
+                    } else {
+                        vec![base, b, a]
+                    });
+                }
+            }
+            m.normals = Some(normals);
+        }
+        _ => {}
+    }
+    m.tags = vec![Face::Outer; m.faces.len()];
+    m
 }
 
 /// Row-major 4×4 of a pose.
@@ -314,23 +378,14 @@ fn object_json(
             });
             json!({"type": "ply", "path": path, "smooth": false, "texture": texture})
         }
-        (Shape::Sphere { radius }, None) if o.material.glass.is_some() => {
-            // GLASS_OBJECTS: a glass sphere refracts at its true normals; finely tessellated
-            // (as a dome port's glass), with the sphere's normals for smooth shading, in the
-            // housings' PLY layout ([`super::housing::ply_bytes`]).
+        (Shape::Sphere { .. } | Shape::Cylinder { .. }, None) if o.material.glass.is_some() => {
+            // GLASS_OBJECTS: glass refracts at its true normals: finely tessellated (as a dome
+            // port's glass), with the shape's normals for smooth shading, in the housings' PLY
+            // layout ([`super::housing::ply_bytes`]).
             let path = format!("assets/object_{i}.ply");
-            let mesh = crate::geometry::mesh::sphere(*radius, GLASS_SPHERE_SEGMENTS);
-            let normals = mesh.positions.iter().map(|p| p.normalize()).collect();
-            let faces = mesh.triangles.iter().map(|t| t.to_vec()).collect();
-            let shaded = crate::optics::port::TaggedMesh {
-                tags: vec![crate::optics::port::Face::Outer; mesh.triangles.len()],
-                positions: mesh.positions,
-                normals: Some(normals),
-                faces,
-            };
             assets.push(Asset {
                 path: path.clone(),
-                bytes: super::housing::ply_bytes(&shaded),
+                bytes: super::housing::ply_bytes(&glass_solid_mesh(&o.shape)),
             });
             json!({"type": "shaded_ply", "path": path})
         }

@@ -517,35 +517,56 @@ fn port_shapes(
     }))
 }
 
-/// The glass objects ([`crate::model::Material::glass`]): a `cube` (a box) or a `sphere` with
-/// a smooth `dielectric` BSDF of the glass's and the surrounding water's (or air's) indices in
+/// The glass objects ([`crate::model::Material::glass`]): a `cube` (a box), a `sphere`, or a
+/// `cylinder` closed by two `disk`s, with a smooth `dielectric` BSDF of the glass's and the surrounding water's (or air's) indices in
 /// `channel`, and the water medium as its exterior when the box stands in it. In the view,
 /// not in world.xml, since the medium is declared here.
 fn glass_objects(model: &Model, channel: usize, region: MediumRegion) -> Vec<El> {
+    use crate::model::Shape;
     let n_out = model.ambient_ior()[channel];
-    model
-        .objects
-        .iter()
-        .filter_map(|o| {
-            let g = o.material.glass.as_ref()?;
-            let (kind, half) = match o.shape {
-                crate::model::Shape::Box { size } => ("cube", size * 0.5),
-                // Uniformly scaled (the front end's rule): Mitsuba's exact sphere.
-                crate::model::Shape::Sphere { radius } => ("sphere", DVec3::splat(radius)),
-                _ => return None,
-            };
-            let m = o.pose.rotation * DMat3::from_diagonal(o.scale * half);
-            let el = El::typed("shape", kind)
-                .comment(format!("object `{}`: {} glass", o.name, g.name))
-                .to_world(m, o.pose.translation)
-                .child(dielectric(g.ior[channel], n_out));
-            Some(if region.contains(o.pose.translation) {
+    let mut out = Vec::new();
+    for o in &model.objects {
+        let Some(g) = o.material.glass.as_ref() else {
+            continue;
+        };
+        let comment = format!("object `{}`: {} glass", o.name, g.name);
+        let bsdf = dielectric(g.ior[channel], n_out);
+        let (m, t) = (o.pose.rotation, o.pose.translation);
+        let shapes = match o.shape {
+            Shape::Box { size } => vec![
+                El::typed("shape", "cube")
+                    .comment(comment)
+                    .to_world(m * DMat3::from_diagonal(o.scale * size * 0.5), t)
+                    .child(bsdf),
+            ],
+            // Uniformly scaled (the front end's rule): Mitsuba's exact sphere.
+            Shape::Sphere { radius } => vec![
+                El::typed("shape", "sphere")
+                    .comment(comment)
+                    .to_world(m * DMat3::from_diagonal(o.scale * radius), t)
+                    .child(bsdf),
+            ],
+            // Scaled alike in x and y (the front end's rule): Mitsuba's exact cylinder, capped.
+            Shape::Cylinder { radius, height } => super::world::capped_cylinder(
+                m,
+                t,
+                radius * o.scale.x,
+                0.5 * height * o.scale.z,
+                &bsdf,
+                comment,
+            ),
+            _ => continue,
+        };
+        let in_water = region.contains(t);
+        out.extend(shapes.into_iter().map(|el| {
+            if in_water {
                 el.reference("exterior", WATER_ID)
             } else {
                 el
-            })
-        })
-        .collect()
+            }
+        }));
+    }
+    out
 }
 
 /// The inside of a housing: black on both sides.

@@ -314,6 +314,40 @@ fn diffuse(o: &Object, plane: Option<(f64, f64)>, warnings: &mut Vec<String>) ->
     El::typed("bsdf", "twosided").child(reflectance)
 }
 
+/// A closed cylinder about the axis `m.z_axis` through `t`, of radius `r` and half-height `hz`:
+/// Mitsuba's open `cylinder` and two `disk`s facing out, each with `bsdf` (also the glass
+/// objects' form, `view::glass_objects`).
+pub(super) fn capped_cylinder(
+    m: DMat3,
+    t: DVec3,
+    r: f64,
+    hz: f64,
+    bsdf: &El,
+    comment: String,
+) -> Vec<El> {
+    let axis = m.z_axis;
+    let mut out = vec![
+        El::typed("shape", "cylinder")
+            .comment(comment)
+            .point("p0", t - axis * hz)
+            .point("p1", t + axis * hz)
+            .float("radius", r)
+            .child(bsdf.clone()),
+    ];
+    for sign in [-1.0, 1.0] {
+        let n = axis * sign;
+        out.push(
+            El::typed("shape", "disk")
+                .to_world(
+                    DMat3::from_cols(m.x_axis * r, m.y_axis * r * sign, n),
+                    t + n * hz,
+                )
+                .child(bsdf.clone()),
+        );
+    }
+    out
+}
+
 /// The Mitsuba shape(s) of one object: analytic plugins for planes, boxes, spheres and
 /// cylinders; PLY meshes (world frame, from `crate::geometry::mesh`) for the rest.
 fn object_shapes(
@@ -363,31 +397,14 @@ fn object_shapes(
                 .float("radius", radius * s.x.abs())
                 .child(bsdf),
         ]),
-        Shape::Cylinder { radius, height } if uniform_xy => {
-            let r = radius * s.x.abs();
-            let hz = 0.5 * height * s.z;
-            let axis = m.z_axis;
-            let mut out = vec![
-                El::typed("shape", "cylinder")
-                    .comment(comment)
-                    .point("p0", t - axis * hz)
-                    .point("p1", t + axis * hz)
-                    .float("radius", r)
-                    .child(bsdf.clone()),
-            ];
-            for sign in [-1.0, 1.0] {
-                let n = axis * sign;
-                out.push(
-                    El::typed("shape", "disk")
-                        .to_world(
-                            DMat3::from_cols(m.x_axis * r, m.y_axis * r * sign, n),
-                            t + n * hz,
-                        )
-                        .child(bsdf.clone()),
-                );
-            }
-            Ok(out)
-        }
+        Shape::Cylinder { radius, height } if uniform_xy => Ok(capped_cylinder(
+            m,
+            t,
+            radius * s.x.abs(),
+            0.5 * height * s.z,
+            &bsdf,
+            comment,
+        )),
         _ => {
             let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
             let mesh = crate::geometry::mesh::object_mesh(o, base)?;

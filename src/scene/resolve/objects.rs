@@ -528,12 +528,13 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
 }
 
 /// `glass = "N-BK7"`: the object is a clear glass solid ([`crate::model::Material::glass`]).
-/// A box (a tank's window, an acrylic block) or a sphere (a ball lens, a float), each exact
-/// in all three back ends: native intersects a glass sphere analytically, Mitsuba has its
-/// own `sphere`, Cycles a finely tessellated one with the sphere's normals. A sphere must be
-/// scaled uniformly (Mitsuba's sphere takes no other scale). A cylinder or a mesh would
-/// refract at flat facets, differently in each back end. A glass object takes no `albedo`
-/// or `pattern`.
+/// A box (a tank's window, an acrylic block), a sphere (a ball lens, a float) or a cylinder
+/// (a rod, a viewing port's plug), each exact in all three back ends: native intersects glass
+/// spheres and cylinders analytically, Mitsuba has its own `sphere` and `cylinder`, Cycles
+/// finely tessellated ones with their true normals. A sphere must be scaled uniformly and a
+/// cylinder alike across its axis (Mitsuba's shapes take no other scale). A mesh or a plane
+/// would refract at flat facets, differently in each back end. A glass object takes no
+/// `albedo` or `pattern`.
 fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str, scale: DVec3) -> Option<crate::model::Glass> {
     let span = o.span_of("glass");
     let name = o.opt_str(cx, "glass")?;
@@ -552,27 +553,37 @@ fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str, scale: DVec3) -> Option<cra
         cx.push(d);
         return None;
     };
-    if shape_kind != "box" && shape_kind != "sphere" {
+    if !matches!(shape_kind, "box" | "sphere" | "cylinder") {
         cx.push(
-            Diagnostic::error("E0296", "a glass object must be a box or a sphere")
-                .label(span, format!("on a {shape_kind}"))
-                .help(
-                    "make it `shape = \"box\"` (a window, a slab, a block) or `\"sphere\"`; \
-                     other glass shapes would refract at the flat facets of their meshes",
-                ),
+            Diagnostic::error(
+                "E0296",
+                "a glass object must be a box, a sphere or a cylinder",
+            )
+            .label(span, format!("on a {shape_kind}"))
+            .help(
+                "make it `shape = \"box\"` (a window, a slab, a block), `\"sphere\"` or \
+                     `\"cylinder\"`; other glass shapes would refract at the flat facets of \
+                     their meshes",
+            ),
         );
         return None;
     }
-    if shape_kind == "sphere" && scale.max_element() > scale.min_element() {
+    let uneven = match shape_kind {
+        "sphere" => scale.max_element() > scale.min_element(),
+        "cylinder" => scale.x != scale.y,
+        _ => false,
+    };
+    if uneven {
         cx.push(
-            Diagnostic::error("E0301", "a glass sphere must be scaled uniformly")
+            Diagnostic::error("E0301", "a glass sphere or cylinder must be round")
                 .label(
                     o.span_of("scale"),
                     format!("scaled by {} × {} × {}", scale.x, scale.y, scale.z),
                 )
                 .help(
-                    "give one `scale` for all three axes, or set the `radius`; a glass \
-                     ellipsoid is not supported",
+                    "scale a sphere alike on all three axes and a cylinder alike on x and y, \
+                     or set the `radius`; glass ellipsoids and elliptic cylinders are not \
+                     supported",
                 ),
         );
         return None;
