@@ -608,7 +608,7 @@ def glass_box(r, o, mat, depsgraph, where):
     (relative to the medium around it)}; or a sphere (every vertex, at least 32, at one
     distance from its bounding box's centre, the box a cube): {"name", "sphere": world matrix
     of the unit sphere, "ior", "vertices"}; else None, with a note."""
-    help_ = ("poser's glass objects are smooth, clear boxes and spheres (docs/scenes.md, "
+    help_ = ("poser imports smooth, clear boxes and spheres as glass objects (docs/scenes.md, "
              "\"Glass objects\")")
     ior, why = glass_ior(mat)
     if ior is None:

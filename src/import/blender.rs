@@ -725,8 +725,8 @@ fn glass_object(
     at: &str,
 ) -> Result<(Table, Option<Note>), Note> {
     let here = || Some(at.to_string());
-    let help = "poser's glass objects are boxes and spheres of a catalogue glass (docs/scenes.md, \
-                \"Glass objects\")";
+    let help = "poser imports boxes and spheres of a catalogue glass as glass objects \
+                (docs/scenes.md, \"Glass objects\")";
     let Some(rows) = g.cube.or(g.sphere) else {
         return Err(Note::new(here(), "this glass object is not imported: no shape").help(help));
     };

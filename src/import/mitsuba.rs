@@ -2623,8 +2623,8 @@ fn refuse_away_from_camera(cx: &Cx, k: &X, what: &str, distance: f64) -> Result<
         ("null", Some(_)) => Ok(()),
         (_, _) if distance >= PORT_REACH => Err(format!(
             "{}: this `{}` shape with a `{bsdf}` BSDF is a glass object {distance:.3} m from \
-             the camera: poser's glass objects are boxes and spheres of smooth glass (a \
-             `cube` or a `sphere` with a `dielectric` BSDF imports as one), and glass within \
+             the camera: poser imports a `cube` or a `sphere` of smooth `dielectric` as a \
+             glass object (Mitsuba's `cylinder` is open: no solid), and glass within \
              {PORT_REACH} m of the camera is its housing port\n  help: make it a `cube` or a \
              `sphere` with a `dielectric` BSDF, or give the shape a diffuse BSDF, or remove \
              it, to import the rest of the scene",
