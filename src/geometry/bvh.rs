@@ -146,6 +146,25 @@ fn roots(a: f64, b: f64, c: f64) -> Option<[f64; 2]> {
 }
 
 impl Solid {
+    /// Object `i`, `o`, as a solid when it is a glass sphere or cylinder.
+    fn of(o: &crate::model::Object, i: usize) -> Option<Solid> {
+        o.material.glass.as_ref()?;
+        let (radius, half_height) = match o.shape {
+            crate::model::Shape::Sphere { radius } => (radius, None),
+            crate::model::Shape::Cylinder { radius, height } => {
+                (radius, Some(0.5 * height * o.scale.z))
+            }
+            _ => return None,
+        };
+        Some(Solid {
+            centre: o.pose.translation,
+            rotation: o.pose.rotation,
+            radius: radius * o.scale.x,
+            half_height,
+            surface: SurfaceId::Object(i as u32),
+        })
+    }
+
     /// The smallest `t ∈ (RAY_EPSILON, tmax)` where the ray meets the solid's surface, with the
     /// surface's outward unit normal there.
     fn hit(&self, ray: &Ray, tmax: f64) -> Option<(f64, DVec3)> {
@@ -256,29 +275,15 @@ impl Bvh {
                     (f.mesh.transformed(&o.pose, o.scale), uv)
                 }
                 (None, Some(b)) => (b.mesh.transformed(&o.pose, o.scale), Some(b.uv.clone())),
-                (None, None) if o.material.glass.is_some() => {
-                    let (radius, half_height) = match o.shape {
-                        crate::model::Shape::Sphere { radius } => (radius, None),
-                        crate::model::Shape::Cylinder { radius, height } => {
-                            (radius, Some(0.5 * height * o.scale.z))
-                        }
-                        _ => (0.0, None),
-                    };
-                    if radius > 0.0 {
-                        solids.push(Solid {
-                            centre: o.pose.translation,
-                            rotation: o.pose.rotation,
-                            radius: radius * o.scale.x,
-                            half_height,
-                            surface: SurfaceId::Object(i as u32),
-                        });
+                (None, None) => {
+                    if let Some(s) = Solid::of(o, i) {
+                        solids.push(s);
                         textures.push(None);
                         prepared.push(None);
                         continue;
                     }
                     (object_mesh(o, base)?, None)
                 }
-                (None, None) => (object_mesh(o, base)?, None),
             };
             meshes.push((SurfaceId::Object(i as u32), mesh, uv));
             textures.push(baked);

@@ -266,6 +266,7 @@ class Built:
         self.lights = []  # (light data, colour, strength, in_water)
         self.world_bg = None  # (background node, colour, strength, in_water)
         self.glass_nodes = []  # (glass node, function(channel) -> ior)
+        self.solids = {}  # glass sphere/cylinder PLY path -> mesh, read once (`_solid`)
         self.water = None
         self.depth_mat = None  # created on the first depth render
         self.depth_nodes = None
@@ -804,7 +805,7 @@ def _build_water(built, coll, desc, shells, n_w, ref, base_dir):
         obj.matrix_parent_inverse.identity()
         _housing_inside(built, coll, ci, shell)
     gapped = [None if s is None else (s[0], geo.inflate(s[1], WATER_GAP), s[2]) for s in shells]
-    cutouts = _glass_cutouts(desc, base_dir)
+    cutouts = _glass_cutouts(built, base_dir)
     mesh = _water_mesh(desc, 0, gapped, cutouts)
     me = _mesh_from("poser_water", mesh, smooth=True)
     boundary = _volume_only_material("water boundary", water)
@@ -1001,7 +1002,7 @@ def _build_objects(built, coll, desc, base_dir):
             me = _import_parts(base_dir, shape["parts"], name)
         elif kind == "shaded_ply":
             # A glass sphere or cylinder: poser's mesh with its true normals (GLASS_OBJECTS).
-            me = _mesh_from(name, geo.read_ply(os.path.join(base_dir, shape["path"])),
+            me = _mesh_from(name, _solid(built, base_dir, shape["path"]),
                             smooth=True)
         else:
             me = bpy.data.meshes.new(name)
@@ -1046,12 +1047,20 @@ def _glass_object_material(built, name, glass, desc):
     return mat
 
 
-def _glass_cutouts(desc, base_dir):
+def _solid(built, base_dir, path):
+    """A glass sphere's or cylinder's mesh (`shaded_ply`), read once per build: the object and
+    its cut-out of the water both use it."""
+    if path not in built.solids:
+        built.solids[path] = geo.read_ply(os.path.join(base_dir, path))
+    return built.solids[path]
+
+
+def _glass_cutouts(built, base_dir):
     """GLASS_OBJECTS: every glass box, sphere and cylinder (world frame), WATER_GAP larger,
     normals into it: holes of the water mesh, in the order `_water_mesh` and `_water_verts`
     both use."""
     out = []
-    for ob in desc.get("objects", []):
+    for ob in built.desc.get("objects", []):
         kind = ob["shape"]["type"]
         if not ob["material"].get("glass") or kind not in ("box", "shaded_ply"):
             continue
@@ -1062,7 +1071,7 @@ def _glass_cutouts(desc, base_dir):
             half = 0.5 * np.asarray(ob["shape"]["size"], dtype=float) + WATER_GAP / scale
             hole = geo.box_mesh(-half, half, 0)
         else:  # a glass sphere or cylinder, centred on its frame's origin: grown per axis
-            solid = geo.read_ply(os.path.join(base_dir, ob["shape"]["path"]))
+            solid = _solid(built, base_dir, ob["shape"]["path"])
             half = np.max(np.abs(solid["verts"]), axis=0)
             grow = (half + WATER_GAP / scale) / half
             hole = {**solid, "verts": solid["verts"] * grow}

@@ -324,40 +324,42 @@ pub(super) fn border_rays(cam: &Camera) -> Vec<DVec3> {
 /// the image centre and `per_side + 1` points along each edge (the sizes of
 /// [`housing_shell`]'s shells). Points outside a fisheye's field are left out.
 pub(super) fn field_directions(cam: &Camera, per_side: usize) -> Vec<DVec3> {
-    let lens = Lens::from_camera(cam);
     let (w, h) = (cam.width as f64, cam.height as f64);
     let mut pts = vec![(0.5 * w, 0.5 * h)];
     for i in 0..=per_side {
         let s = i as f64 / per_side.max(1) as f64;
         pts.extend([(s * w, 0.0), (s * w, h), (0.0, s * h), (w, s * h)]);
     }
-    pts.into_iter()
-        .filter_map(|(u, v)| lens.unproject(u, v).ok())
-        .map(DVec3::normalize)
-        .collect()
+    unproject_all(cam, pts)
 }
 
 /// Unit directions of the field of view's border (corners and edge midpoints) from the pupil,
 /// camera frame, through the lens model (for the display meshes).
 pub(super) fn border_directions(cam: &Camera) -> Vec<DVec3> {
-    let lens = Lens::from_camera(cam);
     let (w, h) = (cam.width as f64, cam.height as f64);
-    let mut out = Vec::new();
-    for (u, v) in [
-        (0.0, 0.0),
-        (w, 0.0),
-        (0.0, h),
-        (w, h),
-        (0.5 * w, 0.0),
-        (0.5 * w, h),
-        (0.0, 0.5 * h),
-        (w, 0.5 * h),
-    ] {
-        if let Ok(d) = lens.unproject(u, v) {
-            out.push(d.normalize());
-        }
-    }
-    out
+    unproject_all(
+        cam,
+        [
+            (0.0, 0.0),
+            (w, 0.0),
+            (0.0, h),
+            (w, h),
+            (0.5 * w, 0.0),
+            (0.5 * w, h),
+            (0.0, 0.5 * h),
+            (w, 0.5 * h),
+        ],
+    )
+}
+
+/// The unit camera-frame directions of the pixel positions `pts` through `cam`'s lens model,
+/// in their order; positions outside the lens's field are left out.
+fn unproject_all(cam: &Camera, pts: impl IntoIterator<Item = (f64, f64)>) -> Vec<DVec3> {
+    let lens = Lens::from_camera(cam);
+    pts.into_iter()
+        .filter_map(|(u, v)| lens.unproject(u, v).ok())
+        .map(DVec3::normalize)
+        .collect()
 }
 
 #[cfg(test)]
