@@ -30,6 +30,8 @@
 //! Batches with independent counter-seeded streams run in parallel and are summed in order:
 //! the bytes do not depend on the thread count; the batches give the standard errors.
 
+mod open;
+
 use super::phase::PhaseFn;
 use crate::rng::SplitMix64;
 use glam::DVec3;
@@ -45,9 +47,6 @@ pub const NMU: usize = 48;
 /// Bins of azimuth relative to the sun, over [0, π] (folded).
 pub const NPHI: usize = 18;
 
-/// The smallest share of the light a channel must carry to be sampled on its own
-/// ([`Column::bright_channels`]).
-pub const BRIGHT_SHARE: f64 = 0.05;
 /// Independent batches per round (standard errors, parallelism).
 pub const BATCHES: usize = 32;
 /// Rounds at most: the solve stops earlier once E_d at the seabed is known to
@@ -230,9 +229,9 @@ pub struct Column {
     /// The sun's first-scattered light alone, same layout (`L_d = L_m + first`).
     pub first: [Vec<f32>; 3],
     /// Per layer and half-space (look up, look down): cumulative light × |cos θ| over the
-    /// half's `NMU/2 × NPHI` bins (importance sampling for surfaces facing up or down), last
-    /// entry the total; index 0 the channels' sum, 1–3 each channel's own.
-    cdf: Vec<[[Vec<f64>; 4]; 2]>,
+    /// half's `NMU/2 × NPHI` bins, the channels summed (importance sampling of the camera
+    /// ray's gather), last entry the total.
+    cdf: Vec<[Vec<f64>; 2]>,
     pub profiles: [Profile; 3],
     /// Per channel, the radiance seen looking down within [`SEEN_CONE`] of the nadir in every
     /// layer, split by the number of events (scatterings in the water, reflections at the
@@ -251,6 +250,12 @@ pub struct Column {
     /// The water's index under a reflecting surface ([`Top::Fresnel`]): the sky is seen
     /// through Snell's window.
     pub window: Option<[f64; 3]>,
+    /// The water's attenuation per channel, 1/m.
+    pub sigma_t: DVec3,
+    /// Per layer, the open irradiance on the normals' grid ([`Column::irradiance_open`]).
+    open: open::OpenLayers,
+    /// Per layer, the normal-aware direction sampler's tables ([`Column::sample_open`]).
+    samplers: open::SampleLayers,
     pub seconds: f64,
 }
 
@@ -531,6 +536,9 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
         sky: DVec3::from_array(input.ambient),
         bottom,
         window: input.top.window(),
+        sigma_t: DVec3::from_array([0, 1, 2].map(|c| input.sigma_a[c] + input.sigma_s[c])),
+        open: open::empty_layers(),
+        samplers: open::empty_samplers(),
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
@@ -560,13 +568,11 @@ fn stderr(v: &[f64]) -> f64 {
     (var / n).sqrt()
 }
 
-/// Per layer, the CDFs of the light × |cos θ| over the upper and the lower half of the bins:
-/// the table's (`table`: `L_m` with the sun's first scattering) plus the boundary's (the sky
-/// above, through Snell's window under a reflecting surface; `bottom` below) seen through the
-/// water from the layer's centre, so that a surface's next-event directions follow the whole
-/// diffuse light it sees where nothing shades it. Index 0 follows the channels' sum, 1–3 each
-/// channel's own light ([`Column::sample_channel`]).
-fn build_cdf(table: &[Vec<f32>; 3], input: &ColumnInput, bottom: DVec3) -> Vec<[[Vec<f64>; 4]; 2]> {
+/// Per layer, the CDFs of the light × |cos θ| over the upper and the lower half of the bins,
+/// the channels summed: the table's (`table`: `L_m` with the sun's first scattering) plus the
+/// boundary's (the sky above, through Snell's window under a reflecting surface; `bottom`
+/// below) seen through the water from the layer's centre.
+fn build_cdf(table: &[Vec<f32>; 3], input: &ColumnInput, bottom: DVec3) -> Vec<[Vec<f64>; 2]> {
     let depth = input.depth;
     let sky = DVec3::from_array(input.ambient);
     let sky_at = |mu: f64| sky_seen(sky, input.top.window(), mu);
@@ -577,12 +583,9 @@ fn build_cdf(table: &[Vec<f32>; 3], input: &ColumnInput, bottom: DVec3) -> Vec<[
         .map(|k| {
             let z = (k as f64 + 0.5) * dz;
             [1, 0].map(|up| {
-                let mut acc = [0.0; 4];
-                let mut out = [0, 1, 2, 3].map(|_| {
-                    let mut v = Vec::with_capacity(half + 1);
-                    v.push(0.0);
-                    v
-                });
+                let mut acc = 0.0;
+                let mut out = Vec::with_capacity(half + 1);
+                out.push(0.0);
                 for b in 0..half {
                     let i = k * NMU * NPHI + up * half + b;
                     let mu_bin = up * NMU / 2 + b / NPHI;
@@ -595,17 +598,8 @@ fn build_cdf(table: &[Vec<f32>; 3], input: &ColumnInput, bottom: DVec3) -> Vec<[
                     let through = lb * (-sigma_t * (to / mu.max(1e-3))).exp();
                     let l = DVec3::new(table[0][i] as f64, table[1][i] as f64, table[2][i] as f64)
                         + through;
-                    let l = l.max(DVec3::ZERO);
-                    let omega = mu * bin_solid_angle(mu_bin);
-                    // The channels' sum: the mixture of their own densities weighted by their
-                    // irradiance (the bright channels, which carry the image's noise, lead).
-                    acc[0] += l.element_sum() * omega;
-                    for c in 0..3 {
-                        acc[c + 1] += l[c] * omega;
-                    }
-                    for (o, a) in out.iter_mut().zip(acc) {
-                        o.push(a);
-                    }
+                    acc += l.max(DVec3::ZERO).element_sum() * mu * bin_solid_angle(mu_bin);
+                    out.push(acc);
                 }
                 out
             })
@@ -894,16 +888,17 @@ impl Column {
     /// [`Column::radiance`]'s interpolation agree; sampled against the interpolation, the
     /// aureole's peak gave next-event estimates a 40 % relative spread.)
     pub fn radiance_binned(&self, z: f64, look: DVec3) -> DVec3 {
+        self.binned_sum(z, look).max(DVec3::ZERO)
+    }
+
+    /// [`Column::radiance_binned`] before its clamp at 0: linear in the layers' bins.
+    fn binned_sum(&self, z: f64, look: DVec3) -> DVec3 {
         let (i, j) = bin_of(look, self.sun_azimuth);
         // Linear in depth as [`Column::radiance`], extrapolated in the outer half-layers (the
         // light changes by e^(−K dz/2) there: 3.5 % for red at 12 m); the sampler's mixture
         // holds the outer layers' own bins, which are nearly proportional.
-        let dz = self.depth / NZ as f64;
-        let fz = (z / dz - 0.5).clamp(-0.5, NZ as f64 - 0.5);
-        let k0 = (fz.max(0.0) as usize).min(NZ - 2);
-        let tz = fz - k0 as f64;
         let mut out = DVec3::ZERO;
-        for (k, w) in [(k0, 1.0 - tz), (k0 + 1, tz)] {
+        for (k, w) in self.depth_weights(z) {
             if w == 0.0 {
                 continue;
             }
@@ -914,7 +909,7 @@ impl Column {
                 (self.table[2][idx] + self.first[2][idx]) as f64,
             );
         }
-        out.max(DVec3::ZERO)
+        out
     }
 
     /// Sample a look direction at depth `z` in the upper (`up`) or lower half of the sphere,
@@ -924,33 +919,10 @@ impl Column {
     /// [`Column::radiance_binned`] reads. Returns (direction, density per sr), or `None` where
     /// that half is dark.
     pub fn sample(&self, z: f64, up: bool, u0: f64, u1: f64, u2: f64) -> Option<(DVec3, f64)> {
-        self.sample_from(0, z, up, [u0, u1, u2])
+        self.sample_from(z, up, [u0, u1, u2])
     }
 
-    /// The channels carrying at least [`BRIGHT_SHARE`] of the light over the upper half at
-    /// depth `z` (the nearer layer), and the brightest of them: a surface estimates these
-    /// from directions of their own ([`Column::sample_channel`]), the others (dark, their
-    /// noise does not show) from the brightest's directions.
-    pub fn bright_channels(&self, z: f64) -> ([bool; 3], usize) {
-        let [(k0, w0), (k1, _)] = self.layers_at(z);
-        let k = if w0 >= 0.5 { k0 } else { k1 };
-        let cdf = &self.cdf[k][0];
-        let total = |c: usize| cdf[c + 1].last().copied().unwrap_or(0.0);
-        let sum = cdf[0].last().copied().unwrap_or(0.0);
-        let lead = (0..3).fold(0, |m, c| if total(c) > total(m) { c } else { m });
-        let bright = [0, 1, 2].map(|c| c == lead || total(c) >= BRIGHT_SHARE * sum);
-        (bright, lead)
-    }
-
-    /// [`Column::sample`] with density ∝ channel `c`'s own light × |cos θ| (its light may be
-    /// spread wider or narrower than the channels' sum: a surface's estimate of each channel
-    /// from its own directions errs less, [`Column::pdf_channel`]).
-    pub fn sample_channel(&self, c: usize, z: f64, up: bool, u: [f64; 3]) -> Option<(DVec3, f64)> {
-        self.sample_from(1 + c.min(2), z, up, u)
-    }
-
-    /// Draw from CDF `which` (0: the channels' sum, 1–3: a channel's own).
-    fn sample_from(&self, which: usize, z: f64, up: bool, u: [f64; 3]) -> Option<(DVec3, f64)> {
+    fn sample_from(&self, z: f64, up: bool, u: [f64; 3]) -> Option<(DVec3, f64)> {
         let [u0, u1, u2] = u;
         let half = NMU / 2 * NPHI;
         // The layer: one of the two bracketing `z`, by its weight (`u0` is reused).
@@ -960,7 +932,7 @@ impl Column {
         } else {
             (k1, ((u0 - w0) / (1.0 - w0)).min(1.0 - f64::EPSILON))
         };
-        let cdf = &self.cdf[k][if up { 0 } else { 1 }][which];
+        let cdf = &self.cdf[k][if up { 0 } else { 1 }];
         let total = *cdf.last()?;
         if !(total > 0.0) {
             return None;
@@ -983,21 +955,12 @@ impl Column {
         let a = self.sun_azimuth;
         let perp = DVec3::new(-a.y, a.x, 0.0);
         let dir = (a * (sz * phi.cos()) + perp * (sz * phi.sin()) + DVec3::Z * cz).normalize();
-        let p = self.pdf_from(which, z, up, dir);
+        let p = self.pdf(z, up, dir);
         (p > 0.0).then_some((dir, p))
     }
 
     /// Density (per sr) of [`Column::sample`] (half `up`) at depth `z` for direction `look`.
     pub fn pdf(&self, z: f64, up: bool, look: DVec3) -> f64 {
-        self.pdf_from(0, z, up, look)
-    }
-
-    /// Density (per sr) of [`Column::sample_channel`] for channel `c`.
-    pub fn pdf_channel(&self, c: usize, z: f64, up: bool, look: DVec3) -> f64 {
-        self.pdf_from(1 + c.min(2), z, up, look)
-    }
-
-    fn pdf_from(&self, which: usize, z: f64, up: bool, look: DVec3) -> f64 {
         let (i, j) = bin_of(look, self.sun_azimuth);
         let in_up = i >= NMU / 2;
         if in_up != up {
@@ -1008,7 +971,7 @@ impl Column {
             .iter()
             .filter(|(_, w)| *w > 0.0)
             .map(|&(k, w)| {
-                let cdf = &self.cdf[k][if up { 0 } else { 1 }][which];
+                let cdf = &self.cdf[k][if up { 0 } else { 1 }];
                 let total = cdf.last().copied().unwrap_or(0.0);
                 if total > 0.0 {
                     w * (cdf[b + 1] - cdf[b]) / total / bin_solid_angle(i)
@@ -1272,27 +1235,6 @@ mod tests {
         // E[1/p] over the sampled density is the solid angle of its support: a half, 2π.
         let support = sum / n as f64;
         assert!((support - 2.0 * PI).abs() < 0.05 * 2.0 * PI, "{support}");
-        // Each channel's own sampler likewise.
-        for c in 0..3 {
-            let mut sum = 0.0;
-            for _ in 0..n {
-                let up = rng.next_f64() < 0.5;
-                let u = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
-                let (d, p) = col.sample_channel(c, z, up, u).unwrap();
-                assert_eq!(d.z > 0.0, up);
-                let q = col.pdf_channel(c, z, up, d);
-                assert!(
-                    (p - q).abs() < 1e-9 * p.max(1e-12),
-                    "channel {c}: {p} vs {q}"
-                );
-                sum += 1.0 / p;
-            }
-            let support = sum / n as f64;
-            assert!(
-                (support - 2.0 * PI).abs() < 0.05 * 2.0 * PI,
-                "channel {c}: {support}"
-            );
-        }
     }
 
     /// Bad input is an explicit error, never a hang or NaN.
@@ -1443,18 +1385,15 @@ mod tests {
             seed: 1,
         };
         let col = solve(&input).unwrap();
-        // Each channel's irradiance from the channels' summed light (`None`) and from its own
-        // (`Some(c)`): both converge to E_d; its own spreads no more than the sum's.
-        let estimate = |z: f64, channel: Option<usize>| {
+        // The irradiance on a level surface from the channels' summed light converges to E_d.
+        let estimate = |z: f64| {
             let mut rng = SplitMix64(5);
             let n = 100_000;
             let (mut s, mut s2) = (DVec3::ZERO, DVec3::ZERO);
             for _ in 0..n {
-                let u = [rng.next_f64(), rng.next_f64(), rng.next_f64()];
-                let (w, p) = match channel {
-                    Some(c) => col.sample_channel(c, z, true, u).unwrap(),
-                    None => col.sample(z, true, u[0], u[1], u[2]).unwrap(),
-                };
+                let (w, p) = col
+                    .sample(z, true, rng.next_f64(), rng.next_f64(), rng.next_f64())
+                    .unwrap();
                 let through = (-DVec3::new(0.379, 0.1159, 0.0915) * (z / w.z)).exp() * col.sky;
                 let e = (col.radiance_binned(z, w) + through) * w.z / p;
                 s += e;
@@ -1466,7 +1405,7 @@ mod tests {
         };
         for z in [11.95, 6.0] {
             let j = (z / 12.0 * NZ as f64).round() as usize;
-            let (m, spread) = estimate(z, None);
+            let (m, spread) = estimate(z);
             for c in 1..3 {
                 let e_d = col.profiles[c].e_d_diffuse[j];
                 assert!(
@@ -1475,18 +1414,6 @@ mod tests {
                     m[c]
                 );
                 assert!(spread[c] < 0.12, "z {z} channel {c}: spread {}", spread[c]);
-                let (own, own_spread) = estimate(z, Some(c));
-                assert!(
-                    (own[c] / e_d - 1.0).abs() < 0.015,
-                    "z {z} channel {c}, its own directions: {} vs {e_d}",
-                    own[c]
-                );
-                assert!(
-                    own_spread[c] <= spread[c],
-                    "z {z} channel {c}: its own directions spread {} > the sum's {}",
-                    own_spread[c],
-                    spread[c]
-                );
             }
         }
     }

@@ -708,7 +708,7 @@ impl<'a> Integrator<'a> {
             }
             let p = h.point + n * SURFACE_OFFSET * (1.0 + h.point.abs().max_element());
             rng.surface(depth);
-            l += beta_nee * self.surface_direct(&h, d, albedo, day, depth == 0, rng);
+            l += beta_nee * self.surface_direct(&h, d, albedo, day, rng);
             // f·cos/pdf = albedo·(cos/π)/pdf (= albedo for pure cosine sampling).
             let (nd, pdf) = self.sample_surface(n, rng);
             let cos = n.dot(nd);
@@ -790,7 +790,7 @@ impl<'a> Integrator<'a> {
             if t < b {
                 if let Some(h) = surface {
                     let albedo = self.albedo_over(h, self.footprint(spread, depth, o, d, h));
-                    let lit = self.surface_direct(h, d, albedo, day, depth == 0, rng);
+                    let lit = self.surface_direct(h, d, albedo, day, rng);
                     *l += *beta * tr(m.sigma_t, b - a) * lit;
                 }
                 let trv = tr(m.sigma_t, t - a);
@@ -1013,7 +1013,7 @@ impl<'a> Integrator<'a> {
             let lit = if albedo == DVec3::ZERO {
                 DVec3::ZERO
             } else {
-                self.surface_light(&h, w, albedo, false, true, false, rng)
+                self.surface_light(&h, w, albedo, false, true, rng)
             };
             let water = if level + 1 < GATHER_LEVELS {
                 self.column_gather(col, x, w, h.t, level + 1, rng)
@@ -1041,24 +1041,20 @@ impl<'a> Integrator<'a> {
 
     /// Next-event estimate of the light reflected at surface hit `h` (of albedo `albedo`,
     /// [`Integrator::albedo`]) towards `-d` (no path weight). `day`: the path still carries
-    /// daylight (sun, and the column's light when there is one). `first`: the camera ray's own
-    /// hit, where the column's light is estimated per channel ([`Integrator::column_nee`]).
+    /// daylight (sun, and the column's light when there is one).
     fn surface_direct(
         &self,
         h: &Hit,
         d: DVec3,
         albedo: DVec3,
         day: bool,
-        first: bool,
         rng: &mut Sampler,
     ) -> DVec3 {
-        self.surface_light(h, d, albedo, true, day, first, rng)
+        self.surface_light(h, d, albedo, true, day, rng)
     }
 
     /// [`Integrator::surface_direct`] from the lamps (strobes, area lights) when `lamps`, and
-    /// from daylight (the sun, and the column's light) when `day`; the column's light per
-    /// channel when `per_channel`.
-    #[allow(clippy::too_many_arguments)]
+    /// from daylight (the sun, and the column's light) when `day`.
     fn surface_light(
         &self,
         h: &Hit,
@@ -1066,7 +1062,6 @@ impl<'a> Integrator<'a> {
         albedo: DVec3,
         lamps: bool,
         day: bool,
-        per_channel: bool,
         rng: &mut Sampler,
     ) -> DVec3 {
         let n = if h.normal.dot(d) > 0.0 {
@@ -1095,51 +1090,41 @@ impl<'a> Integrator<'a> {
             DVec3::ZERO
         };
         if day && let Some(col) = self.column {
-            // Per channel under the sun only: its aureole's width differs per channel; a
-            // sky-lit column's channels are alike, and their own draws cost without gain.
-            l += if per_channel && self.lights.sun.is_some() {
-                self.column_nee_per_channel(col, p, n, &f, rng)
-            } else {
-                self.column_nee(col, p, n, &f, None, rng)
-            };
+            l += self.column_nee(col, p, n, albedo, &f, rng);
         }
         l
     }
 
-    /// Next-event estimate of the column's daylight reflected at `p` (normal `n`, BSDF·cos
-    /// `f`): one direction from the mixture of the column's table over the upper half, over
-    /// the lower half (each ∝ luminance × |cos θ|, weighted by the share of that half the
-    /// surface faces) and the cosine lobe ([`COLUMN_NEE_COSINE`], so that every direction the
-    /// surface sees has a density), visibility traced to the local geometry. It is the only
-    /// estimator of the column's light at surfaces: the bounce leaving `p` adds none
-    /// (combining the two by MIS doubled the variance: the table's sampler alone is close to
-    /// proportional to the integrand, the cosine lobe far from it).
+    /// Next-event estimate of the column's daylight reflected at `p` (normal `n`, Lambertian
+    /// `albedo`, BSDF·cos `f`), with the open plane's irradiance as a control variate: the
+    /// irradiance the column puts on an unshaded plane of normal `n` at that depth
+    /// ([`crate::optics::column::Column::irradiance_open`], exact but for the normals' grid),
+    /// plus a one-direction estimate of what the local geometry changes,
+    /// `f · (seen − open) / pdf`: `seen` is the light arriving along the direction (the
+    /// column's in the water up to what it meets, traced to the local geometry), `open` what
+    /// an open plane receives ([`crate::optics::column::Column::radiance_open`]). Where nothing
+    /// shades the point the two nearly cancel, so a rough seabed's unshaded facets carry no
+    /// noise from the column's light. The direction comes from the column's normal-aware
+    /// sampler ([`crate::optics::column::Column::sample_open`], nearly ∝ open radiance ×
+    /// max(0, n·ω), so that `f · open / pdf` stays near the open irradiance where the point
+    /// is shaded) mixed with the cosine lobe ([`COLUMN_NEE_COSINE`], so that every direction
+    /// the surface faces has a density). It is the only estimator of the column's light at
+    /// surfaces: the bounce leaving `p` adds none.
     fn column_nee(
         &self,
         col: &crate::optics::column::Column,
         p: DVec3,
         n: DVec3,
+        albedo: DVec3,
         f: &impl Fn(DVec3) -> DVec3,
-        channel: Option<usize>,
         rng: &mut Sampler,
     ) -> DVec3 {
         let z = -p.z;
-        let sample = |up: bool, u: [f64; 3]| match channel {
-            Some(c) => col.sample_channel(c, z, up, u),
-            None => col.sample(z, up, u[0], u[1], u[2]),
-        };
-        let pdf_of = |up: bool, w: DVec3| match channel {
-            Some(c) => col.pdf_channel(c, z, up, w),
-            None => col.pdf(z, up, w),
-        };
-        let (u0, u1, u2) = (rng.next(), rng.next(), rng.next());
+        let open = albedo / PI * col.irradiance_open(z, n);
+        let (u0, u1, u2, u3) = (rng.next(), rng.next(), rng.next(), rng.next());
         let table = 1.0 - COLUMN_NEE_COSINE;
-        let p_up = table * 0.5 * (1.0 + n.z.clamp(-1.0, 1.0));
-        let p_down = table - p_up;
-        let w = if u0 < p_up {
-            sample(true, [u0 / p_up, u1, u2]).map(|s| s.0)
-        } else if u0 < table {
-            sample(false, [(u0 - p_up) / p_down, u1, u2]).map(|s| s.0)
+        let w = if u0 < table {
+            col.sample_open(z, n, [u0 / table, u1, u2, u3]).map(|s| s.0)
         } else {
             let r = u1.sqrt();
             let phi = 2.0 * PI * u2;
@@ -1147,55 +1132,22 @@ impl<'a> Integrator<'a> {
             let c = (1.0 - u1).max(0.0).sqrt();
             Some((tx * (r * phi.cos()) + ty * (r * phi.sin()) + n * c).normalize())
         };
-        let Some(w) = w else { return DVec3::ZERO };
+        // A draw that fails, or falls below the surface's horizon, estimates the difference
+        // as 0 there: the mixture's density covers every direction the surface faces.
+        let Some(w) = w else { return open };
         let fv = f(w);
         if fv == DVec3::ZERO {
-            return DVec3::ZERO;
+            return open;
         }
-        let pdf = p_up * pdf_of(true, w)
-            + p_down * pdf_of(false, w)
-            + COLUMN_NEE_COSINE * n.dot(w).max(0.0) / PI;
+        let pdf = table * col.pdf_open(z, n, w) + COLUMN_NEE_COSINE * n.dot(w).max(0.0) / PI;
         if !(pdf > 0.0) {
-            return DVec3::ZERO;
+            return open;
         }
         let t = self
             .scene
             .intersect(&Ray { origin: p, dir: w }, f64::INFINITY)
             .map_or(f64::INFINITY, |h| h.t);
-        fv * self.column_seen(col, p, w, t) / pdf
-    }
-
-    /// [`Integrator::column_nee`] with each bright channel's light estimated from a direction
-    /// drawn from its own distribution ([`crate::optics::column::Column::bright_channels`]),
-    /// the dark channels' from the brightest's: one direction per bright channel instead of
-    /// one for all. Drawn in proportion to the channels' summed light, a channel whose light
-    /// is spread otherwise than the sum's gets uneven weights. Measured at the camera ray's
-    /// hit (quarter size, 8 spp, relative noise of the pixel means): a flat untextured sand
-    /// bed at 12 m in Jerlov IB, green 2.61 → 1.24 %, blue 1.37 → 1.27 %; samples to the
-    /// sensor's noise: reef_strip 146 → 127, archaeology (8 % size) 68 → 41,
-    /// flat_port_deformation (8 %) 39 → 22; for 10–20 % more time per sample. Used under a
-    /// sun only: on the deep scenes lit by the sky alone (paper_survey, two_gas_dive) the
-    /// samples did not move and the time rose.
-    fn column_nee_per_channel(
-        &self,
-        col: &crate::optics::column::Column,
-        p: DVec3,
-        n: DVec3,
-        f: &impl Fn(DVec3) -> DVec3,
-        rng: &mut Sampler,
-    ) -> DVec3 {
-        let (bright, lead) = col.bright_channels(-p.z);
-        let mut out = DVec3::ZERO;
-        for c in (0..3).filter(|&c| bright[c]) {
-            let e = self.column_nee(col, p, n, f, Some(c), rng);
-            out[c] = e[c];
-            if c == lead {
-                for k in (0..3).filter(|&k| !bright[k]) {
-                    out[k] = e[k];
-                }
-            }
-        }
-        out
+        open + fv * (self.column_seen(col, p, w, t) - col.radiance_open(z, w)) / pdf
     }
 
     /// The column's whole diffuse light reaching `o` along `d` from up to `t_end` (as
