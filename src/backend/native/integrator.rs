@@ -1123,23 +1123,32 @@ impl<'a> Integrator<'a> {
         let open = albedo / PI * col.irradiance_open(z, n);
         let (u0, u1, u2, u3) = (rng.next(), rng.next(), rng.next(), rng.next());
         let table = 1.0 - COLUMN_NEE_COSINE;
-        let w = if u0 < table {
-            col.sample_open(z, n, [u0 / table, u1, u2, u3]).map(|s| s.0)
+        // The direction, and the table's density there when it drew it (the cosine lobe's
+        // draws look it up).
+        let drawn = if u0 < table {
+            col.sample_open(z, n, [u0 / table, u1, u2, u3])
+                .map(|(w, p)| (w, Some(p)))
         } else {
             let r = u1.sqrt();
             let phi = 2.0 * PI * u2;
             let (tx, ty) = n.any_orthonormal_pair();
             let c = (1.0 - u1).max(0.0).sqrt();
-            Some((tx * (r * phi.cos()) + ty * (r * phi.sin()) + n * c).normalize())
+            Some((
+                (tx * (r * phi.cos()) + ty * (r * phi.sin()) + n * c).normalize(),
+                None,
+            ))
         };
         // A draw that fails, or falls below the surface's horizon, estimates the difference
         // as 0 there: the mixture's density covers every direction the surface faces.
-        let Some(w) = w else { return open };
+        let Some((w, p_table)) = drawn else {
+            return open;
+        };
         let fv = f(w);
         if fv == DVec3::ZERO {
             return open;
         }
-        let pdf = table * col.pdf_open(z, n, w) + COLUMN_NEE_COSINE * n.dot(w).max(0.0) / PI;
+        let p_table = p_table.unwrap_or_else(|| col.pdf_open(z, n, w));
+        let pdf = table * p_table + COLUMN_NEE_COSINE * n.dot(w).max(0.0) / PI;
         if !(pdf > 0.0) {
             return open;
         }

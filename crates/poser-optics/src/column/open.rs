@@ -164,7 +164,10 @@ fn bin_cosines() -> &'static [f32] {
                 (0..NMU * NPHI).map(move |bin| {
                     let (i, j) = (bin / NPHI, bin % NPHI);
                     let (a, b) = (i as f64 * PI / NMU as f64, (i + 1) as f64 * PI / NMU as f64);
-                    let (p, q) = (j as f64 * PI / NPHI as f64, (j + 1) as f64 * PI / NPHI as f64);
+                    let (p, q) = (
+                        j as f64 * PI / NPHI as f64,
+                        (j + 1) as f64 * PI / NPHI as f64,
+                    );
                     (half_bin(n, a, b, p, q) + half_bin(n, a, b, -q, -p)) as f32
                 })
             })
@@ -230,8 +233,8 @@ impl Column {
         let a = self.sun_azimuth;
         let perp = DVec3::new(-a.y, a.x, 0.0);
         let ft = (n.z.clamp(-1.0, 1.0).acos() / PI * (NT - 1) as f64).clamp(0.0, (NT - 1) as f64);
-        let fp = (n.dot(perp).abs().atan2(n.dot(a)) / PI * (NP - 1) as f64)
-            .clamp(0.0, (NP - 1) as f64);
+        let fp =
+            (n.dot(perp).abs().atan2(n.dot(a)) / PI * (NP - 1) as f64).clamp(0.0, (NP - 1) as f64);
         let (t0, p0) = ((ft as usize).min(NT - 2), (fp as usize).min(NP - 2));
         let (tt, tp) = (ft - t0 as f64, fp - p0 as f64);
         let mut out = DVec3::ZERO;
@@ -307,7 +310,10 @@ impl Column {
             return None;
         }
         let x = (u1 * total) as f32;
-        let h = cdf.partition_point(|&v| v <= x).saturating_sub(1).min(HALVES - 1);
+        let h = cdf
+            .partition_point(|&v| v <= x)
+            .saturating_sub(1)
+            .min(HALVES - 1);
         if cdf[h + 1] <= cdf[h] {
             return None;
         }
@@ -319,7 +325,8 @@ impl Column {
         let a = self.sun_azimuth;
         let perp = DVec3::new(-a.y, a.x, 0.0);
         let sign = if mirror { -1.0 } else { 1.0 };
-        let dir = (a * (sz * phi.cos()) + perp * (sign * sz * phi.sin()) + DVec3::Z * cz).normalize();
+        let dir =
+            (a * (sz * phi.cos()) + perp * (sign * sz * phi.sin()) + DVec3::Z * cz).normalize();
         let pdf = self.pdf_open(z, n, dir);
         (pdf > 0.0).then_some((dir, pdf))
     }
@@ -334,7 +341,8 @@ impl Column {
         let i = ((polar_from_nadir(look.z) / PI * NMU as f64) as usize).min(NMU - 1);
         let js = (((phi + PI) / (PI / NPHI as f64)) as usize).min(2 * NPHI - 1);
         let h = i * 2 * NPHI + js;
-        let omega = (-((i + 1) as f64 * PI / NMU as f64).cos() + (i as f64 * PI / NMU as f64).cos())
+        let omega = (-((i + 1) as f64 * PI / NMU as f64).cos()
+            + (i as f64 * PI / NMU as f64).cos())
             * (PI / NPHI as f64);
         let nodes = Self::sampling_nodes(ft, fp);
         self.layers_at(z)
@@ -371,8 +379,9 @@ impl Column {
                 .map(|h| {
                     let b = folded(h);
                     let i = b / NPHI;
-                    let mu = 0.5 * (-(i as f64 * PI / NMU as f64).cos()
-                        - ((i + 1) as f64 * PI / NMU as f64).cos());
+                    let mu = 0.5
+                        * (-(i as f64 * PI / NMU as f64).cos()
+                            - ((i + 1) as f64 * PI / NMU as f64).cos());
                     let t: f64 = (0..3)
                         .map(|c| (self.table[c][base + b] + self.first[c][base + b]) as f64)
                         .sum();
@@ -587,7 +596,11 @@ mod tests {
                 );
                 // Red is dark at depth, and the channels' sum leads the draws.
                 let most = if c == 0 { 1.0 } else { 0.3 };
-                assert!(spread[c] < most, "z {z}, n {n}, channel {c}: spread {}", spread[c]);
+                assert!(
+                    spread[c] < most,
+                    "z {z}, n {n}, channel {c}: spread {}",
+                    spread[c]
+                );
             }
             // Few draws are wasted below the plane's horizon (the nodes about `n` face a few
             // degrees otherwise).
