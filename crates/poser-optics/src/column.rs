@@ -1083,6 +1083,27 @@ impl Column {
     }
 }
 
+/// A reef site's column for the tests: 12 m of Jerlov IB (HG g = 0.92) under a sun, with the
+/// sky's radiance `ambient` above the surface `top`, solved with `photons` per channel.
+#[cfg(test)]
+pub(crate) fn reef_site(ambient: [f64; 3], top: Top, photons: usize) -> ColumnInput {
+    ColumnInput {
+        depth: 12.0,
+        sigma_a: [0.334, 0.0623, 0.0235],
+        sigma_s: [0.045, 0.0536, 0.068],
+        phase: PhaseFn::Hg { g: 0.92 },
+        sun: Some(ColumnSun {
+            dirs: [DVec3::new(0.33, -0.28, -0.9).normalize(); 3],
+            irradiance: [500.0, 600.0, 550.0],
+        }),
+        ambient,
+        bottom_albedo: [0.4, 0.38, 0.3],
+        top,
+        photons,
+        seed: 1,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1361,30 +1382,15 @@ mod tests {
         assert!(col.table[0].iter().all(|v| v.is_finite()));
     }
 
-    /// A surface's next-event directions ([`Column::sample`]) follow the light they estimate
-    /// ([`Column::radiance_binned`] × cos θ): under a sun through 12 m of coastal water
+    /// The table's directions ([`Column::sample`], which the camera ray's gather draws from)
+    /// follow the light they estimate ([`Column::radiance_binned`] × cos θ): under a sun through 12 m of coastal water
     /// (g = 0.92, the aureole's peak in the table) the estimate of E_d's diffuse part at the
     /// bottom and half-way down matches the column's own crossing tallies, and its relative
     /// spread per sample stays small. (Sampling bins against the trilinear interpolation
     /// spread it 40 %: fireflies on every sunlit surface.)
     #[test]
     fn surface_sampling_follows_the_diffuse_light() {
-        let input = ColumnInput {
-            depth: 12.0,
-            sigma_a: [0.334, 0.0623, 0.0235],
-            sigma_s: [0.045, 0.0536, 0.068],
-            phase: PhaseFn::Hg { g: 0.92 },
-            sun: Some(ColumnSun {
-                dirs: [DVec3::new(0.33, -0.28, -0.9).normalize(); 3],
-                irradiance: [500.0, 600.0, 550.0],
-            }),
-            ambient: [0.0, 2.0, 3.0],
-            bottom_albedo: [0.4, 0.38, 0.3],
-            top: Top::Open,
-            photons: 200_000,
-            seed: 1,
-        };
-        let col = solve(&input).unwrap();
+        let col = solve(&reef_site([0.0, 2.0, 3.0], Top::Open, 200_000)).unwrap();
         // The irradiance on a level surface from the channels' summed light converges to E_d.
         let estimate = |z: f64| {
             let mut rng = SplitMix64(5);

@@ -442,6 +442,7 @@ impl Column {
 
 #[cfg(test)]
 mod tests {
+    use super::super::{Top, reef_site, solve};
     use super::*;
 
     #[test]
@@ -480,24 +481,7 @@ mod tests {
     /// nodes and between them, under a sun and a sky through Snell's window with a bottom.
     #[test]
     fn open_irradiance_integrates_the_open_radiance() {
-        use super::super::{ColumnInput, ColumnSun, Top, solve};
-        use crate::phase::PhaseFn;
-        let col = solve(&ColumnInput {
-            depth: 12.0,
-            sigma_a: [0.334, 0.0623, 0.0235],
-            sigma_s: [0.045, 0.0536, 0.068],
-            phase: PhaseFn::Hg { g: 0.92 },
-            sun: Some(ColumnSun {
-                dirs: [DVec3::new(0.33, -0.28, -0.9).normalize(); 3],
-                irradiance: [500.0, 600.0, 550.0],
-            }),
-            ambient: [1.0, 2.0, 3.0],
-            bottom_albedo: [0.4, 0.38, 0.3],
-            top: Top::Fresnel([1.34; 3]),
-            photons: 20_000,
-            seed: 1,
-        })
-        .unwrap();
+        let col = solve(&reef_site([1.0, 2.0, 3.0], Top::Fresnel([1.34; 3]), 20_000)).unwrap();
         // Sub-cells aligned with the bins, 16 per bin side, full azimuth.
         let (na, nf) = (NMU * 16, 2 * NPHI * 16);
         let brute = |z: f64, n: DVec3| {
@@ -543,25 +527,8 @@ mod tests {
     /// its one-direction estimate of the open irradiance averages to it with a small spread.
     #[test]
     fn open_sampling_follows_the_light_on_a_tilted_plane() {
-        use super::super::{ColumnInput, ColumnSun, Top, solve};
-        use crate::phase::PhaseFn;
         use crate::rng::SplitMix64;
-        let col = solve(&ColumnInput {
-            depth: 12.0,
-            sigma_a: [0.334, 0.0623, 0.0235],
-            sigma_s: [0.045, 0.0536, 0.068],
-            phase: PhaseFn::Hg { g: 0.92 },
-            sun: Some(ColumnSun {
-                dirs: [DVec3::new(0.33, -0.28, -0.9).normalize(); 3],
-                irradiance: [500.0, 600.0, 550.0],
-            }),
-            ambient: [1.0, 2.0, 3.0],
-            bottom_albedo: [0.4, 0.38, 0.3],
-            top: Top::Fresnel([1.34; 3]),
-            photons: 20_000,
-            seed: 1,
-        })
-        .unwrap();
+        let col = solve(&reef_site([1.0, 2.0, 3.0], Top::Fresnel([1.34; 3]), 20_000)).unwrap();
         let mut rng = SplitMix64(3);
         for (z, n) in [
             (11.9, DVec3::Z),
