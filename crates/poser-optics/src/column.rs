@@ -334,7 +334,8 @@ fn polar(z: f64) -> f64 {
 /// cos θ (the look direction's z) at the lower edge of polar bin `i` (`i = NMU`: the zenith).
 #[inline]
 fn mu_edge(i: usize) -> f64 {
-    -(i as f64 * PI / NMU as f64).cos()
+    static EDGES: std::sync::OnceLock<[f64; NMU + 1]> = std::sync::OnceLock::new();
+    EDGES.get_or_init(|| std::array::from_fn(|i| -(i as f64 * PI / NMU as f64).cos()))[i]
 }
 
 /// Solid angle of one (folded) bin of polar bin `i`: both mirror halves.
@@ -892,7 +893,7 @@ impl Column {
     }
 
     /// [`Column::radiance_binned`] before its clamp at 0: linear in the layers' bins.
-    fn binned_sum(&self, z: f64, look: DVec3) -> DVec3 {
+    pub fn binned_sum(&self, z: f64, look: DVec3) -> DVec3 {
         let (i, j) = bin_of(look, self.sun_azimuth);
         // Linear in depth as [`Column::radiance`], extrapolated in the outer half-layers (the
         // light changes by e^(−K dz/2) there: 3.5 % for red at 12 m); the sampler's mixture

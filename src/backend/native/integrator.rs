@@ -920,7 +920,19 @@ impl<'a> Integrator<'a> {
         t_end: f64,
         read: impl Fn(f64, DVec3) -> DVec3,
     ) -> DVec3 {
-        let near = read(-o.z, d);
+        self.column_from(col, o, d, t_end, read(-o.z, d), read)
+    }
+
+    /// [`Integrator::column_between`] with the near end's value `near` (`read(z_o, d)`) given.
+    fn column_from(
+        &self,
+        col: &crate::optics::column::Column,
+        o: DVec3,
+        d: DVec3,
+        t_end: f64,
+        near: DVec3,
+        read: impl Fn(f64, DVec3) -> DVec3,
+    ) -> DVec3 {
         if !t_end.is_finite() {
             // Nothing in the way: the sky or the column's bottom through the water.
             let s = col.to_boundary(-o.z, d);
@@ -1172,22 +1184,14 @@ impl<'a> Integrator<'a> {
             .scene
             .intersect(&Ray { origin: p, dir: w }, f64::INFINITY)
             .map_or(f64::INFINITY, |h| h.t);
-        open + fv * (self.column_seen(col, p, w, t) - col.radiance_open(z, w)) / pdf
-    }
-
-    /// The column's whole diffuse light reaching `o` along `d` from up to `t_end` (as
-    /// [`Integrator::column_segment`] with the sun's first scattering), read from the table's
-    /// bins ([`crate::optics::column::Column::radiance_binned`]), the function the column's
-    /// direction sampler follows.
-    fn column_seen(
-        &self,
-        col: &crate::optics::column::Column,
-        o: DVec3,
-        d: DVec3,
-        t_end: f64,
-    ) -> DVec3 {
-        self.column_between(col, o, d, t_end, |z, w| col.radiance_binned(z, w))
-            .max(DVec3::ZERO)
+        // `seen` and `h` read the same bin at the point: looked up once.
+        let b = col.binned_sum(z, w);
+        let seen = self
+            .column_from(col, p, w, t, b.max(DVec3::ZERO), |z, w| {
+                col.radiance_binned(z, w)
+            })
+            .max(DVec3::ZERO);
+        open + fv * (seen - (b + col.boundary_open(z, w.z))) / pdf
     }
 
     fn roulette(&self, beta: &mut DVec3, depth: u32, rng: &mut Sampler) -> bool {

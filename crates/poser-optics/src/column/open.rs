@@ -15,7 +15,7 @@
 //! irradiance is the radiance convolved with a clamped cosine: smooth;
 //! `open_irradiance_integrates_the_open_radiance` checks it against brute-force quadrature).
 
-use super::{Column, NMU, NPHI, NZ, sky_seen};
+use super::{Column, NMU, NPHI, NZ, mu_edge, sky_seen};
 
 /// Angle of a look direction from the nadir, [0, π].
 fn polar_from_nadir(z: f64) -> f64 {
@@ -218,10 +218,17 @@ impl Column {
     /// nothing in the way, as the surfaces' control variate reads it: the binned table plus
     /// the boundary through the water from the layers' centres, weighted as the table is.
     pub fn radiance_open(&self, z: f64, look: DVec3) -> DVec3 {
-        let mut out = self.binned_sum(z, look);
+        self.binned_sum(z, look) + self.boundary_open(z, look.z)
+    }
+
+    /// The boundary's part of [`Column::radiance_open`] for a look of `cos θ = mu`: the sky's
+    /// or the bottom's radiance through the water from the two layers' centres, weighted as
+    /// the table is.
+    pub fn boundary_open(&self, z: f64, mu: f64) -> DVec3 {
+        let mut out = DVec3::ZERO;
         for (k, w) in self.depth_weights(z) {
             if w != 0.0 {
-                out += w * self.boundary_from_layer(k, look.z);
+                out += w * self.boundary_from_layer(k, mu);
             }
         }
         out
@@ -318,8 +325,7 @@ impl Column {
             return None;
         }
         let (i, p, q) = half_bounds(h);
-        let cz = -(i as f64 * PI / NMU as f64).cos()
-            + u2 * (-((i + 1) as f64 * PI / NMU as f64).cos() + (i as f64 * PI / NMU as f64).cos());
+        let cz = mu_edge(i) + u2 * (mu_edge(i + 1) - mu_edge(i));
         let phi = p + u3 * (q - p);
         let sz = (1.0 - cz * cz).max(0.0).sqrt();
         let a = self.sun_azimuth;
@@ -327,7 +333,9 @@ impl Column {
         let sign = if mirror { -1.0 } else { 1.0 };
         let dir =
             (a * (sz * phi.cos()) + perp * (sign * sz * phi.sin()) + DVec3::Z * cz).normalize();
-        let pdf = self.pdf_open(z, n, dir);
+        // The density of the half-bin drawn (its coordinates are known: no angles to
+        // recompute from the direction).
+        let pdf = self.pdf_half(z, &nodes, h);
         (pdf > 0.0).then_some((dir, pdf))
     }
 
@@ -340,11 +348,14 @@ impl Column {
         let phi = y.atan2(look.dot(a));
         let i = ((polar_from_nadir(look.z) / PI * NMU as f64) as usize).min(NMU - 1);
         let js = (((phi + PI) / (PI / NPHI as f64)) as usize).min(2 * NPHI - 1);
-        let h = i * 2 * NPHI + js;
-        let omega = (-((i + 1) as f64 * PI / NMU as f64).cos()
-            + (i as f64 * PI / NMU as f64).cos())
-            * (PI / NPHI as f64);
-        let nodes = Self::sampling_nodes(ft, fp);
+        self.pdf_half(z, &Self::sampling_nodes(ft, fp), i * 2 * NPHI + js)
+    }
+
+    /// Density (per sr) of [`Column::sample_open`] in half-bin `h`, for the sampling grid's
+    /// `nodes` about the surface's normal.
+    fn pdf_half(&self, z: f64, nodes: &[(usize, f64); 4], h: usize) -> f64 {
+        let i = h / (2 * NPHI);
+        let omega = (mu_edge(i + 1) - mu_edge(i)) * (PI / NPHI as f64);
         self.layers_at(z)
             .iter()
             .filter(|(_, w)| *w > 0.0)
