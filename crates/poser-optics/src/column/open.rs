@@ -475,8 +475,7 @@ mod tests {
     #[test]
     fn rings_integrate_the_clamped_cosine() {
         for nz in [-1.0, -0.3, 0.0, 0.5, 0.9, 1.0] {
-            let sn: f64 = (1.0 - nz * nz) as f64;
-            let sn = sn.sqrt();
+            let sn = (1.0f64 - nz * nz).sqrt();
             let n = 20000;
             let s: f64 = (0..n)
                 .map(|i| {
