@@ -946,7 +946,8 @@ pub struct Render {
     /// Most scattering vertices (surface or medium) on a path. **Default:** 8, raised to what
     /// keeps 99 % of the daylight the cameras see where the scene's water is a column whose
     /// light has scattered more often (measured on the column, docs/column.md; at most 254).
-    /// A written value that cuts off more than 1 % is warning W0239, with the share.
+    /// At least 1 (0 would end every path at its first surface: error E0046). A written value
+    /// that cuts off more than 1 % is warning W0239, with the share.
     pub bounces: Option<u32>,
     /// Render one pass per channel with that channel's indices (only done when the lateral
     /// colour is ≥ 0.1 px). **Default:** false.

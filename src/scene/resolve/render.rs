@@ -38,6 +38,8 @@ pub(super) fn render(
     let seed = r.opt_u64(cx, "seed").unwrap_or(0);
     // Raised to what the water column needs when not written (`super::default_bounces`).
     let max_bounces = r.u32(cx, "bounces", super::DEFAULT_BOUNCES);
+    // 0 would end every path at its first surface: a black image, every light dropped.
+    check::at_least(cx, &r, "bounces", max_bounces, 1);
     let dispersion = r.bool(cx, "dispersion", false);
     let outputs = outputs(cx, &mut r);
     let exposure = r.f64(cx, "exposure", Dim::Number, 1.0);
