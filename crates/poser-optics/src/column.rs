@@ -818,11 +818,6 @@ impl Column {
         // Layer values stand at the layers' centres; in the outer half-layers they are
         // extrapolated linearly to the surface and the bottom (looking down, the light
         // scattered between a point and the bottom falls linearly to 0 at the bottom).
-        let dz = self.depth / NZ as f64;
-        let fz = (z / dz - 0.5).clamp(-0.5, NZ as f64 - 0.5);
-        let k0 = (fz.max(0.0) as usize).min(NZ - 2);
-        let k1 = k0 + 1;
-        let tz = fz - k0 as f64;
         let fm = (polar(look.z) / PI * NMU as f64 - 0.5).clamp(0.0, (NMU - 1) as f64);
         let i0 = (fm as usize).min(NMU - 2);
         let i1 = i0 + 1;
@@ -840,7 +835,7 @@ impl Column {
         let j1 = (j0 + 1).min(NPHI - 1);
         let tp = fp - j0 as f64;
         let mut out = DVec3::ZERO;
-        for (k, wk) in [(k0, 1.0 - tz), (k1, tz)] {
+        for (k, wk) in self.depth_weights(z) {
             for (i, wi) in [(i0, 1.0 - tm), (i1, tm)] {
                 for (j, wj) in [(j0, 1.0 - tp), (j1, tp)] {
                     let w = wk * wi * wj;

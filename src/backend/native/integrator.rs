@@ -1118,13 +1118,13 @@ impl<'a> Integrator<'a> {
             DVec3::ZERO
         };
         if day && let Some(col) = self.column {
-            l += self.column_nee(col, p, n, albedo, &f, rng);
+            l += self.column_nee(col, p, n, albedo, rng);
         }
         l
     }
 
     /// Next-event estimate of the column's daylight reflected at `p` (normal `n`, Lambertian
-    /// `albedo`, BSDF·cos `f`), with the open plane's irradiance as a control variate: the
+    /// `albedo`), with the open plane's irradiance as a control variate: the
     /// irradiance the column puts on an unshaded plane of normal `n` at that depth
     /// ([`crate::optics::column::Column::irradiance_open`], exact but for the normals' grid),
     /// plus a one-direction estimate of what the local geometry changes,
@@ -1144,7 +1144,6 @@ impl<'a> Integrator<'a> {
         p: DVec3,
         n: DVec3,
         albedo: DVec3,
-        f: &impl Fn(DVec3) -> DVec3,
         rng: &mut Sampler,
     ) -> DVec3 {
         let z = -p.z;
@@ -1171,12 +1170,13 @@ impl<'a> Integrator<'a> {
         let Some((w, p_table)) = drawn else {
             return open;
         };
-        let fv = f(w);
-        if fv == DVec3::ZERO {
+        let cos = n.dot(w);
+        if cos <= 0.0 || albedo == DVec3::ZERO {
             return open;
         }
+        let fv = albedo * (cos / PI);
         let p_table = p_table.unwrap_or_else(|| col.pdf_open(z, n, w));
-        let pdf = table * p_table + COLUMN_NEE_COSINE * n.dot(w).max(0.0) / PI;
+        let pdf = table * p_table + COLUMN_NEE_COSINE * cos / PI;
         if !(pdf > 0.0) {
             return open;
         }

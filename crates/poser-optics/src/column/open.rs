@@ -15,12 +15,7 @@
 //! irradiance is the radiance convolved with a clamped cosine: smooth;
 //! `open_irradiance_integrates_the_open_radiance` checks it against brute-force quadrature).
 
-use super::{Column, NMU, NPHI, NZ, mu_edge, sky_seen};
-
-/// Angle of a look direction from the nadir, [0, π].
-fn polar_from_nadir(z: f64) -> f64 {
-    (-z.clamp(-1.0, 1.0)).acos()
-}
+use super::{Column, NMU, NPHI, NZ, mu_edge, polar, sky_seen};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -82,10 +77,7 @@ fn half_cosines() -> &'static [f32] {
         (0..ST * SP)
             .into_par_iter()
             .flat_map_iter(|node| {
-                let (t, p) = (node / SP, node % SP);
-                let th = t as f64 * PI / (ST - 1) as f64;
-                let ph = p as f64 * PI / (SP - 1) as f64;
-                let n = DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
+                let n = grid_normal(node / SP, node % SP, ST, SP);
                 (0..HALVES).map(move |h| {
                     let (i, p, q) = half_bounds(h);
                     let (a, b) = (i as f64 * PI / NMU as f64, (i + 1) as f64 * PI / NMU as f64);
@@ -96,10 +88,11 @@ fn half_cosines() -> &'static [f32] {
     })
 }
 
-/// The node's normal in the sun's frame (x towards the sun's azimuth, z up).
-fn node_normal(t: usize, p: usize) -> DVec3 {
-    let th = t as f64 * PI / (NT - 1) as f64;
-    let ph = p as f64 * PI / (NP - 1) as f64;
+/// The normal of node `(t, p)` of a grid of `nt` polar × `np` azimuth nodes over [0, π]²,
+/// in the sun's frame (x towards the sun's azimuth, z up).
+fn grid_normal(t: usize, p: usize, nt: usize, np: usize) -> DVec3 {
+    let th = t as f64 * PI / (nt - 1) as f64;
+    let ph = p as f64 * PI / (np - 1) as f64;
     DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos())
 }
 
@@ -160,7 +153,7 @@ fn bin_cosines() -> &'static [f32] {
         (0..NT * NP)
             .into_par_iter()
             .flat_map_iter(|node| {
-                let n = node_normal(node / NP, node % NP);
+                let n = grid_normal(node / NP, node % NP, NT, NP);
                 (0..NMU * NPHI).map(move |bin| {
                     let (i, j) = (bin / NPHI, bin % NPHI);
                     let (a, b) = (i as f64 * PI / NMU as f64, (i + 1) as f64 * PI / NMU as f64);
@@ -237,52 +230,39 @@ impl Column {
     /// `∫ h(z, ω) max(0, n·ω) dω` ([`Column::radiance_open`]): the irradiance on an open
     /// plane of unit normal `n` (world, z up) at depth `z`, per channel, W/m².
     pub fn irradiance_open(&self, z: f64, n: DVec3) -> DVec3 {
-        let a = self.sun_azimuth;
-        let perp = DVec3::new(-a.y, a.x, 0.0);
-        let ft = (n.z.clamp(-1.0, 1.0).acos() / PI * (NT - 1) as f64).clamp(0.0, (NT - 1) as f64);
-        let fp =
-            (n.dot(perp).abs().atan2(n.dot(a)) / PI * (NP - 1) as f64).clamp(0.0, (NP - 1) as f64);
-        let (t0, p0) = ((ft as usize).min(NT - 2), (fp as usize).min(NP - 2));
-        let (tt, tp) = (ft - t0 as f64, fp - p0 as f64);
+        let (nodes, _) = self.grid_nodes(n, NT, NP);
         let mut out = DVec3::ZERO;
         for (k, wk) in self.depth_weights(z) {
             if wk == 0.0 {
                 continue;
             }
             let layer = self.open_layer(k);
-            for (t, wt) in [(t0, 1.0 - tt), (t0 + 1, tt)] {
-                for (p, wp) in [(p0, 1.0 - tp), (p0 + 1, tp)] {
-                    let w = wk * wt * wp;
-                    if w != 0.0 {
-                        out += w * DVec3::from_array(layer[t * NP + p]);
-                    }
+            for (m, wm) in nodes {
+                if wm != 0.0 {
+                    out += wk * wm * DVec3::from_array(layer[m]);
                 }
             }
         }
         out
     }
 
-    /// A normal in the sun's frame: its polar and folded-azimuth coordinates on the sampling
-    /// grid, and whether its azimuth is on the mirror side (directions are then mirrored).
-    fn sampling_coords(&self, n: DVec3) -> (f64, f64, bool) {
+    /// The four nodes about unit normal `n` on a grid of `nt` polar × `np` folded-azimuth
+    /// nodes in the sun's frame (index `t · np + p`), with their bilinear weights, and whether
+    /// `n`'s azimuth is on the mirror side (directions drawn for it are then mirrored).
+    fn grid_nodes(&self, n: DVec3, nt: usize, np: usize) -> ([(usize, f64); 4], bool) {
         let a = self.sun_azimuth;
-        let perp = DVec3::new(-a.y, a.x, 0.0);
-        let y = n.dot(perp);
-        let ft = (n.z.clamp(-1.0, 1.0).acos() / PI * (ST - 1) as f64).clamp(0.0, (ST - 1) as f64);
-        let fp = (y.abs().atan2(n.dot(a)) / PI * (SP - 1) as f64).clamp(0.0, (SP - 1) as f64);
-        (ft, fp, y < 0.0)
-    }
-
-    /// The sampling grid's nodes about `(ft, fp)` with their bilinear weights.
-    fn sampling_nodes(ft: f64, fp: f64) -> [(usize, f64); 4] {
-        let (t0, p0) = ((ft as usize).min(ST - 2), (fp as usize).min(SP - 2));
+        let y = n.dot(DVec3::new(-a.y, a.x, 0.0));
+        let ft = (n.z.clamp(-1.0, 1.0).acos() / PI * (nt - 1) as f64).clamp(0.0, (nt - 1) as f64);
+        let fp = (y.abs().atan2(n.dot(a)) / PI * (np - 1) as f64).clamp(0.0, (np - 1) as f64);
+        let (t0, p0) = ((ft as usize).min(nt - 2), (fp as usize).min(np - 2));
         let (tt, tp) = (ft - t0 as f64, fp - p0 as f64);
-        [
-            (t0 * SP + p0, (1.0 - tt) * (1.0 - tp)),
-            (t0 * SP + p0 + 1, (1.0 - tt) * tp),
-            ((t0 + 1) * SP + p0, tt * (1.0 - tp)),
-            ((t0 + 1) * SP + p0 + 1, tt * tp),
-        ]
+        let nodes = [
+            (t0 * np + p0, (1.0 - tt) * (1.0 - tp)),
+            (t0 * np + p0 + 1, (1.0 - tt) * tp),
+            ((t0 + 1) * np + p0, tt * (1.0 - tp)),
+            ((t0 + 1) * np + p0 + 1, tt * tp),
+        ];
+        (nodes, y < 0.0)
     }
 
     /// Sample a look direction for a surface of unit normal `n` at depth `z`, with density
@@ -299,10 +279,9 @@ impl Column {
         } else {
             (k1, ((u0 - w0) / (1.0 - w0)).min(1.0 - f64::EPSILON))
         };
-        let (ft, fp, mirror) = self.sampling_coords(n);
+        let (nodes, mirror) = self.grid_nodes(n, ST, SP);
         let mut node = None;
         let mut acc = 0.0;
-        let nodes = Self::sampling_nodes(ft, fp);
         for (m, w) in nodes {
             if w > 0.0 && u0 < acc + w {
                 node = Some(m);
@@ -341,14 +320,14 @@ impl Column {
 
     /// Density (per sr) of [`Column::sample_open`] for a surface of normal `n` at depth `z`.
     pub fn pdf_open(&self, z: f64, n: DVec3, look: DVec3) -> f64 {
-        let (ft, fp, mirror) = self.sampling_coords(n);
+        let (nodes, mirror) = self.grid_nodes(n, ST, SP);
         let a = self.sun_azimuth;
         let perp = DVec3::new(-a.y, a.x, 0.0);
         let y = look.dot(perp) * if mirror { -1.0 } else { 1.0 };
         let phi = y.atan2(look.dot(a));
-        let i = ((polar_from_nadir(look.z) / PI * NMU as f64) as usize).min(NMU - 1);
+        let i = ((polar(look.z) / PI * NMU as f64) as usize).min(NMU - 1);
         let js = (((phi + PI) / (PI / NPHI as f64)) as usize).min(2 * NPHI - 1);
-        self.pdf_half(z, &Self::sampling_nodes(ft, fp), i * 2 * NPHI + js)
+        self.pdf_half(z, &nodes, i * 2 * NPHI + js)
     }
 
     /// Density (per sr) of [`Column::sample_open`] in half-bin `h`, for the sampling grid's
@@ -432,7 +411,9 @@ impl Column {
                     acc + self.boundary_from_layer(k, mu) * ring(nz * mu, sn * s) * dmu
                 })
             };
-            let rings: Vec<DVec3> = (0..NT).map(|t| ring_at(node_normal(t, 0).z)).collect();
+            let rings: Vec<DVec3> = (0..NT)
+                .map(|t| ring_at(grid_normal(t, 0, NT, NP).z))
+                .collect();
             (0..NT * NP)
                 .map(|node| {
                     let row = &cos[node * NMU * NPHI..(node + 1) * NMU * NPHI];
