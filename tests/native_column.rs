@@ -146,3 +146,52 @@ fn an_unshaded_tilted_surface_takes_the_columns_light_without_its_noise() {
         }
     }
 }
+
+/// The water in front of the camera takes the open column's in-scattered light without its
+/// noise: the camera ray's gather adds the light the open column's water along the ray
+/// scatters towards the camera, exactly (`Column::scattered_along`,
+/// crates/poser-optics/src/column/scatter.rs), and estimates by one traced point and
+/// direction only what the local geometry changes. A camera 6 m above a uniform seabed in
+/// turbid coastal water (Jerlov 3C, where the water's own light is most of the image), one
+/// bounce, 4 spp. Measured, median and largest relative noise of a pixel (G, B): sun 1.6 /
+/// 1.3 % and 5.1 / 7.2 %; sky 0.9 / 1.5 % and 6.2 / 6.0 %. The gather without the control
+/// variate: sun 14.8 % and 41.8 % (G), about 80× the variance.
+#[test]
+fn the_water_in_view_takes_the_columns_scattered_light_without_its_noise() {
+    for light in [SUN, SKY] {
+        let text = SCENE
+            .replace("LIGHT", light)
+            .replace("jerlov = \"IB\"", "jerlov = \"3C\"")
+            .replace(
+                "position = [0.0, 0.0, -10.0]",
+                "position = [0.0, 0.0, -6.0]",
+            );
+        assert!(text.contains("-6.0]"));
+        let sets = [
+            "render.daylight=\"column\"".to_string(),
+            "render.bounces=1".to_string(),
+        ];
+        let m = load_text(&text, &sets);
+        let img = poser::backend::native::render_one(&m, 0, 0, Some(4)).unwrap();
+        for c in 1..3 {
+            let mut rel: Vec<f64> = img
+                .rgb
+                .iter()
+                .zip(&img.variance)
+                .map(|(p, v)| (v[c] as f64).sqrt() / p[c] as f64)
+                .collect();
+            assert!(
+                rel.iter().all(|r| r.is_finite()),
+                "channel {c}: a black pixel"
+            );
+            rel.sort_by(f64::total_cmp);
+            let (median, worst) = (rel[rel.len() / 2], rel[rel.len() - 1]);
+            assert!(
+                median < 0.03 && worst < 0.1,
+                "channel {c}: relative noise of a pixel, median {:.2} %, largest {:.2} %",
+                100.0 * median,
+                100.0 * worst
+            );
+        }
+    }
+}

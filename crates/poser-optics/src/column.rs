@@ -31,12 +31,14 @@
 //! the bytes do not depend on the thread count; the batches give the standard errors.
 
 mod open;
+mod scatter;
 
 use super::phase::PhaseFn;
 use crate::rng::SplitMix64;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
+use std::sync::OnceLock;
 
 /// Depth layers of the table.
 pub const NZ: usize = 64;
@@ -256,6 +258,13 @@ pub struct Column {
     open: open::OpenLayers,
     /// Per layer, the normal-aware direction sampler's tables ([`Column::sample_open`]).
     samplers: open::SampleLayers,
+    /// The water's phase function (the column's own, and the gather's control variate's).
+    pub phase: PhaseFn,
+    /// Per grid direction, the phase mass of each bin and boundary cell
+    /// ([`Column::scattered_open`]).
+    scatter_weights: OnceLock<Vec<f32>>,
+    /// Per layer, the open column's in-scattered light on the directions' grid.
+    scattered: scatter::ScatterLayers,
     pub seconds: f64,
 }
 
@@ -327,6 +336,28 @@ fn bin_of(look: DVec3, az: DVec3) -> (usize, usize) {
 
 /// Angle of a look direction from the nadir, [0, π].
 #[inline]
+/// The bilinear weights [`Column::radiance`] reads the bins with for a look along `look`
+/// (`az`: the sun's azimuth): the two polar bins about it and the two folded azimuth bins,
+/// each with its weight (bin centres as nodes, held at the outer centres).
+fn bin_weights(look: DVec3, az: DVec3) -> ([(usize, f64); 2], [(usize, f64); 2]) {
+    let fm = (polar(look.z) / PI * NMU as f64 - 0.5).clamp(0.0, (NMU - 1) as f64);
+    let i0 = (fm as usize).min(NMU - 2);
+    let tm = fm - i0 as f64;
+    let h = DVec3::new(look.x, look.y, 0.0);
+    let c = h.dot(az);
+    let s = (h.x * az.y - h.y * az.x).abs();
+    let phi = if h.length_squared() > 0.0 {
+        s.atan2(c)
+    } else {
+        0.0
+    };
+    let fp = (phi / PI * NPHI as f64 - 0.5).clamp(0.0, (NPHI - 1) as f64);
+    let j0 = (fp as usize).min(NPHI - 1);
+    let j1 = (j0 + 1).min(NPHI - 1);
+    let tp = fp - j0 as f64;
+    ([(i0, 1.0 - tm), (i0 + 1, tm)], [(j0, 1.0 - tp), (j1, tp)])
+}
+
 fn polar(z: f64) -> f64 {
     (-z.clamp(-1.0, 1.0)).acos()
 }
@@ -540,6 +571,9 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
         sigma_t: DVec3::from_array([0, 1, 2].map(|c| input.sigma_a[c] + input.sigma_s[c])),
         open: open::empty_layers(),
         samplers: open::empty_samplers(),
+        phase: input.phase.clone(),
+        scatter_weights: OnceLock::new(),
+        scattered: scatter::empty_layers(),
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
@@ -815,29 +849,19 @@ impl Column {
     /// z up), trilinear in depth, cos θ and azimuth; W/(m²·sr). `with_first`: the whole
     /// diffuse light `L_d`, the sun's first scattering included.
     pub fn radiance(&self, z: f64, look: DVec3, with_first: bool) -> DVec3 {
+        self.radiance_sum(z, look, with_first).max(DVec3::ZERO)
+    }
+
+    /// [`Column::radiance`] before its clamp at 0: linear in the layers' bins.
+    pub fn radiance_sum(&self, z: f64, look: DVec3, with_first: bool) -> DVec3 {
         // Layer values stand at the layers' centres; in the outer half-layers they are
         // extrapolated linearly to the surface and the bottom (looking down, the light
         // scattered between a point and the bottom falls linearly to 0 at the bottom).
-        let fm = (polar(look.z) / PI * NMU as f64 - 0.5).clamp(0.0, (NMU - 1) as f64);
-        let i0 = (fm as usize).min(NMU - 2);
-        let i1 = i0 + 1;
-        let tm = fm - i0 as f64;
-        let h = DVec3::new(look.x, look.y, 0.0);
-        let c = h.dot(self.sun_azimuth);
-        let s = (h.x * self.sun_azimuth.y - h.y * self.sun_azimuth.x).abs();
-        let phi = if h.length_squared() > 0.0 {
-            s.atan2(c)
-        } else {
-            0.0
-        };
-        let fp = (phi / PI * NPHI as f64 - 0.5).clamp(0.0, (NPHI - 1) as f64);
-        let j0 = (fp as usize).min(NPHI - 1);
-        let j1 = (j0 + 1).min(NPHI - 1);
-        let tp = fp - j0 as f64;
+        let (polars, azimuths) = bin_weights(look, self.sun_azimuth);
         let mut out = DVec3::ZERO;
         for (k, wk) in self.depth_weights(z) {
-            for (i, wi) in [(i0, 1.0 - tm), (i1, tm)] {
-                for (j, wj) in [(j0, 1.0 - tp), (j1, tp)] {
+            for (i, wi) in polars {
+                for (j, wj) in azimuths {
                     let w = wk * wi * wj;
                     if w == 0.0 {
                         continue;
@@ -859,7 +883,7 @@ impl Column {
                 }
             }
         }
-        out.max(DVec3::ZERO)
+        out
     }
 
     fn layer(&self, z: f64) -> usize {

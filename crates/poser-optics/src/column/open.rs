@@ -90,7 +90,7 @@ fn half_cosines() -> &'static [f32] {
 
 /// The normal of node `(t, p)` of a grid of `nt` polar × `np` azimuth nodes over [0, π]²,
 /// in the sun's frame (x towards the sun's azimuth, z up).
-fn grid_normal(t: usize, p: usize, nt: usize, np: usize) -> DVec3 {
+pub(super) fn grid_normal(t: usize, p: usize, nt: usize, np: usize) -> DVec3 {
     let th = t as f64 * PI / (nt - 1) as f64;
     let ph = p as f64 * PI / (np - 1) as f64;
     DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos())
@@ -168,6 +168,22 @@ fn bin_cosines() -> &'static [f32] {
     })
 }
 
+/// [`Column::grid_nodes`] for the sun's azimuth `a` (unit, horizontal).
+pub(super) fn grid_nodes_at(a: DVec3, n: DVec3, nt: usize, np: usize) -> ([(usize, f64); 4], bool) {
+    let y = n.dot(DVec3::new(-a.y, a.x, 0.0));
+    let ft = (n.z.clamp(-1.0, 1.0).acos() / PI * (nt - 1) as f64).clamp(0.0, (nt - 1) as f64);
+    let fp = (y.abs().atan2(n.dot(a)) / PI * (np - 1) as f64).clamp(0.0, (np - 1) as f64);
+    let (t0, p0) = ((ft as usize).min(nt - 2), (fp as usize).min(np - 2));
+    let (tt, tp) = (ft - t0 as f64, fp - p0 as f64);
+    let nodes = [
+        (t0 * np + p0, (1.0 - tt) * (1.0 - tp)),
+        (t0 * np + p0 + 1, (1.0 - tt) * tp),
+        ((t0 + 1) * np + p0, tt * (1.0 - tp)),
+        ((t0 + 1) * np + p0 + 1, tt * tp),
+    ];
+    (nodes, y < 0.0)
+}
+
 /// `∫₀^{2π} max(0, a + b cos φ) dφ` for `b ≥ 0`.
 fn ring(a: f64, b: f64) -> f64 {
     if a >= b {
@@ -195,7 +211,7 @@ impl Column {
     /// The boundary's radiance seen from layer `k`'s centre along a look of `cos θ = mu`,
     /// through the water: the sky above (through Snell's window under a reflecting surface),
     /// the bottom below.
-    fn boundary_from_layer(&self, k: usize, mu: f64) -> DVec3 {
+    pub(super) fn boundary_from_layer(&self, k: usize, mu: f64) -> DVec3 {
         let z = (k as f64 + 0.5) * self.depth / NZ as f64;
         let (to, l) = if mu > 0.0 {
             (z, sky_seen(self.sky, self.window, mu))
@@ -250,19 +266,7 @@ impl Column {
     /// nodes in the sun's frame (index `t · np + p`), with their bilinear weights, and whether
     /// `n`'s azimuth is on the mirror side (directions drawn for it are then mirrored).
     fn grid_nodes(&self, n: DVec3, nt: usize, np: usize) -> ([(usize, f64); 4], bool) {
-        let a = self.sun_azimuth;
-        let y = n.dot(DVec3::new(-a.y, a.x, 0.0));
-        let ft = (n.z.clamp(-1.0, 1.0).acos() / PI * (nt - 1) as f64).clamp(0.0, (nt - 1) as f64);
-        let fp = (y.abs().atan2(n.dot(a)) / PI * (np - 1) as f64).clamp(0.0, (np - 1) as f64);
-        let (t0, p0) = ((ft as usize).min(nt - 2), (fp as usize).min(np - 2));
-        let (tt, tp) = (ft - t0 as f64, fp - p0 as f64);
-        let nodes = [
-            (t0 * np + p0, (1.0 - tt) * (1.0 - tp)),
-            (t0 * np + p0 + 1, (1.0 - tt) * tp),
-            ((t0 + 1) * np + p0, tt * (1.0 - tp)),
-            ((t0 + 1) * np + p0 + 1, tt * tp),
-        ];
-        (nodes, y < 0.0)
+        grid_nodes_at(self.sun_azimuth, n, nt, np)
     }
 
     /// Sample a look direction for a surface of unit normal `n` at depth `z`, with density
