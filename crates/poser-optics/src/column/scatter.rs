@@ -53,6 +53,7 @@ pub const PANELS: usize = 2;
 /// [`Column::scattered_along`].
 pub const ALONG_RATIO: f64 = 12.0;
 /// Gauss–Legendre nodes and weights on [−1, 1], [`ALONG`] of them.
+#[allow(clippy::excessive_precision)]
 const GAUSS_LEGENDRE: [(f64, f64); ALONG] = [
     (-0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
     (-0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
