@@ -208,12 +208,7 @@ pub fn baseline_plot(rows: &[Row]) -> Result<String, String> {
             .map_err(|e| e.to_string())?
             .label("the block (evaluate), RMS Z")
             .legend(|(x, y)| Circle::new((x + 8, y), 4, BLUE.filled()));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| e.to_string())?;
+        crate::plan::plot::legend(&mut chart, SeriesLabelPosition::MiddleRight)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(s)

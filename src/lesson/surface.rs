@@ -193,12 +193,7 @@ fn caustic_plot(rows: &[Row]) -> Result<String, String> {
                 .label(r.label.clone())
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], col));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| e.to_string())?;
+        crate::plan::plot::legend(&mut chart, SeriesLabelPosition::MiddleRight)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(s)
