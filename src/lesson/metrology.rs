@@ -53,102 +53,93 @@ pub struct Row {
     pub backscatter_png: Vec<u8>,
 }
 
-/// Render, measure and evaluate every case.
-pub fn run(
-    cases: &[Case],
-    out: &Path,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Row>, String> {
-    let mut rows = Vec::new();
-    for c in cases {
-        let t0 = std::time::Instant::now();
-        let err = |e: String| format!("variant `{}`: {e}", c.label);
-        let m = &c.model;
-        let board = m.targets.first().ok_or_else(|| {
-            err(
-                "the metrology lesson needs a checkerboard as its first target\n  help: add \
-                 `[[targets]]` with `type = \"checkerboard\"` in view of the network"
-                    .into(),
-            )
-        })?;
-        if m.poses.is_empty() || m.cameras.is_empty() {
-            return Err(err("the network has no images".into()));
-        }
-        // The rig pose nearest the board (horizontally), alone, at a reduced resolution.
-        let at = board.pose.translation;
-        let pose = (0..m.poses.len())
-            .min_by(|&a, &b| {
-                let d = |i: usize| {
-                    let t = m.poses[i].world_from_rig.translation - at;
-                    t.x.hypot(t.y)
-                };
-                d(a).total_cmp(&d(b))
-            })
-            .unwrap_or(0);
-        let mut view = m.clone();
-        view.poses = vec![m.poses[pose].clone()];
-        let view = view.with_resolution_scale(VIEW_SCALE);
-        progress(&format!("rendering `{}`", c.label));
-        let img = contrast::render(&view).map_err(err)?;
-        let mut empty = view.clone();
-        empty.targets.clear();
-        empty.objects.clear();
-        progress(&format!("rendering `{}` with nothing but water", c.label));
-        let bs = contrast::render(&empty).map_err(err)?;
-        let light = contrast::measure(&view, &img, &bs).map_err(err)?;
-        let dir = out.join(&c.slug);
-        let view_png = contrast::view_png(&img, &dir.join("view.png")).map_err(err)?;
-        let backscatter_png = contrast::view_png(&bs, &dir.join("backscatter.png")).map_err(err)?;
+/// Render, measure and evaluate one case.
+pub fn run_case(c: &Case, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<Row, String> {
+    let t0 = std::time::Instant::now();
+    let err = |e: String| format!("variant `{}`: {e}", c.label);
+    let m = &c.model;
+    let board = m.targets.first().ok_or_else(|| {
+        err(
+            "the metrology lesson needs a checkerboard as its first target\n  help: add \
+             `[[targets]]` with `type = \"checkerboard\"` in view of the network"
+                .into(),
+        )
+    })?;
+    if m.poses.is_empty() || m.cameras.is_empty() {
+        return Err(err("the network has no images".into()));
+    }
+    // The rig pose nearest the board (horizontally), alone, at a reduced resolution.
+    let at = board.pose.translation;
+    let pose = (0..m.poses.len())
+        .min_by(|&a, &b| {
+            let d = |i: usize| {
+                let t = m.poses[i].world_from_rig.translation - at;
+                t.x.hypot(t.y)
+            };
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap_or(0);
+    let mut view = m.clone();
+    view.poses = vec![m.poses[pose].clone()];
+    let view = view.with_resolution_scale(VIEW_SCALE);
+    progress(&format!("rendering `{}`", c.label));
+    let img = contrast::render(&view).map_err(err)?;
+    let mut empty = view.clone();
+    empty.targets.clear();
+    empty.objects.clear();
+    progress(&format!("rendering `{}` with nothing but water", c.label));
+    let bs = contrast::render(&empty).map_err(err)?;
+    let light = contrast::measure(&view, &img, &bs).map_err(err)?;
+    let dir = out.join(&c.slug);
+    let view_png = contrast::view_png(&img, &dir.join("view.png")).map_err(err)?;
+    let backscatter_png = contrast::view_png(&bs, &dir.join("backscatter.png")).map_err(err)?;
 
-        let distance = m.world_from_camera(pose, 0).inverse().transform_point(at).z;
-        let baseline = if m.cameras.len() >= 2 {
-            (m.cameras[0].rig_from_camera.translation - m.cameras[1].rig_from_camera.translation)
-                .length()
+    let distance = m.world_from_camera(pose, 0).inverse().transform_point(at).z;
+    let baseline = if m.cameras.len() >= 2 {
+        (m.cameras[0].rig_from_camera.translation - m.cameras[1].rig_from_camera.translation)
+            .length()
+    } else {
+        f64::NAN
+    };
+    let opts = Options {
+        gcp: true,
+        rig: true,
+        density: DENSITY,
+        ..Options::default()
+    };
+    let f = water_equivalent(m, 0, distance).map_err(err)?[0];
+    let pair_sigma_z = distance * distance * std::f64::consts::SQRT_2 * opts.noise / (baseline * f);
+    progress(&format!(
+        "evaluating `{}` ({} images)",
+        c.label,
+        m.poses.len() * m.cameras.len()
+    ));
+    let accuracy = dive::accuracy(m, &opts, &dir).map_err(err)?;
+    let spots: Vec<DVec3> = m
+        .lights
+        .iter()
+        .filter_map(|l| match l.kind {
+            LightKind::Spot { position, .. } => Some(position),
+            _ => None,
+        })
+        .collect();
+    Ok(Row {
+        label: c.label.clone(),
+        command: format!("{} --gcp --rig --density {DENSITY}", c.command("evaluate")),
+        lamp_separation_m: if spots.len() >= 2 {
+            (spots[0] - spots[1]).length()
         } else {
             f64::NAN
-        };
-        let opts = Options {
-            gcp: true,
-            rig: true,
-            density: DENSITY,
-            ..Options::default()
-        };
-        let f = water_equivalent(m, 0, distance).map_err(err)?[0];
-        let pair_sigma_z =
-            distance * distance * std::f64::consts::SQRT_2 * opts.noise / (baseline * f);
-        progress(&format!(
-            "evaluating `{}` ({} images)",
-            c.label,
-            m.poses.len() * m.cameras.len()
-        ));
-        let accuracy = dive::accuracy(m, &opts, &dir).map_err(err)?;
-        let spots: Vec<DVec3> = m
-            .lights
-            .iter()
-            .filter_map(|l| match l.kind {
-                LightKind::Spot { position, .. } => Some(position),
-                _ => None,
-            })
-            .collect();
-        rows.push(Row {
-            label: c.label.clone(),
-            command: format!("{} --gcp --rig --density {DENSITY}", c.command("evaluate")),
-            lamp_separation_m: if spots.len() >= 2 {
-                (spots[0] - spots[1]).length()
-            } else {
-                f64::NAN
-            },
-            baseline_m: baseline,
-            distance_m: distance,
-            light,
-            accuracy,
-            pair_sigma_z_mm: 1e3 * pair_sigma_z,
-            seconds: t0.elapsed().as_secs_f64(),
-            view_png,
-            backscatter_png,
-        });
-    }
-    Ok(rows)
+        },
+        baseline_m: baseline,
+        distance_m: distance,
+        light,
+        accuracy,
+        pair_sigma_z_mm: 1e3 * pair_sigma_z,
+        seconds: t0.elapsed().as_secs_f64(),
+        view_png,
+        backscatter_png,
+    })
 }
 
 /// RMS Z of the block against the baseline (points), and one pair's σZ (the curve), SVG.
