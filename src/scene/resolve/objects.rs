@@ -179,7 +179,7 @@ fn shape(
             }
         }
         "seabed" => seabed(cx, o, seed),
-        "coral" => crate::scene::coral::shape(cx, o, seed),
+        "coral" => super::coral::shape(cx, o, seed),
         _ => boulders(cx, o, seed),
     }
 }
