@@ -17,7 +17,7 @@
 //! independent per sample (rayon), so the numbers do not depend on the thread count.
 
 use super::Case;
-use super::html::{base64, escape, num};
+use super::html::{base64, case_row, escape};
 use crate::geometry::Bvh;
 use crate::geometry::mesh::{TriMesh, shape_mesh};
 use crate::model::{Model, Shape};
@@ -302,23 +302,17 @@ pub fn section(rows: &[Row]) -> String {
          <th>completeness, %</th><th>images per point</th></tr>\n"
     );
     for row in rows {
-        let k = super::slug(&row.label);
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}{}</tr>",
-            escape(&row.label),
-            num(&format!("{k}.images"), row.images.to_string()),
-            num(&format!("{k}.area_m2"), format!("{:.3}", row.area_m2)),
-            num(&format!("{k}.samples"), row.samples.to_string()),
-            num(&format!("{k}.seen"), format!("{:.1}", 100.0 * row.seen)),
-            num(
-                &format!("{k}.completeness"),
-                format!("{:.1}", 100.0 * row.completeness)
-            ),
-            num(
-                &format!("{k}.mean_images"),
-                format!("{:.1}", row.mean_images)
-            ),
+        case_row(
+            &mut s,
+            &row.label,
+            &[
+                ("images", row.images.to_string()),
+                ("area_m2", format!("{:.3}", row.area_m2)),
+                ("samples", row.samples.to_string()),
+                ("seen", format!("{:.1}", 100.0 * row.seen)),
+                ("completeness", format!("{:.1}", 100.0 * row.completeness)),
+                ("mean_images", format!("{:.1}", row.mean_images)),
+            ],
         );
     }
     let _ = write!(

@@ -20,7 +20,7 @@
 //! with the kind `gsd`, and [`measure`] with the kind `metrology`.
 
 use super::Case;
-use super::html::{escape, num, png, svg};
+use super::html::{case_row, escape, png, svg};
 use crate::backend::native;
 use crate::geometry::targets;
 use crate::model::{LightKind, Model, TargetKind};
@@ -382,37 +382,28 @@ pub fn html(rows: &[Row]) -> String {
          <th>B/G</th><th>backscatter (G), W/(m²·sr)</th><th>veiling share, %</th></tr>\n",
     );
     for r in rows {
-        let k = super::slug(&r.label);
         let me = &r.measured;
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}{}{}{}{}{}</tr>",
-            escape(&r.label),
-            num(
-                &format!("{k}.focal_length_mm"),
-                format!("{:.0}", r.focal_length_mm)
-            ),
-            num(&format!("{k}.gsd_mm"), format!("{:.2}", r.gsd_mm)),
-            num(&format!("{k}.distance_m"), format!("{:.3}", r.distance_m)),
-            num(
-                &format!("{k}.strobe_separation_m"),
-                format!("{:.2}", r.strobe_separation_m)
-            ),
-            num(&format!("{k}.contrast"), format!("{:.3}", me.contrast)),
-            num(
-                &format!("{k}.contrast_without_backscatter"),
-                format!("{:.3}", me.contrast_without_backscatter)
-            ),
-            num(&format!("{k}.r_over_g"), format!("{:.3}", me.r_over_g)),
-            num(&format!("{k}.b_over_g"), format!("{:.3}", me.b_over_g)),
-            num(
-                &format!("{k}.backscatter"),
-                format!("{:.3e}", me.backscatter[1])
-            ),
-            num(
-                &format!("{k}.veiling_share"),
-                format!("{:.1}", 100.0 * me.veiling_share)
-            ),
+        case_row(
+            &mut s,
+            &r.label,
+            &[
+                ("focal_length_mm", format!("{:.0}", r.focal_length_mm)),
+                ("gsd_mm", format!("{:.2}", r.gsd_mm)),
+                ("distance_m", format!("{:.3}", r.distance_m)),
+                (
+                    "strobe_separation_m",
+                    format!("{:.2}", r.strobe_separation_m),
+                ),
+                ("contrast", format!("{:.3}", me.contrast)),
+                (
+                    "contrast_without_backscatter",
+                    format!("{:.3}", me.contrast_without_backscatter),
+                ),
+                ("r_over_g", format!("{:.3}", me.r_over_g)),
+                ("b_over_g", format!("{:.3}", me.b_over_g)),
+                ("backscatter", format!("{:.3e}", me.backscatter[1])),
+                ("veiling_share", format!("{:.1}", 100.0 * me.veiling_share)),
+            ],
         );
     }
     s.push_str(

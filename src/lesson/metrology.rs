@@ -17,7 +17,7 @@
 use super::Case;
 use super::contrast::{self, Measured};
 use super::dive::{self, Accuracy};
-use super::html::{escape, num, png, svg};
+use super::html::{case_row, escape, png, svg};
 use crate::evaluate::{Options, water_equivalent};
 use crate::model::LightKind;
 use glam::DVec3;
@@ -218,31 +218,22 @@ pub fn html(rows: &[Row]) -> String {
          </tr>\n",
     );
     for r in rows {
-        let k = super::slug(&r.label);
         let l = &r.light;
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}{}{}</tr>",
-            escape(&r.label),
-            num(
-                &format!("{k}.lamp_separation_m"),
-                format!("{:.2}", r.lamp_separation_m)
-            ),
-            num(
-                &format!("{k}.backscatter"),
-                format!("{:.3e}", l.backscatter[1])
-            ),
-            num(&format!("{k}.contrast"), format!("{:.3}", l.contrast)),
-            num(
-                &format!("{k}.contrast_without_backscatter"),
-                format!("{:.3}", l.contrast_without_backscatter)
-            ),
-            num(
-                &format!("{k}.veiling_share"),
-                format!("{:.1}", 100.0 * l.veiling_share)
-            ),
-            num(&format!("{k}.r_over_g"), format!("{:.3}", l.r_over_g)),
-            num(&format!("{k}.b_over_g"), format!("{:.3}", l.b_over_g)),
+        case_row(
+            &mut s,
+            &r.label,
+            &[
+                ("lamp_separation_m", format!("{:.2}", r.lamp_separation_m)),
+                ("backscatter", format!("{:.3e}", l.backscatter[1])),
+                ("contrast", format!("{:.3}", l.contrast)),
+                (
+                    "contrast_without_backscatter",
+                    format!("{:.3}", l.contrast_without_backscatter),
+                ),
+                ("veiling_share", format!("{:.1}", 100.0 * l.veiling_share)),
+                ("r_over_g", format!("{:.3}", l.r_over_g)),
+                ("b_over_g", format!("{:.3}", l.b_over_g)),
+            ],
         );
     }
     s.push_str(
@@ -257,31 +248,22 @@ pub fn html(rows: &[Row]) -> String {
          <th>scale error, ppm</th></tr>\n",
     );
     for r in rows {
-        let k = super::slug(&r.label);
         let a = &r.accuracy;
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}{}{}{}{}{}</tr>",
-            escape(&r.label),
-            num(&format!("{k}.baseline_m"), format!("{:.2}", r.baseline_m)),
-            num(&format!("{k}.images"), a.images.to_string()),
-            num(&format!("{k}.points"), a.points.to_string()),
-            num(
-                &format!("{k}.reprojection_px"),
-                format!("{:.3}", a.reprojection_px)
-            ),
-            num(&format!("{k}.rms_x_mm"), format!("{:.2}", a.rms_xyz_mm[0])),
-            num(&format!("{k}.rms_y_mm"), format!("{:.2}", a.rms_xyz_mm[1])),
-            num(&format!("{k}.rms_z_mm"), format!("{:.2}", a.rms_xyz_mm[2])),
-            num(&format!("{k}.rms_3d_mm"), format!("{:.2}", a.rms_3d_mm)),
-            num(
-                &format!("{k}.pair_sigma_z_mm"),
-                format!("{:.2}", r.pair_sigma_z_mm)
-            ),
-            num(
-                &format!("{k}.scale_error_ppm"),
-                format!("{:.0}", a.scale_error_ppm)
-            ),
+        case_row(
+            &mut s,
+            &r.label,
+            &[
+                ("baseline_m", format!("{:.2}", r.baseline_m)),
+                ("images", a.images.to_string()),
+                ("points", a.points.to_string()),
+                ("reprojection_px", format!("{:.3}", a.reprojection_px)),
+                ("rms_x_mm", format!("{:.2}", a.rms_xyz_mm[0])),
+                ("rms_y_mm", format!("{:.2}", a.rms_xyz_mm[1])),
+                ("rms_z_mm", format!("{:.2}", a.rms_xyz_mm[2])),
+                ("rms_3d_mm", format!("{:.2}", a.rms_3d_mm)),
+                ("pair_sigma_z_mm", format!("{:.2}", r.pair_sigma_z_mm)),
+                ("scale_error_ppm", format!("{:.0}", a.scale_error_ppm)),
+            ],
         );
     }
     s.push_str("</table>\n");

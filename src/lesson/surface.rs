@@ -10,7 +10,7 @@
 
 use super::Case;
 use super::contrast::view_png;
-use super::html::{escape, num, png, svg};
+use super::html::{case_row, escape, num, png, svg};
 use crate::backend::native::caustics::CausticVolume;
 use crate::model::SeaSurface;
 use crate::optics::surface::{SeaInterface, image_through};
@@ -202,25 +202,16 @@ pub fn html(rows: &[Row]) -> String {
          <th>moved, largest px</th><th>no image</th></tr>\n",
     );
     for r in rows {
-        let k = super::slug(&r.label);
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}</tr>",
-            escape(&r.label),
-            num(
-                &format!("{k}.wave_height_m"),
-                format!("{:.2}", r.wave_height_m)
-            ),
-            num(&format!("{k}.points"), r.points.to_string()),
-            num(
-                &format!("{k}.moved_rms_px"),
-                format!("{:.2}", r.moved_rms_px)
-            ),
-            num(
-                &format!("{k}.moved_max_px"),
-                format!("{:.2}", r.moved_max_px)
-            ),
-            num(&format!("{k}.no_image"), r.no_image.to_string()),
+        case_row(
+            &mut s,
+            &r.label,
+            &[
+                ("wave_height_m", format!("{:.2}", r.wave_height_m)),
+                ("points", r.points.to_string()),
+                ("moved_rms_px", format!("{:.2}", r.moved_rms_px)),
+                ("moved_max_px", format!("{:.2}", r.moved_max_px)),
+                ("no_image", r.no_image.to_string()),
+            ],
         );
     }
     s.push_str(
