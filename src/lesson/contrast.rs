@@ -17,7 +17,7 @@
 //! ([`crate::geometry::targets::reflectance`]) at each sample point of the target's own frame,
 //! and its pixel from the exact projection ([`crate::optics::project::Projector`]) — no pixel
 //! box is typed in. The helpers [`place`], [`render`], [`bilinear`] and [`view_png`] are shared
-//! with the kind `gsd`, and [`measure`] with the kind `metrology`.
+//! with the kind `gsd`, and [`measure`] and [`strobe_separation`] with the kind `metrology`.
 
 use super::Case;
 use super::html::{case_row, escape, png, svg};
@@ -217,6 +217,24 @@ fn trimmed_mean(v: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
+/// Distance between the first two spot lights of `model`, m (NaN with fewer): how far apart
+/// the strobes are.
+pub fn strobe_separation(model: &Model) -> f64 {
+    let spots: Vec<DVec3> = model
+        .lights
+        .iter()
+        .filter_map(|l| match l.kind {
+            LightKind::Spot { position, .. } => Some(position),
+            _ => None,
+        })
+        .collect();
+    if spots.len() >= 2 {
+        (spots[0] - spots[1]).length()
+    } else {
+        f64::NAN
+    }
+}
+
 /// What is measured on a view of a checkerboard (pose 0, camera 0, the first target) and on
 /// the same view without it (`bs`): the numbers of the module's table.
 #[derive(Debug, Clone, Serialize)]
@@ -281,14 +299,6 @@ pub fn run_case(c: &Case, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Resul
     progress(&format!("rendering `{}` without the target", c.label));
     let bs = render(&empty)?;
     let me = measure(&m, &img, &bs)?;
-    let spots: Vec<DVec3> = m
-        .lights
-        .iter()
-        .filter_map(|l| match l.kind {
-            LightKind::Spot { position, .. } => Some(position),
-            _ => None,
-        })
-        .collect();
     let dir = out.join(&c.slug);
     let profile_svg = profile(&m, &img, &bs, &c.label)?;
     Ok(Row {
@@ -297,11 +307,7 @@ pub fn run_case(c: &Case, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Resul
         focal_length_mm: m.cameras[0].focal_length * 1e3,
         gsd_mm: gsd * 1e3,
         distance_m: d,
-        strobe_separation_m: if spots.len() >= 2 {
-            (spots[0] - spots[1]).length()
-        } else {
-            f64::NAN
-        },
+        strobe_separation_m: strobe_separation(&m),
         measured: me,
         seconds: t0.elapsed().as_secs_f64(),
         view_png: view_png(&img, &dir.join("view.png"))?,

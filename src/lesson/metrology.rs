@@ -19,8 +19,6 @@ use super::contrast::{self, Measured};
 use super::dive::{self, Accuracy};
 use super::html::{case_row, escape, png, svg};
 use crate::evaluate::{Options, water_equivalent};
-use crate::model::LightKind;
-use glam::DVec3;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -115,22 +113,10 @@ pub fn run_case(c: &Case, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Resul
         m.poses.len() * m.cameras.len()
     ));
     let accuracy = dive::accuracy(m, &opts, &dir).map_err(err)?;
-    let spots: Vec<DVec3> = m
-        .lights
-        .iter()
-        .filter_map(|l| match l.kind {
-            LightKind::Spot { position, .. } => Some(position),
-            _ => None,
-        })
-        .collect();
     Ok(Row {
         label: c.label.clone(),
         command: format!("{} --gcp --rig --density {DENSITY}", c.command("evaluate")),
-        lamp_separation_m: if spots.len() >= 2 {
-            (spots[0] - spots[1]).length()
-        } else {
-            f64::NAN
-        },
+        lamp_separation_m: contrast::strobe_separation(m),
         baseline_m: baseline,
         distance_m: distance,
         light,
