@@ -138,12 +138,7 @@ pub fn svg(col: &Column, title: &str) -> Result<String, String> {
                 .label(format!("E_u {}", CH[c]))
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], colors[c]));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| e.to_string())?;
+        crate::plan::plot::legend(&mut chart, SeriesLabelPosition::MiddleRight)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(buf)

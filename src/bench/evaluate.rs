@@ -89,10 +89,7 @@ pub fn run(lessons: &Path, quick: bool) -> Result<Vec<Row>, String> {
             wall_s: wall,
             cpu_s: cpu,
             reprojection_px: ev.reprojection_error,
-            focal_error_percent: ev
-                .cameras
-                .first()
-                .map_or(f64::NAN, |c| 100.0 * c.focal_error),
+            focal_error_percent: ev.focal_error_percent(),
             rms_z_mm: 1e3 * ev.tie_errors.rms[2],
             bowl_mm: ev.bowl.map_or(f64::NAN, |b| 1e3 * b.peak_to_peak),
             bowl_share: ev.bowl.map_or(f64::NAN, |b| b.explained),

@@ -1135,13 +1135,7 @@ impl Report {
                         .draw_series(line.into_iter().map(|p| Circle::new(p, 3, col.filled())))
                         .map_err(|e| e.to_string())?;
                 }
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.8))
-                    .border_style(BLACK)
-                    .position(SeriesLabelPosition::LowerLeft)
-                    .draw()
-                    .map_err(|e| e.to_string())?;
+                crate::plan::plot::legend(&mut chart, SeriesLabelPosition::LowerLeft)?;
             }
             root.present().map_err(|e| e.to_string())?;
         }

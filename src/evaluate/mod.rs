@@ -224,6 +224,14 @@ pub const FOCAL_DETERMINED: f64 = 0.005;
 pub const FOCAL_RISE_CAP: f64 = 10.0;
 
 impl Evaluation {
+    /// The first camera's focal length error, % (NaN without a camera): the one focal number
+    /// the lesson pages and `poser bench evaluate` show.
+    pub fn focal_error_percent(&self) -> f64 {
+        self.cameras
+            .first()
+            .map_or(f64::NAN, |c| 100.0 * c.focal_error)
+    }
+
     /// Images mode: the relative rise of the mean reprojection error when the focal length is
     /// held 10 % above COLMAP's estimate and the rest is adjusted again (`focal_sensitivity`
     /// in `backends/colmap/evaluate.py`). Below [`FOCAL_DETERMINED`] the images do not

@@ -929,14 +929,7 @@ fn grid(x0: f64, y0: f64, size: f64, n: u32, h: impl Fn(f64, f64) -> f64) -> Tri
             m.positions.push(DVec3::new(x, y, h(x, y)));
         }
     }
-    let idx = |i: u32, j: u32| j * (n + 1) + i;
-    for j in 0..n {
-        for i in 0..n {
-            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i, j + 1), idx(i + 1, j + 1));
-            m.triangles.push([a, b, d]);
-            m.triangles.push([a, d, c]);
-        }
-    }
+    m.triangulate_grid(n, n);
     m
 }
 

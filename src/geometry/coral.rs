@@ -315,17 +315,6 @@ mod tests {
             .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
     }
 
-    /// Signed volume (positive when the normals point outwards).
-    fn volume(m: &TriMesh) -> f64 {
-        m.triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| m.positions[i as usize]);
-                a.dot(b.cross(c)) / 6.0
-            })
-            .sum()
-    }
-
     #[test]
     fn corals_are_deterministic_closed_and_outward() {
         for growth in [Growth::Branching, Growth::Massive] {
@@ -338,7 +327,7 @@ mod tests {
                 m.triangles.len()
             );
             assert!(closed_and_consistent(&m), "{growth:?}");
-            assert!(volume(&m) > 0.0, "{growth:?}");
+            assert!(m.signed_volume() > 0.0, "{growth:?}");
             let (lo, hi) = m.bounds().unwrap();
             assert!(
                 lo.z < 0.0 && lo.z > -0.3 * (BURIED + 0.05),
@@ -355,7 +344,7 @@ mod tests {
     fn a_branching_colony_is_airier_than_a_massive_one() {
         let vol_per_area = |g| {
             let m = coral(g, 0.3, 3);
-            volume(&m) / m.area()
+            m.signed_volume() / m.area()
         };
         // Thin branches: little volume for their surface.
         assert!(vol_per_area(Growth::Branching) < 0.5 * vol_per_area(Growth::Massive));

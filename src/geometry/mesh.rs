@@ -66,6 +66,32 @@ impl TriMesh {
         }
     }
 
+    /// Two triangles per cell, counter-clockwise seen from +z, for a mesh whose vertices are a
+    /// grid of `(nx + 1) × (ny + 1)` points pushed row by row (x fastest).
+    pub fn triangulate_grid(&mut self, nx: u32, ny: u32) {
+        let idx = |i: u32, j: u32| j * (nx + 1) + i;
+        for j in 0..ny {
+            for i in 0..nx {
+                let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i, j + 1), idx(i + 1, j + 1));
+                self.triangles.push([a, b, d]);
+                self.triangles.push([a, d, c]);
+            }
+        }
+    }
+
+    /// The enclosed volume, m³ (divergence theorem): positive when the triangles face
+    /// outwards, the tests' check of a closed mesh's orientation.
+    #[cfg(test)]
+    pub fn signed_volume(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize]);
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum()
+    }
+
     /// Axis-aligned bounds `(min, max)`; `None` for an empty mesh.
     pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
         let first = *self.positions.first()?;
@@ -454,14 +480,7 @@ pub fn seabed(
             m.positions.push(DVec3::new(x, y, h));
         }
     }
-    let idx = |i: u32, j: u32| j * (nx + 1) + i;
-    for j in 0..ny {
-        for i in 0..nx {
-            let (a, b, c, d) = (idx(i, j), idx(i + 1, j), idx(i, j + 1), idx(i + 1, j + 1));
-            m.triangles.push([a, b, d]);
-            m.triangles.push([a, d, c]);
-        }
-    }
+    m.triangulate_grid(nx, ny);
     Ok(m)
 }
 
@@ -665,28 +684,18 @@ pub fn write_ply(path: &Path, mesh: &TriMesh, format: PlyFormat) -> Result<(), S
 mod tests {
     use super::*;
 
-    fn signed_volume(m: &TriMesh) -> f64 {
-        m.triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| m.positions[i as usize]);
-                a.dot(b.cross(c)) / 6.0
-            })
-            .sum()
-    }
-
     #[test]
     fn closed_primitives_have_outward_normals_and_right_volume() {
         let b = cuboid(DVec3::new(1.0, 2.0, 3.0));
-        assert!((signed_volume(&b) - 6.0).abs() < 1e-12);
+        assert!((b.signed_volume() - 6.0).abs() < 1e-12);
         assert!((b.area() - 22.0).abs() < 1e-12);
         // Tessellated sphere/cylinder volumes fall short of the analytic ones by the chord error
         // (< 1 % at 64 segments: 1 - sin(2π/64)/(2π/64) ≈ 0.16 % per ring, summed ≈ 0.5 %).
         let s = sphere(1.0, SPHERE_SEGMENTS);
-        let v = signed_volume(&s) / (4.0 / 3.0 * std::f64::consts::PI);
+        let v = s.signed_volume() / (4.0 / 3.0 * std::f64::consts::PI);
         assert!(v > 0.99 && v < 1.0, "{v}");
         let c = cylinder(0.5, 2.0, CYLINDER_SEGMENTS);
-        let v = signed_volume(&c) / (std::f64::consts::PI * 0.25 * 2.0);
+        let v = c.signed_volume() / (std::f64::consts::PI * 0.25 * 2.0);
         assert!(v > 0.99 && v < 1.0, "{v}");
     }
 
@@ -695,7 +704,7 @@ mod tests {
         let p = plane(2.0, 1.0);
         assert_eq!(p.face_normal(0), DVec3::Z);
         let b = cuboid(DVec3::ONE).transformed(&Pose::IDENTITY, DVec3::new(-1.0, 1.0, 1.0));
-        assert!(signed_volume(&b) > 0.0);
+        assert!(b.signed_volume() > 0.0);
     }
 
     #[test]
@@ -732,7 +741,7 @@ mod tests {
         assert!(lo.x > -2.0 - 0.4 && hi.x < 2.0 + 0.4 && lo.y > -1.5 - 0.4 && hi.y < 1.5 + 0.4);
         assert!(hi.z > 0.0 && lo.z < 0.0);
         assert_eq!(m, boulders(4.0, 3.0, 10, 0.2, 3));
-        assert!(signed_volume(&m) > 0.0);
+        assert!(m.signed_volume() > 0.0);
     }
 
     #[test]

@@ -118,65 +118,57 @@ pub fn calibrate(
     )
 }
 
-/// Render, detect and calibrate every case.
-pub fn run(
-    cases: &[Case],
-    out: &Path,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Row>, String> {
-    let mut rows = Vec::new();
-    for c in cases {
-        let t0 = std::time::Instant::now();
-        let m = &c.model;
-        let (cols, rows_, square) = m
-            .targets
-            .iter()
-            .find_map(|t| match t.kind {
-                TargetKind::Checkerboard { cols, rows, square } => Some((cols, rows, square)),
-                _ => None,
-            })
-            .ok_or_else(|| {
-                format!(
-                    "variant `{}`: a calibration lesson needs a checkerboard target\n  help: add \
-                     `[[targets]]` with `type = \"checkerboard\"`",
-                    c.label
-                )
-            })?;
-        let dir = out.join(&c.slug);
-        let images_dir = dir.join("images");
-        progress(&format!(
-            "rendering `{}` ({} views)",
-            c.label,
-            m.poses.len()
-        ));
-        let opts = RenderOptions::default();
-        crate::pipeline::run(m, Backend::Native, &images_dir, &opts, Default::default())?;
-        let mut images: Vec<PathBuf> = std::fs::read_dir(&images_dir)
-            .map_err(|e| format!("{}: {e}", images_dir.display()))?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|x| x == "png"))
-            .collect();
-        images.sort();
-        progress(&format!("calibrating `{}` with OpenCV", c.label));
-        let cal = calibrate(&images, (cols - 1, rows_ - 1), square, &dir)
-            .map_err(|e| format!("variant `{}`: {e}", c.label))?;
-        let cam = &m.cameras[0];
-        let view_png =
-            std::fs::read(&images[0]).map_err(|e| format!("{}: {e}", images[0].display()))?;
-        let residuals_svg = residual_svg(&cal)?;
-        rows.push(Row {
-            label: c.label.clone(),
-            command: c.command("render"),
-            f_air: cam.fx,
-            fx_ratio: cal.grey.fx / cam.fx,
-            fy_ratio: cal.grey.fy / cam.fy,
-            calibration: cal,
-            seconds: t0.elapsed().as_secs_f64(),
-            view_png,
-            residuals_svg,
-        });
-    }
-    Ok(rows)
+/// Render, detect and calibrate one case.
+pub fn run_case(c: &Case, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<Row, String> {
+    let t0 = std::time::Instant::now();
+    let m = &c.model;
+    let (cols, rows_, square) = m
+        .targets
+        .iter()
+        .find_map(|t| match t.kind {
+            TargetKind::Checkerboard { cols, rows, square } => Some((cols, rows, square)),
+            _ => None,
+        })
+        .ok_or_else(|| {
+            format!(
+                "variant `{}`: a calibration lesson needs a checkerboard target\n  help: add \
+                 `[[targets]]` with `type = \"checkerboard\"`",
+                c.label
+            )
+        })?;
+    let dir = out.join(&c.slug);
+    let images_dir = dir.join("images");
+    progress(&format!(
+        "rendering `{}` ({} views)",
+        c.label,
+        m.poses.len()
+    ));
+    let opts = RenderOptions::default();
+    crate::pipeline::run(m, Backend::Native, &images_dir, &opts, Default::default())?;
+    let mut images: Vec<PathBuf> = std::fs::read_dir(&images_dir)
+        .map_err(|e| format!("{}: {e}", images_dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "png"))
+        .collect();
+    images.sort();
+    progress(&format!("calibrating `{}` with OpenCV", c.label));
+    let cal = calibrate(&images, (cols - 1, rows_ - 1), square, &dir)
+        .map_err(|e| format!("variant `{}`: {e}", c.label))?;
+    let cam = &m.cameras[0];
+    let view_png =
+        std::fs::read(&images[0]).map_err(|e| format!("{}: {e}", images[0].display()))?;
+    let residuals_svg = residual_svg(&cal)?;
+    Ok(Row {
+        label: c.label.clone(),
+        command: c.command("render"),
+        f_air: cam.fx,
+        fx_ratio: cal.grey.fx / cam.fx,
+        fy_ratio: cal.grey.fy / cam.fy,
+        calibration: cal,
+        seconds: t0.elapsed().as_secs_f64(),
+        view_png,
+        residuals_svg,
+    })
 }
 
 /// The residual vectors drawn over the image frame, scaled so that the largest is a tenth of

@@ -17,7 +17,7 @@
 //! independent per sample (rayon), so the numbers do not depend on the thread count.
 
 use super::Case;
-use super::html::{base64, escape};
+use super::html::{base64, case_row, escape};
 use crate::geometry::Bvh;
 use crate::geometry::mesh::{TriMesh, shape_mesh};
 use crate::model::{Model, Shape};
@@ -176,43 +176,35 @@ pub fn counts(model: &Model, scene: &Bvh, samples: &[Sample]) -> Result<Vec<u32>
         .collect())
 }
 
-/// Measure every case.
-pub fn run(
-    cases: &[Case],
-    full: bool,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Row>, String> {
+/// Measure one case.
+pub fn run_case(c: &Case, full: bool, progress: &(dyn Fn(&str) + Sync)) -> Result<Row, String> {
     let n = if full { SAMPLES_FULL } else { SAMPLES_QUICK };
-    let mut rows = Vec::new();
-    for c in cases {
-        let t0 = std::time::Instant::now();
-        let m = &c.model;
-        let images = m.poses.len() * m.cameras.len();
-        progress(&format!(
-            "`{}`: {n} surface points × {images} images",
-            c.label
-        ));
-        let err = |e: String| format!("variant `{}`: {e}", c.label);
-        let surface = coral_surface(m).map_err(err)?;
-        let samples = sample(&surface, n, m.render.seed);
-        let scene = Bvh::of_model(m).map_err(err)?;
-        let counts = counts(m, &scene, &samples).map_err(err)?;
-        let share = |k: u32| counts.iter().filter(|&&c| c >= k).count() as f64 / n as f64;
-        rows.push(Row {
-            label: c.label.clone(),
-            command: c.command("render"),
-            images,
-            area_m2: surface.area(),
-            samples: n,
-            seen: share(1),
-            completeness: share(MIN_IMAGES),
-            mean_images: counts.iter().map(|&c| c as f64).sum::<f64>() / n as f64,
-            seconds: t0.elapsed().as_secs_f64(),
-            top_png: map_png(&samples, &counts, View::Top)?,
-            side_png: map_png(&samples, &counts, View::Side)?,
-        });
-    }
-    Ok(rows)
+    let t0 = std::time::Instant::now();
+    let m = &c.model;
+    let images = m.poses.len() * m.cameras.len();
+    progress(&format!(
+        "`{}`: {n} surface points × {images} images",
+        c.label
+    ));
+    let err = |e: String| format!("variant `{}`: {e}", c.label);
+    let surface = coral_surface(m).map_err(err)?;
+    let samples = sample(&surface, n, m.render.seed);
+    let scene = Bvh::of_model(m).map_err(err)?;
+    let counts = counts(m, &scene, &samples).map_err(err)?;
+    let share = |k: u32| counts.iter().filter(|&&c| c >= k).count() as f64 / n as f64;
+    Ok(Row {
+        label: c.label.clone(),
+        command: c.command("render"),
+        images,
+        area_m2: surface.area(),
+        samples: n,
+        seen: share(1),
+        completeness: share(MIN_IMAGES),
+        mean_images: counts.iter().map(|&c| c as f64).sum::<f64>() / n as f64,
+        seconds: t0.elapsed().as_secs_f64(),
+        top_png: map_png(&samples, &counts, View::Top)?,
+        side_png: map_png(&samples, &counts, View::Side)?,
+    })
 }
 
 /// Which way a map looks.
@@ -288,10 +280,6 @@ pub fn map_png(samples: &[Sample], counts: &[u32], view: View) -> Result<Vec<u8>
     Ok(bytes)
 }
 
-fn num(key: &str, text: String) -> String {
-    format!("<td class=\"num\" data-key=\"{}\">{text}</td>", escape(key))
-}
-
 fn swatch(c: [u8; 3]) -> String {
     format!(
         "<span style=\"display:inline-block;width:.9em;height:.9em;background:rgb({},{},{});\
@@ -314,23 +302,17 @@ pub fn section(rows: &[Row]) -> String {
          <th>completeness, %</th><th>images per point</th></tr>\n"
     );
     for row in rows {
-        let k = super::slug(&row.label);
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}{}</tr>",
-            escape(&row.label),
-            num(&format!("{k}.images"), row.images.to_string()),
-            num(&format!("{k}.area_m2"), format!("{:.3}", row.area_m2)),
-            num(&format!("{k}.samples"), row.samples.to_string()),
-            num(&format!("{k}.seen"), format!("{:.1}", 100.0 * row.seen)),
-            num(
-                &format!("{k}.completeness"),
-                format!("{:.1}", 100.0 * row.completeness)
-            ),
-            num(
-                &format!("{k}.mean_images"),
-                format!("{:.1}", row.mean_images)
-            ),
+        case_row(
+            &mut s,
+            &row.label,
+            &[
+                ("images", row.images.to_string()),
+                ("area_m2", format!("{:.3}", row.area_m2)),
+                ("samples", row.samples.to_string()),
+                ("seen", format!("{:.1}", 100.0 * row.seen)),
+                ("completeness", format!("{:.1}", 100.0 * row.completeness)),
+                ("mean_images", format!("{:.1}", row.mean_images)),
+            ],
         );
     }
     let _ = write!(

@@ -17,10 +17,10 @@
 //! ([`crate::geometry::targets::reflectance`]) at each sample point of the target's own frame,
 //! and its pixel from the exact projection ([`crate::optics::project::Projector`]) — no pixel
 //! box is typed in. The helpers [`place`], [`render`], [`bilinear`] and [`view_png`] are shared
-//! with the kind `gsd`, and [`measure`] with the kind `metrology`.
+//! with the kind `gsd`, and [`measure`] and [`strobe_separation`] with the kind `metrology`.
 
 use super::Case;
-use super::html::{escape, num, png, svg};
+use super::html::{case_row, escape, png, svg};
 use crate::backend::native;
 use crate::geometry::targets;
 use crate::model::{LightKind, Model, TargetKind};
@@ -137,15 +137,10 @@ pub struct Row {
     pub distance_m: f64,
     /// Distance between the first two spot lights, m (NaN with fewer).
     pub strobe_separation_m: f64,
-    pub contrast: f64,
-    pub contrast_without_backscatter: f64,
-    pub r_over_g: f64,
-    pub b_over_g: f64,
-    /// Mean radiance of the view without targets, whole frame, [r, g, b], W/(m²·sr).
-    pub backscatter: [f64; 3],
-    pub veiling_share: f64,
-    /// Sample points on the light and the dark squares.
-    pub samples: [usize; 2],
+    /// Contrast, colour cast and backscatter (`bs`: the view without targets), flat in the
+    /// row's JSON.
+    #[serde(flatten)]
+    pub measured: Measured,
     pub seconds: f64,
     #[serde(skip)]
     pub view_png: Vec<u8>,
@@ -222,6 +217,24 @@ fn trimmed_mean(v: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
+/// Distance between the first two spot lights of `model`, m (NaN with fewer): how far apart
+/// the strobes are.
+pub fn strobe_separation(model: &Model) -> f64 {
+    let spots: Vec<DVec3> = model
+        .lights
+        .iter()
+        .filter_map(|l| match l.kind {
+            LightKind::Spot { position, .. } => Some(position),
+            _ => None,
+        })
+        .collect();
+    if spots.len() >= 2 {
+        (spots[0] - spots[1]).length()
+    } else {
+        f64::NAN
+    }
+}
+
 /// What is measured on a view of a checkerboard (pose 0, camera 0, the first target) and on
 /// the same view without it (`bs`): the numbers of the module's table.
 #[derive(Debug, Clone, Serialize)]
@@ -267,66 +280,40 @@ pub fn measure(model: &Model, img: &native::Image, bs: &native::Image) -> Result
     })
 }
 
-/// Render and measure every case.
-pub fn run(
-    cases: &[Case],
-    out: &Path,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Row>, String> {
-    let mut rows = Vec::new();
-    for c in cases {
-        let t0 = std::time::Instant::now();
-        let mut m = c.model.clone();
-        let gsd = m.lesson.as_ref().and_then(|l| l.gsd).ok_or_else(|| {
-            format!(
-                "variant `{}`: a contrast lesson needs `lesson.gsd`\n  help: write e.g. \
-                 `gsd = \"3 mm/px\"` in `[lesson]`",
-                c.label
-            )
-        })?;
-        let d = place(&mut m, gsd, &c.label)?;
-        progress(&format!("rendering `{}` at {d:.2} m", c.label));
-        let img = render(&m)?;
-        let mut empty = m.clone();
-        empty.targets.clear();
-        progress(&format!("rendering `{}` without the target", c.label));
-        let bs = render(&empty)?;
-        let me = measure(&m, &img, &bs)?;
-        let spots: Vec<DVec3> = m
-            .lights
-            .iter()
-            .filter_map(|l| match l.kind {
-                LightKind::Spot { position, .. } => Some(position),
-                _ => None,
-            })
-            .collect();
-        let dir = out.join(&c.slug);
-        let profile_svg = profile(&m, &img, &bs, &c.label)?;
-        rows.push(Row {
-            label: c.label.clone(),
-            command: c.command("render"),
-            focal_length_mm: m.cameras[0].focal_length * 1e3,
-            gsd_mm: gsd * 1e3,
-            distance_m: d,
-            strobe_separation_m: if spots.len() >= 2 {
-                (spots[0] - spots[1]).length()
-            } else {
-                f64::NAN
-            },
-            contrast: me.contrast,
-            contrast_without_backscatter: me.contrast_without_backscatter,
-            r_over_g: me.r_over_g,
-            b_over_g: me.b_over_g,
-            backscatter: me.backscatter,
-            veiling_share: me.veiling_share,
-            samples: me.samples,
-            seconds: t0.elapsed().as_secs_f64(),
-            view_png: view_png(&img, &dir.join("view.png"))?,
-            backscatter_png: view_png(&bs, &dir.join("backscatter.png"))?,
-            profile_svg,
-        });
-    }
-    Ok(rows)
+/// Render and measure one case.
+pub fn run_case(c: &Case, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<Row, String> {
+    let t0 = std::time::Instant::now();
+    let mut m = c.model.clone();
+    let gsd = m.lesson.as_ref().and_then(|l| l.gsd).ok_or_else(|| {
+        format!(
+            "variant `{}`: a contrast lesson needs `lesson.gsd`\n  help: write e.g. \
+             `gsd = \"3 mm/px\"` in `[lesson]`",
+            c.label
+        )
+    })?;
+    let d = place(&mut m, gsd, &c.label)?;
+    progress(&format!("rendering `{}` at {d:.2} m", c.label));
+    let img = render(&m)?;
+    let mut empty = m.clone();
+    empty.targets.clear();
+    progress(&format!("rendering `{}` without the target", c.label));
+    let bs = render(&empty)?;
+    let me = measure(&m, &img, &bs)?;
+    let dir = out.join(&c.slug);
+    let profile_svg = profile(&m, &img, &bs, &c.label)?;
+    Ok(Row {
+        label: c.label.clone(),
+        command: c.command("render"),
+        focal_length_mm: m.cameras[0].focal_length * 1e3,
+        gsd_mm: gsd * 1e3,
+        distance_m: d,
+        strobe_separation_m: strobe_separation(&m),
+        measured: me,
+        seconds: t0.elapsed().as_secs_f64(),
+        view_png: view_png(&img, &dir.join("view.png"))?,
+        backscatter_png: view_png(&bs, &dir.join("backscatter.png"))?,
+        profile_svg,
+    })
 }
 
 /// Green radiance along the board's row of squares just above its centre line (exact
@@ -401,36 +388,28 @@ pub fn html(rows: &[Row]) -> String {
          <th>B/G</th><th>backscatter (G), W/(m²·sr)</th><th>veiling share, %</th></tr>\n",
     );
     for r in rows {
-        let k = super::slug(&r.label);
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}{}{}{}{}{}</tr>",
-            escape(&r.label),
-            num(
-                &format!("{k}.focal_length_mm"),
-                format!("{:.0}", r.focal_length_mm)
-            ),
-            num(&format!("{k}.gsd_mm"), format!("{:.2}", r.gsd_mm)),
-            num(&format!("{k}.distance_m"), format!("{:.3}", r.distance_m)),
-            num(
-                &format!("{k}.strobe_separation_m"),
-                format!("{:.2}", r.strobe_separation_m)
-            ),
-            num(&format!("{k}.contrast"), format!("{:.3}", r.contrast)),
-            num(
-                &format!("{k}.contrast_without_backscatter"),
-                format!("{:.3}", r.contrast_without_backscatter)
-            ),
-            num(&format!("{k}.r_over_g"), format!("{:.3}", r.r_over_g)),
-            num(&format!("{k}.b_over_g"), format!("{:.3}", r.b_over_g)),
-            num(
-                &format!("{k}.backscatter"),
-                format!("{:.3e}", r.backscatter[1])
-            ),
-            num(
-                &format!("{k}.veiling_share"),
-                format!("{:.1}", 100.0 * r.veiling_share)
-            ),
+        let me = &r.measured;
+        case_row(
+            &mut s,
+            &r.label,
+            &[
+                ("focal_length_mm", format!("{:.0}", r.focal_length_mm)),
+                ("gsd_mm", format!("{:.2}", r.gsd_mm)),
+                ("distance_m", format!("{:.3}", r.distance_m)),
+                (
+                    "strobe_separation_m",
+                    format!("{:.2}", r.strobe_separation_m),
+                ),
+                ("contrast", format!("{:.3}", me.contrast)),
+                (
+                    "contrast_without_backscatter",
+                    format!("{:.3}", me.contrast_without_backscatter),
+                ),
+                ("r_over_g", format!("{:.3}", me.r_over_g)),
+                ("b_over_g", format!("{:.3}", me.b_over_g)),
+                ("backscatter", format!("{:.3e}", me.backscatter[1])),
+                ("veiling_share", format!("{:.1}", 100.0 * me.veiling_share)),
+            ],
         );
     }
     s.push_str(

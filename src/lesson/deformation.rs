@@ -79,10 +79,7 @@ pub fn run(
             registered: ev.registered,
             points: ev.points,
             reprojection_px: ev.reprojection_error,
-            focal_error_percent: ev
-                .cameras
-                .first()
-                .map_or(f64::NAN, |c| 100.0 * c.focal_error),
+            focal_error_percent: ev.focal_error_percent(),
             rms_z_mm: 1e3 * ev.tie_errors.rms[2],
             nmad_z_mm: 1e3 * ev.tie_errors.robust_z.nmad,
             bowl_mm: ev.bowl.map_or(f64::NAN, |b| 1e3 * b.peak_to_peak),

@@ -393,10 +393,7 @@ pub fn accuracy(m: &crate::model::Model, opts: &Options, dir: &Path) -> Result<A
         alignment_count: ev.alignment_count,
         rms_3d_mm: 1e3 * ev.tie_errors.rms_3d,
         rms_xyz_mm: ev.tie_errors.rms.map(|x| 1e3 * x),
-        focal_error_percent: ev
-            .cameras
-            .first()
-            .map_or(f64::NAN, |c| 100.0 * c.focal_error),
+        focal_error_percent: ev.focal_error_percent(),
         scale_error_ppm: 1e6 * (ev.similarity.scale - 1.0),
         seconds: ev.seconds,
     })

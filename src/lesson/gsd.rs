@@ -185,68 +185,60 @@ fn gsd_at_star(model: &Model) -> Option<f64> {
     (d > 0.0).then(|| 1e-3 / d)
 }
 
-/// Plan, render and measure every case.
-pub fn run(
-    cases: &[Case],
-    out: &Path,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Row>, String> {
-    let mut rows = Vec::new();
-    for c in cases {
-        let t0 = std::time::Instant::now();
-        let mut m = c.model.clone();
-        let gsd = m.lesson.as_ref().and_then(|l| l.gsd).ok_or_else(|| {
-            format!(
-                "variant `{}`: a GSD lesson needs `lesson.gsd`\n  help: write e.g. `gsd = \"1 \
-                 mm/px\"` in `[lesson]` or the variant's `set`",
-                c.label
-            )
-        })?;
-        let h = place(&mut m, gsd, &c.label)?;
-        let air = Projector::for_camera(&m.cameras[0], 1, 1.0)
-            .ok()
-            .and_then(|p| distance_for_gsd(&p, gsd))
-            .unwrap_or(f64::NAN);
-        progress(&format!("rendering `{}` at {h:.2} m", c.label));
-        let img = render(&m)?;
-        let circ = circles(&m, &img)?;
-        // Down from the outermost circle while every circle is resolved.
-        let smallest = circ
-            .iter()
-            .take_while(|k| k.min_dip >= RESOLVED)
-            .last()
-            .copied();
-        let mtf10 = circ
-            .iter()
-            .take_while(|k| k.contrast >= RESOLVED)
-            .last()
-            .map_or(f64::NAN, |k| k.bar_px);
-        let spokes = match m.targets[0].kind {
-            TargetKind::SiemensStar { spokes, .. } => spokes,
-            _ => 0,
-        };
-        let (mm, px) = smallest.map_or((f64::NAN, f64::NAN), |k| (k.bar_mm, k.bar_px));
-        let contrast_svg = contrast_plot(&c.label, &circ, gsd)?;
-        rows.push(Row {
-            label: c.label.clone(),
-            command: c.command("render"),
-            port: port_name(&m.cameras[0].port).into(),
-            gsd_mm: gsd * 1e3,
-            height_m: h,
-            height_air_m: air,
-            gsd_at_star_mm: gsd_at_star(&m).map_or(f64::NAN, |g| g * 1e3),
-            smallest_resolved_mm: mm,
-            smallest_resolved_px: px,
-            resolved_over_gsd: mm / (gsd * 1e3),
-            mean_contrast_10_px: mtf10,
-            spokes,
-            circles: circ,
-            seconds: t0.elapsed().as_secs_f64(),
-            view_png: view_png(&img, &out.join(&c.slug).join("view.png"))?,
-            contrast_svg,
-        });
-    }
-    Ok(rows)
+/// Plan, render and measure one case.
+pub fn run_case(c: &Case, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<Row, String> {
+    let t0 = std::time::Instant::now();
+    let mut m = c.model.clone();
+    let gsd = m.lesson.as_ref().and_then(|l| l.gsd).ok_or_else(|| {
+        format!(
+            "variant `{}`: a GSD lesson needs `lesson.gsd`\n  help: write e.g. `gsd = \"1 \
+             mm/px\"` in `[lesson]` or the variant's `set`",
+            c.label
+        )
+    })?;
+    let h = place(&mut m, gsd, &c.label)?;
+    let air = Projector::for_camera(&m.cameras[0], 1, 1.0)
+        .ok()
+        .and_then(|p| distance_for_gsd(&p, gsd))
+        .unwrap_or(f64::NAN);
+    progress(&format!("rendering `{}` at {h:.2} m", c.label));
+    let img = render(&m)?;
+    let circ = circles(&m, &img)?;
+    // Down from the outermost circle while every circle is resolved.
+    let smallest = circ
+        .iter()
+        .take_while(|k| k.min_dip >= RESOLVED)
+        .last()
+        .copied();
+    let mtf10 = circ
+        .iter()
+        .take_while(|k| k.contrast >= RESOLVED)
+        .last()
+        .map_or(f64::NAN, |k| k.bar_px);
+    let spokes = match m.targets[0].kind {
+        TargetKind::SiemensStar { spokes, .. } => spokes,
+        _ => 0,
+    };
+    let (mm, px) = smallest.map_or((f64::NAN, f64::NAN), |k| (k.bar_mm, k.bar_px));
+    let contrast_svg = contrast_plot(&c.label, &circ, gsd)?;
+    Ok(Row {
+        label: c.label.clone(),
+        command: c.command("render"),
+        port: port_name(&m.cameras[0].port).into(),
+        gsd_mm: gsd * 1e3,
+        height_m: h,
+        height_air_m: air,
+        gsd_at_star_mm: gsd_at_star(&m).map_or(f64::NAN, |g| g * 1e3),
+        smallest_resolved_mm: mm,
+        smallest_resolved_px: px,
+        resolved_over_gsd: mm / (gsd * 1e3),
+        mean_contrast_10_px: mtf10,
+        spokes,
+        circles: circ,
+        seconds: t0.elapsed().as_secs_f64(),
+        view_png: view_png(&img, &out.join(&c.slug).join("view.png"))?,
+        contrast_svg,
+    })
 }
 
 /// Contrast against bar width (in planned GSDs), with the threshold.

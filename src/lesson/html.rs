@@ -10,7 +10,7 @@
 //! | try next | each suggestion with the `poser lesson … --set` that changes one thing |
 //!
 //! Every number cell carries `data-key="<variant slug>.<quantity>"` so tools (and the tests)
-//! can find it.
+//! can find it; [`case_row`] writes the usual row of a kind's table: the case, then such cells.
 
 use super::{Report, Results, slug};
 use crate::io::write_atomic;
@@ -57,6 +57,19 @@ pub(crate) fn svg(s: &str) -> String {
 
 pub(crate) fn num(key: &str, text: String) -> String {
     format!("<td class=\"num\" data-key=\"{}\">{text}</td>", escape(key))
+}
+
+/// One table row of a case: its label, then a number cell per `(key, text)`, each keyed
+/// `SLUG.KEY` (the case's [`slug`]) for whoever reads the page's numbers.
+pub(crate) fn case_row(s: &mut String, label: &str, cells: &[(&str, String)]) {
+    let k = slug(label);
+    s.push_str("<tr><th>");
+    s.push_str(&escape(label));
+    s.push_str("</th>");
+    for (key, text) in cells {
+        s.push_str(&num(&format!("{k}.{key}"), text.clone()));
+    }
+    s.push_str("</tr>\n");
 }
 
 const STYLE: &str = "body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;\
@@ -163,27 +176,21 @@ fn deformation_section(s: &mut String, rows: &[super::deformation::Row]) {
          <th>bowl share, %</th></tr>\n",
     );
     for row in rows {
-        let k = slug(&row.label);
-        let _ = writeln!(
+        case_row(
             s,
-            "<tr><th>{}</th>{}{}{}{}{}{}{}</tr>",
-            escape(&row.label),
-            num(&format!("{k}.images"), row.images.to_string()),
-            num(
-                &format!("{k}.reprojection_px"),
-                format!("{:.2}", row.reprojection_px)
-            ),
-            num(
-                &format!("{k}.focal_error_percent"),
-                format!("{:+.2}", row.focal_error_percent)
-            ),
-            num(&format!("{k}.rms_z_mm"), format!("{:.1}", row.rms_z_mm)),
-            num(&format!("{k}.nmad_z_mm"), format!("{:.1}", row.nmad_z_mm)),
-            num(&format!("{k}.bowl_mm"), format!("{:.1}", row.bowl_mm)),
-            num(
-                &format!("{k}.bowl_share"),
-                format!("{:.0}", 100.0 * row.bowl_share)
-            ),
+            &row.label,
+            &[
+                ("images", row.images.to_string()),
+                ("reprojection_px", format!("{:.2}", row.reprojection_px)),
+                (
+                    "focal_error_percent",
+                    format!("{:+.2}", row.focal_error_percent),
+                ),
+                ("rms_z_mm", format!("{:.1}", row.rms_z_mm)),
+                ("nmad_z_mm", format!("{:.1}", row.nmad_z_mm)),
+                ("bowl_mm", format!("{:.1}", row.bowl_mm)),
+                ("bowl_share", format!("{:.0}", 100.0 * row.bowl_share)),
+            ],
         );
     }
     s.push_str(
@@ -221,33 +228,32 @@ fn calibration_section(s: &mut String, rows: &[super::calibration::Row]) {
          <th>lateral colour R−B at the corners, px (calibrated; detected)</th></tr>\n",
     );
     for row in rows {
-        let k = slug(&row.label);
         let c = &row.calibration;
         let d = &c.grey.dist;
-        let _ = writeln!(
+        case_row(
             s,
-            "<tr><th>{}</th>{}{}{}{}{}{}{}{}{}{}{}</tr>",
-            escape(&row.label),
-            num(&format!("{k}.views"), c.views.len().to_string()),
-            num(&format!("{k}.rms"), format!("{:.3}", c.grey.rms)),
-            num(&format!("{k}.fx_ratio"), format!("{:.3}", row.fx_ratio)),
-            num(&format!("{k}.fy_ratio"), format!("{:.3}", row.fy_ratio)),
-            num(
-                &format!("{k}.principal_point"),
-                format!("{:.1}, {:.1}", c.grey.cx, c.grey.cy)
-            ),
-            num(&format!("{k}.k1"), format!("{:.3}", d.k1)),
-            num(&format!("{k}.k2"), format!("{:.3}", d.k2)),
-            num(&format!("{k}.p1"), format!("{:.4}", d.p1)),
-            num(&format!("{k}.p2"), format!("{:.4}", d.p2)),
-            num(&format!("{k}.k3"), format!("{:.3}", d.k3)),
-            num(
-                &format!("{k}.lateral_colour"),
-                c.lateral_colour.as_ref().map_or("–".into(), |l| format!(
-                    "{:.2}; {:.2}",
-                    l.r_minus_b_px, l.detected_r_minus_b_px
-                ))
-            ),
+            &row.label,
+            &[
+                ("views", c.views.len().to_string()),
+                ("rms", format!("{:.3}", c.grey.rms)),
+                ("fx_ratio", format!("{:.3}", row.fx_ratio)),
+                ("fy_ratio", format!("{:.3}", row.fy_ratio)),
+                (
+                    "principal_point",
+                    format!("{:.1}, {:.1}", c.grey.cx, c.grey.cy),
+                ),
+                ("k1", format!("{:.3}", d.k1)),
+                ("k2", format!("{:.3}", d.k2)),
+                ("p1", format!("{:.4}", d.p1)),
+                ("p2", format!("{:.4}", d.p2)),
+                ("k3", format!("{:.3}", d.k3)),
+                (
+                    "lateral_colour",
+                    c.lateral_colour.as_ref().map_or("–".into(), |l| {
+                        format!("{:.2}; {:.2}", l.r_minus_b_px, l.detected_r_minus_b_px)
+                    }),
+                ),
+            ],
         );
     }
     let f_air = rows.first().map_or(f64::NAN, |r| r.f_air);

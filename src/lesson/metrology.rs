@@ -17,10 +17,8 @@
 use super::Case;
 use super::contrast::{self, Measured};
 use super::dive::{self, Accuracy};
-use super::html::{escape, num, png, svg};
+use super::html::{case_row, escape, png, svg};
 use crate::evaluate::{Options, water_equivalent};
-use crate::model::LightKind;
-use glam::DVec3;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -53,102 +51,81 @@ pub struct Row {
     pub backscatter_png: Vec<u8>,
 }
 
-/// Render, measure and evaluate every case.
-pub fn run(
-    cases: &[Case],
-    out: &Path,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Row>, String> {
-    let mut rows = Vec::new();
-    for c in cases {
-        let t0 = std::time::Instant::now();
-        let err = |e: String| format!("variant `{}`: {e}", c.label);
-        let m = &c.model;
-        let board = m.targets.first().ok_or_else(|| {
-            err(
-                "the metrology lesson needs a checkerboard as its first target\n  help: add \
-                 `[[targets]]` with `type = \"checkerboard\"` in view of the network"
-                    .into(),
-            )
-        })?;
-        if m.poses.is_empty() || m.cameras.is_empty() {
-            return Err(err("the network has no images".into()));
-        }
-        // The rig pose nearest the board (horizontally), alone, at a reduced resolution.
-        let at = board.pose.translation;
-        let pose = (0..m.poses.len())
-            .min_by(|&a, &b| {
-                let d = |i: usize| {
-                    let t = m.poses[i].world_from_rig.translation - at;
-                    t.x.hypot(t.y)
-                };
-                d(a).total_cmp(&d(b))
-            })
-            .unwrap_or(0);
-        let mut view = m.clone();
-        view.poses = vec![m.poses[pose].clone()];
-        let view = view.with_resolution_scale(VIEW_SCALE);
-        progress(&format!("rendering `{}`", c.label));
-        let img = contrast::render(&view).map_err(err)?;
-        let mut empty = view.clone();
-        empty.targets.clear();
-        empty.objects.clear();
-        progress(&format!("rendering `{}` with nothing but water", c.label));
-        let bs = contrast::render(&empty).map_err(err)?;
-        let light = contrast::measure(&view, &img, &bs).map_err(err)?;
-        let dir = out.join(&c.slug);
-        let view_png = contrast::view_png(&img, &dir.join("view.png")).map_err(err)?;
-        let backscatter_png = contrast::view_png(&bs, &dir.join("backscatter.png")).map_err(err)?;
-
-        let distance = m.world_from_camera(pose, 0).inverse().transform_point(at).z;
-        let baseline = if m.cameras.len() >= 2 {
-            (m.cameras[0].rig_from_camera.translation - m.cameras[1].rig_from_camera.translation)
-                .length()
-        } else {
-            f64::NAN
-        };
-        let opts = Options {
-            gcp: true,
-            rig: true,
-            density: DENSITY,
-            ..Options::default()
-        };
-        let f = water_equivalent(m, 0, distance).map_err(err)?[0];
-        let pair_sigma_z =
-            distance * distance * std::f64::consts::SQRT_2 * opts.noise / (baseline * f);
-        progress(&format!(
-            "evaluating `{}` ({} images)",
-            c.label,
-            m.poses.len() * m.cameras.len()
-        ));
-        let accuracy = dive::accuracy(m, &opts, &dir).map_err(err)?;
-        let spots: Vec<DVec3> = m
-            .lights
-            .iter()
-            .filter_map(|l| match l.kind {
-                LightKind::Spot { position, .. } => Some(position),
-                _ => None,
-            })
-            .collect();
-        rows.push(Row {
-            label: c.label.clone(),
-            command: format!("{} --gcp --rig --density {DENSITY}", c.command("evaluate")),
-            lamp_separation_m: if spots.len() >= 2 {
-                (spots[0] - spots[1]).length()
-            } else {
-                f64::NAN
-            },
-            baseline_m: baseline,
-            distance_m: distance,
-            light,
-            accuracy,
-            pair_sigma_z_mm: 1e3 * pair_sigma_z,
-            seconds: t0.elapsed().as_secs_f64(),
-            view_png,
-            backscatter_png,
-        });
+/// Render, measure and evaluate one case.
+pub fn run_case(c: &Case, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<Row, String> {
+    let t0 = std::time::Instant::now();
+    let err = |e: String| format!("variant `{}`: {e}", c.label);
+    let m = &c.model;
+    let board = m.targets.first().ok_or_else(|| {
+        err(
+            "the metrology lesson needs a checkerboard as its first target\n  help: add \
+             `[[targets]]` with `type = \"checkerboard\"` in view of the network"
+                .into(),
+        )
+    })?;
+    if m.poses.is_empty() || m.cameras.is_empty() {
+        return Err(err("the network has no images".into()));
     }
-    Ok(rows)
+    // The rig pose nearest the board (horizontally), alone, at a reduced resolution.
+    let at = board.pose.translation;
+    let pose = (0..m.poses.len())
+        .min_by(|&a, &b| {
+            let d = |i: usize| {
+                let t = m.poses[i].world_from_rig.translation - at;
+                t.x.hypot(t.y)
+            };
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap_or(0);
+    let mut view = m.clone();
+    view.poses = vec![m.poses[pose].clone()];
+    let view = view.with_resolution_scale(VIEW_SCALE);
+    progress(&format!("rendering `{}`", c.label));
+    let img = contrast::render(&view).map_err(err)?;
+    let mut empty = view.clone();
+    empty.targets.clear();
+    empty.objects.clear();
+    progress(&format!("rendering `{}` with nothing but water", c.label));
+    let bs = contrast::render(&empty).map_err(err)?;
+    let light = contrast::measure(&view, &img, &bs).map_err(err)?;
+    let dir = out.join(&c.slug);
+    let view_png = contrast::view_png(&img, &dir.join("view.png")).map_err(err)?;
+    let backscatter_png = contrast::view_png(&bs, &dir.join("backscatter.png")).map_err(err)?;
+
+    let distance = m.world_from_camera(pose, 0).inverse().transform_point(at).z;
+    let baseline = if m.cameras.len() >= 2 {
+        (m.cameras[0].rig_from_camera.translation - m.cameras[1].rig_from_camera.translation)
+            .length()
+    } else {
+        f64::NAN
+    };
+    let opts = Options {
+        gcp: true,
+        rig: true,
+        density: DENSITY,
+        ..Options::default()
+    };
+    let f = water_equivalent(m, 0, distance).map_err(err)?[0];
+    let pair_sigma_z = distance * distance * std::f64::consts::SQRT_2 * opts.noise / (baseline * f);
+    progress(&format!(
+        "evaluating `{}` ({} images)",
+        c.label,
+        m.poses.len() * m.cameras.len()
+    ));
+    let accuracy = dive::accuracy(m, &opts, &dir).map_err(err)?;
+    Ok(Row {
+        label: c.label.clone(),
+        command: format!("{} --gcp --rig --density {DENSITY}", c.command("evaluate")),
+        lamp_separation_m: contrast::strobe_separation(m),
+        baseline_m: baseline,
+        distance_m: distance,
+        light,
+        accuracy,
+        pair_sigma_z_mm: 1e3 * pair_sigma_z,
+        seconds: t0.elapsed().as_secs_f64(),
+        view_png,
+        backscatter_png,
+    })
 }
 
 /// RMS Z of the block against the baseline (points), and one pair's σZ (the curve), SVG.
@@ -208,12 +185,7 @@ pub fn baseline_plot(rows: &[Row]) -> Result<String, String> {
             .map_err(|e| e.to_string())?
             .label("the block (evaluate), RMS Z")
             .legend(|(x, y)| Circle::new((x + 8, y), 4, BLUE.filled()));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| e.to_string())?;
+        crate::plan::plot::legend(&mut chart, SeriesLabelPosition::MiddleRight)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(s)
@@ -232,31 +204,22 @@ pub fn html(rows: &[Row]) -> String {
          </tr>\n",
     );
     for r in rows {
-        let k = super::slug(&r.label);
         let l = &r.light;
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}{}{}</tr>",
-            escape(&r.label),
-            num(
-                &format!("{k}.lamp_separation_m"),
-                format!("{:.2}", r.lamp_separation_m)
-            ),
-            num(
-                &format!("{k}.backscatter"),
-                format!("{:.3e}", l.backscatter[1])
-            ),
-            num(&format!("{k}.contrast"), format!("{:.3}", l.contrast)),
-            num(
-                &format!("{k}.contrast_without_backscatter"),
-                format!("{:.3}", l.contrast_without_backscatter)
-            ),
-            num(
-                &format!("{k}.veiling_share"),
-                format!("{:.1}", 100.0 * l.veiling_share)
-            ),
-            num(&format!("{k}.r_over_g"), format!("{:.3}", l.r_over_g)),
-            num(&format!("{k}.b_over_g"), format!("{:.3}", l.b_over_g)),
+        case_row(
+            &mut s,
+            &r.label,
+            &[
+                ("lamp_separation_m", format!("{:.2}", r.lamp_separation_m)),
+                ("backscatter", format!("{:.3e}", l.backscatter[1])),
+                ("contrast", format!("{:.3}", l.contrast)),
+                (
+                    "contrast_without_backscatter",
+                    format!("{:.3}", l.contrast_without_backscatter),
+                ),
+                ("veiling_share", format!("{:.1}", 100.0 * l.veiling_share)),
+                ("r_over_g", format!("{:.3}", l.r_over_g)),
+                ("b_over_g", format!("{:.3}", l.b_over_g)),
+            ],
         );
     }
     s.push_str(
@@ -271,31 +234,22 @@ pub fn html(rows: &[Row]) -> String {
          <th>scale error, ppm</th></tr>\n",
     );
     for r in rows {
-        let k = super::slug(&r.label);
         let a = &r.accuracy;
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}{}{}{}{}{}</tr>",
-            escape(&r.label),
-            num(&format!("{k}.baseline_m"), format!("{:.2}", r.baseline_m)),
-            num(&format!("{k}.images"), a.images.to_string()),
-            num(&format!("{k}.points"), a.points.to_string()),
-            num(
-                &format!("{k}.reprojection_px"),
-                format!("{:.3}", a.reprojection_px)
-            ),
-            num(&format!("{k}.rms_x_mm"), format!("{:.2}", a.rms_xyz_mm[0])),
-            num(&format!("{k}.rms_y_mm"), format!("{:.2}", a.rms_xyz_mm[1])),
-            num(&format!("{k}.rms_z_mm"), format!("{:.2}", a.rms_xyz_mm[2])),
-            num(&format!("{k}.rms_3d_mm"), format!("{:.2}", a.rms_3d_mm)),
-            num(
-                &format!("{k}.pair_sigma_z_mm"),
-                format!("{:.2}", r.pair_sigma_z_mm)
-            ),
-            num(
-                &format!("{k}.scale_error_ppm"),
-                format!("{:.0}", a.scale_error_ppm)
-            ),
+        case_row(
+            &mut s,
+            &r.label,
+            &[
+                ("baseline_m", format!("{:.2}", r.baseline_m)),
+                ("images", a.images.to_string()),
+                ("points", a.points.to_string()),
+                ("reprojection_px", format!("{:.3}", a.reprojection_px)),
+                ("rms_x_mm", format!("{:.2}", a.rms_xyz_mm[0])),
+                ("rms_y_mm", format!("{:.2}", a.rms_xyz_mm[1])),
+                ("rms_z_mm", format!("{:.2}", a.rms_xyz_mm[2])),
+                ("rms_3d_mm", format!("{:.2}", a.rms_3d_mm)),
+                ("pair_sigma_z_mm", format!("{:.2}", r.pair_sigma_z_mm)),
+                ("scale_error_ppm", format!("{:.0}", a.scale_error_ppm)),
+            ],
         );
     }
     s.push_str("</table>\n");

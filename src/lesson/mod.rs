@@ -230,6 +230,15 @@ pub fn cases(scene: &Path, opts: &Options) -> Result<(Lesson, Vec<Case>), String
     Ok((lesson, out))
 }
 
+/// One row per case, in the cases' order, stopping at the first error: how a kind whose cases
+/// are independent (all but `deformation`, `dive` and `survey`) runs its `run_case`.
+fn each_case<R>(
+    cases: &[Case],
+    run_case: impl Fn(&Case) -> Result<R, String>,
+) -> Result<Vec<R>, String> {
+    cases.iter().map(run_case).collect()
+}
+
 /// Run the lesson of `scene`, writing each variant's own outputs under `out`, and return
 /// the report (the caller writes the page with [`html::write`]).
 pub fn run(
@@ -251,24 +260,24 @@ pub fn run(
             rows: deformation::run(&cases, out, progress)?,
         },
         LessonKind::Calibration => Results::Calibration {
-            rows: calibration::run(&cases, out, progress)?,
+            rows: each_case(&cases, |c| calibration::run_case(c, out, progress))?,
         },
         LessonKind::Contrast => Results::Contrast {
-            rows: contrast::run(&cases, out, progress)?,
+            rows: each_case(&cases, |c| contrast::run_case(c, out, progress))?,
         },
         LessonKind::Gsd => Results::Gsd {
-            rows: gsd::run(&cases, out, progress)?,
+            rows: each_case(&cases, |c| gsd::run_case(c, out, progress))?,
         },
         LessonKind::Dive => Results::Dive(dive::run(&cases, out, false, opts.full, progress)?),
         LessonKind::Survey => Results::Survey(dive::run(&cases, out, true, opts.full, progress)?),
         LessonKind::Completeness => Results::Completeness {
-            rows: completeness::run(&cases, opts.full, progress)?,
+            rows: each_case(&cases, |c| completeness::run_case(c, opts.full, progress))?,
         },
         LessonKind::Metrology => Results::Metrology {
-            rows: metrology::run(&cases, out, progress)?,
+            rows: each_case(&cases, |c| metrology::run_case(c, out, progress))?,
         },
         LessonKind::Surface => Results::Surface {
-            rows: surface::run(&cases, out, progress)?,
+            rows: each_case(&cases, |c| surface::run_case(c, out, progress))?,
         },
     };
     let command_of = |full: bool| {

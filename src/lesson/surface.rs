@@ -10,7 +10,7 @@
 
 use super::Case;
 use super::contrast::view_png;
-use super::html::{escape, num, png, svg};
+use super::html::{case_row, escape, num, png, svg};
 use crate::backend::native::caustics::CausticVolume;
 use crate::model::SeaSurface;
 use crate::optics::surface::{SeaInterface, image_through};
@@ -44,89 +44,81 @@ pub struct Row {
     pub view_png: Vec<u8>,
 }
 
-/// Measure and render every case.
-pub fn run(
-    cases: &[Case],
-    out: &Path,
-    progress: &(dyn Fn(&str) + Sync),
-) -> Result<Vec<Row>, String> {
-    let mut rows = Vec::new();
-    for c in cases {
-        let t0 = std::time::Instant::now();
-        let err = |e: String| format!("variant `{}`: {e}", c.label);
-        let m = &c.model;
-        if m.poses.is_empty() || m.cameras.is_empty() || !m.above_surface(0, 0) {
-            return Err(err(
-                "the surface lesson needs camera 0 above the sea surface at the first pose\n  \
-                 help: put the first pose in the air (z above the crests), give the camera \
-                 `[camera.port] type = \"none\"` and model the surface (`site.surface`)"
-                    .into(),
-            ));
-        }
-        let waves = m
-            .sea_interface(1)
-            .ok_or_else(|| err("no sea surface".into()))?;
-        let flat = SeaInterface::flat(waves.n_water);
-        let pr = m.projector(0, 1).map_err(err)?;
-        let ray = |u: f64, v: f64| pr.pixel_ray_world(0, u, v).map(|(o, d, _)| (o, d));
-        progress(&format!(
-            "projecting `{}`'s targets through the surface",
-            c.label
+/// Measure and render one case.
+pub fn run_case(c: &Case, out: &Path, progress: &(dyn Fn(&str) + Sync)) -> Result<Row, String> {
+    let t0 = std::time::Instant::now();
+    let err = |e: String| format!("variant `{}`: {e}", c.label);
+    let m = &c.model;
+    if m.poses.is_empty() || m.cameras.is_empty() || !m.above_surface(0, 0) {
+        return Err(err(
+            "the surface lesson needs camera 0 above the sea surface at the first pose\n  \
+             help: put the first pose in the air (z above the crests), give the camera \
+             `[camera.port] type = \"none\"` and model the surface (`site.surface`)"
+                .into(),
         ));
-        let (mut sum2, mut max, mut n, mut lost) = (0.0f64, 0.0f64, 0usize, 0usize);
-        for t in &m.targets {
-            for p in &t.points {
-                let Ok(start) = pr.project_world_unbounded(0, p.world) else {
-                    continue;
-                };
-                let Ok(a) = image_through(&flat, &ray, p.world, start) else {
-                    continue;
-                };
-                if !pr.on_sensor(a) {
-                    continue;
+    }
+    let waves = m
+        .sea_interface(1)
+        .ok_or_else(|| err("no sea surface".into()))?;
+    let flat = SeaInterface::flat(waves.n_water);
+    let pr = m.projector(0, 1).map_err(err)?;
+    let ray = |u: f64, v: f64| pr.pixel_ray_world(0, u, v).map(|(o, d, _)| (o, d));
+    progress(&format!(
+        "projecting `{}`'s targets through the surface",
+        c.label
+    ));
+    let (mut sum2, mut max, mut n, mut lost) = (0.0f64, 0.0f64, 0usize, 0usize);
+    for t in &m.targets {
+        for p in &t.points {
+            let Ok(start) = pr.project_world_unbounded(0, p.world) else {
+                continue;
+            };
+            let Ok(a) = image_through(&flat, &ray, p.world, start) else {
+                continue;
+            };
+            if !pr.on_sensor(a) {
+                continue;
+            }
+            match image_through(&waves, &ray, p.world, a) {
+                Ok(b) => {
+                    let d = (a[0] - b[0]).hypot(a[1] - b[1]);
+                    sum2 += d * d;
+                    max = max.max(d);
+                    n += 1;
                 }
-                match image_through(&waves, &ray, p.world, a) {
-                    Ok(b) => {
-                        let d = (a[0] - b[0]).hypot(a[1] - b[1]);
-                        sum2 += d * d;
-                        max = max.max(d);
-                        n += 1;
-                    }
-                    Err(_) => lost += 1,
-                }
+                Err(_) => lost += 1,
             }
         }
-        let wave_height_m = match m.site.surface {
-            SeaSurface::Waves { height, .. } => height,
-            _ => 0.0,
-        };
-        progress(&format!("caustics of `{}`", c.label));
-        let caustic_contrast = caustics(m);
-        progress(&format!("rendering `{}`", c.label));
-        let small = m.clone().with_resolution_scale(VIEW_SCALE);
-        let scene = crate::backend::native::scene::Scene::build(&small).map_err(err)?;
-        let img =
-            crate::backend::native::render_image(&small, &scene, 0, 0, small.render.samples, None)
-                .map_err(err)?;
-        let view_png = view_png(&img, &out.join(&c.slug).join("view.png")).map_err(err)?;
-        rows.push(Row {
-            label: c.label.clone(),
-            command: c.command("render"),
-            wave_height_m,
-            points: n,
-            no_image: lost,
-            moved_rms_px: if n > 0 {
-                (sum2 / n as f64).sqrt()
-            } else {
-                f64::NAN
-            },
-            moved_max_px: if n > 0 { max } else { f64::NAN },
-            caustic_contrast,
-            seconds: t0.elapsed().as_secs_f64(),
-            view_png,
-        });
     }
-    Ok(rows)
+    let wave_height_m = match m.site.surface {
+        SeaSurface::Waves { height, .. } => height,
+        _ => 0.0,
+    };
+    progress(&format!("caustics of `{}`", c.label));
+    let caustic_contrast = caustics(m);
+    progress(&format!("rendering `{}`", c.label));
+    let small = m.clone().with_resolution_scale(VIEW_SCALE);
+    let scene = crate::backend::native::scene::Scene::build(&small).map_err(err)?;
+    let img =
+        crate::backend::native::render_image(&small, &scene, 0, 0, small.render.samples, None)
+            .map_err(err)?;
+    let view_png = view_png(&img, &out.join(&c.slug).join("view.png")).map_err(err)?;
+    Ok(Row {
+        label: c.label.clone(),
+        command: c.command("render"),
+        wave_height_m,
+        points: n,
+        no_image: lost,
+        moved_rms_px: if n > 0 {
+            (sum2 / n as f64).sqrt()
+        } else {
+            f64::NAN
+        },
+        moved_max_px: if n > 0 { max } else { f64::NAN },
+        caustic_contrast,
+        seconds: t0.elapsed().as_secs_f64(),
+        view_png,
+    })
 }
 
 /// Caustic contrast at [`DEPTHS`] (empty without sun or waves).
@@ -193,12 +185,7 @@ fn caustic_plot(rows: &[Row]) -> Result<String, String> {
                 .label(r.label.clone())
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], col));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| e.to_string())?;
+        crate::plan::plot::legend(&mut chart, SeriesLabelPosition::MiddleRight)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(s)
@@ -215,25 +202,16 @@ pub fn html(rows: &[Row]) -> String {
          <th>moved, largest px</th><th>no image</th></tr>\n",
     );
     for r in rows {
-        let k = super::slug(&r.label);
-        let _ = writeln!(
-            s,
-            "<tr><th>{}</th>{}{}{}{}{}</tr>",
-            escape(&r.label),
-            num(
-                &format!("{k}.wave_height_m"),
-                format!("{:.2}", r.wave_height_m)
-            ),
-            num(&format!("{k}.points"), r.points.to_string()),
-            num(
-                &format!("{k}.moved_rms_px"),
-                format!("{:.2}", r.moved_rms_px)
-            ),
-            num(
-                &format!("{k}.moved_max_px"),
-                format!("{:.2}", r.moved_max_px)
-            ),
-            num(&format!("{k}.no_image"), r.no_image.to_string()),
+        case_row(
+            &mut s,
+            &r.label,
+            &[
+                ("wave_height_m", format!("{:.2}", r.wave_height_m)),
+                ("points", r.points.to_string()),
+                ("moved_rms_px", format!("{:.2}", r.moved_rms_px)),
+                ("moved_max_px", format!("{:.2}", r.moved_max_px)),
+                ("no_image", r.no_image.to_string()),
+            ],
         );
     }
     s.push_str(

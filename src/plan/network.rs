@@ -379,15 +379,11 @@ pub fn expand(
             let c0 = DVec3::new(center.x, center.y, z);
             let (strip_no, strip_spacing_used) =
                 lawnmower_strips(&mut b, &passes, *strips, strip_gap, along, c0)?;
-            summary.altitude = Some(*altitude);
-            summary.spacing = Some(along);
+            summarise_flight(&mut summary, ctx, *altitude, along, *overlap, *sidelap);
             summary.strip_spacing = strip_spacing_used;
-            summary.overlap = Some(ctx.overlap_for(*altitude, along, Axis::Along));
             summary.sidelap = strip_spacing_used
                 .filter(|&s| s > 0.0)
                 .map(|s| ctx.overlap_for(*altitude, s, Axis::Across));
-            summary.overlap_requested = Some(*overlap);
-            summary.sidelap_requested = Some(*sidelap);
             summary.strips = strip_no;
         }
         NetworkSpec::Spiral {
@@ -417,13 +413,9 @@ pub fn expand(
             check_count(n, 1)?;
             let c0 = DVec3::new(center.x, center.y, ctx.seabed_z + altitude);
             spiral_poses(&mut b, c0, bcoef, along, n);
-            summary.altitude = Some(*altitude);
-            summary.spacing = Some(along);
+            summarise_flight(&mut summary, ctx, *altitude, along, *overlap, *sidelap);
             summary.strip_spacing = Some(turn);
-            summary.overlap = Some(ctx.overlap_for(*altitude, along, Axis::Along));
             summary.sidelap = Some(ctx.overlap_for(*altitude, turn, Axis::Across));
-            summary.overlap_requested = Some(*overlap);
-            summary.sidelap_requested = Some(*sidelap);
             summary.strips = (theta_end / std::f64::consts::TAU).ceil() as u32;
         }
         NetworkSpec::Orbit {
@@ -457,6 +449,23 @@ pub fn expand(
 
 /// The poses of an explicit network, in order, each at its position, looking at its target
 /// or with its rotation.
+/// The summary of a flight at `altitude` taking an image every `along`: the overlap that
+/// gives, and the overlap and sidelap asked for (the sidelap it gives is the pattern's).
+fn summarise_flight(
+    summary: &mut NetworkSummary,
+    ctx: &NetworkContext,
+    altitude: f64,
+    along: f64,
+    overlap: f64,
+    sidelap: f64,
+) {
+    summary.altitude = Some(altitude);
+    summary.spacing = Some(along);
+    summary.overlap = Some(ctx.overlap_for(altitude, along, Axis::Along));
+    summary.overlap_requested = Some(overlap);
+    summary.sidelap_requested = Some(sidelap);
+}
+
 fn explicit_poses(b: &mut Builder, poses: &[ExplicitPose]) -> Result<(), String> {
     for (i, p) in poses.iter().enumerate() {
         finite3(p.position, "pose position")?;

@@ -1,5 +1,7 @@
 //! Plot of a simulated dive, as SVG or PNG: depth and ceiling (m, down) and NDL (min, right
-//! axis) over runtime, with the stops and the safety stop visible in the depth line.
+//! axis) over runtime, with the stops and the safety stop visible in the depth line. Also what
+//! every plot of poser shares: the embedded font ([`register_font`]) and the legend box
+//! ([`legend`]).
 //!
 //! | output | backend | text |
 //! |---|---|---|
@@ -23,6 +25,21 @@ pub fn register_font() -> Result<(), String> {
             .map_err(|_| "the embedded plot font is unreadable".to_string())
     })
     .clone()
+}
+
+/// The series legend of every plot of poser: a white box at 80 % over the plot, a black
+/// border, at `position` (plotters' own default is `MiddleRight`).
+pub fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(position)
+        .draw()
+        .map_err(|e| e.to_string())
 }
 
 /// Render the dive as an SVG document.
@@ -121,13 +138,7 @@ fn draw<DB: DrawingBackend>(
             .map_err(|e| e.to_string())?
             .label("NDL (right axis)")
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], green));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()
-            .map_err(|e| e.to_string())?;
+        legend(&mut chart, SeriesLabelPosition::LowerRight)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(())

@@ -112,6 +112,16 @@ pub fn at_most(cx: &mut Cx, t: &Tab, key: &str, v: u64, max: u64, what: &str) ->
     true
 }
 
+/// A count through [`at_most`]: the count itself, or `fallback` (a size that can be built)
+/// when it is over `max`, so that reading goes on.
+pub fn capped(cx: &mut Cx, t: &Tab, key: &str, v: u32, max: u64, what: &str, fallback: u32) -> u32 {
+    if at_most(cx, t, key, v as u64, max, what) {
+        v
+    } else {
+        fallback
+    }
+}
+
 pub fn non_negative_rgb(cx: &mut Cx, t: &Tab, key: &str, v: Rgb, unit: &str) {
     if v.iter().any(|x| *x < 0.0) {
         cx.push(

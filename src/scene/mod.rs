@@ -9,14 +9,11 @@
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 pub mod check;
-pub mod coral;
 pub mod diag;
 pub mod format;
-pub mod lesson;
 pub mod points_file;
 pub mod reader;
 pub mod resolve;
-pub mod sensor;
 pub mod source;
 
 pub use diag::{Diagnostic, Severity, Span};

@@ -17,19 +17,24 @@
 //! | `camera.rs` | `[camera]` (its `distortion` and `port`, flat-port `layers`), `[rig]` | [`Camera`]s with their [`Port`] |
 //! | `lights.rs` | `[[lights]]` | [`Light`]s |
 //! | `objects.rs` | `[[objects]]`: shapes, mesh files, materials and patterns | [`Object`]s |
+//! | `coral.rs` | a `shape = "coral"` object's keys (for `objects.rs`) | [`Shape::Coral`] |
 //! | `targets.rs` | `[[targets]]`, points files included | [`Target`]s |
 //! | `network.rs` | `[network]`, its `trigger` and `[[network.poses]]` | [`RigPose`]s, [`NetworkSummary`] |
 //! | `diver.rs` | `[diver]`, `[[diver.cylinders]]` | [`Diver`] |
-//! | elsewhere | `[sensor]` ([`super::sensor`]), `[lesson]` ([`super::lesson`]), coral shapes ([`super::coral`]) | |
+//! | `sensor.rs` | `[sensor]` | [`Sensor`] |
+//! | `lesson.rs` | `[lesson]`, `[[lesson.variants]]`, `[[lesson.try_next]]` | [`Lesson`] |
 
 mod camera;
+mod coral;
 mod diver;
 mod environment;
 mod georef;
+mod lesson;
 mod lights;
 mod network;
 mod objects;
 mod render;
+mod sensor;
 mod targets;
 
 pub use diver::parse_gas;
@@ -105,12 +110,12 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
     let render = render::render(cx, t.get("render"), top, &mut render_at);
     let cameras = camera::cameras(cx, &mut t, water.is_some(), &mut spans, top);
     let f_number = cameras.first().and_then(|c| c.f_number);
-    let sensor = super::sensor::sensor(cx, t.get("sensor"), f_number, top);
+    let sensor = sensor::sensor(cx, t.get("sensor"), f_number, top);
     let lights = lights::lights(cx, &mut t, &mut spans);
     let objects = objects::objects(cx, &mut t, &site, sources, scene_path, &mut spans);
     let targets = targets::targets(cx, &mut t, &mut spans, &objects, &site, sources, scene_path);
     let diver = diver::diver(cx, t.get("diver"), top);
-    let lesson = super::lesson::lesson(cx, t.get("lesson"), sources, &name, &description, top);
+    let lesson = lesson::lesson(cx, t.get("lesson"), sources, &name, &description, top);
     let speed_default = diver.as_ref().map(|d| d.speed).unwrap_or(0.2);
     let (poses, summary) = network::network(
         cx,

@@ -289,18 +289,7 @@ fn orbit(cx: &mut Cx, t: &mut Tab, site: &Site) -> NetworkSpec {
         );
     }
     let per_ring = t.u32(cx, "per_ring", 24);
-    let per_ring = if check::at_most(
-        cx,
-        t,
-        "per_ring",
-        per_ring as u64,
-        100_000,
-        "images per ring",
-    ) {
-        per_ring
-    } else {
-        1
-    };
+    let per_ring = check::capped(cx, t, "per_ring", per_ring, 100_000, "images per ring", 1);
     check::at_least(cx, t, "per_ring", per_ring, 1);
     NetworkSpec::Orbit {
         center,

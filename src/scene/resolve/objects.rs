@@ -179,7 +179,7 @@ fn shape(
             }
         }
         "seabed" => seabed(cx, o, seed),
-        "coral" => crate::scene::coral::shape(cx, o, seed),
+        "coral" => super::coral::shape(cx, o, seed),
         _ => boulders(cx, o, seed),
     }
 }
@@ -227,11 +227,7 @@ fn boulders(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
     let length = o.f64(cx, "length", Dim::Length, 20.0);
     let count = o.u32(cx, "count", 30);
     let radius = o.f64(cx, "radius", Dim::Length, 0.3);
-    let count = if check::at_most(cx, o, "count", count as u64, 1_000_000, "boulders") {
-        count
-    } else {
-        0
-    };
+    let count = check::capped(cx, o, "count", count, 1_000_000, "boulders", 0);
     check::positive(cx, o, "width", width, "m");
     check::positive(cx, o, "length", length, "m");
     check::positive(cx, o, "radius", radius, "m");

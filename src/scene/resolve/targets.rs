@@ -121,11 +121,7 @@ fn kind(cx: &mut Cx, g: &mut Tab, ty: &str) -> TargetKind {
             let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
             let first_code = g.u32(cx, "first_code", 1);
             check::at_least(cx, g, "count", count, 1);
-            let count = if check::at_most(cx, g, "count", count as u64, 10_000, "coded targets") {
-                count
-            } else {
-                1
-            };
+            let count = check::capped(cx, g, "count", count, 10_000, "coded targets", 1);
             check::positive(cx, g, "spacing", spacing, "m");
             check::positive(cx, g, "diameter", diameter, "m");
             check::fits(
@@ -162,11 +158,7 @@ fn kind(cx: &mut Cx, g: &mut Tab, ty: &str) -> TargetKind {
             let spokes = g.u32(cx, "spokes", 16);
             check::positive(cx, g, "diameter", diameter, "m");
             check::at_least(cx, g, "spokes", spokes, 2);
-            let spokes = if check::at_most(cx, g, "spokes", spokes as u64, 10_000, "spokes") {
-                spokes
-            } else {
-                16
-            };
+            let spokes = check::capped(cx, g, "spokes", spokes, 10_000, "spokes", 16);
             TargetKind::SiemensStar { diameter, spokes }
         }
         _ => {
@@ -176,11 +168,7 @@ fn kind(cx: &mut Cx, g: &mut Tab, ty: &str) -> TargetKind {
             let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
             check::positive(cx, g, "size", size, "m");
             check::at_least(cx, g, "levels", levels, 1);
-            let levels = if check::at_most(cx, g, "levels", levels as u64, 1000, "levels") {
-                levels
-            } else {
-                1
-            };
+            let levels = check::capped(cx, g, "levels", levels, 1000, "levels", 1);
             check::positive(cx, g, "step", step, "m");
             check::positive(cx, g, "diameter", diameter, "m");
             TargetKind::TestObject {

@@ -1,5 +1,6 @@
 //! Resolution of the optional `[lesson]` table into [`crate::model::Lesson`] (documented in
-//! [`super::format::LessonTable`]; what `poser lesson` does with it is in `docs/lessons.md`).
+//! [`crate::scene::format::LessonTable`]; what `poser lesson` does with it is in
+//! `docs/lessons.md`).
 //!
 //! | key | resolved to | check |
 //! |---|---|---|
@@ -10,10 +11,10 @@
 //! | `[[lesson.variants]]` `label`, `scene`, `set` | [`LessonVariant`]; `scene` made absolute, relative to the file that names it | the file exists |
 //! | `[[lesson.try_next]]` `text`, `set` | [`TryNext`] | both given |
 
-use super::diag::{Diagnostic, Span};
-use super::reader::{Cx, Tab, type_error};
-use super::source::{Node, Sources, Val};
 use crate::model::{Lesson, LessonKind, LessonVariant, TryNext};
+use crate::scene::diag::{Diagnostic, Span};
+use crate::scene::reader::{Cx, Tab, type_error};
+use crate::scene::source::{Node, Sources, Val};
 
 /// A list of strings (`set = ["a=1", "b=2"]`); a bad entry is reported and skipped.
 fn strings(cx: &mut Cx, t: &mut Tab, key: &'static str) -> Vec<String> {
@@ -109,7 +110,7 @@ pub fn lesson(
     };
     let gsd = t.opt_f64(cx, "gsd", crate::units::Dim::Gsd);
     if let Some(g) = gsd {
-        super::check::positive(cx, &t, "gsd", g, "m/px");
+        crate::scene::check::positive(cx, &t, "gsd", g, "m/px");
     }
     let quick = strings(cx, &mut t, "quick");
     let full = strings(cx, &mut t, "full");

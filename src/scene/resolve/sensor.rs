@@ -1,5 +1,5 @@
 //! Resolution of the optional `[sensor]` table into [`crate::model::Sensor`] (documented in
-//! [`super::format::Sensor`]; the model and formulas are in `docs/sensor.md`).
+//! [`crate::scene::format::Sensor`]; the model and formulas are in `docs/sensor.md`).
 //!
 //! | key | resolved to | check |
 //! |---|---|---|
@@ -14,11 +14,11 @@
 //! | `format`, `quality` | JPEG (quality 1..=100) or PNG | |
 //! | `noise` | shot + read noise on | |
 
-use super::check;
-use super::diag::{Diagnostic, Span};
-use super::reader::{Cx, Tab};
-use super::source::{Node, Val};
 use crate::model::*;
+use crate::scene::check;
+use crate::scene::diag::{Diagnostic, Span};
+use crate::scene::reader::{Cx, Tab};
+use crate::scene::source::{Node, Val};
 use crate::units::Dim;
 
 /// `[sensor]`, or `None` when the table is absent. `camera_f_number` is the first camera's
@@ -194,7 +194,7 @@ fn white_balance(cx: &mut Cx, t: &mut Tab) -> WhiteBalance {
             WhiteBalance::Fixed(g)
         }
         v => {
-            cx.push(super::reader::type_error(
+            cx.push(crate::scene::reader::type_error(
                 n,
                 "sensor.white_balance",
                 "\"grey_world\", \"none\" or gains [r, g, b]",

@@ -1,5 +1,5 @@
-//! Resolution of a `shape = "coral"` object's keys into [`Shape::Coral`] (documented in
-//! [`super::format::Object`]; the mesh is [`crate::geometry::coral`]).
+//! Resolution of a `shape = "coral"` object's keys into [`Shape::Coral`] for `objects.rs`
+//! (documented in [`crate::scene::format::Object`]; the mesh is [`crate::geometry::coral`]).
 //!
 //! | key | resolved to | check |
 //! |---|---|---|
@@ -7,10 +7,10 @@
 //! | `radius` | colony radius, m (default 0.3 m) | > 0, at most 10 m (`E0288`) |
 //! | `seed` | the object's seed (given by the caller) | |
 
-use super::check;
-use super::diag::Diagnostic;
-use super::reader::{Cx, Tab};
 use crate::model::{CoralGrowth, Shape};
+use crate::scene::check;
+use crate::scene::diag::Diagnostic;
+use crate::scene::reader::{Cx, Tab};
 use crate::units::Dim;
 
 /// The coral of object table `o`.
