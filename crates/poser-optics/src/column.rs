@@ -260,11 +260,12 @@ pub struct Column {
     samplers: open::SampleLayers,
     /// The water's phase function (the column's own, and the gather's control variate's).
     pub phase: PhaseFn,
-    /// Per grid direction, the phase mass of each bin and boundary cell
-    /// ([`Column::scattered_open`]).
-    scatter_weights: OnceLock<Vec<f32>>,
-    /// Per layer, the open column's in-scattered light on the directions' grid.
-    scattered: scatter::ScatterLayers,
+    /// The quadrature of [`Column::scattered_open`] about a direction, and per polar row of
+    /// its grid of directions the phase mass each bin and boundary cell receives.
+    scatter_rule: OnceLock<Vec<(f64, usize, f64)>>,
+    scatter_weights: scatter::ScatterWeights,
+    /// Per layer and polar row, the open column's in-scattered light on the directions' grid.
+    scattered: scatter::ScatterRows,
     pub seconds: f64,
 }
 
@@ -334,15 +335,10 @@ fn bin_of(look: DVec3, az: DVec3) -> (usize, usize) {
     (i, j)
 }
 
-/// Angle of a look direction from the nadir, [0, π].
-#[inline]
 /// The bilinear weights [`Column::radiance`] reads the bins with for a look along `look`
 /// (`az`: the sun's azimuth): the two polar bins about it and the two folded azimuth bins,
 /// each with its weight (bin centres as nodes, held at the outer centres).
 fn bin_weights(look: DVec3, az: DVec3) -> ([(usize, f64); 2], [(usize, f64); 2]) {
-    let fm = (polar(look.z) / PI * NMU as f64 - 0.5).clamp(0.0, (NMU - 1) as f64);
-    let i0 = (fm as usize).min(NMU - 2);
-    let tm = fm - i0 as f64;
     let h = DVec3::new(look.x, look.y, 0.0);
     let c = h.dot(az);
     let s = (h.x * az.y - h.y * az.x).abs();
@@ -355,9 +351,19 @@ fn bin_weights(look: DVec3, az: DVec3) -> ([(usize, f64); 2], [(usize, f64); 2])
     let j0 = (fp as usize).min(NPHI - 1);
     let j1 = (j0 + 1).min(NPHI - 1);
     let tp = fp - j0 as f64;
-    ([(i0, 1.0 - tm), (i0 + 1, tm)], [(j0, 1.0 - tp), (j1, tp)])
+    (polar_weights(look.z), [(j0, 1.0 - tp), (j1, tp)])
 }
 
+/// The polar half of [`bin_weights`], for a look of `cos θ = z`.
+fn polar_weights(z: f64) -> [(usize, f64); 2] {
+    let fm = (polar(z) / PI * NMU as f64 - 0.5).clamp(0.0, (NMU - 1) as f64);
+    let i0 = (fm as usize).min(NMU - 2);
+    let tm = fm - i0 as f64;
+    [(i0, 1.0 - tm), (i0 + 1, tm)]
+}
+
+/// Angle of a look direction from the nadir, [0, π].
+#[inline]
 fn polar(z: f64) -> f64 {
     (-z.clamp(-1.0, 1.0)).acos()
 }
@@ -572,8 +578,9 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
         open: open::empty_layers(),
         samplers: open::empty_samplers(),
         phase: input.phase.clone(),
-        scatter_weights: OnceLock::new(),
-        scattered: scatter::empty_layers(),
+        scatter_rule: OnceLock::new(),
+        scatter_weights: scatter::empty_weights(),
+        scattered: scatter::empty_rows(),
         seconds: t0.elapsed().as_secs_f64(),
     })
 }

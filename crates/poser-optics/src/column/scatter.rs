@@ -2,24 +2,25 @@
 //! `J(z, d) = ∫ p(d·ω) h(z, ω) dω` of the open column, where `h` is the column's whole diffuse
 //! radiance with nothing in the way ([`Column::radiance_scattered`]). The renderer's camera
 //! rays use it as a control variate of their gather (docs/column.md, "Lighting the scene with
-//! it"): a point in the water adds `σs · J` exactly and estimates by one traced direction only
-//! what the local geometry changes, `p · (seen − h) / pdf`.
+//! it"): a segment of water adds `∫ σs T J` exactly ([`Column::scattered_along`]) and
+//! estimates by one traced point and direction only what the local geometry changes,
+//! `σs T p · (seen − h) / pdf`.
 //!
 //! | item | meaning |
 //! |---|---|
 //! | [`Column::radiance_scattered`] | `h(z, ω)`: the table as [`Column::radiance`] interpolates it (with the sun's first scattering, not clamped) plus the boundary's radiance through the water from the layers' centres ([`Column::boundary_open`]) |
-//! | [`Column::scattered_open`] | `J(z, d)` per channel, W/(m²·sr) per unit phase: per layer on a grid of directions `d` in the sun's frame ([`JT`] polar nodes 1° apart × 37 azimuths 5° apart, bilinear), linear in depth as the table; the phase function is symmetric about `d`, so the quadrature runs for two azimuths only and the others turn its weights by whole azimuth bins |
-//! | [`QMU`] × [`QPHI`] | the quadrature of each node: strata of equal phase mass in the scattering angle (the phase function's inverse CDF at their midpoints) × azimuths; each point adds its phase mass to the bins `h` reads it from (their bilinear weights) and to a cell of [`BMU`] in cos θ for the boundary |
+//! | [`Column::scattered_open`] | `J(z, d)` per channel, W/(m²·sr) per unit σs: on a grid of directions `d` in the sun's frame ([`JT`] polar nodes 1° apart × 37 azimuths 5° apart, bilinear), linear in depth as the table; filled per layer and polar row when first read |
+//! | [`Column::scattered_along`] | `∫₀^len σs e^{−σt s} J ds` per channel: Gauss–Legendre in the clearest channel's transmittance, [`PANELS`] × [`ALONG`] nodes |
+//! | quadrature of a node | inside [`CONE`] of `d`: [`QMU`] strata of equal phase mass (the phase function's inverse CDF at their midpoints) × [`QPHI`] azimuths; outside: [`QREST`] rings even in cos θ × [`QPHI_REST`] azimuths, weighted by the phase function. Each point adds its phase mass to the bins `h` reads it from (their bilinear weights) and to one of [`BMU`] cells in cos θ for the boundary. The phase function is symmetric about `d`, so a polar row's quadrature runs for two azimuths only (0° and 5° from the sun) and the row's other nodes turn those weights by whole azimuth bins |
 //!
 //! `h` is continuous in the direction (the bins interpolated, the boundary fading to 0 at the
-//! horizon), so `J` is smooth and its grid interpolation errs by well under 0.1 % but where the
-//! sky's edge at Snell's window sharpens it (`scattered_light_integrates_the_open_radiance`).
+//! horizon), so `J` is smooth; against a Monte Carlo of 10⁶ directions it agrees within 0.3 %
+//! off the grid's nodes (`scattered_light_integrates_the_open_radiance`).
 
 use super::open::grid_nodes_at;
-use super::{Column, NMU, NPHI, NZ, bin_weights};
+use super::{Column, NMU, NPHI, NZ, polar_weights};
 use crate::phase::PhaseFn;
 use glam::DVec3;
-use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::sync::OnceLock;
 
@@ -65,11 +66,19 @@ const GAUSS_LEGENDRE: [(f64, f64); ALONG] = [
     (0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
 ];
 
-/// Per layer, `J` at every node (`t · JP + p`), per channel; filled when a layer is first read.
-pub(super) type ScatterLayers = Vec<OnceLock<Vec<[f64; 3]>>>;
+/// Per layer and polar row of the grid (`k · JT + t`), `J` at the row's nodes, per channel;
+/// filled when first read.
+pub(super) type ScatterRows = Vec<OnceLock<Vec<[f64; 3]>>>;
 
-pub(super) fn empty_layers() -> ScatterLayers {
-    (0..NZ).map(|_| OnceLock::new()).collect()
+/// Per polar row, the quadrature's weights of its two base nodes; filled when first read.
+pub(super) type ScatterWeights = Vec<OnceLock<Vec<f32>>>;
+
+pub(super) fn empty_rows() -> ScatterRows {
+    (0..NZ * JT).map(|_| OnceLock::new()).collect()
+}
+
+pub(super) fn empty_weights() -> ScatterWeights {
+    (0..JT).map(|_| OnceLock::new()).collect()
 }
 
 /// The centre of boundary cell `m`, cos θ.
@@ -105,10 +114,10 @@ impl Column {
             if wk == 0.0 {
                 continue;
             }
-            let layer = self.scatter_layer(k);
             for &(m, wm) in nodes {
                 if wm != 0.0 {
-                    out += wk * wm * DVec3::from_array(layer[m]);
+                    let row = self.scatter_row(k, m / JP);
+                    out += wk * wm * DVec3::from_array(row[m % JP]);
                 }
             }
         }
@@ -118,7 +127,7 @@ impl Column {
     /// `∫₀^len σs e^{−σt s} J(z(s), d) ds` per channel: the open column's in-scattered light
     /// that the water along a segment sends back to its start (depth `z0`, unit direction `d`
     /// in the world, z up; `sigma_s`, `sigma_t` per channel, 1/m). Gauss–Legendre in the
-    /// transmittance of the clearest channel, `u = 1 − e^{−k s}` ([`PANELS`] × [`ALONG`]
+    /// transmittance of the clearest channel, `u = 1 − e^{−k s}` (`PANELS` × `ALONG`
     /// nodes, shared by the channels): `J` is smooth along the segment, and another channel's transmittance is
     /// `(1 − u)^(k_c/k − 1)` there, a polynomial the rule integrates exactly up to degree
     /// `2 ALONG − 1`; a channel that attenuates [`ALONG_RATIO`] times faster or more takes its
@@ -178,12 +187,12 @@ impl Column {
         0.5 * panel * sum
     }
 
-    /// `J` of layer `k` at every node: a node at azimuth `10° m + 5° δ` reads the base node
-    /// `δ`'s weights with the bins turned by `m` (the phase function is symmetric about the
-    /// direction, so the weights turn with it).
-    fn scatter_layer(&self, k: usize) -> &[[f64; 3]] {
-        self.scattered[k].get_or_init(|| {
-            let w = self.scatter_weights();
+    /// `J` of layer `k` at the nodes of polar row `t`: a node at azimuth `10° m + 5° δ`
+    /// reads the base node `δ`'s weights with the bins turned by `m` (the phase function is
+    /// symmetric about the direction, so the weights turn with it).
+    fn scatter_row(&self, k: usize, t: usize) -> &[[f64; 3]] {
+        self.scattered[k * JT + t].get_or_init(|| {
+            let w = self.scatter_weights(t);
             let base = k * NMU * NPHI;
             let bins: Vec<DVec3> = (0..NMU * NPHI)
                 .map(|b| {
@@ -196,23 +205,16 @@ impl Column {
             let cells: Vec<DVec3> = (0..BMU)
                 .map(|m| self.boundary_from_layer(k, cell_mu(m)))
                 .collect();
-            // The folded bin of every unfolded hat under every turn.
-            let turned: Vec<usize> = (0..NAZ * NAZ)
-                .map(|x| fold((x / NAZ + x % NAZ) % NAZ))
-                .collect();
-            (0..JT * JP)
-                .into_par_iter()
-                .map(|node| {
-                    let (t, p) = (node / JP, node % JP);
+            (0..JP)
+                .map(|p| {
                     let (turn, delta) = (p / 2, p % 2);
-                    let wn = &w[(t * 2 + delta) * PER_NODE..(t * 2 + delta + 1) * PER_NODE];
-                    let folds = &turned[turn * NAZ..(turn + 1) * NAZ];
+                    let wn = &w[delta * PER_NODE..(delta + 1) * PER_NODE];
                     let mut s = DVec3::ZERO;
                     for i in 0..NMU {
                         let row = &bins[i * NPHI..(i + 1) * NPHI];
                         for (u, &x) in wn[i * NAZ..(i + 1) * NAZ].iter().enumerate() {
                             if x != 0.0 {
-                                s += x as f64 * row[folds[u]];
+                                s += x as f64 * row[fold((u + turn) % NAZ)];
                             }
                         }
                     }
@@ -225,30 +227,37 @@ impl Column {
         })
     }
 
-    /// For the base nodes (every polar node at azimuths 0° and 5° from the sun), the phase
-    /// mass each unfolded bin (by the table's bilinear weights) and each boundary cell
-    /// receives (index `(t · 2 + δ) · PER_NODE + …`). Depends on the phase function only;
-    /// computed once.
-    fn scatter_weights(&self) -> &[f32] {
-        self.scatter_weights.get_or_init(|| {
-            let rule = quadrature(&self.phase);
+    /// For polar row `t`'s base nodes (azimuths 0° and 5° from the sun), the phase mass each
+    /// unfolded bin (by the table's bilinear weights) and each boundary cell receives (index
+    /// `δ · PER_NODE + …`). Depends on the phase function only.
+    fn scatter_weights(&self, t: usize) -> &[f32] {
+        self.scatter_weights[t].get_or_init(|| {
+            let rule = self.scatter_rule.get_or_init(|| quadrature(&self.phase));
+            // The azimuths of the rings about the direction, (cos, sin).
+            let azimuths = |n: usize| -> Vec<(f64, f64)> {
+                (0..n)
+                    .map(|j| {
+                        let phi = 2.0 * PI * (j as f64 + 0.5) / n as f64;
+                        (phi.cos(), phi.sin())
+                    })
+                    .collect()
+            };
+            let rings = (azimuths(QPHI), azimuths(QPHI_REST));
             let step = PI / NPHI as f64;
-            (0..JT * 2)
-                .into_par_iter()
-                .flat_map_iter(|base| {
-                    let th = (base / 2) as f64 * PI / (JT - 1) as f64;
-                    let ph = (base % 2) as f64 * 0.5 * step;
+            let th = t as f64 * PI / (JT - 1) as f64;
+            (0..2)
+                .flat_map(|delta| {
+                    let ph = delta as f64 * 0.5 * step;
                     let d = DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
-                    let (t, b) = d.any_orthonormal_pair();
+                    let (tx, ty) = d.any_orthonormal_pair();
                     let mut w = vec![0.0f64; PER_NODE];
-                    for &(c, nphi, q) in &rule {
+                    for &(c, nphi, q) in rule {
                         let s = (1.0 - c * c).max(0.0).sqrt();
-                        for j in 0..nphi {
-                            let phi = 2.0 * PI * (j as f64 + 0.5) / nphi as f64;
-                            let v = (t * (s * phi.cos()) + b * (s * phi.sin()) + d * c).normalize();
-                            // The polar bins as [`bin_weights`] reads them; the azimuth
+                        let ring = if nphi == QPHI { &rings.0 } else { &rings.1 };
+                        for &(cf, sf) in ring {
+                            let v = (tx * (s * cf) + ty * (s * sf) + d * c).normalize();
+                            // The polar bins as [`Column::radiance`] reads them; the azimuth
                             // unfolded: hats at −175° + 10° u, periodic.
-                            let (polars, _) = bin_weights(v, DVec3::X);
                             let az = if v.x == 0.0 && v.y == 0.0 {
                                 0.0
                             } else {
@@ -257,7 +266,7 @@ impl Column {
                             let fu = ((az + PI) / step - 0.5).rem_euclid(NAZ as f64);
                             let u0 = (fu as usize).min(NAZ - 1);
                             let tu = fu - u0 as f64;
-                            for (i, wi) in polars {
+                            for (i, wi) in polar_weights(v.z) {
                                 w[i * NAZ + u0] += q * wi * (1.0 - tu);
                                 w[i * NAZ + (u0 + 1) % NAZ] += q * wi * tu;
                             }
