@@ -10,7 +10,7 @@
 //! |---|---|
 //! | [`Column::radiance_scattered`] | `h(z, ω)`: the table as [`Column::radiance`] interpolates it (with the sun's first scattering, not clamped) plus the boundary's radiance through the water from the layers' centres ([`Column::boundary_open`]) |
 //! | [`Column::scattered_open`] | `J(z, d)` per channel, W/(m²·sr) per unit σs: on a grid of directions `d` in the sun's frame ([`JT`] polar nodes 1° apart × 37 azimuths 5° apart, bilinear), linear in depth as the table; filled per layer and polar row when first read |
-//! | [`Column::scattered_along`] | `∫₀^len σs e^{−σt s} J ds` per channel: Gauss–Legendre in the clearest channel's transmittance, [`PANELS`] × [`ALONG`] nodes |
+//! | [`Column::scattered_along`] | `∫₀^len σs e^{−σt s} J ds` per channel, exact for the tabulated `J`: linear in depth between the layers' centres, so piecewise linear along the segment, each piece against the exponential in closed form |
 //! | quadrature of a node | inside [`CONE`] of `d`: [`QMU`] strata of equal phase mass (the phase function's inverse CDF at their midpoints) × [`QPHI`] azimuths; outside: [`QREST`] rings even in cos θ × [`QPHI_REST`] azimuths, weighted by the phase function. Each point adds its phase mass to the bins `h` reads it from (their bilinear weights) and to one of [`BMU`] cells in cos θ for the boundary. The phase function is symmetric about `d`, so a polar row's quadrature runs for two azimuths only (0° and 5° from the sun) and the row's other nodes turn those weights by whole azimuth bins |
 //!
 //! `h` is continuous in the direction (the bins interpolated, the boundary fading to 0 at the
@@ -45,26 +45,6 @@ const JP: usize = 2 * NPHI + 1;
 const NAZ: usize = 2 * NPHI;
 /// Weights per base node: the unfolded bins, then the boundary's cells.
 const PER_NODE: usize = NMU * NAZ + BMU;
-
-/// Gauss–Legendre nodes per panel of [`Column::scattered_along`].
-pub const ALONG: usize = 8;
-/// Panels of [`Column::scattered_along`], equal in the transmittance variable.
-pub const PANELS: usize = 2;
-/// A channel attenuating this many times faster than the clearest takes its own nodes in
-/// [`Column::scattered_along`].
-pub const ALONG_RATIO: f64 = 12.0;
-/// Gauss–Legendre nodes and weights on [−1, 1], [`ALONG`] of them.
-#[allow(clippy::excessive_precision)]
-const GAUSS_LEGENDRE: [(f64, f64); ALONG] = [
-    (-0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
-    (-0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
-    (-0.525_532_409_916_329_0, 0.313_706_645_877_887_3),
-    (-0.183_434_642_495_649_8, 0.362_683_783_378_362_0),
-    (0.183_434_642_495_649_8, 0.362_683_783_378_362_0),
-    (0.525_532_409_916_329_0, 0.313_706_645_877_887_3),
-    (0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
-    (0.960_289_856_497_536_2, 0.101_228_536_290_376_26),
-];
 
 /// Per layer and polar row of the grid (`k · JT + t`), `J` at the row's nodes, per channel;
 /// filled when first read.
@@ -126,12 +106,11 @@ impl Column {
 
     /// `∫₀^len σs e^{−σt s} J(z(s), d) ds` per channel: the open column's in-scattered light
     /// that the water along a segment sends back to its start (depth `z0`, unit direction `d`
-    /// in the world, z up; `sigma_s`, `sigma_t` per channel, 1/m). Gauss–Legendre in the
-    /// transmittance of the clearest channel, `u = 1 − e^{−k s}` (`PANELS` × `ALONG`
-    /// nodes, shared by the channels): `J` is smooth along the segment, and another channel's transmittance is
-    /// `(1 − u)^(k_c/k − 1)` there, a polynomial the rule integrates exactly up to degree
-    /// `2 ALONG − 1`; a channel that attenuates [`ALONG_RATIO`] times faster or more takes its
-    /// own nodes.
+    /// in the world, z up; `sigma_s`, `sigma_t` per channel, 1/m). `J` is linear in depth
+    /// between the layers' centres (as the table is read), so along the segment it is linear
+    /// in the distance between the depths where it crosses a centre (or the column's surface
+    /// or bottom): each piece's integral against the exponential is in closed form, and the
+    /// whole is exact for the tabulated `J`. A level segment is one piece.
     pub fn scattered_along(
         &self,
         z0: f64,
@@ -141,50 +120,44 @@ impl Column {
         sigma_t: DVec3,
     ) -> DVec3 {
         let nodes = grid_nodes_at(self.sun_azimuth, d, JT, JP).0;
-        let k = sigma_t.min_element();
-        let shared: [bool; 3] = std::array::from_fn(|c| sigma_t[c] < ALONG_RATIO * k.max(1e-12));
-        let mut out = self.along(z0, d.z, len, k, sigma_t, &nodes, shared);
-        for c in 0..3 {
-            if !shared[c] {
-                let own = std::array::from_fn(|i| i == c);
-                out[c] = self.along(z0, d.z, len, sigma_t[c], sigma_t, &nodes, own)[c];
+        let dz = -d.z;
+        let z1 = z0 + len * dz;
+        // The depths where `J`'s slope changes (the column's surface, the inner layers'
+        // centres, its bottom), in the order the segment meets them.
+        let dl = self.depth / NZ as f64;
+        let kink = |i: usize| match i {
+            0 => 0.0,
+            _ if i == NZ - 1 => self.depth,
+            _ => (i as f64 + 0.5) * dl,
+        };
+        let mut out = DVec3::ZERO;
+        let (mut s_a, mut j_a) = (0.0, self.scattered_at(z0, &nodes));
+        // e^{−σt s_a}, per channel.
+        let mut reach = DVec3::ONE;
+        for n in 0..=NZ {
+            let s_b = if n == NZ {
+                len
+            } else {
+                let zk = kink(if dz > 0.0 { n } else { NZ - 1 - n });
+                if !((zk - z0) * (zk - z1) < 0.0) {
+                    continue;
+                }
+                (zk - z0) / dz
+            };
+            let l = s_b - s_a;
+            if !(l > 0.0) {
+                continue;
             }
+            let j_b = self.scattered_at(z0 + s_b * dz, &nodes);
+            for c in 0..3 {
+                let x = sigma_t[c] * l;
+                let (e, f0, g) = exp_moments(x);
+                out[c] += reach[c] * l * (j_a[c] * f0 + (j_b[c] - j_a[c]) * g);
+                reach[c] *= e;
+            }
+            (s_a, j_a) = (s_b, j_b);
         }
         sigma_s * out
-    }
-
-    /// `∫₀^len e^{−σt_c s} J_c(z(s)) ds` for the channels `which`, by Gauss–Legendre in
-    /// `u = 1 − e^{−k s}` (in `s` where the segment is optically thin for `k`).
-    #[allow(clippy::too_many_arguments)]
-    fn along(
-        &self,
-        z0: f64,
-        dz: f64,
-        len: f64,
-        k: f64,
-        sigma_t: DVec3,
-        nodes: &[(usize, f64); 4],
-        which: [bool; 3],
-    ) -> DVec3 {
-        let thin = !(k * len > 1e-9);
-        let span = if thin { len } else { -(-k * len).exp_m1() };
-        let mut sum = DVec3::ZERO;
-        let panel = span / PANELS as f64;
-        for (p, (x, w)) in (0..PANELS).flat_map(|p| GAUSS_LEGENDRE.map(|g| (p, g))) {
-            let u = panel * (p as f64 + 0.5 * (1.0 + x));
-            let s = if thin { u } else { -(-u).ln_1p() / k };
-            // e^{−σt_c s} per unit of the variable: ds/du = e^{k s}/k.
-            let jac = if thin { 1.0 } else { (k * s).exp() / k };
-            let t = DVec3::from_array(std::array::from_fn(|c| {
-                if which[c] {
-                    (-sigma_t[c] * s).exp() * jac
-                } else {
-                    0.0
-                }
-            }));
-            sum += w * t * self.scattered_at(z0 - s * dz, nodes);
-        }
-        0.5 * panel * sum
     }
 
     /// `J` of layer `k` at the nodes of polar row `t`: a node at azimuth `10° m + 5° δ`
@@ -281,6 +254,17 @@ impl Column {
     }
 }
 
+/// `e^{−x}`, `(1 − e^{−x}) / x` and `(1 − e^{−x}(1 + x)) / x²`: the transmittance, and the
+/// integrals of `e^{−x t}` and of `t e^{−x t}` over `t ∈ [0, 1]`, stable for small `x`.
+fn exp_moments(x: f64) -> (f64, f64, f64) {
+    let e = (-x).exp();
+    if x < 1e-4 {
+        (e, 1.0 - x / 2.0 + x * x / 6.0, 0.5 - x / 3.0 + x * x / 8.0)
+    } else {
+        (e, (1.0 - e) / x, (1.0 - e * (1.0 + x)) / (x * x))
+    }
+}
+
 /// The scattering angles of the quadrature about a direction: `(cos θ, azimuths, phase mass of
 /// each point)`. Inside [`CONE`] of the forward direction, [`QMU`] strata of equal phase mass
 /// (the peak, where the phase function changes fastest); outside it, [`QREST`] rings evenly
@@ -359,7 +343,7 @@ mod tests {
             for c in 0..3 {
                 let rel = (quick[c] - fine[c]) / fine[c];
                 assert!(
-                    rel.abs() < 1e-3,
+                    rel.abs() < 1e-6,
                     "z0 {z0}, d {d}, len {len}, channel {c}: {} against {} ({:+.4} %)",
                     quick[c],
                     fine[c],
