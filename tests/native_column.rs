@@ -107,9 +107,10 @@ fn explain_names_views_past_the_seabed() {
 /// by next-event estimation only what the local geometry changes (`Integrator::column_nee`,
 /// crates/poser-optics/src/column/open.rs). A plane tilted about two axes over open water,
 /// one bounce (the camera ray's gather and the surface's estimate), 4 spp. Measured, median
-/// and largest relative noise of a pixel (G, B): sun 0.33 / 0.36 % and 2.1 / 2.4 %; sky 0.33
-/// / 0.35 % and 1.9 / 2.2 %. The one-direction estimate alone (before): sun 4.1 / 1.9 % and
-/// 13 / 18 %; sky 6.4 / 3.5 % and 33 / 20 % (24× and 140× the variance in G).
+/// and largest relative noise of a pixel (G, B): sun 0.10 / 0.06 % and 1.6 / 1.6 %; sky 0.11
+/// / 0.09 % and 1.9 / 1.7 % (0.33 / 0.36 % and 0.33 / 0.35 % median before the camera ray's
+/// gather took its own control variate, below). The one-direction estimate alone (before
+/// both): sun 4.1 / 1.9 % and 13 / 18 %; sky 6.4 / 3.5 % and 33 / 20 %.
 #[test]
 fn an_unshaded_tilted_surface_takes_the_columns_light_without_its_noise() {
     for light in [SUN, SKY] {
