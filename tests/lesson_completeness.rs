@@ -111,16 +111,6 @@ fn closed_and_consistent(m: &TriMesh) -> bool {
         .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
 }
 
-fn signed_volume(m: &TriMesh) -> f64 {
-    m.triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| m.positions[i as usize]);
-            a.dot(b.cross(c)) / 6.0
-        })
-        .sum()
-}
-
 #[test]
 fn the_lesson_corals_are_deterministic_closed_meshes_with_outward_normals() {
     for growth in ["branching", "massive"] {
@@ -131,7 +121,7 @@ fn the_lesson_corals_are_deterministic_closed_meshes_with_outward_normals() {
         assert_eq!(mesh, shape_mesh(&o.shape, Path::new(".")).unwrap());
         assert!(closed_and_consistent(&mesh), "{growth}");
         assert!(
-            signed_volume(&mesh) > 0.0,
+            mesh.signed_volume() > 0.0,
             "{growth}: normals point inwards"
         );
         let (lo, hi) = mesh.bounds().unwrap();

@@ -80,8 +80,7 @@ impl TriMesh {
     }
 
     /// The enclosed volume, m³ (divergence theorem): positive when the triangles face
-    /// outwards, the tests' check of a closed mesh's orientation.
-    #[cfg(test)]
+    /// outwards: the check of a closed mesh's orientation.
     pub fn signed_volume(&self) -> f64 {
         self.triangles
             .iter()
