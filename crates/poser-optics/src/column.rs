@@ -38,7 +38,6 @@ use crate::rng::SplitMix64;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
-use std::sync::OnceLock;
 
 /// Depth layers of the table.
 pub const NZ: usize = 64;
@@ -260,12 +259,9 @@ pub struct Column {
     samplers: open::SampleLayers,
     /// The water's phase function (the column's own, and the gather's control variate's).
     pub phase: PhaseFn,
-    /// The quadrature of [`Column::scattered_open`] about a direction, and per polar row of
-    /// its grid of directions the phase mass each bin and boundary cell receives.
-    scatter_rule: OnceLock<Vec<(f64, usize, f64)>>,
-    scatter_weights: scatter::ScatterWeights,
-    /// Per layer and polar row, the open column's in-scattered light on the directions' grid.
-    scattered: scatter::ScatterRows,
+    /// The open column's in-scattered light ([`Column::scattered_open`]): its quadrature,
+    /// weights and tables, filled when first read.
+    scatter: scatter::Tables,
     pub seconds: f64,
 }
 
@@ -578,9 +574,7 @@ pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, Co
         open: open::empty_layers(),
         samplers: open::empty_samplers(),
         phase: input.phase.clone(),
-        scatter_rule: OnceLock::new(),
-        scatter_weights: scatter::empty_weights(),
-        scattered: scatter::empty_rows(),
+        scatter: scatter::Tables::default(),
         seconds: t0.elapsed().as_secs_f64(),
     })
 }

@@ -46,19 +46,26 @@ const NAZ: usize = 2 * NPHI;
 /// Weights per base node: the unfolded bins, then the boundary's cells.
 const PER_NODE: usize = NMU * NAZ + BMU;
 
-/// Per layer and polar row of the grid (`k · JT + t`), `J` at the row's nodes, per channel;
-/// filled when first read.
-pub(super) type ScatterRows = Vec<OnceLock<Vec<[f64; 3]>>>;
-
-/// Per polar row, the quadrature's weights of its two base nodes; filled when first read.
-pub(super) type ScatterWeights = Vec<OnceLock<Vec<f32>>>;
-
-pub(super) fn empty_rows() -> ScatterRows {
-    (0..NZ * JT).map(|_| OnceLock::new()).collect()
+/// The open column's in-scattered light, its tables filled when first read.
+#[derive(Debug, Clone)]
+pub(super) struct Tables {
+    /// The quadrature about a direction ([`quadrature`]).
+    rule: OnceLock<Vec<(f64, usize, f64)>>,
+    /// Per polar row, the quadrature's weights of its two base nodes.
+    weights: Vec<OnceLock<Vec<f32>>>,
+    /// Per layer and polar row of the grid (`k · JT + t`), `J` at the row's nodes, per
+    /// channel.
+    rows: Vec<OnceLock<Vec<[f64; 3]>>>,
 }
 
-pub(super) fn empty_weights() -> ScatterWeights {
-    (0..JT).map(|_| OnceLock::new()).collect()
+impl Default for Tables {
+    fn default() -> Tables {
+        Tables {
+            rule: OnceLock::new(),
+            weights: (0..JT).map(|_| OnceLock::new()).collect(),
+            rows: (0..NZ * JT).map(|_| OnceLock::new()).collect(),
+        }
+    }
 }
 
 /// The centre of boundary cell `m`, cos θ.
@@ -164,7 +171,7 @@ impl Column {
     /// reads the base node `δ`'s weights with the bins turned by `m` (the phase function is
     /// symmetric about the direction, so the weights turn with it).
     fn scatter_row(&self, k: usize, t: usize) -> &[[f64; 3]] {
-        self.scattered[k * JT + t].get_or_init(|| {
+        self.scatter.rows[k * JT + t].get_or_init(|| {
             let w = self.scatter_weights(t);
             let base = k * NMU * NPHI;
             let bins: Vec<DVec3> = (0..NMU * NPHI)
@@ -204,8 +211,8 @@ impl Column {
     /// unfolded bin (by the table's bilinear weights) and each boundary cell receives (index
     /// `δ · PER_NODE + …`). Depends on the phase function only.
     fn scatter_weights(&self, t: usize) -> &[f32] {
-        self.scatter_weights[t].get_or_init(|| {
-            let rule = self.scatter_rule.get_or_init(|| quadrature(&self.phase));
+        self.scatter.weights[t].get_or_init(|| {
+            let rule = self.scatter.rule.get_or_init(|| quadrature(&self.phase));
             // The azimuths of the rings about the direction, (cos, sin).
             let azimuths = |n: usize| -> Vec<(f64, f64)> {
                 (0..n)
