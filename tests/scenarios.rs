@@ -184,9 +184,11 @@ fn schema_check_passes_on_the_committed_files() {
     assert_eq!(o.status.code(), Some(1), "an empty directory is stale");
 }
 
-/// The README's main job, as a user types it, at a smaller scale and two poses: linear EXR,
-/// PNG and ground truth per image, images of the scaled size, a non-black and unsaturated
-/// preview (the scenario's exposure suits its radiance).
+/// The README's main job, as a user types it (a pose range, the noise target "sensor"), at a
+/// smaller scale and two poses: linear EXR, PNG, camera JPEG and ground truth per image,
+/// images of the scaled size, a non-black and unsaturated preview (the scenario's exposure
+/// suits its radiance), and the noise target's report: more samples than the pilot where the
+/// pilot said so.
 #[test]
 fn readme_main_job_renders_previews_with_truth() {
     let dir = tempfile::tempdir().unwrap();
@@ -198,14 +200,27 @@ fn readme_main_job_renders_previews_with_truth() {
         out.to_str().unwrap(),
         "--scale",
         "0.05",
+        "--poses",
+        "0-1",
         "--samples",
         "2",
-        "--poses",
-        "0,1",
+        "--set",
+        "render.noise=sensor",
         "--quiet",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for img in ["img_0001", "img_0002"] {
+        let noise: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join(format!("{img}.noise.json"))).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(noise["target"], 1.0, "{noise}");
+        let mean = noise["samples"]["mean"].as_f64().unwrap();
+        assert!(
+            mean > 2.0,
+            "{img}: {mean} samples per pixel after a pilot of 2"
+        );
+        assert!(out.join("camera").join(format!("{img}.jpg")).is_file());
         let png = image::open(out.join(format!("{img}.png")))
             .unwrap()
             .into_rgb8();
@@ -229,6 +244,20 @@ fn readme_main_job_renders_previews_with_truth() {
         "0",
     ]);
     assert_eq!(bad.status.code(), Some(2), "--scale 0 is a usage error");
+    let bad = poser(&[
+        "render",
+        "scenarios/reef_strip.toml",
+        "-o",
+        "/tmp/x",
+        "--poses",
+        "3-1",
+    ]);
+    assert_eq!(
+        bad.status.code(),
+        Some(2),
+        "an empty pose range is a usage error"
+    );
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("empty range"));
 }
 
 /// `render.seed` draws the noise; `site.seed` the site. A new render seed must not move a

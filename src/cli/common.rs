@@ -112,6 +112,39 @@ pub fn parse_crop(s: &str) -> Result<crate::model::Crop, String> {
 
 /// `--samples N`: samples per pixel, at least one (a zero is refused, as `render.samples = 0`
 /// is in a scene, instead of silently rendering one).
+/// `--poses`: pose indices, counted from 0, as a comma-separated list of indices and
+/// inclusive ranges (`0,3,5`, `0-9`, `0-4,10-14`), kept in the order given, repeats dropped.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseList(pub Vec<usize>);
+
+pub fn parse_poses(s: &str) -> Result<PoseList, String> {
+    let help = "help: give pose indices from 0, e.g. `--poses 0,3,5` or `--poses 0-9`";
+    let index = |t: &str| {
+        t.trim()
+            .parse::<usize>()
+            .map_err(|_| format!("`{}` is not a pose index\n  {help}", t.trim()))
+    };
+    let mut out = Vec::new();
+    for item in s.split(',') {
+        let (a, b) = match item.split_once('-') {
+            Some((a, b)) => (index(a)?, index(b)?),
+            None => (index(item)?, index(item)?),
+        };
+        if b < a {
+            return Err(format!(
+                "`{}` is an empty range (it ends before it starts)\n  {help}",
+                item.trim()
+            ));
+        }
+        for i in a..=b {
+            if !out.contains(&i) {
+                out.push(i);
+            }
+        }
+    }
+    Ok(PoseList(out))
+}
+
 pub fn parse_samples(s: &str) -> Result<u32, String> {
     match s.trim().parse::<u32>() {
         Ok(0) => Err("at least one sample per pixel is needed\n  help: use e.g. `--samples 64`, or leave it out to use the scene's `render.samples`".into()),
@@ -119,5 +152,23 @@ pub fn parse_samples(s: &str) -> Result<u32, String> {
         Err(_) => Err(format!(
             "`{s}` is not a whole number of samples per pixel\n  help: use e.g. `--samples 64`"
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pose_lists_take_indices_and_ranges() {
+        assert_eq!(parse_poses("0,3,5").unwrap().0, vec![0, 3, 5]);
+        assert_eq!(parse_poses("0-3").unwrap().0, vec![0, 1, 2, 3]);
+        assert_eq!(parse_poses("4, 0-2,1").unwrap().0, vec![4, 0, 1, 2]);
+        assert_eq!(parse_poses("7-7").unwrap().0, vec![7]);
+        let e = parse_poses("3-1").unwrap_err();
+        assert!(e.contains("empty range") && e.contains("help:"), "{e}");
+        let e = parse_poses("0-x").unwrap_err();
+        assert!(e.contains("`x` is not a pose index"), "{e}");
+        assert!(parse_poses("-1").is_err());
     }
 }

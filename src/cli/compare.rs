@@ -16,9 +16,9 @@ pub struct Args {
     /// Override samples per pixel.
     #[arg(long, value_parser = super::common::parse_samples)]
     pub samples: Option<u32>,
-    /// Render only these pose indices (e.g. `0,3,5`).
-    #[arg(long, value_delimiter = ',')]
-    pub poses: Option<Vec<usize>>,
+    /// Render only these poses, counted from 0: indices and ranges (`0,3,5`, `0-9`).
+    #[arg(long, value_parser = super::common::parse_poses)]
+    pub poses: Option<super::common::PoseList>,
     /// Compare at a fraction of the cameras' resolution (e.g. `0.25`): same field of view, lens
     /// and port; the truth the targets are measured against is the scaled one.
     #[arg(long)]
@@ -55,7 +55,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         &args.backends,
         &args.out,
         args.samples,
-        args.poses.clone(),
+        args.poses.clone().map(|p| p.0),
     );
     let mut model = super::common::apply_scale(load_model(scene)?, args.scale)?;
     let crop = match args.crop {

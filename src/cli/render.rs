@@ -15,9 +15,9 @@ pub struct Args {
     /// Override samples per pixel.
     #[arg(long, value_parser = super::common::parse_samples)]
     pub samples: Option<u32>,
-    /// Render only these pose indices (e.g. `0,3,5`).
-    #[arg(long, value_delimiter = ',')]
-    pub poses: Option<Vec<usize>>,
+    /// Render only these poses, counted from 0: indices and ranges (`0,3,5`, `0-9`).
+    #[arg(long, value_parser = super::common::parse_poses)]
+    pub poses: Option<super::common::PoseList>,
     /// Preview at a fraction of the cameras' resolution (e.g. `0.25`): same field of view,
     /// lens and port; the ground truth is written for the scaled images.
     #[arg(long)]
@@ -78,7 +78,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         args.backend,
         &args.out,
         args.samples,
-        args.poses.clone(),
+        args.poses.clone().map(|p| p.0),
         args.scale,
         args.quiet,
         args.sensor,
