@@ -151,7 +151,9 @@ fn skip_value(m: &syn::meta::ParseNestedMeta) -> syn::Result<()> {
 fn unknown_rule(lit: &LitStr, rule: &str) -> syn::Error {
     syn::Error::new(
         lit.span(),
-        format!("unknown `rename_all` rule `{rule}` (serde's: lowercase, UPPERCASE, PascalCase, camelCase, snake_case, SCREAMING_SNAKE_CASE, kebab-case, SCREAMING-KEBAB-CASE)"),
+        format!(
+            "unknown `rename_all` rule `{rule}` (serde's: lowercase, UPPERCASE, PascalCase, camelCase, snake_case, SCREAMING_SNAKE_CASE, kebab-case, SCREAMING-KEBAB-CASE)"
+        ),
     )
 }
 
