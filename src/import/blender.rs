@@ -22,6 +22,7 @@ use super::{
     unrefract,
 };
 use crate::backend::python;
+use crate::scene::format::types as F;
 use glam::{DMat3, DMat4, DVec3};
 use serde::Deserialize;
 use std::collections::HashMap;
@@ -178,9 +179,9 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
     } else {
         read.name.clone()
     };
-    t.insert("name".into(), Value::String(name));
+    t.insert(F::Scene::name.into(), Value::String(name));
     t.insert(
-        "description".into(),
+        F::Scene::description.into(),
         Value::String(format!("imported from a Blender {} file", read.blender)),
     );
 
@@ -226,20 +227,23 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
     };
     let mut sun_done = false;
     for l in &read.lights {
-        let kind = l.get("type").and_then(|v| v.as_str()).unwrap_or("");
-        let lname = l.get("name").and_then(|v| v.as_str()).unwrap_or("light");
+        let kind = l.get(F::Light::kind).and_then(|v| v.as_str()).unwrap_or("");
+        let lname = l
+            .get(F::Light::name)
+            .and_then(|v| v.as_str())
+            .unwrap_or("light");
         if kind == "sun" {
             let in_water = read.water.is_some() && surface;
             if let Some(sun) = sun_of(l, lname, sun_done, in_water, n_water, &shown, &mut notes) {
                 sun_done = true;
-                t.insert("sun".into(), sun);
+                t.insert(F::Scene::sun.into(), sun);
             }
             continue;
         }
         lights.push(light_table(l, lname, dz, &mut unique, &shown)?);
     }
     if !lights.is_empty() {
-        t.insert("lights".into(), Value::Array(lights));
+        t.insert(F::Scene::lights.into(), Value::Array(lights));
     }
 
     // Meshes → .glb assets.
@@ -258,7 +262,7 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
         match glass_object(g, dz, in_water.then_some(n_water[1]), &at_object) {
             Ok((o, note)) => {
                 let mut o = o;
-                o.insert("name".into(), Value::String(unique(&g.name)));
+                o.insert(F::Object::name.into(), Value::String(unique(&g.name)));
                 notes.extend(note);
                 objects.push(Value::Table(o));
             }
@@ -266,21 +270,21 @@ fn convert(read: Read, blend: &Path, assets: &str, work: &Path) -> Result<Import
         }
     }
     if !objects.is_empty() {
-        t.insert("objects".into(), Value::Array(objects));
+        t.insert(F::Scene::objects.into(), Value::Array(objects));
     }
 
     // Network: one explicit pose per frame.
-    t.insert("network".into(), explicit_network(poses));
+    t.insert(F::Scene::network.into(), explicit_network(poses));
     let mut r = Table::new();
     r.insert(
-        "samples".into(),
+        F::Render::samples.into(),
         Value::Integer(read.render.samples.clamp(1, 1 << 20)),
     );
     r.insert(
-        "bounces".into(),
+        F::Render::bounces.into(),
         Value::Integer(read.render.bounces.clamp(1, 1024)),
     );
-    t.insert("render".into(), Value::Table(r));
+    t.insert(F::Scene::render.into(), Value::Table(r));
     finish(&t, &shown, notes, assets_out)
 }
 
@@ -336,38 +340,38 @@ fn check_cameras(cameras: &[ReadCamera], shown: &str) -> Result<(), String> {
 /// A camera's intrinsics into `tab`: size, focal length (physical, with the thin lens, when
 /// it has an f-number), principal point, lens model and distortion.
 fn insert_intrinsics(c: &ReadCamera, tab: &mut Table) {
-    tab.insert("width".into(), Value::Integer(c.width));
-    tab.insert("height".into(), Value::Integer(c.height));
+    tab.insert(F::Camera::width.into(), Value::Integer(c.width));
+    tab.insert(F::Camera::height.into(), Value::Integer(c.height));
     match (c.focal_length, c.f_number) {
         (Some(fl), Some(n)) if fl > 0.0 && n > 0.0 => {
             // Depth of field: the thin lens needs a physical focal length.
-            tab.insert("focal_length".into(), Value::Float(fl));
-            tab.insert("pixel_pitch".into(), Value::Float(fl / c.fx));
-            tab.insert("f_number".into(), Value::Float(n));
+            tab.insert(F::Camera::focal_length.into(), Value::Float(fl));
+            tab.insert(F::Camera::pixel_pitch.into(), Value::Float(fl / c.fx));
+            tab.insert(F::Camera::f_number.into(), Value::Float(n));
             if let Some(d) = c.focus_distance.filter(|d| *d > 0.0) {
-                tab.insert("focus_distance".into(), Value::Float(d));
+                tab.insert(F::Camera::focus_distance.into(), Value::Float(d));
             }
         }
         _ => {
-            tab.insert("fx".into(), Value::Float(c.fx));
+            tab.insert(F::Camera::fx.into(), Value::Float(c.fx));
         }
     }
     if c.fy != c.fx {
         tab.insert("fy".into(), Value::Float(c.fy));
     }
-    tab.insert("principal_point".into(), arr([c.cx, c.cy]));
+    tab.insert(F::Camera::principal_point.into(), arr([c.cx, c.cy]));
     if c.lens != "rectilinear" {
-        tab.insert("lens".into(), Value::String(c.lens.clone()));
+        tab.insert(F::Camera::lens.into(), Value::String(c.lens.clone()));
     }
     if let Some(d) = &c.distortion {
         let mut dt = Table::new();
-        for k in ["k1", "k2", "k3", "p1", "p2"] {
+        for &k in F::DistortionTable::KEYS {
             if let Some(v) = d.get(k).filter(|v| **v != 0.0) {
                 dt.insert(k.into(), Value::Float(*v));
             }
         }
         if !dt.is_empty() {
-            tab.insert("distortion".into(), Value::Table(dt));
+            tab.insert(F::Camera::distortion.into(), Value::Table(dt));
         }
     }
 }
@@ -378,27 +382,27 @@ fn camera_tables(read: &Read, t: &mut Table) {
     let mut cam = Table::new();
     insert_intrinsics(c0, &mut cam);
     if !read.port_glass {
-        cam.insert("port".into(), no_port());
+        cam.insert(F::Camera::port.into(), no_port());
     }
     if read.cameras.len() > 1 {
         let mut cams = Vec::new();
         for c in &read.cameras {
             let (rot, pos) = frame_of(&mat(&c.rig_from_camera));
             let mut ct = Table::new();
-            ct.insert("name".into(), Value::String(c.name.clone()));
-            ct.insert("position".into(), arr(pos.to_array()));
-            ct.insert("rotation".into(), arr(euler_xyz(rot)));
+            ct.insert(F::Camera::name.into(), Value::String(c.name.clone()));
+            ct.insert(F::Camera::position.into(), arr(pos.to_array()));
+            ct.insert(F::Camera::rotation.into(), arr(euler_xyz(rot)));
             insert_intrinsics(c, &mut ct);
             cams.push(Value::Table(ct));
         }
         let mut rt = Table::new();
-        rt.insert("type".into(), Value::String("multi".into()));
-        rt.insert("cameras".into(), Value::Array(cams));
-        t.insert("camera".into(), Value::Table(cam));
-        t.insert("rig".into(), Value::Table(rt));
+        rt.insert(F::Rig::kind.into(), Value::String("multi".into()));
+        rt.insert(F::Rig::cameras.into(), Value::Array(cams));
+        t.insert(F::Scene::camera.into(), Value::Table(cam));
+        t.insert(F::Scene::rig.into(), Value::Table(rt));
     } else {
-        cam.insert("name".into(), Value::String(c0.name.clone()));
-        t.insert("camera".into(), Value::Table(cam));
+        cam.insert(F::Camera::name.into(), Value::String(c0.name.clone()));
+        t.insert(F::Scene::camera.into(), Value::Table(cam));
     }
 }
 
@@ -416,8 +420,8 @@ fn water_tables(
         return Err(format!("{shown}: the water's coefficients are not finite"));
     }
     let mut wt = Table::new();
-    wt.insert("absorption".into(), arr(w.absorption));
-    wt.insert("scattering".into(), arr(w.scattering));
+    wt.insert(F::Water::absorption.into(), arr(w.absorption));
+    wt.insert(F::Water::scattering.into(), arr(w.scattering));
     match &w.ff {
         Some(ff) => {
             // Cycles gives the backscatter fraction; poser the Junge slope that yields it.
@@ -431,27 +435,30 @@ fn water_tables(
                     ff.backscatter, ff.n
                 ));
             };
-            wt.insert("phase".into(), Value::String("fournier_forand".into()));
-            wt.insert("particle_index".into(), Value::Float(ff.n));
-            wt.insert("junge_slope".into(), Value::Float(mu));
+            wt.insert(
+                F::Water::phase.into(),
+                Value::String("fournier_forand".into()),
+            );
+            wt.insert(F::Water::particle_index.into(), Value::Float(ff.n));
+            wt.insert(F::Water::junge_slope.into(), Value::Float(mu));
         }
         None => {
-            wt.insert("g".into(), Value::Float(w.g.clamp(-0.999, 0.999)));
+            wt.insert(F::Water::g.into(), Value::Float(w.g.clamp(-0.999, 0.999)));
         }
     }
     match w.ior {
         Some(n) => {
-            wt.insert("ior".into(), arr(n));
+            wt.insert(F::Water::ior.into(), arr(n));
         }
         None => {
-            wt.insert("ior".into(), Value::Float(default_n));
+            wt.insert(F::Water::ior.into(), Value::Float(default_n));
             notes.push(Note::new(
                 located(shown, "water"),
                 format!("a Blender volume has no refractive index; seawater's at 20 °C, 35 PSU and 550 nm ({default_n:.5}) is written"),
             ).help("set `water.ior`, or `temperature` and `salinity` instead"));
         }
     }
-    t.insert("water".into(), Value::Table(wt));
+    t.insert(F::Scene::water.into(), Value::Table(wt));
     let surface = match w.surface.as_deref() {
         Some("waves") => {
             notes.push(
@@ -468,10 +475,10 @@ fn water_tables(
     };
     let mut site = Table::new();
     site.insert(
-        "surface".into(),
+        F::Site::surface.into(),
         Value::String(if surface { "flat" } else { "none" }.into()),
     );
-    t.insert("site".into(), Value::Table(site));
+    t.insert(F::Scene::site.into(), Value::Table(site));
     if surface && poses.iter().any(|(_, c)| c.z >= 0.0) {
         notes.push(
             Note::new(
@@ -544,15 +551,19 @@ fn light_table(
     unique: &mut dyn FnMut(&str) -> String,
     shown: &str,
 ) -> Result<Value, String> {
-    let world = l.get("mount").and_then(|v| v.as_str()) == Some("world");
+    let world = l.get(F::Light::mount).and_then(|v| v.as_str()) == Some("world");
     let mut lt = Table::new();
     for (k, v) in l {
         let value = match v {
-            serde_json::Value::String(s) if k == "name" => Value::String(unique(s)),
+            serde_json::Value::String(s) if k == F::Light::name => Value::String(unique(s)),
             serde_json::Value::String(s) => Value::String(s.clone()),
             serde_json::Value::Number(n) => Value::Float(n.as_f64().unwrap_or(f64::NAN)),
             serde_json::Value::Array(a) => {
-                let shift = if k == "position" && world { dz } else { 0.0 };
+                let shift = if k == F::Light::position && world {
+                    dz
+                } else {
+                    0.0
+                };
                 arr(a.iter().enumerate().map(|(i, x)| {
                     x.as_f64().unwrap_or(f64::NAN) + if i == 2 { shift } else { 0.0 }
                 }))
@@ -704,10 +715,16 @@ fn mesh_object(
         ));
     }
     let mut o = Table::new();
-    o.insert("name".into(), Value::String(name.to_string()));
-    o.insert("shape".into(), Value::String("mesh".into()));
-    o.insert("path".into(), Value::String(format!("{assets}/{file}")));
-    o.insert("albedo".into(), arr(m.albedo.map(|a| a.clamp(0.0, 1.0))));
+    o.insert(F::Object::name.into(), Value::String(name.to_string()));
+    o.insert(F::Object::shape.into(), Value::String("mesh".into()));
+    o.insert(
+        F::Object::path.into(),
+        Value::String(format!("{assets}/{file}")),
+    );
+    o.insert(
+        F::Object::albedo.into(),
+        arr(m.albedo.map(|a| a.clamp(0.0, 1.0))),
+    );
     Ok((assets_out, notes, Value::Table(o)))
 }
 
@@ -795,16 +812,25 @@ fn glass_object(
             "its mesh of {} vertices on a sphere is imported as the exact sphere",
             g.vertices
         ));
-        o.insert("shape".into(), Value::String("sphere".into()));
-        o.insert("radius".into(), Value::Float(len.element_sum() / 3.0));
-        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
+        o.insert(F::Object::shape.into(), Value::String("sphere".into()));
+        o.insert(
+            F::Object::radius.into(),
+            Value::Float(len.element_sum() / 3.0),
+        );
+        o.insert(
+            F::Object::position.into(),
+            arr(m.w_axis.truncate().to_array()),
+        );
     } else {
-        o.insert("shape".into(), Value::String("box".into()));
-        o.insert("size".into(), arr((2.0 * len).to_array()));
-        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
-        o.insert("rotation".into(), arr(euler_xyz(frame)));
+        o.insert(F::Object::shape.into(), Value::String("box".into()));
+        o.insert(F::Object::size.into(), arr((2.0 * len).to_array()));
+        o.insert(
+            F::Object::position.into(),
+            arr(m.w_axis.truncate().to_array()),
+        );
+        o.insert(F::Object::rotation.into(), arr(euler_xyz(frame)));
     }
-    o.insert("glass".into(), Value::String(glass.to_string()));
+    o.insert(F::Object::glass.into(), Value::String(glass.to_string()));
     let note = (!says.is_empty()).then(|| Note::new(here(), says.join("; ")).help(help));
     Ok((o, note))
 }
@@ -844,7 +870,7 @@ fn texture_png(tex: &ReadTexture, name: &str, work: &Path) -> Result<(String, Ve
 /// default in water is a 10 mm flat port).
 fn no_port() -> Value {
     let mut port = Table::new();
-    port.insert("type".into(), Value::String("none".into()));
+    port.insert(F::PortTable::kind.into(), Value::String("none".into()));
     Value::Table(port)
 }
 

@@ -29,6 +29,7 @@ use super::{
 };
 use crate::backend::mitsuba::xml::{ORIGIN_PARAMS, PER_UNIT_PARAM, UNIT_PARAM};
 use crate::geometry::mesh::TriMesh;
+use crate::scene::format::types as F;
 use glam::{DMat3, DMat4, DVec3};
 use quick_xml::events::Event;
 use std::collections::HashMap;
@@ -1697,9 +1698,9 @@ pub fn import_within(
     let name = comment_name(&docs[0], "poser scene")
         .or_else(|| first.file_stem().map(|s| s.to_string_lossy().into_owned()))
         .unwrap_or_else(|| "imported".into());
-    t.insert("name".into(), Value::String(name.clone()));
+    t.insert(F::Scene::name.into(), Value::String(name.clone()));
     t.insert(
-        "description".into(),
+        F::Scene::description.into(),
         Value::String(format!(
             "imported from Mitsuba 3 XML ({} file(s))",
             files.len()
@@ -1715,7 +1716,10 @@ pub fn import_within(
         max_depth,
     } = world_of(&mut cx, &docs, &sensors, assets)?;
 
-    t.insert("camera".into(), camera_table(s0, port_faces.is_empty()));
+    t.insert(
+        F::Scene::camera.into(),
+        camera_table(s0, port_faces.is_empty()),
+    );
     if !port_faces.is_empty() {
         port_note(&mut cx, s0, &port_faces);
     }
@@ -1738,16 +1742,16 @@ pub fn import_within(
             }
             _ => (*dir, *e),
         };
-        t.insert("sun".into(), sun_table(dir_air, e_air));
+        t.insert(F::Scene::sun.into(), sun_table(dir_air, e_air));
         if water.is_some() && surface {
             cx.note(k, "the directional light is read as the sun refracted at the flat sea surface: elevation and irradiance are those above the water", None);
         }
     }
     if !lights.is_empty() {
-        t.insert("lights".into(), Value::Array(lights));
+        t.insert(F::Scene::lights.into(), Value::Array(lights));
     }
     if !objects.is_empty() {
-        t.insert("objects".into(), Value::Array(objects));
+        t.insert(F::Scene::objects.into(), Value::Array(objects));
     }
 
     // Network: one explicit pose per sensor, or per rig pose (the rig frame is the first
@@ -1757,10 +1761,10 @@ pub fn import_within(
     } else {
         sensors.iter().map(|s| (s.rot, s.pos)).collect()
     };
-    t.insert("network".into(), explicit_network(poses));
+    t.insert(F::Scene::network.into(), explicit_network(poses));
     let r = render_table(&mut cx, s0, max_depth.as_ref(), &port_faces);
     if !r.is_empty() {
-        t.insert("render".into(), Value::Table(r));
+        t.insert(F::Scene::render.into(), Value::Table(r));
     }
 
     let sources = files
@@ -2076,33 +2080,33 @@ fn water_of(cx: &mut Cx, docs: &[X]) -> Result<(Option<Water>, bool), String> {
 /// The `[camera]` table of the first sensor; `no_port`: no glass at the camera.
 fn camera_table(s0: &Sensor, no_port: bool) -> Value {
     let mut cam = Table::new();
-    cam.insert("width".into(), Value::Integer(s0.width));
-    cam.insert("height".into(), Value::Integer(s0.height));
-    cam.insert("fx".into(), Value::Float(s0.fx));
-    cam.insert("principal_point".into(), arr([s0.cx, s0.cy]));
+    cam.insert(F::Camera::width.into(), Value::Integer(s0.width));
+    cam.insert(F::Camera::height.into(), Value::Integer(s0.height));
+    cam.insert(F::Camera::fx.into(), Value::Float(s0.fx));
+    cam.insert(F::Camera::principal_point.into(), arr([s0.cx, s0.cy]));
     if let Some((aperture, focus)) = s0.thin {
         // f-number for poser's default pixel pitch: the aperture radius (in metres) is what
         // the blur depends on, and it comes back unchanged.
         let pitch = 3.76e-6;
-        cam.insert("pixel_pitch".into(), Value::Float(pitch));
+        cam.insert(F::Camera::pixel_pitch.into(), Value::Float(pitch));
         if aperture > 0.0 {
             cam.insert(
-                "f_number".into(),
+                F::Camera::f_number.into(),
                 Value::Float(s0.fx * pitch / (2.0 * aperture)),
             );
         }
         if focus > 0.0 {
-            cam.insert("focus_distance".into(), Value::Float(focus));
+            cam.insert(F::Camera::focus_distance.into(), Value::Float(focus));
         }
-        cam.remove("fx");
-        cam.insert("focal_length".into(), Value::Float(s0.fx * pitch));
+        cam.remove(F::Camera::fx);
+        cam.insert(F::Camera::focal_length.into(), Value::Float(s0.fx * pitch));
     }
     if no_port {
         // No glass at the camera: no housing, said explicitly (poser's default in water is
         // a 10 mm flat port).
         let mut port = Table::new();
-        port.insert("type".into(), Value::String("none".into()));
-        cam.insert("port".into(), Value::Table(port));
+        port.insert(F::PortTable::kind.into(), Value::String("none".into()));
+        cam.insert(F::Camera::port.into(), Value::Table(port));
     }
     Value::Table(cam)
 }
@@ -2118,13 +2122,13 @@ fn insert_water(
     sensors: &[Sensor],
 ) {
     let mut wt = Table::new();
-    wt.insert("absorption".into(), arr(w.sigma_a));
-    wt.insert("scattering".into(), arr(w.sigma_s));
-    wt.insert("g".into(), Value::Float(w.g));
+    wt.insert(F::Water::absorption.into(), arr(w.sigma_a));
+    wt.insert(F::Water::scattering.into(), arr(w.sigma_s));
+    wt.insert(F::Water::g.into(), Value::Float(w.g));
     if let Some(n) = n_water {
-        wt.insert("ior".into(), Value::Float(n));
+        wt.insert(F::Water::ior.into(), Value::Float(n));
     }
-    t.insert("water".into(), Value::Table(wt));
+    t.insert(F::Scene::water.into(), Value::Table(wt));
     if !surface && sensors.iter().any(|s| s.pos.z >= 0.0) {
         cx.notes.push(
             Note::new(
@@ -2138,10 +2142,10 @@ fn insert_water(
     // without poser's sea box fills the scene.
     let mut site = Table::new();
     site.insert(
-        "surface".into(),
+        F::Site::surface.into(),
         Value::String(if surface { "flat" } else { "none" }.into()),
     );
-    t.insert("site".into(), Value::Table(site));
+    t.insert(F::Scene::site.into(), Value::Table(site));
 }
 
 /// A rig of poser's view files: the `[rig]` table (each camera relative to the first camera
@@ -2178,19 +2182,22 @@ fn rig_poses(
         };
         let inv = a.rot.transpose();
         let mut c = Table::new();
-        c.insert("name".into(), Value::String(n.clone()));
-        c.insert("position".into(), arr((inv * (b.pos - a.pos)).to_array()));
-        c.insert("rotation".into(), arr(euler_xyz(inv * b.rot)));
-        c.insert("width".into(), Value::Integer(b.width));
-        c.insert("height".into(), Value::Integer(b.height));
-        c.insert("fx".into(), Value::Float(b.fx));
-        c.insert("principal_point".into(), arr([b.cx, b.cy]));
+        c.insert(F::Camera::name.into(), Value::String(n.clone()));
+        c.insert(
+            F::Camera::position.into(),
+            arr((inv * (b.pos - a.pos)).to_array()),
+        );
+        c.insert(F::Camera::rotation.into(), arr(euler_xyz(inv * b.rot)));
+        c.insert(F::Camera::width.into(), Value::Integer(b.width));
+        c.insert(F::Camera::height.into(), Value::Integer(b.height));
+        c.insert(F::Camera::fx.into(), Value::Float(b.fx));
+        c.insert(F::Camera::principal_point.into(), arr([b.cx, b.cy]));
         cams.push(Value::Table(c));
     }
     let mut rt = Table::new();
-    rt.insert("type".into(), Value::String("multi".into()));
-    rt.insert("cameras".into(), Value::Array(cams));
-    t.insert("rig".into(), Value::Table(rt));
+    rt.insert(F::Rig::kind.into(), Value::String("multi".into()));
+    rt.insert(F::Rig::cameras.into(), Value::Array(cams));
+    t.insert(F::Scene::rig.into(), Value::Table(rt));
     for &p in &ids {
         let Some(s) = find(p, &names[0]) else {
             cx.notes.push(Note::new(
@@ -2217,7 +2224,10 @@ fn render_table(
 ) -> Table {
     let mut r = Table::new();
     if let Some(spp) = s0.samples {
-        r.insert("samples".into(), Value::Integer(spp.clamp(1, 1 << 20)));
+        r.insert(
+            F::Render::samples.into(),
+            Value::Integer(spp.clamp(1, 1 << 20)),
+        );
     }
     if let Some((k, depth)) = max_depth {
         // Mitsuba counts path vertices from the camera and every glass face (poser's port:
@@ -2228,7 +2238,7 @@ fn render_table(
             0
         };
         if *depth > 1 + glass {
-            r.insert("bounces".into(), Value::Integer(depth - 1 - glass));
+            r.insert(F::Render::bounces.into(), Value::Integer(depth - 1 - glass));
         } else {
             cx.note(
                 k,
@@ -2477,7 +2487,7 @@ fn shape(
             .unwrap_or_else(|| kind.clone()),
     );
     let mut o = Table::new();
-    o.insert("name".into(), Value::String(name.clone()));
+    o.insert(F::Object::name.into(), Value::String(name.clone()));
     if let (Some(b), Some((mesh, uv))) = (&bitmap, &uv_mesh) {
         let (image, bytes, wrap) = bitmap_asset(cx, b, &format!("{name}-texture"))?;
         let file = safe_file_name(&format!("{}.glb", name));
@@ -2488,9 +2498,12 @@ fn shape(
         };
         assets_out.push((file.clone(), meshes::glb_textured(mesh, Some(&tex), &name)));
         assets_out.push((image.clone(), bytes));
-        o.insert("shape".into(), Value::String("mesh".into()));
-        o.insert("path".into(), Value::String(format!("{assets}/{file}")));
-        o.insert("albedo".into(), arr(alb));
+        o.insert(F::Object::shape.into(), Value::String("mesh".into()));
+        o.insert(
+            F::Object::path.into(),
+            Value::String(format!("{assets}/{file}")),
+        );
+        o.insert(F::Object::albedo.into(), arr(alb));
         objects.push(Value::Table(o));
         let src = b
             .named("filename")
@@ -2509,7 +2522,7 @@ fn shape(
     if !shape_geometry(cx, k, &m, &kind, &name, &mut o, assets_out, assets)? {
         return Ok(());
     }
-    o.insert("albedo".into(), arr(alb));
+    o.insert(F::Object::albedo.into(), arr(alb));
     objects.push(Value::Table(o));
     Ok(())
 }
@@ -2576,12 +2589,12 @@ fn glass_object(
         );
     }
     let mut o = Table::new();
-    o.insert("name".into(), Value::String(name.to_string()));
+    o.insert(F::Object::name.into(), Value::String(name.to_string()));
     if !shape_geometry(cx, k, m, kind, name, &mut o, assets_out, assets)? {
         return Ok(());
     }
     let want = if kind == "cube" { "box" } else { "sphere" };
-    if o.get("shape").and_then(Value::as_str) != Some(want) {
+    if o.get(F::Object::shape).and_then(Value::as_str) != Some(want) {
         return Err(format!(
             "{}: this glass `{kind}` is sheared, mirrored or (a sphere) scaled unevenly: \
              poser's glass objects are boxes and round spheres\n  help: give the shape a \
@@ -2589,7 +2602,7 @@ fn glass_object(
             k.loc
         ));
     }
-    o.insert("glass".into(), Value::String(glass.to_string()));
+    o.insert(F::Object::glass.into(), Value::String(glass.to_string()));
     objects.push(Value::Table(o));
     Ok(())
 }
@@ -2692,18 +2705,21 @@ fn area_light(
         let (len, frame, ..) = decompose(m);
         let mut l = Table::new();
         l.insert(
-            "name".into(),
+            F::Light::name.into(),
             Value::String(unique(
                 comment_name(k, "light").unwrap_or_else(|| "area".into()),
             )),
         );
-        l.insert("type".into(), Value::String("area".into()));
-        l.insert("mount".into(), Value::String("world".into()));
-        l.insert("position".into(), arr(m.w_axis.truncate().to_array()));
-        l.insert("aim".into(), arr(frame.z_axis.to_array()));
-        l.insert("width".into(), Value::Float(2.0 * len.x));
-        l.insert("height".into(), Value::Float(2.0 * len.y));
-        l.insert("radiance".into(), arr(radiance));
+        l.insert(F::Light::kind.into(), Value::String("area".into()));
+        l.insert(F::Light::mount.into(), Value::String("world".into()));
+        l.insert(
+            F::Light::position.into(),
+            arr(m.w_axis.truncate().to_array()),
+        );
+        l.insert(F::Light::aim.into(), arr(frame.z_axis.to_array()));
+        l.insert(F::Light::width.into(), Value::Float(2.0 * len.x));
+        l.insert(F::Light::height.into(), Value::Float(2.0 * len.y));
+        l.insert(F::Light::radiance.into(), arr(radiance));
         return Ok(Some(Value::Table(l)));
     }
     if e.ty() == "area"
@@ -2713,20 +2729,20 @@ fn area_light(
         let radiance = cx.colour(e, "radiance")?.unwrap_or([1.0; 3]);
         let mut l = Table::new();
         l.insert(
-            "name".into(),
+            F::Light::name.into(),
             Value::String(unique(
                 k.attr("id")
                     .map(str::to_string)
                     .unwrap_or_else(|| "area".into()),
             )),
         );
-        l.insert("type".into(), Value::String("area".into()));
-        l.insert("mount".into(), Value::String("world".into()));
-        l.insert("position".into(), arr(centre.to_array()));
-        l.insert("aim".into(), arr(n.to_array()));
-        l.insert("width".into(), Value::Float(u.length()));
-        l.insert("height".into(), Value::Float(v.length()));
-        l.insert("radiance".into(), arr(radiance));
+        l.insert(F::Light::kind.into(), Value::String("area".into()));
+        l.insert(F::Light::mount.into(), Value::String("world".into()));
+        l.insert(F::Light::position.into(), arr(centre.to_array()));
+        l.insert(F::Light::aim.into(), arr(n.to_array()));
+        l.insert(F::Light::width.into(), Value::Float(u.length()));
+        l.insert(F::Light::height.into(), Value::Float(v.length()));
+        l.insert(F::Light::radiance.into(), arr(radiance));
         if (u.length() - v.length()).abs() > 1e-9 * u.length() {
             cx.note(
                 e,
@@ -2803,20 +2819,23 @@ fn shape_geometry(
 ) -> Result<bool, String> {
     let (len, frame, mirror, sheared) = decompose(m);
     let placed = |o: &mut Table| {
-        o.insert("position".into(), arr(m.w_axis.truncate().to_array()));
-        o.insert("rotation".into(), arr(euler_xyz(frame)));
+        o.insert(
+            F::Object::position.into(),
+            arr(m.w_axis.truncate().to_array()),
+        );
+        o.insert(F::Object::rotation.into(), arr(euler_xyz(frame)));
     };
     let analytic = !sheared && !mirror;
     match kind {
         "rectangle" if analytic => {
-            o.insert("shape".into(), Value::String("plane".into()));
-            o.insert("width".into(), Value::Float(2.0 * len.x));
-            o.insert("height".into(), Value::Float(2.0 * len.y));
+            o.insert(F::Object::shape.into(), Value::String("plane".into()));
+            o.insert(F::Object::width.into(), Value::Float(2.0 * len.x));
+            o.insert(F::Object::height.into(), Value::Float(2.0 * len.y));
             placed(o);
         }
         "cube" if analytic => {
-            o.insert("shape".into(), Value::String("box".into()));
-            o.insert("size".into(), arr((2.0 * len).to_array()));
+            o.insert(F::Object::shape.into(), Value::String("box".into()));
+            o.insert(F::Object::size.into(), arr((2.0 * len).to_array()));
             placed(o);
         }
         "sphere"
@@ -2826,9 +2845,9 @@ fn shape_geometry(
         {
             let r = cx.float(k, "radius", 1.0)? * len.x;
             let c = m.transform_point3(cx.point(k, "center", DVec3::ZERO)?);
-            o.insert("shape".into(), Value::String("sphere".into()));
-            o.insert("radius".into(), Value::Float(r));
-            o.insert("position".into(), arr(c.to_array()));
+            o.insert(F::Object::shape.into(), Value::String("sphere".into()));
+            o.insert(F::Object::radius.into(), Value::Float(r));
+            o.insert(F::Object::position.into(), arr(c.to_array()));
         }
         "cylinder"
             if analytic
@@ -2843,11 +2862,14 @@ fn shape_geometry(
                 return Err(format!("{}: a cylinder with p0 = p1", k.loc));
             }
             let rot = DMat3::from_quat(glam::DQuat::from_rotation_arc(DVec3::Z, axis));
-            o.insert("shape".into(), Value::String("cylinder".into()));
-            o.insert("radius".into(), Value::Float(r));
-            o.insert("height".into(), Value::Float((p1 - p0).length()));
-            o.insert("position".into(), arr((0.5 * (p0 + p1)).to_array()));
-            o.insert("rotation".into(), arr(euler_xyz(rot)));
+            o.insert(F::Object::shape.into(), Value::String("cylinder".into()));
+            o.insert(F::Object::radius.into(), Value::Float(r));
+            o.insert(F::Object::height.into(), Value::Float((p1 - p0).length()));
+            o.insert(
+                F::Object::position.into(),
+                arr((0.5 * (p0 + p1)).to_array()),
+            );
+            o.insert(F::Object::rotation.into(), arr(euler_xyz(rot)));
             cx.note(k, "Mitsuba's cylinder is open; poser's has caps", None);
         }
         "rectangle" | "cube" | "sphere" | "cylinder" | "disk" | "obj" | "ply" => {
@@ -2871,8 +2893,11 @@ fn shape_geometry(
             };
             let file = safe_file_name(&format!("{}.glb", name));
             assets_out.push((file.clone(), meshes::glb(&mesh, name)));
-            o.insert("shape".into(), Value::String("mesh".into()));
-            o.insert("path".into(), Value::String(format!("{assets}/{file}")));
+            o.insert(F::Object::shape.into(), Value::String("mesh".into()));
+            o.insert(
+                F::Object::path.into(),
+                Value::String(format!("{assets}/{file}")),
+            );
         }
         other => {
             cx.note(
@@ -2923,17 +2948,17 @@ fn emitter(
     let place = |l: &mut Table, pos: DVec3, aim: Option<DVec3>| match view {
         Some((r, c)) => {
             let inv = r.transpose();
-            l.insert("mount".into(), Value::String("rig".into()));
-            l.insert("position".into(), arr((inv * (pos - c)).to_array()));
+            l.insert(F::Light::mount.into(), Value::String("rig".into()));
+            l.insert(F::Light::position.into(), arr((inv * (pos - c)).to_array()));
             if let Some(a) = aim {
-                l.insert("aim".into(), arr((inv * a).to_array()));
+                l.insert(F::Light::aim.into(), arr((inv * a).to_array()));
             }
         }
         None => {
-            l.insert("mount".into(), Value::String("world".into()));
-            l.insert("position".into(), arr(pos.to_array()));
+            l.insert(F::Light::mount.into(), Value::String("world".into()));
+            l.insert(F::Light::position.into(), arr(pos.to_array()));
             if let Some(a) = aim {
-                l.insert("aim".into(), arr(a.to_array()));
+                l.insert(F::Light::aim.into(), arr(a.to_array()));
             }
         }
     };
@@ -2945,12 +2970,12 @@ fn emitter(
                 m.w_axis.truncate()
             };
             l.insert(
-                "name".into(),
+                F::Light::name.into(),
                 Value::String(unique(name.unwrap_or_else(|| "point".into()))),
             );
-            l.insert("type".into(), Value::String("point".into()));
+            l.insert(F::Light::kind.into(), Value::String("point".into()));
             place(&mut l, pos, None);
-            l.insert("intensity".into(), arr(point_intensity(cx, k)?));
+            l.insert(F::Light::intensity.into(), arr(point_intensity(cx, k)?));
         }
         "spot" => {
             let cutoff = cx.float(k, "cutoff_angle", 20.0)?;
@@ -2959,20 +2984,20 @@ fn emitter(
                 cx.note(k, format!("the spot's soft edge (beam_width {beam}° inside cutoff_angle {cutoff}°) is imported sharp at the cutoff"), Some("poser's spots have a sharp edge"));
             }
             l.insert(
-                "name".into(),
+                F::Light::name.into(),
                 Value::String(unique(name.unwrap_or_else(|| "spot".into()))),
             );
-            l.insert("type".into(), Value::String("spot".into()));
+            l.insert(F::Light::kind.into(), Value::String("spot".into()));
             place(
                 &mut l,
                 m.w_axis.truncate(),
                 Some(m.z_axis.truncate().normalize()),
             );
             l.insert(
-                "beam_angle".into(),
+                F::Light::beam_angle.into(),
                 Value::Float((2.0 * cutoff).to_radians()),
             );
-            l.insert("intensity".into(), arr(point_intensity(cx, k)?));
+            l.insert(F::Light::intensity.into(), arr(point_intensity(cx, k)?));
         }
         "directional" => {
             let dir = if k.named("direction").is_some() {
@@ -3000,12 +3025,12 @@ fn emitter(
         }
         "constant" => {
             l.insert(
-                "name".into(),
+                F::Light::name.into(),
                 Value::String(unique(name.unwrap_or_else(|| "ambient".into()))),
             );
-            l.insert("type".into(), Value::String("ambient".into()));
+            l.insert(F::Light::kind.into(), Value::String("ambient".into()));
             l.insert(
-                "radiance".into(),
+                F::Light::radiance.into(),
                 arr(cx.colour(k, "radiance")?.unwrap_or([1.0; 3])),
             );
         }

@@ -19,6 +19,7 @@ pub mod meshes;
 pub mod mitsuba;
 pub mod verify;
 
+use crate::scene::format::types as F;
 use glam::{DMat3, DMat4, DVec3, EulerRot};
 use std::path::{Path, PathBuf};
 use toml::{Table, Value};
@@ -144,14 +145,14 @@ pub(crate) fn explicit_network(poses: impl IntoIterator<Item = (DMat3, DVec3)>) 
         .into_iter()
         .map(|(rot, pos)| {
             let mut p = Table::new();
-            p.insert("position".into(), arr(pos.to_array()));
-            p.insert("rotation".into(), arr(euler_xyz(rot)));
+            p.insert(F::PoseTable::position.into(), arr(pos.to_array()));
+            p.insert(F::PoseTable::rotation.into(), arr(euler_xyz(rot)));
             Value::Table(p)
         })
         .collect();
     let mut net = Table::new();
-    net.insert("type".into(), Value::String("explicit".into()));
-    net.insert("poses".into(), Value::Array(ps));
+    net.insert(F::Network::kind.into(), Value::String("explicit".into()));
+    net.insert(F::Network::poses.into(), Value::Array(ps));
     Value::Table(net)
 }
 
@@ -161,12 +162,12 @@ pub(crate) fn sun_table(dir_air: DVec3, e_air: [f64; 3]) -> Value {
     let elevation = (-dir_air.z).clamp(-1.0, 1.0).asin();
     let azimuth = (-dir_air.x).atan2(-dir_air.y);
     let mut st = Table::new();
-    st.insert("elevation".into(), Value::Float(elevation));
+    st.insert(F::Sun::elevation.into(), Value::Float(elevation));
     st.insert(
-        "azimuth".into(),
+        F::Sun::azimuth.into(),
         Value::Float(azimuth.rem_euclid(std::f64::consts::TAU)),
     );
-    st.insert("irradiance".into(), arr(e_air));
+    st.insert(F::Sun::irradiance.into(), arr(e_air));
     Value::Table(st)
 }
 

@@ -6,10 +6,11 @@ use super::diag::{Diagnostic, num};
 use super::reader::{Cx, Tab};
 use super::resolve::Spans;
 use crate::model::*;
+use crate::scene::format::types as F;
 
 pub fn positive(cx: &mut Cx, t: &Tab, key: &str, v: f64, unit: &str) {
     if !(v > 0.0) {
-        let what = if key.contains("thickness") {
+        let what = if key.contains(F::PortTable::thickness) {
             "non-positive thickness"
         } else {
             "value must be positive"

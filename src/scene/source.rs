@@ -4,6 +4,7 @@
 //! included files and at the command line.
 
 use super::diag::{Diagnostic, Span};
+use crate::scene::format::types as F;
 use std::path::{Path, PathBuf};
 use toml::de::{DeTable, DeValue};
 
@@ -694,7 +695,7 @@ pub fn load_file(
     let Val::Table(t) = &mut node.val else {
         return Some(node);
     };
-    let Some(inc) = t.remove("include") else {
+    let Some(inc) = t.remove(F::Scene::include) else {
         return Some(node);
     };
     let list: Vec<Node> = match inc.node.val {

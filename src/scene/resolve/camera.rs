@@ -11,6 +11,7 @@ use crate::model::*;
 use crate::optics;
 use crate::scene::check;
 use crate::scene::diag::{Diagnostic, Span, num};
+use crate::scene::format::types as F;
 use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::{Node, Val, merge};
 use crate::units::Dim;
@@ -25,10 +26,10 @@ pub(super) fn cameras(
     spans: &mut Spans,
     fallback: Span,
 ) -> Vec<Camera> {
-    let cam_node = t.get("camera");
-    let mut rig = Tab::open(cx, t.get("rig"), "rig", fallback);
+    let cam_node = t.get(F::Scene::camera);
+    let mut rig = Tab::open(cx, t.get(F::Scene::rig), F::Scene::rig, fallback);
     let kind = rig
-        .choice(cx, "type", &["single", "stereo", "multi"])
+        .choice(cx, F::Rig::kind, &["single", "stereo", "multi"])
         .unwrap_or("single");
     let base = cam_node.cloned().unwrap_or(Node {
         val: Val::Table(Default::default()),
@@ -37,22 +38,22 @@ pub(super) fn cameras(
     let mut out = Vec::new();
     match kind {
         "stereo" => {
-            let b = rig.f64(cx, "baseline", Dim::Length, 0.3);
-            spans.baseline = Some(rig.span_of("baseline"));
-            check::positive(cx, &rig, "baseline", b, "m");
-            let conv = rig.f64(cx, "convergence", Dim::Angle, 0.0);
+            let b = rig.f64(cx, F::Rig::baseline, Dim::Length, 0.3);
+            spans.baseline = Some(rig.span_of(F::Rig::baseline));
+            check::positive(cx, &rig, F::Rig::baseline, b, "m");
+            let conv = rig.f64(cx, F::Rig::convergence, Dim::Angle, 0.0);
             for (name, sx) in [("left", -1.0), ("right", 1.0)] {
                 let pose = Pose {
                     rotation: DMat3::from_rotation_y(-sx * conv / 2.0),
                     translation: DVec3::new(sx * b / 2.0, 0.0, 0.0),
                 };
-                if let Some(c) = camera(cx, &base, "camera", water, name, pose, spans) {
+                if let Some(c) = camera(cx, &base, F::Scene::camera, water, name, pose, spans) {
                     out.push(c);
                 }
             }
         }
         "multi" => {
-            let entries = rig.tables(cx, "cameras");
+            let entries = rig.tables(cx, F::Rig::cameras);
             if entries.is_empty() {
                 let sp = rig.span;
                 cx.push(
@@ -83,7 +84,7 @@ pub(super) fn cameras(
             if let Some(c) = camera(
                 cx,
                 &base,
-                "camera",
+                F::Scene::camera,
                 water,
                 DEFAULT_CAMERA_NAME,
                 Pose::IDENTITY,
@@ -123,13 +124,13 @@ fn camera(
 ) -> Option<Camera> {
     let mut c = Tab::open(cx, Some(node), path, node.span);
     let name = c
-        .opt_str(cx, "name")
+        .opt_str(cx, F::Camera::name)
         .unwrap_or_else(|| default_name.to_string());
     if !crate::model::is_safe_file_name(&name) {
         // Camera names become file names (`{camera}_{pose}.exr` in a rig); they are checked
         // here, once for every backend.
-        let sp = if c.has("name") {
-            c.span_of("name")
+        let sp = if c.has(F::Camera::name) {
+            c.span_of(F::Camera::name)
         } else {
             node.span
         };
@@ -145,8 +146,8 @@ fn camera(
             .help("use letters, digits, `_`, `-` and `.` only (not first), at most 100 characters"),
         );
     }
-    let position = c.opt_vec3(cx, "position", Dim::Length);
-    let rotation = c.opt_vec3(cx, "rotation", Dim::Angle);
+    let position = c.opt_vec3(cx, F::Camera::position, Dim::Length);
+    let rotation = c.opt_vec3(cx, F::Camera::rotation, Dim::Angle);
     let rig_from_camera = match (position, rotation) {
         (None, None) => rig_pose,
         (p, r) => Pose {
@@ -154,9 +155,9 @@ fn camera(
             translation: p.unwrap_or(DVec3::ZERO),
         },
     };
-    let width = c.u32(cx, "width", 1600);
-    let height = c.u32(cx, "height", 1200);
-    for (k, v) in [("width", width), ("height", height)] {
+    let width = c.u32(cx, F::Camera::width, 1600);
+    let height = c.u32(cx, F::Camera::height, 1200);
+    for (k, v) in [(F::Camera::width, width), (F::Camera::height, height)] {
         check::at_most(cx, &c, k, v as u64, 65_536, "pixels");
         if v == 0 {
             let sp = c.span_of(k);
@@ -172,20 +173,27 @@ fn camera(
     let (cx_, cy_) = principal_point(cx, &mut c, width, height);
     let lens = lens(cx, &mut c);
     let distortion = distortion(cx, &mut c);
-    let focus_distance = c.opt_f64(cx, "focus_distance", Dim::Length);
+    let focus_distance = c.opt_f64(cx, F::Camera::focus_distance, Dim::Length);
     if let Some(f) = focus_distance {
-        check::positive(cx, &c, "focus_distance", f, "m");
+        check::positive(cx, &c, F::Camera::focus_distance, f, "m");
     }
-    let f_number = c.opt_f64(cx, "f_number", Dim::Number);
+    let f_number = c.opt_f64(cx, F::Camera::f_number, Dim::Number);
     if let Some(f) = f_number {
-        check::positive(cx, &c, "f_number", f, "");
+        check::positive(cx, &c, F::Camera::f_number, f, "");
     }
-    let port_node = c.get("port");
+    let port_node = c.get(F::Camera::port);
     let mut cs = CameraSpans {
-        port: c.span_of("port"),
+        port: c.span_of(F::Camera::port),
         ..Default::default()
     };
-    let port = port(cx, port_node, &c.full("port"), water, c.span, &mut cs);
+    let port = port(
+        cx,
+        port_node,
+        &c.full(F::Camera::port),
+        water,
+        c.span,
+        &mut cs,
+    );
     c.finish(cx);
     spans.camera.push(cs);
     Some(Camera {
@@ -210,13 +218,13 @@ fn camera(
 /// `pixel_pitch`, or `sensor_width` / `width` (metres; 3.76 µm when neither is given).
 fn pixel_pitch(cx: &mut Cx, c: &mut Tab, width: u32) -> f64 {
     let pitch = match (
-        c.opt_f64(cx, "pixel_pitch", Dim::Length),
-        c.opt_f64(cx, "sensor_width", Dim::Length),
+        c.opt_f64(cx, F::Camera::pixel_pitch, Dim::Length),
+        c.opt_f64(cx, F::Camera::sensor_width, Dim::Length),
     ) {
         (Some(p), None) => p,
         (None, Some(sw)) => sw / width.max(1) as f64,
         (Some(p), Some(_)) => {
-            let sp = c.key_span("sensor_width");
+            let sp = c.key_span(F::Camera::sensor_width);
             cx.push(
                 Diagnostic::error(
                     "E0233",
@@ -229,10 +237,10 @@ fn pixel_pitch(cx: &mut Cx, c: &mut Tab, width: u32) -> f64 {
         }
         (None, None) => 3.76e-6,
     };
-    let pitch_key = if c.has("sensor_width") {
-        "sensor_width"
+    let pitch_key = if c.has(F::Camera::sensor_width) {
+        F::Camera::sensor_width
     } else {
-        "pixel_pitch"
+        F::Camera::pixel_pitch
     };
     check::positive(cx, c, pitch_key, pitch, "m");
     pitch
@@ -242,13 +250,13 @@ fn pixel_pitch(cx: &mut Cx, c: &mut Tab, width: u32) -> f64 {
 /// given); 1 px when it is not positive, so that checking continues.
 fn focal_px(cx: &mut Cx, c: &mut Tab, pitch: f64) -> f64 {
     let fx = match (
-        c.opt_f64(cx, "focal_length", Dim::Length),
-        c.opt_f64(cx, "fx", Dim::Number),
+        c.opt_f64(cx, F::Camera::focal_length, Dim::Length),
+        c.opt_f64(cx, F::Camera::fx, Dim::Number),
     ) {
         (Some(f), None) => f / pitch,
         (None, Some(fx)) => fx,
         (Some(f), Some(_)) => {
-            let sp = c.key_span("fx");
+            let sp = c.key_span(F::Camera::fx);
             cx.push(
                 Diagnostic::error("E0233", "give either `focal_length` or `fx`, not both")
                     .label(sp, "remove this or `focal_length`")
@@ -258,7 +266,11 @@ fn focal_px(cx: &mut Cx, c: &mut Tab, pitch: f64) -> f64 {
         }
         (None, None) => 0.016 / pitch,
     };
-    let fkey = if c.has("fx") { "fx" } else { "focal_length" };
+    let fkey = if c.has(F::Camera::fx) {
+        F::Camera::fx
+    } else {
+        F::Camera::focal_length
+    };
     check::positive(cx, c, fkey, fx, "");
     if fx.is_finite() && fx > 0.0 { fx } else { 1.0 }
 }
@@ -266,10 +278,10 @@ fn focal_px(cx: &mut Cx, c: &mut Tab, pitch: f64) -> f64 {
 /// `principal_point = [cx, cy]` in pixels (poser's convention: pixel centres at +0.5); the
 /// image centre by default.
 fn principal_point(cx: &mut Cx, c: &mut Tab, width: u32, height: u32) -> (f64, f64) {
-    match c.opt_list(cx, "principal_point", Dim::Number) {
+    match c.opt_list(cx, F::Camera::principal_point, Dim::Number) {
         Some(v) if v.len() == 2 => (v[0], v[1]),
         Some(_) => {
-            let sp = c.span_of("principal_point");
+            let sp = c.span_of(F::Camera::principal_point);
             cx.push(
                 Diagnostic::error("E0044", "`principal_point` needs 2 values")
                     .label(sp, "expected [cx, cy] in pixels")
@@ -285,7 +297,7 @@ fn principal_point(cx: &mut Cx, c: &mut Tab, width: u32, height: u32) -> (f64, f
 fn lens(cx: &mut Cx, c: &mut Tab) -> LensModel {
     match c.choice(
         cx,
-        "lens",
+        F::Camera::lens,
         &["rectilinear", "fisheye_equidistant", "fisheye_equisolid"],
     ) {
         Some("fisheye_equidistant") => LensModel::FisheyeEquidistant,
@@ -297,14 +309,14 @@ fn lens(cx: &mut Cx, c: &mut Tab) -> LensModel {
 /// `[camera.distortion]`: the radial `k1`–`k3` and tangential `p1`, `p2` coefficients (all 0 by
 /// default).
 fn distortion(cx: &mut Cx, c: &mut Tab) -> Distortion {
-    let n = c.get("distortion");
-    let mut d = Tab::open(cx, n, &c.full("distortion"), c.span);
+    let n = c.get(F::Camera::distortion);
+    let mut d = Tab::open(cx, n, &c.full(F::Camera::distortion), c.span);
     let r = Distortion {
-        k1: d.f64(cx, "k1", Dim::Number, 0.0),
-        k2: d.f64(cx, "k2", Dim::Number, 0.0),
-        k3: d.f64(cx, "k3", Dim::Number, 0.0),
-        p1: d.f64(cx, "p1", Dim::Number, 0.0),
-        p2: d.f64(cx, "p2", Dim::Number, 0.0),
+        k1: d.f64(cx, F::DistortionTable::k1, Dim::Number, 0.0),
+        k2: d.f64(cx, F::DistortionTable::k2, Dim::Number, 0.0),
+        k3: d.f64(cx, F::DistortionTable::k3, Dim::Number, 0.0),
+        p1: d.f64(cx, F::DistortionTable::p1, Dim::Number, 0.0),
+        p2: d.f64(cx, F::DistortionTable::p2, Dim::Number, 0.0),
     };
     d.finish(cx);
     r
@@ -313,10 +325,14 @@ fn distortion(cx: &mut Cx, c: &mut Tab) -> Distortion {
 /// The glass of a port or layer: `material` from the catalogue (with common aliases) or a
 /// custom `ior`, not both; N-BK7 after an error, so that checking continues.
 fn glass(cx: &mut Cx, p: &mut Tab, default: &str, cs: &mut CameraSpans) -> Glass {
-    cs.material = p.span_of(if p.has("ior") { "ior" } else { "material" });
-    if let Some(ior) = p.opt_rgb(cx, "ior", Dim::Number) {
-        if p.has("material") {
-            let sp = p.key_span("material");
+    cs.material = p.span_of(if p.has(F::PortTable::ior) {
+        F::PortTable::ior
+    } else {
+        F::PortTable::material
+    });
+    if let Some(ior) = p.opt_rgb(cx, F::PortTable::ior, Dim::Number) {
+        if p.has(F::PortTable::material) {
+            let sp = p.key_span(F::PortTable::material);
             cx.push(
                 Diagnostic::error(
                     "E0240",
@@ -326,16 +342,16 @@ fn glass(cx: &mut Cx, p: &mut Tab, default: &str, cs: &mut CameraSpans) -> Glass
                 .help("`ior` defines a custom glass; `material` picks one from the catalogue"),
             );
         }
-        p.get("material");
-        check::index(cx, p, "ior", ior);
+        p.get(F::PortTable::material);
+        check::index(cx, p, F::PortTable::ior, ior);
         return Glass {
             name: "custom".into(),
             ior,
         };
     }
-    let mspan = p.span_of("material");
+    let mspan = p.span_of(F::PortTable::material);
     let name = p
-        .opt_str(cx, "material")
+        .opt_str(cx, F::PortTable::material)
         .unwrap_or_else(|| default.to_string());
     match catalogue_glass(&name) {
         Some(g) => g,
@@ -388,8 +404,12 @@ fn flat_layers(
     path: &str,
     cs: &mut CameraSpans,
 ) -> (f64, Glass, Vec<GlassLayer>) {
-    let lspan = p.span_of("layers");
-    for key in ["thickness", "material", "ior"] {
+    let lspan = p.span_of(F::PortTable::layers);
+    for key in [
+        F::PortTable::thickness,
+        F::PortTable::material,
+        F::PortTable::ior,
+    ] {
         if p.has(key) {
             let sp = p.key_span(key);
             cx.push(
@@ -405,10 +425,14 @@ fn flat_layers(
         }
     }
     // Mark the port-level keys read (they were reported above when present).
-    let _ = (p.get("thickness"), p.get("material"), p.get("ior"));
+    let _ = (
+        p.get(F::PortTable::thickness),
+        p.get(F::PortTable::material),
+        p.get(F::PortTable::ior),
+    );
     cs.thickness = lspan;
     cs.material = lspan;
-    let nodes = p.tables(cx, "layers");
+    let nodes = p.tables(cx, F::PortTable::layers);
     let max = crate::optics::port::MAX_LAYERS;
     if nodes.is_empty() || nodes.len() > max {
         cx.push(
@@ -424,9 +448,9 @@ fn flat_layers(
     for (i, n) in nodes.into_iter().take(max).enumerate() {
         let lpath = format!("{path}.layers[{i}]");
         let mut t = Tab::open(cx, Some(n), &lpath, lspan);
-        let thickness = match t.opt_f64(cx, "thickness", Dim::Length) {
+        let thickness = match t.opt_f64(cx, F::PortLayer::thickness, Dim::Length) {
             Some(v) => {
-                check::positive(cx, &t, "thickness", v, "m");
+                check::positive(cx, &t, F::PortLayer::thickness, v, "m");
                 v
             }
             None => {
@@ -470,9 +494,13 @@ fn port(
 ) -> Port {
     let mut p = Tab::open(cx, node, path, fallback);
     let kind = p
-        .choice(cx, "type", &["none", "flat", "dome", "cylinder"])
+        .choice(
+            cx,
+            F::PortTable::kind,
+            &["none", "flat", "dome", "cylinder"],
+        )
         .unwrap_or(if water { "flat" } else { "none" });
-    cs.thickness = p.span_of("thickness");
+    cs.thickness = p.span_of(F::PortTable::thickness);
     let port = match kind {
         "none" => Port::None,
         "flat" => flat_port(cx, &mut p, path, cs),
@@ -486,20 +514,20 @@ fn port(
 /// A flat port: the glass (one plate, or `layers`) at `pupil_distance` in front of the
 /// entrance pupil, its normal tilted by `tilt` towards `tilt_direction`.
 fn flat_port(cx: &mut Cx, p: &mut Tab, path: &str, cs: &mut CameraSpans) -> Port {
-    let distance = p.f64(cx, "pupil_distance", Dim::Length, 0.01);
-    cs.distance = p.span_of("pupil_distance");
-    let tilt = p.f64(cx, "tilt", Dim::Angle, 0.0);
-    let tilt_dir = p.f64(cx, "tilt_direction", Dim::Angle, 0.0);
-    let (thickness, glass, outer_layers) = if p.has("layers") {
+    let distance = p.f64(cx, F::PortTable::pupil_distance, Dim::Length, 0.01);
+    cs.distance = p.span_of(F::PortTable::pupil_distance);
+    let tilt = p.f64(cx, F::PortTable::tilt, Dim::Angle, 0.0);
+    let tilt_dir = p.f64(cx, F::PortTable::tilt_direction, Dim::Angle, 0.0);
+    let (thickness, glass, outer_layers) = if p.has(F::PortTable::layers) {
         flat_layers(cx, p, path, cs)
     } else {
-        let thickness = p.f64(cx, "thickness", Dim::Length, 0.01);
+        let thickness = p.f64(cx, F::PortTable::thickness, Dim::Length, 0.01);
         let glass = glass(cx, p, "N-BK7", cs);
-        check::positive(cx, p, "thickness", thickness, "m");
+        check::positive(cx, p, F::PortTable::thickness, thickness, "m");
         (thickness, glass, vec![])
     };
     if !(distance > 0.0) {
-        let sp = p.span_of("pupil_distance");
+        let sp = p.span_of(F::PortTable::pupil_distance);
         cx.push(
             Diagnostic::error("E0250", "the entrance pupil is outside the housing")
                 .label(sp, format!("pupil_distance = {} m puts the pupil at or beyond the port", num(distance)))
@@ -507,7 +535,7 @@ fn flat_port(cx: &mut Cx, p: &mut Tab, path: &str, cs: &mut CameraSpans) -> Port
         );
     }
     if tilt.abs() >= std::f64::consts::FRAC_PI_2 * 0.9 {
-        let sp = p.span_of("tilt");
+        let sp = p.span_of(F::PortTable::tilt);
         cx.push(
             Diagnostic::error("E0251", "the port is tilted too far")
                 .label(sp, format!("{:.1}°", tilt.to_degrees()))
@@ -529,16 +557,16 @@ fn flat_port(cx: &mut Cx, p: &mut Tab, path: &str, cs: &mut CameraSpans) -> Port
 /// A dome port: a spherical shell of `inner_radius` and `thickness` centred at `decentering`
 /// from the entrance pupil.
 fn dome_port(cx: &mut Cx, p: &mut Tab, cs: &mut CameraSpans) -> Port {
-    let inner_radius = p.f64(cx, "inner_radius", Dim::Length, 0.05);
-    let thickness = p.f64(cx, "thickness", Dim::Length, 0.005);
-    let center = p.vec3(cx, "decentering", Dim::Length, DVec3::ZERO);
-    cs.center = p.span_of("decentering");
+    let inner_radius = p.f64(cx, F::PortTable::inner_radius, Dim::Length, 0.05);
+    let thickness = p.f64(cx, F::PortTable::thickness, Dim::Length, 0.005);
+    let center = p.vec3(cx, F::PortTable::decentering, Dim::Length, DVec3::ZERO);
+    cs.center = p.span_of(F::PortTable::decentering);
     cs.distance = cs.center;
     let glass = glass(cx, p, "PMMA", cs);
-    check::positive(cx, p, "inner_radius", inner_radius, "m");
-    check::positive(cx, p, "thickness", thickness, "m");
+    check::positive(cx, p, F::PortTable::inner_radius, inner_radius, "m");
+    check::positive(cx, p, F::PortTable::thickness, thickness, "m");
     if inner_radius > 0.0 && center.length() >= inner_radius {
-        let sp = p.span_of("decentering");
+        let sp = p.span_of(F::PortTable::decentering);
         cx.push(
             Diagnostic::error("E0250", "the entrance pupil is outside the dome")
                 .label(sp, format!("|decentering| = {:.4} m ≥ inner radius {:.4} m", center.length(), inner_radius))
@@ -558,18 +586,18 @@ fn dome_port(cx: &mut Cx, p: &mut Tab, cs: &mut CameraSpans) -> Port {
 /// A cylindrical port: a shell of `inner_radius` and `thickness` around the line through
 /// `offset` along `axis` (both relative to the entrance pupil).
 fn cylinder_port(cx: &mut Cx, p: &mut Tab, cs: &mut CameraSpans) -> Port {
-    let inner_radius = p.f64(cx, "inner_radius", Dim::Length, 0.05);
-    let thickness = p.f64(cx, "thickness", Dim::Length, 0.005);
-    let axis = p.vec3(cx, "axis", Dim::Number, DVec3::Y);
-    let axis_point = p.vec3(cx, "offset", Dim::Length, DVec3::ZERO);
-    cs.center = p.span_of("offset");
+    let inner_radius = p.f64(cx, F::PortTable::inner_radius, Dim::Length, 0.05);
+    let thickness = p.f64(cx, F::PortTable::thickness, Dim::Length, 0.005);
+    let axis = p.vec3(cx, F::PortTable::axis, Dim::Number, DVec3::Y);
+    let axis_point = p.vec3(cx, F::PortTable::offset, Dim::Length, DVec3::ZERO);
+    cs.center = p.span_of(F::PortTable::offset);
     cs.distance = cs.center;
     let glass = glass(cx, p, "PMMA", cs);
-    check::positive(cx, p, "inner_radius", inner_radius, "m");
-    check::positive(cx, p, "thickness", thickness, "m");
+    check::positive(cx, p, F::PortTable::inner_radius, inner_radius, "m");
+    check::positive(cx, p, F::PortTable::thickness, thickness, "m");
     let axis_n = axis.try_normalize();
     if axis_n.is_none() {
-        let sp = p.span_of("axis");
+        let sp = p.span_of(F::PortTable::axis);
         cx.push(
             Diagnostic::error("E0252", "the cylinder axis must not be zero")
                 .label(sp, "zero vector")
@@ -579,7 +607,7 @@ fn cylinder_port(cx: &mut Cx, p: &mut Tab, cs: &mut CameraSpans) -> Port {
     let axis = axis_n.unwrap_or(DVec3::Y);
     let off = axis_point - axis * axis_point.dot(axis);
     if inner_radius > 0.0 && off.length() >= inner_radius {
-        let sp = p.span_of("offset");
+        let sp = p.span_of(F::PortTable::offset);
         cx.push(
             Diagnostic::error("E0250", "the entrance pupil is outside the cylindrical port")
                 .label(sp, format!("the pupil is {:.4} m from the axis, the inner radius is {:.4} m", off.length(), inner_radius))

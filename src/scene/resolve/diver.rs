@@ -7,6 +7,7 @@ use crate::model::*;
 use crate::plan::deco::Gas;
 use crate::scene::check;
 use crate::scene::diag::{Diagnostic, Span, num};
+use crate::scene::format::types as F;
 use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::Node;
 use crate::units::Dim;
@@ -16,23 +17,23 @@ use crate::units::Dim;
 /// gas, `gas = "air"`.
 pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<Diver> {
     node?;
-    let mut d = Tab::open(cx, node, "diver", fallback);
-    let speed = d.f64(cx, "speed", Dim::Speed, 0.2);
-    let descent_rate = d.f64(cx, "descent_rate", Dim::Speed, 18.0 / 60.0);
-    let ascent_rate = d.f64(cx, "ascent_rate", Dim::Speed, 9.0 / 60.0);
-    let sac = d.f64(cx, "sac", Dim::Flow, 20e-3 / 60.0);
+    let mut d = Tab::open(cx, node, F::Scene::diver, fallback);
+    let speed = d.f64(cx, F::Diver::speed, Dim::Speed, 0.2);
+    let descent_rate = d.f64(cx, F::Diver::descent_rate, Dim::Speed, 18.0 / 60.0);
+    let ascent_rate = d.f64(cx, F::Diver::ascent_rate, Dim::Speed, 9.0 / 60.0);
+    let sac = d.f64(cx, F::Diver::sac, Dim::Flow, 20e-3 / 60.0);
     for (k, v, u) in [
-        ("speed", speed, "m/s"),
-        ("descent_rate", descent_rate, "m/s"),
-        ("ascent_rate", ascent_rate, "m/s"),
-        ("sac", sac, "m³/s"),
+        (F::Diver::speed, speed, "m/s"),
+        (F::Diver::descent_rate, descent_rate, "m/s"),
+        (F::Diver::ascent_rate, ascent_rate, "m/s"),
+        (F::Diver::sac, sac, "m³/s"),
     ] {
         check::positive(cx, &d, k, v, u);
     }
     // Subsurface's default gradient factors, 30/75 (its `core/pref.cpp`), as without [diver].
-    let gf_low = d.f64(cx, "gf_low", Dim::Fraction, 0.3);
-    let gf_high = d.f64(cx, "gf_high", Dim::Fraction, 0.75);
-    for (k, v) in [("gf_low", gf_low), ("gf_high", gf_high)] {
+    let gf_low = d.f64(cx, F::Diver::gf_low, Dim::Fraction, 0.3);
+    let gf_high = d.f64(cx, F::Diver::gf_high, Dim::Fraction, 0.75);
+    for (k, v) in [(F::Diver::gf_low, gf_low), (F::Diver::gf_high, gf_high)] {
         if !(v > 0.0 && v <= 1.0) {
             let sp = d.span_of(k);
             cx.push(
@@ -45,17 +46,20 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
         }
     }
     if gf_low > gf_high {
-        let sp = d.span_of("gf_low");
+        let sp = d.span_of(F::Diver::gf_low);
         cx.push(
             Diagnostic::error("E0320", "`gf_low` is above `gf_high`")
                 .label(sp, format!("{} > {}", num(gf_low), num(gf_high)))
                 .help("the low gradient factor applies at depth and must not exceed the high one (e.g. 30/70)"),
         );
     }
-    let reserve = d.f64(cx, "reserve", Dim::Pressure, 50e5);
-    let po2_bottom = d.f64(cx, "po2_bottom", Dim::Pressure, 1.4e5) / 1e5;
-    let po2_deco = d.f64(cx, "po2_deco", Dim::Pressure, 1.6e5) / 1e5;
-    for (k, v) in [("po2_bottom", po2_bottom), ("po2_deco", po2_deco)] {
+    let reserve = d.f64(cx, F::Diver::reserve, Dim::Pressure, 50e5);
+    let po2_bottom = d.f64(cx, F::Diver::po2_bottom, Dim::Pressure, 1.4e5) / 1e5;
+    let po2_deco = d.f64(cx, F::Diver::po2_deco, Dim::Pressure, 1.6e5) / 1e5;
+    for (k, v) in [
+        (F::Diver::po2_bottom, po2_bottom),
+        (F::Diver::po2_deco, po2_deco),
+    ] {
         if !(v.is_finite() && (0.16..=2.0).contains(&v)) {
             let sp = d.span_of(k);
             cx.push(
@@ -63,27 +67,30 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
                     .label(sp, format!("{} bar", num(v)))
                     .help(format!(
                         "Subsurface's limits are 1.4 bar on the bottom and 1.6 bar for deco gases: `{k} = \"{}\"`",
-                        if k == "po2_deco" { "1.6 bar" } else { "1.4 bar" }
+                        if k == F::Diver::po2_deco { "1.6 bar" } else { "1.4 bar" }
                     )),
             );
         }
     }
-    let end_limit = d.f64(cx, "end_limit", Dim::Length, DEFAULT_END_LIMIT);
+    let end_limit = d.f64(cx, F::Diver::end_limit, Dim::Length, DEFAULT_END_LIMIT);
     if !(end_limit.is_finite() && end_limit > 0.0 && end_limit <= 100.0) {
-        let sp = d.span_of("end_limit");
+        let sp = d.span_of(F::Diver::end_limit);
         cx.push(
             Diagnostic::error("E0327", "`end_limit` must be a depth in (0, 100] m")
                 .label(sp, format!("{} m", num(end_limit)))
                 .help("the deepest equivalent narcotic depth a gas may have, customarily 30 m: `end_limit = \"30 m\"`"),
         );
     }
-    let salt_water = !matches!(d.choice(cx, "water", &["salt", "fresh"]), Some("fresh"));
-    let deco = match d.choice(cx, "deco", &["none", "planned"]) {
+    let salt_water = !matches!(
+        d.choice(cx, F::Diver::water, &["salt", "fresh"]),
+        Some("fresh")
+    );
+    let deco = match d.choice(cx, F::Diver::deco, &["none", "planned"]) {
         Some("planned") => DecoMode::Planned,
         _ => DecoMode::None,
     };
     let mut cylinders: Vec<Cylinder> = Vec::new();
-    for (i, n) in d.tables(cx, "cylinders").into_iter().enumerate() {
+    for (i, n) in d.tables(cx, F::Diver::cylinders).into_iter().enumerate() {
         let c = cylinder(cx, i, n, cylinders.first());
         cylinders.push(c);
     }
@@ -99,7 +106,7 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
         });
     }
     if !cylinders.iter().any(|c| c.role.is_bottom()) {
-        let sp = d.span_of("cylinders");
+        let sp = d.span_of(F::Diver::cylinders);
         cx.push(
             Diagnostic::error(
                 "E0326",
@@ -132,14 +139,14 @@ pub(super) fn diver(cx: &mut Cx, node: Option<&Node>, fallback: Span) -> Option<
 fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylinder {
     let mut c = Tab::open(cx, Some(n), &format!("diver.cylinders[{i}]"), n.span);
     let name = c
-        .opt_str(cx, "name")
+        .opt_str(cx, F::CylinderTable::name)
         .unwrap_or_else(|| format!("cylinder{i}"));
-    let volume = c.f64(cx, "volume", Dim::Volume, 0.012);
-    let pressure = c.f64(cx, "pressure", Dim::Pressure, 200e5);
-    check::positive(cx, &c, "volume", volume, "m³");
-    check::positive(cx, &c, "pressure", pressure, "Pa");
-    let gas_span = c.span_of("gas");
-    let (mut o2, mut he) = match c.opt_str(cx, "gas") {
+    let volume = c.f64(cx, F::CylinderTable::volume, Dim::Volume, 0.012);
+    let pressure = c.f64(cx, F::CylinderTable::pressure, Dim::Pressure, 200e5);
+    check::positive(cx, &c, F::CylinderTable::volume, volume, "m³");
+    check::positive(cx, &c, F::CylinderTable::pressure, pressure, "Pa");
+    let gas_span = c.span_of(F::CylinderTable::gas);
+    let (mut o2, mut he) = match c.opt_str(cx, F::CylinderTable::gas) {
         None => (Gas::AIR.o2, 0.0),
         Some(g) => match parse_gas(&g) {
             Some(x) => x,
@@ -153,17 +160,20 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
             }
         },
     };
-    if let Some(x) = c.opt_f64(cx, "o2", Dim::Fraction) {
+    if let Some(x) = c.opt_f64(cx, F::CylinderTable::o2, Dim::Fraction) {
         o2 = x;
     }
-    if let Some(x) = c.opt_f64(cx, "he", Dim::Fraction) {
+    if let Some(x) = c.opt_f64(cx, F::CylinderTable::he, Dim::Fraction) {
         he = x;
     }
     let mut mix_ok = true;
-    for (k, v, lo) in [("o2", o2, 0.0), ("he", he, -1e-12)] {
+    for (k, v, lo) in [
+        (F::CylinderTable::o2, o2, 0.0),
+        (F::CylinderTable::he, he, -1e-12),
+    ] {
         if !(v > lo && v <= 1.0 + 1e-12) {
             mix_ok = false;
-            let sp = c.span_of(if c.has(k) { k } else { "gas" });
+            let sp = c.span_of(if c.has(k) { k } else { F::CylinderTable::gas });
             cx.push(
                 Diagnostic::error("E0322", format!("`{k}` fraction out of range"))
                     .label(
@@ -171,7 +181,11 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
                         format!(
                             "{} is not a fraction in {}",
                             num(v),
-                            if k == "o2" { "(0, 1]" } else { "[0, 1]" }
+                            if k == F::CylinderTable::o2 {
+                                "(0, 1]"
+                            } else {
+                                "[0, 1]"
+                            }
                         ),
                     )
                     .help(format!(
@@ -181,12 +195,12 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
         }
     }
     if mix_ok && o2 + he > 1.0 + 1e-12 {
-        let sp = c.span_of(if c.has("he") {
-            "he"
-        } else if c.has("o2") {
-            "o2"
+        let sp = c.span_of(if c.has(F::CylinderTable::he) {
+            F::CylinderTable::he
+        } else if c.has(F::CylinderTable::o2) {
+            F::CylinderTable::o2
         } else {
-            "gas"
+            F::CylinderTable::gas
         });
         cx.push(
             Diagnostic::error("E0322", "impossible gas mix: O₂ + He exceed the whole")
@@ -196,7 +210,7 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
     }
     let role_given = c.choice(
         cx,
-        "role",
+        F::CylinderTable::role,
         &["bottom", "stage", "travel", "deco", "bailout"],
     );
     let role = match role_given {
@@ -211,8 +225,8 @@ fn cylinder(cx: &mut Cx, i: usize, n: &Node, first: Option<&Cylinder>) -> Cylind
             _ => CylinderRole::Bottom,
         },
     };
-    let sw_span = c.span_of("switch_depth");
-    let switch_depth = c.opt_f64(cx, "switch_depth", Dim::Length);
+    let sw_span = c.span_of(F::CylinderTable::switch_depth);
+    let switch_depth = c.opt_f64(cx, F::CylinderTable::switch_depth, Dim::Length);
     if let Some(sw) = switch_depth {
         if !(sw.is_finite() && sw >= 0.0) {
             cx.push(

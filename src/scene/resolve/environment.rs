@@ -8,6 +8,7 @@ use crate::model::*;
 use crate::optics;
 use crate::scene::check;
 use crate::scene::diag::{Diagnostic, Span, num};
+use crate::scene::format::types as F;
 use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::{Node, Val};
 use crate::units::Dim;
@@ -16,9 +17,9 @@ use glam::DVec3;
 /// `[site]`; the sea surface defaults to flat when the scene has water, none without.
 pub(super) fn site(cx: &mut Cx, t: &mut Tab, water: bool) -> Site {
     let fallback = t.span;
-    let mut s = Tab::open(cx, t.get("site"), "site", fallback);
-    let depth = s.f64(cx, "depth", Dim::Length, 10.0);
-    let dspan = s.span_of("depth");
+    let mut s = Tab::open(cx, t.get(F::Scene::site), F::Scene::site, fallback);
+    let depth = s.f64(cx, F::Site::depth, Dim::Length, 10.0);
+    let dspan = s.span_of(F::Site::depth);
     if !(depth >= 0.0) {
         cx.push(
             Diagnostic::error("E0200", "the site depth must not be negative")
@@ -27,14 +28,14 @@ pub(super) fn site(cx: &mut Cx, t: &mut Tab, water: bool) -> Site {
         );
     }
     let kind = s
-        .choice(cx, "surface", &["none", "flat", "waves"])
+        .choice(cx, F::Site::surface, &["none", "flat", "waves"])
         .unwrap_or(if water { "flat" } else { "none" });
-    let height = s.f64(cx, "wave_height", Dim::Length, 0.5);
-    let wavelength = s.f64(cx, "wave_length", Dim::Length, 10.0);
-    let wind_speed = s.f64(cx, "wind_speed", Dim::Speed, 5.0);
+    let height = s.f64(cx, F::Site::wave_height, Dim::Length, 0.5);
+    let wavelength = s.f64(cx, F::Site::wave_length, Dim::Length, 10.0);
+    let wind_speed = s.f64(cx, F::Site::wind_speed, Dim::Speed, 5.0);
     if kind == "waves" {
-        check::positive(cx, &s, "wave_height", height, "m");
-        check::positive(cx, &s, "wave_length", wavelength, "m");
+        check::positive(cx, &s, F::Site::wave_height, height, "m");
+        check::positive(cx, &s, F::Site::wave_length, wavelength, "m");
     }
     let surface = match kind {
         "none" => SeaSurface::None,
@@ -45,8 +46,8 @@ pub(super) fn site(cx: &mut Cx, t: &mut Tab, water: bool) -> Site {
         },
         _ => SeaSurface::Flat,
     };
-    let altitude = s.f64(cx, "altitude", Dim::Length, 0.0);
-    let seed = s.opt_u64(cx, "seed").unwrap_or(0);
+    let altitude = s.f64(cx, F::Site::altitude, Dim::Length, 0.0);
+    let seed = s.opt_u64(cx, F::Site::seed).unwrap_or(0);
     s.finish(cx);
     Site {
         depth: depth.max(0.0),
@@ -63,7 +64,7 @@ pub(super) fn water(
     site: &Site,
     fallback: Span,
 ) -> Option<Water> {
-    let mut w = Tab::open(cx, node, "water", fallback);
+    let mut w = Tab::open(cx, node, F::Scene::water, fallback);
     let (ior, ior_source) = index(cx, &mut w, site);
     let (absorption, scattering, jerlov) = iops(cx, &mut w);
     let phase = phase(cx, &mut w);
@@ -83,14 +84,14 @@ pub(super) fn water(
 /// The refractive index of the water per channel: `ior` as given, or from `temperature`,
 /// `salinity` and `ior_depth` (the site depth by default) by the seawater formula.
 fn index(cx: &mut Cx, w: &mut Tab, site: &Site) -> (Rgb, IorSource) {
-    let temperature = w.f64(cx, "temperature", Dim::Temperature, 20.0);
-    let salinity = w.f64(cx, "salinity", Dim::Number, 35.0);
-    let ior_depth = w.f64(cx, "ior_depth", Dim::Length, site.depth);
-    let (ior, ior_source) = match w.opt_rgb(cx, "ior", Dim::Number) {
+    let temperature = w.f64(cx, F::Water::temperature, Dim::Temperature, 20.0);
+    let salinity = w.f64(cx, F::Water::salinity, Dim::Number, 35.0);
+    let ior_depth = w.f64(cx, F::Water::ior_depth, Dim::Length, site.depth);
+    let (ior, ior_source) = match w.opt_rgb(cx, F::Water::ior, Dim::Number) {
         Some(v) => (v, IorSource::Constant),
         None => {
             if !(-2.0..=40.0).contains(&temperature) {
-                let sp = w.span_of("temperature");
+                let sp = w.span_of(F::Water::temperature);
                 cx.push(
                     Diagnostic::error("E0201", "water temperature out of range")
                         .label(sp, format!("{} °C", num(temperature)))
@@ -98,7 +99,7 @@ fn index(cx: &mut Cx, w: &mut Tab, site: &Site) -> (Rgb, IorSource) {
                 );
             }
             if !(0.0..=45.0).contains(&salinity) {
-                let sp = w.span_of("salinity");
+                let sp = w.span_of(F::Water::salinity);
                 cx.push(
                     Diagnostic::error("E0201", "salinity out of range")
                         .label(sp, format!("{} PSU", num(salinity)))
@@ -117,16 +118,16 @@ fn index(cx: &mut Cx, w: &mut Tab, site: &Site) -> (Rgb, IorSource) {
             )
         }
     };
-    check::index(cx, w, "ior", ior);
+    check::index(cx, w, F::Water::ior, ior);
     (ior, ior_source)
 }
 
 /// Absorption and scattering (1/m per channel): from a Jerlov water type (IB when neither
 /// `absorption` nor `scattering` is given), each overridden by its key when given.
 fn iops(cx: &mut Cx, w: &mut Tab) -> (Rgb, Rgb, Option<String>) {
-    let jerlov_name = w.opt_str(cx, "jerlov");
-    let jspan = w.span_of("jerlov");
-    let has_iops = w.has("absorption") || w.has("scattering");
+    let jerlov_name = w.opt_str(cx, F::Water::jerlov);
+    let jspan = w.span_of(F::Water::jerlov);
+    let has_iops = w.has(F::Water::absorption) || w.has(F::Water::scattering);
     let mut absorption = [0.0; 3];
     let mut scattering = [0.0; 3];
     let mut jerlov = None;
@@ -163,12 +164,12 @@ fn iops(cx: &mut Cx, w: &mut Tab) -> (Rgb, Rgb, Option<String>) {
             }
         }
     }
-    if let Some(a) = w.opt_rgb(cx, "absorption", Dim::Number) {
-        check::non_negative_rgb(cx, w, "absorption", a, "1/m");
+    if let Some(a) = w.opt_rgb(cx, F::Water::absorption, Dim::Number) {
+        check::non_negative_rgb(cx, w, F::Water::absorption, a, "1/m");
         absorption = a;
     }
-    if let Some(b) = w.opt_rgb(cx, "scattering", Dim::Number) {
-        check::non_negative_rgb(cx, w, "scattering", b, "1/m");
+    if let Some(b) = w.opt_rgb(cx, F::Water::scattering, Dim::Number) {
+        check::non_negative_rgb(cx, w, F::Water::scattering, b, "1/m");
         scattering = b;
     }
     (absorption, scattering, jerlov)
@@ -178,14 +179,14 @@ fn iops(cx: &mut Cx, w: &mut Tab) -> (Rgb, Rgb, Option<String>) {
 /// (`particle_index`, `junge_slope`).
 fn phase(cx: &mut Cx, w: &mut Tab) -> Phase {
     let phase_kind = w
-        .choice(cx, "phase", &["hg", "fournier_forand"])
+        .choice(cx, F::Water::phase, &["hg", "fournier_forand"])
         .unwrap_or("hg");
-    let g = w.f64(cx, "g", Dim::Number, 0.9);
-    let n = w.f64(cx, "particle_index", Dim::Number, 1.1);
-    let mu = w.f64(cx, "junge_slope", Dim::Number, 3.6);
+    let g = w.f64(cx, F::Water::g, Dim::Number, 0.9);
+    let n = w.f64(cx, F::Water::particle_index, Dim::Number, 1.1);
+    let mu = w.f64(cx, F::Water::junge_slope, Dim::Number, 3.6);
     if phase_kind == "fournier_forand" {
         if !(n > 1.0) {
-            let sp = w.span_of("particle_index");
+            let sp = w.span_of(F::Water::particle_index);
             cx.push(
                 Diagnostic::error("E0203", "Fournier–Forand needs a particle index above 1")
                     .label(sp, num(n))
@@ -193,7 +194,7 @@ fn phase(cx: &mut Cx, w: &mut Tab) -> Phase {
             );
         }
         if !(mu > 3.0 && mu <= 5.0) {
-            let sp = w.span_of("junge_slope");
+            let sp = w.span_of(F::Water::junge_slope);
             cx.push(
                 Diagnostic::error("E0203", "Fournier–Forand needs a Junge slope in (3, 5]")
                     .label(sp, num(mu))
@@ -207,7 +208,7 @@ fn phase(cx: &mut Cx, w: &mut Tab) -> Phase {
         }
     } else {
         if !(g > -1.0 && g < 1.0) {
-            let sp = w.span_of("g");
+            let sp = w.span_of(F::Water::g);
             cx.push(
                 Diagnostic::error(
                     "E0203",
@@ -224,9 +225,9 @@ fn phase(cx: &mut Cx, w: &mut Tab) -> Phase {
 /// Where the water is: everywhere, or a box of `box_half_size` around each camera.
 fn extent(cx: &mut Cx, w: &mut Tab) -> WaterExtent {
     let extent_kind = w
-        .choice(cx, "extent", &["everywhere", "box"])
+        .choice(cx, F::Water::extent, &["everywhere", "box"])
         .unwrap_or("everywhere");
-    let half = match w.get("box_half_size") {
+    let half = match w.get(F::Water::box_half_size) {
         Some(n) if matches!(n.val, Val::Array(_)) => {
             crate::scene::reader::vector(cx, n, Dim::Length, "water.box_half_size", Some(3))
                 .map(|v| DVec3::new(v[0], v[1], v[2]))
@@ -238,7 +239,7 @@ fn extent(cx: &mut Cx, w: &mut Tab) -> WaterExtent {
     .unwrap_or(DVec3::splat(2.0));
     if extent_kind == "box" {
         if !(half.min_element() > 0.0) {
-            let sp = w.span_of("box_half_size");
+            let sp = w.span_of(F::Water::box_half_size);
             cx.push(
                 Diagnostic::error("E0204", "the water box must have a positive size")
                     .label(sp, "every half-size must be > 0")
@@ -260,14 +261,14 @@ pub(super) fn sun(
     fallback: Span,
 ) -> Option<Sun> {
     node?;
-    let mut s = Tab::open(cx, node, "sun", fallback);
-    let irradiance = s.rgb(cx, "irradiance", Dim::Irradiance, [1.0; 3]);
-    check::non_negative_rgb(cx, &s, "irradiance", irradiance, "W/m²");
-    let el = s.opt_f64(cx, "elevation", Dim::Angle);
-    let az = s.opt_f64(cx, "azimuth", Dim::Angle);
-    let lat = s.opt_degrees(cx, "latitude");
-    let lon = s.opt_degrees(cx, "longitude");
-    let dt = match s.get("datetime") {
+    let mut s = Tab::open(cx, node, F::Scene::sun, fallback);
+    let irradiance = s.rgb(cx, F::Sun::irradiance, Dim::Irradiance, [1.0; 3]);
+    check::non_negative_rgb(cx, &s, F::Sun::irradiance, irradiance, "W/m²");
+    let el = s.opt_f64(cx, F::Sun::elevation, Dim::Angle);
+    let az = s.opt_f64(cx, F::Sun::azimuth, Dim::Angle);
+    let lat = s.opt_degrees(cx, F::Sun::latitude);
+    let lon = s.opt_degrees(cx, F::Sun::longitude);
+    let dt = match s.get(F::Sun::datetime) {
         Some(Node {
             val: Val::Datetime(d),
             ..
@@ -290,7 +291,7 @@ pub(super) fn sun(
         (Some(e), None, None, None) => (e, az.unwrap_or(std::f64::consts::PI), None),
         (None, Some(la), Some(lo), Some(d)) => {
             if az.is_some() {
-                let sp = s.key_span("azimuth");
+                let sp = s.key_span(F::Sun::azimuth);
                 cx.push(
                     Diagnostic::error("E0210", "the sun is given both by time and by azimuth")
                         .label(sp, "remove this, or remove latitude/longitude/datetime")
@@ -308,7 +309,7 @@ pub(super) fn sun(
                     }),
                 ),
                 Err(m) => {
-                    let sp = s.span_of("datetime");
+                    let sp = s.span_of(F::Sun::datetime);
                     cx.push(
                         Diagnostic::error("E0211", "cannot compute the sun position")
                             .label(sp, m)
@@ -328,7 +329,7 @@ pub(super) fn sun(
         }
     };
     if elevation <= 0.0 {
-        let sp = s.span_of("elevation");
+        let sp = s.span_of(F::Sun::elevation);
         cx.push(
             Diagnostic::warning("W0210", "the sun is at or below the horizon")
                 .label(sp, "no direct sunlight reaches the water")

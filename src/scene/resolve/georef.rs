@@ -5,6 +5,7 @@
 
 use crate::model::UpAxis;
 use crate::scene::diag::{Diagnostic, Span};
+use crate::scene::format::types as F;
 use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::Sources;
 use crate::units::Dim;
@@ -24,17 +25,22 @@ pub(super) fn keys(
     sources: &Sources,
     scene: &Path,
 ) -> (DVec3, Option<UpAxis>) {
-    let up = o.choice(cx, "up_axis", &["z", "y"]).map(|u| match u {
-        "y" => UpAxis::Y,
-        _ => UpAxis::Z,
-    });
-    let given = o.opt_vec3(cx, "offset", Dim::Number);
-    let fspan = o.span_of("offset_file");
-    let file = o.opt_str(cx, "offset_file");
+    let up = o
+        .choice(cx, F::Object::up_axis, &["z", "y"])
+        .map(|u| match u {
+            "y" => UpAxis::Y,
+            _ => UpAxis::Z,
+        });
+    let given = o.opt_vec3(cx, F::Object::offset, Dim::Number);
+    let fspan = o.span_of(F::Object::offset_file);
+    let file = o.opt_str(cx, F::Object::offset_file);
     if given.is_some() && file.is_some() {
         cx.push(
             Diagnostic::error("E0298", "give either `offset` or `offset_file`, not both")
-                .label(o.key_span("offset_file"), "remove this or `offset`")
+                .label(
+                    o.key_span(F::Object::offset_file),
+                    "remove this or `offset`",
+                )
                 .help("`offset_file` names a file holding the three numbers `offset` would give"),
         );
     }

@@ -13,6 +13,7 @@
 
 use crate::model::{Lesson, LessonKind, LessonVariant, TryNext};
 use crate::scene::diag::{Diagnostic, Span};
+use crate::scene::format::types as F;
 use crate::scene::reader::{Cx, Tab, type_error};
 use crate::scene::source::{Node, Sources, Val};
 
@@ -67,25 +68,27 @@ pub fn lesson(
     // Read even when absent, so that the key record that keeps reader and schema in step
     // sees every key.
     let present = node.is_some();
-    let mut t = Tab::open(cx, node, "lesson", fallback);
-    let title = t.opt_str(cx, "title").unwrap_or_else(|| name.to_string());
+    let mut t = Tab::open(cx, node, F::Scene::lesson, fallback);
+    let title = t
+        .opt_str(cx, F::LessonTable::title)
+        .unwrap_or_else(|| name.to_string());
     let question = if present {
         required(
             cx,
             &mut t,
-            "question",
+            F::LessonTable::question,
             "\"Why does the reef come out bent?\"",
         )
     } else {
-        t.opt_str(cx, "question").unwrap_or_default()
+        t.opt_str(cx, F::LessonTable::question).unwrap_or_default()
     };
     let setup = t
-        .opt_str(cx, "setup")
+        .opt_str(cx, F::LessonTable::setup)
         .unwrap_or_else(|| description.to_string());
-    let shows = t.opt_str(cx, "shows").unwrap_or_default();
+    let shows = t.opt_str(cx, F::LessonTable::shows).unwrap_or_default();
     let kind = match t.choice(
         cx,
-        "kind",
+        F::LessonTable::kind,
         &[
             "deformation",
             "calibration",
@@ -108,20 +111,24 @@ pub fn lesson(
         Some("surface") => LessonKind::Surface,
         _ => LessonKind::Deformation,
     };
-    let gsd = t.opt_f64(cx, "gsd", crate::units::Dim::Gsd);
+    let gsd = t.opt_f64(cx, F::LessonTable::gsd, crate::units::Dim::Gsd);
     if let Some(g) = gsd {
-        crate::scene::check::positive(cx, &t, "gsd", g, "m/px");
+        crate::scene::check::positive(cx, &t, F::LessonTable::gsd, g, "m/px");
     }
-    let quick = strings(cx, &mut t, "quick");
-    let full = strings(cx, &mut t, "full");
+    let quick = strings(cx, &mut t, F::LessonTable::quick);
+    let full = strings(cx, &mut t, F::LessonTable::full);
     let mut variants = Vec::new();
-    for (i, n) in t.tables(cx, "variants").into_iter().enumerate() {
+    for (i, n) in t
+        .tables(cx, F::LessonTable::variants)
+        .into_iter()
+        .enumerate()
+    {
         let mut v = Tab::open(cx, Some(n), &format!("lesson.variants[{i}]"), n.span);
         let label = v
-            .opt_str(cx, "label")
+            .opt_str(cx, F::LessonVariantTable::label)
             .unwrap_or_else(|| format!("variant {i}"));
-        let scene = v.opt_str(cx, "scene").map(|rel| {
-            let span = v.span_of("scene");
+        let scene = v.opt_str(cx, F::LessonVariantTable::scene).map(|rel| {
+            let span = v.span_of(F::LessonVariantTable::scene);
             let dir = sources.dir_of(span.file).unwrap_or_default();
             let p = dir.join(&rel);
             if !p.is_file() {
@@ -136,15 +143,24 @@ pub fn lesson(
             }
             p.to_string_lossy().to_string()
         });
-        let set = strings(cx, &mut v, "set");
+        let set = strings(cx, &mut v, F::LessonVariantTable::set);
         v.finish(cx);
         variants.push(LessonVariant { label, scene, set });
     }
     let mut try_next = Vec::new();
-    for (i, n) in t.tables(cx, "try_next").into_iter().enumerate() {
+    for (i, n) in t
+        .tables(cx, F::LessonTable::try_next)
+        .into_iter()
+        .enumerate()
+    {
         let mut v = Tab::open(cx, Some(n), &format!("lesson.try_next[{i}]"), n.span);
-        let text = required(cx, &mut v, "text", "\"Fly higher\"");
-        let set = required(cx, &mut v, "set", "\"network.altitude=\\\"2 m\\\"\"");
+        let text = required(cx, &mut v, F::TryNextTable::text, "\"Fly higher\"");
+        let set = required(
+            cx,
+            &mut v,
+            F::TryNextTable::set,
+            "\"network.altitude=\\\"2 m\\\"\"",
+        );
         v.finish(cx);
         try_next.push(TryNext { text, set });
     }

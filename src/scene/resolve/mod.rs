@@ -44,6 +44,7 @@ use super::reader::{Cx, Tab};
 use super::source::{Node, Sources};
 use crate::model::*;
 use crate::optics;
+use crate::scene::format::types as F;
 use crate::units::Dim;
 use glam::{DMat3, DVec3, EulerRot};
 use std::path::Path;
@@ -84,42 +85,49 @@ pub fn resolve(root: &Node, scene_path: &Path, sources: &Sources, cx: &mut Cx) -
     };
     let mut t = Tab::open(cx, Some(root), "", top);
     let mut spans = Spans::default();
-    let name = t.opt_str(cx, "name").unwrap_or_else(|| {
+    let name = t.opt_str(cx, F::Scene::name).unwrap_or_else(|| {
         scene_path
             .file_stem()
             .map(|s| s.to_string_lossy().to_string())
             .unwrap_or_default()
     });
-    let description = t.opt_str(cx, "description").unwrap_or_default();
-    t.get("include"); // handled by the loader; known here
+    let description = t.opt_str(cx, F::Scene::description).unwrap_or_default();
+    t.get(F::Scene::include); // handled by the loader; known here
 
     // Site first: the water's pressure depth and seabed defaults depend on it.
-    let water_present = t.has("water");
+    let water_present = t.has(F::Scene::water);
     let site = environment::site(cx, &mut t, water_present);
     let water = if water_present {
-        let node = t.get("water");
-        spans.water = t.span_of("water");
+        let node = t.get(F::Scene::water);
+        spans.water = t.span_of(F::Scene::water);
         environment::water(cx, node, &site, top)
     } else {
-        t.get("water");
+        t.get(F::Scene::water);
         None
     };
     let ior = water.as_ref().map(|w| w.ior).unwrap_or([1.0; 3]);
-    let sun = environment::sun(cx, t.get("sun"), water.as_ref(), &site, top);
+    let sun = environment::sun(cx, t.get(F::Scene::sun), water.as_ref(), &site, top);
     let mut render_at = render::RenderSpans::default();
-    let render = render::render(cx, t.get("render"), top, &mut render_at);
+    let render = render::render(cx, t.get(F::Scene::render), top, &mut render_at);
     let cameras = camera::cameras(cx, &mut t, water.is_some(), &mut spans, top);
     let f_number = cameras.first().and_then(|c| c.f_number);
-    let sensor = sensor::sensor(cx, t.get("sensor"), f_number, top);
+    let sensor = sensor::sensor(cx, t.get(F::Scene::sensor), f_number, top);
     let lights = lights::lights(cx, &mut t, &mut spans);
     let objects = objects::objects(cx, &mut t, &site, sources, scene_path, &mut spans);
     let targets = targets::targets(cx, &mut t, &mut spans, &objects, &site, sources, scene_path);
-    let diver = diver::diver(cx, t.get("diver"), top);
-    let lesson = lesson::lesson(cx, t.get("lesson"), sources, &name, &description, top);
+    let diver = diver::diver(cx, t.get(F::Scene::diver), top);
+    let lesson = lesson::lesson(
+        cx,
+        t.get(F::Scene::lesson),
+        sources,
+        &name,
+        &description,
+        top,
+    );
     let speed_default = diver.as_ref().map(|d| d.speed).unwrap_or(0.2);
     let (poses, summary) = network::network(
         cx,
-        t.get("network"),
+        t.get(F::Scene::network),
         &cameras,
         ior,
         &site,
@@ -261,15 +269,15 @@ fn orthonormal_frame(z: DVec3) -> DMat3 {
 /// `world_from_x` from `position` and `rotation` (Euler XYZ angles) or `look_at` (+z towards
 /// a point).
 fn placement(cx: &mut Cx, t: &mut Tab, default_pos: DVec3) -> Pose {
-    let position = t.vec3(cx, "position", Dim::Length, default_pos);
-    let rotation = t.opt_vec3(cx, "rotation", Dim::Angle);
-    let look = t.opt_vec3(cx, "look_at", Dim::Length);
+    let position = t.vec3(cx, F::Object::position, Dim::Length, default_pos);
+    let rotation = t.opt_vec3(cx, F::Object::rotation, Dim::Angle);
+    let look = t.opt_vec3(cx, F::Object::look_at, Dim::Length);
     let r = match (rotation, look) {
         (Some(r), None) => euler(r),
         (None, Some(p)) => match (p - position).try_normalize() {
             Some(z) => orthonormal_frame(z),
             None => {
-                let sp = t.span_of("look_at");
+                let sp = t.span_of(F::Object::look_at);
                 cx.push(
                     Diagnostic::error("E0270", "`look_at` is the object's own position")
                         .label(sp, "no direction to face")
@@ -279,7 +287,7 @@ fn placement(cx: &mut Cx, t: &mut Tab, default_pos: DVec3) -> Pose {
             }
         },
         (Some(r), Some(_)) => {
-            let sp = t.key_span("look_at");
+            let sp = t.key_span(F::Object::look_at);
             cx.push(
                 Diagnostic::error("E0271", "give either `rotation` or `look_at`, not both")
                     .label(sp, "remove this or `rotation`")

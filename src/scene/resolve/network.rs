@@ -10,6 +10,7 @@ use crate::optics;
 use crate::plan::network::{self, ExplicitPose, NetworkContext, NetworkSpec, Orientation, Trigger};
 use crate::scene::check;
 use crate::scene::diag::{Diagnostic, Span, num};
+use crate::scene::format::types as F;
 use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::{Node, Val};
 use crate::units::Dim;
@@ -36,13 +37,17 @@ pub(super) fn network(
         );
         return (vec![], NetworkSummary::default());
     };
-    let mut t = Tab::open(cx, Some(node), "network", fallback);
+    let mut t = Tab::open(cx, Some(node), F::Scene::network, fallback);
     spans.network = t.span;
     let ty = t
-        .choice(cx, "type", &["explicit", "lawnmower", "spiral", "orbit"])
+        .choice(
+            cx,
+            F::Network::kind,
+            &["explicit", "lawnmower", "spiral", "orbit"],
+        )
         .unwrap_or("explicit");
-    let speed = t.f64(cx, "speed", Dim::Speed, speed_default);
-    check::positive(cx, &t, "speed", speed, "m/s");
+    let speed = t.f64(cx, F::Network::speed, Dim::Speed, speed_default);
+    check::positive(cx, &t, F::Network::speed, speed, "m/s");
     let jitter = jitter(cx, &mut t);
     let ctx = context(cameras, ior, site, speed);
     let spec = match ty {
@@ -87,12 +92,12 @@ pub(super) fn network(
 /// `jitter_seed`.
 fn jitter(cx: &mut Cx, t: &mut Tab) -> network::Jitter {
     let jitter = network::Jitter {
-        position: t.f64(cx, "jitter_position", Dim::Length, 0.0),
-        rotation: t.f64(cx, "jitter_rotation", Dim::Angle, 0.0),
-        seed: t.opt_u64(cx, "jitter_seed").unwrap_or(1),
+        position: t.f64(cx, F::Network::jitter_position, Dim::Length, 0.0),
+        rotation: t.f64(cx, F::Network::jitter_rotation, Dim::Angle, 0.0),
+        seed: t.opt_u64(cx, F::Network::jitter_seed).unwrap_or(1),
     };
     if !(jitter.position >= 0.0 && jitter.rotation >= 0.0 && jitter.rotation < 0.5) {
-        let sp = t.span_of("jitter_rotation");
+        let sp = t.span_of(F::Network::jitter_rotation);
         cx.push(
             Diagnostic::error("E0315", "jitter must be a small, non-negative spread")
                 .label(sp, "the σ of a hand-held camera's wobble")
@@ -127,19 +132,19 @@ fn context(cameras: &[Camera], ior: Rgb, site: &Site, speed: f64) -> NetworkCont
 /// The survey height above the seabed: `altitude`, or the one that gives `gsd` (one of the two
 /// is required).
 fn altitude(cx: &mut Cx, t: &mut Tab, ctx: &NetworkContext, ty: &str) -> f64 {
-    let a = t.opt_f64(cx, "altitude", Dim::Length);
-    let g = t.opt_f64(cx, "gsd", Dim::Gsd);
+    let a = t.opt_f64(cx, F::Network::altitude, Dim::Length);
+    let g = t.opt_f64(cx, F::Network::gsd, Dim::Gsd);
     match (a, g) {
         (Some(a), None) => {
-            check::positive(cx, t, "altitude", a, "m");
+            check::positive(cx, t, F::Network::altitude, a, "m");
             a
         }
         (None, Some(g)) => {
-            check::positive(cx, t, "gsd", g, "m/px");
+            check::positive(cx, t, F::Network::gsd, g, "m/px");
             ctx.altitude_for_gsd(g)
         }
         (Some(a), Some(_)) => {
-            let sp = t.key_span("gsd");
+            let sp = t.key_span(F::Network::gsd);
             cx.push(
                 Diagnostic::error("E0311", "give either `altitude` or `gsd`, not both")
                     .label(sp, "remove this or `altitude`")
@@ -180,11 +185,15 @@ fn fraction(cx: &mut Cx, t: &mut Tab, key: &'static str, d: f64) -> f64 {
 /// `overlap` (along a strip) and `sidelap` (between strips) of a lawnmower or spiral, with the
 /// spans the coverage checks point at.
 fn laps(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> (f64, f64) {
-    let overlap = fraction(cx, t, "overlap", 0.8);
-    let sidelap = fraction(cx, t, "sidelap", 0.6);
-    spans.sidelap = Some(t.span_of("sidelap"));
-    spans.overlap_asked = t.has("overlap").then(|| t.span_of("overlap"));
-    spans.sidelap_asked = t.has("sidelap").then(|| t.span_of("sidelap"));
+    let overlap = fraction(cx, t, F::Network::overlap, 0.8);
+    let sidelap = fraction(cx, t, F::Network::sidelap, 0.6);
+    spans.sidelap = Some(t.span_of(F::Network::sidelap));
+    spans.overlap_asked = t
+        .has(F::Network::overlap)
+        .then(|| t.span_of(F::Network::overlap));
+    spans.sidelap_asked = t
+        .has(F::Network::sidelap)
+        .then(|| t.span_of(F::Network::sidelap));
     (overlap, sidelap)
 }
 
@@ -192,29 +201,29 @@ fn laps(cx: &mut Cx, t: &mut Tab, spans: &mut Spans) -> (f64, f64) {
 /// crossed and with oblique images.
 fn lawnmower(cx: &mut Cx, t: &mut Tab, ctx: &NetworkContext, spans: &mut Spans) -> NetworkSpec {
     let center = t
-        .opt_vec23(cx, "center", Dim::Length, 0.0)
+        .opt_vec23(cx, F::Network::center, Dim::Length, 0.0)
         .unwrap_or(DVec3::ZERO);
-    let width = t.f64(cx, "width", Dim::Length, 10.0);
-    let length = t.f64(cx, "length", Dim::Length, 10.0);
-    check::positive(cx, t, "width", width, "m");
-    check::positive(cx, t, "length", length, "m");
-    let heading = t.f64(cx, "heading", Dim::Angle, 0.0);
+    let width = t.f64(cx, F::Network::width, Dim::Length, 10.0);
+    let length = t.f64(cx, F::Network::length, Dim::Length, 10.0);
+    check::positive(cx, t, F::Network::width, width, "m");
+    check::positive(cx, t, F::Network::length, length, "m");
+    let heading = t.f64(cx, F::Network::heading, Dim::Angle, 0.0);
     let altitude = altitude(cx, t, ctx, "lawnmower");
     let (overlap, sidelap) = laps(cx, t, spans);
-    let strips = t.opt_u32(cx, "strips");
+    let strips = t.opt_u32(cx, F::Network::strips);
     if strips == Some(0) {
-        let sp = t.span_of("strips");
+        let sp = t.span_of(F::Network::strips);
         cx.push(
             Diagnostic::error("E0313", "a lawnmower needs at least one strip")
                 .label(sp, "0 strips")
                 .help("remove `strips` to derive it from the side-lap"),
         );
     }
-    let cross_strips = t.bool(cx, "cross_strips", false);
-    let tilt = t.f64(cx, "tilt", Dim::Angle, 0.0);
-    let obliques = t.f64(cx, "obliques", Dim::Angle, 0.0);
+    let cross_strips = t.bool(cx, F::Network::cross_strips, false);
+    let tilt = t.f64(cx, F::Network::tilt, Dim::Angle, 0.0);
+    let obliques = t.f64(cx, F::Network::obliques, Dim::Angle, 0.0);
     if obliques.abs() >= std::f64::consts::FRAC_PI_2 {
-        let sp = t.span_of("obliques");
+        let sp = t.span_of(F::Network::obliques);
         cx.push(
             Diagnostic::error("E0314", "oblique tilt must be below 90°")
                 .label(sp, format!("{:.1}°", obliques.to_degrees()))
@@ -241,10 +250,10 @@ fn lawnmower(cx: &mut Cx, t: &mut Tab, ctx: &NetworkContext, spans: &mut Spans) 
 /// `type = "spiral"`: a spiral out to `radius` around `center`.
 fn spiral(cx: &mut Cx, t: &mut Tab, ctx: &NetworkContext, spans: &mut Spans) -> NetworkSpec {
     let center = t
-        .opt_vec23(cx, "center", Dim::Length, 0.0)
+        .opt_vec23(cx, F::Network::center, Dim::Length, 0.0)
         .unwrap_or(DVec3::ZERO);
-    let radius = t.f64(cx, "radius", Dim::Length, 5.0);
-    check::positive(cx, t, "radius", radius, "m");
+    let radius = t.f64(cx, F::Network::radius, Dim::Length, 5.0);
+    check::positive(cx, t, F::Network::radius, radius, "m");
     let altitude = altitude(cx, t, ctx, "spiral");
     let (overlap, sidelap) = laps(cx, t, spans);
     let trigger = trigger(cx, t);
@@ -262,15 +271,15 @@ fn spiral(cx: &mut Cx, t: &mut Tab, ctx: &NetworkContext, spans: &mut Spans) -> 
 /// `center` (on the seabed unless given) from `radius`.
 fn orbit(cx: &mut Cx, t: &mut Tab, site: &Site) -> NetworkSpec {
     let center = t
-        .opt_vec23(cx, "center", Dim::Length, -site.depth)
+        .opt_vec23(cx, F::Network::center, Dim::Length, -site.depth)
         .unwrap_or(DVec3::new(0.0, 0.0, -site.depth));
-    let radius = t.f64(cx, "radius", Dim::Length, 2.0);
-    check::positive(cx, t, "radius", radius, "m");
+    let radius = t.f64(cx, F::Network::radius, Dim::Length, 2.0);
+    check::positive(cx, t, F::Network::radius, radius, "m");
     let elevations = t
-        .opt_list(cx, "elevations", Dim::Angle)
+        .opt_list(cx, F::Network::elevations, Dim::Angle)
         .unwrap_or(vec![20f64.to_radians(), 45f64.to_radians()]);
     if elevations.is_empty() {
-        let sp = t.span_of("elevations");
+        let sp = t.span_of(F::Network::elevations);
         cx.push(
             Diagnostic::error("E0314", "an orbit needs at least one ring")
                 .label(sp, "empty list")
@@ -281,16 +290,24 @@ fn orbit(cx: &mut Cx, t: &mut Tab, site: &Site) -> NetworkSpec {
         .iter()
         .find(|e| e.abs() >= std::f64::consts::FRAC_PI_2)
     {
-        let sp = t.span_of("elevations");
+        let sp = t.span_of(F::Network::elevations);
         cx.push(
             Diagnostic::error("E0314", "orbit elevations must be between -90 and 90 degrees")
                 .label(sp, format!("{:.1}° is out of range", e.to_degrees()))
                 .help("elevations are angles above the horizontal plane through `center`, e.g. \"20, 45 deg\""),
         );
     }
-    let per_ring = t.u32(cx, "per_ring", 24);
-    let per_ring = check::capped(cx, t, "per_ring", per_ring, 100_000, "images per ring", 1);
-    check::at_least(cx, t, "per_ring", per_ring, 1);
+    let per_ring = t.u32(cx, F::Network::per_ring, 24);
+    let per_ring = check::capped(
+        cx,
+        t,
+        F::Network::per_ring,
+        per_ring,
+        100_000,
+        "images per ring",
+        1,
+    );
+    check::at_least(cx, t, F::Network::per_ring, per_ring, 1);
     NetworkSpec::Orbit {
         center,
         radius,
@@ -301,7 +318,7 @@ fn orbit(cx: &mut Cx, t: &mut Tab, site: &Site) -> NetworkSpec {
 
 /// `type = "explicit"`: the `[[network.poses]]` as written (at least one).
 fn explicit(cx: &mut Cx, t: &mut Tab) -> NetworkSpec {
-    let entries = t.tables(cx, "poses");
+    let entries = t.tables(cx, F::Network::poses);
     let mut poses = Vec::new();
     for (i, n) in entries.into_iter().enumerate() {
         poses.push(explicit_pose(cx, i, n));
@@ -321,22 +338,22 @@ fn explicit(cx: &mut Cx, t: &mut Tab) -> NetworkSpec {
 /// with neither, the camera looks straight down.
 fn explicit_pose(cx: &mut Cx, i: usize, n: &Node) -> ExplicitPose {
     let mut p = Tab::open(cx, Some(n), &format!("network.poses[{i}]"), n.span);
-    let position = p.opt_vec3(cx, "position", Dim::Length);
-    if position.is_none() && !p.has("position") {
+    let position = p.opt_vec3(cx, F::PoseTable::position, Dim::Length);
+    if position.is_none() && !p.has(F::PoseTable::position) {
         cx.push(
             Diagnostic::error("E0315", "a pose needs a `position`")
                 .label(p.span, "no position")
                 .help("write `position = [x, y, z]` (metres, world frame, z up)"),
         );
     }
-    let look = p.opt_vec3(cx, "look_at", Dim::Length);
-    let up = p.vec3(cx, "up", Dim::Number, DVec3::Z);
-    let rot = p.opt_vec3(cx, "rotation", Dim::Angle);
+    let look = p.opt_vec3(cx, F::PoseTable::look_at, Dim::Length);
+    let up = p.vec3(cx, F::PoseTable::up, Dim::Number, DVec3::Z);
+    let rot = p.opt_vec3(cx, F::PoseTable::rotation, Dim::Angle);
     let orientation = match (look, rot) {
         (Some(target), None) => Orientation::LookAt { target, up },
         (None, Some(r)) => Orientation::Rotation { rotation: euler(r) },
         (Some(target), Some(_)) => {
-            let sp = p.key_span("rotation");
+            let sp = p.key_span(F::PoseTable::rotation);
             cx.push(
                 Diagnostic::error("E0316", "give either `look_at` or `rotation`, not both")
                     .label(sp, "remove this or `look_at`")
@@ -355,7 +372,7 @@ fn explicit_pose(cx: &mut Cx, i: usize, n: &Node) -> ExplicitPose {
         && parsed
         && network::look_rotation(*target - position, *up).is_none()
     {
-        let sp = p.span_of("look_at");
+        let sp = p.span_of(F::PoseTable::look_at);
         cx.push(
             Diagnostic::error("E0317", "this pose has no viewing direction")
                 .label(
@@ -375,8 +392,8 @@ fn explicit_pose(cx: &mut Cx, i: usize, n: &Node) -> ExplicitPose {
 /// `trigger`: when a picture is taken — `"overlap"` (the default: spaced for the overlap),
 /// every given distance (`"0.5 m"`), or every given time (`"2 s"`).
 fn trigger(cx: &mut Cx, t: &mut Tab) -> Trigger {
-    let sp = t.span_of("trigger");
-    let Some(n) = t.get("trigger") else {
+    let sp = t.span_of(F::Network::trigger);
+    let Some(n) = t.get(F::Network::trigger) else {
         return Trigger::Overlap;
     };
     let bad = |cx: &mut Cx| {

@@ -8,6 +8,7 @@ use super::{Spans, placement};
 use crate::model::*;
 use crate::scene::check;
 use crate::scene::diag::{Diagnostic, Span};
+use crate::scene::format::types as F;
 use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::{Sources, Val};
 use crate::units::Dim;
@@ -24,47 +25,46 @@ pub(super) fn objects(
     spans: &mut Spans,
 ) -> Vec<Object> {
     let mut out = Vec::new();
-    for (i, n) in t.tables(cx, "objects").into_iter().enumerate() {
+    for (i, n) in t.tables(cx, F::Scene::objects).into_iter().enumerate() {
         let path = format!("objects[{i}]");
         let mut o = Tab::open(cx, Some(n), &path, n.span);
         let name = o
-            .opt_str(cx, "name")
+            .opt_str(cx, F::Object::name)
             .unwrap_or_else(|| format!("object{i}"));
         let shape_kind = o
             .choice(
                 cx,
-                "shape",
+                F::Object::shape,
                 &[
                     "mesh", "plane", "box", "sphere", "cylinder", "seabed", "boulders", "coral",
                 ],
             )
             .unwrap_or("box");
         let seed = o
-            .opt_u64(cx, "seed")
+            .opt_u64(cx, F::Object::seed)
             .unwrap_or(site.seed.wrapping_add(i as u64));
         let errors = cx.diags.iter().filter(|d| d.is_error()).count();
         let shape = shape(cx, &mut o, shape_kind, seed, sources, scene);
         let mesh_ok = cx.diags.iter().filter(|d| d.is_error()).count() == errors;
-        let backdrop = o.bool(cx, "backdrop", false);
+        let backdrop = o.bool(cx, F::Object::backdrop, false);
         let default_pos = if matches!(shape, Shape::Seabed { .. } | Shape::Boulders { .. }) {
             DVec3::new(0.0, 0.0, -site.depth)
         } else {
             DVec3::ZERO
         };
         let pose = placement(cx, &mut o, default_pos);
-        let scale = match o.get("scale") {
+        let scale = match o.get(F::Object::scale) {
             Some(n) if matches!(n.val, Val::Array(_)) => {
-                crate::scene::reader::vector(cx, n, Dim::Number, &o.full("scale"), Some(3))
+                crate::scene::reader::vector(cx, n, Dim::Number, &o.full(F::Object::scale), Some(3))
                     .map(|v| DVec3::new(v[0], v[1], v[2]))
             }
-            Some(n) => {
-                crate::scene::reader::number(cx, n, Dim::Number, &o.full("scale")).map(DVec3::splat)
-            }
+            Some(n) => crate::scene::reader::number(cx, n, Dim::Number, &o.full(F::Object::scale))
+                .map(DVec3::splat),
             None => None,
         }
         .unwrap_or(DVec3::ONE);
         if !(scale.min_element() > 0.0) {
-            let sp = o.span_of("scale");
+            let sp = o.span_of(F::Object::scale);
             cx.push(
                 Diagnostic::error("E0283", "the scale must be positive")
                     .label(sp, "every factor must be > 0")
@@ -78,10 +78,16 @@ pub(super) fn objects(
             ..
         } = &shape
             && mesh_ok
-            && !o.has("offset")
-            && !o.has("offset_file")
+            && !o.has(F::Object::offset)
+            && !o.has(F::Object::offset_file)
         {
-            super::georef::warn_far(cx, Path::new(path), *up_axis, scale, o.span_of("path"));
+            super::georef::warn_far(
+                cx,
+                Path::new(path),
+                *up_axis,
+                scale,
+                o.span_of(F::Object::path),
+            );
         }
         let mut material = material(cx, &mut o, 0.3);
         material.glass = glass(cx, &mut o, shape_kind, scale);
@@ -111,9 +117,9 @@ fn shape(
 ) -> Shape {
     match kind {
         "mesh" => {
-            let sp = o.span_of("path");
-            let rel = o.opt_str(cx, "path").unwrap_or_default();
-            if !o.has("path") {
+            let sp = o.span_of(F::Object::path);
+            let rel = o.opt_str(cx, F::Object::path).unwrap_or_default();
+            if !o.has(F::Object::path) {
                 cx.push(
                     Diagnostic::error("E0280", "a mesh object needs a `path`")
                         .label(o.span, "no `path`")
@@ -121,12 +127,14 @@ fn shape(
                 );
             }
             // `texture = false`: the file's colours are never read, nor the files they name.
-            let want = o.has("texture").then(|| o.bool(cx, "texture", true));
+            let want = o
+                .has(F::Object::texture)
+                .then(|| o.bool(cx, F::Object::texture, true));
             let (resolved, has_texture) =
                 resolve_asset(cx, &rel, sp, sources, scene, want != Some(false));
             let textured = want.unwrap_or(has_texture);
-            if textured && o.has("pattern") {
-                let at = o.key_span("pattern");
+            if textured && o.has(F::Object::pattern) {
+                let at = o.key_span(F::Object::pattern);
                 cx.push(
                     Diagnostic::error("E0295", "a textured mesh cannot take a pattern")
                         .label(at, "the mesh's file gives its colours")
@@ -142,19 +150,19 @@ fn shape(
             }
         }
         "plane" => {
-            let w = o.f64(cx, "width", Dim::Length, 1.0);
-            let h = o.f64(cx, "height", Dim::Length, 1.0);
-            check::positive(cx, o, "width", w, "m");
-            check::positive(cx, o, "height", h, "m");
+            let w = o.f64(cx, F::Object::width, Dim::Length, 1.0);
+            let h = o.f64(cx, F::Object::height, Dim::Length, 1.0);
+            check::positive(cx, o, F::Object::width, w, "m");
+            check::positive(cx, o, F::Object::height, h, "m");
             Shape::Plane {
                 width: w,
                 height: h,
             }
         }
         "box" => {
-            let size = o.vec3(cx, "size", Dim::Length, DVec3::ONE);
+            let size = o.vec3(cx, F::Object::size, Dim::Length, DVec3::ONE);
             if !(size.min_element() > 0.0) {
-                let sp = o.span_of("size");
+                let sp = o.span_of(F::Object::size);
                 cx.push(
                     Diagnostic::error("E0281", "a box needs a positive size")
                         .label(sp, "every side must be > 0")
@@ -164,15 +172,15 @@ fn shape(
             Shape::Box { size }
         }
         "sphere" => {
-            let r = o.f64(cx, "radius", Dim::Length, 0.5);
-            check::positive(cx, o, "radius", r, "m");
+            let r = o.f64(cx, F::Object::radius, Dim::Length, 0.5);
+            check::positive(cx, o, F::Object::radius, r, "m");
             Shape::Sphere { radius: r }
         }
         "cylinder" => {
-            let r = o.f64(cx, "radius", Dim::Length, 0.5);
-            let h = o.f64(cx, "height", Dim::Length, 1.0);
-            check::positive(cx, o, "radius", r, "m");
-            check::positive(cx, o, "height", h, "m");
+            let r = o.f64(cx, F::Object::radius, Dim::Length, 0.5);
+            let h = o.f64(cx, F::Object::height, Dim::Length, 1.0);
+            check::positive(cx, o, F::Object::radius, r, "m");
+            check::positive(cx, o, F::Object::height, h, "m");
             Shape::Cylinder {
                 radius: r,
                 height: h,
@@ -187,22 +195,22 @@ fn shape(
 /// A generated seabed heightfield of `width` × `length`, with `roughness` sampled every
 /// `resolution` (at most 50 million cells).
 fn seabed(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
-    let width = o.f64(cx, "width", Dim::Length, 20.0);
-    let length = o.f64(cx, "length", Dim::Length, 20.0);
-    let roughness = o.f64(cx, "roughness", Dim::Length, 0.1);
-    let resolution = o.f64(cx, "resolution", Dim::Length, 0.05);
-    check::positive(cx, o, "width", width, "m");
-    check::positive(cx, o, "length", length, "m");
-    check::positive(cx, o, "resolution", resolution, "m");
+    let width = o.f64(cx, F::Object::width, Dim::Length, 20.0);
+    let length = o.f64(cx, F::Object::length, Dim::Length, 20.0);
+    let roughness = o.f64(cx, F::Object::roughness, Dim::Length, 0.1);
+    let resolution = o.f64(cx, F::Object::resolution, Dim::Length, 0.05);
+    check::positive(cx, o, F::Object::width, width, "m");
+    check::positive(cx, o, F::Object::length, length, "m");
+    check::positive(cx, o, F::Object::resolution, resolution, "m");
     if roughness < 0.0 {
-        check::positive(cx, o, "roughness", roughness, "m");
+        check::positive(cx, o, F::Object::roughness, roughness, "m");
     }
     if width > 0.0
         && length > 0.0
         && resolution > 0.0
         && (width / resolution) * (length / resolution) > 5e7
     {
-        let sp = o.span_of("resolution");
+        let sp = o.span_of(F::Object::resolution);
         cx.push(
             Diagnostic::error("E0282", "the seabed heightfield is too fine")
                 .label(
@@ -223,14 +231,14 @@ fn seabed(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
 
 /// `count` boulders of about `radius` scattered over `width` × `length`.
 fn boulders(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
-    let width = o.f64(cx, "width", Dim::Length, 20.0);
-    let length = o.f64(cx, "length", Dim::Length, 20.0);
-    let count = o.u32(cx, "count", 30);
-    let radius = o.f64(cx, "radius", Dim::Length, 0.3);
-    let count = check::capped(cx, o, "count", count, 1_000_000, "boulders", 0);
-    check::positive(cx, o, "width", width, "m");
-    check::positive(cx, o, "length", length, "m");
-    check::positive(cx, o, "radius", radius, "m");
+    let width = o.f64(cx, F::Object::width, Dim::Length, 20.0);
+    let length = o.f64(cx, F::Object::length, Dim::Length, 20.0);
+    let count = o.u32(cx, F::Object::count, 30);
+    let radius = o.f64(cx, F::Object::radius, Dim::Length, 0.3);
+    let count = check::capped(cx, o, F::Object::count, count, 1_000_000, "boulders", 0);
+    check::positive(cx, o, F::Object::width, width, "m");
+    check::positive(cx, o, F::Object::length, length, "m");
+    check::positive(cx, o, F::Object::radius, radius, "m");
     Shape::Boulders {
         width,
         length,
@@ -400,9 +408,9 @@ fn side_files(
 /// `albedo` and an optional `[….pattern]` texture (checker, noise, fbm, sand, rock, coral)
 /// with its `variation` and `texel`.
 fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
-    let albedo = o.rgb(cx, "albedo", Dim::Number, [default_albedo; 3]);
+    let albedo = o.rgb(cx, F::Object::albedo, Dim::Number, [default_albedo; 3]);
     if albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {
-        let sp = o.span_of("albedo");
+        let sp = o.span_of(F::Object::albedo);
         cx.push(
             Diagnostic::error("E0290", "albedo must be between 0 and 1")
                 .label(sp, "outside [0, 1]")
@@ -412,16 +420,16 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
     let mut variation = 0.0;
     let mut texel = None;
     let mut grid = None;
-    let pattern = o.get("pattern").map(|n| {
-        let mut p = Tab::open(cx, Some(n), &o.full("pattern"), n.span);
+    let pattern = o.get(F::Object::pattern).map(|n| {
+        let mut p = Tab::open(cx, Some(n), &o.full(F::Object::pattern), n.span);
         let ty = p
             .choice(
                 cx,
-                "type",
+                F::PatternTable::kind,
                 &["checker", "noise", "fbm", "sand", "rock", "coral"],
             )
             .unwrap_or("noise");
-        let seed = |cx: &mut Cx, p: &mut Tab| p.opt_u64(cx, "seed").unwrap_or(0);
+        let seed = |cx: &mut Cx, p: &mut Tab| p.opt_u64(cx, F::PatternTable::seed).unwrap_or(0);
         // A length ≥ 0 (0 switches the feature off).
         let len0 = |cx: &mut Cx, p: &mut Tab, key: &'static str, default: f64| {
             let v = p.f64(cx, key, Dim::Length, default);
@@ -440,63 +448,63 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
         };
         let r = match ty {
             "checker" => Pattern::Checker {
-                size: len(cx, &mut p, "size", 0.1),
-                contrast: p.f64(cx, "contrast", Dim::Number, 0.5),
+                size: len(cx, &mut p, F::PatternTable::size, 0.1),
+                contrast: p.f64(cx, F::PatternTable::contrast, Dim::Number, 0.5),
             },
             "fbm" => Pattern::Fbm {
-                size: len(cx, &mut p, "size", 1.0),
-                smallest: len0(cx, &mut p, "smallest", 0.0),
-                gain: fraction(cx, &mut p, "gain", 0.7),
-                contrast: fraction(cx, &mut p, "contrast", 0.3),
+                size: len(cx, &mut p, F::PatternTable::size, 1.0),
+                smallest: len0(cx, &mut p, F::PatternTable::smallest, 0.0),
+                gain: fraction(cx, &mut p, F::PatternTable::gain, 0.7),
+                contrast: fraction(cx, &mut p, F::PatternTable::contrast, 0.3),
                 seed: seed(cx, &mut p),
             },
             "sand" => Pattern::Sand {
-                wavelength: len0(cx, &mut p, "wavelength", 0.1),
-                direction: p.f64(cx, "direction", Dim::Angle, 0.0),
-                ripple: fraction(cx, &mut p, "ripple", 0.15),
-                grain: len0(cx, &mut p, "grain", 0.0005),
-                contrast: fraction(cx, &mut p, "contrast", 0.2),
+                wavelength: len0(cx, &mut p, F::PatternTable::wavelength, 0.1),
+                direction: p.f64(cx, F::PatternTable::direction, Dim::Angle, 0.0),
+                ripple: fraction(cx, &mut p, F::PatternTable::ripple, 0.15),
+                grain: len0(cx, &mut p, F::PatternTable::grain, 0.0005),
+                contrast: fraction(cx, &mut p, F::PatternTable::contrast, 0.2),
                 seed: seed(cx, &mut p),
             },
             "rock" => Pattern::Rock {
-                size: len(cx, &mut p, "size", 0.5),
-                crack: len0(cx, &mut p, "crack", 0.2),
-                crack_width: len0(cx, &mut p, "crack_width", 0.003),
-                speckle: len0(cx, &mut p, "speckle", 0.002),
-                contrast: fraction(cx, &mut p, "contrast", 0.25),
+                size: len(cx, &mut p, F::PatternTable::size, 0.5),
+                crack: len0(cx, &mut p, F::PatternTable::crack, 0.2),
+                crack_width: len0(cx, &mut p, F::PatternTable::crack_width, 0.003),
+                speckle: len0(cx, &mut p, F::PatternTable::speckle, 0.002),
+                contrast: fraction(cx, &mut p, F::PatternTable::contrast, 0.25),
                 seed: seed(cx, &mut p),
             },
             "coral" => {
-                let size = len(cx, &mut p, "size", 0.3);
-                let cover = fraction(cx, &mut p, "cover", 0.6);
+                let size = len(cx, &mut p, F::PatternTable::size, 0.3);
+                let cover = fraction(cx, &mut p, F::PatternTable::cover, 0.6);
                 let colors = coral_colors(cx, &mut p);
                 Pattern::Coral {
                     size,
                     cover,
                     colors,
-                    polyp: len0(cx, &mut p, "polyp", 0.005),
-                    contrast: fraction(cx, &mut p, "contrast", 0.2),
+                    polyp: len0(cx, &mut p, F::PatternTable::polyp, 0.005),
+                    contrast: fraction(cx, &mut p, F::PatternTable::contrast, 0.2),
                     seed: seed(cx, &mut p),
                 }
             }
             _ => Pattern::Noise {
-                size: len(cx, &mut p, "size", 0.1),
-                amount: p.f64(cx, "amount", Dim::Number, 0.5),
+                size: len(cx, &mut p, F::PatternTable::size, 0.1),
+                amount: p.f64(cx, F::PatternTable::amount, Dim::Number, 0.5),
                 seed: seed(cx, &mut p),
             },
         };
         if ty != "checker" {
-            variation = fraction(cx, &mut p, "variation", 0.0);
-            texel = p.opt_f64(cx, "texel", Dim::Length);
+            variation = fraction(cx, &mut p, F::PatternTable::variation, 0.0);
+            texel = p.opt_f64(cx, F::PatternTable::texel, Dim::Length);
             if let Some(t) = texel {
-                check::positive(cx, &p, "texel", t, "m");
+                check::positive(cx, &p, F::PatternTable::texel, t, "m");
             }
-            if let Some(spacing) = p.opt_f64(cx, "grid", Dim::Length) {
-                check::positive(cx, &p, "grid", spacing, "m");
-                let width = len(cx, &mut p, "grid_width", 0.01);
-                let albedo = p.rgb(cx, "grid_albedo", Dim::Number, GRID_ALBEDO);
+            if let Some(spacing) = p.opt_f64(cx, F::PatternTable::grid, Dim::Length) {
+                check::positive(cx, &p, F::PatternTable::grid, spacing, "m");
+                let width = len(cx, &mut p, F::PatternTable::grid_width, 0.01);
+                let albedo = p.rgb(cx, F::PatternTable::grid_albedo, Dim::Number, GRID_ALBEDO);
                 if albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {
-                    let sp = p.span_of("grid_albedo");
+                    let sp = p.span_of(F::PatternTable::grid_albedo);
                     cx.push(
                         Diagnostic::error("E0290", "albedo must be between 0 and 1")
                             .label(sp, "outside [0, 1]")
@@ -532,8 +540,8 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
 /// would refract at flat facets, differently in each back end. A glass object takes no
 /// `albedo` or `pattern`.
 fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str, scale: DVec3) -> Option<crate::model::Glass> {
-    let span = o.span_of("glass");
-    let name = o.opt_str(cx, "glass")?;
+    let span = o.span_of(F::Object::glass);
+    let name = o.opt_str(cx, F::Object::glass)?;
     let Some(g) = super::camera::catalogue_glass(&name) else {
         let d = Diagnostic::error("E0299", format!("unknown glass `{name}`")).label(
             span,
@@ -573,7 +581,7 @@ fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str, scale: DVec3) -> Option<cra
         cx.push(
             Diagnostic::error("E0301", "a glass sphere or cylinder must be round")
                 .label(
-                    o.span_of("scale"),
+                    o.span_of(F::Object::scale),
                     format!("scaled by {} × {} × {}", scale.x, scale.y, scale.z),
                 )
                 .help(
@@ -584,7 +592,7 @@ fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str, scale: DVec3) -> Option<cra
         );
         return None;
     }
-    for key in ["albedo", "pattern"] {
+    for key in [F::Object::albedo, F::Object::pattern] {
         if o.has(key) {
             let sp = o.key_span(key);
             cx.push(
@@ -602,8 +610,8 @@ const GRID_ALBEDO: crate::model::Rgb = [0.8, 0.75, 0.5];
 
 /// `colors = [[r, g, b], …]` of a coral pattern: albedos in [0, 1]; empty = the default palette.
 fn coral_colors(cx: &mut Cx, p: &mut Tab) -> Vec<crate::model::Rgb> {
-    let full = p.full("colors");
-    let Some(n) = p.get("colors") else {
+    let full = p.full(F::PatternTable::colors);
+    let Some(n) = p.get(F::PatternTable::colors) else {
         return vec![];
     };
     let Val::Array(items) = &n.val else {

@@ -17,6 +17,7 @@
 use crate::model::*;
 use crate::scene::check;
 use crate::scene::diag::{Diagnostic, Span};
+use crate::scene::format::types as F;
 use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::{Node, Val};
 use crate::units::Dim;
@@ -31,80 +32,80 @@ pub fn sensor(
 ) -> Option<Sensor> {
     // Read even when absent (every getter then gives its default), so that the key record
     // that keeps the reader and the schema in step sees every key.
-    let mut t = Tab::open(cx, node, "sensor", fallback);
+    let mut t = Tab::open(cx, node, F::Scene::sensor, fallback);
     let d = Sensor::default();
-    let full_well = t.f64(cx, "full_well", Dim::Number, d.full_well);
-    check::positive(cx, &t, "full_well", full_well, "e⁻");
-    let read_noise = t.f64(cx, "read_noise", Dim::Number, d.read_noise);
+    let full_well = t.f64(cx, F::Sensor::full_well, Dim::Number, d.full_well);
+    check::positive(cx, &t, F::Sensor::full_well, full_well, "e⁻");
+    let read_noise = t.f64(cx, F::Sensor::read_noise, Dim::Number, d.read_noise);
     if !(read_noise >= 0.0) {
         cx.push(
             Diagnostic::error("E0222", "`sensor.read_noise` must not be negative")
-                .label(t.span_of("read_noise"), format!("{read_noise} e⁻"))
+                .label(t.span_of(F::Sensor::read_noise), format!("{read_noise} e⁻"))
                 .help("read noise is an RMS value in electrons, e.g. `read_noise = 3`"),
         );
     }
     let qe = t.rgb(
         cx,
-        "quantum_efficiency",
+        F::Sensor::quantum_efficiency,
         Dim::Fraction,
         d.quantum_efficiency,
     );
     if qe.iter().any(|q| !(*q > 0.0 && *q <= 1.0)) {
         cx.push(
             Diagnostic::error("E0223", "`sensor.quantum_efficiency` must be in (0, 1]")
-                .label(t.span_of("quantum_efficiency"), format!("{qe:?}"))
+                .label(t.span_of(F::Sensor::quantum_efficiency), format!("{qe:?}"))
                 .help("electrons per photon, e.g. `quantum_efficiency = [0.45, 0.55, 0.45]`"),
         );
     }
-    let bits = t.u32(cx, "bits", d.bits);
+    let bits = t.u32(cx, F::Sensor::bits, d.bits);
     if !(8..=16).contains(&bits) {
         cx.push(
             Diagnostic::error("E0224", "`sensor.bits` must be between 8 and 16")
-                .label(t.span_of("bits"), format!("{bits} bits"))
+                .label(t.span_of(F::Sensor::bits), format!("{bits} bits"))
                 .help("cameras digitise with 10 to 14 bits, e.g. `bits = 12`"),
         );
     }
     let bits = bits.clamp(8, 16);
-    let black_level = t.u32(cx, "black_level", 1 << (bits - 6));
+    let black_level = t.u32(cx, F::Sensor::black_level, 1 << (bits - 6));
     if black_level >= (1 << (bits - 1)) {
         cx.push(
             Diagnostic::error("E0225", "`sensor.black_level` is too large")
                 .label(
-                    t.span_of("black_level"),
+                    t.span_of(F::Sensor::black_level),
                     format!("{black_level} DN of {} DN full scale", (1u32 << bits) - 1),
                 )
                 .help("keep the black level below half of the ADC range, e.g. 64 DN at 12 bits"),
         );
     }
-    let iso = t.f64(cx, "iso", Dim::Number, d.iso);
-    check::positive(cx, &t, "iso", iso, "");
-    let base_iso = t.f64(cx, "base_iso", Dim::Number, d.base_iso);
-    check::positive(cx, &t, "base_iso", base_iso, "");
+    let iso = t.f64(cx, F::Sensor::iso, Dim::Number, d.iso);
+    check::positive(cx, &t, F::Sensor::iso, iso, "");
+    let base_iso = t.f64(cx, F::Sensor::base_iso, Dim::Number, d.base_iso);
+    check::positive(cx, &t, F::Sensor::base_iso, base_iso, "");
     let mode = t
-        .choice(cx, "exposure", &["auto", "manual"])
+        .choice(cx, F::Sensor::exposure, &["auto", "manual"])
         .unwrap_or("auto");
-    let shutter = t.f64(cx, "shutter", Dim::Time, d.shutter);
-    check::positive(cx, &t, "shutter", shutter, "s");
+    let shutter = t.f64(cx, F::Sensor::shutter, Dim::Time, d.shutter);
+    check::positive(cx, &t, F::Sensor::shutter, shutter, "s");
     let f_number = t
-        .opt_f64(cx, "f_number", Dim::Number)
+        .opt_f64(cx, F::Sensor::f_number, Dim::Number)
         .or(camera_f_number)
         .unwrap_or(d.f_number);
-    check::positive(cx, &t, "f_number", f_number, "");
-    let transmittance = t.f64(cx, "transmittance", Dim::Fraction, d.transmittance);
-    fraction(cx, &t, "transmittance", transmittance);
-    let meter = match t.choice(cx, "meter", &["highlights", "average"]) {
+    check::positive(cx, &t, F::Sensor::f_number, f_number, "");
+    let transmittance = t.f64(cx, F::Sensor::transmittance, Dim::Fraction, d.transmittance);
+    fraction(cx, &t, F::Sensor::transmittance, transmittance);
+    let meter = match t.choice(cx, F::Sensor::meter, &["highlights", "average"]) {
         Some("average") => Meter::Average,
         _ => Meter::Highlights,
     };
-    let percentile = t.f64(cx, "percentile", Dim::Fraction, 0.99);
-    fraction(cx, &t, "percentile", percentile);
+    let percentile = t.f64(cx, F::Sensor::percentile, Dim::Fraction, 0.99);
+    fraction(cx, &t, F::Sensor::percentile, percentile);
     let target = t.f64(
         cx,
-        "target",
+        F::Sensor::target,
         Dim::Fraction,
         if meter == Meter::Average { 0.18 } else { 0.85 },
     );
-    fraction(cx, &t, "target", target);
+    fraction(cx, &t, F::Sensor::target, target);
     let exposure = if mode == "manual" {
         SensorExposure::Manual
     } else {
@@ -115,30 +116,30 @@ pub fn sensor(
         }
     };
     let white_balance = white_balance(cx, &mut t);
-    let tone = match t.choice(cx, "tone", &["srgb", "gamma", "linear"]) {
+    let tone = match t.choice(cx, F::Sensor::tone, &["srgb", "gamma", "linear"]) {
         Some("linear") => ToneCurve::Linear,
         Some("gamma") => ToneCurve::Gamma(0.0),
         _ => ToneCurve::Srgb,
     };
-    let gamma = t.f64(cx, "gamma", Dim::Number, 2.2);
-    check::positive(cx, &t, "gamma", gamma, "");
+    let gamma = t.f64(cx, F::Sensor::gamma, Dim::Number, 2.2);
+    check::positive(cx, &t, F::Sensor::gamma, gamma, "");
     let tone = match tone {
         ToneCurve::Gamma(_) => ToneCurve::Gamma(gamma),
         x => x,
     };
-    let quality = t.u32(cx, "quality", 95);
+    let quality = t.u32(cx, F::Sensor::quality, 95);
     if !(1..=100).contains(&quality) {
         cx.push(
             Diagnostic::error("E0226", "`sensor.quality` must be between 1 and 100")
-                .label(t.span_of("quality"), format!("{quality}"))
+                .label(t.span_of(F::Sensor::quality), format!("{quality}"))
                 .help("JPEG quality as cameras write it is 85 to 98, e.g. `quality = 95`"),
         );
     }
-    let format = match t.choice(cx, "format", &["jpeg", "png"]) {
+    let format = match t.choice(cx, F::Sensor::format, &["jpeg", "png"]) {
         Some("png") => SensorFormat::Png,
         _ => SensorFormat::Jpeg(quality.clamp(1, 100) as u8),
     };
-    let noise = t.bool(cx, "noise", true);
+    let noise = t.bool(cx, F::Sensor::noise, true);
     t.finish(cx);
     node?;
     Some(Sensor {
@@ -173,17 +174,17 @@ fn fraction(cx: &mut Cx, t: &Tab, key: &'static str, v: f64) {
 }
 
 fn white_balance(cx: &mut Cx, t: &mut Tab) -> WhiteBalance {
-    let span = t.span_of("white_balance");
-    let Some(n) = t.get("white_balance") else {
+    let span = t.span_of(F::Sensor::white_balance);
+    let Some(n) = t.get(F::Sensor::white_balance) else {
         return WhiteBalance::GreyWorld;
     };
     match &n.val {
-        Val::Str(_) => match t.choice(cx, "white_balance", &["grey_world", "none"]) {
+        Val::Str(_) => match t.choice(cx, F::Sensor::white_balance, &["grey_world", "none"]) {
             Some("none") => WhiteBalance::None,
             _ => WhiteBalance::GreyWorld,
         },
         Val::Array(_) => {
-            let g = t.rgb(cx, "white_balance", Dim::Number, [1.0; 3]);
+            let g = t.rgb(cx, F::Sensor::white_balance, Dim::Number, [1.0; 3]);
             if g.iter().any(|x| !(*x > 0.0)) {
                 cx.push(
                     Diagnostic::error("E0228", "white-balance gains must be positive")

@@ -6,6 +6,7 @@ use super::{Spans, placement};
 use crate::model::*;
 use crate::scene::check;
 use crate::scene::diag::Diagnostic;
+use crate::scene::format::types as F;
 use crate::scene::reader::{Cx, Tab};
 use crate::scene::source::Sources;
 use crate::units::Dim;
@@ -23,16 +24,16 @@ pub(super) fn targets(
     scene: &Path,
 ) -> Vec<Target> {
     let mut out: Vec<Target> = Vec::new();
-    for (i, n) in t.tables(cx, "targets").into_iter().enumerate() {
+    for (i, n) in t.tables(cx, F::Scene::targets).into_iter().enumerate() {
         let path = format!("targets[{i}]");
         let mut g = Tab::open(cx, Some(n), &path, n.span);
         let name = g
-            .opt_str(cx, "name")
+            .opt_str(cx, F::Target::name)
             .unwrap_or_else(|| format!("target{i}"));
         let ty = g
             .choice(
                 cx,
-                "type",
+                F::Target::kind,
                 &[
                     "checkerboard",
                     "circle_grid",
@@ -50,7 +51,7 @@ pub(super) fn targets(
                 if out.iter().any(|o| o.name == d.name) {
                     cx.push(
                         Diagnostic::error("E0291", format!("two targets are named `{}`", d.name))
-                            .label(g.span_of("name"), "a point of this file has a taken name")
+                            .label(g.span_of(F::Target::name), "a point of this file has a taken name")
                             .help("a points file's disks are named `name/id`; give this target another `name`"),
                     );
                     break;
@@ -64,7 +65,7 @@ pub(super) fn targets(
         let kind = kind(cx, &mut g, ty);
         let pose = placement(cx, &mut g, DVec3::ZERO);
         if out.iter().any(|o| o.name == name) {
-            let sp = g.span_of("name");
+            let sp = g.span_of(F::Target::name);
             cx.push(
                 Diagnostic::error("E0291", format!("two targets are named `{name}`"))
                     .label(sp, "duplicate name")
@@ -88,25 +89,25 @@ pub(super) fn targets(
 fn kind(cx: &mut Cx, g: &mut Tab, ty: &str) -> TargetKind {
     match ty {
         "checkerboard" => {
-            let cols = g.u32(cx, "cols", 9);
-            let rows = g.u32(cx, "rows", 6);
-            let square = g.f64(cx, "square", Dim::Length, 0.04);
-            check::at_least(cx, g, "cols", cols, 2);
-            check::at_least(cx, g, "rows", rows, 2);
-            check::positive(cx, g, "square", square, "m");
+            let cols = g.u32(cx, F::Target::cols, 9);
+            let rows = g.u32(cx, F::Target::rows, 6);
+            let square = g.f64(cx, F::Target::square, Dim::Length, 0.04);
+            check::at_least(cx, g, F::Target::cols, cols, 2);
+            check::at_least(cx, g, F::Target::rows, rows, 2);
+            check::positive(cx, g, F::Target::square, square, "m");
             let (cols, rows) = limit_grid(cx, g, cols, rows);
             TargetKind::Checkerboard { cols, rows, square }
         }
         "circle_grid" => {
-            let cols = g.u32(cx, "cols", 7);
-            let rows = g.u32(cx, "rows", 5);
-            let spacing = g.f64(cx, "spacing", Dim::Length, 0.05);
-            let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
-            check::at_least(cx, g, "cols", cols, 1);
-            check::at_least(cx, g, "rows", rows, 1);
-            check::positive(cx, g, "spacing", spacing, "m");
-            check::positive(cx, g, "diameter", diameter, "m");
-            check::fits(cx, g, "diameter", diameter, spacing, "the spacing");
+            let cols = g.u32(cx, F::Target::cols, 7);
+            let rows = g.u32(cx, F::Target::rows, 5);
+            let spacing = g.f64(cx, F::Target::spacing, Dim::Length, 0.05);
+            let diameter = g.f64(cx, F::Target::diameter, Dim::Length, 0.02);
+            check::at_least(cx, g, F::Target::cols, cols, 1);
+            check::at_least(cx, g, F::Target::rows, rows, 1);
+            check::positive(cx, g, F::Target::spacing, spacing, "m");
+            check::positive(cx, g, F::Target::diameter, diameter, "m");
+            check::fits(cx, g, F::Target::diameter, diameter, spacing, "the spacing");
             let (cols, rows) = limit_grid(cx, g, cols, rows);
             TargetKind::CircleGrid {
                 cols,
@@ -116,18 +117,18 @@ fn kind(cx: &mut Cx, g: &mut Tab, ty: &str) -> TargetKind {
             }
         }
         "coded" => {
-            let count = g.u32(cx, "count", 12);
-            let spacing = g.f64(cx, "spacing", Dim::Length, 0.1);
-            let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
-            let first_code = g.u32(cx, "first_code", 1);
-            check::at_least(cx, g, "count", count, 1);
-            let count = check::capped(cx, g, "count", count, 10_000, "coded targets", 1);
-            check::positive(cx, g, "spacing", spacing, "m");
-            check::positive(cx, g, "diameter", diameter, "m");
+            let count = g.u32(cx, F::Target::count, 12);
+            let spacing = g.f64(cx, F::Target::spacing, Dim::Length, 0.1);
+            let diameter = g.f64(cx, F::Target::diameter, Dim::Length, 0.02);
+            let first_code = g.u32(cx, F::Target::first_code, 1);
+            check::at_least(cx, g, F::Target::count, count, 1);
+            let count = check::capped(cx, g, F::Target::count, count, 10_000, "coded targets", 1);
+            check::positive(cx, g, F::Target::spacing, spacing, "m");
+            check::positive(cx, g, F::Target::diameter, diameter, "m");
             check::fits(
                 cx,
                 g,
-                "diameter",
+                F::Target::diameter,
                 diameter * 2.5,
                 spacing,
                 "the spacing (the code ring is 2.5 × the diameter)",
@@ -140,13 +141,13 @@ fn kind(cx: &mut Cx, g: &mut Tab, ty: &str) -> TargetKind {
             }
         }
         "scale_bar" => {
-            let length = g.f64(cx, "length", Dim::Length, 1.0);
-            let width = g.f64(cx, "width", Dim::Length, 0.04);
-            let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
-            check::positive(cx, g, "length", length, "m");
-            check::positive(cx, g, "width", width, "m");
-            check::positive(cx, g, "diameter", diameter, "m");
-            check::fits(cx, g, "diameter", diameter, width, "the bar width");
+            let length = g.f64(cx, F::Target::length, Dim::Length, 1.0);
+            let width = g.f64(cx, F::Target::width, Dim::Length, 0.04);
+            let diameter = g.f64(cx, F::Target::diameter, Dim::Length, 0.02);
+            check::positive(cx, g, F::Target::length, length, "m");
+            check::positive(cx, g, F::Target::width, width, "m");
+            check::positive(cx, g, F::Target::diameter, diameter, "m");
+            check::fits(cx, g, F::Target::diameter, diameter, width, "the bar width");
             TargetKind::ScaleBar {
                 length,
                 width,
@@ -154,23 +155,23 @@ fn kind(cx: &mut Cx, g: &mut Tab, ty: &str) -> TargetKind {
             }
         }
         "siemens_star" => {
-            let diameter = g.f64(cx, "diameter", Dim::Length, 0.2);
-            let spokes = g.u32(cx, "spokes", 16);
-            check::positive(cx, g, "diameter", diameter, "m");
-            check::at_least(cx, g, "spokes", spokes, 2);
-            let spokes = check::capped(cx, g, "spokes", spokes, 10_000, "spokes", 16);
+            let diameter = g.f64(cx, F::Target::diameter, Dim::Length, 0.2);
+            let spokes = g.u32(cx, F::Target::spokes, 16);
+            check::positive(cx, g, F::Target::diameter, diameter, "m");
+            check::at_least(cx, g, F::Target::spokes, spokes, 2);
+            let spokes = check::capped(cx, g, F::Target::spokes, spokes, 10_000, "spokes", 16);
             TargetKind::SiemensStar { diameter, spokes }
         }
         _ => {
-            let size = g.f64(cx, "size", Dim::Length, 0.5);
-            let levels = g.u32(cx, "levels", 3);
-            let step = g.f64(cx, "step", Dim::Length, 0.05);
-            let diameter = g.f64(cx, "diameter", Dim::Length, 0.02);
-            check::positive(cx, g, "size", size, "m");
-            check::at_least(cx, g, "levels", levels, 1);
-            let levels = check::capped(cx, g, "levels", levels, 1000, "levels", 1);
-            check::positive(cx, g, "step", step, "m");
-            check::positive(cx, g, "diameter", diameter, "m");
+            let size = g.f64(cx, F::Target::size, Dim::Length, 0.5);
+            let levels = g.u32(cx, F::Target::levels, 3);
+            let step = g.f64(cx, F::Target::step, Dim::Length, 0.05);
+            let diameter = g.f64(cx, F::Target::diameter, Dim::Length, 0.02);
+            check::positive(cx, g, F::Target::size, size, "m");
+            check::at_least(cx, g, F::Target::levels, levels, 1);
+            let levels = check::capped(cx, g, F::Target::levels, levels, 1000, "levels", 1);
+            check::positive(cx, g, F::Target::step, step, "m");
+            check::positive(cx, g, F::Target::diameter, diameter, "m");
             TargetKind::TestObject {
                 size,
                 levels: levels.max(1),
@@ -191,14 +192,14 @@ fn points_file(
     sources: &Sources,
     scene: &Path,
 ) -> Vec<Target> {
-    let diameter = g.f64(cx, "diameter", Dim::Length, 0.1);
-    check::positive(cx, g, "diameter", diameter, "m");
+    let diameter = g.f64(cx, F::Target::diameter, Dim::Length, 0.1);
+    check::positive(cx, g, F::Target::diameter, diameter, "m");
     let surface = g
-        .choice(cx, "surface", &["given", "seabed"])
+        .choice(cx, F::Target::surface, &["given", "seabed"])
         .unwrap_or("given");
     let frame = placement(cx, g, DVec3::ZERO);
-    let fspan = g.span_of("file");
-    let Some(rel) = g.opt_str(cx, "file") else {
+    let fspan = g.span_of(F::Target::file);
+    let Some(rel) = g.opt_str(cx, F::Target::file) else {
         cx.push(
             Diagnostic::error("E0293", format!("`{}` needs a `file`", g.path))
                 .label(g.span, "no `file`")
@@ -236,7 +237,10 @@ fn points_file(
                             pts.len()
                         ),
                     )
-                    .label(g.span_of("surface"), format!("e.g. `{}`", missed[0]))
+                    .label(
+                        g.span_of(F::Target::surface),
+                        format!("e.g. `{}`", missed[0]),
+                    )
                     .help(
                         "add a seabed object under them, or use `surface = \"given\"` with their z",
                     ),
@@ -247,7 +251,7 @@ fn points_file(
         Err(e) => {
             cx.push(
                 Diagnostic::error("E0294", "cannot drop the points onto the scene's objects")
-                    .label(g.span_of("surface"), e)
+                    .label(g.span_of(F::Target::surface), e)
                     .help("fix the objects' meshes, or use `surface = \"given\"`"),
             );
             vec![]
@@ -262,7 +266,7 @@ fn limit_grid(cx: &mut Cx, g: &Tab, cols: u32, rows: u32) -> (u32, u32) {
         cx.push(
             Diagnostic::error("E0050", format!("`{}` has too many points", g.path))
                 .label(
-                    g.span_of("cols"),
+                    g.span_of(F::Target::cols),
                     format!("{cols} × {rows} exceeds one million"),
                 )
                 .help("real targets have at most a few thousand points"),

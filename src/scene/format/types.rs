@@ -1,13 +1,16 @@
-//! The scene format as Rust types: the single description from which the JSON Schema
-//! (`schema/poser-scene.schema.json`, via schemars) and the format reference
-//! (`docs/format.md`) are generated. These types document; the reading itself is done by
-//! [`super::resolve`] with full diagnostics, and a test checks both agree key by key.
+//! The scene format as Rust types: every table a struct, every key a field, spelled once. The
+//! JSON Schema and `docs/format.md` are generated from these types ([`super::docgen`]), and
+//! `#[derive(Keys)]` turns each field into the constant through which the reader's resolvers
+//! and the importers name the key (`Light::beam_angle == "beam_angle"`, `Light::kind ==
+//! "type"`). The types document; the reading itself is done by [`crate::scene::resolve`] with
+//! full diagnostics, and a test checks both agree key by key.
 //!
 //! Values with a physical dimension accept a plain number in the SI unit or a string with a
 //! unit (`"18 mm"`); see [`crate::units`]. Every field's doc comment gives its unit and
 //! default.
 #![allow(dead_code)]
 
+use poser_keys::Keys;
 use schemars::{JsonSchema, Schema, SchemaGenerator, json_schema};
 use std::borrow::Cow;
 use std::marker::PhantomData;
@@ -142,7 +145,7 @@ impl<Q: Quantity> JsonSchema for PerChannel<Q> {
 /// A poser scene: one survey — water, site, sun, camera rig with housing ports, lights,
 /// objects, targets, camera network, diver and render settings. Every table is optional
 /// except `[network]`; without `[water]` the survey is in air.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(title = "poser scene", deny_unknown_fields)]
 pub struct Scene {
     /// Scenario name. **Default:** the file name without `.toml`.
@@ -171,7 +174,7 @@ pub struct Scene {
 }
 
 /// `[site]` — where the survey happens. The sea surface is the plane z = 0 (z up).
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Site {
     /// Depth of the nominal seabed below the surface. **Unit:** m. **Default:** 10 m.
@@ -207,7 +210,7 @@ pub enum SurfaceKind {
 }
 
 /// `[water]` — the medium. Without this table the survey is in air (no medium anywhere).
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Water {
     /// Constant refractive index (one value or `[r, g, b]`). **Unit:** 1. **Default:**
@@ -266,7 +269,7 @@ pub enum ExtentKind {
 
 /// `[sun]` — daylight. Give `elevation` (+ `azimuth`), or `latitude`, `longitude` and
 /// `datetime`. Without this table there is no sun.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Sun {
     /// Elevation above the horizon. **Unit:** rad (or `"55 deg"`). **Default:** none.
@@ -288,7 +291,7 @@ pub struct Sun {
 
 /// `[camera]` — the camera (for a stereo or multi-camera rig: the template every camera of
 /// the rig starts from).
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Camera {
     /// Camera name (multi rigs). **Default:** `"cam"`, `"left"`/`"right"` (stereo),
@@ -337,7 +340,7 @@ pub enum LensKind {
 
 /// `[camera.distortion]` — Brown–Conrady coefficients on normalised coordinates (OpenCV).
 /// All default to 0.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct DistortionTable {
     /// Radial k1. **Default:** 0.
@@ -354,7 +357,7 @@ pub struct DistortionTable {
 
 /// `[camera.port]` — the housing port, in the camera frame (x right, y down, z forward,
 /// origin at the entrance pupil). Which keys apply depends on `type`.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct PortTable {
     /// Port kind. **Default:** `"flat"` with water, `"none"` in air.
@@ -396,7 +399,7 @@ pub struct PortTable {
 }
 
 /// `[[camera.port.layers]]` — one glass layer of a multi-layer flat port.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct PortLayer {
     /// Layer thickness. **Unit:** m. Required.
@@ -421,7 +424,7 @@ pub enum PortKind {
 }
 
 /// `[rig]` — how many cameras and where. Without it: one camera at the rig origin.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Rig {
     /// Rig kind. **Default:** `"single"`.
@@ -447,7 +450,7 @@ pub enum RigKind {
 }
 
 /// `[[lights]]` — one light. Which keys apply depends on `type`.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Light {
     /// Light name. **Default:** `"light<i>"`.
@@ -507,7 +510,7 @@ pub enum MountKind {
 }
 
 /// `[[objects]]` — one piece of geometry. Which keys apply depends on `shape`.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Object {
     /// Object name. **Default:** `"object<i>"`.
@@ -624,7 +627,7 @@ pub enum CoralGrowthKind {
 /// whose texels are half the finest ground sample distance of the cameras on the object, so
 /// that texture exists down to the pixel; the same texture is used by every backend. See
 /// `docs/textures.md`.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct PatternTable {
     /// Pattern kind: `"checker"`, `"noise"`, `"fbm"` (fractal albedo), `"sand"` (ripples and
@@ -691,7 +694,7 @@ pub struct PatternTable {
 /// `[[targets]]` — a calibration target, scale bar or GSD target with known 3D points (ids
 /// `name/index`, or code numbers for coded targets). The printed face is the target's
 /// z = 0 plane, facing +z.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Target {
     /// Target name (unique). **Default:** `"target<i>"`.
@@ -766,7 +769,7 @@ pub enum PointsSurface {
 }
 
 /// `[network]` — where the images are taken. Which keys apply depends on `type`.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Network {
     /// Network kind. **Default:** `"explicit"`.
@@ -843,7 +846,7 @@ pub enum NetworkKind {
 }
 
 /// `[[network.poses]]` — one explicit rig position.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct PoseTable {
     /// Entrance-pupil position of the rig (world). **Unit:** m. **Required.**
@@ -859,7 +862,7 @@ pub struct PoseTable {
 }
 
 /// `[diver]` — the diver (or vehicle) for planning and dive safety.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Diver {
     /// Swim speed during the survey. **Unit:** m/s. **Default:** 0.2 m/s.
@@ -902,7 +905,7 @@ pub struct Diver {
 }
 
 /// `[[diver.cylinders]]` — one cylinder.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct CylinderTable {
     /// Cylinder name. **Default:** `"cylinder<i>"`.
@@ -935,7 +938,7 @@ pub struct CylinderTable {
 }
 
 /// `[render]` — render settings shared by every backend (image size is on `[camera]`).
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Render {
     /// Samples per pixel (≥ 1). **Default:** 64.
@@ -1015,7 +1018,7 @@ pub struct Render {
 /// balance, tone curve and the 8-bit file a camera writes (`OUT/camera/<image>.jpg|png` beside
 /// the linear EXR, with `<image>.sensor.json`). Optional: without it `poser render` writes only
 /// the linear EXR and its preview. Model, units and formulas: `docs/sensor.md`.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct Sensor {
     /// Full-well capacity: electrons a pixel holds before it saturates. **Unit:** e⁻.
@@ -1075,7 +1078,7 @@ pub struct Sensor {
 
 /// `[lesson]` — makes the scene a lesson that `poser lesson` runs into one HTML page
 /// (`docs/lessons.md`). Ignored by every other command.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct LessonTable {
     /// Title of the page. **Default:** the scene name.
@@ -1129,7 +1132,7 @@ pub enum LessonKindValue {
 }
 
 /// `[[lesson.variants]]` — one compared case.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct LessonVariantTable {
     /// Label on the page. **Default:** `"variant <i>"`.
@@ -1142,7 +1145,7 @@ pub struct LessonVariantTable {
 }
 
 /// `[[lesson.try_next]]` — a suggestion: a sentence and the one override that does it.
-#[derive(JsonSchema)]
+#[derive(JsonSchema, Keys)]
 #[schemars(deny_unknown_fields)]
 pub struct TryNextTable {
     /// What to try (required).
@@ -1165,651 +1168,4 @@ pub enum NoiseGoal {
 pub enum WhiteBalanceValue {
     Mode(String),
     Gains([f64; 3]),
-}
-
-// ------------------------------------------------------------------------------------------
-
-/// The JSON Schema of the scene format, pretty-printed with a trailing newline: the format
-/// types' schema, in which every key also admits `{ unset = true }` (the removal of what an
-/// included file sets, `source::merge`), so that an editor checking a scene with it accepts
-/// what poser accepts.
-pub fn schema_json() -> String {
-    let mut v = format_schema();
-    admit_unset(&mut v);
-    if let Some(defs) = v.get_mut("$defs").and_then(|d| d.as_object_mut()) {
-        defs.insert(UNSET_DEF.into(), unset_schema());
-    }
-    let mut s = serde_json::to_string_pretty(&v).expect("schema serialises");
-    s.push('\n');
-    s
-}
-
-/// The schema of the format types alone (no `{ unset = true }` alternatives): what the format
-/// reference and the key lists are generated from.
-fn format_schema() -> serde_json::Value {
-    let schema = schemars::schema_for!(Scene);
-    let mut v = serde_json::to_value(&schema).expect("schema serialises");
-    if let Some(o) = v.as_object_mut() {
-        o.insert(
-            "$id".into(),
-            serde_json::Value::String(
-                "https://github.com/poser/poser/schema/poser-scene.schema.json".into(),
-            ),
-        );
-    }
-    v
-}
-
-/// Name of the `{ unset = true }` definition in the schema's `$defs`.
-pub const UNSET_DEF: &str = "Unset";
-
-fn unset_schema() -> serde_json::Value {
-    serde_json::json!({
-        "description": "Removes what an included file sets for this key (`key = { unset = true }`; docs/scenes.md).",
-        "type": "object",
-        "properties": { "unset": { "const": true } },
-        "required": ["unset"],
-        "additionalProperties": false
-    })
-}
-
-/// Every property of every table in `v` (the scene's and each `$defs` entry's) becomes
-/// "its own schema, or `{ unset = true }`".
-fn admit_unset(v: &mut serde_json::Value) {
-    match v {
-        serde_json::Value::Object(o) => {
-            for x in o.values_mut() {
-                admit_unset(x);
-            }
-            if let Some(serde_json::Value::Object(props)) = o.get_mut("properties") {
-                let unset = serde_json::json!({ "$ref": format!("#/$defs/{UNSET_DEF}") });
-                for p in props.values_mut() {
-                    let own = std::mem::take(p);
-                    *p = serde_json::json!({ "anyOf": [own, unset.clone()] });
-                }
-            }
-        }
-        serde_json::Value::Array(a) => a.iter_mut().for_each(admit_unset),
-        _ => {}
-    }
-}
-
-/// Keys accepted per table path (`""` = top level, `"camera.port"`, `"lights"`, …), from
-/// the schema. Used by the tests that keep the reader and the documentation in step.
-pub fn keys_by_path() -> std::collections::BTreeMap<String, Vec<String>> {
-    let v = format_schema();
-    let mut out = std::collections::BTreeMap::new();
-    walk_keys(&v, &v, "", &mut out, 0);
-    out
-}
-
-fn resolve_ref<'a>(root: &'a serde_json::Value, v: &'a serde_json::Value) -> &'a serde_json::Value {
-    if let Some(r) = v.get("$ref").and_then(|r| r.as_str()) {
-        let name = r.rsplit('/').next().unwrap_or("");
-        if let Some(d) = root.get("$defs").and_then(|d| d.get(name)) {
-            return d;
-        }
-    }
-    v
-}
-
-/// The object schema inside `v` (following `$ref`, `anyOf` with null, arrays of tables).
-fn table_of<'a>(
-    root: &'a serde_json::Value,
-    v: &'a serde_json::Value,
-) -> Option<(&'a serde_json::Value, bool)> {
-    let v = resolve_ref(root, v);
-    if v.get("properties").is_some() {
-        return Some((v, false));
-    }
-    if let Some(items) = v.get("items") {
-        return table_of(root, items).map(|(t, _)| (t, true));
-    }
-    for k in ["anyOf", "oneOf"] {
-        if let Some(a) = v.get(k).and_then(|a| a.as_array()) {
-            for x in a {
-                if let Some(t) = table_of(root, x) {
-                    return Some(t);
-                }
-            }
-        }
-    }
-    if let Some(t) = v.get("type").and_then(|t| t.as_array())
-        && t.iter().any(|x| x == "array")
-        && let Some(items) = v.get("items")
-    {
-        return table_of(root, items).map(|(t, _)| (t, true));
-    }
-    None
-}
-
-fn walk_keys(
-    root: &serde_json::Value,
-    v: &serde_json::Value,
-    path: &str,
-    out: &mut std::collections::BTreeMap<String, Vec<String>>,
-    depth: usize,
-) {
-    let Some(props) = v.get("properties").and_then(|p| p.as_object()) else {
-        return;
-    };
-    out.insert(path.to_string(), props.keys().cloned().collect());
-    if depth > 4 {
-        return;
-    }
-    for (k, p) in props {
-        if let Some((t, _)) = table_of(root, p) {
-            let sub = if path.is_empty() {
-                k.clone()
-            } else {
-                format!("{path}.{k}")
-            };
-            walk_keys(root, t, &sub, out, depth + 1);
-        }
-    }
-}
-
-/// The format reference (`docs/format.md`), generated from the schema.
-pub fn format_markdown() -> String {
-    let v = format_schema();
-    let mut s = String::new();
-    s.push_str(
-        "<!-- Generated by `poser schema` from src/scene/format.rs. Do not edit by hand. -->\n",
-    );
-    s.push_str("# poser scene format reference\n\n");
-    s.push_str(
-        "A scene is one TOML file. Values with a physical dimension take a plain number in the SI \
-         unit listed, or a string with a unit: `\"18 mm\"`, `\"15 m\"`, `\"0.2 m/s\"`, `\"20 l/min\"`, \
-         `\"532 nm\"`, `\"30 deg\"`, `\"232 bar\"`, `\"12 l\"`, `\"50 W\"`, `\"4.5 µm\"`, `\"60 %\"`. \
-         Vectors are `[x, y, z]` or one string with a trailing unit (`\"0, 0.1, 2 m\"`). \
-         Per-channel values are one number for R, G and B or `[r, g, b]` (650/550/450 nm).\n\n",
-    );
-    s.push_str(
-        "World frame: metres, z up, x east, y north, sea surface z = 0, seabed z = −`site.depth`. \
-         Camera and rig frames: x right, y down, z forward (OpenCV), origin at the entrance pupil.\n\n",
-    );
-    s.push_str(
-        "Composition: `include = [\"../shared/rig.toml\"]` merges files under this one (deep merge \
-         of tables); `poser … --set a.b.c=value` overrides any value after includes (the value is \
-         read as TOML, else as a string; list entries by index: `--set network.poses.0.position=[0,0,-2]`). \
-         A key written `key = { unset = true }` removes what the included files set for it (a \
-         dome variant of a flat-port base: `pupil_distance = { unset = true }` under \
-         `[camera.port]`; a whole table: `port = { unset = true }` under `[camera]`); unsetting a \
-         key no included file sets is error E0021, and `--set camera.port.tilt='{ unset = true }'` \
-         removes a key from the command line. An unknown key an included file sets is reported \
-         in that file, as inherited, with the include line.\n\n",
-    );
-    s.push_str(
-        "Editor support: the JSON Schema is `schema/poser-scene.schema.json`. With the Even Better \
-         TOML extension (taplo), put `#:schema ../schema/poser-scene.schema.json` as the first \
-         line of a scene (path relative to the scene), or map `scenarios/*.toml` to the schema in \
-         `.taplo.toml`:\n\n```toml\n[[rule]]\ninclude = [\"scenarios/**/*.toml\"]\n[rule.schema]\npath = \"./schema/poser-scene.schema.json\"\n```\n\n\
-         The schema accepts `{ unset = true }` for every key, as poser does, and refuses any other \
-         value of that shape. Every shipped scene validates against it with a real validator \
-         (`jsonschema`, in the full test tier: backends/schema).\n\n",
-    );
-    s.push_str("Check a scene with `poser validate SCENE`; see what it resolves to with `poser explain SCENE`.\n\n");
-    s.push_str("## Contents\n\n");
-    let mut sections = Vec::new();
-    collect_sections(&v, &v, "", &mut sections, 0);
-    for (path, _, _) in &sections {
-        let title = if path.is_empty() {
-            "top level".to_string()
-        } else {
-            path.clone()
-        };
-        s.push_str(&format!("- [{title}](#{})\n", anchor(&title)));
-    }
-    s.push('\n');
-    for (path, table, is_array) in &sections {
-        let title = if path.is_empty() {
-            "top level".to_string()
-        } else {
-            path.clone()
-        };
-        s.push_str(&format!("## {title}\n\n"));
-        if !path.is_empty() {
-            s.push_str(&format!(
-                "Written as `{}`.\n\n",
-                if *is_array {
-                    format!("[[{path}]]")
-                } else {
-                    format!("[{path}]")
-                }
-            ));
-        }
-        if let Some(d) = table.get("description").and_then(|d| d.as_str()) {
-            s.push_str(&one_line(d));
-            s.push_str("\n\n");
-        }
-        s.push_str("| key | value | meaning, unit, default |\n|---|---|---|\n");
-        let props = table
-            .get("properties")
-            .and_then(|p| p.as_object())
-            .cloned()
-            .unwrap_or_default();
-        for (k, p) in &props {
-            let (kind, mut sub) = describe(&v, p);
-            let mut desc = p
-                .get("description")
-                .and_then(|d| d.as_str())
-                .map(one_line)
-                .unwrap_or_default();
-            if let Some((t, _)) = table_of(&v, p) {
-                let full = if path.is_empty() {
-                    k.clone()
-                } else {
-                    format!("{path}.{k}")
-                };
-                sub = Some(if full == "rig.cameras" {
-                    "camera".to_string()
-                } else {
-                    full
-                });
-                if desc.is_empty()
-                    && let Some(d) = t.get("description").and_then(|d| d.as_str())
-                {
-                    desc = one_line(d.split("\n\n").next().unwrap_or(d));
-                }
-            }
-            if let Some(sp) = sub {
-                desc = format!("{desc} See [{sp}](#{}).", anchor(&sp))
-                    .trim()
-                    .to_string();
-            }
-            s.push_str(&format!(
-                "| `{k}` | {kind} | {} |\n",
-                desc.replace('|', "\\|")
-            ));
-        }
-        s.push('\n');
-    }
-    s.push_str(UNITS_TABLE);
-    s
-}
-
-const UNITS_TABLE: &str = "## Units\n\n\
-| dimension | plain numbers | units in strings |\n|---|---|---|\n\
-| length | m | m, cm, mm, µm (um), nm, km, ft, in |\n\
-| angle | rad | rad, mrad, deg, ° |\n\
-| speed | m/s | m/s, cm/s, m/min, ft/min, km/h, kn |\n\
-| gas flow | m³/s | l/min, L/min, m3/s, cuft/min |\n\
-| pressure | Pa | Pa, kPa, MPa, bar, mbar, psi, atm |\n\
-| volume | m³ | m3, l, L, ml, cuft |\n\
-| time | s | s, ms, min, h |\n\
-| power | W | W, mW, kW |\n\
-| radiant intensity | W/sr | W/sr, mW/sr |\n\
-| radiance | W/(m²·sr) | W/m2/sr |\n\
-| irradiance | W/m² | W/m2 |\n\
-| temperature | °C | °C, C, degC, K, F |\n\
-| fraction | 1 | % |\n\
-| ground sampling distance | m/px | m/px, cm/px, mm/px |\n\n\
-Units are case-exact, as SI writes them: `mW` is a milliwatt and `MW` a megawatt, so `\"50 MW\"` \
-is an error (with a hint), never 50 mW. Spellings without an SI prefix (bar, psi, atm, deg, rad, \
-ft, in, min, kn, cuft, degC) are also accepted in any case (`\"232 Bar\"`).\n";
-
-fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
-fn anchor(title: &str) -> String {
-    title
-        .to_lowercase()
-        .chars()
-        .filter(|c| c.is_alphanumeric() || *c == '-' || *c == ' ' || *c == '_')
-        .collect::<String>()
-        .replace(' ', "-")
-}
-
-fn collect_sections(
-    root: &serde_json::Value,
-    v: &serde_json::Value,
-    path: &str,
-    out: &mut Vec<(String, serde_json::Value, bool)>,
-    depth: usize,
-) {
-    let Some(props) = v.get("properties").and_then(|p| p.as_object()) else {
-        return;
-    };
-    if !out.iter().any(|(p, _, _)| p == path) {
-        out.push((path.to_string(), v.clone(), false));
-    }
-    if depth > 3 {
-        return;
-    }
-    for (k, p) in props {
-        if let Some((t, arr)) = table_of(root, p) {
-            let sub = if path.is_empty() {
-                k.clone()
-            } else {
-                format!("{path}.{k}")
-            };
-            // rig.cameras repeats [camera]: document it once.
-            if sub == "rig.cameras" {
-                continue;
-            }
-            let before = out.len();
-            collect_sections(root, t, &sub, out, depth + 1);
-            if out.len() > before {
-                out[before].2 = arr;
-            }
-        }
-    }
-}
-
-/// (value description, sub-section path if the value is a table).
-fn describe(root: &serde_json::Value, p: &serde_json::Value) -> (String, Option<String>) {
-    let r = resolve_ref(root, p);
-    if let Some(kind) = find_kind(r) {
-        let unit = find_unit(r).filter(|u| !u.is_empty() && *u != "1");
-        return (
-            match unit {
-                Some(u) => format!("{kind} ({u})"),
-                None => kind,
-            },
-            None,
-        );
-    }
-    if let Some(e) = enum_values(root, r) {
-        return (
-            format!(
-                "one of {}",
-                e.iter()
-                    .map(|x| format!("`\"{x}\"`"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-            None,
-        );
-    }
-    if table_of(root, p).is_some() {
-        let arr = table_of(root, p).is_some_and(|t| t.1);
-        return (
-            if arr {
-                "list of tables".into()
-            } else {
-                "table".into()
-            },
-            None,
-        );
-    }
-    let t = type_name(r);
-    (t, None)
-}
-
-fn find_kind(v: &serde_json::Value) -> Option<String> {
-    if let Some(k) = v.get("x-poser-kind").and_then(|k| k.as_str()) {
-        return Some(k.to_string());
-    }
-    for k in ["anyOf", "oneOf"] {
-        if let Some(a) = v.get(k).and_then(|a| a.as_array()) {
-            for x in a {
-                if let Some(r) = find_kind(x) {
-                    return Some(r);
-                }
-            }
-        }
-    }
-    None
-}
-
-fn find_unit(v: &serde_json::Value) -> Option<&str> {
-    if let Some(k) = v.get("x-poser-unit").and_then(|k| k.as_str()) {
-        return Some(k);
-    }
-    for k in ["anyOf", "oneOf"] {
-        if let Some(a) = v.get(k).and_then(|a| a.as_array()) {
-            for x in a {
-                if let Some(r) = find_unit(x) {
-                    return Some(r);
-                }
-            }
-        }
-    }
-    None
-}
-
-fn enum_values(root: &serde_json::Value, v: &serde_json::Value) -> Option<Vec<String>> {
-    let v = resolve_ref(root, v);
-    if let Some(e) = v.get("enum").and_then(|e| e.as_array()) {
-        return Some(
-            e.iter()
-                .filter_map(|x| x.as_str().map(str::to_string))
-                .collect(),
-        );
-    }
-    if let Some(a) = v.get("oneOf").and_then(|a| a.as_array()) {
-        let mut out = Vec::new();
-        for x in a {
-            if let Some(c) = x.get("const").and_then(|c| c.as_str()) {
-                out.push(c.to_string());
-            } else if let Some(e) = x.get("enum").and_then(|e| e.as_array()) {
-                out.extend(e.iter().filter_map(|x| x.as_str().map(str::to_string)));
-            } else {
-                return None;
-            }
-        }
-        return Some(out);
-    }
-    if let Some(a) = v.get("anyOf").and_then(|a| a.as_array()) {
-        for x in a {
-            if x.get("type").and_then(|t| t.as_str()) == Some("null") {
-                continue;
-            }
-            if let Some(e) = enum_values(root, x) {
-                return Some(e);
-            }
-        }
-    }
-    None
-}
-
-fn type_name(v: &serde_json::Value) -> String {
-    let t = match v.get("type") {
-        Some(serde_json::Value::String(s)) => s.clone(),
-        Some(serde_json::Value::Array(a)) => a
-            .iter()
-            .filter_map(|x| x.as_str())
-            .filter(|x| *x != "null")
-            .collect::<Vec<_>>()
-            .join(" or "),
-        _ => "value".into(),
-    };
-    match t.as_str() {
-        "integer" => "integer".into(),
-        "boolean" => "true / false".into(),
-        "array" => match v.get("items").map(type_name).as_deref() {
-            Some("string") => "list of strings".into(),
-            Some(x) => format!("list of {x}"),
-            None => "list".into(),
-        },
-        other => other.to_string(),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use std::collections::{BTreeMap, BTreeSet};
-
-    /// Every key the reader accepts is documented in the schema, and every documented key is
-    /// read by some variant: load the examples with overrides that switch every `type`.
-    #[test]
-    fn reader_and_schema_agree_key_by_key() {
-        let variants: &[&[&str]] = &[
-            &[],
-            &["camera.port.type=\"dome\""],
-            &["camera.port.type=\"cylinder\""],
-            &["camera.port.type=\"none\"", "camera.distortion.k1=0.01"],
-            &["rig.type=\"stereo\""],
-            &[
-                "rig.type=\"multi\"",
-                "rig.cameras=[{name = \"a\"}, {name = \"b\", position = [0.3, 0, 0]}]",
-            ],
-            &["lights.0.type=\"point\"", "lights.1.type=\"area\""],
-            &["lights.0.type=\"ambient\""],
-            &[
-                "objects.0.shape=\"mesh\"",
-                "objects.0.texture=false",
-                "objects.1.shape=\"plane\"",
-            ],
-            &["objects.0.shape=\"box\"", "objects.1.shape=\"sphere\""],
-            &[
-                "objects.0.shape=\"cylinder\"",
-                "objects.0.pattern={type = \"checker\"}",
-            ],
-            &[
-                "objects.0.pattern={type = \"fbm\"}",
-                "objects.1.pattern={type = \"noise\"}",
-            ],
-            &["objects.0.pattern={type = \"rock\"}"],
-            &[
-                "objects.0.pattern={type = \"sand\", grid = 1, grid_width = 0.01, grid_albedo = [0.8, 0.8, 0.6]}",
-            ],
-            &["objects.0.pattern={type = \"coral\", colors = [[0.5, 0.2, 0.3]]}"],
-            &["targets.0.type=\"checkerboard\""],
-            &["targets.0.type=\"circle_grid\""],
-            &["targets.0.type=\"coded\""],
-            &["targets.0.type=\"siemens_star\""],
-            &["targets.0.type=\"test_object\""],
-            &["network.type=\"spiral\""],
-            &["network.type=\"orbit\""],
-            &[
-                "network.type=\"explicit\"",
-                "network.poses=[{position = [0, 0, -10]}]",
-            ],
-            &["diver.cylinders.0.o2=0.32"],
-            &["sun.elevation=0.5"],
-            &["objects.0.shape=\"coral\"", "objects.0.growth=\"massive\""],
-            &[
-                "targets=[{type = \"points_file\", file = \"none.txt\", surface = \"seabed\", diameter = 0.1}]",
-            ],
-            &[
-                "camera.port={type = \"flat\", layers = [{thickness = \"6 mm\", material = \"PMMA\"}, {thickness = \"2 mm\", ior = 1.77}]}",
-            ],
-            &[
-                "lesson={question = \"q\", quick = [], full = [], variants = [{label = \"a\", set = []}], try_next = [{text = \"t\", set = \"a=1\"}]}",
-            ],
-        ];
-        let mut known: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-        for v in variants {
-            let sets: Vec<String> = v.iter().map(|s| s.to_string()).collect();
-            let (_, m) = crate::scene::reader::record_known_keys(|| {
-                let _ =
-                    crate::scene::load(std::path::Path::new("scenarios/reef_strip.toml"), &sets);
-            });
-            for (k, s) in m {
-                known.entry(k).or_default().extend(s);
-            }
-        }
-        let schema = keys_by_path();
-        let mut problems = Vec::new();
-        for (path, keys) in &known {
-            let Some(doc) = schema.get(path) else {
-                problems.push(format!("table `{path}` is read but not in the schema"));
-                continue;
-            };
-            for k in keys {
-                if !doc.contains(k) {
-                    problems.push(format!("`{path}.{k}` is read but not documented"));
-                }
-            }
-            for k in doc {
-                if !(keys.contains(k) || path.is_empty() && k == "include") {
-                    problems.push(format!("`{path}.{k}` is documented but never read"));
-                }
-            }
-        }
-        for path in schema.keys() {
-            if !known.contains_key(path)
-                && path != "rig.cameras"
-                && !path.starts_with("rig.cameras.")
-            {
-                problems.push(format!("table `{path}` is documented but never read"));
-            }
-        }
-        assert!(
-            problems.is_empty(),
-            "reader and schema disagree:\n{}",
-            problems.join("\n")
-        );
-    }
-
-    /// `schema/` and `docs/format.md` are regenerated by `poser schema`; stale files fail.
-    #[test]
-    fn generated_files_are_fresh() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let schema = std::fs::read_to_string(root.join("schema/poser-scene.schema.json"))
-            .unwrap_or_default();
-        let docs = std::fs::read_to_string(root.join("docs/format.md")).unwrap_or_default();
-        assert!(
-            schema == schema_json(),
-            "schema/poser-scene.schema.json is stale: run `cargo run -- schema`"
-        );
-        assert!(
-            docs == format_markdown(),
-            "docs/format.md is stale: run `cargo run -- schema`"
-        );
-    }
-
-    /// Every key of every table in the published schema admits `{ unset = true }`, and only
-    /// that spelling (a real validator checks scenes with it: backends/schema).
-    #[test]
-    fn every_key_of_the_schema_admits_unset() {
-        let v: serde_json::Value = serde_json::from_str(&schema_json()).unwrap();
-        let unset = serde_json::json!({ "$ref": format!("#/$defs/{UNSET_DEF}") });
-        let mut keys = 0;
-        fn each<'a>(v: &'a serde_json::Value, f: &mut dyn FnMut(&'a serde_json::Value)) {
-            match v {
-                serde_json::Value::Object(o) => {
-                    if let Some(serde_json::Value::Object(p)) = o.get("properties") {
-                        p.values().for_each(&mut *f);
-                    }
-                    o.values().for_each(|x| each(x, f));
-                }
-                serde_json::Value::Array(a) => a.iter().for_each(|x| each(x, f)),
-                _ => {}
-            }
-        }
-        each(&v, &mut |p| {
-            if p.get("const").is_none() {
-                keys += 1;
-                let alts = p["anyOf"].as_array().expect("a key is its schema or unset");
-                assert_eq!(alts.len(), 2, "{p}");
-                assert_eq!(alts[1], unset, "{p}");
-            }
-        });
-        assert!(keys > 200, "only {keys} keys");
-        let def = &v["$defs"][UNSET_DEF];
-        assert_eq!(
-            def["properties"]["unset"]["const"],
-            serde_json::Value::Bool(true)
-        );
-        assert_eq!(def["required"][0], "unset");
-    }
-
-    #[test]
-    fn schema_is_valid_json_with_every_table() {
-        let v: serde_json::Value = serde_json::from_str(&schema_json()).unwrap();
-        assert_eq!(v["additionalProperties"], serde_json::Value::Bool(false));
-        let k = keys_by_path();
-        for t in [
-            "water",
-            "site",
-            "sun",
-            "camera",
-            "camera.port",
-            "rig",
-            "lights",
-            "objects",
-            "targets",
-            "network",
-            "network.poses",
-            "diver",
-            "diver.cylinders",
-            "render",
-        ] {
-            assert!(k.contains_key(t), "schema lacks `{t}`");
-        }
-    }
 }
