@@ -333,6 +333,14 @@ fn check_cameras(cameras: &[ReadCamera], shown: &str) -> Result<(), String> {
                 c.name
             ));
         }
+        // poser's cameras have square pixels (one focal length in pixels): refused rather
+        // than imported with one of the two, which would move every pixel off its ray.
+        if (c.fy / c.fx - 1.0).abs() > 1e-9 {
+            return Err(format!(
+                "{shown}: camera `{}`: fx = {} px and fy = {} px differ (non-square pixels)\n  help: poser's cameras have square pixels: set the camera's `fy` equal to its `fx`",
+                c.name, c.fx, c.fy
+            ));
+        }
     }
     Ok(())
 }
@@ -355,9 +363,6 @@ fn insert_intrinsics(c: &ReadCamera, tab: &mut Table) {
         _ => {
             tab.insert(F::Camera::fx.into(), Value::Float(c.fx));
         }
-    }
-    if c.fy != c.fx {
-        tab.insert("fy".into(), Value::Float(c.fy));
     }
     tab.insert(F::Camera::principal_point.into(), arr([c.cx, c.cy]));
     if c.lens != "rectilinear" {
@@ -917,6 +922,21 @@ mod tests {
       "meshes": [],
       "notes": [{"element": "text `go.py`", "message": "a script in the file was not run and is not imported", "help": null}]
     }"#;
+
+    /// A camera whose fx and fy differ is refused with its name (the format has one focal
+    /// length; the importer once wrote an `fy` key that no scene reads).
+    #[test]
+    fn non_square_pixels_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let text = READ.replacen(r#""fy": 60.0, "cx": 32.0"#, r#""fy": 66.0, "cx": 32.0"#, 1);
+        assert_ne!(text, READ);
+        let read: Read = serde_json::from_str(&text).unwrap();
+        let e = convert(read, Path::new("x.blend"), "x_assets", dir.path()).unwrap_err();
+        assert!(
+            e.contains("camera `left`") && e.contains("non-square") && e.contains("help:"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn what_bpy_read_becomes_a_valid_scene() {
