@@ -1,5 +1,6 @@
 //! Output plumbing shared by every command: atomic file writes (temporary file, then rename),
-//! so that a failed run never leaves a half-written output behind.
+//! so that a failed run never leaves a half-written output behind, and the SHA-256 of what
+//! was written (packs, the renderer's resume manifest).
 
 use std::io::Write;
 use std::path::Path;
@@ -159,4 +160,15 @@ mod tests {
         replace_dir(&new, &d.path().join("fresh")).unwrap();
         assert!(d.path().join("fresh").is_dir() && !new.exists());
     }
+}
+
+/// The SHA-256 of `bytes`, as lowercase hex.
+pub fn sha256(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    hex(&Sha256::digest(bytes))
+}
+
+/// Lowercase hex of a digest.
+pub fn hex(d: &[u8]) -> String {
+    d.iter().map(|b| format!("{b:02x}")).collect()
 }

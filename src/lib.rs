@@ -29,6 +29,7 @@ pub mod image;
 pub mod import;
 pub mod io;
 pub mod lesson;
+pub mod noise;
 pub mod pack;
 pub mod pipeline;
 pub mod plan;

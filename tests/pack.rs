@@ -41,7 +41,7 @@ fn rehash(l: &mut [Raw], k: usize, path: &str) {
     let mut m: serde_json::Value = serde_json::from_slice(&l[0].2).unwrap();
     for f in m["files"].as_array_mut().unwrap() {
         if f["path"] == path {
-            f["sha256"] = poser::pack::sha256(&l[k].2).into();
+            f["sha256"] = poser::io::sha256(&l[k].2).into();
             f["bytes"] = l[k].2.len().into();
         }
     }

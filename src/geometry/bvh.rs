@@ -894,7 +894,7 @@ mod tests {
     fn uniform(seed: u64) -> impl FnMut() -> f64 {
         let mut h = seed;
         move || {
-            h = crate::geometry::mesh::mix64(h);
+            h = crate::noise::mix64(h);
             (h >> 11) as f64 / (1u64 << 53) as f64
         }
     }
@@ -978,7 +978,7 @@ mod tests {
     /// A digest of the tree (nodes and triangle order), to compare builds.
     fn digest(b: &Bvh) -> u64 {
         let mut h = 0u64;
-        let mut eat = |x: u64| h = crate::geometry::mesh::mix64(h ^ x);
+        let mut eat = |x: u64| h = crate::noise::mix64(h ^ x);
         for n in &b.nodes {
             for v in [n.lo.x, n.lo.y, n.lo.z, n.hi.x, n.hi.y, n.hi.z] {
                 eat(v.to_bits() as u64);

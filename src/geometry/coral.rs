@@ -14,7 +14,8 @@
 //! corners of its tetrahedron to the outside ones. The colony stands on the object's xy plane:
 //! z = 0 is where the substrate is; the part below it (the base) is buried.
 
-use super::mesh::{TriMesh, mix64, value_noise3};
+use super::mesh::TriMesh;
+use crate::noise::{mix64, value_noise3};
 use glam::DVec3;
 use std::collections::HashMap;
 

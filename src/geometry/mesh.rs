@@ -19,7 +19,8 @@
 //! the winding so that normals stay outward. Every procedural shape is a pure function of its
 //! parameters and seed: the same scene gives the same bytes.
 
-use crate::model::{Object, Pattern, Pose, Shape, UpAxis};
+use crate::model::{Object, Pose, Shape, UpAxis};
+use crate::noise::{hash_unit, mix64, value_noise3};
 use glam::DVec3;
 use std::path::Path;
 
@@ -384,40 +385,6 @@ pub fn cylinder(radius: f64, height: f64, seg: u32) -> TriMesh {
 // Procedural shapes
 // ------------------------------------------------------------------------------------------
 
-/// SplitMix64 finaliser: a well-mixed 64-bit hash.
-pub(crate) fn mix64(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-/// Uniform in [0, 1) from a hash of the inputs.
-fn hash_unit(seed: u64, a: i64, b: i64, c: i64) -> f64 {
-    let h = mix64(mix64(mix64(seed ^ (a as u64)) ^ (b as u64)) ^ (c as u64));
-    (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-}
-
-fn quintic(t: f64) -> f64 {
-    t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
-}
-
-/// Value noise in [-1, 1] on the integer lattice, trilinear with quintic fade.
-pub fn value_noise3(seed: u64, p: DVec3) -> f64 {
-    let fl = crate::texture::floor;
-    let f = DVec3::new(fl(p.x), fl(p.y), fl(p.z));
-    let (ix, iy, iz) = (f.x as i64, f.y as i64, f.z as i64);
-    let d = p - f;
-    let (u, v, w) = (quintic(d.x), quintic(d.y), quintic(d.z));
-    let l = |a: i64, b: i64, c: i64| 2.0 * hash_unit(seed, ix + a, iy + b, iz + c) - 1.0;
-    let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
-    let x00 = lerp(l(0, 0, 0), l(1, 0, 0), u);
-    let x10 = lerp(l(0, 1, 0), l(1, 1, 0), u);
-    let x01 = lerp(l(0, 0, 1), l(1, 0, 1), u);
-    let x11 = lerp(l(0, 1, 1), l(1, 1, 1), u);
-    lerp(lerp(x00, x10, v), lerp(x01, x11, v), w)
-}
-
 /// Fractal heightfield: ⌈width/resolution⌉ × ⌈length/resolution⌉ cells on the xy plane,
 /// heights of zero mean and RMS exactly `roughness`.
 pub fn seabed(
@@ -586,38 +553,6 @@ pub fn load_gltf(path: &Path) -> Result<TriMesh, String> {
 }
 
 // ------------------------------------------------------------------------------------------
-// Patterns
-// ------------------------------------------------------------------------------------------
-
-/// Multiplier of the albedo at object-frame point `p` (metres, after scale) for a pattern:
-/// checker → 1 or `contrast` by the parity of ⌊x/s⌋+⌊y/s⌋+⌊z/s⌋; noise → `1 + amount·n`
-/// with n ∈ [-1, 1] value noise of feature size `size`, clamped to ≥ 0.
-pub fn pattern_factor(pattern: &Pattern, p: DVec3) -> f64 {
-    match *pattern {
-        Pattern::Checker { size, contrast } => {
-            if size <= 0.0 {
-                return 1.0;
-            }
-            let q = p / size;
-            let fl = crate::texture::floor;
-            let q = DVec3::new(fl(q.x), fl(q.y), fl(q.z));
-            let parity = (q.x as i64 + q.y as i64 + q.z as i64).rem_euclid(2);
-            if parity == 0 { 1.0 } else { contrast }
-        }
-        Pattern::Noise { size, amount, seed } => {
-            if size <= 0.0 {
-                return 1.0;
-            }
-            let q = p / size;
-            let n = 0.6 * value_noise3(seed, q) + 0.4 * value_noise3(mix64(seed), q * 2.7);
-            (1.0 + amount * n).max(0.0)
-        }
-        // The other patterns are baked into image textures (`crate::texture::bake`).
-        _ => 1.0,
-    }
-}
-
-// ------------------------------------------------------------------------------------------
 // PLY
 // ------------------------------------------------------------------------------------------
 
@@ -754,16 +689,5 @@ mod tests {
         let a = String::from_utf8(ply_bytes(&m, PlyFormat::Ascii)).unwrap();
         assert_eq!(a.lines().count(), 10 + 24 + 12);
         assert!(a.ends_with("3 20 22 23\n"));
-    }
-
-    #[test]
-    fn checker_pattern_alternates() {
-        let p = Pattern::Checker {
-            size: 0.1,
-            contrast: 0.25,
-        };
-        assert_eq!(pattern_factor(&p, DVec3::new(0.05, 0.05, 0.0)), 1.0);
-        assert_eq!(pattern_factor(&p, DVec3::new(0.15, 0.05, 0.0)), 0.25);
-        assert_eq!(pattern_factor(&p, DVec3::new(-0.05, 0.05, 0.0)), 0.25);
     }
 }

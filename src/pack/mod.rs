@@ -24,6 +24,7 @@
 //! moves the files into place. A pack that fails any check is refused with the entry named, and
 //! nothing is written.
 
+use crate::io::sha256;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::cell::{Cell, RefCell};
@@ -213,13 +214,6 @@ pub struct Manifest {
 }
 
 /// SHA-256 of `bytes`, lower-case hex.
-pub fn sha256(bytes: &[u8]) -> String {
-    hex(&Sha256::digest(bytes))
-}
-
-fn hex(d: &[u8]) -> String {
-    d.iter().map(|b| format!("{b:02x}")).collect()
-}
 
 /// Every regular file below `dir`, with paths relative to it (`/`-separated), sorted.
 /// Symbolic links are skipped: a command's outputs are regular files. The native renderer's
@@ -238,7 +232,7 @@ pub fn hash_dir(dir: &Path) -> Result<Vec<FileHash>, String> {
                 let bytes = std::fs::read(&p).map_err(|e| format!("{}: {e}", p.display()))?;
                 out.push(FileHash {
                     path: rel_string(p.strip_prefix(root).unwrap())?,
-                    sha256: sha256(&bytes),
+                    sha256: crate::io::sha256(&bytes),
                     bytes: bytes.len() as u64,
                 });
             }
@@ -606,7 +600,10 @@ pub fn check_with(pack: &Path, limits: &Limits) -> Result<Checked, String> {
         let mut h = Sha256::new();
         let n = std::io::copy(&mut (&mut e).take(limits.entry_bytes + 1), &mut h)
             .map_err(|e| read_error(&shown, &format!("`{path}`"), e, &tripped))?;
-        if seen.insert(path.clone(), (hex(&h.finalize()), n)).is_some() {
+        if seen
+            .insert(path.clone(), (crate::io::hex(&h.finalize()), n))
+            .is_some()
+        {
             return Err(format!("{shown}: `{path}` appears twice"));
         }
     }
@@ -803,7 +800,7 @@ fn extract(pack: &Path, checked: &Checked, dir: &Path, limits: &Limits) -> Resul
         let n = std::io::copy(&mut (&mut e).take(limits.entry_bytes + 1), &mut w)
             .map_err(|e| read_error(&shown, &format!("`{path}`"), e, &tripped))?;
         std::io::Write::flush(&mut w.inner).map_err(|e| format!("{}: {e}", target.display()))?;
-        let hash = hex(&w.h.finalize());
+        let hash = crate::io::hex(&w.h.finalize());
         let ok = if path == MANIFEST {
             hash == checked.manifest_sha256
         } else if path == sign::SIGNATURE {

@@ -638,7 +638,7 @@ pub fn prepare_object(model: &Model, index: usize) -> Result<Option<Arc<Prepared
     }
     // The level depends on the object, its file and the cameras and poses: the whole model.
     let json = serde_json::to_string(model).map_err(|e| e.to_string())?;
-    let key = super::name_hash(&json) ^ super::mix64(index as u64);
+    let key = super::name_hash(&json) ^ crate::noise::mix64(index as u64);
     {
         let mut g = CACHE.lock().unwrap_or_else(|e| e.into_inner());
         let map = g.get_or_insert_with(HashMap::new);

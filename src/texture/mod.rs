@@ -25,15 +25,7 @@ pub mod mapped;
 pub mod mip;
 
 use crate::model::{Pattern, Rgb};
-
-/// SplitMix64 finaliser.
-#[inline]
-fn mix64(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
+use crate::noise::{floor, mix64, quintic, value_noise3};
 
 /// Hash of a seed and a 2D lattice cell.
 #[inline]
@@ -89,23 +81,6 @@ pub fn name_hash(s: &str) -> u64 {
     s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
         (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01B3)
     })
-}
-
-/// `x.floor()`, the same value for every `x`, inlined: without SSE4.1 (`roundsd`, not in the
-/// x86-64 baseline) `f64::floor` is a call into libm, a large share of a bake's time.
-#[inline]
-pub(crate) fn floor(x: f64) -> f64 {
-    // Beyond 2^52 every f64 is an integer; NaN, ±∞ and ±0 are their own floor.
-    if !(x.abs() < 4_503_599_627_370_496.0) || x == 0.0 {
-        return x;
-    }
-    let t = x as i64 as f64;
-    if t > x { t - 1.0 } else { t }
-}
-
-#[inline]
-fn quintic(t: f64) -> f64 {
-    t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
 }
 
 /// The eight unit gradient directions of 2D gradient noise.
@@ -246,14 +221,14 @@ pub struct At {
 }
 
 /// Albedo of `pattern` over base albedo `base` at `at` (not clamped). The checker is evaluated
-/// by [`crate::geometry::mesh::pattern_factor`] and is returned here as the base albedo.
+/// by [`pattern_factor`] and is returned here as the base albedo.
 pub fn albedo(pattern: &Pattern, base: Rgb, at: &At) -> Rgb {
     let (x, y, t) = (at.x, at.y, at.texel);
     let band = 2.0 * t;
     let scale = |f: f64| base.map(|a| a * f.max(0.0));
     match pattern {
         Pattern::Checker { .. } => base,
-        Pattern::Noise { size, amount, seed } => scale(crate::geometry::mesh::pattern_factor(
+        Pattern::Noise { size, amount, seed } => scale(pattern_factor(
             &Pattern::Noise {
                 size: *size,
                 amount: *amount,
@@ -366,9 +341,49 @@ pub fn variation(seed: u64, v: f64) -> Rgb {
     })
 }
 
+/// Multiplier of the albedo at object-frame point `p` (metres, after scale) for a pattern:
+/// checker → 1 or `contrast` by the parity of ⌊x/s⌋+⌊y/s⌋+⌊z/s⌋; noise → `1 + amount·n`
+/// with n ∈ [-1, 1] value noise of feature size `size`, clamped to ≥ 0.
+pub fn pattern_factor(pattern: &Pattern, p: glam::DVec3) -> f64 {
+    match *pattern {
+        Pattern::Checker { size, contrast } => {
+            if size <= 0.0 {
+                return 1.0;
+            }
+            let q = p / size;
+            let fl = floor;
+            let q = glam::DVec3::new(fl(q.x), fl(q.y), fl(q.z));
+            let parity = (q.x as i64 + q.y as i64 + q.z as i64).rem_euclid(2);
+            if parity == 0 { 1.0 } else { contrast }
+        }
+        Pattern::Noise { size, amount, seed } => {
+            if size <= 0.0 {
+                return 1.0;
+            }
+            let q = p / size;
+            let n = 0.6 * value_noise3(seed, q) + 0.4 * value_noise3(mix64(seed), q * 2.7);
+            (1.0 + amount * n).max(0.0)
+        }
+        // The other patterns are baked into image textures (`crate::texture::bake`).
+        _ => 1.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
+
+    #[test]
+    fn checker_pattern_alternates() {
+        let p = Pattern::Checker {
+            size: 0.1,
+            contrast: 0.25,
+        };
+        assert_eq!(pattern_factor(&p, DVec3::new(0.05, 0.05, 0.0)), 1.0);
+        assert_eq!(pattern_factor(&p, DVec3::new(0.15, 0.05, 0.0)), 0.25);
+        assert_eq!(pattern_factor(&p, DVec3::new(-0.05, 0.05, 0.0)), 0.25);
+    }
 
     /// The inlined floor is `f64::floor`, bit for bit, on every kind of value.
     #[test]

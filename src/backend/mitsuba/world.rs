@@ -264,7 +264,7 @@ pub(super) fn scene_bounds(model: &Model) -> (DVec3, DVec3) {
 }
 
 /// The object's BSDF: two-sided Lambertian; a checker on a plane becomes a `checkerboard`
-/// texture with the native renderer's parity (`pattern_factor` in `crate::geometry::mesh`). Patterns
+/// texture with the native renderer's parity (`pattern_factor` in `crate::texture`). Patterns
 /// Mitsuba cannot express on a shape are reported and the plain albedo is used.
 fn diffuse(o: &Object, plane: Option<(f64, f64)>, warnings: &mut Vec<String>) -> El {
     let a = o.material.albedo;

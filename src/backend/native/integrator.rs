@@ -296,7 +296,7 @@ impl<'a> Integrator<'a> {
                 match &o.material.pattern {
                     Some(p) => {
                         let q = self.object_from_world[i as usize].transform_point(h.point);
-                        a * crate::geometry::mesh::pattern_factor(p, q)
+                        a * crate::texture::pattern_factor(p, q)
                     }
                     None => a,
                 }

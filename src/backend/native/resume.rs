@@ -12,8 +12,8 @@
 //! An image counts as done only when every file it lists still exists with its hash. Renders
 //! running at once into one folder (shards of a SLURM array) update the manifest under a lock.
 
+use crate::io::sha256;
 use crate::model::Model;
-use crate::pack::sha256;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

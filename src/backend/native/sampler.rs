@@ -11,7 +11,7 @@
 //! independent, which lowers the error of their mean (docs/native.md, "The sampler"). The 24 bits
 //! of a Sobol value are completed to 53 with independent low bits.
 
-use crate::geometry::mesh::mix64;
+use crate::noise::mix64;
 use crate::rng::SplitMix64;
 
 /// How many draws of each sample come from the Sobol sequence (33 four-dimensional sets: the
