@@ -213,8 +213,6 @@ pub struct Manifest {
     pub outputs_included: bool,
 }
 
-/// SHA-256 of `bytes`, lower-case hex.
-
 /// Every regular file below `dir`, with paths relative to it (`/`-separated), sorted.
 /// Symbolic links are skipped: a command's outputs are regular files. The native renderer's
 /// resume bookkeeping (`render-manifest.json`, which fingerprints the scene's absolute paths)
