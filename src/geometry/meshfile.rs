@@ -138,9 +138,9 @@ impl Format {
 
 /// Read a mesh file (any [`Format`]) with its colours; `roots` are the folders its side files
 /// (MTL, images, buffers) may be in, besides the mesh's own ([`side_file`]). The file is read
-/// the front end's one way ([`crate::scene::source::read_capped`], at most
-/// [`MAX_MESH_BYTES`](crate::scene::source::MAX_MESH_BYTES); the files it names at most
-/// [`MAX_ASSET_BYTES`](crate::scene::source::MAX_ASSET_BYTES)).
+/// the front end's one way ([`crate::io::read::read_capped`], at most
+/// [`MAX_MESH_BYTES`](crate::io::read::MAX_MESH_BYTES); the files it names at most
+/// [`MAX_ASSET_BYTES`](crate::io::read::MAX_ASSET_BYTES)).
 pub fn load(path: &Path, roots: &[PathBuf]) -> Result<MeshFile, String> {
     load_with(path, roots, true)
 }
@@ -251,15 +251,15 @@ fn load_with(path: &Path, roots: &[PathBuf], colours: bool) -> Result<MeshFile, 
 
 /// A file a scene reads, capped.
 pub(crate) fn read(path: &Path) -> Result<Vec<u8>, String> {
-    use crate::scene::source::{MAX_ASSET_BYTES, read_capped};
+    use crate::io::read::{MAX_ASSET_BYTES, read_capped};
     read_capped(path, MAX_ASSET_BYTES)
         .map_err(|r| format!("cannot read `{}`: {}", path.display(), r.reason()))
 }
 
 /// A mesh file a `mesh` object names, capped at
-/// [`MAX_MESH_BYTES`](crate::scene::source::MAX_MESH_BYTES).
+/// [`MAX_MESH_BYTES`](crate::io::read::MAX_MESH_BYTES).
 pub(crate) fn read_mesh(path: &Path) -> Result<Vec<u8>, String> {
-    use crate::scene::source::{MAX_MESH_BYTES, read_capped};
+    use crate::io::read::{MAX_MESH_BYTES, read_capped};
     read_capped(path, MAX_MESH_BYTES)
         .map_err(|r| format!("cannot read `{}`: {}", path.display(), r.reason()))
 }
@@ -272,7 +272,7 @@ fn text_of<'a>(bytes: &'a [u8], shown: &str) -> Result<&'a str, String> {
     {
         return Ok(text);
     }
-    if let Some((at, b)) = crate::scene::source::not_text(bytes) {
+    if let Some((at, b)) = crate::io::read::not_text(bytes) {
         let line = 1 + bytes[..at].iter().filter(|&&c| c == b'\n').count();
         return Err(format!(
             "{shown}:{line}: not a text file (byte 0x{b:02x} at offset {at})"
@@ -305,12 +305,9 @@ pub fn side_file(by: &Path, rel: &str, roots: &[PathBuf]) -> Result<PathBuf, Str
         dir
     };
     let joined = dir.join(p);
-    let canon = joined.canonicalize().map_err(|e| {
-        format!(
-            "`{rel}` is missing ({})",
-            crate::scene::source::io_reason(&e)
-        )
-    })?;
+    let canon = joined
+        .canonicalize()
+        .map_err(|e| format!("`{rel}` is missing ({})", crate::io::read::io_reason(&e)))?;
     let inside = std::iter::once(dir.to_path_buf())
         .chain(roots.iter().cloned())
         .filter_map(|r| r.canonicalize().ok())
@@ -323,7 +320,7 @@ pub fn side_file(by: &Path, rel: &str, roots: &[PathBuf]) -> Result<PathBuf, Str
     let meta = std::fs::metadata(&canon).map_err(|e| {
         format!(
             "`{rel}` cannot be read ({})",
-            crate::scene::source::io_reason(&e)
+            crate::io::read::io_reason(&e)
         )
     })?;
     if !meta.is_file() {

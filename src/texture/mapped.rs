@@ -334,7 +334,7 @@ impl MeshPlan {
             self.file.mesh.positions.len(),
             self.materials.len(),
             self.texels(),
-            crate::scene::source::size_text(self.memory())
+            crate::io::read::size_text(self.memory())
         )];
         for m in &self.materials {
             let name = if m.name.is_empty() {

@@ -1,6 +1,9 @@
-//! Output plumbing shared by every command: atomic file writes (temporary file, then rename),
-//! so that a failed run never leaves a half-written output behind, and the SHA-256 of what
-//! was written (packs, the renderer's resume manifest).
+//! File plumbing shared by every command: atomic file writes (temporary file, then rename),
+//! so that a failed run never leaves a half-written output behind, the SHA-256 of what was
+//! written (packs, the renderer's resume manifest), and the one bounded way to read a file a
+//! scene names ([`read`]).
+
+pub mod read;
 
 use std::io::Write;
 use std::path::Path;
