@@ -204,8 +204,8 @@ fn a_textured_utm_site_is_the_local_site_in_the_truth_and_the_texture() {
     assert!(dm < 1e-9 && dpx < 1e-6, "{dm} {dpx}");
     // The textured geometry (what the renderers draw and sample the image on).
     let (ba, bb) = (
-        poser::geometry::Bvh::textured(&local).unwrap(),
-        poser::geometry::Bvh::textured(&far).unwrap(),
+        poser::texture::Textured::of_model(&local).unwrap(),
+        poser::texture::Textured::of_model(&far).unwrap(),
     );
     for (x, y) in [(0.0, 0.0), (-0.31, 0.2), (0.3, -0.2), (0.758, 0.189)] {
         let ray = poser::geometry::Ray {

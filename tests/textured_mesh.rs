@@ -263,7 +263,7 @@ fn a_vertex_coloured_ply_is_drawn_with_its_colours() {
         model.objects[0].shape,
         Shape::Mesh { textured: true, .. }
     ));
-    let bvh = poser::geometry::Bvh::textured(&model).unwrap();
+    let bvh = poser::texture::Textured::of_model(&model).unwrap();
     // Straight down onto the corner of the red vertex and the centre.
     let at = |x: f64, y: f64| {
         let h = bvh

@@ -9,7 +9,7 @@
 //! |---|---|
 //! | `write` | writing the files (not part of the goal) |
 //! | `load` | [`crate::scene::load`] (the front end reads the mesh and probes its image) and [`crate::texture::mapped::prepare_object`] (the OBJ parsed, the JPEG decoded to linear 16-bit, the level chosen) |
-//! | `bvh` | [`crate::geometry::bvh::Bvh::textured`] on the prepared mesh |
+//! | `bvh` | [`crate::texture::Textured::of_model`] on the prepared mesh |
 //! | `truth` | [`crate::truth::write_in`] on that BVH (the targets' pixels, occlusion against the site) |
 //! | `render` | one native render through [`crate::backend::Backend`] (which builds its own scene: the prepared mesh is reused, the BVH is built again) |
 //!
@@ -21,7 +21,6 @@
 
 use crate::backend::{Backend, RenderOptions};
 use crate::geometry::bommie::{self, HALF, height};
-use crate::geometry::bvh::Bvh;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -154,7 +153,7 @@ pub fn run(opts: &Options) -> Result<Report, String> {
     let prepared = crate::texture::mapped::prepare_object(&model, 0)?
         .ok_or("the site is not a textured mesh")?;
     stages.push(clock.lap("load"));
-    let bvh = Bvh::textured(&model)?;
+    let bvh = crate::texture::Textured::of_model(&model)?;
     stages.push(clock.lap("bvh"));
     crate::truth::write_in(&model, &bvh, &dir.join("render/truth"))?;
     stages.push(clock.lap("truth"));

@@ -105,10 +105,10 @@ pub fn write(dir: &Path, triangles: u64, texture: u32) -> Result<Written, String
             crate::geometry::meshfile::MAX_ELEMENTS
         ));
     }
-    if !(16..=crate::texture::mapped::MAX_TEXTURE_SIDE).contains(&texture) {
+    if !(16..=crate::io::read::MAX_TEXTURE_SIDE).contains(&texture) {
         return Err(format!(
             "a {texture}² texture: its side between 16 and {}",
-            crate::texture::mapped::MAX_TEXTURE_SIDE
+            crate::io::read::MAX_TEXTURE_SIDE
         ));
     }
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;

@@ -9,9 +9,9 @@
 //! |---|---|
 //! | [`SurfaceId`] | which object or target a triangle belongs to (for its material) |
 //! | [`Bvh::of_model`] | objects via [`super::mesh::object_mesh`]; targets as planes of their printed extent |
-//! | [`Bvh::textured`] | the same, with baked objects as their baked mesh with UVs and texture ([`crate::texture::bake`]) and textured meshes with their file's colours ([`crate::texture::mapped`]) |
+//! | [`Bvh::of_model_with`] | the same, with some objects' meshes given (with UVs): what the textured geometry (`texture::Textured`) builds |
 //! | [`Bvh::uv_at`] | texture coordinates at a hit |
-//! | [`Bvh::mapped_albedo`] | albedo at a hit on a textured mesh ([`crate::texture::mapped`]) |
+//! | [`Bvh::source_of`] | a hit's triangle index in its object's mesh, when kept |
 //! | [`Bvh::intersect`] | closest hit with `t ∈ (RAY_EPSILON, tmax)` |
 //! | [`Bvh::occluded`] | is the open segment between two points blocked? |
 //!
@@ -103,10 +103,6 @@ pub struct Bvh {
     surface: Vec<SurfaceId>,
     /// Texture coordinates of each triangle's corners (empty when nothing is baked).
     uv: Vec<[[f32; 2]; 3]>,
-    /// The baked texture of each object ([`crate::texture::bake`]), by object index.
-    pub textures: Vec<Option<std::sync::Arc<crate::texture::bake::Baked>>>,
-    /// The prepared textured mesh of each object ([`crate::texture::mapped`]), by object index.
-    pub meshes: Vec<Option<std::sync::Arc<crate::texture::mapped::Prepared>>>,
     /// Index of each triangle in its surface's mesh (empty when no object is a textured mesh:
     /// only those look up per-triangle materials and vertex colours).
     source: Vec<u32>,
@@ -240,62 +236,38 @@ impl Bvh {
     /// Tessellate every object and target of the model and build the BVH (no textures: what
     /// occlusion tests need). glTF paths are resolved against the directory of `model.source`.
     pub fn of_model(model: &Model) -> Result<Bvh, String> {
-        Bvh::assemble(model, false)
+        Bvh::of_model_with(model, Vec::new(), false)
     }
 
-    /// [`Bvh::of_model`] with the baked textures ([`crate::texture::bake`]) and their UVs.
-    pub fn textured(model: &Model) -> Result<Bvh, String> {
-        Bvh::assemble(model, true)
-    }
-
-    /// The geometry, with the baked textures and the textured meshes when `textured`.
-    fn assemble(model: &Model, textured: bool) -> Result<Bvh, String> {
+    /// [`Bvh::of_model`], with object `i`'s world-frame mesh and its UVs taken from `given[i]`
+    /// where that is `Some` (a baked or mapped texture's mesh: the same triangles, vertices
+    /// split at UV seams), and each triangle's index in its mesh kept when `keep_source`.
+    pub fn of_model_with(
+        model: &Model,
+        mut given: Vec<Option<(TriMesh, Option<Vec<[f32; 2]>>)>>,
+        keep_source: bool,
+    ) -> Result<Bvh, String> {
         let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
+        given.resize_with(model.objects.len(), || None);
         let mut meshes = Vec::new();
-        let mut textures = Vec::new();
-        let mut prepared = Vec::new();
         let mut solids = Vec::new();
-        for (i, o) in model.objects.iter().enumerate() {
-            // Textured meshes keep their file's triangles (the geometry `object_mesh` reads);
-            // baked objects use the baked mesh (same triangles, vertices split at UV seams).
-            let mapped = if textured {
-                crate::texture::mapped::prepare_object(model, i)?
-            } else {
-                None
-            };
-            let baked = if textured && mapped.is_none() {
-                crate::texture::bake::bake_object(model, i)?
-            } else {
-                None
-            };
-            let (mesh, uv) = match (&mapped, &baked) {
-                (Some(p), _) => {
-                    let f = &p.plan.file;
-                    let uv = (!f.uv.is_empty()).then(|| f.uv.clone());
-                    (f.mesh.transformed(&o.pose, o.scale), uv)
-                }
-                (None, Some(b)) => (b.mesh.transformed(&o.pose, o.scale), Some(b.uv.clone())),
-                (None, None) => {
+        for ((i, o), g) in model.objects.iter().enumerate().zip(given) {
+            let (mesh, uv) = match g {
+                Some(m) => m,
+                None => {
                     if let Some(s) = Solid::of(o, i) {
                         solids.push(s);
-                        textures.push(None);
-                        prepared.push(None);
                         continue;
                     }
                     (object_mesh(o, base)?, None)
                 }
             };
             meshes.push((SurfaceId::Object(i as u32), mesh, uv));
-            textures.push(baked);
-            prepared.push(mapped);
         }
         for (i, t) in model.targets.iter().enumerate() {
             meshes.push((SurfaceId::Target(i as u32), target_mesh(t), None));
         }
-        let any_mapped = prepared.iter().any(Option::is_some);
-        let mut s = Bvh::build(meshes, any_mapped);
-        s.textures = textures;
-        s.meshes = prepared;
+        let mut s = Bvh::build(meshes, keep_source);
         s.solids = solids;
         Ok(s)
     }
@@ -345,8 +317,6 @@ impl Bvh {
             tris,
             surface,
             uv: uvs,
-            textures: Vec::new(),
-            meshes: Vec::new(),
             source,
             nodes: Vec::new(),
             solids: Vec::new(),
@@ -382,22 +352,10 @@ impl Bvh {
         Some([f(0), f(1)])
     }
 
-    /// Albedo at a hit on a textured mesh ([`crate::texture::mapped`]): its material's image,
-    /// colour or vertex colours there; `None` for every other surface.
-    pub fn mapped_albedo(&self, h: &Hit) -> Option<[f64; 3]> {
-        self.mapped_albedo_over(h, 0.0)
-    }
-
-    /// [`Bvh::mapped_albedo`] with the image averaged over a footprint `width` metres wide
-    /// ([`crate::texture::mapped::Prepared::albedo_over`]).
-    pub fn mapped_albedo_over(&self, h: &Hit, width: f64) -> Option<[f64; 3]> {
-        let SurfaceId::Object(i) = h.surface else {
-            return None;
-        };
-        let p = self.meshes.get(i as usize)?.as_ref()?;
-        let src = *self.source.get(h.triangle as usize)?;
-        let k = *p.plan.file.material.get(src as usize)?;
-        Some(p.albedo_over(k, self.uv_at(h), src, self.barycentric(h), width))
+    /// The index of a hit's triangle in its object's mesh, when the BVH keeps them
+    /// ([`Bvh::of_model_with`] with `keep_source`).
+    pub fn source_of(&self, h: &Hit) -> Option<u32> {
+        self.source.get(h.triangle as usize).copied()
     }
 
     /// Number of (non-degenerate) triangles.

@@ -5,6 +5,9 @@
 
 use std::path::Path;
 
+/// Largest side of an image a mesh may name (or a generated texture may have), texels.
+pub const MAX_TEXTURE_SIDE: u32 = 16384;
+
 /// Largest other file a scene names (a point list, an MTL, an image, a glTF's buffer): 256 MiB.
 pub const MAX_ASSET_BYTES: u64 = 256 << 20;
 

@@ -24,8 +24,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock, Weak};
 
-/// Largest side of an image a mesh may name, texels.
-pub const MAX_TEXTURE_SIDE: u32 = 16384;
+pub use crate::io::read::MAX_TEXTURE_SIDE;
 /// Most bytes a decoder may allocate for one image (a 16384² RGBA 8-bit image).
 pub const MAX_DECODE_BYTES: u64 = 1 << 30;
 

@@ -23,6 +23,9 @@
 pub mod bake;
 pub mod mapped;
 pub mod mip;
+pub mod textured;
+
+pub use textured::Textured;
 
 use crate::model::{Pattern, Rgb};
 use crate::noise::{floor, mix64, quintic, value_noise3};
