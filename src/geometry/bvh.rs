@@ -232,6 +232,9 @@ const BINS: usize = 16;
 /// A world-frame mesh of a surface, with per-vertex texture coordinates when it is textured.
 pub type UvMesh = (SurfaceId, TriMesh, Option<Vec<[f32; 2]>>);
 
+/// An object's world-frame mesh given to [`Bvh::of_model_with`], with its per-vertex UVs.
+pub type GivenMesh = (TriMesh, Option<Vec<[f32; 2]>>);
+
 impl Bvh {
     /// Tessellate every object and target of the model and build the BVH (no textures: what
     /// occlusion tests need). glTF paths are resolved against the directory of `model.source`.
@@ -244,7 +247,7 @@ impl Bvh {
     /// split at UV seams), and each triangle's index in its mesh kept when `keep_source`.
     pub fn of_model_with(
         model: &Model,
-        mut given: Vec<Option<(TriMesh, Option<Vec<[f32; 2]>>)>>,
+        mut given: Vec<Option<GivenMesh>>,
         keep_source: bool,
     ) -> Result<Bvh, String> {
         let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
