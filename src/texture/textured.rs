@@ -7,7 +7,6 @@
 //! | item | meaning |
 //! |---|---|
 //! | [`Textured::of_model`] | bake or prepare every textured object, then build the BVH on their meshes |
-//! | [`Textured::untextured`] | a BVH without textures |
 //! | [`Textured::mapped_albedo`] | albedo at a hit on a textured mesh |
 //!
 //! It dereferences to its [`Bvh`], so `textured.intersect(…)` is the geometry's query.
@@ -60,14 +59,6 @@ impl Textured {
             textures,
             meshes,
         })
-    }
-
-    /// `bvh` without textures.
-    pub fn untextured(bvh: Bvh) -> Textured {
-        Textured {
-            bvh,
-            ..Textured::default()
-        }
     }
 
     /// Albedo at a hit on a textured mesh: its material's image, colour or vertex colours

@@ -72,17 +72,18 @@ fn expand(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
     })
 }
 
-/// `rename_all = "…"` of the struct, schemars' over serde's.
-fn container_rename_all(attrs: &[Attribute]) -> syn::Result<Option<(String, LitStr)>> {
+/// The value `read` finds in the `serde` and `schemars` attributes, schemars' over serde's
+/// (as in the schema). `read` sees each nested item and returns `Some` for the one it wants.
+fn schemars_over_serde<T>(
+    attrs: &[Attribute],
+    mut read: impl FnMut(&syn::meta::ParseNestedMeta) -> syn::Result<Option<T>>,
+) -> syn::Result<Option<T>> {
     let mut out = None;
     for (tool, a) in tool_attrs(attrs) {
         let mut found = None;
         a.parse_nested_meta(|m| {
-            if m.path.is_ident("rename_all") {
-                let lit: LitStr = m.value()?.parse()?;
-                found = Some((lit.value(), lit));
-            } else {
-                skip_value(&m)?;
+            if let Some(v) = read(&m)? {
+                found = Some(v);
             }
             Ok(())
         })?;
@@ -93,34 +94,38 @@ fn container_rename_all(attrs: &[Attribute]) -> syn::Result<Option<(String, LitS
     Ok(out)
 }
 
+/// `rename_all = "…"` of the struct, schemars' over serde's.
+fn container_rename_all(attrs: &[Attribute]) -> syn::Result<Option<(String, LitStr)>> {
+    schemars_over_serde(attrs, |m| {
+        if m.path.is_ident("rename_all") {
+            let lit: LitStr = m.value()?.parse()?;
+            return Ok(Some((lit.value(), lit)));
+        }
+        skip_value(m)?;
+        Ok(None)
+    })
+}
+
 /// `rename = "…"` of a field, schemars' over serde's; `flatten`, `skip` and split renames are
 /// refused.
 fn field_rename(attrs: &[Attribute]) -> syn::Result<Option<String>> {
-    let mut out = None;
-    for (tool, a) in tool_attrs(attrs) {
-        let mut found = None;
-        a.parse_nested_meta(|m| {
-            let p = &m.path;
-            if p.is_ident("rename") {
-                if m.input.peek(syn::token::Paren) {
-                    return Err(m.error("`Keys` needs one key: a plain `rename = \"…\"`"));
-                }
-                found = Some(m.value()?.parse::<LitStr>()?.value());
-            } else if ["flatten", "skip", "skip_deserializing", "skip_serializing"]
-                .iter()
-                .any(|w| p.is_ident(w))
-            {
-                return Err(m.error("`Keys` cannot name the keys of a flattened or skipped field"));
-            } else {
-                skip_value(&m)?;
+    schemars_over_serde(attrs, |m| {
+        let p = &m.path;
+        if p.is_ident("rename") {
+            if m.input.peek(syn::token::Paren) {
+                return Err(m.error("`Keys` needs one key: a plain `rename = \"…\"`"));
             }
-            Ok(())
-        })?;
-        if found.is_some() && (out.is_none() || tool == "schemars") {
-            out = found;
+            return Ok(Some(m.value()?.parse::<LitStr>()?.value()));
         }
-    }
-    Ok(out)
+        if ["flatten", "skip", "skip_deserializing", "skip_serializing"]
+            .iter()
+            .any(|w| p.is_ident(w))
+        {
+            return Err(m.error("`Keys` cannot name the keys of a flattened or skipped field"));
+        }
+        skip_value(m)?;
+        Ok(None)
+    })
 }
 
 fn tool_attrs(attrs: &[Attribute]) -> impl Iterator<Item = (&'static str, &Attribute)> {
