@@ -63,6 +63,7 @@ mod points_file;
 mod port_layers;
 mod render_resume;
 mod scenarios;
+mod seabed_relief;
 mod sensor;
 mod texture_budget;
 mod textured_mesh;

@@ -886,7 +886,7 @@ mod tests {
             (SurfaceId::Object(0), mesh::boulders(4.0, 4.0, 40, 0.3, 1)),
             (
                 SurfaceId::Object(1),
-                mesh::seabed(6.0, 6.0, 0.1, 0.2, 2).unwrap(),
+                mesh::seabed(6.0, 6.0, 0.1, 0.2, 2, None).unwrap(),
             ),
         ];
         let scene = Bvh::from_meshes(meshes.clone());
@@ -965,7 +965,7 @@ mod tests {
         vec![
             (
                 SurfaceId::Object(0),
-                mesh::seabed(8.0, 8.0, 0.05, 0.02, 3).unwrap(),
+                mesh::seabed(8.0, 8.0, 0.05, 0.02, 3, None).unwrap(),
             ),
             (SurfaceId::Object(1), mesh::boulders(6.0, 6.0, 300, 0.2, 4)),
             (SurfaceId::Target(0), stack),

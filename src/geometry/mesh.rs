@@ -10,7 +10,7 @@
 //! | `Box` | `size` (x, y, z), centred | 12 triangles, outward normals |
 //! | `Sphere` | `radius`, centred | UV sphere, [`SPHERE_SEGMENTS`] × [`SPHERE_SEGMENTS`]/2 |
 //! | `Cylinder` | `radius`, `height` along z, centred, capped | [`CYLINDER_SEGMENTS`] sides |
-//! | `Seabed` | `width` (x) × `length` (y) heightfield, cell `resolution`, relief RMS `roughness`, `seed` | grid of ⌈width/resolution⌉ × ⌈length/resolution⌉ cells, ≤ [`MAX_SEABED_CELLS`] |
+//! | `Seabed` | `width` (x) × `length` (y) heightfield, cell `resolution`, relief RMS `roughness`, `seed`, on the spline through `relief`'s heights ([`super::relief`]) | grid of ⌈width/resolution⌉ × ⌈length/resolution⌉ cells, ≤ [`MAX_SEABED_CELLS`] |
 //! | `Boulders` | `count` rocks of mean radius `radius` in `width` × `length`, `seed` | subdivided icosahedra, radii 0.6–1.4 × `radius`, squashed, half buried at z = 0 |
 //! | `Coral` | `growth` (branching or massive), colony `radius`, `seed` | a signed distance field polygonised by marching tetrahedra ([`super::coral`]) |
 //!
@@ -175,6 +175,7 @@ pub fn shape_mesh(shape: &Shape, base_dir: &Path) -> Result<TriMesh, String> {
             roughness,
             resolution,
             seed,
+            ref relief,
         } => {
             positive("seabed width", width)?;
             positive("seabed length", length)?;
@@ -182,7 +183,12 @@ pub fn shape_mesh(shape: &Shape, base_dir: &Path) -> Result<TriMesh, String> {
             if !(roughness.is_finite() && roughness >= 0.0) {
                 return Err(format!("seabed roughness must be ≥ 0 (got {roughness})"));
             }
-            seabed(width, length, roughness, resolution, seed)
+            let relief = if relief.is_empty() {
+                None
+            } else {
+                Some(super::relief::Relief::through(relief)?)
+            };
+            seabed(width, length, roughness, resolution, seed, relief.as_ref())
         }
         Shape::Boulders {
             width,
@@ -386,13 +392,15 @@ pub fn cylinder(radius: f64, height: f64, seg: u32) -> TriMesh {
 // ------------------------------------------------------------------------------------------
 
 /// Fractal heightfield: ⌈width/resolution⌉ × ⌈length/resolution⌉ cells on the xy plane,
-/// heights of zero mean and RMS exactly `roughness`.
+/// heights of zero mean and RMS exactly `roughness`, added to `relief` (the surveyed heights'
+/// spline) where there is one.
 pub fn seabed(
     width: f64,
     length: f64,
     roughness: f64,
     resolution: f64,
     seed: u64,
+    relief: Option<&super::relief::Relief>,
 ) -> Result<TriMesh, String> {
     let nx = (width / resolution).ceil().max(1.0);
     let ny = (length / resolution).ceil().max(1.0);
@@ -442,7 +450,10 @@ pub fn seabed(
         for i in 0..=nx {
             let x = -0.5 * width + width * i as f64 / nx as f64;
             let y = -0.5 * length + length * j as f64 / ny as f64;
-            let h = (heights[(j * (nx + 1) + i) as usize] - mean) * k;
+            let mut h = (heights[(j * (nx + 1) + i) as usize] - mean) * k;
+            if let Some(r) = relief {
+                h += r.height(x, y);
+            }
             m.positions.push(DVec3::new(x, y, h));
         }
     }
@@ -643,16 +654,16 @@ mod tests {
 
     #[test]
     fn seabed_is_deterministic_with_exact_rms() {
-        let a = seabed(10.0, 6.0, 0.2, 0.1, 7).unwrap();
-        let b = seabed(10.0, 6.0, 0.2, 0.1, 7).unwrap();
-        let c = seabed(10.0, 6.0, 0.2, 0.1, 8).unwrap();
+        let a = seabed(10.0, 6.0, 0.2, 0.1, 7, None).unwrap();
+        let b = seabed(10.0, 6.0, 0.2, 0.1, 7, None).unwrap();
+        let c = seabed(10.0, 6.0, 0.2, 0.1, 8, None).unwrap();
         assert_eq!(a, b);
         // Its rows are computed in parallel: the same mesh, bit for bit, on one thread.
         let one = rayon::ThreadPoolBuilder::new()
             .num_threads(1)
             .build()
             .unwrap();
-        let serial = one.install(|| seabed(10.0, 6.0, 0.2, 0.1, 7).unwrap());
+        let serial = one.install(|| seabed(10.0, 6.0, 0.2, 0.1, 7, None).unwrap());
         assert!(
             a.positions
                 .iter()
@@ -665,7 +676,7 @@ mod tests {
         let rms = (a.positions.iter().map(|p| p.z * p.z).sum::<f64>() / n).sqrt();
         assert!((rms - 0.2).abs() < 1e-9, "{rms}");
         assert_eq!(a.triangles.len(), 2 * 100 * 60);
-        assert!(seabed(1e4, 1e4, 0.1, 0.001, 1).is_err());
+        assert!(seabed(1e4, 1e4, 0.1, 0.001, 1, None).is_err());
     }
 
     #[test]

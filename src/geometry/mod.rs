@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`mesh`] | triangle meshes of every scene shape (glTF, primitives, seabed, boulders), patterns, PLY |
 //! | [`meshfile`] | mesh files with their colours: OBJ + MTL, PLY with vertex colours, glTF with base-colour textures |
+//! | [`relief`] | a seabed's large-scale relief through surveyed heights (thin-plate spline) |
 //! | [`coral`] | procedural coral colonies (branching, massive) as closed meshes |
 //! | [`bommie`] | a generated textured site (a coral bommie on rubble) written as OBJ + MTL + JPEG, as a photogrammetry package exports it |
 //! | [`targets`] | calibration targets: 3D points, printed reflectance, textures |
@@ -18,6 +19,7 @@ pub mod bvh;
 pub mod coral;
 pub mod mesh;
 pub mod meshfile;
+pub mod relief;
 pub mod seen;
 pub mod shadow;
 pub mod targets;

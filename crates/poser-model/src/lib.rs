@@ -430,13 +430,17 @@ pub enum Shape {
         height: f64,
     },
     /// Procedural seabed: a `width`×`length` heightfield on the object's xy plane, fractal
-    /// relief of RMS `roughness` m, `resolution` m cell size, from `seed`.
+    /// relief of RMS `roughness` m, `resolution` m cell size, from `seed`; with `relief`
+    /// points (object frame, at most 200, not all on one line) the fractal relief is added to
+    /// the thin-plate spline through them, the surveyed heights of the site.
     Seabed {
         width: f64,
         length: f64,
         roughness: f64,
         resolution: f64,
         seed: u64,
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        relief: Vec<DVec3>,
     },
     /// Procedural rock/coral field scattered on the seabed: `count` boulders of mean radius
     /// `radius` within `width`×`length`, from `seed`.

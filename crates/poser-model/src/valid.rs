@@ -311,9 +311,13 @@ fn object(c: &mut Checker, at: &str, o: &Object) {
             length,
             roughness,
             resolution,
+            relief,
             ..
         } => {
             c.non_negative(&format!("{at}.shape.roughness"), *roughness);
+            for (k, p) in relief.iter().enumerate() {
+                c.finite_vec(&format!("{at}.shape.relief[{k}]"), *p);
+            }
             vec![
                 ("width", *width),
                 ("length", *length),

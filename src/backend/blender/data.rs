@@ -557,8 +557,12 @@ fn bounds(model: &Model) -> Value {
                 width,
                 length,
                 roughness,
+                relief,
                 ..
-            } => 0.5 * width.hypot(*length) + 4.0 * roughness,
+            } => {
+                let heights = relief.iter().map(|p| 2.0 * p.z.abs()).fold(0.0, f64::max);
+                0.5 * width.hypot(*length) + 4.0 * roughness + heights
+            }
             Shape::Boulders {
                 width,
                 length,

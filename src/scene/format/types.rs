@@ -570,6 +570,17 @@ pub struct Object {
     pub roughness: Option<Length>,
     /// Seabed: heightfield cell size. **Unit:** m. **Default:** 0.05 m.
     pub resolution: Option<Length>,
+    /// Seabed: a list of surveyed points (`id x y z` per line, as a `points_file` target's
+    /// `file`, relative to the file that names it) whose heights the seabed passes through:
+    /// its large-scale relief is the thin-plate spline through them (the smoothest surface
+    /// through the points), and `roughness` is added on top. 3 to 200 points, not all on one
+    /// line. See docs/scenes.md, "A seabed through surveyed heights". **Default:** none (a
+    /// flat seabed under its roughness).
+    pub relief_file: Option<String>,
+    /// Seabed: where the origin of `relief_file`'s frame lies in the world, as a `points_file`
+    /// target's `position` (one file, one frame: a GCP list can shape the seabed and print
+    /// its disks). **Unit:** m. **Default:** `[0, 0, 0]`.
+    pub relief_origin: Option<Vec3<Length>>,
     /// Boulders: how many. **Default:** 30.
     pub count: Option<u32>,
     /// Coral: growth form, `"branching"` (staghorn-like branches of branches) or `"massive"`

@@ -89,6 +89,12 @@ pub(super) fn objects(
                 o.span_of(F::Object::path),
             );
         }
+        let mut shape = shape;
+        if let Shape::Seabed { relief, .. } = &mut shape
+            && o.has(F::Object::relief_file)
+        {
+            *relief = relief_points(cx, &mut o, &pose, scale, sources, scene);
+        }
         let mut material = material(cx, &mut o, 0.3);
         material.glass = glass(cx, &mut o, shape_kind, scale);
         spans.objects.push(o.span);
@@ -226,7 +232,58 @@ fn seabed(cx: &mut Cx, o: &mut Tab, seed: u64) -> Shape {
         roughness,
         resolution,
         seed,
+        relief: vec![],
     }
+}
+
+/// A seabed's `relief_file`: its points moved by `relief_origin` into the world, then into the
+/// seabed's own frame (pose and scale undone), checked to make a surface
+/// ([`crate::geometry::relief`]).
+fn relief_points(
+    cx: &mut Cx,
+    o: &mut Tab,
+    pose: &Pose,
+    scale: DVec3,
+    sources: &Sources,
+    scene: &Path,
+) -> Vec<DVec3> {
+    let origin = o
+        .opt_vec3(cx, F::Object::relief_origin, Dim::Length)
+        .unwrap_or(DVec3::ZERO);
+    let fspan = o.span_of(F::Object::relief_file);
+    let Some(rel) = o.opt_str(cx, F::Object::relief_file) else {
+        return vec![];
+    };
+    let dir = sources
+        .dir_of(fspan.file)
+        .unwrap_or_else(|| scene.parent().map(Path::to_path_buf).unwrap_or_default());
+    let file = dir.join(&rel);
+    if let Some(why) = crate::scene::source::outside_root(sources, &rel, &file) {
+        cx.push(crate::scene::source::outside_diag(&rel, &why, fspan));
+        return vec![];
+    }
+    let pts = crate::scene::points_file::read(cx, &file, fspan);
+    if pts.is_empty() {
+        return vec![];
+    }
+    cx.files.push(file.clone());
+    if !(scale.min_element() > 0.0) {
+        return vec![];
+    }
+    let to_local = pose.inverse();
+    let local: Vec<DVec3> = pts
+        .iter()
+        .map(|p| to_local.transform_point(origin + p.p) / scale)
+        .collect();
+    if let Err(e) = crate::geometry::relief::Relief::through(&local) {
+        cx.push(
+            Diagnostic::error("E0302", "the seabed's relief points make no surface")
+                .label(fspan, e)
+                .help("give at least 3 points (at most 200) spread across the site, not on one line, each (x, y) once"),
+        );
+        return vec![];
+    }
+    local
 }
 
 /// `count` boulders of about `radius` scattered over `width` × `length`.
