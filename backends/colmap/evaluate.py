@@ -351,6 +351,7 @@ def bundle(pycolmap, req: dict) -> dict:
     )
     remove_gcp_views(rec, views)
     rec.update_point_3d_errors()
+    diverged = drop_diverged_points(rec)
     # The focal probe, when the adjustment calibrated the camera itself (not a calibrated rig).
     sensitivity = (
         focal_sensitivity(pycolmap, rec, req) if req.get("rig") is None else None
@@ -370,9 +371,38 @@ def bundle(pycolmap, req: dict) -> dict:
         "focal_sensitivity": sensitivity,
         **covariance,
         "gcps_weighted": len(views) // 3,
+        "diverged_points": diverged,
         "colmap": pycolmap.COLMAP_version,
     }
     return result
+
+
+# A tie point whose mean reprojection error after the adjustment exceeds both this many pixels
+# and this many times the median point's has diverged (started far off, it ran to a camera's
+# centre or behind it, where a residual has no bound); see drop_diverged_points.
+DIVERGED_MIN_PX = 100.0
+DIVERGED_TIMES_MEDIAN = 100.0
+
+
+def drop_diverged_points(rec) -> int:
+    """Remove the tie points the adjustment left with an absurd reprojection error and return
+    how many. Observations mode starts every pose and point perturbed; on a weak block a few
+    points can run off to a camera's centre, where their residuals reach 1e149 px: left in,
+    they make the mean reprojection error meaningless and the focal probe's rise relative to
+    it vanish. A camera model that fits no image (a held pinhole behind a flat port, about
+    36 px everywhere) moves the median with it and keeps its points."""
+    errors = {pid: p.error for pid, p in rec.points3D.items()}
+    finite = sorted(e for e in errors.values() if math.isfinite(e))
+    if not finite:
+        return 0
+    median = finite[len(finite) // 2]
+    limit = max(DIVERGED_MIN_PX, DIVERGED_TIMES_MEDIAN * median)
+    gone = [pid for pid, e in errors.items() if not (math.isfinite(e) and e <= limit)]
+    for pid in gone:
+        rec.delete_point3D(pid)
+    if gone:
+        rec.update_point_3d_errors()
+    return len(gone)
 
 
 def images(pycolmap, req: dict) -> dict:

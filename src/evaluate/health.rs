@@ -8,6 +8,7 @@
 //! | `dropped` | images that dropped out, when at least [`MIN_REGISTERED`] are in: how many, their share and the first names | any image missing from the result |
 //! | `focal` | a self-calibrated focal length the block does not determine: the focal probe ([`super::Evaluation::focal_sensitivity`]) or the adjustment's covariance ([`super::Evaluation::focal_sd`], [`super::Evaluation::focal_singular`]) | a probe rise below [`super::FOCAL_DETERMINED`], a singular normal matrix, or a standard deviation above [`super::FOCAL_SD_MAX`] per pixel |
 //! | `focal_drift` | a self-calibrated focal length far from the nominal (in-water-equivalent) one | beyond ± [`super::FOCAL_DRIFT_MAX`] |
+//! | `diverged` | tie points the adjustment ran off to a camera's centre (observations mode), left out of every figure | a point's reprojection error above 100 px and 100 × the median point's (`drop_diverged_points` in `backends/colmap/evaluate.py`) |
 //! | `fit` | a camera model that does not fit the images | a mean reprojection error above [`MAX_REPROJECTION_PX`] |
 //! | `outliers` | a height RMS driven by a few far points, not by the block | more than [`MAX_OUTLIERS`] of the tie points beyond 3 NMAD, and RMS Z over twice the NMAD |
 //!
@@ -128,6 +129,20 @@ pub fn checks(ev: &Evaluation, self_calibrated: bool, regular: bool) -> Vec<Warn
     }
     if self_calibrated {
         focal_checks(ev, regular, &mut out);
+    }
+    let diverged = ev.diverged_points();
+    if diverged > 0 {
+        out.push(Warning {
+            code: "diverged",
+            message: format!(
+                "{diverged} tie point(s) diverged in the adjustment (a reprojection error above \
+                 100 px and 100 times the median point's: run off to a camera's centre from \
+                 their perturbed start) and were left out of every figure"
+            ),
+            help: "a block that lets points run off is weakly determined: read the focal \
+                   checks, and add obliques, relief or control points"
+                .into(),
+        });
     }
     if ev.reprojection_error > MAX_REPROJECTION_PX {
         out.push(Warning {
@@ -328,6 +343,17 @@ pub(crate) mod tests {
             w[0].message
         );
         assert!(w[0].to_string().contains("\n  help: "));
+    }
+
+    #[test]
+    fn diverged_points_warn_with_their_count() {
+        // Measured: the Moorea plot with 20° obliques left one point at 1e149 px.
+        let mut ev = healthy();
+        ev.colmap["diverged_points"] = serde_json::json!(1);
+        let w = checks(&ev, true, false);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!(w[0].code, "diverged");
+        assert!(w[0].message.starts_with("1 tie point(s) diverged"), "{}", w[0].message);
     }
 
     #[test]

@@ -242,6 +242,15 @@ impl Evaluation {
             .and_then(|v| v.as_f64())
     }
 
+    /// Tie points the adjustment left with an absurd reprojection error, removed before any
+    /// figure was taken (`drop_diverged_points` in `backends/colmap/evaluate.py`).
+    pub fn diverged_points(&self) -> u64 {
+        self.colmap
+            .get("diverged_points")
+            .and_then(|v| v.as_u64())
+            .unwrap_or(0)
+    }
+
     /// The focal length's standard deviation from the adjustment's covariance (the inverse
     /// normal matrix, COLMAP's `estimate_ba_covariance`), relative to the focal length, per
     /// pixel of image-measurement σ (`focal_covariance` in `backends/colmap/evaluate.py`).

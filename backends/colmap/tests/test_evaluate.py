@@ -113,6 +113,26 @@ def test_bundle_recovers_the_focal_length_from_a_wrong_start(driver):
     assert ids <= {p["id"] for p in req["points"]}
 
 
+def test_a_point_run_off_to_a_camera_centre_is_dropped_and_counted(driver):
+    req, _ = synthetic(f_init=800.0)
+    assert driver.bundle(pycolmap, req)["summary"]["diverged_points"] == 0
+    rec, _ = driver.build_reconstruction(pycolmap, req)
+    rec.update_point_3d_errors()
+    assert driver.drop_diverged_points(rec) == 0
+    sound = rec.compute_mean_reprojection_error()
+    # Move one point to within a micrometre of the camera centre of an image that sees it:
+    # its residuals there have no bound, and the mean with it is meaningless.
+    pid = max(rec.points3D, key=lambda k: rec.points3D[k].track.length())
+    image = rec.image(rec.points3D[pid].track.elements[0].image_id)
+    centre = image.projection_center()
+    rec.points3D[pid].xyz = centre + np.array([1e-6, 0.0, 1e-9])
+    rec.update_point_3d_errors()
+    assert rec.compute_mean_reprojection_error() > 1e3 * sound
+    assert driver.drop_diverged_points(rec) == 1
+    assert pid not in rec.points3D
+    assert abs(rec.compute_mean_reprojection_error() - sound) < 0.05 * sound
+
+
 def test_the_covariance_tells_a_determined_focal_length_from_one_that_trades_with_height(
     driver,
 ):
