@@ -16,6 +16,7 @@ mod compare_cli;
 mod cross_backend;
 mod evaluate;
 mod exif_pycolmap;
+mod filled_backends;
 mod glass_backends;
 mod gltf_view;
 mod import_blender;

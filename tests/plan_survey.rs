@@ -27,6 +27,7 @@ fn seabed(depth: f64) -> Object {
             texel: None,
             grid: None,
             glass: None,
+            fill: None,
         },
     }
 }
@@ -111,6 +112,7 @@ fn coverage_sees_occlusion_under_a_box() {
             texel: None,
             grid: None,
             glass: None,
+            fill: None,
         },
     });
     let site = Site::new(&m);

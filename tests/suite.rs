@@ -30,6 +30,7 @@ mod docs_numbers;
 mod error_index;
 mod evaluate_images_folder;
 mod evaluate_precheck;
+mod filled_objects;
 mod fuzz_replay;
 mod georef_mesh;
 mod glass_objects;

@@ -51,6 +51,7 @@ fn occluded_and_back_facing_points_are_left_out() {
             texel: None,
             grid: None,
             glass: None,
+            fill: None,
         },
     });
     let cams: Vec<DVec3> = (0..model.poses.len())

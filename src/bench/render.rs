@@ -104,6 +104,7 @@ pub fn bench_model(width: u32, height: u32) -> Model {
         texel: None,
         grid: None,
         glass: None,
+        fill: None,
     };
     let boxed = |name: &str, at: DVec3, size: f64, a: [f64; 3]| Object {
         name: name.into(),

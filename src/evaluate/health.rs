@@ -353,7 +353,11 @@ pub(crate) mod tests {
         let w = checks(&ev, true, false);
         assert_eq!(w.len(), 1, "{w:?}");
         assert_eq!(w[0].code, "diverged");
-        assert!(w[0].message.starts_with("1 tie point(s) diverged"), "{}", w[0].message);
+        assert!(
+            w[0].message.starts_with("1 tie point(s) diverged"),
+            "{}",
+            w[0].message
+        );
     }
 
     #[test]

@@ -181,10 +181,89 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
     }
     ports_overlap(cx, m, spans);
     glass_objects(cx, m, spans);
+    filled_objects(cx, m, spans);
     wide_lens_behind_flat_port(cx, m, spans);
     overlap_delivered(cx, m, spans);
     seabed_seen(cx, m, spans);
     strobes_near_axis(cx, m, spans);
+}
+
+/// Whether world point `p` is inside object `o`'s box, sphere or cylinder (scale applied).
+fn inside_solid(o: &crate::model::Object, p: glam::DVec3) -> bool {
+    use crate::model::Shape;
+    let a = o.pose.inverse().transform_point(p) / o.scale;
+    match o.shape {
+        Shape::Box { size } => a.abs().cmplt(0.5 * size).all(),
+        Shape::Sphere { radius } => a.length() < radius,
+        Shape::Cylinder { radius, height } => {
+            a.truncate().length() < radius && a.z.abs() < 0.5 * height
+        }
+        _ => false,
+    }
+}
+
+/// The filled objects ([`crate::model::Material::fill`]): no camera's pupil (E0304) and no
+/// point, spot or area light (E0305) inside one. A camera in a tank would need the tank's water
+/// as the water its port meets; a lamp inside lights it through no face, and a shadow ray from
+/// it would have to leave the water through a refracting face that no backend follows.
+fn filled_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
+    use crate::model::LightKind;
+    let filled: Vec<(usize, &crate::model::Object)> = m
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| o.material.fill.is_some())
+        .collect();
+    if filled.is_empty() {
+        return;
+    }
+    let at = |i: usize| spans.objects.get(i).copied().unwrap_or(spans.network);
+    let rig_poses: Vec<&crate::model::RigPose> = m.poses.iter().take(2000).collect();
+    for (pi, pose) in rig_poses.iter().enumerate() {
+        for ci in 0..m.cameras.len() {
+            let c = m.world_from_camera(pi, ci).translation;
+            if let Some(&(i, o)) = filled.iter().find(|(_, o)| inside_solid(o, c)) {
+                cx.push(
+                    Diagnostic::error(
+                        "E0304",
+                        format!("camera `{}` is inside filled object `{}`", m.cameras[ci].name, o.name),
+                    )
+                    .label(at(i), format!("the camera's pupil is inside it at pose {}", pose.name))
+                    .help("cameras look at a filled object from outside it; to survey in that water, make it the scene's `[water]`"),
+                );
+                return;
+            }
+        }
+    }
+    let identity = crate::model::Pose::IDENTITY;
+    let poses: Vec<&crate::model::Pose> = if rig_poses.is_empty() {
+        vec![&identity]
+    } else {
+        rig_poses.iter().map(|p| &p.world_from_rig).collect()
+    };
+    for (li, light) in m.lights.iter().enumerate() {
+        for w in &poses {
+            let l = light.in_world(w);
+            let p = match l.kind {
+                LightKind::Point { position, .. } | LightKind::Spot { position, .. } => position,
+                LightKind::Area { frame, .. } => frame.translation,
+                LightKind::Ambient { .. } => continue,
+            };
+            if let Some(&(i, o)) = filled.iter().find(|(_, o)| inside_solid(o, p)) {
+                let sp = spans.lights.get(li).map(|s| s.0).unwrap_or(at(i));
+                cx.push(
+                    Diagnostic::error(
+                        "E0305",
+                        format!("light `{}` is inside filled object `{}`", light.name, o.name),
+                    )
+                    .label(sp, "this light")
+                    .label(at(i), "is inside this object")
+                    .help("light a filled object from outside it (its faces refract the light in); move the light or the object"),
+                );
+                return;
+            }
+        }
+    }
 }
 
 /// A target point inside the port glass (or between the pupil and the port) of a camera

@@ -855,6 +855,7 @@ mod tests {
                 texel: None,
                 grid: None,
                 glass: None,
+                fill: None,
             },
         }
     }

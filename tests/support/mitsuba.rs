@@ -131,6 +131,7 @@ pub fn showcase() -> Model {
                 texel: None,
                 grid: None,
                 glass: None,
+                fill: None,
             },
         },
         Object {
@@ -151,6 +152,7 @@ pub fn showcase() -> Model {
                 texel: None,
                 grid: None,
                 glass: None,
+                fill: None,
             },
         },
         Object {
@@ -172,6 +174,7 @@ pub fn showcase() -> Model {
                 texel: None,
                 grid: None,
                 glass: None,
+                fill: None,
             },
         },
     ];

@@ -114,6 +114,7 @@ pub fn plane(name: &str, z: f64, size: f64, albedo: Rgb) -> Object {
             texel: None,
             grid: None,
             glass: None,
+            fill: None,
         },
     }
 }

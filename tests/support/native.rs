@@ -91,6 +91,7 @@ pub fn busy_model() -> Model {
             texel: None,
             grid: None,
             glass: None,
+            fill: None,
         },
     });
     m.lights.push(rig_spot(DVec3::new(0.25, 0.0, 0.0), 10.0));

@@ -11,7 +11,7 @@ The description (format `poser-blender/1`) is written by `poser compile --backen
 | port | the housing poser computed (PLY assets `cameras[].housing`, read by `geometry.read_ply`): inner air->glass surface (Glass, IOR n_g/1) + housing shell carved out of the water mesh (outer face Glass IOR n_w/n_g); black housing walls inside it (HOUSING_INSIDE); no housing shadow (HOUSING_SHADOW) |
 | water | one closed mesh `poser_water` (box minus housings), Volume Coefficients node; per pose a shape key |
 | lights | point/spot (P = 4 pi I, radius 0, blend 0), sun (angle 0), area (P = L pi A), ambient = world |
-| objects | Blender primitives (plane/box) or imported PLY assets; Diffuse BSDF; glass objects (GLASS_OBJECTS): Glass BSDF, a glass sphere or cylinder from poser's PLY with its normals (`shaded_ply`, `geometry.read_ply`), carved out of the water |
+| objects | Blender primitives (plane/box) or imported PLY assets; Diffuse BSDF; glass objects (GLASS_OBJECTS): Glass BSDF, a glass sphere or cylinder from poser's PLY with its normals (`shaded_ply`, `geometry.read_ply`), carved out of the water; filled objects (FILLED_OBJECTS): the same, of their water's index, with that water's Volume Coefficients inside |
 | targets | planes with the target's PNG texture; 3D test objects as white boxes + black disks |
 | sea waves | the native backend's periodic height field (`wave_field`): one period as a smooth glass mesh, instanced; caustics by MNEE (surface = caster, objects and targets = receivers, sun = caustics light) |
 | seed | one Cycles seed per image (`poses[].seeds`, derived by poser from the scene seed) |
@@ -1024,7 +1024,11 @@ def _build_objects(built, coll, desc, base_dir):
             path = os.path.join(base_dir, shape["texture"])
             me.materials.append(_texture_material(name, path, "Linear"))
         elif ob["material"].get("glass"):
-            me.materials.append(_glass_object_material(built, name, ob["material"]["glass"], desc))
+            me.materials.append(
+                _glass_object_material(
+                    built, name, ob["material"]["glass"], desc, ob["material"].get("fill")
+                )
+            )
         else:
             me.materials.append(_diffuse_material(name, ob["material"], scale))
         obj = _new_object(coll, name, me)
@@ -1033,16 +1037,18 @@ def _build_objects(built, coll, desc, base_dir):
         _caustics_receiver(obj, desc)
 
 
-def _glass_object_material(built, name, glass, desc):
+def _glass_object_material(built, name, glass, desc, fill=None):
     """GLASS_OBJECTS: a glass object's faces, smooth Glass BSDF of IOR n_glass / n_around
     (normals outward), per channel with the passes. In water its box is carved out of the water
     mesh WATER_GAP further out (`_glass_cutouts`), as a port's outer face is: inside it there
-    is no water, and the glass shader stays off the volume stack."""
+    is no water, and the glass shader stays off the volume stack. A filled object (FILLED_OBJECTS,
+    `fill`: its water) is the same boundary, of its water's index, with that water's volume
+    inside."""
     water = desc.get("water")
     n_out = [float(x) for x in water["ior"]] if water else [1.0, 1.0, 1.0]
     n_g = [float(x) for x in glass["ior"]]
     ref = int(desc.get("reference_channel", 1))
-    mat, node = _glass_material(f"glass:{name}", n_g[ref] / n_out[ref])
+    mat, node = _glass_material(f"glass:{name}", n_g[ref] / n_out[ref], fill)
     built.glass_nodes.append((node, lambda c, g=n_g, w=n_out: g[c] / w[c]))
     return mat
 

@@ -494,6 +494,12 @@ pub struct Material {
     /// `pattern` do not apply.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub glass: Option<Glass>,
+    /// A closed object filled with a medium (`fill = { … }`): a tank, a jar, a flume, a fog
+    /// box. Its faces are the smooth boundary of the medium's index (`glass` then holds that
+    /// index, named `"fill"`), and inside it light is absorbed and scattered as in this water
+    /// (its `extent` is the object). `None`: no medium inside.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill: Option<Water>,
 }
 
 /// Lines along the object's x and y axes every `spacing` m, `width` m wide, of albedo `albedo`

@@ -162,8 +162,11 @@ enum SegmentEnd {
 /// ([`crate::model::Material::glass`]).
 #[derive(Debug, Clone, Copy, Default)]
 struct GlassPath {
-    /// Between a glass object's faces: no water there.
+    /// Between a glass object's faces: no water there (a filled object's own water, if it is
+    /// one: [`Integrator::fill`]).
     inside: bool,
+    /// The glass or filled object the path is inside.
+    object: Option<u32>,
     /// The channel whose indices the path follows through glass when each channel is rendered
     /// alone (`needs.per_channel_passes`): drawn uniformly at the first glass face, with the
     /// path's weight that channel's alone ×3; `None` before, or when one index serves all.
@@ -200,6 +203,9 @@ pub struct Integrator<'a> {
     /// Per object: the index of its glass per channel ([`crate::model::Material::glass`]),
     /// `None` for an opaque object.
     glass: Vec<Option<DVec3>>,
+    /// Per object: the water inside a filled object ([`crate::model::Material::fill`]), as a
+    /// medium bounded by the object's faces (`None`: clear, or not filled).
+    fill: Vec<Option<Medium>>,
     /// The index around the glass objects per channel: the water's, or air's.
     n_around: DVec3,
     object_from_world: Vec<Pose>,
@@ -255,6 +261,19 @@ impl<'a> Integrator<'a> {
                 .objects
                 .iter()
                 .map(|o| o.material.glass.as_ref().map(|g| DVec3::from_array(g.ior)))
+                .collect(),
+            fill: model
+                .objects
+                .iter()
+                .map(|o| {
+                    let w = o.material.fill.as_ref()?;
+                    let (sa, ss) = (
+                        DVec3::from_array(w.absorption),
+                        DVec3::from_array(w.scattering),
+                    );
+                    ((sa + ss).max_element() > 0.0)
+                        .then(|| Medium::everywhere(sa, ss, w.phase.phase_fn()))
+                })
                 .collect(),
             n_around: DVec3::from_array(model.ambient_ior()),
             object_from_world: model.objects.iter().map(|o| o.pose.inverse()).collect(),
@@ -340,8 +359,7 @@ impl<'a> Integrator<'a> {
 
     /// Density (per sr) of the direction `w` sampled at a medium vertex reached along `d`:
     /// the phase function about `d`, or its mixture with the phase lobe about the sun.
-    fn medium_pdf(&self, d: DVec3, w: DVec3) -> f64 {
-        let Some(m) = &self.medium else { return 0.0 };
+    fn medium_pdf(&self, m: &Medium, d: DVec3, w: DVec3) -> f64 {
         let p = m.phase.eval(d.dot(w));
         match self.aureole {
             Some(s) => (1.0 - AUREOLE_FRACTION) * p + AUREOLE_FRACTION * m.phase.eval(s.dot(w)),
@@ -351,17 +369,14 @@ impl<'a> Integrator<'a> {
 
     /// Sample the direction leaving a medium vertex reached along `d`; returns (direction,
     /// density).
-    fn sample_medium(&self, d: DVec3, rng: &mut Sampler) -> (DVec3, f64) {
-        let Some(m) = &self.medium else {
-            return (d, 0.0);
-        };
+    fn sample_medium(&self, m: &Medium, d: DVec3, rng: &mut Sampler) -> (DVec3, f64) {
         let pick = rng.next();
         let (u1, u2) = rng.next2();
         let w = match self.aureole {
             Some(s) if pick < AUREOLE_FRACTION => m.phase.sample(s, u1, u2).0,
             _ => m.phase.sample(d, u1, u2).0,
         };
-        (w, self.medium_pdf(d, w))
+        (w, self.medium_pdf(m, d, w))
     }
 
     fn tr_seg(&self, o: DVec3, d: DVec3, len: f64) -> DVec3 {
@@ -577,6 +592,10 @@ impl<'a> Integrator<'a> {
                 let tr = crate::optics::interface::fresnel_transmittance(n1, n2, cos_i, cos_t);
                 if rng.next() >= 1.0 - tr {
                     glass.inside = !glass.inside;
+                    glass.object = match (glass.inside, h.surface) {
+                        (true, SurfaceId::Object(k)) => Some(k),
+                        _ => None,
+                    };
                     return Some((h.point - n * off, t.normalize()));
                 }
                 reflect
@@ -624,7 +643,16 @@ impl<'a> Integrator<'a> {
             // transmittance, whichever way the free flight below goes (both branches add it
             // exactly once), so direct light on surfaces carries no free-flight noise.
             let mut beta_nee = beta;
-            if let Some(m) = self.medium.as_ref().filter(|_| !glass.inside)
+            // The water the segment runs through: the scene's, or a filled object's inside it.
+            let water = if glass.inside {
+                glass
+                    .object
+                    .and_then(|k| self.fill.get(k as usize))
+                    .and_then(Option::as_ref)
+            } else {
+                self.medium.as_ref()
+            };
+            if let Some(m) = water
                 && let Some((a, b)) = m.interval(o, d, 0.0, t_end)
             {
                 // A glass face takes no next-event estimate (it is a delta BSDF).
@@ -809,7 +837,7 @@ impl<'a> Integrator<'a> {
                 let p = o + t * d;
                 let phase = &m.phase;
                 let f = |w: DVec3| DVec3::splat(phase.eval(d.dot(w)));
-                let pdf = |w: DVec3| self.medium_pdf(d, w);
+                let pdf = |w: DVec3| self.medium_pdf(m, d, w);
                 let pw = |i: usize, x: DVec3| {
                     let seg = match segs.get(i) {
                         Some(s) => *s,
@@ -827,7 +855,7 @@ impl<'a> Integrator<'a> {
                     sun_rate.map_or(1.0, |k| power(pdf_d, k.pdf(t)))
                 };
                 *l += *beta * self.direct(p, f, pdf, pw, sw, rng);
-                let (nd, ppdf) = self.sample_medium(d, rng);
+                let (nd, ppdf) = self.sample_medium(m, d, rng);
                 if ppdf <= 0.0 {
                     return SegmentEnd::Ends;
                 }

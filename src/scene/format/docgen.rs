@@ -518,6 +518,14 @@ mod tests {
             &["sun.elevation=0.5"],
             &["objects.0.shape=\"coral\"", "objects.0.growth=\"massive\""],
             &[
+                "objects.0.relief_file=\"none.txt\"",
+                "objects.0.relief_origin=[0, 0, 0]",
+            ],
+            &[
+                "objects.0.shape=\"box\"",
+                "objects.0.fill={ior = 1.33, temperature = 20, salinity = 35, ior_depth = 1, jerlov = \"3C\", absorption = 0.1, scattering = 0.2, phase = \"fournier_forand\", g = 0.8, particle_index = 1.1, junge_slope = 3.6}",
+            ],
+            &[
                 "targets=[{type = \"points_file\", file = \"none.txt\", surface = \"seabed\", diameter = 0.1}]",
             ],
             &[

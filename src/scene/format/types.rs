@@ -249,6 +249,35 @@ pub struct Water {
     pub box_half_size: Option<PerChannel<Length>>,
 }
 
+/// `fill = { … }` — the water inside a filled object: `[water]`'s keys but `extent` and
+/// `box_half_size` (the object is its extent); each means what it means there.
+#[derive(JsonSchema, Keys)]
+#[schemars(deny_unknown_fields)]
+pub struct FillTable {
+    /// As `[water]`'s `ior`. **Unit:** 1. **Default:** from `temperature` and `salinity`.
+    pub ior: Option<PerChannel<Number>>,
+    /// As `[water]`'s. **Unit:** °C. **Default:** 20 °C.
+    pub temperature: Option<Temperature>,
+    /// As `[water]`'s. **Unit:** PSU. **Default:** 35.
+    pub salinity: Option<Number>,
+    /// As `[water]`'s. **Unit:** m. **Default:** the site depth.
+    pub ior_depth: Option<Length>,
+    /// As `[water]`'s. **Default:** `"IB"` unless `absorption`/`scattering` are given.
+    pub jerlov: Option<String>,
+    /// As `[water]`'s. **Unit:** 1/m. **Default:** from `jerlov`, else 0.
+    pub absorption: Option<PerChannel<Number>>,
+    /// As `[water]`'s. **Unit:** 1/m. **Default:** from `jerlov`, else 0.
+    pub scattering: Option<PerChannel<Number>>,
+    /// As `[water]`'s. **Default:** `"hg"`.
+    pub phase: Option<PhaseKind>,
+    /// As `[water]`'s. **Unit:** 1. **Default:** 0.9.
+    pub g: Option<Number>,
+    /// As `[water]`'s. **Unit:** 1. **Default:** 1.1.
+    pub particle_index: Option<Number>,
+    /// As `[water]`'s. **Unit:** 1. **Default:** 3.6.
+    pub junge_slope: Option<Number>,
+}
+
 #[derive(JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum PhaseKind {
@@ -530,6 +559,14 @@ pub struct Object {
     /// traced, not read from the water column (docs/column.md). See docs/scenes.md, "Glass
     /// objects". **Default:** none (an opaque Lambertian object).
     pub glass: Option<String>,
+    /// A box, sphere or cylinder filled with water: a tank, a jar, a flume, a sample of turbid
+    /// water. The table takes `[water]`'s keys (`jerlov`, `absorption`, `scattering`, `phase`,
+    /// `g`, `ior`, `temperature`, `salinity`, …; not `extent` or `box_half_size`): the object's
+    /// faces are the smooth boundary of that water's index (Fresnel, Snell, as `glass`), and
+    /// inside it light is absorbed and scattered as in that water. Around it is the scene's
+    /// water, or air without `[water]`. Not with `glass`, `albedo` or `pattern`; it may not
+    /// hold a camera or a light. See docs/scenes.md, "Filled objects". **Default:** none.
+    pub fill: Option<FillTable>,
     /// Mesh: glTF (`.glb`/`.gltf`), OBJ (with its MTL files) or PLY file, relative to the file
     /// that names it. Every file it names (MTL, images, buffers) must be beside it or elsewhere
     /// inside the scene's folder. See `docs/textures.md`, "Textured meshes".

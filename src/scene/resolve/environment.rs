@@ -81,6 +81,29 @@ pub(super) fn water(
     })
 }
 
+/// The water inside a filled object (`fill = { … }`, at `path`): `[water]`'s keys but
+/// `extent` and `box_half_size` (the object is its extent).
+pub(super) fn fill_water(cx: &mut Cx, node: &Node, path: &str, site: &Site) -> Water {
+    let mut w = Tab::open(cx, Some(node), path, node.span);
+    let (ior, ior_source) = index(cx, &mut w, site);
+    let (absorption, scattering, jerlov) = iops(cx, &mut w);
+    let phase = phase(cx, &mut w);
+    let extent = WaterExtent::Everywhere;
+    w.finish_as(
+        cx,
+        Some("the water of a filled object (the object is its extent)"),
+    );
+    Water {
+        ior,
+        ior_source,
+        absorption,
+        scattering,
+        jerlov,
+        phase,
+        extent,
+    }
+}
+
 /// The refractive index of the water per channel: `ior` as given, or from `temperature`,
 /// `salinity` and `ior_depth` (the site depth by default) by the seawater formula.
 fn index(cx: &mut Cx, w: &mut Tab, site: &Site) -> (Rgb, IorSource) {

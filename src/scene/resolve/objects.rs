@@ -97,6 +97,13 @@ pub(super) fn objects(
         }
         let mut material = material(cx, &mut o, 0.3);
         material.glass = glass(cx, &mut o, shape_kind, scale);
+        if let Some(w) = fill(cx, &mut o, shape_kind, scale, site) {
+            material.glass = Some(crate::model::Glass {
+                name: "fill".into(),
+                ior: w.ior,
+            });
+            material.fill = Some(w);
+        }
         spans.objects.push(o.span);
         o.finish_as(cx, Some(&format!("a {shape_kind} object (`{path}`)")));
         out.push(Object {
@@ -585,6 +592,7 @@ fn material(cx: &mut Cx, o: &mut Tab, default_albedo: f64) -> Material {
         texel,
         grid,
         glass: None,
+        fill: None,
     }
 }
 
@@ -614,11 +622,60 @@ fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str, scale: DVec3) -> Option<cra
         cx.push(d);
         return None;
     };
+    if !solid_checks(cx, o, shape_kind, scale, span, "glass") {
+        return None;
+    }
+    Some(g)
+}
+
+/// `fill = { … }`: the object is filled with water ([`crate::model::Material::fill`]), its
+/// faces the boundary of that water's index. The same shapes as glass, and not both.
+fn fill(
+    cx: &mut Cx,
+    o: &mut Tab,
+    shape_kind: &str,
+    scale: DVec3,
+    site: &Site,
+) -> Option<crate::model::Water> {
+    let node = o.get(F::Object::fill)?;
+    let span = o.key_span(F::Object::fill);
+    let path = o.full(F::Object::fill);
+    let water = super::environment::fill_water(cx, node, &path, site);
+    if o.has(F::Object::glass) {
+        cx.push(
+            Diagnostic::error("E0303", "an object is either glass or filled, not both")
+                .label(span, "filled here")
+                .label(o.key_span(F::Object::glass), "and glass here")
+                .help(
+                    "a glass tank of water is two objects: the water (`fill`) and the glass \
+                     walls or window (`glass`) beside it",
+                ),
+        );
+        return None;
+    }
+    if !solid_checks(cx, o, shape_kind, scale, span, "filled") {
+        return None;
+    }
+    Some(water)
+}
+
+/// The rules a glass or filled object's shape keeps (`what`: "glass" or "filled"; `span`: its
+/// key's): a box, a sphere scaled uniformly or a cylinder scaled alike across its axis (E0296,
+/// E0301), and no `albedo` or `pattern` (E0292). Returns whether the shape is usable.
+fn solid_checks(
+    cx: &mut Cx,
+    o: &mut Tab,
+    shape_kind: &str,
+    scale: DVec3,
+    span: Span,
+    what: &str,
+) -> bool {
+    let what_key = if what == "glass" { "glass" } else { "fill" };
     if !matches!(shape_kind, "box" | "sphere" | "cylinder") {
         cx.push(
             Diagnostic::error(
                 "E0296",
-                "a glass object must be a box, a sphere or a cylinder",
+                format!("a {what} object must be a box, a sphere or a cylinder"),
             )
             .label(span, format!("on a {shape_kind}"))
             .help(
@@ -627,7 +684,7 @@ fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str, scale: DVec3) -> Option<cra
                      their meshes",
             ),
         );
-        return None;
+        return false;
     }
     let uneven = match shape_kind {
         "sphere" => scale.max_element() > scale.min_element(),
@@ -636,30 +693,42 @@ fn glass(cx: &mut Cx, o: &mut Tab, shape_kind: &str, scale: DVec3) -> Option<cra
     };
     if uneven {
         cx.push(
-            Diagnostic::error("E0301", "a glass sphere or cylinder must be round")
-                .label(
-                    o.span_of(F::Object::scale),
-                    format!("scaled by {} × {} × {}", scale.x, scale.y, scale.z),
-                )
-                .help(
-                    "scale a sphere alike on all three axes and a cylinder alike on x and y, \
+            Diagnostic::error(
+                "E0301",
+                format!("a {what} sphere or cylinder must be round"),
+            )
+            .label(
+                o.span_of(F::Object::scale),
+                format!("scaled by {} × {} × {}", scale.x, scale.y, scale.z),
+            )
+            .help(
+                "scale a sphere alike on all three axes and a cylinder alike on x and y, \
                      or set the `radius`; glass ellipsoids and elliptic cylinders are not \
                      supported",
-                ),
+            ),
         );
-        return None;
+        return false;
     }
     for key in [F::Object::albedo, F::Object::pattern] {
         if o.has(key) {
             let sp = o.key_span(key);
             cx.push(
-                Diagnostic::error("E0292", format!("a glass object has no `{key}`"))
-                    .label(sp, "clear glass reflects and refracts; it has no colour")
-                    .help(format!("remove `{key}`, or `glass` for an opaque object")),
+                Diagnostic::error("E0292", format!("a {what} object has no `{key}`"))
+                    .label(
+                        sp,
+                        if what == "glass" {
+                            "clear glass reflects and refracts; it has no colour"
+                        } else {
+                            "its faces are its water's boundary; it has no colour"
+                        },
+                    )
+                    .help(format!(
+                        "remove `{key}`, or `{what_key}` for an opaque object"
+                    )),
             );
         }
     }
-    Some(g)
+    true
 }
 
 /// Default albedo of a pattern's grid lines: a pale yellow string.

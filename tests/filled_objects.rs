@@ -1,0 +1,186 @@
+//! Filled objects (`fill = { … }` on a box, sphere or cylinder, `poser::model::Material::fill`):
+//! a tank, a jar, a sample of turbid water in the scene. The native renderer against Beer–
+//! Lambert and Fresnel, the bounce limit they get, what the Mitsuba compiler writes, and the
+//! located errors. The three renderers against each other are in the full tier
+//! (`filled_backends`). docs/scenes.md, "Filled objects".
+
+use crate::support::column::load_text;
+use poser::backend::native::render_one;
+use poser::model::Model;
+use poser::optics::interface::fresnel_transmittance;
+
+/// A camera in air looking down a 1 m deep box of water (2 × 2 m across, 1.5 m below it)
+/// against a sky of radiance 1; `fill` is the box's water table.
+fn tank(fill: &str, extra: &str) -> String {
+    format!(
+        "name = \"tank\"\n[camera]\nwidth = 40\nheight = 30\nsensor_width = \"36 mm\"\n\
+         focal_length = \"50 mm\"\n[[lights]]\nname = \"sky\"\ntype = \"ambient\"\nradiance = 1.0\n\
+         [[objects]]\nname = \"tank\"\nshape = \"box\"\nsize = [\"2 m\", \"2 m\", \"1 m\"]\n\
+         position = [0.0, 0.0, -2.0]\nfill = {fill}\n{extra}\
+         [network]\ntype = \"explicit\"\n[[network.poses]]\nposition = [0.0, 0.0, 0.0]\n\
+         look_at = [0.0, 0.0, -2.0]\nup = [0.0, 1.0, 0.0]\n[render]\nsamples = 64\nseed = 1\n"
+    )
+}
+
+/// Mean of the central 6 × 6 pixels (within 2° of the axis).
+fn centre(m: &Model, spp: u32) -> [f64; 3] {
+    let img = render_one(m, 0, 0, Some(spp)).unwrap();
+    let (w, h) = (img.width as usize, img.height as usize);
+    let mut s = [0.0; 3];
+    for y in h / 2 - 3..h / 2 + 3 {
+        for x in w / 2 - 3..w / 2 + 3 {
+            for (c, v) in s.iter_mut().enumerate() {
+                *v += img.rgb[y * w + x][c] as f64 / 36.0;
+            }
+        }
+    }
+    s
+}
+
+const SIGMA_A: [f64; 3] = [0.5, 1.0, 2.0];
+
+#[test]
+fn an_index_matched_tank_transmits_beer_lambert() {
+    // Index 1 (no refraction, no reflection) and no scattering: the sky seen through 1 m of
+    // water is e^(−σa·1 m) on the axis, with no noise.
+    let m = load_text(
+        &tank(
+            "{ absorption = [0.5, 1.0, 2.0], scattering = 0, ior = 1.0 }",
+            "",
+        ),
+        &[],
+    );
+    let got = centre(&m, 4);
+    for c in 0..3 {
+        let want = (-SIGMA_A[c]).exp();
+        // The central pixels look up to 2° off the axis: paths up to 0.06 % longer.
+        assert!(
+            got[c] < want && got[c] / want > 1.0 - 2e-3 * SIGMA_A[c],
+            "channel {c}: {} for {want}",
+            got[c]
+        );
+    }
+}
+
+#[test]
+fn a_water_tank_reflects_and_transmits_as_fresnel_says() {
+    // Index 1.5: the sky seen through the slab, its internal reflections summed incoherently,
+    // plus the sky the slab reflects: R_slab + T_slab at normal incidence.
+    let m = load_text(
+        &tank(
+            "{ absorption = [0.5, 1.0, 2.0], scattering = 0, ior = 1.5 }",
+            "",
+        ),
+        &[],
+    );
+    let r = 1.0 - fresnel_transmittance(1.0, 1.5, 1.0, 1.0);
+    let got = centre(&m, 1024);
+    for c in 0..3 {
+        let t = (-SIGMA_A[c]).exp();
+        let tt = (1.0 - r) * (1.0 - r) * t / (1.0 - r * r * t * t);
+        let rr = r + (1.0 - r) * (1.0 - r) * r * t * t / (1.0 - r * r * t * t);
+        let want = tt + rr;
+        // One Fresnel draw per face: about 0.5 % noise (1σ) on 36 pixels × 1024 samples.
+        assert!(
+            (got[c] / want - 1.0).abs() < 0.01,
+            "channel {c}: {:.5} for {want:.5} (T {tt:.5}, R {rr:.5})",
+            got[c]
+        );
+    }
+    // Without the water's absorption the same box would be far brighter: the fill is used.
+    let clear = load_text(
+        &tank("{ absorption = 0, scattering = 0, ior = 1.5 }", ""),
+        &[],
+    );
+    assert!(centre(&clear, 64)[2] > 3.0 * got[2]);
+}
+
+#[test]
+fn a_scattering_fill_raises_the_default_bounce_limit_and_a_low_one_warns() {
+    let scattering = "{ absorption = 0.1, scattering = 1.5, g = 0.8 }";
+    let m = load_text(&tank(scattering, ""), &[]);
+    assert_eq!(m.render.max_bounces, 64);
+    // A clear fill keeps the default.
+    let clear = load_text(&tank("{ absorption = 0.1, scattering = 0 }", ""), &[]);
+    assert_eq!(clear.render.max_bounces, 8);
+    // Written below it: W0241 names the object and the bounces.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("scene.toml");
+    std::fs::write(
+        &p,
+        tank(scattering, "").replace("samples = 64", "samples = 64\nbounces = 8"),
+    )
+    .unwrap();
+    let loaded = poser::scene::load(&p, &[]).unwrap();
+    let text: String = loaded.warnings.iter().map(|d| format!("{d:?}")).collect();
+    assert!(text.contains("W0241") && text.contains("`tank`"), "{text}");
+}
+
+fn errors(text: &str) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    match poser::scene::load(&p, &[]) {
+        Ok(_) => panic!("loaded:\n{text}"),
+        Err(f) => f.render(),
+    }
+}
+
+#[test]
+fn filled_objects_refuse_what_they_cannot_be() {
+    let water = "{ jerlov = \"3C\" }";
+    // Glass and fill on one object.
+    let e = errors(&tank(water, "glass = \"N-BK7\"\n"));
+    assert!(e.contains("E0303") && e.contains("help:"), "{e}");
+    // A plane holds nothing.
+    let e = errors(&tank(water, "").replace("shape = \"box\"", "shape = \"plane\""));
+    assert!(e.contains("E0296") && e.contains("filled object"), "{e}");
+    // A filled object has no colour.
+    let e = errors(&tank(water, "albedo = 0.5\n"));
+    assert!(
+        e.contains("E0292") && e.contains("a filled object has no `albedo`"),
+        "{e}"
+    );
+    // The object is the water's extent.
+    let e = errors(&tank("{ jerlov = \"3C\", extent = \"box\" }", ""));
+    assert!(e.contains("E0100") && e.contains("extent"), "{e}");
+    // A camera inside it.
+    let e = errors(&tank(water, "").replace(
+        "position = [0.0, 0.0, -2.0]\nfill",
+        "position = [0.0, 0.0, -0.2]\nfill",
+    ));
+    assert!(
+        e.contains("E0304") && e.contains("inside filled object `tank`"),
+        "{e}"
+    );
+    // A lamp inside it.
+    let lamp = "[[lights]]\nname = \"lamp\"\ntype = \"point\"\nmount = \"world\"\n\
+                position = [0.0, 0.0, -2.0]\nintensity = 10\n";
+    let e = errors(&tank(water, lamp));
+    assert!(
+        e.contains("E0305") && e.contains("light `lamp` is inside"),
+        "{e}"
+    );
+}
+
+#[test]
+fn mitsuba_gets_the_water_as_the_objects_interior() {
+    let m = load_text(
+        &tank("{ absorption = [0.5, 1.0, 2.0], scattering = 0.3 }", ""),
+        &[],
+    );
+    let dir = tempfile::tempdir().unwrap();
+    poser::backend::mitsuba::compile(&m, dir.path()).unwrap();
+    let xml =
+        std::fs::read_to_string(dir.path().join(format!("{}.xml", m.image_name(0, 0)))).unwrap();
+    let medium = xml
+        .find("<medium type=\"homogeneous\" id=\"fill_0\">")
+        .expect(&xml);
+    let interior = xml
+        .find("<ref name=\"interior\" id=\"fill_0\"/>")
+        .expect(&xml);
+    assert!(medium < interior, "the medium is declared before its use");
+    assert!(xml.contains("int_ior"), "its faces are a dielectric");
+    // In air: `volpath` (see the full tier for why not `volpathmis`).
+    assert!(xml.contains("<integrator type=\"volpath\">"), "{xml}");
+}
