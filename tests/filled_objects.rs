@@ -184,3 +184,103 @@ fn mitsuba_gets_the_water_as_the_objects_interior() {
     // In air: `volpath` (see the full tier for why not `volpathmis`).
     assert!(xml.contains("<integrator type=\"volpath\">"), "{xml}");
 }
+
+/// Mitsuba's medium inside a shape comes back as a filled object: poser's own jar compiled and
+/// imported (a `dielectric` sphere of the water's index with its `interior` medium), and a
+/// hand-written fog box (a `null` cube holding a medium given by σt, albedo and scale).
+#[test]
+fn a_medium_inside_a_mitsuba_shape_imports_as_a_filled_object() {
+    let src = tank(
+        "{ absorption = [0.5, 1.0, 2.0], scattering = [0.3, 0.2, 0.1], g = 0.7 }",
+        "",
+    );
+    let m = load_text(&src, &[]);
+    let dir = tempfile::tempdir().unwrap();
+    poser::backend::mitsuba::compile(&m, &dir.path().join("mi")).unwrap();
+    let xml = dir.path().join(format!("mi/{}.xml", m.image_name(0, 0)));
+    let out = dir.path().join("back/scene.toml");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
+        .args(["import", xml.to_str().unwrap(), "-o", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let back = poser::scene::load(&out, &[]).unwrap().model;
+    assert!(
+        back.water.is_none(),
+        "the fill's medium is not the scene's water"
+    );
+    let o = back
+        .objects
+        .iter()
+        .find(|o| o.material.fill.is_some())
+        .expect("a filled object");
+    let (a, b) = (
+        m.objects[0].material.fill.as_ref().unwrap(),
+        o.material.fill.as_ref().unwrap(),
+    );
+    for c in 0..3 {
+        assert!(
+            (a.absorption[c] - b.absorption[c]).abs() < 1e-9,
+            "{a:?} {b:?}"
+        );
+        assert!(
+            (a.scattering[c] - b.scattering[c]).abs() < 1e-9,
+            "{a:?} {b:?}"
+        );
+    }
+    assert!(
+        matches!(b.phase, poser::model::Phase::HenyeyGreenstein { g } if (g - 0.7).abs() < 1e-12)
+    );
+    assert!(
+        matches!(o.shape, poser::model::Shape::Box { size } if (size - glam::DVec3::new(2.0, 2.0, 1.0)).length() < 1e-9)
+    );
+    // Its faces keep the water's index (green's: Mitsuba's dielectric takes one).
+    assert!((b.ior[1] - a.ior[1]).abs() < 1e-9);
+
+    // A fog box: a `null` cube holding a medium, in front of a camera looking down -z.
+    let fog = r#"<scene version="3.0.0">
+  <sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, -1" up="0, 1, 0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="24"/></film>
+  </sensor>
+  <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
+  <medium type="homogeneous" id="fog">
+    <rgb name="sigma_t" value="2, 1, 0.5"/><rgb name="albedo" value="0.5, 0.5, 0.5"/>
+    <float name="scale" value="0.5"/><phase type="isotropic"/>
+  </medium>
+  <shape type="cube"><bsdf type="null"/><ref name="interior" id="fog"/>
+    <transform name="to_world"><scale value="0.5"/><translate z="-3"/></transform>
+  </shape>
+</scene>"#;
+    std::fs::write(dir.path().join("fog.xml"), fog).unwrap();
+    let out = dir.path().join("fog/scene.toml");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_poser"))
+        .args([
+            "import",
+            dir.path().join("fog.xml").to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let fog = poser::scene::load(&out, &[]).unwrap().model;
+    assert!(fog.water.is_none());
+    let w = fog.objects[0]
+        .material
+        .fill
+        .as_ref()
+        .expect("a filled object");
+    assert_eq!(w.absorption, [0.5, 0.25, 0.125]);
+    assert_eq!(w.scattering, [0.5, 0.25, 0.125]);
+    assert_eq!(w.ior, [1.0; 3], "a null boundary");
+    assert!(matches!(w.phase, poser::model::Phase::HenyeyGreenstein { g } if g == 0.0));
+}

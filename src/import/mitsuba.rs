@@ -7,7 +7,7 @@
 //! | `disk`, `obj`, `ply` | `mesh` objects, written as `.glb` assets | `to_world` baked into the vertices |
 //! | `diffuse` BSDF (`rgb`, `spectrum`, `bitmap`, `checkerboard` reflectance), `twosided` | `albedo` | a bitmap on an `obj`/`ply` with texture coordinates or on a `rectangle` becomes the mesh's image texture, elsewhere its mean albedo; a checkerboard the mean of its colours (noted); other BSDFs their diffuse reflectance, noted |
 //! | `spectrum` (one value, wavelength:value pairs, `.spd` file) | linear sRGB | as Mitsuba 3's RGB variants (`spectrum_list_to_srgb`): CIE 1931 2° observer, D65 for reflectances; noted |
-//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted. A `cube` or a `sphere` with a smooth `dielectric` 0.5 m or more from every sensor is a glass object (`glass = …`, the catalogue glass nearest its `int_ior`, within 0.02); other glass that far, or a shape holding an `interior` medium that no sensor is inside, is refused at the shape |
+//! | `dielectric` shapes and black walls around a sensor | dropped: a housing port is declared in poser | the note gives the `[camera.port]` to write; `int_ior`/`ext_ior` numbers or Mitsuba's names; per channel: their mean, noted. A `cube` or a `sphere` with a smooth `dielectric` 0.5 m or more from every sensor is a glass object (`glass = …`, the catalogue glass nearest its `int_ior`, within 0.02); a `cube` or `sphere` holding a homogeneous `interior` medium that no sensor is inside, with a `null` or smooth `dielectric` BSDF, is a filled object (`fill = { … }`: the medium's σa, σs, HG g, and `int_ior`, or 1 for `null`); other glass that far, or another shape holding such a medium, is refused at the shape |
 //! | no glass at a sensor | `[camera.port] type = "none"` | |
 //! | `point`, `spot`, `directional`, `constant`, `area` on a `rectangle` | `point`, `spot`, `[sun]`, `ambient`, `area` lights | lights of a per-image file (not of an included world) are rig-mounted |
 //! | `homogeneous` medium (`sigma_t`, `albedo`, `scale`, `hg`/`isotropic`) | `[water]` `absorption`, `scattering`, `g` | the glass's `ext_ior` gives the water's index |
@@ -1692,7 +1692,8 @@ pub fn import_within(
     if !rig {
         note_other_intrinsics(&mut cx, &sensors);
     }
-    let (water, surface) = water_of(&mut cx, &docs)?;
+    let sensor_at: Vec<DVec3> = sensors.iter().map(|s| s.pos).collect();
+    let (water, surface) = water_of(&mut cx, &docs, &sensor_at)?;
 
     let mut t = Table::new();
     let name = comment_name(&docs[0], "poser scene")
@@ -2037,11 +2038,40 @@ fn note_other_intrinsics(cx: &mut Cx, sensors: &[Sensor]) {
 
 /// The water: the medium inside a `null` shape (poser's sea box), else the first medium; and
 /// whether a sea box has its top at z = 0 (a flat surface).
-fn water_of(cx: &mut Cx, docs: &[X]) -> Result<(Option<Water>, bool), String> {
+fn water_of(cx: &mut Cx, docs: &[X], sensors: &[DVec3]) -> Result<(Option<Water>, bool), String> {
     let world = &docs[0];
     let mut water = None;
     let mut surface = false;
-    for k in world.kids.iter().filter(|k| k.tag == "medium") {
+    // A `cube` or `sphere` holding a medium that no sensor is inside is a filled object
+    // (`filled_object`): its medium is not the scene's water.
+    let mut filled: Vec<String> = Vec::new();
+    for d in docs {
+        for k in d.kids.iter().filter(|k| {
+            k.tag == "shape"
+                && matches!(k.ty(), "cube" | "sphere")
+                && k.kids.iter().any(|c| c.attr("name") == Some("interior"))
+        }) {
+            let m = cx.to_world(k)?;
+            let (lo, hi) = world_bounds(cx, k, &m)?;
+            if !sensors
+                .iter()
+                .any(|p| p.cmpge(lo).all() && p.cmple(hi).all())
+                && let Some(r) = k.kids.iter().find(|c| c.attr("name") == Some("interior"))
+                && let Some(id) = r.attr("id")
+            {
+                filled.push(id.to_string());
+            }
+        }
+    }
+    let is_fill = |k: &X| {
+        k.attr("id")
+            .is_some_and(|id| filled.iter().any(|f| f == id))
+    };
+    for k in world
+        .kids
+        .iter()
+        .filter(|k| k.tag == "medium" && !is_fill(k))
+    {
         if water.is_none() {
             water = medium(cx, k)?;
         }
@@ -2053,7 +2083,14 @@ fn water_of(cx: &mut Cx, docs: &[X]) -> Result<(Option<Water>, bool), String> {
             .filter(|k| k.tag == "shape" && k.ty() == "cube")
         {
             let interior = k.kids.iter().any(|c| c.attr("name") == Some("interior"));
-            if interior {
+            let sensor_inside = {
+                let m = cx.to_world(k)?;
+                let (lo, hi) = world_bounds(cx, k, &m)?;
+                sensors
+                    .iter()
+                    .any(|p| p.cmpge(lo).all() && p.cmple(hi).all())
+            };
+            if interior && sensor_inside {
                 if water.is_none()
                     && let Some(r) = k.kids.iter().find(|c| c.attr("name") == Some("interior"))
                 {
@@ -2068,7 +2105,7 @@ fn water_of(cx: &mut Cx, docs: &[X]) -> Result<(Option<Water>, bool), String> {
                 surface |= top.abs() < 1e-6;
             }
         }
-        for k in d.kids.iter().filter(|k| k.tag == "medium") {
+        for k in d.kids.iter().filter(|k| k.tag == "medium" && !is_fill(k)) {
             if water.is_none() {
                 water = medium(cx, k)?;
             }
@@ -2434,6 +2471,18 @@ fn shape(
             }
             let (lo, hi) = world_bounds(cx, k, &m)?;
             let distance = sensor_distance(lo, hi);
+            if medium
+                && distance > 0.0
+                && (what == "dielectric" || what == "null")
+                && (kind == "cube" || kind == "sphere")
+            {
+                let name = unique(
+                    comment_name(k, "object")
+                        .or_else(|| k.attr("id").map(str::to_string))
+                        .unwrap_or_else(|| kind.clone()),
+                );
+                return filled_object(cx, k, &m, &kind, &name, objects, assets_out, assets);
+            }
             if what == "dielectric"
                 && distance >= PORT_REACH
                 && !medium
@@ -2603,6 +2652,72 @@ fn glass_object(
         ));
     }
     o.insert(F::Object::glass.into(), Value::String(glass.to_string()));
+    objects.push(Value::Table(o));
+    Ok(())
+}
+
+/// A `cube` or `sphere` holding an `interior` medium that no sensor is inside: a filled
+/// object (`fill = { … }`, docs/scenes.md "Filled objects") of the medium's coefficients and
+/// phase, its faces of the smooth `dielectric`'s `int_ior` (a `null` BSDF: index 1, a boundary
+/// that neither reflects nor bends).
+#[allow(clippy::too_many_arguments)]
+fn filled_object(
+    cx: &mut Cx,
+    k: &X,
+    m: &DMat4,
+    kind: &str,
+    name: &str,
+    objects: &mut Vec<Value>,
+    assets_out: &mut Vec<(String, Vec<u8>)>,
+    assets: &str,
+) -> Result<(), String> {
+    let Some(r) = k.kids.iter().find(|c| c.attr("name") == Some("interior")) else {
+        return Err(format!("{}: a filled {kind} without its medium", k.loc));
+    };
+    let medium_x = cx.deref(r)?.clone();
+    let Some(w) = medium(cx, &medium_x)? else {
+        return Err(format!(
+            "{}: this `{kind}` holds a `{}` medium: poser's filled objects hold homogeneous \
+             water\n  help: make the medium `homogeneous`, or remove the shape",
+            k.loc,
+            medium_x.ty()
+        ));
+    };
+    let n = match shape_bsdf(cx, k)? {
+        Some(b) if b.ty() == "dielectric" => {
+            let ne = ior(cx, &b, "ext_ior", 1.000277)?;
+            if (ne - 1.0).abs() > 1e-3 {
+                cx.note(
+                    &b,
+                    format!("ext_ior {ne:.4} is imported as what is around the object in poser"),
+                    Some("a filled object's faces divide its water from the scene's water or air"),
+                );
+            }
+            ior(cx, &b, "int_ior", 1.5046)?
+        }
+        _ => 1.0,
+    };
+    let mut o = Table::new();
+    o.insert(F::Object::name.into(), Value::String(name.to_string()));
+    if !shape_geometry(cx, k, m, kind, name, &mut o, assets_out, assets)? {
+        return Ok(());
+    }
+    let want = if kind == "cube" { "box" } else { "sphere" };
+    if o.get(F::Object::shape).and_then(Value::as_str) != Some(want) {
+        return Err(format!(
+            "{}: this filled `{kind}` is sheared, mirrored or (a sphere) scaled unevenly: \
+             poser's filled objects are boxes and round spheres\n  help: give the shape a \
+             rotation, a translation and one scale only",
+            k.loc
+        ));
+    }
+    let mut f = Table::new();
+    f.insert(F::FillTable::absorption.into(), arr(w.sigma_a));
+    f.insert(F::FillTable::scattering.into(), arr(w.sigma_s));
+    f.insert(F::FillTable::phase.into(), Value::String("hg".into()));
+    f.insert(F::FillTable::g.into(), Value::Float(w.g));
+    f.insert(F::FillTable::ior.into(), Value::Float(n));
+    o.insert(F::Object::fill.into(), Value::Table(f));
     objects.push(Value::Table(o));
     Ok(())
 }
