@@ -228,10 +228,11 @@ fn glass_around_the_camera_is_still_its_port() {
     );
 }
 
-/// A medium inside a shape the camera is outside of: Mitsuba fills only the shape, poser's
-/// water would fill the scene. Refused at the shape, naming the medium.
+/// A medium inside a sphere the camera is outside of is a filled object (tests/filled_objects.rs
+/// checks its coefficients); inside a shape poser cannot fill (Mitsuba's open `cylinder`) it is
+/// refused at the shape, naming the medium.
 #[test]
-fn a_medium_inside_a_shape_away_from_the_camera_is_refused() {
+fn a_medium_inside_a_shape_away_from_the_camera_is_filled_or_refused() {
     let dir = tempfile::tempdir().unwrap();
     scene(
         dir.path(),
@@ -244,11 +245,35 @@ fn a_medium_inside_a_shape_away_from_the_camera_is_refused() {
     </shape>"#,
     );
     let out = import(dir.path(), "s.xml", &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let m = poser::scene::load(&dir.path().join("out/scene.toml"), &[])
+        .unwrap()
+        .model;
+    assert!(m.water.is_none());
+    assert!(matches!(
+        m.objects[0].shape,
+        poser::model::Shape::Sphere { .. }
+    ));
+    assert!(m.objects[0].material.fill.is_some());
+
+    let dir = tempfile::tempdir().unwrap();
+    scene(
+        dir.path(),
+        "0, 0, -10",
+        r#"    <medium type="homogeneous" id="fog"><rgb name="sigma_t" value="0.5"/></medium>
+    <shape type="cylinder">
+        <point name="p0" x="0" y="0" z="4"/>
+        <point name="p1" x="0" y="0" z="5"/>
+        <bsdf type="null"/>
+        <ref name="interior" id="fog"/>
+    </shape>"#,
+    );
+    let out = import(dir.path(), "s.xml", &[]);
     assert_refused(
         dir.path(),
         &out,
         "s.xml:9:5",
-        "`sphere` shape with a `null` BSDF bounds medium `fog`, and the camera is outside it",
+        "`cylinder` shape with a `null` BSDF bounds medium `fog`, and the camera is outside it",
     );
 }
 

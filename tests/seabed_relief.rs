@@ -164,10 +164,10 @@ relief_file = "pts.txt"
 
 #[test]
 fn the_moorea_scene_keeps_its_gcps_surveyed_heights() {
-    let m = poser::scene::load(Path::new("scenarios/lessons/moorea.toml"), &[])
+    let m = poser::scene::load(Path::new("scenarios/sites/moorea.toml"), &[])
         .map(|l| l.model)
         .unwrap_or_else(|f| panic!("{}", f.render()));
-    let text = std::fs::read_to_string("scenarios/lessons/assets/moorea_gcps.txt").unwrap();
+    let text = std::fs::read_to_string("scenarios/sites/assets/moorea_gcps.txt").unwrap();
     let pts = poser::points::parse(&text).unwrap();
     assert_eq!(pts.len(), 8);
     let origin = DVec3::new(-27.5, -10.0, -12.0);

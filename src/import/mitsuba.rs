@@ -2471,29 +2471,20 @@ fn shape(
             }
             let (lo, hi) = world_bounds(cx, k, &m)?;
             let distance = sensor_distance(lo, hi);
-            if medium
-                && distance > 0.0
-                && (what == "dielectric" || what == "null")
-                && (kind == "cube" || kind == "sphere")
-            {
+            let solid = kind == "cube" || kind == "sphere";
+            let filled = medium && distance > 0.0 && (what == "dielectric" || what == "null");
+            let glass = what == "dielectric" && distance >= PORT_REACH && !medium;
+            if solid && (filled || glass) {
                 let name = unique(
                     comment_name(k, "object")
                         .or_else(|| k.attr("id").map(str::to_string))
                         .unwrap_or_else(|| kind.clone()),
                 );
-                return filled_object(cx, k, &m, &kind, &name, objects, assets_out, assets);
-            }
-            if what == "dielectric"
-                && distance >= PORT_REACH
-                && !medium
-                && (kind == "cube" || kind == "sphere")
-            {
-                let name = unique(
-                    comment_name(k, "object")
-                        .or_else(|| k.attr("id").map(str::to_string))
-                        .unwrap_or_else(|| kind.clone()),
-                );
-                return glass_object(cx, k, &m, &kind, &name, objects, assets_out, assets);
+                return if filled {
+                    filled_object(cx, k, &m, &kind, &name, objects, assets_out, assets)
+                } else {
+                    glass_object(cx, k, &m, &kind, &name, objects, assets_out, assets)
+                };
             }
             refuse_away_from_camera(cx, k, what, distance)?;
             if what == "null" {

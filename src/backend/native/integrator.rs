@@ -544,6 +544,19 @@ impl<'a> Integrator<'a> {
         }
     }
 
+    /// The water a path's segment runs through: the scene's, none inside a glass object, or a
+    /// filled object's own inside it.
+    fn segment_water(&self, glass: &GlassPath) -> Option<&Medium> {
+        if glass.inside {
+            glass
+                .object
+                .and_then(|k| self.fill.get(k as usize))
+                .and_then(Option::as_ref)
+        } else {
+            self.medium.as_ref()
+        }
+    }
+
     /// The bounce of a path along `d` at a glass object's face `h` (indices `ior`): Fresnel
     /// reflection or Snell refraction, one of them drawn with the reflectance's odds (total
     /// internal reflection always reflects). Returns the new origin, just off the face on the
@@ -643,16 +656,7 @@ impl<'a> Integrator<'a> {
             // transmittance, whichever way the free flight below goes (both branches add it
             // exactly once), so direct light on surfaces carries no free-flight noise.
             let mut beta_nee = beta;
-            // The water the segment runs through: the scene's, or a filled object's inside it.
-            let water = if glass.inside {
-                glass
-                    .object
-                    .and_then(|k| self.fill.get(k as usize))
-                    .and_then(Option::as_ref)
-            } else {
-                self.medium.as_ref()
-            };
-            if let Some(m) = water
+            if let Some(m) = self.segment_water(&glass)
                 && let Some((a, b)) = m.interval(o, d, 0.0, t_end)
             {
                 // A glass face takes no next-event estimate (it is a delta BSDF).
