@@ -2628,20 +2628,9 @@ fn glass_object(
             ),
         );
     }
-    let mut o = Table::new();
-    o.insert(F::Object::name.into(), Value::String(name.to_string()));
-    if !shape_geometry(cx, k, m, kind, name, &mut o, assets_out, assets)? {
+    let Some(mut o) = solid_table(cx, k, m, kind, name, "glass", assets_out, assets)? else {
         return Ok(());
-    }
-    let want = if kind == "cube" { "box" } else { "sphere" };
-    if o.get(F::Object::shape).and_then(Value::as_str) != Some(want) {
-        return Err(format!(
-            "{}: this glass `{kind}` is sheared, mirrored or (a sphere) scaled unevenly: \
-             poser's glass objects are boxes and round spheres\n  help: give the shape a \
-             rotation, a translation and one scale only",
-            k.loc
-        ));
-    }
+    };
     o.insert(F::Object::glass.into(), Value::String(glass.to_string()));
     objects.push(Value::Table(o));
     Ok(())
@@ -2688,20 +2677,9 @@ fn filled_object(
         }
         _ => 1.0,
     };
-    let mut o = Table::new();
-    o.insert(F::Object::name.into(), Value::String(name.to_string()));
-    if !shape_geometry(cx, k, m, kind, name, &mut o, assets_out, assets)? {
+    let Some(mut o) = solid_table(cx, k, m, kind, name, "filled", assets_out, assets)? else {
         return Ok(());
-    }
-    let want = if kind == "cube" { "box" } else { "sphere" };
-    if o.get(F::Object::shape).and_then(Value::as_str) != Some(want) {
-        return Err(format!(
-            "{}: this filled `{kind}` is sheared, mirrored or (a sphere) scaled unevenly: \
-             poser's filled objects are boxes and round spheres\n  help: give the shape a \
-             rotation, a translation and one scale only",
-            k.loc
-        ));
-    }
+    };
     let mut f = Table::new();
     f.insert(F::FillTable::absorption.into(), arr(w.sigma_a));
     f.insert(F::FillTable::scattering.into(), arr(w.sigma_s));
@@ -2711,6 +2689,37 @@ fn filled_object(
     o.insert(F::Object::fill.into(), Value::Table(f));
     objects.push(Value::Table(o));
     Ok(())
+}
+
+/// The object table of a glass or filled (`what`) `cube` or `sphere`: its name and geometry
+/// as a box or a round sphere (`None`: the geometry was noted and left out), or an error for a
+/// sheared, mirrored or unevenly scaled one.
+#[allow(clippy::too_many_arguments)]
+fn solid_table(
+    cx: &mut Cx,
+    k: &X,
+    m: &DMat4,
+    kind: &str,
+    name: &str,
+    what: &str,
+    assets_out: &mut Vec<(String, Vec<u8>)>,
+    assets: &str,
+) -> Result<Option<Table>, String> {
+    let mut o = Table::new();
+    o.insert(F::Object::name.into(), Value::String(name.to_string()));
+    if !shape_geometry(cx, k, m, kind, name, &mut o, assets_out, assets)? {
+        return Ok(None);
+    }
+    let want = if kind == "cube" { "box" } else { "sphere" };
+    if o.get(F::Object::shape).and_then(Value::as_str) != Some(want) {
+        return Err(format!(
+            "{}: this {what} `{kind}` is sheared, mirrored or (a sphere) scaled unevenly: \
+             poser's {what} objects are boxes and round spheres\n  help: give the shape a \
+             rotation, a translation and one scale only",
+            k.loc
+        ));
+    }
+    Ok(Some(o))
 }
 
 /// How far from a sensor glass and black walls are read as its housing, metres.

@@ -49,6 +49,31 @@ pub fn parse(text: &str) -> Result<Vec<FilePoint>, (usize, usize, String)> {
     Ok(out)
 }
 
+/// Read the points file `rel` that a scene key names (`span`: the key's value): relative to
+/// the file holding the key, refused outside the scene's folder, read and parsed ([`read`]),
+/// and recorded among the files the scene was read from. Empty on any problem (diagnosed).
+pub fn read_named(
+    cx: &mut Cx,
+    sources: &super::source::Sources,
+    scene: &Path,
+    rel: &str,
+    span: Span,
+) -> Vec<FilePoint> {
+    let dir = sources
+        .dir_of(span.file)
+        .unwrap_or_else(|| scene.parent().map(Path::to_path_buf).unwrap_or_default());
+    let file = dir.join(rel);
+    if let Some(why) = super::source::outside_root(sources, rel, &file) {
+        cx.push(super::source::outside_diag(rel, &why, span));
+        return vec![];
+    }
+    let pts = read(cx, &file, span);
+    if !pts.is_empty() {
+        cx.files.push(file);
+    }
+    pts
+}
+
 /// Read and parse `path`; problems become one diagnostic on the `file` key (`span`), naming
 /// the file, line and column.
 pub fn read(cx: &mut Cx, path: &Path, span: Span) -> Vec<FilePoint> {

@@ -261,19 +261,10 @@ fn relief_points(
     let Some(rel) = o.opt_str(cx, F::Object::relief_file) else {
         return vec![];
     };
-    let dir = sources
-        .dir_of(fspan.file)
-        .unwrap_or_else(|| scene.parent().map(Path::to_path_buf).unwrap_or_default());
-    let file = dir.join(&rel);
-    if let Some(why) = crate::scene::source::outside_root(sources, &rel, &file) {
-        cx.push(crate::scene::source::outside_diag(&rel, &why, fspan));
-        return vec![];
-    }
-    let pts = crate::scene::points_file::read(cx, &file, fspan);
+    let pts = crate::scene::points_file::read_named(cx, sources, scene, &rel, fspan);
     if pts.is_empty() {
         return vec![];
     }
-    cx.files.push(file.clone());
     if !(scale.min_element() > 0.0) {
         return vec![];
     }

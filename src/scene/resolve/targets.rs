@@ -207,18 +207,7 @@ fn points_file(
         );
         return vec![];
     };
-    let dir = sources
-        .dir_of(fspan.file)
-        .unwrap_or_else(|| scene.parent().map(Path::to_path_buf).unwrap_or_default());
-    let file = dir.join(&rel);
-    if let Some(why) = crate::scene::source::outside_root(sources, &rel, &file) {
-        cx.push(crate::scene::source::outside_diag(&rel, &why, fspan));
-        return vec![];
-    }
-    let pts = crate::scene::points_file::read(cx, &file, fspan);
-    if !pts.is_empty() {
-        cx.files.push(file.clone());
-    }
+    let pts = crate::scene::points_file::read_named(cx, sources, scene, &rel, fspan);
     if pts.is_empty() || !(diameter > 0.0) {
         return vec![];
     }
