@@ -21,7 +21,7 @@ fn colmap_registers_the_survey_of_the_shipped_textured_model() {
         .find(|c| c.scene.ends_with("textured_bommie.toml"))
         .expect("the textured model is a case of `poser bench images`");
     let out = tempfile::tempdir().unwrap();
-    let row = run_case(root, case, true, out.path()).unwrap();
+    let row = run_case(root, case, true, true, out.path()).unwrap();
     eprintln!(
         "{}",
         poser::bench::images::table(std::slice::from_ref(&row))
@@ -35,4 +35,18 @@ fn colmap_registers_the_survey_of_the_shipped_textured_model() {
         row.images
     );
     assert!(row.reprojection_px < 0.5, "{} px", row.reprojection_px);
+    // COLMAP as it ships, on the same JPEGs (`poser bench images --stock`): it runs, and reads
+    // the focal length from their EXIF (the in-air value; docs/bench/images.md for its result).
+    let stock = row.stock.as_ref().expect("the stock run");
+    assert!(stock.failure.is_none(), "{:?}", stock.failure);
+    let cam = &poser::scene::load(&root.join(case.scene), &[])
+        .unwrap()
+        .model
+        .cameras[0];
+    let f_air = cam.fx * case.scale;
+    let exif = stock.exif_focal_px.expect("the EXIF focal length");
+    assert!(
+        (exif / f_air - 1.0).abs() < 0.01,
+        "EXIF {exif} px, f_air {f_air} px"
+    );
 }

@@ -123,17 +123,41 @@ pub struct Row {
     pub cpu_s: f64,
     /// Why the scene could not be processed, if it could not.
     pub failure: Option<String>,
+    /// COLMAP as it ships on the same JPEGs (`--stock`), when asked.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stock: Option<StockRow>,
+}
+
+/// Stock COLMAP's result on a scene's images ([`crate::evaluate::Options::stock`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct StockRow {
+    pub registered: usize,
+    pub share: f64,
+    /// Separate models the mapper made (the largest is kept).
+    pub models: Option<u64>,
+    pub reprojection_px: f64,
+    pub focal_error: Option<f64>,
+    /// The focal length COLMAP read from the images' EXIF, px (`None`: none found).
+    pub exif_focal_px: Option<f64>,
+    pub colmap_wall_s: f64,
+    pub failure: Option<String>,
 }
 
 /// Run the cases whose file name contains `only` (all when `None`); renders go to `out`.
-pub fn run(root: &Path, quick: bool, only: Option<&str>, out: &Path) -> Result<Vec<Row>, String> {
+pub fn run(
+    root: &Path,
+    quick: bool,
+    only: Option<&str>,
+    stock: bool,
+    out: &Path,
+) -> Result<Vec<Row>, String> {
     let mut rows = Vec::new();
     for case in CASES {
         if only.is_some_and(|o| !case.scene.contains(o)) {
             continue;
         }
         eprintln!("bench images: {}", case.scene);
-        rows.push(run_case(root, case, quick, out)?);
+        rows.push(run_case(root, case, quick, stock, out)?);
     }
     if rows.is_empty() {
         return Err(format!(
@@ -145,7 +169,13 @@ pub fn run(root: &Path, quick: bool, only: Option<&str>, out: &Path) -> Result<V
 }
 
 /// Render and process one case.
-pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row, String> {
+pub fn run_case(
+    root: &Path,
+    case: &Case,
+    quick: bool,
+    stock: bool,
+    out: &Path,
+) -> Result<Row, String> {
     let (scale, samples) = if quick {
         (case.scale, case.samples)
     } else {
@@ -186,6 +216,7 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
         colmap_wall_s: 0.0,
         cpu_s: 0.0,
         failure: None,
+        stock: None,
     };
     let c0 = cpu_seconds();
     if let Err(e) = check_images_texture(&model) {
@@ -232,8 +263,44 @@ pub fn run_case(root: &Path, case: &Case, quick: bool, out: &Path) -> Result<Row
         Err(e) => row.failure = Some(first_line(&e)),
     }
     row.colmap_wall_s = t1.elapsed().as_secs_f64();
+    if stock {
+        row.stock = Some(run_stock(&model, &dir));
+    }
     row.cpu_s = cpu_seconds() - c0;
     Ok(row)
+}
+
+/// COLMAP as it ships on the JPEGs in `dir` (`poser evaluate --mode images --stock`).
+fn run_stock(model: &crate::model::Model, dir: &Path) -> StockRow {
+    let t = std::time::Instant::now();
+    let opts = Options {
+        model: crate::evaluate::colmap::CameraModel::SimpleRadial,
+        stock: true,
+        ..Options::default()
+    };
+    let mut s = StockRow {
+        registered: 0,
+        share: 0.0,
+        models: None,
+        reprojection_px: f64::NAN,
+        focal_error: None,
+        exif_focal_px: None,
+        colmap_wall_s: 0.0,
+        failure: None,
+    };
+    match evaluate_images(model, dir, &opts, &|_, _, _| {}) {
+        Ok(ev) => {
+            s.registered = ev.registered;
+            s.share = ev.registered as f64 / ev.images.max(1) as f64;
+            s.models = ev.colmap.get("models").and_then(|v| v.as_u64());
+            s.reprojection_px = ev.reprojection_error;
+            s.focal_error = ev.cameras.first().map(|c| c.focal_error);
+            s.exif_focal_px = ev.colmap.get("exif_focal_px").and_then(|v| v.as_f64());
+        }
+        Err(e) => s.failure = Some(first_line(&e)),
+    }
+    s.colmap_wall_s = t.elapsed().as_secs_f64();
+    s
 }
 
 fn first_line(s: &str) -> String {
@@ -294,6 +361,37 @@ pub fn table(rows: &[Row]) -> String {
             r.colmap_wall_s,
         );
     }
+    if rows.iter().any(|r| r.stock.is_some()) {
+        s.push_str(
+            "\nStock COLMAP on the same JPEGs (`--stock`: COLMAP's defaults, the focal length from \
+             the EXIF, the initial pair's angle lowered to 8°):\n\n\
+             | scene | registered | models | reprojection | focal error | EXIF focal | COLMAP | note |\n\
+             |---|---|---|---|---|---|---|---|\n",
+        );
+        for r in rows {
+            let Some(k) = &r.stock else { continue };
+            let _ = writeln!(
+                s,
+                "| {} | {} of {} ({:.0} %) | {} | {} | {} | {} | {:.0} s | {} |",
+                r.scene,
+                k.registered,
+                r.images,
+                100.0 * k.share,
+                k.models.map_or("—".into(), |m| m.to_string()),
+                if k.reprojection_px.is_finite() {
+                    format!("{:.2} px", k.reprojection_px)
+                } else {
+                    "—".into()
+                },
+                k.focal_error
+                    .map_or("—".into(), |f| format!("{:+.1} %", 100.0 * f)),
+                k.exif_focal_px
+                    .map_or("none".into(), |f| format!("{f:.1} px")),
+                k.colmap_wall_s,
+                k.failure.as_deref().unwrap_or("").replace('|', "/"),
+            );
+        }
+    }
     s
 }
 
@@ -322,6 +420,7 @@ mod tests {
             colmap_wall_s: 1.0,
             cpu_s: 4.0,
             failure: failure.map(str::to_string),
+            stock: None,
         }
     }
 
@@ -337,6 +436,31 @@ mod tests {
         assert!(
             lines[3].contains("| — | — | — | — | 20 % |")
                 && lines[3].contains("COLMAP failed / badly"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn stock_colmap_gets_its_own_table() {
+        assert!(!table(&[row(None)]).contains("Stock COLMAP"));
+        let mut r = row(None);
+        r.stock = Some(StockRow {
+            registered: 3,
+            share: 0.3,
+            models: Some(2),
+            reprojection_px: 0.61,
+            focal_error: Some(-0.5),
+            exif_focal_px: Some(333.3),
+            colmap_wall_s: 7.0,
+            failure: None,
+        });
+        let t = table(&[r]);
+        let stock = t.split("Stock COLMAP").nth(1).expect("a stock table");
+        let lines: Vec<&str> = stock.lines().filter(|l| l.starts_with('|')).collect();
+        let columns = |l: &str| l.matches('|').count();
+        assert!(lines.iter().all(|l| columns(l) == columns(lines[0])), "{t}");
+        assert!(
+            lines[2].starts_with("| s | 3 of 10 (30 %) | 2 | 0.61 px | -50.0 % | 333.3 px | 7 s |"),
             "{t}"
         );
     }

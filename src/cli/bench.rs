@@ -31,7 +31,7 @@ pub enum What {
     /// The backends' agreement on every shipped scene.
     Parity(ParityArgs),
     /// COLMAP on rendered surveys: registered share, reprojection error, focal length.
-    Images(ScenesArgs),
+    Images(ImagesArgs),
     /// A large textured mesh: load, BVH, truth and render, with the peak memory.
     Mesh(MeshArgs),
 }
@@ -58,6 +58,18 @@ pub struct ScenesArgs {
     /// Keep the renders here (default: a temporary folder, removed afterwards).
     #[arg(long)]
     pub out: Option<PathBuf>,
+}
+
+/// `images`.
+#[derive(clap::Args, Debug)]
+pub struct ImagesArgs {
+    #[command(flatten)]
+    pub scenes: ScenesArgs,
+    /// Also hand the same JPEGs to COLMAP as it ships (`poser evaluate --stock`: its
+    /// defaults, the focal length from the EXIF, the initial pair's angle lowered to 8°) and
+    /// report its registration beside poser's pipeline.
+    #[arg(long)]
+    pub stock: bool,
 }
 
 /// `render`.
@@ -202,10 +214,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             print!("{}", crate::bench::column::table(&rows));
             write_json(a.common.json.as_deref(), &rows)
         }
-        What::Images(a) => {
+        What::Images(ImagesArgs { scenes: a, stock }) => {
             let (_tmp, out) = out_dir(a.out.as_ref())?;
-            let rows = crate::bench::images::run(&root(), a.common.quick, a.only.as_deref(), &out)
-                .map_err(CliError::Failed)?;
+            let rows =
+                crate::bench::images::run(&root(), a.common.quick, a.only.as_deref(), *stock, &out)
+                    .map_err(CliError::Failed)?;
             print!("{}", crate::bench::images::table(&rows));
             write_json(a.common.json.as_deref(), &rows)
         }
