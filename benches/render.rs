@@ -24,7 +24,7 @@ fn reef() -> Vec<(SurfaceId, mesh::TriMesh)> {
     vec![
         (
             SurfaceId::Object(0),
-            mesh::seabed(16.0, 12.0, 0.15, 0.05, 7).unwrap(),
+            mesh::seabed(16.0, 12.0, 0.15, 0.05, 7, None).unwrap(),
         ),
         (
             SurfaceId::Object(1),
