@@ -284,3 +284,28 @@ fn a_medium_inside_a_mitsuba_shape_imports_as_a_filled_object() {
     assert_eq!(w.ior, [1.0; 3], "a null boundary");
     assert!(matches!(w.phase, poser::model::Phase::HenyeyGreenstein { g } if g == 0.0));
 }
+
+#[test]
+fn a_camera_in_a_filled_box_is_one_error_and_a_target_behind_one_is_warned() {
+    let water = "{ jerlov = \"3C\" }";
+    let e = errors(&tank(water, "").replace(
+        "position = [0.0, 0.0, -2.0]\nfill",
+        "position = [0.0, 0.0, -0.2]\nfill",
+    ));
+    assert!(
+        e.contains("E0304") && !e.contains("E0405"),
+        "one error, not a glass one too: {e}"
+    );
+    // A target behind the tank: the truth counts the tank opaque, and says so.
+    let target = "[[targets]]\nname = \"board\"\ntype = \"checkerboard\"\ncols = 4\nrows = 3\n\
+                  square = \"5 cm\"\nposition = [0.0, 0.0, -3.0]\n";
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("scene.toml");
+    std::fs::write(&p, tank(water, target)).unwrap();
+    let loaded = poser::scene::load(&p, &[]).unwrap();
+    let text: String = loaded.warnings.iter().map(|d| format!("{d:?}")).collect();
+    assert!(
+        text.contains("W0406") && text.contains("seen through filled object `tank`"),
+        "{text}"
+    );
+}

@@ -342,9 +342,10 @@ fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
         for ci in 0..m.cameras.len() {
             let c = m.world_from_camera(pi, ci).translation;
             for &(i, o, half, from_world) in &glass {
-                // The pupil in the box's own frame: inside it within the half-sizes.
+                // The pupil in the box's own frame: inside it within the half-sizes (a filled
+                // box: E0304, `filled_objects`).
                 let a = from_world.transform_point(c);
-                if a.abs().cmplt(half).all() {
+                if a.abs().cmplt(half).all() && o.material.fill.is_none() {
                     cx.push(
                         Diagnostic::error("E0405", format!("camera `{}` is inside glass object `{}`", m.cameras[ci].name, o.name))
                             .label(at(i), format!("the camera's pupil is inside it at pose {}", pose.name))
@@ -370,7 +371,7 @@ fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
     }
     if let Some((i, target, pose, n)) = seen_through {
         cx.push(
-            Diagnostic::warning("W0406", format!("target `{target}` is seen through glass object `{}`", m.objects[i].name))
+            Diagnostic::warning("W0406", format!("target `{target}` is seen through {} object `{}`", if m.objects[i].material.fill.is_some() { "filled" } else { "glass" }, m.objects[i].name))
                 .label(at(i), format!("{n} line(s) of sight from a camera to a target point cross it (first at pose {pose})"))
                 .help("the ground truth does not refract through glass objects: it counts them as opaque, so those points are left out of the truth where glass hides them; move the target or the glass"),
         );
