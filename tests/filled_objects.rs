@@ -100,6 +100,13 @@ fn a_scattering_fill_raises_the_default_bounce_limit_and_a_low_one_warns() {
     let scattering = "{ absorption = 0.1, scattering = 1.5, g = 0.8 }";
     let m = load_text(&tank(scattering, ""), &[]);
     assert_eq!(m.render.max_bounces, 64);
+    // `poser explain` says where the water is.
+    let reasons = m.needs.reasons.join("\n");
+    assert!(
+        reasons.contains("water only inside the 1 filled object(s)")
+            && reasons.contains("filled object `tank`: water inside, σa = [0.1000"),
+        "{reasons}"
+    );
     // A clear fill keeps the default.
     let clear = load_text(&tank("{ absorption = 0.1, scattering = 0 }", ""), &[]);
     assert_eq!(clear.render.max_bounces, 8);

@@ -357,11 +357,32 @@ fn placement(cx: &mut Cx, t: &mut Tab, default_pos: DVec3) -> Pose {
 
 // ------------------------------------------------------------------------------------------
 
+/// One line per filled object for [`needs`]: its water and its boundary.
+fn filled_reasons(m: &Model, n: &mut Needs) {
+    for o in &m.objects {
+        let Some(w) = &o.material.fill else { continue };
+        let (a, b) = (w.absorption, w.scattering);
+        n.reasons.push(format!(
+            "filled object `{}`: water inside, σa = [{:.4}, {:.4}, {:.4}], σs = [{:.4}, {:.4}, \
+             {:.4}] 1/m (R, G, B), behind a smooth boundary of index {:.4} (green)",
+            o.name, a[0], a[1], a[2], b[0], b[1], b[2], w.ior[1]
+        ));
+    }
+}
+
 /// Decide what the scene needs modelled, with reasons.
 pub fn needs(m: &Model) -> Needs {
     let mut n = Needs::default();
     let ior = m.ambient_ior();
+    let filled = m
+        .objects
+        .iter()
+        .filter(|o| o.material.fill.is_some())
+        .count();
     match &m.water {
+        None if filled > 0 => n.reasons.push(format!(
+            "no [water]: survey in air; water only inside the {filled} filled object(s)"
+        )),
         None => n
             .reasons
             .push("no [water]: survey in air, no medium is emitted".into()),
@@ -391,6 +412,7 @@ pub fn needs(m: &Model) -> Needs {
             }
         }
     }
+    filled_reasons(m, &mut n);
     let ports: Vec<&str> = m
         .cameras
         .iter()
