@@ -65,34 +65,34 @@ pub(super) fn water(
     fallback: Span,
 ) -> Option<Water> {
     let mut w = Tab::open(cx, node, F::Scene::water, fallback);
-    let (ior, ior_source) = index(cx, &mut w, site);
-    let (absorption, scattering, jerlov) = iops(cx, &mut w);
-    let phase = phase(cx, &mut w);
-    let extent = extent(cx, &mut w);
+    let water = water_keys(cx, &mut w, site, true);
     w.finish(cx);
-    Some(Water {
-        ior,
-        ior_source,
-        absorption,
-        scattering,
-        jerlov,
-        phase,
-        extent,
-    })
+    Some(water)
 }
 
 /// The water inside a filled object (`fill = { … }`, at `path`): `[water]`'s keys but
 /// `extent` and `box_half_size` (the object is its extent).
 pub(super) fn fill_water(cx: &mut Cx, node: &Node, path: &str, site: &Site) -> Water {
     let mut w = Tab::open(cx, Some(node), path, node.span);
-    let (ior, ior_source) = index(cx, &mut w, site);
-    let (absorption, scattering, jerlov) = iops(cx, &mut w);
-    let phase = phase(cx, &mut w);
-    let extent = WaterExtent::Everywhere;
+    let water = water_keys(cx, &mut w, site, false);
     w.finish_as(
         cx,
         Some("the water of a filled object (the object is its extent)"),
     );
+    water
+}
+
+/// A water table's keys, read in this order: index, inherent optical properties, phase
+/// function, and (`with_extent`) extent; without it the water is everywhere it is put.
+fn water_keys(cx: &mut Cx, w: &mut Tab, site: &Site, with_extent: bool) -> Water {
+    let (ior, ior_source) = index(cx, w, site);
+    let (absorption, scattering, jerlov) = iops(cx, w);
+    let phase = phase(cx, w);
+    let extent = if with_extent {
+        extent(cx, w)
+    } else {
+        WaterExtent::Everywhere
+    };
     Water {
         ior,
         ior_source,
