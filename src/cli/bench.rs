@@ -103,6 +103,10 @@ pub struct ParityArgs {
     /// The backends to compare (default: all three).
     #[arg(long, value_enum, value_delimiter = ',')]
     pub backends: Vec<Backend>,
+    /// Render each scene again with four times the samples until every pair of backends is
+    /// decided (noise allowance ≤ 1 %) or differs, within this many seconds per scene.
+    #[arg(long, value_name = "SECONDS")]
+    pub decisive: Option<f64>,
 }
 
 /// `mesh`.
@@ -188,6 +192,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 s.common.quick,
                 s.only.as_deref(),
                 &out,
+                a.decisive,
             )
             .map_err(CliError::Failed)?;
             print!("{}", crate::bench::parity::table(&rows));
