@@ -10,7 +10,7 @@
 //! for a measured reason, written beside it.
 
 use poser::backend::Backend;
-use poser::bench::parity::{Row, run_decisive, run_scene};
+use poser::bench::parity::{Row, run_scene};
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -38,15 +38,10 @@ fn check(name: &str, skip: &[(&str, &str)]) -> Row {
 /// [`check`], where the backends in `refuse` must refuse the scene with a message containing
 /// the given words (a refusal is part of a backend's contract, as in `tests/out/`).
 fn check_refusing(name: &str, skip: &[(&str, &str)], refuse: &[(&str, &str)]) -> Row {
-    check_in(name, skip, refuse, budget(name))
+    check_in(name, skip, refuse, decided_at(name).is_some())
 }
 
-fn check_in(
-    name: &str,
-    skip: &[(&str, &str)],
-    refuse: &[(&str, &str)],
-    decisive: Option<f64>,
-) -> Row {
+fn check_in(name: &str, skip: &[(&str, &str)], refuse: &[(&str, &str)], decisive: bool) -> Row {
     let row = rendered(name);
     let mut failures = Vec::new();
     for b in &row.backends {
@@ -82,7 +77,7 @@ fn check_in(
         let skipped = skip
             .iter()
             .any(|(a, b)| (p.a == *a && p.b == *b) || (p.a == *b && p.b == *a));
-        if !skipped && decisive.is_some() && !p.decided {
+        if !skipped && decisive && !p.decided {
             failures.push(format!(
                 "{} vs {}: undecided at {} spp (allowance {:.2} %, above {:.0} %)",
                 p.b,
@@ -109,21 +104,25 @@ fn check_in(
     row
 }
 
-/// The scenes whose quick form (16 spp) cannot decide but four or sixteen times its samples
-/// can, with the seconds that takes on 2 cores (`poser bench parity --quick --decisive 400`,
-/// docs/bench/parity.md): each is rendered again until every pair is decided (allowance
-/// ≤ 1 %), and must be. The scenes not listed either decide at 16 spp, or cannot decide in
-/// minutes; their allowance is written beside their test.
-fn budget(name: &str) -> Option<f64> {
+/// The scenes whose quick form (16 spp) cannot decide but more samples can, with the samples
+/// at which `poser bench parity --quick --decisive 400` decided them (docs/bench/parity.md):
+/// they are rendered at those samples, and every pair checked must be decided (allowance
+/// ≤ 1 %), so that a 3 % difference fails it. The scenes not listed either decide at 16 spp,
+/// or cannot decide in minutes; their allowance is written beside their test. (A fixed count,
+/// not `--decisive`'s time budget: the tests run four at a time, and a test's outcome must
+/// not follow the machine's speed.)
+fn decided_at(name: &str) -> Option<u32> {
     match name {
-        // 1.2 % at 16 spp; decided at 64 (52 s measured).
-        "calibration_flat" => Some(90.0),
-        // 1.2 % at 16 spp; decided at 64 (137 s measured).
-        "paper_survey" => Some(200.0),
-        // 4.1 % at 16 spp; decided at 1024 (29 s measured, all four rounds).
-        "calibration_by_port" => Some(60.0),
-        // 2.3 % at 16 spp, 1.1 % at 64; decided at 256 (115 s measured, all three rounds).
-        "coral_self_occlusion" => Some(200.0),
+        // 1.2 % at 16 spp, 2.0 % at 64; decided at 256 (41 s).
+        "calibration_flat" => Some(256),
+        // 1.2 % at 16 spp; decided at 64 (100 s).
+        "paper_survey" => Some(64),
+        // 4.1 % at 16 spp, 2.0 % at 64, 1.0 % at 256; decided at 1024 (16 s).
+        "calibration_by_port" => Some(1024),
+        // 2.3 % at 16 spp, 1.1 % at 64; decided at 256 (77 s).
+        "coral_self_occlusion" => Some(256),
+        // 9.6 % at 16 spp, 1.2 % at 1024; decided at 4096 (31 s).
+        "gsd_reef" => Some(4096),
         _ => None,
     }
 }
@@ -136,11 +135,10 @@ fn scene(name: &str) -> std::path::PathBuf {
         .unwrap_or_else(|| panic!("no shipped scene `{name}`"))
 }
 
-/// `poser bench parity --quick`'s row of `name` (with `--decisive` and the scene's
-/// [`budget`], if it has one), rendered once per process (a test of a scene that renders as
-/// another, [`check_like`], reads that scene's row).
+/// `poser bench parity --quick`'s row of `name` (at the samples of [`decided_at`], if it has
+/// them), rendered once per process (a test of a scene that renders as another,
+/// [`check_like`], reads that scene's row).
 fn rendered(name: &str) -> Row {
-    let decisive = budget(name);
     type Cell = Arc<OnceLock<Row>>;
     static DONE: Mutex<BTreeMap<String, Cell>> = Mutex::new(BTreeMap::new());
     let cell = DONE
@@ -152,12 +150,12 @@ fn rendered(name: &str) -> Row {
     cell.get_or_init(|| {
         require_python();
         let out = tempfile::tempdir().unwrap();
-        let form = poser::bench::parity::Form::new(true);
-        let row = match decisive {
-            Some(budget) => run_decisive(&scene(name), &Backend::ALL, form, out.path(), budget),
-            None => run_scene(&scene(name), &Backend::ALL, form, out.path()),
+        let mut form = poser::bench::parity::Form::new(true);
+        if let Some(samples) = decided_at(name) {
+            form.samples = samples;
         }
-        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let row = run_scene(&scene(name), &Backend::ALL, form, out.path())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         for b in &row.backends {
             eprintln!("{name}: {} {:.1} s", b.backend, b.seconds);
         }
