@@ -144,6 +144,24 @@ fn table_in_markdown(path: &str, table: &str) {
     assert_eq!(current, table, "{path}: rerun with POSER_UPDATE_DOCS=1");
 }
 
+/// docs/bench/parity.md's table is `poser bench parity --quick --decisive 400 --json
+/// docs/bench/parity.json`'s rows as the bench prints them, over every shipped scene.
+#[test]
+fn parity_bench_table_is_its_json() {
+    let rows: Vec<poser::bench::parity::Row> =
+        serde_json::from_str(&std::fs::read_to_string("docs/bench/parity.json").unwrap()).unwrap();
+    let shipped: Vec<String> = poser::bench::parity::shipped_scenes(std::path::Path::new("."))
+        .iter()
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .collect();
+    let benched: Vec<String> = rows.iter().map(|r| r.scene.clone()).collect();
+    assert_eq!(
+        benched, shipped,
+        "every shipped scene is in the bench: rerun it"
+    );
+    table_in_markdown("docs/bench/parity.md", &poser::bench::parity::table(&rows));
+}
+
 #[test]
 fn sensor_bench_table_is_its_json() {
     let rows: Vec<poser::bench::sensor::Row> =

@@ -33,7 +33,7 @@
 use crate::backend::{Backend, RenderOptions};
 use crate::compare::LinearImage;
 use crate::model::Model;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -64,7 +64,7 @@ pub const PARITY_SETS: [&str; 2] = [
 ];
 
 /// The size and sampling of a run.
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 pub struct Form {
     pub scale: f64,
     pub samples: u32,
@@ -87,7 +87,7 @@ impl Form {
 }
 
 /// One backend on one scene.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct BackendRow {
     pub backend: String,
     /// Why it could not render the scene, if it could not.
@@ -100,7 +100,7 @@ pub struct BackendRow {
 }
 
 /// One pair of backends on one scene.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct PairRow {
     pub a: String,
     pub b: String,
@@ -127,7 +127,7 @@ impl PairRow {
 }
 
 /// One scene.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Row {
     pub scene: String,
     pub form: Form,
