@@ -342,13 +342,7 @@ fn compare_pairs(
                     |m: [f64; 3]| m[c] < BLACK_CHANNEL * m.iter().copied().fold(0.0, f64::max);
                 dark(ma) && dark(mb)
             });
-            let rel_diff = [0, 1, 2].map(|c| {
-                if ma[c] > 0.0 {
-                    (mb[c] - ma[c]) / ma[c]
-                } else {
-                    0.0
-                }
-            });
+            let rel_diff = crate::compare::rel_diff(ma, mb);
             let allow = [0, 1, 2].map(|c| {
                 if ma[c] > 0.0 {
                     3.0 * (va[c] + vb[c]).sqrt() / ma[c]

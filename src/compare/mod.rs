@@ -415,6 +415,17 @@ pub fn run(
     Ok(report)
 }
 
+/// `(b − a)/a` per channel (0 where `a` is 0): how two backends' image means differ.
+pub fn rel_diff(ma: [f64; 3], mb: [f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|c| {
+        if ma[c] > 0.0 {
+            (mb[c] - ma[c]) / ma[c]
+        } else {
+            0.0
+        }
+    })
+}
+
 fn compare_pair(
     model: &Model,
     out: &Path,
@@ -428,13 +439,7 @@ fn compare_pair(
         b: b.into(),
         ..Default::default()
     };
-    pr.mean_rel_diff = [0, 1, 2].map(|c| {
-        if ma[c] > 0.0 {
-            (mb[c] - ma[c]) / ma[c]
-        } else {
-            0.0
-        }
-    });
+    pr.mean_rel_diff = rel_diff(ma, mb);
     let mut rms_sum = 0.0;
     let mut n = 0;
     for cam in 0..model.cameras.len() {
