@@ -93,8 +93,10 @@ fn shards_write_the_files_of_one_whole_run() {
 
 #[test]
 fn shards_running_at_once_write_the_files_of_one_whole_run() {
-    // As the tasks of a SLURM array do: the manifest is updated under a lock, so no shard's
-    // record is lost (without it, the last writer wins and the others' images are forgotten).
+    // As the tasks of a SLURM array do (with `--resume`): the manifest is updated under a lock,
+    // so no shard's record is lost (without it, the last writer wins and the others' images
+    // are forgotten), and a shard starting late cleans up only the temporary files of dead
+    // runs, not another shard's write in progress (which then failed to rename it).
     let dir = tempfile::tempdir().unwrap();
     let whole = dir.path().join("whole");
     assert!(render(&whole, &[]).status().unwrap().success());
@@ -102,7 +104,7 @@ fn shards_running_at_once_write_the_files_of_one_whole_run() {
     let children: Vec<_> = ["0/5", "1/5", "2/5", "3/5", "4/5"]
         .iter()
         .map(|sh| {
-            render(&shards, &["--shard", sh])
+            render(&shards, &["--shard", sh, "--resume"])
                 .stderr(Stdio::null())
                 .spawn()
                 .unwrap()

@@ -2,8 +2,8 @@
 //! backend, the real Mitsuba 3 and the real Cycles at a tenth of its resolution, first pose,
 //! 16 spp (`poser bench parity --quick`, the same code), and every pair of backends must agree:
 //! image means within 2 % per channel plus a noise allowance, three standard errors of the
-//! difference measured from each backend's two renders at two seeds (`poser::bench::parity`). Disk targets, where a scene has them, must be found by every
-//! backend and sit within [`TARGET_RMS_PX`] of the exact truth.
+//! difference measured from each backend's two renders at two seeds (`poser::bench::parity`). Targets (disks and checkerboard corners), where a scene
+//! has them, must be found by every backend and sit within [`TARGET_RMS_PX`] of the exact truth.
 //!
 //! Every scenario and lesson scene has its test here (`every_shipped_scene_has_a_test`), the
 //! same list as `poser bench parity` (docs/bench/parity.md). A pair left unchecked is left out
@@ -61,7 +61,7 @@ fn check_in(name: &str, skip: &[(&str, &str)], refuse: &[(&str, &str)], decisive
         if b.targets.1 > 0 {
             if b.targets.0 < b.targets.1 {
                 failures.push(format!(
-                    "{}: found {} of {} disk targets",
+                    "{}: found {} of {} targets (disks and corners)",
                     b.backend, b.targets.0, b.targets.1
                 ));
             }

@@ -79,23 +79,6 @@ fn a_slurm_job_array_writes_the_bytes_of_a_local_run() {
     let jobs = std::fs::read_to_string(cluster.join("slurm/jobs")).unwrap();
     let ids: Vec<&str> = jobs.split_whitespace().collect();
     assert_eq!(ids.len(), 2, "{jobs}");
-    // Wait for the array and the merge job to leave the queue.
-    loop {
-        let q = Command::new("squeue")
-            .env("SLURM_CONF", &conf)
-            .args(["-h", "-o", "%i %T", "-j", &ids.join(",")])
-            .output()
-            .unwrap();
-        let text = String::from_utf8_lossy(&q.stdout).to_string();
-        if q.status.success() && text.trim().is_empty() {
-            break;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(600),
-            "jobs still queued after 10 min:\n{text}"
-        );
-        std::thread::sleep(Duration::from_millis(500));
-    }
     let logs = cluster.join("slurm/logs");
     let log_text = || {
         let mut s = String::new();
@@ -109,6 +92,29 @@ fn a_slurm_job_array_writes_the_bytes_of_a_local_run() {
         }
         s
     };
+    // Wait for the array and the merge job to leave the queue.
+    loop {
+        let q = Command::new("squeue")
+            .env("SLURM_CONF", &conf)
+            .args(["-h", "-o", "%i %T %r", "-j", &ids.join(",")])
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&q.stdout).to_string();
+        if q.status.success() && text.trim().is_empty() {
+            break;
+        }
+        // A failed render task leaves the merge job waiting for ever: say so at once.
+        assert!(
+            !text.contains("DependencyNeverSatisfied"),
+            "a render task failed:\n{text}\n{}",
+            log_text()
+        );
+        assert!(
+            start.elapsed() < Duration::from_secs(600),
+            "jobs still queued after 10 min:\n{text}"
+        );
+        std::thread::sleep(Duration::from_millis(500));
+    }
     let summary: serde_json::Value = serde_json::from_slice(
         &std::fs::read(cluster.join("slurm/summary.json"))
             .unwrap_or_else(|e| panic!("no summary ({e}); logs:\n{}", log_text())),

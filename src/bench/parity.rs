@@ -94,7 +94,8 @@ pub struct BackendRow {
     pub refused: Option<String>,
     pub seconds: f64,
     pub mean_rgb: [f64; 3],
-    /// Disk targets measured / expected, and their RMS error against the exact truth (px).
+    /// Targets (disks and checkerboard corners) measured / expected, and their RMS error
+    /// against the exact truth (px).
     pub targets: (usize, usize),
     pub target_rms_px: Option<f64>,
 }
@@ -243,10 +244,10 @@ pub fn run_scene(
     })
 }
 
-/// The disks found in both renders of a backend, and the RMS of their offsets from the truth
-/// averaged over the two: the centroid is linear in the pixels but for its background plane,
-/// so this is, within that, the offset measured in the mean of the two images (all the
-/// samples), not in one half of them.
+/// The targets found in both renders of a backend, and the RMS of their offsets from the truth
+/// averaged over the two: a disk's centroid is linear in the pixels but for its background
+/// plane, so this is, within that, the offset measured in the mean of the two images (all the
+/// samples), not in one half of them (a corner's fit nearly so).
 fn targets_of_both(
     a: &[crate::compare::TargetResidual],
     b: &[crate::compare::TargetResidual],

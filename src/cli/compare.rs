@@ -25,8 +25,8 @@ pub struct Args {
     pub scale: Option<f64>,
     /// Render only a rectangle of each image: `X,Y,W,H` in pixels of the image as rendered
     /// (after `--scale`), or `targets`: the first image (of `--poses`) that shows a measurable
-    /// disk, alone, cropped to the disks nearest its centre (at most 256 px on a side), to
-    /// measure targets at full size for a small share of the cost.
+    /// disk or checkerboard corner, alone, cropped to those nearest its centre (at most 256 px
+    /// on a side), to measure targets at full size for a small share of the cost.
     #[arg(long, value_name = "X,Y,W,H|targets", value_parser = parse_crop_arg)]
     pub crop: Option<CropArg>,
 }
@@ -62,15 +62,20 @@ pub fn run(args: &Args) -> Result<(), CliError> {
         None => None,
         Some(CropArg::Rect(c)) => Some(c),
         Some(CropArg::Targets) => {
-            // The first image (of the poses asked for) where a disk can be measured; only
-            // that pose is rendered.
+            // The first image (of the poses asked for) where a disk or a checkerboard corner
+            // can be measured; only that pose is rendered.
             let candidates = poses
                 .clone()
                 .unwrap_or_else(|| (0..model.poses.len()).collect());
             let mut found = None;
             for &p in &candidates {
-                if let Some(c) = crate::compare::target_crop(&model, p, TARGET_CROP_SIDE)
-                    .map_err(CliError::Failed)?
+                if let Some(c) = crate::compare::target_crop(
+                    &model,
+                    p,
+                    TARGET_CROP_SIDE,
+                    crate::compare::Points::All,
+                )
+                .map_err(CliError::Failed)?
                 {
                     found = Some((p, c));
                     break;
@@ -78,7 +83,7 @@ pub fn run(args: &Args) -> Result<(), CliError> {
             }
             let (p, c) = found.ok_or_else(|| {
                 CliError::Usage(
-                    "--crop targets: no image of camera 0 shows a disk target that can be measured"
+                    "--crop targets: no image of camera 0 shows a disk target or a checkerboard corner that can be measured"
                         .into(),
                 )
             })?;

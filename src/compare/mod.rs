@@ -2,6 +2,7 @@
 //! ground truth and with each other, and write the `poser compare` report.
 
 pub mod analytic;
+pub mod corner;
 pub mod detect;
 pub mod report;
 
@@ -102,6 +103,95 @@ pub fn disks(model: &Model) -> Vec<Disk> {
     out
 }
 
+/// The exact projection into image `pose`: from the air through the sea surface when one is
+/// given, else through the port.
+fn projection<'a>(
+    proj: &'a Projector,
+    surface: Option<&'a SeaInterface>,
+    pose: usize,
+) -> impl Fn(DVec3) -> Result<[f64; 2], crate::optics::NoSolution> + 'a {
+    move |p: DVec3| match surface {
+        Some(s) => crate::optics::surface::project_through(proj, s, pose, p),
+        None => proj.project_world(pose, p),
+    }
+}
+
+/// A checkerboard's inner corner: where it is and the board's axes and square, from which
+/// its edges' directions and a window free of other corners follow.
+#[derive(Debug, Clone)]
+pub struct Corner {
+    pub id: String,
+    pub world: DVec3,
+    pub x_axis: DVec3,
+    pub y_axis: DVec3,
+    pub square: f64,
+}
+
+/// Every inner corner of the model's checkerboards.
+pub fn corners(model: &Model) -> Vec<Corner> {
+    let mut out = Vec::new();
+    for t in &model.targets {
+        let TargetKind::Checkerboard { square, .. } = t.kind else {
+            continue;
+        };
+        for p in &t.points {
+            out.push(Corner {
+                id: p.id.clone(),
+                world: p.world,
+                x_axis: t.pose.rotation.x_axis,
+                y_axis: t.pose.rotation.y_axis,
+                square,
+            });
+        }
+    }
+    out
+}
+
+/// Where a corner should appear in image `pose`: its exact projection, the image directions
+/// of its two edges, and the window's radius (0.45 of the nearest projected neighbour at one
+/// square, so that no other corner or edge end falls inside); `None` when the board faces away
+/// or the window is under 3 px or leaves the image.
+pub fn expected_corner(
+    proj: &Projector,
+    surface: Option<&SeaInterface>,
+    pose: usize,
+    c: &Corner,
+) -> Option<([f64; 2], [[f64; 2]; 2], f64)> {
+    let project = projection(proj, surface, pose);
+    let cam = proj.world_from_camera(pose).translation;
+    if c.x_axis.cross(c.y_axis).dot(cam - c.world) <= 0.0 {
+        return None;
+    }
+    let q = project(c.world).ok()?;
+    let mut nearest = f64::INFINITY;
+    let mut dirs = [[0.0; 2]; 2];
+    for (k, axis) in [c.x_axis, c.y_axis].into_iter().enumerate() {
+        let a = project(c.world + c.square * axis).ok()?;
+        let b = project(c.world - c.square * axis).ok()?;
+        let (da, db) = (
+            (a[0] - q[0]).hypot(a[1] - q[1]),
+            (b[0] - q[0]).hypot(b[1] - q[1]),
+        );
+        nearest = nearest.min(da).min(db);
+        let d = [a[0] - b[0], a[1] - b[1]];
+        let n = d[0].hypot(d[1]);
+        if !(n > 0.0) {
+            return None;
+        }
+        dirs[k] = [d[0] / n, d[1] / n];
+    }
+    let half = 0.45 * nearest;
+    if !(half >= 3.0)
+        || q[0] - half < 1.0
+        || q[1] - half < 1.0
+        || q[0] + half > proj.width - 1.0
+        || q[1] + half > proj.height - 1.0
+    {
+        return None;
+    }
+    Some((q, dirs, half))
+}
+
 /// Where a disk should appear in image (pose, cam): expected image centroid and window
 /// half-size, or `None` when it is not (fully) visible or too small/crowded to measure.
 pub fn expected_disk(
@@ -110,11 +200,7 @@ pub fn expected_disk(
     pose: usize,
     d: &Disk,
 ) -> Option<([f64; 2], f64)> {
-    // From the air, through the sea surface; else through the port.
-    let project = |p: DVec3| match surface {
-        Some(s) => crate::optics::surface::project_through(proj, s, pose, p),
-        None => proj.project_world(pose, p),
-    };
+    let project = projection(proj, surface, pose);
     let c = detect::expected_centroid(d.center, d.normal, d.radius, |p| project(p).ok())?;
     // Facing the camera?
     let cam = proj.world_from_camera(pose).translation;
@@ -161,25 +247,43 @@ pub fn expected_disk(
     Some((c, half))
 }
 
-/// The rectangle of image (`pose`, camera 0) around the disks nearest its centre, at most
-/// `max_side` px on a side: the disk nearest the centre, then the next nearest to it while
-/// their windows still fit, with a 2 px margin. A crop render there (`render.crop`) measures
-/// targets at the full image size for a small share of its cost (`poser compare --crop
-/// targets`). `None` when no disk can be measured in that image.
+/// Which measurable points a [`target_crop`] gathers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Points {
+    Disks,
+    Corners,
+    All,
+}
+
+/// The rectangle of image (`pose`, camera 0) around the measurable points (`which`) nearest
+/// its centre, at most `max_side` px on a side: the point nearest the centre, then the next
+/// nearest to it while their windows still fit, with a 2 px margin. A crop render there
+/// (`render.crop`) measures targets at the full image size for a small share of its cost
+/// (`poser compare --crop targets`). `None` when no such point can be measured in that image.
 pub fn target_crop(
     model: &Model,
     pose: usize,
     max_side: u32,
+    which: Points,
 ) -> Result<Option<crate::model::Crop>, String> {
     let proj = model.projector(0, 1)?;
     let surface = model
         .above_surface(pose, 0)
         .then(|| model.sea_interface(1))
         .flatten();
-    let mut windows: Vec<([f64; 2], f64)> = disks(model)
-        .iter()
-        .filter_map(|d| expected_disk(&proj, surface.as_ref(), pose, d))
-        .collect();
+    let mut windows: Vec<([f64; 2], f64)> = Vec::new();
+    if which != Points::Corners {
+        windows.extend(
+            disks(model)
+                .iter()
+                .filter_map(|d| expected_disk(&proj, surface.as_ref(), pose, d)),
+        );
+    }
+    if which != Points::Disks {
+        windows.extend(corners(model).iter().filter_map(|c| {
+            expected_corner(&proj, surface.as_ref(), pose, c).map(|(q, _, half)| (q, half))
+        }));
+    }
     let centre = [proj.width / 2.0, proj.height / 2.0];
     let dist = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
     let Some(first) = windows
@@ -229,8 +333,10 @@ pub type Measured = (Vec<(String, String, [f64; 2])>, usize);
 /// shows it.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct TargetResidual {
-    /// The disk's id, as [`Disk::id`] (`dots/0`: a grid's first disk).
+    /// The point's id, as [`Disk::id`] or [`Corner::id`] (`dots/0`: a grid's first disk).
     pub id: String,
+    /// `disk` (located by its area centroid) or `corner` (a checkerboard's, by a fitted model).
+    pub kind: &'static str,
     /// The image's name.
     pub image: String,
     /// The exact centre, px, pixel centres at +0.5 (COLMAP's convention).
@@ -261,16 +367,22 @@ pub fn measure_targets_in_channel(
     Ok((found, expected))
 }
 
-/// Every disk expected in the rendered images of `dir`, found or not, in channel `channel`
-/// against that channel's exact projection, in the order of the cameras, poses and disks.
-/// Images of a crop (`render.crop`) hold the disks whose window lies inside the rectangle.
+/// Every disk and checkerboard corner expected in the rendered images of `dir`, found or not,
+/// in channel `channel` against that channel's exact projection, in the order of the cameras,
+/// poses, disks and corners. Images of a crop (`render.crop`) hold the points whose window lies
+/// inside the rectangle.
 pub fn target_residuals(
     model: &Model,
     dir: &Path,
     channel: usize,
 ) -> Result<Vec<TargetResidual>, String> {
-    let disks = disks(model);
+    let (disks, corners) = (disks(model), corners(model));
     let dark = crate::geometry::targets::BLACK / crate::geometry::targets::WHITE;
+    // The rendered rectangle's origin in the whole image (a crop's corner, else 0).
+    let (x0, y0) = model
+        .render
+        .crop
+        .map_or((0.0, 0.0), |k| (k.x as f64, k.y as f64));
     let mut out = Vec::new();
     for cam in 0..model.cameras.len() {
         let proj = model.projector(cam, channel)?;
@@ -287,37 +399,52 @@ pub fn target_residuals(
                 height: img.height,
                 data: &g,
             };
+            let surface = model
+                .above_surface(pose, cam)
+                .then(|| model.sea_interface(channel))
+                .flatten();
+            // A window inside the rendered pixels (always, without a crop: the expectation
+            // checked the whole image).
+            let inside = |local: [f64; 2], half: f64| {
+                model.render.crop.is_none()
+                    || (local[0] - half >= 1.0
+                        && local[1] - half >= 1.0
+                        && local[0] + half <= img.width as f64 - 1.0
+                        && local[1] + half <= img.height as f64 - 1.0)
+            };
+            let mut push = |id: &str, kind, truth: [f64; 2], found: Option<[f64; 2]>| {
+                out.push(TargetResidual {
+                    id: id.to_string(),
+                    kind,
+                    image: name.clone(),
+                    truth,
+                    offset: found.map(|m| [m[0] - (truth[0] - x0), m[1] - (truth[1] - y0)]),
+                });
+            };
             for d in &disks {
-                let surface = model
-                    .above_surface(pose, cam)
-                    .then(|| model.sea_interface(channel))
-                    .flatten();
                 let Some((c, half)) = expected_disk(&proj, surface.as_ref(), pose, d) else {
                     continue;
                 };
-                // In the rendered rectangle's pixels (the whole image's without a crop).
-                let (x0, y0) = model
-                    .render
-                    .crop
-                    .map_or((0.0, 0.0), |k| (k.x as f64, k.y as f64));
                 let local = [c[0] - x0, c[1] - y0];
-                if model.render.crop.is_some()
-                    && (local[0] - half < 1.0
-                        || local[1] - half < 1.0
-                        || local[0] + half > img.width as f64 - 1.0
-                        || local[1] + half > img.height as f64 - 1.0)
-                {
-                    continue;
+                if inside(local, half) {
+                    push(
+                        &d.id,
+                        "disk",
+                        c,
+                        detect::disk_centroid(&gray, local, half, dark).ok(),
+                    );
                 }
-                let offset = detect::disk_centroid(&gray, local, half, dark)
-                    .ok()
-                    .map(|m| [m[0] - local[0], m[1] - local[1]]);
-                out.push(TargetResidual {
-                    id: d.id.clone(),
-                    image: name.clone(),
-                    truth: c,
-                    offset,
-                });
+            }
+            for k in &corners {
+                let Some((c, dirs, half)) = expected_corner(&proj, surface.as_ref(), pose, k)
+                else {
+                    continue;
+                };
+                let local = [c[0] - x0, c[1] - y0];
+                if inside(local, half) {
+                    let found = corner::checker_corner(&gray, local, dirs, half).ok();
+                    push(&k.id, "corner", c, found);
+                }
             }
         }
     }

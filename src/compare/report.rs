@@ -65,7 +65,8 @@ impl Report {
             self.scene, self.samples
         );
         s.push_str(
-            "Targets: measured disk centroids against the exact truth (RMS and max, px). \
+            "Targets: measured disk centroids and checkerboard corners against the exact truth \
+             (RMS and max, px). \
              Mean R/G/B: linear radiance over all pixels of all images. vs analytic: \
              rendered / analytic radiance − 1 per channel.\n\n",
         );
@@ -136,9 +137,9 @@ impl Report {
         s
     }
 
-    /// Per disk and image: the exact centre and each backend's offset from it (Δu, Δv and
-    /// its length, px), "not found" where a backend's image shows no disk there. Empty when
-    /// no backend expected a disk.
+    /// Per disk or checkerboard corner and image: the exact point and each backend's offset
+    /// from it (Δu, Δv and its length, px), "not found" where a backend's image shows none
+    /// there. Empty when no backend expected one.
     fn targets_markdown(&self) -> String {
         let shown: Vec<&BackendResult> = self
             .backends
@@ -171,7 +172,8 @@ impl Report {
         }
         let mut s = String::from(
             "\nPer target (G channel; pixel centres at +0.5, COLMAP's convention; OpenCV's \
-             are these − 0.5): the exact centre and each backend's measured − exact offset \
+             are these − 0.5): the exact point (a disk's image centroid, a checkerboard corner's \
+             projection) and each backend's measured − exact offset \
              Δu, Δv and its length, px.\n\n| target | image | exact u, v |",
         );
         for b in &shown {

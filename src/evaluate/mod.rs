@@ -463,6 +463,10 @@ pub fn evaluate_observations(
     }
     let (meshes, scene) = surfaces(model)?;
     let points = observe::sample_points(model, &meshes, opts.density, opts.seed)?;
+    if opts.gcp {
+        // Before minutes of adjustment: a misspelt --gcp or --check id fails at once.
+        gcp::check_target_names(&points, opts)?;
+    }
     let n_images = (model.poses.len() * model.cameras.len()) as u64;
     let done = std::sync::atomic::AtomicU64::new(0);
     let mut images = observe::observe(model, &scene, &points, &|| {

@@ -9,18 +9,66 @@ use std::io::Write;
 use std::path::Path;
 
 /// Prefix of the temporary files that atomic writes rename into place: a file with this prefix
-/// is a write that was cut short (the process was killed), never an output.
+/// is a write in progress or one that was cut short (the process was killed), never an output.
 pub const TEMP_PREFIX: &str = ".poser-";
 
-/// Remove the temporary files of cut-short atomic writes directly in `dir`; returns how many.
+/// The prefix of this process's temporary files: [`TEMP_PREFIX`], then the host and the process
+/// id that own them (`.poser-HOST-PID-`), so that a run cleaning up after a killed one leaves
+/// alone the writes in progress of other runs into the same folder (the shards of a SLURM array).
+pub fn temp_prefix() -> String {
+    format!("{TEMP_PREFIX}{}-{}-", host(), std::process::id())
+}
+
+/// This machine's host name, reduced to `[A-Za-z0-9_.]` (a `-` would end it in a temp name).
+fn host() -> String {
+    let raw = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .or_else(|_| std::env::var("HOSTNAME"))
+        .unwrap_or_default();
+    let h: String = raw
+        .trim()
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == '.')
+        .collect();
+    if h.is_empty() { "host".into() } else { h }
+}
+
+/// Age past which a temporary file whose owner cannot be checked (another host, an older
+/// poser's name without one) counts as cut short: one atomic write takes seconds.
+const FOREIGN_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(3600);
+
+/// Whether the temporary file `name` (modified at `modified`) belongs to no running write:
+/// its owner is a process of this host that no longer exists, or it cannot be checked and the
+/// file is older than [`FOREIGN_TEMP_AGE`].
+fn is_stale(name: &str, modified: Option<std::time::SystemTime>) -> bool {
+    let owner = name.strip_prefix(TEMP_PREFIX).and_then(|rest| {
+        let mut it = rest.splitn(3, '-');
+        let (h, pid) = (it.next()?, it.next()?.parse::<u32>().ok()?);
+        it.next()?;
+        Some((h.to_string(), pid))
+    });
+    let proc_known = Path::new("/proc/self").exists();
+    match owner {
+        Some((h, pid)) if proc_known && h == host() => {
+            pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists()
+        }
+        _ => modified
+            .and_then(|m| m.elapsed().ok())
+            .is_some_and(|age| age > FOREIGN_TEMP_AGE),
+    }
+}
+
+/// Remove the temporary files of cut-short atomic writes directly in `dir` ([`is_stale`]: a
+/// write in progress by another run into the same folder is kept); returns how many.
 pub fn remove_stale_temporaries(dir: &Path) -> usize {
     let Ok(rd) = std::fs::read_dir(dir) else {
         return 0;
     };
     rd.filter_map(Result::ok)
         .filter(|e| {
-            e.file_name().to_string_lossy().starts_with(TEMP_PREFIX)
+            let name = e.file_name().to_string_lossy().to_string();
+            name.starts_with(TEMP_PREFIX)
                 && e.file_type().is_ok_and(|t| t.is_file())
+                && is_stale(&name, e.metadata().ok().and_then(|m| m.modified().ok()))
         })
         .filter(|e| std::fs::remove_file(e.path()).is_ok())
         .count()
@@ -35,7 +83,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     };
     std::fs::create_dir_all(dir)?;
     let mut tmp = tempfile::Builder::new()
-        .prefix(TEMP_PREFIX)
+        .prefix(&temp_prefix())
         .tempfile_in(dir)?;
     tmp.write_all(bytes)?;
     tmp.flush()?;
@@ -79,7 +127,7 @@ pub fn write_atomic_with(
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("tmp");
     let tmp = tempfile::Builder::new()
-        .prefix(TEMP_PREFIX)
+        .prefix(&temp_prefix())
         .suffix(&format!(".{ext}"))
         .tempfile_in(dir)
         .map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -152,6 +200,37 @@ mod tests {
             assert_eq!(mode, 0o644);
         }
         assert_eq!(std::fs::read_dir(d.path()).unwrap().count(), 1);
+    }
+
+    /// A resumed run cleans up what a killed run left, but not the writes in progress of
+    /// another run into the same folder (a SLURM shard lost an image to this).
+    #[test]
+    fn only_the_temporaries_of_dead_writers_are_removed() {
+        let d = tempfile::tempdir().unwrap();
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let live = format!("{}x.exr", temp_prefix());
+        let dead_name = format!("{TEMP_PREFIX}{}-{dead}-y.exr", host());
+        let foreign = format!("{TEMP_PREFIX}elsewhere-1-z.exr");
+        for n in [&live, &dead_name, &foreign] {
+            std::fs::write(d.path().join(n), b"partial").unwrap();
+        }
+        assert_eq!(remove_stale_temporaries(d.path()), 1);
+        assert!(
+            d.path().join(&live).exists(),
+            "a write in progress was removed"
+        );
+        assert!(
+            !d.path().join(&dead_name).exists(),
+            "a dead writer's file stayed"
+        );
+        assert!(
+            d.path().join(&foreign).exists(),
+            "a fresh foreign write was removed"
+        );
+        assert!(is_stale(&foreign, Some(std::time::SystemTime::UNIX_EPOCH)));
+        assert!(!is_stale(&live, Some(std::time::SystemTime::UNIX_EPOCH)));
     }
 
     #[test]
