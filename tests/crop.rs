@@ -92,11 +92,11 @@ fn a_crop_outside_the_image_is_refused_and_nothing_is_written() {
 }
 
 #[test]
-fn compare_crop_targets_measures_the_disks_at_full_size() {
-    // calibration_flat at its full 1600 × 1200 px: the rectangle around the disks nearest the
-    // first image's centre (188 × 190 px, 1.9 % of the image). Measured at 16 spp: 4 of 4
-    // disks, 0.015 px RMS; before the detector fitted the background as a plane (a strobe's
-    // fall-off across a 60 px window), 0.11 px.
+fn compare_crop_targets_measures_the_targets_at_full_size() {
+    // calibration_flat at its full 1600 × 1200 px: the rectangle around the targets nearest
+    // the first image's centre, the checkerboard's corners (before corners were measured, the
+    // disks': 4 of 4 at 16 spp, 0.015 px RMS, and 0.11 px before the detector fitted the
+    // background as a plane). Measured at 16 spp: 4 of 4 corners, 0.011 px RMS.
     let dir = tempfile::tempdir().unwrap();
     let out = poser(
         &[
@@ -132,8 +132,15 @@ fn compare_crop_targets_measures_the_disks_at_full_size() {
         rms <= 0.05,
         "targets {rms:.4} px RMS from the truth at full size"
     );
-    // The truth is in the whole image's pixels: the disks lie inside the rectangle.
+    // The truth is in the whole image's pixels: the targets lie inside the rectangle there.
+    let model = poser::scene::load(Path::new("scenarios/calibration_flat.toml"), &[])
+        .unwrap_or_else(|f| panic!("{}", f.render()))
+        .model;
+    let crop = poser::compare::target_crop(&model, 0, 256, poser::compare::Points::All)
+        .unwrap()
+        .unwrap();
     let img = poser::image::read_exr(&dir.path().join("native/img_0001.exr")).unwrap();
+    assert_eq!((img.width, img.height), (crop.width, crop.height));
     assert!(
         img.width <= 256 && img.height <= 256,
         "{}×{}",
@@ -141,10 +148,15 @@ fn compare_crop_targets_measures_the_disks_at_full_size() {
         img.height
     );
     for t in native["targets"].as_array().unwrap() {
-        let u = t["truth"][0].as_f64().unwrap();
-        assert!(
-            u > 1000.0,
-            "exact centre {u} px: not in the whole image's pixels"
+        let (u, v) = (
+            t["truth"][0].as_f64().unwrap(),
+            t["truth"][1].as_f64().unwrap(),
         );
+        assert!(
+            (crop.x as f64..(crop.x + crop.width) as f64).contains(&u)
+                && (crop.y as f64..(crop.y + crop.height) as f64).contains(&v),
+            "exact point {u}, {v} px: not in the whole image's pixels of {crop:?}"
+        );
+        assert_eq!(t["kind"], "corner");
     }
 }

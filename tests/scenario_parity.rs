@@ -164,30 +164,11 @@ fn rendered(name: &str) -> Row {
     .clone()
 }
 
-/// The model the parity run renders of `name` (quick form, first pose), as JSON, without what
-/// does not reach an image: the name, description, source, lesson, dive plan and network.
+/// The model the parity run renders of `name` (quick form, first pose), as JSON
+/// (`poser::bench::parity::first_pose_model`, by which `poser bench parity` shares renders too).
 fn first_pose_model(name: &str) -> serde_json::Value {
-    let model = poser::scene::load(
-        &scene(name),
-        &poser::bench::parity::PARITY_SETS.map(String::from),
-    )
-    .unwrap_or_else(|f| panic!("{name}: {}", f.render()))
-    .model
-    .with_resolution_scale(poser::bench::parity::Form::new(true).scale);
-    let mut v = serde_json::to_value(&model).unwrap();
-    let m = v.as_object_mut().unwrap();
-    for key in [
-        "name",
-        "description",
-        "source",
-        "lesson",
-        "diver",
-        "network",
-    ] {
-        m.remove(key);
-    }
-    m["poses"].as_array_mut().unwrap().truncate(1);
-    v
+    poser::bench::parity::first_pose_model(&scene(name), poser::bench::parity::Form::new(true))
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 /// [`check`] of a scene whose parity run renders exactly what `like`'s does (the same model at

@@ -141,6 +141,37 @@ pub struct Row {
     pub status: String,
     /// Wall time of the scene's renders, all rounds (s).
     pub seconds: f64,
+    /// The scene whose renders this row is: the two render the same model at the first pose
+    /// ([`first_pose_model`]), so they were rendered once.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub same_as: Option<String>,
+}
+
+/// The model a parity run renders of `scene` in `form` (first pose), as JSON, without what
+/// does not reach an image: the name, description, source, lesson, dive plan and network. Two
+/// scenes with equal values render the same images.
+pub fn first_pose_model(scene: &Path, form: Form) -> Result<serde_json::Value, String> {
+    let model = crate::scene::load(scene, &PARITY_SETS.map(String::from))
+        .map_err(|f| f.render())?
+        .model
+        .with_resolution_scale(form.scale);
+    let mut v = serde_json::to_value(&model).map_err(|e| e.to_string())?;
+    if let Some(m) = v.as_object_mut() {
+        for key in [
+            "name",
+            "description",
+            "source",
+            "lesson",
+            "diver",
+            "network",
+        ] {
+            m.remove(key);
+        }
+        if let Some(p) = m.get_mut("poses").and_then(|p| p.as_array_mut()) {
+            p.truncate(1);
+        }
+    }
+    Ok(v)
 }
 
 /// The shipped scenes: `scenarios/*.toml` then `scenarios/lessons/*.toml`, sorted.
@@ -241,6 +272,7 @@ pub fn run_scene(
         backends: backend_rows,
         pairs,
         status: status.into(),
+        same_as: None,
     })
 }
 
@@ -414,10 +446,21 @@ pub fn run(
     decisive: Option<f64>,
 ) -> Result<Vec<Row>, String> {
     let form = Form::new(quick);
-    let mut rows = Vec::new();
+    let mut rows: Vec<Row> = Vec::new();
+    // The first-pose models rendered so far, with their rows' indices.
+    let mut seen: Vec<(serde_json::Value, usize)> = Vec::new();
     for scene in shipped_scenes(root) {
         let name = scene.file_stem().unwrap_or_default().to_string_lossy();
         if only.is_some_and(|o| !name.contains(o)) {
+            continue;
+        }
+        let key = first_pose_model(&scene, form)?;
+        if let Some(&(_, k)) = seen.iter().find(|(m, _)| *m == key) {
+            let mut row = rows[k].clone();
+            eprintln!("{name}: the same renders as {}", row.scene);
+            row.same_as = Some(std::mem::replace(&mut row.scene, name.to_string()));
+            row.seconds = 0.0;
+            rows.push(row);
             continue;
         }
         let t0 = std::time::Instant::now();
@@ -426,6 +469,7 @@ pub fn run(
             Some(budget) => run_decisive(&scene, backends, form, &dir, budget)?,
             None => run_scene(&scene, backends, form, &dir)?,
         };
+        seen.push((key, rows.len()));
         eprintln!(
             "{name}: {} ({:.0} s)",
             row.status,
@@ -450,6 +494,15 @@ fn pct_compared(p: &PairRow) -> String {
         .join(" / ")
 }
 
+/// A row's scene in the tables: `scuba_survey (= paper_survey)` for one that shares another's
+/// renders.
+fn label(r: &Row) -> String {
+    match &r.same_as {
+        Some(other) => format!("{} (= {other})", r.scene),
+        None => r.scene.clone(),
+    }
+}
+
 /// The rows as a Markdown table: per scene, each pair's difference of means (R / G / B, %)
 /// with its allowance, and each backend's target error.
 pub fn table(rows: &[Row]) -> String {
@@ -465,14 +518,15 @@ pub fn table(rows: &[Row]) -> String {
             let _ = writeln!(
                 s,
                 "| {} | {size} | {} | refused: {short}… | – | – |",
-                r.scene, b.backend
+                label(r),
+                b.backend
             );
         }
         if r.status == "dark" {
             let _ = writeln!(
                 s,
                 "| {} | {size} | all | black at the first pose | – | – |",
-                r.scene
+                label(r)
             );
             continue;
         }
@@ -480,7 +534,7 @@ pub fn table(rows: &[Row]) -> String {
             let _ = writeln!(
                 s,
                 "| {} | {size} | {} vs {} | {} | {:.1} | {} |",
-                r.scene,
+                label(r),
                 p.b,
                 p.a,
                 pct_compared(p),
@@ -500,7 +554,7 @@ pub fn table(rows: &[Row]) -> String {
             let _ = writeln!(
                 s,
                 "| {} | {} | {}/{} | {} | {:.1} |",
-                r.scene,
+                label(r),
                 b.backend,
                 b.targets.0,
                 b.targets.1,

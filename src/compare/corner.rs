@@ -337,8 +337,16 @@ mod tests {
         // Axis-aligned, slanted, sheared (a perspective view, locally), shaded across the
         // window; predicted 0.8 px off with edge directions 3° off.
         for (c, e, shade) in [
-            ([20.3125, 17.75], [unit(0.0), unit(1.5708)], [0.0, 0.0]),
-            ([19.62, 18.13], [unit(0.4), unit(0.4 + 1.5708)], [0.0, 0.0]),
+            (
+                [20.3125, 17.75],
+                [unit(0.0), unit(std::f64::consts::FRAC_PI_2)],
+                [0.0, 0.0],
+            ),
+            (
+                [19.62, 18.13],
+                [unit(0.4), unit(0.4 + std::f64::consts::FRAC_PI_2)],
+                [0.0, 0.0],
+            ),
             ([20.91, 16.58], [unit(-0.3), unit(1.05)], [0.0, 0.0]),
             ([20.17, 17.42], [unit(0.2), unit(1.9)], [0.03, -0.02]),
         ] {
@@ -369,7 +377,7 @@ mod tests {
             height: 34,
             data: &flat,
         };
-        let dirs = [unit(0.0), unit(1.5708)];
+        let dirs = [unit(0.0), unit(std::f64::consts::FRAC_PI_2)];
         assert_eq!(
             checker_corner(&g, [20.0, 17.0], dirs, 6.0),
             Err(Miss::NoContrast)
