@@ -30,6 +30,47 @@ fn require_python() {
     }
 }
 
+/// Render pose 0 of `model` (cropped) with `backend` at `samples` into `dir/backend`: the
+/// offsets from the truth of the points of `kind` (`disk` or `corner`) found, and how many
+/// were expected.
+fn offsets(
+    model: &poser::model::Model,
+    dir: &std::path::Path,
+    backend: &str,
+    samples: u32,
+    kind: &str,
+) -> (Vec<[f64; 2]>, usize) {
+    let opts = RenderOptions {
+        samples: Some(samples),
+        poses: Some(vec![0]),
+        progress: false,
+        resume: false,
+    };
+    let out = dir.join(backend);
+    Backend::parse(backend)
+        .unwrap()
+        .render(model, &out, &opts)
+        .unwrap();
+    let img = poser::image::read_exr(&out.join("img_0001.exr")).unwrap();
+    let crop = model.render.crop.unwrap();
+    assert_eq!(
+        (img.width, img.height),
+        (crop.width, crop.height),
+        "{backend}"
+    );
+    let all: Vec<_> = poser::compare::target_residuals(model, &out, 1)
+        .unwrap()
+        .into_iter()
+        .filter(|t| t.kind == kind)
+        .collect();
+    (all.iter().filter_map(|t| t.offset).collect(), all.len())
+}
+
+/// The RMS length of `d`, px.
+fn rms(d: &[[f64; 2]]) -> f64 {
+    (d.iter().map(|d| d[0] * d[0] + d[1] * d[1]).sum::<f64>() / d.len() as f64).sqrt()
+}
+
 #[test]
 fn calibration_flat_targets_at_full_size_in_every_backend() {
     require_python();
@@ -64,24 +105,10 @@ fn calibration_flat_targets_at_full_size_in_every_backend() {
     ];
     let mut failures = Vec::new();
     for (name, samples, bound, why) in cases {
-        let backend = Backend::parse(name).unwrap();
-        let opts = RenderOptions {
-            samples: Some(samples),
-            poses: Some(vec![0]),
-            progress: false,
-            resume: false,
-        };
-        let out = dir.path().join(name);
-        backend.render(&model, &out, &opts).unwrap();
-        let img = poser::image::read_exr(&out.join("img_0001.exr")).unwrap();
-        assert_eq!((img.width, img.height), (crop.width, crop.height), "{name}");
-        let all = poser::compare::target_residuals(&model, &out, 1).unwrap();
-        let found: Vec<[f64; 2]> = all.iter().filter_map(|t| t.offset).collect();
-        assert!(all.len() >= 4, "{name}: {} disks expected", all.len());
-        assert_eq!(found.len(), all.len(), "{name}: disks lost");
-        let rms = (found.iter().map(|d| d[0] * d[0] + d[1] * d[1]).sum::<f64>()
-            / found.len() as f64)
-            .sqrt();
+        let (found, expected) = offsets(&model, dir.path(), name, samples, "disk");
+        assert!(expected >= 4, "{name}: {expected} disks expected");
+        assert_eq!(found.len(), expected, "{name}: disks lost");
+        let rms = rms(&found);
         eprintln!(
             "{name}: {} disks, {rms:.4} px RMS at {samples} spp",
             found.len()
@@ -119,32 +146,13 @@ fn corners_at_full_size(scene: &str, samples: u32) {
     let dir = tempfile::tempdir().unwrap();
     let mut failures = Vec::new();
     for name in ["native", "mitsuba", "blender"] {
-        let opts = RenderOptions {
-            samples: Some(samples),
-            poses: Some(vec![0]),
-            progress: false,
-            resume: false,
-        };
-        let out = dir.path().join(name);
-        Backend::parse(name)
-            .unwrap()
-            .render(&model, &out, &opts)
-            .unwrap();
-        let all: Vec<_> = poser::compare::target_residuals(&model, &out, 1)
-            .unwrap()
-            .into_iter()
-            .filter(|t| t.kind == "corner")
-            .collect();
-        let found: Vec<[f64; 2]> = all.iter().filter_map(|t| t.offset).collect();
+        let (found, expected) = offsets(&model, dir.path(), name, samples, "corner");
         assert!(
-            all.len() >= 4,
-            "{scene}, {name}: {} corners expected",
-            all.len()
+            expected >= 4,
+            "{scene}, {name}: {expected} corners expected"
         );
-        assert_eq!(found.len(), all.len(), "{scene}, {name}: corners lost");
-        let rms = (found.iter().map(|d| d[0] * d[0] + d[1] * d[1]).sum::<f64>()
-            / found.len() as f64)
-            .sqrt();
+        assert_eq!(found.len(), expected, "{scene}, {name}: corners lost");
+        let rms = rms(&found);
         eprintln!(
             "{scene}, {name}: {} corners, {rms:.4} px RMS at {samples} spp",
             found.len()
