@@ -2,9 +2,9 @@
 //! ground truth and with each other, and write the `poser compare` report.
 
 pub mod analytic;
-pub mod corner;
 pub mod detect;
 pub mod report;
+pub mod sectors;
 
 use std::path::Path;
 
@@ -192,6 +192,92 @@ pub fn expected_corner(
     Some((q, dirs, half))
 }
 
+/// A Siemens star: its centre, axes, radius and spokes.
+#[derive(Debug, Clone)]
+pub struct Star {
+    pub id: String,
+    pub centre: DVec3,
+    pub x_axis: DVec3,
+    pub y_axis: DVec3,
+    pub radius: f64,
+    pub spokes: u32,
+}
+
+/// Every Siemens star of the model.
+pub fn stars(model: &Model) -> Vec<Star> {
+    model
+        .targets
+        .iter()
+        .filter_map(|t| match t.kind {
+            TargetKind::SiemensStar { diameter, spokes } if spokes >= 2 => Some(Star {
+                id: t.points.first()?.id.clone(),
+                centre: t.points.first()?.world,
+                x_axis: t.pose.rotation.x_axis,
+                y_axis: t.pose.rotation.y_axis,
+                radius: diameter / 2.0,
+                spokes,
+            }),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Where a star's centre should appear in image `pose`: its exact projection, its sector
+/// edges' image directions (in order of increasing angle, each sector from an even-numbered
+/// edge to the next of one colour), and the annulus to fit over: from where a sector is
+/// 2.5 px wide to 0.85 of the rim's nearest image radius. `None` when it faces away, or the
+/// annulus is narrow or leaves the image.
+pub fn expected_star(
+    proj: &Projector,
+    surface: Option<&SeaInterface>,
+    pose: usize,
+    s: &Star,
+) -> Option<([f64; 2], Vec<[f64; 2]>, f64, f64)> {
+    let project = projection(proj, surface, pose);
+    let cam = proj.world_from_camera(pose).translation;
+    if s.x_axis.cross(s.y_axis).dot(cam - s.centre) <= 0.0 {
+        return None;
+    }
+    let q = project(s.centre).ok()?;
+    let n = 2 * s.spokes as usize;
+    let (mut dirs, mut rim) = (Vec::with_capacity(n), f64::INFINITY);
+    for k in 0..n {
+        let a = k as f64 * std::f64::consts::PI / s.spokes as f64;
+        let along = a.cos() * s.x_axis + a.sin() * s.y_axis;
+        let near = project(s.centre + 0.25 * s.radius * along).ok()?;
+        let edge = project(s.centre + s.radius * along).ok()?;
+        rim = rim.min((edge[0] - q[0]).hypot(edge[1] - q[1]));
+        let d = [near[0] - q[0], near[1] - q[1]];
+        let len = d[0].hypot(d[1]);
+        if !(len > 0.0) {
+            return None;
+        }
+        dirs.push([d[0] / len, d[1] / len]);
+    }
+    // The image may show the star mirrored (angles decreasing): reverse, which keeps each
+    // sector's pair of edges (even to odd) together.
+    let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
+    if cross(dirs[0], dirs[1]) < 0.0 {
+        dirs.reverse();
+    }
+    let narrowest = (0..n)
+        .map(|k| cross(dirs[k], dirs[(k + 1) % n]).clamp(-1.0, 1.0).asin())
+        .fold(f64::INFINITY, f64::min);
+    if !(narrowest > 0.0) {
+        return None;
+    }
+    let (inner, outer) = ((2.5 / narrowest).max(3.0), 0.85 * rim);
+    if !(outer >= inner + 4.0)
+        || q[0] - outer < 1.0
+        || q[1] - outer < 1.0
+        || q[0] + outer > proj.width - 1.0
+        || q[1] + outer > proj.height - 1.0
+    {
+        return None;
+    }
+    Some((q, dirs, inner, outer))
+}
+
 /// Where a disk should appear in image (pose, cam): expected image centroid and window
 /// half-size, or `None` when it is not (fully) visible or too small/crowded to measure.
 pub fn expected_disk(
@@ -247,7 +333,7 @@ pub fn expected_disk(
     Some((c, half))
 }
 
-/// Which measurable points a [`target_crop`] gathers.
+/// Which measurable points a [`target_crop`] gathers (`All`: stars' centres too).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Points {
     Disks,
@@ -282,6 +368,11 @@ pub fn target_crop(
     if which != Points::Disks {
         windows.extend(corners(model).iter().filter_map(|c| {
             expected_corner(&proj, surface.as_ref(), pose, c).map(|(q, _, half)| (q, half))
+        }));
+    }
+    if which == Points::All {
+        windows.extend(stars(model).iter().filter_map(|s| {
+            expected_star(&proj, surface.as_ref(), pose, s).map(|(q, _, _, outer)| (q, outer))
         }));
     }
     let centre = [proj.width / 2.0, proj.height / 2.0];
@@ -335,7 +426,8 @@ pub type Measured = (Vec<(String, String, [f64; 2])>, usize);
 pub struct TargetResidual {
     /// The point's id, as [`Disk::id`] or [`Corner::id`] (`dots/0`: a grid's first disk).
     pub id: String,
-    /// `disk` (located by its area centroid) or `corner` (a checkerboard's, by a fitted model).
+    /// `disk` (located by its area centroid), `corner` (a checkerboard's) or `star` (a Siemens
+    /// star's centre; both by a fitted model, [`sectors`]).
     pub kind: &'static str,
     /// The image's name.
     pub image: String,
@@ -367,16 +459,16 @@ pub fn measure_targets_in_channel(
     Ok((found, expected))
 }
 
-/// Every disk and checkerboard corner expected in the rendered images of `dir`, found or not,
-/// in channel `channel` against that channel's exact projection, in the order of the cameras,
-/// poses, disks and corners. Images of a crop (`render.crop`) hold the points whose window lies
+/// Every disk, checkerboard corner and Siemens star centre expected in the rendered images of
+/// `dir`, found or not, in channel `channel` against that channel's exact projection, in the
+/// order of the cameras, poses, disks, stars and corners. Images of a crop (`render.crop`) hold the points whose window lies
 /// inside the rectangle.
 pub fn target_residuals(
     model: &Model,
     dir: &Path,
     channel: usize,
 ) -> Result<Vec<TargetResidual>, String> {
-    let (disks, corners) = (disks(model), corners(model));
+    let (disks, corners, stars) = (disks(model), corners(model), stars(model));
     let dark = crate::geometry::targets::BLACK / crate::geometry::targets::WHITE;
     // The rendered rectangle's origin in the whole image (a crop's corner, else 0).
     let (x0, y0) = model
@@ -435,6 +527,17 @@ pub fn target_residuals(
                     );
                 }
             }
+            for s in &stars {
+                let Some((c, dirs, inner, outer)) = expected_star(&proj, surface.as_ref(), pose, s)
+                else {
+                    continue;
+                };
+                let local = [c[0] - x0, c[1] - y0];
+                if inside(local, outer) {
+                    let found = sectors::star_centre(&gray, local, &dirs, inner, outer).ok();
+                    push(&s.id, "star", c, found);
+                }
+            }
             for k in &corners {
                 let Some((c, dirs, half)) = expected_corner(&proj, surface.as_ref(), pose, k)
                 else {
@@ -442,7 +545,7 @@ pub fn target_residuals(
                 };
                 let local = [c[0] - x0, c[1] - y0];
                 if inside(local, half) {
-                    let found = corner::checker_corner(&gray, local, dirs, half).ok();
+                    let found = sectors::checker_corner(&gray, local, dirs, half).ok();
                     push(&k.id, "corner", c, found);
                 }
             }

@@ -65,7 +65,8 @@ impl Report {
             self.scene, self.samples
         );
         s.push_str(
-            "Targets: measured disk centroids and checkerboard corners against the exact truth \
+            "Targets: measured disk centroids, checkerboard corners and Siemens star centres \
+             against the exact truth \
              (RMS and max, px). \
              Mean R/G/B: linear radiance over all pixels of all images. vs analytic: \
              rendered / analytic radiance − 1 per channel.\n\n",
@@ -172,8 +173,8 @@ impl Report {
         }
         let mut s = String::from(
             "\nPer target (G channel; pixel centres at +0.5, COLMAP's convention; OpenCV's \
-             are these − 0.5): the exact point (a disk's image centroid, a checkerboard corner's \
-             projection) and each backend's measured − exact offset \
+             are these − 0.5): the exact point (a disk's image centroid, a checkerboard corner's or \
+             a Siemens star centre's projection) and each backend's measured − exact offset \
              Δu, Δv and its length, px.\n\n| target | image | exact u, v |",
         );
         for b in &shown {
