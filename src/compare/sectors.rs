@@ -358,16 +358,13 @@ pub fn star_centre(
 mod tests {
     use super::*;
 
-    /// A checkerboard corner at `c`, its edges along `e1`, `e2`, box-filtered by 64 × 64
-    /// supersampling, levels `dark` and `light` times `1 + shade·(x − c)`.
-    fn corner_raster(
+    /// A `w` × `h` image box-filtered by `s` × `s` supersampling of `level(x − c)`.
+    fn supersample(
         (w, h): (usize, usize),
         c: [f64; 2],
-        e: [[f64; 2]; 2],
-        shade: [f64; 2],
+        s: usize,
+        level: impl Fn(f64, f64) -> f64,
     ) -> Vec<f32> {
-        let s = 64;
-        let (dark, light) = (0.05, 0.9);
         let mut img = vec![0f32; w * h];
         for y in 0..h {
             for x in 0..w {
@@ -376,17 +373,31 @@ mod tests {
                     for i in 0..s {
                         let px = x as f64 + (i as f64 + 0.5) / s as f64 - c[0];
                         let py = y as f64 + (j as f64 + 0.5) / s as f64 - c[1];
-                        // Signed distances to the two edges (their normals: e rotated 90°).
-                        let u = -e[0][1] * px + e[0][0] * py;
-                        let v = -e[1][1] * px + e[1][0] * py;
-                        let level = if (u > 0.0) == (v > 0.0) { light } else { dark };
-                        sum += level * (1.0 + shade[0] * px + shade[1] * py);
+                        sum += level(px, py);
                     }
                 }
                 img[y * w + x] = (sum / (s * s) as f64) as f32;
             }
         }
         img
+    }
+
+    /// A checkerboard corner at `c`, its edges along `e1`, `e2`, box-filtered by 64 × 64
+    /// supersampling, levels `dark` and `light` times `1 + shade·(x − c)`.
+    fn corner_raster(
+        size: (usize, usize),
+        c: [f64; 2],
+        e: [[f64; 2]; 2],
+        shade: [f64; 2],
+    ) -> Vec<f32> {
+        let (dark, light) = (0.05, 0.9);
+        supersample(size, c, 64, |px, py| {
+            // Signed distances to the two edges (their normals: e rotated 90°).
+            let u = -e[0][1] * px + e[0][0] * py;
+            let v = -e[1][1] * px + e[1][0] * py;
+            let level = if (u > 0.0) == (v > 0.0) { light } else { dark };
+            level * (1.0 + shade[0] * px + shade[1] * py)
+        })
     }
 
     fn unit(a: f64) -> [f64; 2] {
@@ -451,39 +462,29 @@ mod tests {
     /// perspective view, locally), box-filtered by 32 × 32 supersampling; and its edges' image
     /// directions, light sectors first.
     fn star_raster(
-        (w, h): (usize, usize),
+        size: (usize, usize),
         c: [f64; 2],
         spokes: usize,
         m: [[f64; 2]; 2],
     ) -> (Vec<f32>, Vec<[f64; 2]>) {
-        let s = 32;
         let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
         let inv = [
             [m[1][1] / det, -m[0][1] / det],
             [-m[1][0] / det, m[0][0] / det],
         ];
         let sector = std::f64::consts::PI / spokes as f64;
-        let mut img = vec![0f32; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let mut light = 0;
-                for j in 0..s {
-                    for i in 0..s {
-                        let px = x as f64 + (i as f64 + 0.5) / s as f64 - c[0];
-                        let py = y as f64 + (j as f64 + 0.5) / s as f64 - c[1];
-                        let (u, v) = (
-                            inv[0][0] * px + inv[0][1] * py,
-                            inv[1][0] * px + inv[1][1] * py,
-                        );
-                        let a = v.atan2(u).rem_euclid(std::f64::consts::TAU);
-                        if ((a / sector).floor() as u64).is_multiple_of(2) {
-                            light += 1;
-                        }
-                    }
-                }
-                img[y * w + x] = 0.05 + 0.85 * light as f32 / (s * s) as f32;
+        let img = supersample(size, c, 32, |px, py| {
+            let (u, v) = (
+                inv[0][0] * px + inv[0][1] * py,
+                inv[1][0] * px + inv[1][1] * py,
+            );
+            let a = v.atan2(u).rem_euclid(std::f64::consts::TAU);
+            if ((a / sector).floor() as u64).is_multiple_of(2) {
+                0.9
+            } else {
+                0.05
             }
-        }
+        });
         let dirs = (0..2 * spokes)
             .map(|k| {
                 let a = k as f64 * sector;
