@@ -65,7 +65,7 @@ pytest_pid=$!
 # Blender start-up, scene building, COLMAP's matching), so two at a time left a core idle
 # (measured: 1.07 cores busy on average over the run).
 backends_status=0
-time cargo test --locked --test backends -- --test-threads 6 || backends_status=$?
+time cargo test --locked --test backends -- --test-threads 4 || backends_status=$?
 step "full tier: the Python tests' output"
 pytest_status=0
 wait "$pytest_pid" || pytest_status=$?
