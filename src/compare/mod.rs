@@ -116,6 +116,14 @@ fn projection<'a>(
     }
 }
 
+/// Whether a window of radius `r` px around `c` stays a pixel inside the image.
+fn fits(proj: &Projector, c: [f64; 2], r: f64) -> bool {
+    c[0] - r >= 1.0
+        && c[1] - r >= 1.0
+        && c[0] + r <= proj.width - 1.0
+        && c[1] + r <= proj.height - 1.0
+}
+
 /// A checkerboard's inner corner: where it is and the board's axes and square, from which
 /// its edges' directions and a window free of other corners follow.
 #[derive(Debug, Clone)]
@@ -181,12 +189,7 @@ pub fn expected_corner(
         dirs[k] = [d[0] / n, d[1] / n];
     }
     let half = 0.45 * nearest;
-    if !(half >= 3.0)
-        || q[0] - half < 1.0
-        || q[1] - half < 1.0
-        || q[0] + half > proj.width - 1.0
-        || q[1] + half > proj.height - 1.0
-    {
+    if !(half >= 3.0) || !fits(proj, q, half) {
         return None;
     }
     Some((q, dirs, half))
@@ -267,12 +270,7 @@ pub fn expected_star(
         return None;
     }
     let (inner, outer) = ((2.5 / narrowest).max(3.0), 0.85 * rim);
-    if !(outer >= inner + 4.0)
-        || q[0] - outer < 1.0
-        || q[1] - outer < 1.0
-        || q[0] + outer > proj.width - 1.0
-        || q[1] + outer > proj.height - 1.0
-    {
+    if !(outer >= inner + 4.0) || !fits(proj, q, outer) {
         return None;
     }
     Some((q, dirs, inner, outer))
@@ -323,11 +321,7 @@ pub fn expected_disk(
     if r_disk < 1.5 || half < r_disk + 2.0 {
         return None;
     }
-    if c[0] - half < 1.0
-        || c[1] - half < 1.0
-        || c[0] + half > proj.width - 1.0
-        || c[1] + half > proj.height - 1.0
-    {
+    if !fits(proj, c, half) {
         return None;
     }
     Some((c, half))
