@@ -10,6 +10,11 @@
 //! projection of the disk's centre (perspective and refraction shift it), so the truth to
 //! compare with is [`expected_centroid`]: the area centroid of the exactly projected disk
 //! outline. Both sides then measure the same quantity and no bias remains.
+//!
+//! The centroid sums the whole window, so light that is not the print's, smooth across the
+//! disk but not flat (the veil of backscatter in front of a lamp, the glow of forward
+//! scatter), pulls it. Disks [`crate::compare::EDGE_FIT_PX`] or more in radius are therefore
+//! located by their edge instead ([`crate::compare::sectors::disk_edge`]).
 
 use glam::DVec3;
 

@@ -284,6 +284,29 @@ pub fn expected_disk(
     pose: usize,
     d: &Disk,
 ) -> Option<([f64; 2], f64)> {
+    disk_view(proj, surface, pose, d).map(|v| (v.centroid, v.half))
+}
+
+/// A disk's expected image ([`disk_view`]).
+pub struct DiskView {
+    /// The area centroid of the exactly projected outline.
+    pub centroid: [f64; 2],
+    /// The measuring window's half-size, px.
+    pub half: f64,
+    /// The outline's largest distance from the centroid along x or y, px.
+    pub radius: f64,
+    /// The exactly projected outline, 64 points.
+    pub outline: Vec<[f64; 2]>,
+}
+
+/// A disk's exact image in image `pose` and the window that measures it; `None` when it is
+/// not (fully) visible, faces away, or is too small or crowded to measure.
+pub fn disk_view(
+    proj: &Projector,
+    surface: Option<&SeaInterface>,
+    pose: usize,
+    d: &Disk,
+) -> Option<DiskView> {
     let project = projection(proj, surface, pose);
     let c = detect::expected_centroid(d.center, d.normal, d.radius, |p| project(p).ok())?;
     // Facing the camera?
@@ -302,11 +325,13 @@ pub fn expected_disk(
     const N: usize = 64;
     let mut r_disk: f64 = 0.0;
     let mut r_clear = f64::INFINITY;
+    let mut outline = Vec::with_capacity(N);
     for k in 0..N {
         let t = std::f64::consts::TAU * k as f64 / N as f64;
         let (ct, st) = (t.cos(), t.sin());
         let p = project(d.center + d.radius * (ct * a + st * b)).ok()?;
         r_disk = r_disk.max(cheb(p));
+        outline.push(p);
         // Square cell: scale the direction onto the square's boundary.
         let s = if d.x_axis.is_some() {
             1.0 / ct.abs().max(st.abs())
@@ -324,7 +349,37 @@ pub fn expected_disk(
     if !fits(proj, c, half) {
         return None;
     }
-    Some((c, half))
+    Some(DiskView {
+        centroid: c,
+        half,
+        radius: r_disk,
+        outline,
+    })
+}
+
+/// The image radius (px) from which a disk is located by its edge ([`sectors::disk_edge`]),
+/// not by the area centroid of its darkness ([`detect::disk_centroid`]).
+pub const EDGE_FIT_PX: f64 = 12.0;
+
+/// Measure a disk in `gray` (pixel coordinates shifted by `origin`, a crop's corner): by its
+/// edge when its image is [`EDGE_FIT_PX`] or more across its radius, else by its centroid.
+fn measure_disk(
+    gray: &detect::Gray,
+    v: &DiskView,
+    origin: [f64; 2],
+    dark: f64,
+) -> Option<[f64; 2]> {
+    let local = [v.centroid[0] - origin[0], v.centroid[1] - origin[1]];
+    if v.radius >= EDGE_FIT_PX {
+        let outline: Vec<[f64; 2]> = v
+            .outline
+            .iter()
+            .map(|p| [p[0] - origin[0], p[1] - origin[1]])
+            .collect();
+        sectors::disk_edge(gray, &outline, v.half - v.radius).ok()
+    } else {
+        detect::disk_centroid(gray, local, v.half, dark).ok()
+    }
 }
 
 /// Which measurable points a [`target_crop`] gathers (`All`: stars' centres too).
@@ -508,17 +563,13 @@ pub fn target_residuals(
                 });
             };
             for d in &disks {
-                let Some((c, half)) = expected_disk(&proj, surface.as_ref(), pose, d) else {
+                let Some(v) = disk_view(&proj, surface.as_ref(), pose, d) else {
                     continue;
                 };
-                let local = [c[0] - x0, c[1] - y0];
-                if inside(local, half) {
-                    push(
-                        &d.id,
-                        "disk",
-                        c,
-                        detect::disk_centroid(&gray, local, half, dark).ok(),
-                    );
+                let local = [v.centroid[0] - x0, v.centroid[1] - y0];
+                if inside(local, v.half) {
+                    let found = measure_disk(&gray, &v, [x0, y0], dark);
+                    push(&d.id, "disk", v.centroid, found);
                 }
             }
             for s in &stars {
