@@ -15,7 +15,7 @@
 //!   0.0004 px at 64 spp, Cycles 0.040 px at 256, Mitsuba 0.083 px at 256 and 0.0015 px at
 //!   1024: this test. With the area centroid Mitsuba had read 0.12 px (Δv +0.12) at 2048
 //!   and 8192 spp: the centroid, not Mitsuba (docs/backends.md, "Targets at full size").
-//! * turbidity_contrast's corners: 0.10 px natively at 2048–8192 spp, heavy-tailed noise of
+//! * turbidity_contrast's corners: 0.146 / 0.123 px natively at 2048 / 8192 spp, heavy-tailed noise of
 //!   the strobes' light in 1/m scattering water (0.0002 px without the scattering).
 //! * subsea_metrology: its first measurable point is a disk (75 px in radius) under the veil
 //!   of its lamps' backscatter: 0.057 / 0.020 / 0.085 px (native / Mitsuba / Cycles) at
