@@ -136,7 +136,8 @@ fn compare_crop_targets_measures_the_targets_at_full_size() {
     let model = poser::scene::load(Path::new("scenarios/calibration_flat.toml"), &[])
         .unwrap_or_else(|f| panic!("{}", f.render()))
         .model;
-    let crop = poser::compare::target_crop(&model, 0, 256, poser::compare::Points::All)
+    let geometry = poser::geometry::Bvh::of_model(&model).unwrap();
+    let crop = poser::compare::target_crop(&model, &geometry, 0, 256, poser::compare::Points::All)
         .unwrap()
         .unwrap();
     let img = poser::image::read_exr(&dir.path().join("native/img_0001.exr")).unwrap();

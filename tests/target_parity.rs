@@ -85,9 +85,11 @@ fn calibration_flat_targets_at_full_size_in_every_backend() {
     let mut model = poser::scene::load(&root.join("scenarios/calibration_flat.toml"), &[])
         .unwrap_or_else(|f| panic!("{}", f.render()))
         .model;
-    let crop = poser::compare::target_crop(&model, 0, 256, poser::compare::Points::Disks)
-        .unwrap()
-        .expect("the first image shows the circle grid");
+    let geometry = poser::geometry::Bvh::of_model(&model).unwrap();
+    let crop =
+        poser::compare::target_crop(&model, &geometry, 0, 256, poser::compare::Points::Disks)
+            .unwrap()
+            .expect("the first image shows the circle grid");
     assert_eq!(model.cameras[0].width, 1600, "the full size");
     model.render.crop = Some(crop);
     let dir = tempfile::tempdir().unwrap();
@@ -156,9 +158,10 @@ fn points_at_full_size_in(scene: &str, kind: &str, cases: &[(&str, u32, f64, &st
         _ => poser::compare::Points::All,
     };
     // The first image that shows one (as `poser compare --crop targets` picks it).
+    let geometry = poser::geometry::Bvh::of_model(&model).unwrap();
     let (pose, crop) = (0..model.poses.len())
         .find_map(|p| {
-            poser::compare::target_crop(&model, p, 256, which)
+            poser::compare::target_crop(&model, &geometry, p, 256, which)
                 .unwrap()
                 .map(|c| (p, c))
         })

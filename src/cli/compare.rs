@@ -68,9 +68,11 @@ pub fn run(args: &Args) -> Result<(), CliError> {
                 .clone()
                 .unwrap_or_else(|| (0..model.poses.len()).collect());
             let mut found = None;
+            let geometry = crate::geometry::Bvh::of_model(&model).map_err(CliError::Failed)?;
             for &p in &candidates {
                 if let Some(c) = crate::compare::target_crop(
                     &model,
+                    &geometry,
                     p,
                     TARGET_CROP_SIDE,
                     crate::compare::Points::All,

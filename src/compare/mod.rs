@@ -276,31 +276,52 @@ pub fn expected_star(
     Some((q, dirs, inner, outer))
 }
 
-/// Where a disk should appear in image (pose, cam): expected image centroid and window
-/// half-size, or `None` when it is not (fully) visible or too small/crowded to measure.
+/// Where a disk should appear in image (pose, cam): expected image centroid and the
+/// half-size of the window that [`detect::disk_centroid`] measures it in, or `None` when it is
+/// not (fully) visible or too small/crowded for that window.
 pub fn expected_disk(
     proj: &Projector,
     surface: Option<&SeaInterface>,
     pose: usize,
     d: &Disk,
 ) -> Option<([f64; 2], f64)> {
-    disk_view(proj, surface, pose, d).map(|v| (v.centroid, v.half))
+    let v = disk_view(proj, surface, pose, d)?;
+    v.window.map(|half| (v.centroid, half))
 }
 
-/// A disk's expected image ([`disk_view`]).
+/// A disk's expected image ([`disk_view`]) and how it is measured.
 pub struct DiskView {
     /// The area centroid of the exactly projected outline.
     pub centroid: [f64; 2],
-    /// The measuring window's half-size, px.
-    pub half: f64,
     /// The outline's largest distance from the centroid along x or y, px.
     pub radius: f64,
     /// The exactly projected outline, 64 points.
     pub outline: Vec<[f64; 2]>,
+    /// The half-size of [`detect::disk_centroid`]'s window, when the white surround holds
+    /// one.
+    pub window: Option<f64>,
+    /// The band of [`sectors::disk_edge`] (px either side of the outline), when the disk is
+    /// [`EDGE_FIT_PX`] or more in radius and its surround holds the band.
+    pub band: Option<f64>,
+    /// Points that must be seen for the disk to be measured (world, pixel): its centre and
+    /// eight points on the edge of its white surround ([`seen`]), which a half-buried disk's
+    /// surround fails.
+    pub probes: Vec<(DVec3, [f64; 2])>,
 }
 
-/// A disk's exact image in image `pose` and the window that measures it; `None` when it is
-/// not (fully) visible, faces away, or is too small or crowded to measure.
+impl DiskView {
+    /// The half-size of the square around the centroid that its measurement reads.
+    pub fn half(&self) -> f64 {
+        match (self.band, self.window) {
+            (Some(band), _) => self.radius + band + 1.0,
+            (None, Some(half)) => half,
+            (None, None) => 0.0,
+        }
+    }
+}
+
+/// A disk's exact image in image `pose` and how it can be measured; `None` when it is not
+/// (fully) visible, faces away, or is too small or crowded for either measurement.
 pub fn disk_view(
     proj: &Projector,
     surface: Option<&SeaInterface>,
@@ -315,8 +336,8 @@ pub fn disk_view(
         return None;
     }
     // Chebyshev (max-norm) distances from the centroid: the disk's outline must stay inside
-    // the window's border ring, the white surround's outline outside the window. Sampled
-    // outlines handle anisotropic magnification (cylinder ports, oblique views).
+    // the centroid window's border ring, the white surround's outline outside the window.
+    // Sampled outlines handle anisotropic magnification (cylinder ports, oblique views).
     let cheb = |p: [f64; 2]| (p[0] - c[0]).abs().max((p[1] - c[1]).abs());
     let a = d
         .x_axis
@@ -325,12 +346,17 @@ pub fn disk_view(
     const N: usize = 64;
     let mut r_disk: f64 = 0.0;
     let mut r_clear = f64::INFINITY;
+    // The edge fit's room: the white gap between the outline and the surround's edge along
+    // each radius, and the disk's own smallest radius (its inside band).
+    let (mut gap, mut r_min) = (f64::INFINITY, f64::INFINITY);
     let mut outline = Vec::with_capacity(N);
+    let mut probes = vec![(d.center, project(d.center).ok()?)];
     for k in 0..N {
         let t = std::f64::consts::TAU * k as f64 / N as f64;
         let (ct, st) = (t.cos(), t.sin());
         let p = project(d.center + d.radius * (ct * a + st * b)).ok()?;
         r_disk = r_disk.max(cheb(p));
+        r_min = r_min.min((p[0] - c[0]).hypot(p[1] - c[1]));
         outline.push(p);
         // Square cell: scale the direction onto the square's boundary.
         let s = if d.x_axis.is_some() {
@@ -338,31 +364,65 @@ pub fn disk_view(
         } else {
             1.0
         };
-        let q = project(d.center + d.clear_radius * s * (ct * a + st * b)).ok()?;
+        let rim = d.center + d.clear_radius * s * (ct * a + st * b);
+        let q = project(rim).ok()?;
         r_clear = r_clear.min(cheb(q));
+        if k % 8 == 0 {
+            probes.push((rim, q));
+        }
+        gap = gap.min((q[0] - p[0]).hypot(q[1] - p[1]));
     }
     // 1.5 px of safety from the edge of the white surround (partly covered edge pixels).
     let half = (r_clear - 1.5).min(r_disk + 5.0);
-    if r_disk < 1.5 || half < r_disk + 2.0 {
-        return None;
-    }
-    if !fits(proj, c, half) {
-        return None;
-    }
-    Some(DiskView {
+    let window = (r_disk >= 1.5 && half >= r_disk + 2.0).then_some(half);
+    // The edge fit's ellipse must be the outline's shape: not through waves, which bend one
+    // disk's outline out of any ellipse.
+    let elliptic = sectors::moment_ellipse(&outline)
+        .is_some_and(|(q, m)| sectors::ellipse_misfit(&outline, q, m) <= ELLIPSE_MISFIT_PX);
+    let band = (gap - 1.5).min(5.0);
+    let band =
+        (r_disk >= EDGE_FIT_PX && elliptic && band >= 2.0 && r_min >= band + 1.0).then_some(band);
+    let v = DiskView {
         centroid: c,
-        half,
         radius: r_disk,
         outline,
+        window,
+        band,
+        probes,
+    };
+    (v.half() > 0.0 && fits(proj, c, v.half())).then_some(v)
+}
+
+/// Whether every probe (world point, its pixel) of a target on a face of normal `normal` is
+/// seen in image `pose`: the camera on the printed side and the water path clear of `scene`
+/// (the ground truth's test, [`crate::truth::unobstructed`]). A disk half buried in the
+/// seabed's relief, or a corner behind an object, is not measured.
+pub fn seen(
+    scene: &crate::geometry::Bvh,
+    proj: &Projector,
+    surface: Option<&SeaInterface>,
+    pose: usize,
+    normal: DVec3,
+    probes: &[(DVec3, [f64; 2])],
+) -> bool {
+    probes.iter().all(|&(w, uv)| {
+        crate::truth::unobstructed(proj, surface, pose, w, normal, uv, |a, b| {
+            scene.occluded(a, b)
+        })
     })
 }
+
+/// How far (px) a disk's exact outline may depart from its moment ellipse for
+/// [`sectors::disk_edge`]: a perspective view of a circle is an ellipse, and a port bends
+/// one disk's outline by thousandths of a pixel.
+pub const ELLIPSE_MISFIT_PX: f64 = 0.05;
 
 /// The image radius (px) from which a disk is located by its edge ([`sectors::disk_edge`]),
 /// not by the area centroid of its darkness ([`detect::disk_centroid`]).
 pub const EDGE_FIT_PX: f64 = 12.0;
 
 /// Measure a disk in `gray` (pixel coordinates shifted by `origin`, a crop's corner): by its
-/// edge when its image is [`EDGE_FIT_PX`] or more across its radius, else by its centroid.
+/// edge where [`DiskView::band`] allows, else by its centroid.
 fn measure_disk(
     gray: &detect::Gray,
     v: &DiskView,
@@ -370,15 +430,17 @@ fn measure_disk(
     dark: f64,
 ) -> Option<[f64; 2]> {
     let local = [v.centroid[0] - origin[0], v.centroid[1] - origin[1]];
-    if v.radius >= EDGE_FIT_PX {
-        let outline: Vec<[f64; 2]> = v
-            .outline
-            .iter()
-            .map(|p| [p[0] - origin[0], p[1] - origin[1]])
-            .collect();
-        sectors::disk_edge(gray, &outline, v.half - v.radius).ok()
-    } else {
-        detect::disk_centroid(gray, local, v.half, dark).ok()
+    match (v.band, v.window) {
+        (Some(band), _) => {
+            let outline: Vec<[f64; 2]> = v
+                .outline
+                .iter()
+                .map(|p| [p[0] - origin[0], p[1] - origin[1]])
+                .collect();
+            sectors::disk_edge(gray, &outline, band).ok()
+        }
+        (None, Some(half)) => detect::disk_centroid(gray, local, half, dark).ok(),
+        (None, None) => None,
     }
 }
 
@@ -397,6 +459,7 @@ pub enum Points {
 /// (`poser compare --crop targets`). `None` when no such point can be measured in that image.
 pub fn target_crop(
     model: &Model,
+    scene: &crate::geometry::Bvh,
     pose: usize,
     max_side: u32,
     which: Points,
@@ -406,22 +469,25 @@ pub fn target_crop(
         .above_surface(pose, 0)
         .then(|| model.sea_interface(1))
         .flatten();
+    let sf = surface.as_ref();
+    let seen = |normal, probes: &[(DVec3, [f64; 2])]| seen(scene, &proj, sf, pose, normal, probes);
     let mut windows: Vec<([f64; 2], f64)> = Vec::new();
     if which != Points::Corners {
-        windows.extend(
-            disks(model)
-                .iter()
-                .filter_map(|d| expected_disk(&proj, surface.as_ref(), pose, d)),
-        );
+        windows.extend(disks(model).iter().filter_map(|d| {
+            let v = disk_view(&proj, sf, pose, d)?;
+            seen(d.normal, &v.probes).then(|| (v.centroid, v.half()))
+        }));
     }
     if which != Points::Disks {
         windows.extend(corners(model).iter().filter_map(|c| {
-            expected_corner(&proj, surface.as_ref(), pose, c).map(|(q, _, half)| (q, half))
+            let (q, _, half) = expected_corner(&proj, sf, pose, c)?;
+            seen(c.x_axis.cross(c.y_axis), &[(c.world, q)]).then_some((q, half))
         }));
     }
     if which == Points::All {
         windows.extend(stars(model).iter().filter_map(|s| {
-            expected_star(&proj, surface.as_ref(), pose, s).map(|(q, _, _, outer)| (q, outer))
+            let (q, _, _, outer) = expected_star(&proj, sf, pose, s)?;
+            seen(s.x_axis.cross(s.y_axis), &[(s.centre, q)]).then_some((q, outer))
         }));
     }
     let centre = [proj.width / 2.0, proj.height / 2.0];
@@ -518,6 +584,7 @@ pub fn target_residuals(
     channel: usize,
 ) -> Result<Vec<TargetResidual>, String> {
     let (disks, corners, stars) = (disks(model), corners(model), stars(model));
+    let scene = crate::geometry::Bvh::of_model(model)?;
     let dark = crate::geometry::targets::BLACK / crate::geometry::targets::WHITE;
     // The rendered rectangle's origin in the whole image (a crop's corner, else 0).
     let (x0, y0) = model
@@ -553,6 +620,9 @@ pub fn target_residuals(
                         && local[0] + half <= img.width as f64 - 1.0
                         && local[1] + half <= img.height as f64 - 1.0)
             };
+            let seen = |normal, probes: &[(DVec3, [f64; 2])]| {
+                seen(&scene, &proj, surface.as_ref(), pose, normal, probes)
+            };
             let mut push = |id: &str, kind, truth: [f64; 2], found: Option<[f64; 2]>| {
                 out.push(TargetResidual {
                     id: id.to_string(),
@@ -567,7 +637,7 @@ pub fn target_residuals(
                     continue;
                 };
                 let local = [v.centroid[0] - x0, v.centroid[1] - y0];
-                if inside(local, v.half) {
+                if inside(local, v.half()) && seen(d.normal, &v.probes) {
                     let found = measure_disk(&gray, &v, [x0, y0], dark);
                     push(&d.id, "disk", v.centroid, found);
                 }
@@ -578,7 +648,7 @@ pub fn target_residuals(
                     continue;
                 };
                 let local = [c[0] - x0, c[1] - y0];
-                if inside(local, outer) {
+                if inside(local, outer) && seen(s.x_axis.cross(s.y_axis), &[(s.centre, c)]) {
                     let found = sectors::star_centre(&gray, local, &dirs, inner, outer).ok();
                     push(&s.id, "star", c, found);
                 }
@@ -589,7 +659,7 @@ pub fn target_residuals(
                     continue;
                 };
                 let local = [c[0] - x0, c[1] - y0];
-                if inside(local, half) {
+                if inside(local, half) && seen(k.x_axis.cross(k.y_axis), &[(k.world, c)]) {
                     let found = sectors::checker_corner(&gray, local, dirs, half).ok();
                     push(&k.id, "corner", c, found);
                 }

@@ -406,7 +406,7 @@ fn ellipse_outside(x: f64, y: f64, q: [f64; 2], m: [f64; 3]) -> f64 {
 /// The ellipse with the area centroid and second moments of the polygon `p`: its centre `q`
 /// and `m` of `(x − q)ᵀ m (x − q) ≤ 1` (a filled ellipse's covariance is `m⁻¹/4`). `None`
 /// for a degenerate polygon.
-fn moment_ellipse(p: &[[f64; 2]]) -> Option<([f64; 2], [f64; 3])> {
+pub fn moment_ellipse(p: &[[f64; 2]]) -> Option<([f64; 2], [f64; 3])> {
     let q = super::detect::polygon_centroid(p)?;
     let (mut a, mut xx, mut xy, mut yy) = (0.0, 0.0, 0.0, 0.0);
     for i in 0..p.len() {
@@ -423,6 +423,22 @@ fn moment_ellipse(p: &[[f64; 2]]) -> Option<([f64; 2], [f64; 3])> {
     let det = 4.0 * (sxx * syy - sxy * sxy);
     (a.abs() > 1e-12 && det > 1e-300 && det.is_finite())
         .then(|| (q, [syy / det, -sxy / det, sxx / det]))
+}
+
+/// The largest distance (px, first order) of the points `p` from the ellipse `(x − q)ᵀ m
+/// (x − q) = 1`: how far an outline is from the ellipse [`disk_edge`] fits.
+pub fn ellipse_misfit(p: &[[f64; 2]], q: [f64; 2], m: [f64; 3]) -> f64 {
+    p.iter()
+        .map(|p| {
+            let d = [p[0] - q[0], p[1] - q[1]];
+            let md = [m[0] * d[0] + m[1] * d[1], m[1] * d[0] + m[2] * d[1]];
+            let s = (d[0] * md[0] + d[1] * md[1]).sqrt();
+            ((s - 1.0) / (md[0] / s).hypot(md[1] / s)).abs()
+        })
+        .fold(
+            0.0,
+            |a: f64, b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
+        )
 }
 
 /// Sub-pixel area centroid (pixel centres at +0.5) of a disk's image whose exact outline is

@@ -113,6 +113,32 @@ fn pose_json(p: &Pose) -> PoseJson {
     }
 }
 
+/// Whether a target point at `world` (its printed face's normal `normal`), projected to `uv`
+/// in image `pose` of `proj`, is seen: the camera on its printed side, and nothing in
+/// `occluded(point, end)` blocking the water path from it to where its ray leaves the port
+/// (or, from the air, enters the water through `through`).
+pub fn unobstructed(
+    proj: &Projector,
+    through: Option<&SeaInterface>,
+    pose: usize,
+    world: DVec3,
+    normal: DVec3,
+    uv: [f64; 2],
+    occluded: impl Fn(DVec3, DVec3) -> bool,
+) -> bool {
+    let Ok((exit, d, _)) = proj.pixel_ray_world(pose, uv[0], uv[1]) else {
+        return false;
+    };
+    let exit = match through {
+        Some(iface) => match iface.refract_down(exit, d) {
+            Ok((s, _, _)) => s,
+            Err(_) => return false,
+        },
+        None => exit,
+    };
+    (exit - world).dot(normal) > 0.0 && !occluded(world, exit)
+}
+
 /// Compute the ground truth of every image (occlusion against the model's scene geometry).
 pub fn compute(model: &Model) -> Result<Truth, String> {
     compute_in(model, &Bvh::of_model(model)?)
@@ -191,22 +217,8 @@ pub fn compute_with(
                     let Ok(uv) = uv_all[1][i] else {
                         continue;
                     };
-                    // The water path: from the point back to where its ray leaves the port (or,
-                    // from the air, enters the water).
-                    let Ok((exit, d, _)) = pr[1].pixel_ray_world(pi, uv[0], uv[1]) else {
-                        continue;
-                    };
-                    let exit = match &through {
-                        Some(ifaces) => match ifaces[1].refract_down(exit, d) {
-                            Ok((s, _, _)) => s,
-                            Err(_) => continue,
-                        },
-                        None => exit,
-                    };
-                    if (exit - tp.world).dot(normal) <= 0.0 {
-                        continue; // seen from behind its own printed face
-                    }
-                    if occluded(tp.world, exit) {
+                    let through = through.as_ref().map(|i| &i[1]);
+                    if !unobstructed(&pr[1], through, pi, tp.world, normal, uv, &occluded) {
                         continue;
                     }
                     let uv_rgb = [0, 1, 2].map(|ch| uv_all[ch][i].ok());
