@@ -100,11 +100,13 @@ fn the_native_render_through_the_surface_lands_on_the_truth() {
     assert!(m >= 10, "{m} disks measured");
     assert!(rms < 0.2, "flat sea, sunlit: RMS {rms} px");
     // Under waves the sun's caustics speckle the plates; light the scene from the sky alone to
-    // measure the geometry: the same bias of the detector under sky light, flat or wavy. At
-    // 32 spp (seeds 1, 2, 3: flat 0.20 / 0.33 / 0.27 px, 5 cm waves 0.23 / 0.26 / 0.28 px);
-    // at 8 spp the noise alone moved the two apart by up to 0.15 px (flat 0.35–0.43, waves
-    // 0.20–0.50 over the same seeds), as far as the bound below. Both with the Sobol sampler;
-    // independent samples, seed 1: 0.32 / 0.30 px at 32 spp, 0.40 / 0.39 px at 8.
+    // measure the geometry. Through a flat sea the disks (about 20 px in radius) are ellipses
+    // and are located by their edges: 0.064 px at 32 spp, all 12. Through 5 cm waves their
+    // outlines are no ellipses (poser::compare::ELLIPSE_MISFIT_PX), so they are located by
+    // their area centroids, which the sky light focused by the waves pulls: 0.32 px (the 10
+    // whose bent surrounds still hold a window). Before the edge fit both were centroids, with
+    // one bias under sky light, flat or wavy: at 32 spp (seeds 1, 2, 3) flat 0.20 / 0.33 /
+    // 0.27 px, waves 0.23 / 0.26 / 0.28 px, held then to within 0.15 px of each other.
     let sky = [
         "sun.irradiance=0.000001",
         "lights=[{type=\"ambient\", radiance=30}]",
@@ -116,11 +118,7 @@ fn the_native_render_through_the_surface_lands_on_the_truth() {
     );
     assert!(mf >= 10 && mw >= 8, "{mf} {mw} disks measured");
     assert!(
-        flat < 0.5 && waves < 0.5,
-        "flat {flat} px, waves {waves} px"
-    );
-    assert!(
-        (waves - flat).abs() < 0.15,
+        flat < 0.15 && waves < 0.5,
         "flat {flat} px, waves {waves} px"
     );
     // The waves move the truth itself far more than that (1.6 px RMS here).
