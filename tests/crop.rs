@@ -17,6 +17,45 @@ fn poser(args: &[&str], out: &Path) -> Output {
         .unwrap()
 }
 
+/// `poser compare SCENE --backends native --samples 16 --crop targets` with `extra`
+/// arguments, into `dir`: its stderr, and the native backend's entry of report.json, with how
+/// many targets it measured checked to be all of at least `least` expected, and their RMS
+/// distance to the truth, px.
+fn native_crop(
+    scene: &str,
+    extra: &[&str],
+    dir: &Path,
+    least: u64,
+) -> (String, serde_json::Value, f64) {
+    let mut args = vec![
+        "compare",
+        scene,
+        "--backends",
+        "native",
+        "--samples",
+        "16",
+        "--crop",
+        "targets",
+    ];
+    args.extend_from_slice(extra);
+    let out = poser(&args, dir);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{scene}: {stderr}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let native = json["backends"][0].clone();
+    let (found, expected) = (
+        native["targets_measured"].as_u64().unwrap(),
+        native["targets_expected"].as_u64().unwrap(),
+    );
+    assert!(
+        expected >= least && found == expected,
+        "{scene}: {found} of {expected}"
+    );
+    let rms = native["target_rms_px"].as_f64().unwrap();
+    (stderr, native, rms)
+}
+
 const RENDER: [&str; 10] = [
     "render",
     "scenarios/calibration_flat.toml",
@@ -98,36 +137,12 @@ fn compare_crop_targets_measures_the_targets_at_full_size() {
     // disks': 4 of 4 at 16 spp, 0.015 px RMS, and 0.11 px before the detector fitted the
     // background as a plane). Measured at 16 spp: 4 of 4 corners, 0.011 px RMS.
     let dir = tempfile::tempdir().unwrap();
-    let out = poser(
-        &[
-            "compare",
-            "scenarios/calibration_flat.toml",
-            "--backends",
-            "native",
-            "--samples",
-            "16",
-            "--crop",
-            "targets",
-        ],
-        dir.path(),
-    );
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
+    let (stderr, native, rms) = native_crop("scenarios/calibration_flat.toml", &[], dir.path(), 4);
     assert!(
         stderr.contains("--crop targets: image img_0001 (pose 0)"),
         "{stderr}"
     );
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
-            .unwrap();
-    let native = &json["backends"][0];
     assert_eq!(native["images"], 1);
-    let (found, expected) = (
-        native["targets_measured"].as_u64().unwrap(),
-        native["targets_expected"].as_u64().unwrap(),
-    );
-    assert!(expected >= 4 && found == expected, "{found} of {expected}");
-    let rms = native["target_rms_px"].as_f64().unwrap();
     assert!(
         rms <= 0.05,
         "targets {rms:.4} px RMS from the truth at full size"
@@ -208,36 +223,7 @@ fn native_holds_the_small_and_oblique_shipped_targets_to_five_hundredths_of_a_pi
         ("scenarios/caustics_shallow.toml", "3"),
     ] {
         let dir = tempfile::tempdir().unwrap();
-        let out = poser(
-            &[
-                "compare",
-                scene,
-                "--scale",
-                scale,
-                "--backends",
-                "native",
-                "--samples",
-                "16",
-                "--crop",
-                "targets",
-            ],
-            dir.path(),
-        );
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success(), "{scene}: {stderr}");
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
-                .unwrap();
-        let native = &json["backends"][0];
-        let (found, expected) = (
-            native["targets_measured"].as_u64().unwrap(),
-            native["targets_expected"].as_u64().unwrap(),
-        );
-        assert!(
-            expected >= 1 && found == expected,
-            "{scene}: {found} of {expected}"
-        );
-        let rms = native["target_rms_px"].as_f64().unwrap();
+        let (_, _, rms) = native_crop(scene, &["--scale", scale], dir.path(), 1);
         assert!(rms <= 0.05, "{scene}: {rms:.4} px RMS from the truth");
     }
 }
