@@ -102,7 +102,7 @@ fn the_native_render_through_the_surface_lands_on_the_truth() {
     // Under waves the sun's caustics speckle the plates; light the scene from the sky alone to
     // measure the geometry. Through a flat sea the disks (about 20 px in radius) are ellipses
     // and are located by their edges: 0.064 px at 32 spp, all 12. Through 5 cm waves their
-    // outlines are no ellipses (poser::compare::ELLIPSE_MISFIT_PX), so they are located by
+    // outlines are no ellipses (poser::compare::ELLIPSE_MISFIT), so they are located by
     // their area centroids, which the sky light focused by the waves pulls: 0.32 px (the 10
     // whose bent surrounds still hold a window). Before the edge fit both were centroids, with
     // one bias under sky light, flat or wavy: at 32 spp (seeds 1, 2, 3) flat 0.20 / 0.33 /

@@ -378,7 +378,7 @@ pub fn disk_view(
     // The edge fit's ellipse must be the outline's shape: not through waves, which bend one
     // disk's outline out of any ellipse.
     let elliptic = sectors::moment_ellipse(&outline)
-        .is_some_and(|(q, m)| sectors::ellipse_misfit(&outline, q, m) <= ELLIPSE_MISFIT_PX);
+        .is_some_and(|(q, m)| sectors::ellipse_misfit(&outline, q, m) <= ELLIPSE_MISFIT * r_disk);
     let band = (gap - 1.5).min(5.0);
     let band =
         (r_disk >= EDGE_FIT_PX && elliptic && band >= 2.0 && r_min >= band + 1.0).then_some(band);
@@ -412,10 +412,12 @@ pub fn seen(
     })
 }
 
-/// How far (px) a disk's exact outline may depart from its moment ellipse for
-/// [`sectors::disk_edge`]: a perspective view of a circle is an ellipse, and a port bends
-/// one disk's outline by thousandths of a pixel.
-pub const ELLIPSE_MISFIT_PX: f64 = 0.05;
+/// How far a disk's exact outline (64 points) may depart from its moment ellipse, as a share
+/// of its radius, for [`sectors::disk_edge`]. A perspective view of a circle is an ellipse;
+/// the 64-point polygon itself departs by about 0.08 % (its chords' sagitta: 0.02 px at 25 px,
+/// 0.057 px at 69 px, calibration_flat's and archaeology's disks), a port's bending of one
+/// disk by less; 5 cm waves bend a disk's outline by 9–30 % (uav_through_waves).
+pub const ELLIPSE_MISFIT: f64 = 0.01;
 
 /// The image radius (px) from which a disk is located by its edge ([`sectors::disk_edge`]),
 /// not by the area centroid of its darkness ([`detect::disk_centroid`]).
