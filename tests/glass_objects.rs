@@ -334,3 +334,61 @@ fn the_truth_leaves_out_what_glass_hides() {
     assert_eq!(count(&without), 6);
     assert_eq!(count(&with), 0);
 }
+
+/// A camera inside a glass sphere or cylinder is refused (E0405), and a target seen through one
+/// is warned of (W0406), as for a box: the checks take every glass shape. The scene is the
+/// invalid corpus's base (camera at z = −3 looking down at z = −5) with its objects replaced.
+#[test]
+fn a_glass_sphere_or_cylinder_around_the_camera_or_before_a_target_is_caught() {
+    let base = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/invalid/warn_target_behind_glass.toml");
+    let codes = |object: &str| -> Vec<String> {
+        let sets = vec![format!("objects=[{object}]")];
+        match poser::scene::load(&base, &sets) {
+            Ok(l) => l.warnings.iter().map(|w| w.code.to_string()).collect(),
+            Err(f) => f.diagnostics.iter().map(|d| d.code.to_string()).collect(),
+        }
+    };
+    for shape in [
+        "shape=\"sphere\", radius=\"0.6 m\"",
+        "shape=\"cylinder\", radius=\"0.6 m\", height=\"1 m\"",
+    ] {
+        let around = codes(&format!(
+            "{{name=\"glass\", {shape}, position=[0, 0, -3.1], glass=\"PMMA\"}}"
+        ));
+        assert!(around.contains(&"E0405".to_string()), "{shape}: {around:?}");
+        let between = codes(&format!(
+            "{{name=\"glass\", {shape}, position=[0, 0, -4.2], glass=\"PMMA\"}}"
+        ));
+        assert!(
+            between.contains(&"W0406".to_string()),
+            "{shape}: {between:?}"
+        );
+        // Beside the line of sight: neither.
+        let beside = codes(&format!(
+            "{{name=\"glass\", {shape}, position=[3, 0, -4.2], glass=\"PMMA\"}}"
+        ));
+        assert!(
+            !beside.contains(&"W0406".to_string()) && !beside.contains(&"E0405".to_string()),
+            "{shape}: {beside:?}"
+        );
+    }
+}
+
+/// Glass and filled objects may touch but not overlap (E0407): a tank's window sunk 5 cm into
+/// its water is refused; the same window standing on the water's top face loads.
+#[test]
+fn a_window_against_a_tanks_water_loads_and_one_inside_it_is_refused() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/invalid/glass_overlaps_filled_object.toml");
+    let failure = poser::scene::load(&path, &[]).err().expect("E0407");
+    assert!(
+        failure.diagnostics.iter().any(|d| d.code == "E0407"),
+        "{}",
+        failure.render()
+    );
+    let against = vec!["objects.1.position=[0, 0, -4.19]".to_string()];
+    if let Err(f) = poser::scene::load(&path, &against) {
+        panic!("{}", f.render());
+    }
+}

@@ -182,6 +182,7 @@ pub fn scene(cx: &mut Cx, m: &Model, spans: &Spans) {
     ports_overlap(cx, m, spans);
     glass_objects(cx, m, spans);
     filled_objects(cx, m, spans);
+    solids_overlap(cx, m, spans);
     wide_lens_behind_flat_port(cx, m, spans);
     overlap_delivered(cx, m, spans);
     seabed_seen(cx, m, spans);
@@ -293,31 +294,20 @@ fn target_inside_port(cx: &mut Cx, m: &Model, spans: &Spans) -> bool {
     false
 }
 
-/// The glass objects ([`crate::model::Material::glass`], boxes): they need water everywhere or
-/// none (E0404: a water box around the camera would cut them), no camera's pupil may be inside
-/// one (E0405), and a target seen through one gets a warning (W0406: the ground truth does not
-/// refract through glass objects; it counts them as opaque, so those observations are left
-/// out of the truth, while the images show the target through the glass).
+/// The glass objects ([`crate::model::Material::glass`]: boxes, spheres, cylinders): they need
+/// water everywhere or none (E0404: a water box around the camera would cut them), no camera's
+/// pupil may be inside one (E0405), and a target seen through one gets a warning (W0406: the
+/// ground truth does not refract through glass objects; it counts them as opaque, so those
+/// observations are left out of the truth, while the images show the target through the
+/// glass).
 fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
-    // (index, object, half-sizes, object_from_world) of every glass box.
-    let glass: Vec<(
-        usize,
-        &crate::model::Object,
-        glam::DVec3,
-        crate::model::Pose,
-    )> = m
+    let glass: Vec<(usize, &crate::model::Object)> = m
         .objects
         .iter()
         .enumerate()
         .filter(|(_, o)| o.material.glass.is_some())
-        .filter_map(|(i, o)| match o.shape {
-            crate::model::Shape::Box { size } => {
-                Some((i, o, 0.5 * size * o.scale, o.pose.inverse()))
-            }
-            _ => None,
-        })
         .collect();
-    let Some(&(first, o, _, _)) = glass.first() else {
+    let Some(&(first, o)) = glass.first() else {
         return;
     };
     let at = |i: usize| spans.objects.get(i).copied().unwrap_or(spans.network);
@@ -341,11 +331,9 @@ fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
     for (pi, pose) in m.poses.iter().enumerate().take(2000) {
         for ci in 0..m.cameras.len() {
             let c = m.world_from_camera(pi, ci).translation;
-            for &(i, o, half, from_world) in &glass {
-                // The pupil in the box's own frame: inside it within the half-sizes (a filled
-                // box: E0304, `filled_objects`).
-                let a = from_world.transform_point(c);
-                if a.abs().cmplt(half).all() && o.material.fill.is_none() {
+            for &(i, o) in &glass {
+                // A filled glass object holding the camera is E0304 (`filled_objects`).
+                if inside_solid(o, c) && o.material.fill.is_none() {
                     cx.push(
                         Diagnostic::error("E0405", format!("camera `{}` is inside glass object `{}`", m.cameras[ci].name, o.name))
                             .label(at(i), format!("the camera's pupil is inside it at pose {}", pose.name))
@@ -355,7 +343,7 @@ fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
                 }
                 for t in &m.targets {
                     for p in &t.points {
-                        if segment_meets_box(a, from_world.transform_point(p.world), half) {
+                        if segment_meets_solid(o, c, p.world) {
                             let e = seen_through.get_or_insert((
                                 i,
                                 t.name.clone(),
@@ -376,6 +364,116 @@ fn glass_objects(cx: &mut Cx, m: &Model, spans: &Spans) {
                 .help("the ground truth does not refract through glass objects: it counts them as opaque, so those points are left out of the truth where glass hides them; move the target or the glass"),
         );
     }
+}
+
+/// Glass and filled objects whose insides overlap (E0407): each back end follows one boundary
+/// at a time, with the water or air of the scene on its other side, so glass inside water inside
+/// glass is not what any of them renders. Tested on a 16 × 16 × 16 grid of cell centres over
+/// the smaller object's bounding box: an overlap thicker than about a sixteenth of its size is
+/// found; objects that only touch (a window against a tank's water) pass.
+fn solids_overlap(cx: &mut Cx, m: &Model, spans: &Spans) {
+    let solids: Vec<(usize, &crate::model::Object, f64)> = m
+        .objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| o.material.glass.is_some() || o.material.fill.is_some())
+        .filter_map(|(i, o)| solid_extent(o).map(|e| (i, o, (e * o.scale).element_product())))
+        .collect();
+    let at = |i: usize| spans.objects.get(i).copied().unwrap_or(spans.network);
+    for (k, &(i, a, size_a)) in solids.iter().enumerate() {
+        for &(j, b, size_b) in &solids[..k] {
+            // Sample inside the smaller one (by its bounding box's volume).
+            let (small, other) = if size_a <= size_b { (a, b) } else { (b, a) };
+            let Some(half) = solid_extent(small) else {
+                continue;
+            };
+            const N: usize = 16;
+            let hit = (0..N * N * N).find_map(|n| {
+                let f = |k: usize| (k as f64 + 0.5) / N as f64 * 2.0 - 1.0;
+                let local = glam::DVec3::new(f(n % N), f(n / N % N), f(n / (N * N))) * half;
+                let world = small.pose.transform_point(local * small.scale);
+                (inside_solid(small, world) && inside_solid(other, world)).then_some(world)
+            });
+            if let Some(p) = hit {
+                let kind = |o: &crate::model::Object| {
+                    if o.material.fill.is_some() {
+                        "filled"
+                    } else {
+                        "glass"
+                    }
+                };
+                cx.push(
+                    Diagnostic::error("E0407", format!("{} object `{}` and {} object `{}` overlap", kind(b), b.name, kind(a), a.name))
+                        .label(at(j), format!("both hold the point [{:.3}, {:.3}, {:.3}]", p.x, p.y, p.z))
+                        .label(at(i), "overlaps this one")
+                        .help("place them side by side (a glass window against a tank's water may touch it); one object cannot be inside another glass or filled object"),
+                );
+                return;
+            }
+        }
+    }
+}
+
+/// Half the unscaled extent of a box, sphere or cylinder along its own axes; `None` for other
+/// shapes.
+fn solid_extent(o: &crate::model::Object) -> Option<glam::DVec3> {
+    use crate::model::Shape;
+    match o.shape {
+        Shape::Box { size } => Some(0.5 * size),
+        Shape::Sphere { radius } => Some(glam::DVec3::splat(radius)),
+        Shape::Cylinder { radius, height } => Some(glam::DVec3::new(radius, radius, 0.5 * height)),
+        _ => None,
+    }
+}
+
+/// Whether the segment between world points `a` and `b` crosses object `o`'s box, sphere or
+/// cylinder (scale applied; false for other shapes). In the object's frame divided by its
+/// scale, an affine map that keeps which segments meet which solids, the shape is the
+/// unscaled one.
+fn segment_meets_solid(o: &crate::model::Object, a: glam::DVec3, b: glam::DVec3) -> bool {
+    use crate::model::Shape;
+    let from_world = o.pose.inverse();
+    let (a, b) = (
+        from_world.transform_point(a) / o.scale,
+        from_world.transform_point(b) / o.scale,
+    );
+    match o.shape {
+        Shape::Box { size } => segment_meets_box(a, b, 0.5 * size),
+        Shape::Sphere { radius } => segment_distance_to_origin(a, b) < radius,
+        Shape::Cylinder { radius, height } => {
+            // Clip the segment to the slab |z| < height / 2, then its distance from the axis.
+            let h = 0.5 * height;
+            let d = b - a;
+            let (mut t0, mut t1) = (0.0f64, 1.0f64);
+            if d.z.abs() < 1e-300 {
+                if a.z.abs() >= h {
+                    return false;
+                }
+            } else {
+                let (u, v) = ((-h - a.z) / d.z, (h - a.z) / d.z);
+                t0 = t0.max(u.min(v));
+                t1 = t1.min(u.max(v));
+                if t0 > t1 {
+                    return false;
+                }
+            }
+            let (p, q) = (a + t0 * d, a + t1 * d);
+            segment_distance_to_origin(p.truncate().extend(0.0), q.truncate().extend(0.0)) < radius
+        }
+        _ => false,
+    }
+}
+
+/// The distance from the origin to the segment from `a` to `b`.
+fn segment_distance_to_origin(a: glam::DVec3, b: glam::DVec3) -> f64 {
+    let d = b - a;
+    let len2 = d.length_squared();
+    let t = if len2 > 0.0 {
+        (-a.dot(d) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + t * d).length()
 }
 
 /// Whether the segment from `a` to `b` crosses the box `|x| ≤ half` (slab test).
