@@ -382,25 +382,32 @@ pub fn star_centre(
 /// of curvature radius ρ px the area is off by under 1/(8ρ) of the pixel, alike all round).
 fn ellipse_outside(x: f64, y: f64, q: [f64; 2], m: [f64; 3]) -> f64 {
     let (cx, cy) = (x + 0.5, y + 0.5);
-    let d = [cx - q[0], cy - q[1]];
-    let md = [m[0] * d[0] + m[1] * d[1], m[1] * d[0] + m[2] * d[1]];
-    let s2 = d[0] * md[0] + d[1] * md[1];
-    if !(s2 > 1e-300) {
+    let Some((dist, n)) = ellipse_distance([cx, cy], q, m) else {
         return 0.0;
-    }
-    let s = s2.sqrt();
-    // ∇√(dᵀ m d) = m d / s; the distance to the level 1 is (s − 1) / |∇|.
-    let g = [md[0] / s, md[1] / s];
-    let gl = g[0].hypot(g[1]);
-    let dist = (s - 1.0) / gl;
+    };
     if dist >= 0.75 {
         return 1.0;
     }
     if dist <= -0.75 {
         return 0.0;
     }
-    let n = [g[0] / gl, g[1] / gl];
     clipped_area(x, y, &[(n, n[0] * cx + n[1] * cy - dist)])
+}
+
+/// The first-order signed distance (px, positive outside) from `p` to the ellipse
+/// `(x − q)ᵀ m (x − q) = 1`, and the unit outward normal there; `None` at the centre.
+fn ellipse_distance(p: [f64; 2], q: [f64; 2], m: [f64; 3]) -> Option<(f64, [f64; 2])> {
+    let d = [p[0] - q[0], p[1] - q[1]];
+    let md = [m[0] * d[0] + m[1] * d[1], m[1] * d[0] + m[2] * d[1]];
+    let s2 = d[0] * md[0] + d[1] * md[1];
+    if !(s2 > 1e-300) {
+        return None;
+    }
+    let s = s2.sqrt();
+    // ∇√(dᵀ m d) = m d / s; the distance to the level 1 is (s − 1) / |∇|.
+    let g = [md[0] / s, md[1] / s];
+    let gl = g[0].hypot(g[1]);
+    Some(((s - 1.0) / gl, [g[0] / gl, g[1] / gl]))
 }
 
 /// The ellipse with the area centroid and second moments of the polygon `p`: its centre `q`
@@ -429,12 +436,7 @@ pub fn moment_ellipse(p: &[[f64; 2]]) -> Option<([f64; 2], [f64; 3])> {
 /// (x − q) = 1`: how far an outline is from the ellipse [`disk_edge`] fits.
 pub fn ellipse_misfit(p: &[[f64; 2]], q: [f64; 2], m: [f64; 3]) -> f64 {
     p.iter()
-        .map(|p| {
-            let d = [p[0] - q[0], p[1] - q[1]];
-            let md = [m[0] * d[0] + m[1] * d[1], m[1] * d[0] + m[2] * d[1]];
-            let s = (d[0] * md[0] + d[1] * md[1]).sqrt();
-            ((s - 1.0) / (md[0] / s).hypot(md[1] / s)).abs()
-        })
+        .map(|&p| ellipse_distance(p, q, m).map_or(f64::INFINITY, |(d, _)| d.abs()))
         .fold(
             0.0,
             |a: f64, b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
@@ -464,11 +466,7 @@ pub fn disk_edge(img: &Gray, outline: &[[f64; 2]], band: f64) -> Result<[f64; 2]
         .at
         .iter()
         .map(|&(x, y)| {
-            let d = [x + 0.5 - q0[0], y + 0.5 - q0[1]];
-            let md = [m0[0] * d[0] + m0[1] * d[1], m0[1] * d[0] + m0[2] * d[1]];
-            let s = (d[0] * md[0] + d[1] * md[1]).sqrt();
-            let gl = (md[0] / s).hypot(md[1] / s);
-            s > 0.0 && ((s - 1.0) / gl).abs() <= band
+            ellipse_distance([x + 0.5, y + 0.5], q0, m0).is_some_and(|(d, _)| d.abs() <= band)
         })
         .collect();
     let mut k = keep.iter();
