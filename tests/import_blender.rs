@@ -677,3 +677,131 @@ bpy.ops.wm.save_as_mainfile(filepath="user.blend")
         );
     }
 }
+
+/// Filled objects (issue 37): poser's own tank and jar come back from its saved .blend as the
+/// same filled box and sphere, their water exact; in a user's file (a camera in air) a volume
+/// alone on a box no camera is inside is a tank whose faces do not refract (its index is the
+/// air's), and a Glass BSDF sphere around a volume is a jar of that water, of index IOR; a
+/// volume box around the camera stays the scene's water.
+#[test]
+fn volumes_in_boxes_and_spheres_away_from_the_camera_import_as_filled_objects() {
+    use glam::DVec3;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+
+    // poser → .blend → poser.
+    let scene = d.join("tank.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "{}\n[[objects]]\nname = \"tank\"\nshape = \"box\"\nsize = [0.4, 0.3, 0.2]\n\
+             position = [0.3, 0.2, -4.5]\nrotation = [10.0, 20.0, 30.0]\n\
+             fill = {{ absorption = [0.6, 0.15, 0.1], scattering = 1.5, g = 0.8, ior = 1.36 }}\n\
+             [[objects]]\nname = \"jar\"\nshape = \"sphere\"\nradius = 0.15\n\
+             position = [-0.5, 0.35, -4.7]\nfill = {{ jerlov = \"3C\" }}\n",
+            include_str!("canonical/sun_seabed.toml")
+        ),
+    )
+    .unwrap();
+    assert_eq!(round_trip(&scene, d), Ok(None));
+    let model = poser::scene::load(&scene, &[]).unwrap().model;
+    let back = poser::scene::load(&d.join("imported.toml"), &[])
+        .map_err(|e| e.render())
+        .unwrap()
+        .model;
+    for name in ["tank", "jar"] {
+        let a = model.objects.iter().find(|o| o.name == name).unwrap();
+        let b = back.objects.iter().find(|o| o.name == name);
+        let b = b.unwrap_or_else(|| panic!("{name} not imported: {:?}", back.objects));
+        let (fa, fb) = (a.material.fill.as_ref().unwrap(), b.material.fill.as_ref());
+        let fb = fb.unwrap_or_else(|| panic!("{name} is not filled: {:?}", b.material));
+        assert_eq!(fa.absorption, fb.absorption, "{name}");
+        assert_eq!(fa.scattering, fb.scattering, "{name}");
+        assert_eq!(fa.ior, fb.ior, "{name}");
+        assert_eq!(
+            format!("{:?}", fa.phase),
+            format!("{:?}", fb.phase),
+            "{name}"
+        );
+        assert!((a.pose.translation - b.pose.translation).length() < 1e-6);
+    }
+
+    // A user's laboratory: a camera in air, a tank of turbid water (a volume alone on a cube)
+    // and a glass jar of it, and a sea box around a second scene's camera.
+    bpy_script(
+        d,
+        r#"
+import bpy, math
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scene = bpy.context.scene
+cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+scene.collection.objects.link(cam)
+cam.location = (0.0, -3.0, 0.5)
+cam.rotation_euler = (math.radians(90.0), 0.0, 0.0)
+scene.camera = cam
+
+def volume(name, glass_ior=None):
+    m = bpy.data.materials.new(name)
+    m.use_nodes = True
+    nodes = m.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    out = nodes["Material Output"]
+    s = nodes.new("ShaderNodeVolumeScatter")
+    s.inputs["Density"].default_value = 0.8
+    s.inputs["Anisotropy"].default_value = 0.7
+    a = nodes.new("ShaderNodeVolumeAbsorption")
+    a.inputs["Color"].default_value = (0.5, 0.8, 0.9, 1.0)
+    a.inputs["Density"].default_value = 0.4
+    add = nodes.new("ShaderNodeAddShader")
+    m.node_tree.links.new(s.outputs[0], add.inputs[0])
+    m.node_tree.links.new(a.outputs[0], add.inputs[1])
+    m.node_tree.links.new(add.outputs[0], out.inputs["Volume"])
+    if glass_ior is not None:
+        g = nodes.new("ShaderNodeBsdfGlass")
+        g.inputs["IOR"].default_value = glass_ior
+        g.inputs["Roughness"].default_value = 0.0
+        m.node_tree.links.new(g.outputs[0], out.inputs["Surface"])
+    return m
+
+bpy.ops.mesh.primitive_cube_add(size=2.0, location=(0.0, 0.0, 0.5))
+tank = bpy.context.object
+tank.name = "Tank"
+tank.scale = (1.0, 0.5, 0.5)
+tank.data.materials.append(volume("Turbid"))
+bpy.ops.mesh.primitive_uv_sphere_add(radius=0.2, location=(1.5, 0.0, 0.3))
+bpy.context.object.name = "Jar"
+bpy.context.object.data.materials.append(volume("Jar water", 1.33))
+bpy.ops.wm.save_as_mainfile(filepath="lab.blend")
+"#,
+    );
+    let toml = d.join("lab.toml");
+    let out = import(&d.join("lab.blend"), &toml);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let text = std::fs::read_to_string(&toml).unwrap();
+    let m = poser::scene::load(&toml, &[])
+        .map_err(|e| e.render())
+        .unwrap()
+        .model;
+    assert!(m.water.is_none(), "the camera is in air:\n{text}");
+    let tank = m.objects.iter().find(|o| o.name == "Tank").expect(&text);
+    let f = tank.material.fill.as_ref().expect(&text);
+    let want_a = [0.5, 0.2, 0.1].map(|c| c * 0.4);
+    for c in 0..3 {
+        assert!((f.scattering[c] - 0.64).abs() < 1e-6, "{text}");
+        assert!((f.absorption[c] - want_a[c]).abs() < 1e-6, "{text}");
+        assert!((f.ior[c] - 1.0).abs() < 1e-12, "{text}");
+    }
+    let poser::model::Shape::Box { size } = tank.shape else {
+        panic!("{:?}", tank.shape)
+    };
+    let size = size * tank.scale;
+    assert!((size - DVec3::new(2.0, 1.0, 1.0)).abs().max_element() < 1e-5);
+    let jar = m.objects.iter().find(|o| o.name == "Jar").expect(&text);
+    let f = jar.material.fill.as_ref().expect(&text);
+    assert!(f.ior.iter().all(|n| (n - 1.33).abs() < 1e-6), "{:?}", f.ior);
+    assert!(matches!(jar.shape, poser::model::Shape::Sphere { .. }));
+    for want in ["a volume alone on a box", "IOR 1.3300"] {
+        assert!(text.contains(want), "{want}:\n{text}");
+    }
+}

@@ -275,13 +275,16 @@ def surface_of(mat, r, where):
     if surf is None and vol is not None:
         v = volume_of(vol, r, where)
         return ("volume", v) if v is not None else ("skip", None)
-    if vol is not None:
-        r.note(where, "a volume inside a visible surface is not imported")
     if surf is None:
         return ("skip", None)
     t = surf.bl_idname
     if t in ("ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction"):
+        # A volume inside glass fills the object (`fill_of`).
         return ("glass", float(surf.inputs["IOR"].default_value))
+    if vol is not None:
+        r.note(where, "a volume inside a visible surface that is not glass is not imported",
+               "a Glass or Refraction BSDF around a volume, or a volume alone, is a filled "
+               "object (docs/import.md)")
     if t in ("ShaderNodeBsdfPrincipled", "ShaderNodeBsdfDiffuse"):
         key = "Base Color" if t == "ShaderNodeBsdfPrincipled" else "Color"
         inp = surf.inputs[key]
@@ -474,6 +477,11 @@ def read(bpy, blend, work):
         if kind == "housing":
             r.port_glass = True
             continue
+        if kind == "volume" and o.name != "poser_water":
+            f = volume_solid(r, o, value, cam_centres, bpy.context.evaluated_depsgraph_get(), where)
+            if f is not None:
+                glass.append(f)
+                continue
         if kind == "volume" or o.name == "poser_water":
             water = water_of(r, o, mats, value, water, where)
             continue
@@ -488,6 +496,9 @@ def read(bpy, blend, work):
             else:
                 g = glass_box(r, o, mats[0], bpy.context.evaluated_depsgraph_get(), where)
                 if g is not None:
+                    fill = fill_of(r, mats[0], where)
+                    if fill is not None:
+                        g["fill"] = fill
                     glass.append(g)
             continue
         if kind != "diffuse":
@@ -614,6 +625,20 @@ def glass_box(r, o, mat, depsgraph, where):
     if ior is None:
         r.note(where, f"this glass object is not imported: {why}", help_)
         return None
+    solid = solid_of(r, o, depsgraph, where)
+    if solid is None:
+        r.note(where, "this glass object is not imported: its mesh is neither a box nor a sphere",
+               help_)
+        return None
+    return {**solid, "ior": ior}
+
+
+def solid_of(r, o, depsgraph, where):
+    """The mesh of `o` as a box (every vertex at a corner of its bounding box in the object's
+    frame, all eight corners used): {"name", "cube": world matrix of the cube [-1, 1]^3,
+    row-major}; or as a sphere (every vertex, at least 32, at one distance from its bounding
+    box's centre, the box a cube): {"name", "sphere": world matrix of the unit sphere,
+    "vertices"}; else None."""
     ev = o.evaluated_get(depsgraph)
     me = ev.to_mesh()
     try:
@@ -625,9 +650,7 @@ def glass_box(r, o, mat, depsgraph, where):
     exact = o.get("poser_vertices")
     if exact is not None and len(exact) == local.size:
         local = r.shadow(o, "poser_vertices", local.ravel(), where).reshape(-1, 3)
-    not_solid = "this glass object is not imported: its mesh is neither a box nor a sphere"
     if len(local) < 8:
-        r.note(where, not_solid, help_)
         return None
     lo, hi = local.min(axis=0), local.max(axis=0)
     ext = hi - lo
@@ -639,17 +662,77 @@ def glass_box(r, o, mat, depsgraph, where):
     if np.min(ext) > tol and np.all(at_lo | at_hi) and len(corners) == 8:
         cube = np.diag([0.5 * ext[0], 0.5 * ext[1], 0.5 * ext[2], 1.0])
         cube[:3, 3] = centre
-        return {"name": name, "cube": (r.world(o, 0) @ cube).tolist(), "ior": ior}
+        return {"name": name, "cube": (r.world(o, 0) @ cube).tolist()}
     radius = 0.5 * float(ext[0])
     dist = np.linalg.norm(local - centre, axis=1)
     if (len(local) >= 32 and radius > tol and np.all(np.abs(ext - 2.0 * radius) <= 2.0 * tol)
             and np.all(np.abs(dist - radius) <= tol)):
         ball = np.diag([radius, radius, radius, 1.0])
         ball[:3, 3] = centre
-        return {"name": name, "sphere": (r.world(o, 0) @ ball).tolist(), "ior": ior,
+        return {"name": name, "sphere": (r.world(o, 0) @ ball).tolist(),
                 "vertices": len(local)}
-    r.note(where, not_solid, help_)
     return None
+
+
+def fill_of(r, mat, where):
+    """The volume inside a glass object's Glass BSDF (a filled object: a tank, a jar), as
+    `water_of` reads a water (poser's exact values from the material's `poser_fill` when it
+    saved them), or None."""
+    nt = mat.node_tree if mat is not None else None
+    out = output_node(nt) if nt is not None else None
+    vol = linked(out.inputs.get("Volume")) if out is not None else None
+    if vol is None:
+        return None
+    v = volume_of(vol, r, where)
+    if v is None:
+        return None
+    holder = mat.get("poser_fill")
+    out = coefficients(r, holder, v, where)
+    if holder is not None and "ior" in holder:
+        out["ior"] = [float(x) for x in holder["ior"]]
+    return out
+
+
+def volume_solid(r, o, value, cam_centres, depsgraph, where):
+    """A volume alone on a box or sphere mesh that no camera is inside or above (a tank seen
+    through its side, a jar): a filled object without refraction at its faces ("ior": 1, the
+    index relative to what is around it, as Cycles' volume boundary has none), or None (the
+    scene's water, `water_of`)."""
+    if value is None:
+        return None
+    solid = solid_of(r, o, depsgraph, where)
+    if solid is None:
+        return None
+    m = np.asarray(solid.get("cube") or solid.get("sphere"), dtype=float)
+    inv = np.linalg.inv(m)
+    corners = np.array([[x, y, z, 1.0] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    world = corners @ m.T
+    lo, hi = world[:, :3].min(axis=0), world[:, :3].max(axis=0)
+    for c in cam_centres:
+        local = inv @ np.append(np.asarray(c, dtype=float), 1.0)
+        inside = (np.all(np.abs(local[:3]) <= 1.0) if "cube" in solid
+                  else float(np.linalg.norm(local[:3])) <= 1.0)
+        above = c[2] >= hi[2] and np.all(c[:2] >= lo[:2]) and np.all(c[:2] <= hi[:2])
+        if inside or above:
+            return None
+    return {**solid, "ior": 1.0, "fill": coefficients(r, None, value, where)}
+
+
+def coefficients(r, holder, value, where):
+    """{"absorption", "scattering", "g"[, "ff"]} of the volume `value` (`volume_of`), poser's
+    exact values from `holder` where they agree with Blender's."""
+    sa, ss, g = value
+    out = {"absorption": r.shadow(holder, "absorption", sa, where).tolist(),
+           "scattering": r.shadow(holder, "scattering", ss, where).tolist()}
+    if isinstance(g, dict):
+        out["ff"] = {"n": float(r.shadow(holder, "particle_index", g["n"], where)),
+                     "backscatter": float(r.shadow(holder, "backscatter", g["backscatter"], where))}
+        if holder is not None and "junge_slope" in holder:
+            out["ff"]["mu"] = float(holder["junge_slope"])
+        out["g"] = 0.0
+    else:
+        out["g"] = float(r.shadow(holder, "g", g, where))
+    return out
 
 
 def _ancestors(o):
@@ -856,21 +939,8 @@ def water_of(r, o, mats, value, water, where):
             holder = m["poser_water"]
     if value is None and holder is None:
         return water
-    sa, ss, g = value if value is not None else ([0.0] * 3, [0.0] * 3, 0.0)
-    out = {
-        "absorption": r.shadow(holder, "absorption", sa, where).tolist(),
-        "scattering": r.shadow(holder, "scattering", ss, where).tolist(),
-        "top": None,
-        "ior": None,
-    }
-    if isinstance(g, dict):
-        out["ff"] = {"n": float(r.shadow(holder, "particle_index", g["n"], where)),
-                     "backscatter": float(r.shadow(holder, "backscatter", g["backscatter"], where))}
-        if holder is not None and "junge_slope" in holder:
-            out["ff"]["mu"] = float(holder["junge_slope"])
-        out["g"] = 0.0
-    else:
-        out["g"] = float(r.shadow(holder, "g", g, where))
+    value = value if value is not None else ([0.0] * 3, [0.0] * 3, 0.0)
+    out = {**coefficients(r, holder, value, where), "top": None, "ior": None}
     if holder is not None and "ior" in holder:
         out["ior"] = [float(x) for x in holder["ior"]]
     if holder is not None and "surface" in holder:

@@ -9,6 +9,7 @@
 //! | perspective camera: lens, sensor fit, shift, depth of field | `fx`, `principal_point`, `focal_length`, `f_number`, `focus_distance` |
 //! | point, spot, area (W) and sun (W/m²) lights; the world's background | `[[lights]]` (W/sr, W/(m²·sr)), `[sun]`, an ambient light |
 //! | a volume-only material on a mesh (Volume Absorption/Scatter/Coefficients, Principled Volume), or the world's volume | `[water]`; a mesh whose top is at z = 0 gives a flat sea surface; a box elsewhere moves the scene so that its top is at z = 0 |
+//! | a box or sphere holding a volume (alone, or inside smooth clear glass) that no camera is inside or above | a filled object (`fill = { … }`, its index the surroundings' or the glass's IOR times it) |
 //! | meshes with a Principled or Diffuse BSDF | `.glb` assets, albedo = base colour |
 //! | an Image Texture (UV map, a still image) feeding the base colour | a textured `.glb` and its image as a PNG beside it |
 //! | glass at a camera | a note with the `[camera.port]` to declare; without it `[camera.port] type = "none"` |
@@ -74,7 +75,7 @@ struct ReadCamera {
     rig_from_camera: [[f64; 4]; 4],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Clone)]
 struct ReadWater {
     absorption: [f64; 3],
     scattering: [f64; 3],
@@ -87,7 +88,7 @@ struct ReadWater {
     surface: Option<String>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Clone)]
 struct ReadFf {
     n: f64,
     backscatter: f64,
@@ -131,8 +132,12 @@ struct ReadGlass {
     /// The sphere mesh's vertex count (for the note).
     #[serde(default)]
     vertices: usize,
-    /// The Glass BSDF's IOR: in Cycles the index relative to the medium around the glass.
+    /// The Glass BSDF's IOR: in Cycles the index relative to the medium around the glass
+    /// (1 for a volume alone, whose faces do not refract).
     ior: f64,
+    /// The volume inside it: a filled object (a tank, a jar), not glass.
+    #[serde(default)]
+    fill: Option<ReadWater>,
 }
 
 #[derive(Deserialize)]
@@ -411,32 +416,26 @@ fn camera_tables(read: &Read, t: &mut Table) {
     }
 }
 
-/// The `[water]` and `[site]` tables of the volume `w` (`default_n`: the index written when it
-/// has none). Returns whether the sea has a flat surface at z = 0.
-fn water_tables(
-    w: &ReadWater,
-    default_n: f64,
-    poses: &[(DMat3, DVec3)],
-    shown: &str,
-    notes: &mut Vec<Note>,
-    t: &mut Table,
-) -> Result<bool, String> {
+/// A volume's coefficients and phase function as `[water]`'s keys (a filled object's `fill`
+/// has the same): `absorption`, `scattering`, and `g`, or Fournier–Forand's `phase`,
+/// `particle_index` and `junge_slope` (Cycles gives the backscatter fraction; poser the Junge
+/// slope that yields it). `at` locates an error.
+fn medium_table(w: &ReadWater, at: &str) -> Result<Table, String> {
     if !finite(&w.absorption) || !finite(&w.scattering) || !w.g.is_finite() {
-        return Err(format!("{shown}: the water's coefficients are not finite"));
+        return Err(format!("{at}: the volume's coefficients are not finite"));
     }
     let mut wt = Table::new();
     wt.insert(F::Water::absorption.into(), arr(w.absorption));
     wt.insert(F::Water::scattering.into(), arr(w.scattering));
     match &w.ff {
         Some(ff) => {
-            // Cycles gives the backscatter fraction; poser the Junge slope that yields it.
             let mu = ff
                 .mu
                 .filter(|m| *m > 3.0 && *m <= 5.0)
                 .or_else(|| junge_slope(ff.n, ff.backscatter));
             let Some(mu) = mu else {
                 return Err(format!(
-                    "{shown}: water: no Junge slope in (3, 5] gives a Fournier–Forand backscatter fraction of {} with particle index {}",
+                    "{at}: no Junge slope in (3, 5] gives a Fournier–Forand backscatter fraction of {} with particle index {}",
                     ff.backscatter, ff.n
                 ));
             };
@@ -451,6 +450,20 @@ fn water_tables(
             wt.insert(F::Water::g.into(), Value::Float(w.g.clamp(-0.999, 0.999)));
         }
     }
+    Ok(wt)
+}
+
+/// The `[water]` and `[site]` tables of the volume `w` (`default_n`: the index written when it
+/// has none). Returns whether the sea has a flat surface at z = 0.
+fn water_tables(
+    w: &ReadWater,
+    default_n: f64,
+    poses: &[(DMat3, DVec3)],
+    shown: &str,
+    notes: &mut Vec<Note>,
+    t: &mut Table,
+) -> Result<bool, String> {
+    let mut wt = medium_table(w, &format!("{shown}: water"))?;
     match w.ior {
         Some(n) => {
             wt.insert(F::Water::ior.into(), arr(n));
@@ -749,8 +762,14 @@ fn glass_object(
     let here = || Some(at.to_string());
     let help = "poser imports boxes and spheres of a catalogue glass as glass objects \
                 (docs/scenes.md, \"Glass objects\")";
+    let help_fill = "poser imports a volume in a box or sphere that no camera is inside or above \
+                     as a filled object (docs/scenes.md, \"Filled objects\")";
+    let (what, help) = match g.fill {
+        Some(_) => ("filled object", help_fill),
+        None => ("glass object", help),
+    };
     let Some(rows) = g.cube.or(g.sphere) else {
-        return Err(Note::new(here(), "this glass object is not imported: no shape").help(help));
+        return Err(Note::new(here(), format!("this {what} is not imported: no shape")).help(help));
     };
     let mut m = mat(&rows);
     m.w_axis.z += dz;
@@ -765,7 +784,7 @@ fn glass_object(
     if !finite || sheared || !(len.min_element() > 0.0) {
         return Err(Note::new(
             here(),
-            "this glass object is not imported: its transform shears it",
+            format!("this {what} is not imported: its transform shears it"),
         )
         .help(help));
     }
@@ -775,7 +794,7 @@ fn glass_object(
         return Err(Note::new(
             here(),
             format!(
-                "this glass object is not imported: a sphere scaled unevenly ({:.4} × {:.4} × \
+                "this {what} is not imported: a sphere scaled unevenly ({:.4} × {:.4} × \
                  {:.4}), an ellipsoid",
                 len.x, len.y, len.z
             ),
@@ -785,6 +804,59 @@ fn glass_object(
     // Below the surface (z = 0) the medium around the glass is the water.
     let n_water = n_water.filter(|_| m.w_axis.z < 0.0);
     let n = g.ior * n_water.unwrap_or(1.0);
+    let mut o = Table::new();
+    let mut says = Vec::new();
+    if ball {
+        says.push(format!(
+            "its mesh of {} vertices on a sphere is imported as the exact sphere",
+            g.vertices
+        ));
+        o.insert(F::Object::shape.into(), Value::String("sphere".into()));
+        o.insert(
+            F::Object::radius.into(),
+            Value::Float(len.element_sum() / 3.0),
+        );
+    } else {
+        o.insert(F::Object::shape.into(), Value::String("box".into()));
+        o.insert(F::Object::size.into(), arr((2.0 * len).to_array()));
+        o.insert(F::Object::rotation.into(), arr(euler_xyz(frame)));
+    }
+    o.insert(
+        F::Object::position.into(),
+        arr(m.w_axis.truncate().to_array()),
+    );
+    if let Some(w) = &g.fill {
+        let mut f = medium_table(w, at).map_err(|e| Note::new(None, e))?;
+        let around = match n_water {
+            Some(w) => format!("the water's ({w:.4})"),
+            None => "the air's (1)".to_string(),
+        };
+        match w.ior {
+            // poser's own file: the fill's index as poser wrote it.
+            Some(ior) => {
+                f.insert(F::FillTable::ior.into(), arr(ior));
+            }
+            None if g.ior == 1.0 => {
+                says.push(format!(
+                    "a volume alone on a {}: its faces do not refract, so its water's index is \
+                     {around}",
+                    if ball { "sphere" } else { "box" }
+                ));
+                f.insert(F::FillTable::ior.into(), Value::Float(n));
+            }
+            None => {
+                says.push(format!(
+                    "the Glass BSDF around its volume has IOR {:.4}, relative to {around}: its \
+                     water's index is {n:.4}",
+                    g.ior
+                ));
+                f.insert(F::FillTable::ior.into(), Value::Float(n));
+            }
+        }
+        o.insert(F::Object::fill.into(), Value::Table(f));
+        let note = (!says.is_empty()).then(|| Note::new(here(), says.join("; ")).help(help_fill));
+        return Ok((o, note));
+    }
     let relative = match n_water {
         Some(w) => format!(
             "Cycles' IOR {:.4} is the index relative to the water ({w:.4}): glass of index \
@@ -805,35 +877,11 @@ fn glass_object(
         )
         .help(help));
     };
-    let mut says = Vec::new();
     if (n_g - n).abs() > 1e-3 || n_water.is_some() {
-        says.push(format!(
-            "{relative}, imported as the catalogue glass {glass} ({n_g:.4} in green)"
-        ));
-    }
-    let mut o = Table::new();
-    if ball {
-        says.push(format!(
-            "its mesh of {} vertices on a sphere is imported as the exact sphere",
-            g.vertices
-        ));
-        o.insert(F::Object::shape.into(), Value::String("sphere".into()));
-        o.insert(
-            F::Object::radius.into(),
-            Value::Float(len.element_sum() / 3.0),
+        says.insert(
+            0,
+            format!("{relative}, imported as the catalogue glass {glass} ({n_g:.4} in green)"),
         );
-        o.insert(
-            F::Object::position.into(),
-            arr(m.w_axis.truncate().to_array()),
-        );
-    } else {
-        o.insert(F::Object::shape.into(), Value::String("box".into()));
-        o.insert(F::Object::size.into(), arr((2.0 * len).to_array()));
-        o.insert(
-            F::Object::position.into(),
-            arr(m.w_axis.truncate().to_array()),
-        );
-        o.insert(F::Object::rotation.into(), arr(euler_xyz(frame)));
     }
     o.insert(F::Object::glass.into(), Value::String(glass.to_string()));
     let note = (!says.is_empty()).then(|| Note::new(here(), says.join("; ")).help(help));

@@ -810,13 +810,7 @@ def _build_water(built, coll, desc, shells, n_w, ref, base_dir):
     me = _mesh_from("poser_water", mesh, smooth=True)
     boundary = _volume_only_material("water boundary", water)
     boundary["poser_water"] = {
-        "absorption": [float(x) for x in water["absorption"]],
-        "scattering": [float(x) for x in water["scattering"]],
-        "g": float(water["phase"].get("g", 0.0)),
-        "particle_index": float(water["phase"].get("n", 0.0)),
-        "junge_slope": float(water["phase"].get("mu", 0.0)),
-        "backscatter": float(water["phase"].get("backscatter", 0.0)),
-        "ior": [float(x) for x in water["ior"]],
+        **_exact_medium(water),
         "surface": str(desc.get("surface", {}).get("kind", "flat")),
     }
     me.materials.append(boundary)
@@ -1050,7 +1044,23 @@ def _glass_object_material(built, name, glass, desc, fill=None):
     ref = int(desc.get("reference_channel", 1))
     mat, node = _glass_material(f"glass:{name}", n_g[ref] / n_out[ref], fill)
     built.glass_nodes.append((node, lambda c, g=n_g, w=n_out: g[c] / w[c]))
+    if fill is not None:
+        mat["poser_fill"] = _exact_medium(fill)
     return mat
+
+
+def _exact_medium(water):
+    """A water's or filled object's values in f64, kept on its material for `poser import`
+    (Blender's node sockets hold float32)."""
+    return {
+        "absorption": [float(x) for x in water["absorption"]],
+        "scattering": [float(x) for x in water["scattering"]],
+        "g": float(water["phase"].get("g", 0.0)),
+        "particle_index": float(water["phase"].get("n", 0.0)),
+        "junge_slope": float(water["phase"].get("mu", 0.0)),
+        "backscatter": float(water["phase"].get("backscatter", 0.0)),
+        "ior": [float(x) for x in water["ior"]],
+    }
 
 
 def _solid(built, base_dir, path):
