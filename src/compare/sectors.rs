@@ -455,19 +455,73 @@ pub fn ellipse_misfit(p: &[[f64; 2]], q: [f64; 2], m: [f64; 3]) -> f64 {
 /// px from the outline's).
 pub fn disk_edge(img: &Gray, outline: &[[f64; 2]], band: f64) -> Result<[f64; 2], Miss> {
     let (q0, m0) = moment_ellipse(outline).ok_or(Miss::NoContrast)?;
+    // The shape's parameters in units of m0's scale, so that all five are of order 1.
+    let scale = m0[0].abs().max(m0[2].abs());
+    let shape = |p: &[f64; 5]| [p[2] * scale, p[3] * scale, p[4] * scale];
+    let p = edge_fit(
+        img,
+        outline,
+        q0,
+        band,
+        |x, y| ellipse_distance([x, y], q0, m0).map(|(d, _)| d),
+        [q0[0], q0[1], m0[0] / scale, m0[1] / scale, m0[2] / scale],
+        [1e-4, 1e-4, 1e-6, 1e-6, 1e-6],
+        |x, y, p| ellipse_outside(x, y, [p[0], p[1]], shape(p)),
+    )?;
+    if !(p[2] * p[4] > p[3] * p[3]) {
+        return Err(Miss::NoContrast);
+    }
+    Ok([p[0], p[1]])
+}
+
+/// [`disk_edge`] for a disk whose exact outline is no ellipse (seen through waves, which bend
+/// it by pixels): the outline polygon itself, shifted, fitted to the pixels within `band` px
+/// of it (only the shift, 2 parameters; the shape is the truth's). Returns the shifted
+/// polygon's area centroid, comparable with the exact one. `outline` must be a simple polygon
+/// fine enough that its chords follow the edge (64 points around a disk of tens of pixels).
+pub fn outline_edge(img: &Gray, outline: &[[f64; 2]], band: f64) -> Result<[f64; 2], Miss> {
+    let q0 = super::detect::polygon_centroid(outline).ok_or(Miss::NoContrast)?;
+    let p = edge_fit(
+        img,
+        outline,
+        q0,
+        band,
+        |x, y| polygon_distance([x, y], outline),
+        [0.0, 0.0],
+        [1e-4, 1e-4],
+        |x, y, t| polygon_outside(x - t[0], y - t[1], outline),
+    )?;
+    Ok([q0[0] + p[0], q0[1] + p[1]])
+}
+
+/// The fit shared by [`disk_edge`] and [`outline_edge`]: the pixels whose centres lie within
+/// `band` px of the expected edge (`distance(x, y)`, signed, of a pixel centre), the model's
+/// parameters from `p0` (first two: the centre, or the shift, in px; `steps` for the
+/// derivatives) and the share of each pixel outside the disk, `outside(x, y, p)` (the pixel
+/// square's corner), fitted by Levenberg–Marquardt with the levels linear
+/// ([`Window::residuals`] about `centre`), then twice again without the pixels more than 4
+/// robust spreads off (a render's rare bright pixels would pull a least-squares edge).
+#[allow(clippy::too_many_arguments)]
+fn edge_fit<const N: usize>(
+    img: &Gray,
+    outline: &[[f64; 2]],
+    centre: [f64; 2],
+    band: f64,
+    distance: impl Fn(f64, f64) -> Option<f64>,
+    p0: [f64; N],
+    steps: [f64; N],
+    outside: impl Fn(f64, f64, &[f64; N]) -> f64,
+) -> Result<[f64; N], Miss> {
     let reach = outline
         .iter()
-        .map(|p| (p[0] - q0[0]).hypot(p[1] - q0[1]))
+        .map(|p| (p[0] - centre[0]).hypot(p[1] - centre[1]))
         .fold(0.0, f64::max)
         + band;
-    let mut win = Window::annulus(img, q0, 0.0, reach)?;
-    // Keep the pixels whose centres lie within `band` px of the expected edge.
+    let mut win = Window::annulus(img, centre, 0.0, reach)?;
     let keep: Vec<bool> = win
         .at
         .iter()
-        .map(|&(x, y)| {
-            ellipse_distance([x + 0.5, y + 0.5], q0, m0).is_some_and(|(d, _)| d.abs() <= band)
-        })
+        .map(|&(x, y)| distance(x + 0.5, y + 0.5).is_some_and(|d| d.abs() <= band))
         .collect();
     let mut k = keep.iter();
     win.at.retain(|_| *k.next().unwrap_or(&false));
@@ -476,21 +530,11 @@ pub fn disk_edge(img: &Gray, outline: &[[f64; 2]], band: f64) -> Result<[f64; 2]
     if win.at.len() < 32 {
         return Err(Miss::NoContrast);
     }
-    // The shape's parameters in units of m0's scale, so that all five are of order 1.
-    let scale = m0[0].abs().max(m0[2].abs());
-    let fit = |win: &Window, p: &[f64; 5]| {
-        let q = [p[0], p[1]];
-        let m = [p[2] * scale, p[3] * scale, p[4] * scale];
-        win.residuals(q, |x, y| ellipse_outside(x, y, q, m))
-    };
-    let mut p = [q0[0], q0[1], m0[0] / scale, m0[1] / scale, m0[2] / scale];
-    // Fitted, then twice fitted again without the pixels more than 4 robust spreads off: a
-    // render's rare bright pixels (light along rare paths) would pull a least-squares edge.
+    let fit = |win: &Window, p: &[f64; N]| win.residuals(centre, |x, y| outside(x, y, p));
+    let mut p = p0;
     for round in 0..3 {
-        p = levenberg_marquardt(p, [1e-4, 1e-4, 1e-6, 1e-6, 1e-6], |p| {
-            fit(&win, p).map(|f| f.0)
-        })
-        .ok_or(Miss::NoContrast)?;
+        p = levenberg_marquardt(p, steps, |p| fit(&win, p).map(|f| f.0))
+            .ok_or(Miss::NoContrast)?;
         if round == 2 {
             break;
         }
@@ -504,15 +548,89 @@ pub fn disk_edge(img: &Gray, outline: &[[f64; 2]], band: f64) -> Result<[f64; 2]
             return Err(Miss::NoContrast);
         }
     }
-    let q = [p[0], p[1]];
     // The contrast is fitted from thousands of pixels: found when it stands 10 standard
     // errors (about 2·spread/√n, half the pixels on either side) above zero, however noisy
-    // each pixel is.
+    // each pixel is; and the centre (or shift) within `band` px of where it was expected.
     let ratio = 20.0 / (win.at.len() as f64).sqrt();
-    if !win.found(fit(&win, &p), q, q0, band, ratio) || !(p[2] * p[4] > p[3] * p[3]) {
+    let moved = [p[0] - p0[0], p[1] - p0[1]];
+    if !win.found(fit(&win, &p), moved, [0.0, 0.0], band, ratio) {
         return Err(Miss::NoContrast);
     }
-    Ok(q)
+    Ok(p)
+}
+
+/// The signed distance (px, positive outside) from `p` to the polygon `poly`: the distance
+/// to its nearest edge, negative inside (by the crossing rule).
+fn polygon_distance(p: [f64; 2], poly: &[[f64; 2]]) -> Option<f64> {
+    if poly.len() < 3 {
+        return None;
+    }
+    let mut best = f64::INFINITY;
+    let mut inside = false;
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+        let l2 = ex * ex + ey * ey;
+        let t = if l2 > 0.0 {
+            (((p[0] - a[0]) * ex + (p[1] - a[1]) * ey) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        best = best.min((p[0] - a[0] - t * ex).hypot(p[1] - a[1] - t * ey));
+        if (a[1] > p[1]) != (b[1] > p[1])
+            && p[0] < a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0])
+        {
+            inside = !inside;
+        }
+    }
+    Some(if inside { -best } else { best })
+}
+
+/// The share of the unit pixel square at `(x, y)` outside the simple polygon `poly`: exact, by
+/// clipping the polygon with the square's four sides (Sutherland–Hodgman; the square is
+/// convex, so a concave polygon's clipped area is right too). Pixels whose centre is more than
+/// 0.75 px from the edge are wholly in or out.
+fn polygon_outside(x: f64, y: f64, poly: &[[f64; 2]]) -> f64 {
+    let Some(d) = polygon_distance([x + 0.5, y + 0.5], poly) else {
+        return 0.0;
+    };
+    if d >= 0.75 {
+        return 1.0;
+    }
+    if d <= -0.75 {
+        return 0.0;
+    }
+    let mut clipped: Vec<[f64; 2]> = poly.to_vec();
+    for (n, c) in [
+        ([1.0, 0.0], x),
+        ([-1.0, 0.0], -(x + 1.0)),
+        ([0.0, 1.0], y),
+        ([0.0, -1.0], -(y + 1.0)),
+    ] {
+        let s = |p: [f64; 2]| n[0] * p[0] + n[1] * p[1] - c;
+        let mut out = Vec::with_capacity(clipped.len() + 2);
+        for i in 0..clipped.len() {
+            let (a, b) = (clipped[i], clipped[(i + 1) % clipped.len()]);
+            let (sa, sb) = (s(a), s(b));
+            if sa >= 0.0 {
+                out.push(a);
+            }
+            if (sa >= 0.0) != (sb >= 0.0) {
+                let t = sa / (sa - sb);
+                out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
+            }
+        }
+        clipped = out;
+        if clipped.len() < 3 {
+            return 1.0;
+        }
+    }
+    let mut a2 = 0.0;
+    for i in 0..clipped.len() {
+        let (p, r) = (clipped[i], clipped[(i + 1) % clipped.len()]);
+        a2 += p[0] * r[1] - r[0] * p[1];
+    }
+    (1.0 - 0.5 * a2.abs()).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]
@@ -754,6 +872,50 @@ mod tests {
             data: &flat,
         };
         assert_eq!(disk_edge(&g, &guess, 5.0), Err(Miss::NoContrast));
+    }
+
+    #[test]
+    fn a_disk_bent_by_waves_is_located_by_its_exact_outline() {
+        // A disk's outline bent out of any ellipse (radius 16 px, ±2.4 px and ±1.3 px waves
+        // around it), under a veil, drawn 0.37, −0.61 px from where its exact outline (64
+        // points) says.
+        let r = |t: f64| 16.0 * (1.0 + 0.15 * (3.0 * t).sin() + 0.08 * (5.0 * t + 1.0).cos());
+        let (c, shift) = ([40.2, 38.7], [0.37, -0.61]);
+        let veil = |x: f64, y: f64| 0.3 + 0.004 * x - 0.002 * y;
+        let data = supersample((80, 78), [c[0] + shift[0], c[1] + shift[1]], 16, |x, y| {
+            let inside = x.hypot(y) < r(y.atan2(x));
+            (if inside { 0.05 } else { 0.9 }) + veil(x, y)
+        });
+        let g = Gray {
+            width: 80,
+            height: 78,
+            data: &data,
+        };
+        let outline: Vec<[f64; 2]> = (0..64)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / 64.0;
+                [c[0] + r(t) * t.cos(), c[1] + r(t) * t.sin()]
+            })
+            .collect();
+        let (q0, m0) = moment_ellipse(&outline).unwrap();
+        assert!(ellipse_misfit(&outline, q0, m0) > 1.0, "not an ellipse");
+        let want = super::super::detect::polygon_centroid(&outline).unwrap();
+        let q = outline_edge(&g, &outline, 4.0).unwrap();
+        assert!(
+            (q[0] - want[0] - shift[0]).abs() < 0.01 && (q[1] - want[1] - shift[1]).abs() < 0.01,
+            "{q:?} for {want:?} + {shift:?}"
+        );
+        // The polygon's coverage of a pixel is exact: a square half inside a straight edge.
+        let square = [[0.5, -5.0], [9.0, -5.0], [9.0, 5.0], [0.5, 5.0]];
+        assert!((polygon_outside(0.0, 0.0, &square) - 0.5).abs() < 1e-12);
+        // A blank window has no disk.
+        let flat = vec![0.5f32; 80 * 78];
+        let g = Gray {
+            width: 80,
+            height: 78,
+            data: &flat,
+        };
+        assert_eq!(outline_edge(&g, &outline, 4.0), Err(Miss::NoContrast));
     }
 
     #[test]

@@ -1173,6 +1173,7 @@ mod tests {
             sphere: None,
             vertices: 8,
             ior: n_pmma / n_w,
+            fill: None,
         };
         let (o, note) = glass_object(&g, 0.0, Some(n_w), "x.blend: object `Block`").unwrap();
         assert_eq!(o["glass"].as_str(), Some("PMMA"));
