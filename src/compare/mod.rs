@@ -303,6 +303,10 @@ pub struct DiskView {
     /// The band of [`sectors::disk_edge`] (px either side of the outline), when the disk is
     /// [`EDGE_FIT_PX`] or more in radius and its surround holds the band.
     pub band: Option<f64>,
+    /// Whether the outline is an ellipse within [`ELLIPSE_MISFIT`] of its radius: fitted as
+    /// one ([`sectors::disk_edge`]); else (through waves) as itself, shifted
+    /// ([`sectors::outline_edge`]).
+    pub elliptic: bool,
     /// Points that must be seen for the disk to be measured (world, pixel): its centre and
     /// eight points on the edge of its white surround ([`seen`]), which a half-buried disk's
     /// surround fails.
@@ -343,7 +347,7 @@ pub fn disk_view(
         .x_axis
         .unwrap_or_else(|| d.normal.any_orthonormal_vector());
     let b = d.normal.cross(a);
-    const N: usize = 64;
+    const N: usize = 256;
     let mut r_disk: f64 = 0.0;
     let mut r_clear = f64::INFINITY;
     // The edge fit's room: the white gap between the outline and the surround's edge along
@@ -367,7 +371,7 @@ pub fn disk_view(
         let rim = d.center + d.clear_radius * s * (ct * a + st * b);
         let q = project(rim).ok()?;
         r_clear = r_clear.min(cheb(q));
-        if k % 8 == 0 {
+        if k % (N / 8) == 0 {
             probes.push((rim, q));
         }
         gap = gap.min((q[0] - p[0]).hypot(q[1] - p[1]));
@@ -376,18 +380,18 @@ pub fn disk_view(
     let half = (r_clear - 1.5).min(r_disk + 5.0);
     let window = (r_disk >= 1.5 && half >= r_disk + 2.0).then_some(half);
     // The edge fit's ellipse must be the outline's shape: not through waves, which bend one
-    // disk's outline out of any ellipse.
+    // disk's outline out of any ellipse (then the outline itself is fitted).
     let elliptic = sectors::moment_ellipse(&outline)
         .is_some_and(|(q, m)| sectors::ellipse_misfit(&outline, q, m) <= ELLIPSE_MISFIT * r_disk);
     let band = (gap - 1.5).min(5.0);
-    let band =
-        (r_disk >= EDGE_FIT_PX && elliptic && band >= 2.0 && r_min >= band + 1.0).then_some(band);
+    let band = (r_disk >= EDGE_FIT_PX && band >= 2.0 && r_min >= band + 1.0).then_some(band);
     let v = DiskView {
         centroid: c,
         radius: r_disk,
         outline,
         window,
         band,
+        elliptic,
         probes,
     };
     (v.half() > 0.0 && fits(proj, c, v.half())).then_some(v)
@@ -439,7 +443,11 @@ fn measure_disk(
                 .iter()
                 .map(|p| [p[0] - origin[0], p[1] - origin[1]])
                 .collect();
-            sectors::disk_edge(gray, &outline, band).ok()
+            if v.elliptic {
+                sectors::disk_edge(gray, &outline, band).ok()
+            } else {
+                sectors::outline_edge(gray, &outline, band).ok()
+            }
         }
         (None, Some(half)) => detect::disk_centroid(gray, local, half, dark).ok(),
         (None, None) => None,

@@ -533,8 +533,7 @@ fn edge_fit<const N: usize>(
     let fit = |win: &Window, p: &[f64; N]| win.residuals(centre, |x, y| outside(x, y, p));
     let mut p = p0;
     for round in 0..3 {
-        p = levenberg_marquardt(p, steps, |p| fit(&win, p).map(|f| f.0))
-            .ok_or(Miss::NoContrast)?;
+        p = levenberg_marquardt(p, steps, |p| fit(&win, p).map(|f| f.0)).ok_or(Miss::NoContrast)?;
         if round == 2 {
             break;
         }
