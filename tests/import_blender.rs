@@ -109,6 +109,21 @@ fn round_trip(scene: &Path, dir: &Path) -> Result<Option<String>, String> {
     Ok(None)
 }
 
+/// tests/canonical/sun_seabed.toml with `objects` (TOML) added, saved to a .blend by the
+/// Blender backend and imported back ([`round_trip`]): the model and the imported one.
+fn saved_and_back(d: &Path, objects: &str) -> (poser::model::Model, poser::model::Model) {
+    let scene = d.join("saved_and_back.toml");
+    let base = include_str!("canonical/sun_seabed.toml");
+    std::fs::write(&scene, format!("{base}\n{objects}")).unwrap();
+    assert_eq!(round_trip(&scene, d), Ok(None));
+    let model = poser::scene::load(&scene, &[]).unwrap().model;
+    let back = poser::scene::load(&d.join("imported.toml"), &[])
+        .map_err(|e| e.render())
+        .unwrap()
+        .model;
+    (model, back)
+}
+
 #[test]
 fn save_blend_then_import_gives_back_every_shipped_scene() {
     let mut done = Vec::new();
@@ -528,24 +543,13 @@ fn glass_boxes_and_spheres_import_as_glass_objects() {
     let d = dir.path();
 
     // poser → .blend → poser.
-    let scene = d.join("block.toml");
-    std::fs::write(
-        &scene,
-        format!(
-            "{}\n[[objects]]\nname = \"block\"\nshape = \"box\"\nsize = [0.4, 0.3, 0.2]\n\
-             position = [0.3, 0.2, -4.5]\nrotation = [10.0, 20.0, 30.0]\nglass = \"PMMA\"\n\
-             [[objects]]\nname = \"ball\"\nshape = \"sphere\"\nradius = 0.15\n\
-             position = [-0.5, 0.35, -4.7]\nglass = \"N-BK7\"\n",
-            include_str!("canonical/sun_seabed.toml")
-        ),
-    )
-    .unwrap();
-    assert_eq!(round_trip(&scene, d), Ok(None));
-    let model = poser::scene::load(&scene, &[]).unwrap().model;
-    let back = poser::scene::load(&d.join("imported.toml"), &[])
-        .map_err(|e| e.render())
-        .unwrap()
-        .model;
+    let (model, back) = saved_and_back(
+        d,
+        "[[objects]]\nname = \"block\"\nshape = \"box\"\nsize = [0.4, 0.3, 0.2]\n\
+         position = [0.3, 0.2, -4.5]\nrotation = [10.0, 20.0, 30.0]\nglass = \"PMMA\"\n\
+         [[objects]]\nname = \"ball\"\nshape = \"sphere\"\nradius = 0.15\n\
+         position = [-0.5, 0.35, -4.7]\nglass = \"N-BK7\"\n",
+    );
     let glass: Vec<_> = back
         .objects
         .iter()
@@ -690,25 +694,14 @@ fn volumes_in_boxes_and_spheres_away_from_the_camera_import_as_filled_objects() 
     let d = dir.path();
 
     // poser → .blend → poser.
-    let scene = d.join("tank.toml");
-    std::fs::write(
-        &scene,
-        format!(
-            "{}\n[[objects]]\nname = \"tank\"\nshape = \"box\"\nsize = [0.4, 0.3, 0.2]\n\
-             position = [0.3, 0.2, -4.5]\nrotation = [10.0, 20.0, 30.0]\n\
-             fill = {{ absorption = [0.6, 0.15, 0.1], scattering = 1.5, g = 0.8, ior = 1.36 }}\n\
-             [[objects]]\nname = \"jar\"\nshape = \"sphere\"\nradius = 0.15\n\
-             position = [-0.5, 0.35, -4.7]\nfill = {{ jerlov = \"3C\" }}\n",
-            include_str!("canonical/sun_seabed.toml")
-        ),
-    )
-    .unwrap();
-    assert_eq!(round_trip(&scene, d), Ok(None));
-    let model = poser::scene::load(&scene, &[]).unwrap().model;
-    let back = poser::scene::load(&d.join("imported.toml"), &[])
-        .map_err(|e| e.render())
-        .unwrap()
-        .model;
+    let (model, back) = saved_and_back(
+        d,
+        "[[objects]]\nname = \"tank\"\nshape = \"box\"\nsize = [0.4, 0.3, 0.2]\n\
+         position = [0.3, 0.2, -4.5]\nrotation = [10.0, 20.0, 30.0]\n\
+         fill = { absorption = [0.6, 0.15, 0.1], scattering = 1.5, g = 0.8, ior = 1.36 }\n\
+         [[objects]]\nname = \"jar\"\nshape = \"sphere\"\nradius = 0.15\n\
+         position = [-0.5, 0.35, -4.7]\nfill = { jerlov = \"3C\" }\n",
+    );
     for name in ["tank", "jar"] {
         let a = model.objects.iter().find(|o| o.name == name).unwrap();
         let b = back.objects.iter().find(|o| o.name == name);

@@ -31,10 +31,17 @@ use super::detect::{Gray, Miss};
 /// Signed distances are `n·(p − q)`, `n = (cos a, sin a)`; the area of the unit square at
 /// `(x, y)` on the side where both of the given half-planes are positive.
 fn clipped_area(x: f64, y: f64, planes: &[([f64; 2], f64)]) -> f64 {
-    let mut poly: Vec<[f64; 2]> = vec![[x, y], [x + 1.0, y], [x + 1.0, y + 1.0], [x, y + 1.0]];
+    let square = vec![[x, y], [x + 1.0, y], [x + 1.0, y + 1.0], [x, y + 1.0]];
+    polygon_area(&clip(square, planes))
+}
+
+/// The polygon `poly` clipped to where every half-plane `n·p ≥ c` of `planes` holds
+/// (Sutherland–Hodgman: exact for a convex clip region, whatever the polygon); empty when
+/// less than a triangle is left.
+fn clip(mut poly: Vec<[f64; 2]>, planes: &[([f64; 2], f64)]) -> Vec<[f64; 2]> {
     for &(n, c) in planes {
         let s = |p: [f64; 2]| n[0] * p[0] + n[1] * p[1] - c;
-        let mut out = Vec::with_capacity(poly.len() + 1);
+        let mut out = Vec::with_capacity(poly.len() + 2);
         for i in 0..poly.len() {
             let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
             let (sa, sb) = (s(a), s(b));
@@ -48,13 +55,18 @@ fn clipped_area(x: f64, y: f64, planes: &[([f64; 2], f64)]) -> f64 {
         }
         poly = out;
         if poly.len() < 3 {
-            return 0.0;
+            return Vec::new();
         }
     }
+    poly
+}
+
+/// The area of the polygon `p` (shoelace; 0 for fewer than three points).
+fn polygon_area(p: &[[f64; 2]]) -> f64 {
     let mut a2 = 0.0;
-    for i in 0..poly.len() {
-        let (p, r) = (poly[i], poly[(i + 1) % poly.len()]);
-        a2 += p[0] * r[1] - r[0] * p[1];
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        a2 += a[0] * b[1] - b[0] * a[1];
     }
     0.5 * a2.abs()
 }
@@ -599,37 +611,13 @@ fn polygon_outside(x: f64, y: f64, poly: &[[f64; 2]]) -> f64 {
     if d <= -0.75 {
         return 0.0;
     }
-    let mut clipped: Vec<[f64; 2]> = poly.to_vec();
-    for (n, c) in [
+    let square = [
         ([1.0, 0.0], x),
         ([-1.0, 0.0], -(x + 1.0)),
         ([0.0, 1.0], y),
         ([0.0, -1.0], -(y + 1.0)),
-    ] {
-        let s = |p: [f64; 2]| n[0] * p[0] + n[1] * p[1] - c;
-        let mut out = Vec::with_capacity(clipped.len() + 2);
-        for i in 0..clipped.len() {
-            let (a, b) = (clipped[i], clipped[(i + 1) % clipped.len()]);
-            let (sa, sb) = (s(a), s(b));
-            if sa >= 0.0 {
-                out.push(a);
-            }
-            if (sa >= 0.0) != (sb >= 0.0) {
-                let t = sa / (sa - sb);
-                out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
-            }
-        }
-        clipped = out;
-        if clipped.len() < 3 {
-            return 1.0;
-        }
-    }
-    let mut a2 = 0.0;
-    for i in 0..clipped.len() {
-        let (p, r) = (clipped[i], clipped[(i + 1) % clipped.len()]);
-        a2 += p[0] * r[1] - r[0] * p[1];
-    }
-    (1.0 - 0.5 * a2.abs()).clamp(0.0, 1.0)
+    ];
+    (1.0 - polygon_area(&clip(poly.to_vec(), &square))).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]
