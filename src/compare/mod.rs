@@ -295,7 +295,7 @@ pub struct DiskView {
     pub centroid: [f64; 2],
     /// The outline's largest distance from the centroid along x or y, px.
     pub radius: f64,
-    /// The exactly projected outline, 64 points.
+    /// The exactly projected outline, 256 points.
     pub outline: Vec<[f64; 2]>,
     /// The half-size of [`detect::disk_centroid`]'s window, when the white surround holds
     /// one.
@@ -416,11 +416,12 @@ pub fn seen(
     })
 }
 
-/// How far a disk's exact outline (64 points) may depart from its moment ellipse, as a share
+/// How far a disk's exact outline (256 points) may depart from its moment ellipse, as a share
 /// of its radius, for [`sectors::disk_edge`]. A perspective view of a circle is an ellipse;
-/// the 64-point polygon itself departs by about 0.08 % (its chords' sagitta: 0.02 px at 25 px,
-/// 0.057 px at 69 px, calibration_flat's and archaeology's disks), a port's bending of one
-/// disk by less; 5 cm waves bend a disk's outline by 9–30 % (uav_through_waves).
+/// a 64-point polygon departs from it by about 0.08 % (its chords' sagitta: 0.02 px at 25 px,
+/// 0.057 px at 69 px, calibration_flat's and archaeology's disks), 256 points by a sixteenth
+/// of that, a port's bending of one disk by less; 5 cm waves bend a disk's outline by 9–30 %
+/// (uav_through_waves), which [`sectors::outline_edge`] fits as it is.
 pub const ELLIPSE_MISFIT: f64 = 0.01;
 
 /// The image radius (px) from which a disk is located by its edge ([`sectors::disk_edge`]),

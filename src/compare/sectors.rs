@@ -490,7 +490,7 @@ pub fn disk_edge(img: &Gray, outline: &[[f64; 2]], band: f64) -> Result<[f64; 2]
 /// it by pixels): the outline polygon itself, shifted, fitted to the pixels within `band` px
 /// of it (only the shift, 2 parameters; the shape is the truth's). Returns the shifted
 /// polygon's area centroid, comparable with the exact one. `outline` must be a simple polygon
-/// fine enough that its chords follow the edge (64 points around a disk of tens of pixels).
+/// fine enough that its chords follow the edge (256 points around a disk of tens of pixels).
 pub fn outline_edge(img: &Gray, outline: &[[f64; 2]], band: f64) -> Result<[f64; 2], Miss> {
     let q0 = super::detect::polygon_centroid(outline).ok_or(Miss::NoContrast)?;
     let p = edge_fit(
