@@ -1,6 +1,7 @@
 //! Sub-pixel location of targets by fitting the exact image of their printed edges to the
 //! pixels around them: a checkerboard's inner corners and a Siemens star's centre (straight
-//! edges through one point), and a large disk's outline.
+//! edges through one point), and a large disk's outline (an ellipse, or the exact outline
+//! where waves bend it).
 //!
 //! | item | value | meaning |
 //! |---|---|---|
@@ -8,6 +9,7 @@
 //! | corner | [`checker_corner`]: `q` (2) and the two edges' angles, fitted | window: the pixels within `half` px of the prediction; it must hold no other corner |
 //! | star | [`star_centre`]: `q` (2) fitted, the sector edges' image directions given | window: an annulus, from where the sectors are resolved to inside the star's rim |
 //! | disk | [`disk_edge`]: an ellipse's centre `q` (2) and shape (3), fitted | window: the pixels within `band` px of the expected outline; outliers trimmed twice |
+//! | disk bent out of an ellipse (waves) | [`outline_edge`]: the exact outline polygon's shift (2), fitted | as the disk's |
 //! | linear parameters | `D`, `g` (2), `Δ`, `h` (2) | solved by least squares at every step (variable projection) |
 //! | fit | Levenberg–Marquardt, numerical derivatives ([`levenberg_marquardt`]) | |
 //! | pixel filter | a box over the pixel's square | what poser asks of every backend; a symmetric filter does not move `q` |
