@@ -685,8 +685,9 @@ bpy.ops.wm.save_as_mainfile(filepath="user.blend")
 /// Filled objects (issue 37): poser's own tank and jar come back from its saved .blend as the
 /// same filled box and sphere, their water exact; in a user's file (a camera in air) a volume
 /// alone on a box no camera is inside is a tank whose faces do not refract (its index is the
-/// air's), and a Glass BSDF sphere around a volume is a jar of that water, of index IOR; a
-/// volume box around the camera stays the scene's water.
+/// air's), and a Glass BSDF sphere around a volume is a jar of that water, of index IOR. (A
+/// volume box around the camera stays the scene's water: `a_principled_volume_box_below_z0_…`
+/// and the other water scenes here.)
 #[test]
 fn volumes_in_boxes_and_spheres_away_from_the_camera_import_as_filled_objects() {
     use glam::DVec3;
