@@ -12,8 +12,8 @@
 //! | `fit` | a camera model that does not fit the images | a mean reprojection error above [`MAX_REPROJECTION_PX`] |
 //! | `outliers` | a height RMS driven by a few far points, not by the block | more than [`MAX_OUTLIERS`] of the tie points beyond 3 NMAD, and RMS Z over twice the NMAD |
 //!
-//! A perfectly regular network (every image at one height, looking one way: no hand-held
-//! jitter) is named in the `focal` warning's help, since that is its usual cause.
+//! A network of parallel views (every image looking one way, at any height and heading: no
+//! hand-held jitter) is named in the `focal` warning's help, since that is its usual cause.
 
 use super::Evaluation;
 use crate::model::Model;
@@ -41,9 +41,11 @@ impl std::fmt::Display for Warning {
     }
 }
 
-/// Every pose of camera 0 at the same height and looking the same way (the optical axis to
-/// 1 µrad; the heading may turn, as between strips), to 1 µm: a network with no jitter.
-/// Self-calibration cannot then separate focal length from height.
+/// Every pose of camera 0 looking the same way (the optical axis to 1 µrad; the heading may
+/// turn, as between strips, and the height change): a network with no jitter. Scaling the
+/// focal length and every depth (the world's vertical) by one factor then changes no image,
+/// whatever the relief and the cameras' heights (a radial distortion's terms scale with it),
+/// so self-calibration cannot separate focal length from height.
 pub fn regular_network(model: &Model) -> bool {
     if model.poses.len() < 2 || model.cameras.is_empty() {
         return false;
@@ -51,8 +53,7 @@ pub fn regular_network(model: &Model) -> bool {
     let first = model.world_from_camera(0, 0);
     (1..model.poses.len()).all(|p| {
         let w = model.world_from_camera(p, 0);
-        (w.translation.z - first.translation.z).abs() < 1e-6
-            && (w.rotation.z_axis - first.rotation.z_axis).length() < 1e-6
+        (w.rotation.z_axis - first.rotation.z_axis).length() < 1e-6
     })
 }
 
@@ -217,14 +218,13 @@ fn focal_checks(ev: &Evaluation, regular: bool, out: &mut Vec<Warning>) {
                 evidence.join("; ")
             ),
             help: if regular {
-                "the network is perfectly regular (every image at one height, looking one way, \
-                 where scaling the focal length and every depth below the cameras by one factor \
-                 changes no image, relief or not): give the diver's hand-held wobble \
-                 (`network.jitter_position`, `jitter_rotation`), add obliques or a second \
-                 height, or calibrate beforehand (`--rig`)"
+                "every image looks the same way (parallel views, at any height: scaling the \
+                 focal length and every depth by one factor changes no image, relief or not): \
+                 give the diver's hand-held wobble (`network.jitter_rotation`), add obliques, \
+                 or calibrate beforehand (`--rig`)"
                     .into()
             } else {
-                "add obliques, relief or a second height, or calibrate beforehand (`--rig`)".into()
+                "add obliques or views tilted more, or calibrate beforehand (`--rig`)".into()
             },
         });
     }
@@ -360,6 +360,34 @@ pub(crate) mod tests {
         );
     }
 
+    /// A network is regular when every view looks one way, whatever the heights: reef_strip as
+    /// shipped (a diver's wobble) is not; flown without jitter it is; with its positions
+    /// jittered (heights varying) but its views parallel it still is, since scaling the focal
+    /// length and the world's vertical by one factor changes none of its images.
+    #[test]
+    fn parallel_views_make_a_regular_network_at_any_height() {
+        let load = |sets: &[&str]| {
+            let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+            crate::scene::load(std::path::Path::new("scenarios/reef_strip.toml"), &sets)
+                .map_err(|f| f.render())
+                .unwrap()
+                .model
+        };
+        assert!(!regular_network(&load(&[])));
+        assert!(regular_network(&load(&[
+            "network.jitter_position=0",
+            "network.jitter_rotation=0"
+        ])));
+        let heights = load(&["network.jitter_rotation=0"]);
+        let z: Vec<f64> = (0..heights.poses.len())
+            .map(|p| heights.world_from_camera(p, 0).translation.z)
+            .collect();
+        let spread =
+            z.iter().cloned().fold(f64::MIN, f64::max) - z.iter().cloned().fold(f64::MAX, f64::min);
+        assert!(spread > 0.05, "heights spread {spread} m");
+        assert!(regular_network(&heights));
+    }
+
     #[test]
     fn each_sign_of_an_undetermined_focal_length_warns() {
         // The dome flown without jitter (measured): singular normal matrix, probe −0.003 %,
@@ -375,7 +403,7 @@ pub(crate) mod tests {
             ["focal", "focal_drift"]
         );
         assert!(w[0].message.contains("singular") && w[0].message.contains("-0.003 %"));
-        assert!(w[0].help.contains("jitter_position"));
+        assert!(w[0].help.contains("jitter_rotation"), "{}", w[0].help);
         assert!(w[1].message.contains("+75.2 %"), "{}", w[1].message);
         assert_eq!(ev.focal_determined(), Some(false));
         // The flat port flown without jitter (measured): the probe passes (24.8 %), the

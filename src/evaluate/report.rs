@@ -246,9 +246,9 @@ fn intrinsics(s: &mut String, ev: &Evaluation) {
             } else {
                 "**the images do not determine the focal length** (a nearly flat block seen \
                  from above: focal length and height trade against each other), so the focal \
-                 error above is not a measurement. Obliques, the diver's wobble, a second \
-                 height or a calibration beforehand fix it; relief helps only a block that is \
-                 not perfectly regular (every image at one height, looking one way)."
+                 error above is not a measurement. Obliques, the diver's wobble or a calibration \
+                 beforehand fix it; relief or a second height does not help a block whose \
+                 images all look one way."
             }
         );
     }

@@ -1390,9 +1390,6 @@ impl Model {
     pub fn column_physics(&self) -> Result<poser_optics::column::ColumnInput, String> {
         use poser_optics::column::{ColumnInput, ColumnSun};
         let w = self.water.as_ref().ok_or("the scene has no water")?;
-        if !w.scattering.iter().any(|s| *s > 0.0) {
-            return Err("the water does not scatter: daylight needs no column".into());
-        }
         if let WaterExtent::BoxAroundCamera { .. } = w.extent {
             return Err(
                 "the water is a box around the camera, not a column from the surface down".into(),

@@ -1016,6 +1016,10 @@ impl<'a> Integrator<'a> {
             }
             (sb, self.tr_seg(o, d, sb) * col.boundary(d))
         };
+        // Clear water scatters nothing towards the camera: the sky or the bottom through it.
+        if !m.scatters() {
+            return beyond;
+        }
         let Some((a, b)) = m.interval(o, d, 0.0, s) else {
             return beyond;
         };
