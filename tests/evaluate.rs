@@ -88,7 +88,11 @@ fn a_self_calibration_without_jitter_warns_that_the_focal_length_is_not_determin
     // so.
     let w: Vec<&str> = steady.warnings.iter().map(|w| w.code).collect();
     assert_eq!(w, ["focal", "focal_drift"], "{:?}", steady.warnings);
-    assert!(steady.warnings[0].help.contains("jitter_position"));
+    assert!(
+        steady.warnings[0].help.contains("jitter_rotation"),
+        "{}",
+        steady.warnings[0].help
+    );
     assert!(steady.focal_singular(), "{}", steady.colmap);
     assert!(steady.focal_determined() == Some(false));
     let wobbly = run("flat_port_deformation_dome", &[], &Options::default());
