@@ -15,7 +15,10 @@
 //! | [`Bvh::intersect`] | closest hit with `t ∈ (RAY_EPSILON, tmax)` |
 //! | [`Bvh::occluded`] | is the open segment between two points blocked? |
 //!
-//! Queries are read-only, so one `Bvh` is shared by every thread.
+//! Queries are read-only, so one `Bvh` is shared by every thread. Above [`LAZY_ABOVE`]
+//! triangles the subtrees of ranges of at most [`LAZY_MAX`] triangles are built when a ray
+//! first enters their box (one `OnceLock` each): the tree is the one the whole build makes,
+//! so every query answers the same; what no ray reaches is never built.
 
 use super::mesh::{TriMesh, object_mesh};
 use crate::model::Model;
@@ -107,8 +110,41 @@ pub struct Bvh {
     /// only those look up per-triangle materials and vertex colours).
     source: Vec<u32>,
     nodes: Vec<FNode>,
+    /// The subtrees built when a ray first reaches them ([`LAZY_MAX`]): node `count`
+    /// [`LAZY`] points at one by its `start`.
+    lazy: Vec<Lazy>,
     /// The glass spheres and cylinders, intersected exactly.
     solids: Vec<Solid>,
+}
+
+/// A node's `count` bit marking a subtree built on first use (`start` is its index in
+/// [`Bvh::lazy`]).
+const LAZY: u32 = 1 << 31;
+/// In a BVH of more than [`LAZY_ABOVE`] triangles, ranges of at most this many triangles (and
+/// more than [`LAZY_LEAST`]) are built when a ray first enters their box, not up front: a
+/// render or a truth query that sees a small part of a large site (a 60 m reef plot at
+/// 5 cm) builds only that part. The subtree is the one the whole build would make (the same
+/// decisions on the same triangles in the same order), so every hit is the same.
+const LAZY_MAX: usize = 1 << 12;
+const LAZY_LEAST: usize = 256;
+const LAZY_ABOVE: usize = 1 << 17;
+
+/// A range of triangles whose subtree is built on first use.
+#[derive(Debug, Clone, Default)]
+struct Lazy {
+    /// The range's first triangle and count, in the order of [`Bvh::tris`].
+    start: u32,
+    count: u32,
+    tree: std::sync::OnceLock<Sub>,
+}
+
+/// A subtree built on first use: its nodes (leaves index `tris`), its triangles in leaf order
+/// and each one's index in [`Bvh::tris`].
+#[derive(Debug, Clone, Default)]
+struct Sub {
+    nodes: Vec<FNode>,
+    tris: Vec<Tri>,
+    ids: Vec<u32>,
 }
 
 /// The [`Hit::triangle`] of a hit on a glass sphere or cylinder (it has no triangle).
@@ -287,6 +323,11 @@ impl Bvh {
 
     /// [`Bvh::from_meshes_uv`], keeping each triangle's index in its mesh when `keep_source`.
     fn build(meshes: Vec<UvMesh>, keep_source: bool) -> Bvh {
+        Bvh::build_with(meshes, keep_source, true)
+    }
+
+    /// [`Bvh::build`]; `lazy`: large ranges' subtrees are built on first use ([`LAZY_MAX`]).
+    fn build_with(meshes: Vec<UvMesh>, keep_source: bool, lazy: bool) -> Bvh {
         // Sized once: a 5 M-triangle mesh would otherwise double its way up to 8 M slots.
         let n: usize = meshes.iter().map(|m| m.1.triangles.len()).sum();
         let any_uv = meshes.iter().any(|m| m.2.is_some());
@@ -322,9 +363,10 @@ impl Bvh {
             uv: uvs,
             source,
             nodes: Vec::new(),
+            lazy: Vec::new(),
             solids: Vec::new(),
         };
-        s.build_bvh();
+        s.build_bvh(lazy);
         s
     }
 
@@ -382,12 +424,13 @@ impl Bvh {
         })
     }
 
-    fn build_bvh(&mut self) {
+    fn build_bvh(&mut self, lazy: bool) {
         use rayon::prelude::*;
         let n = self.tris.len();
         if n == 0 {
             return;
         }
+        let lazy = lazy && n > LAZY_ABOVE;
         let bounds: Vec<(DVec3, DVec3)> = self
             .tris
             .par_iter()
@@ -402,6 +445,7 @@ impl Bvh {
         let nodes = Builder {
             bounds: &bounds,
             cent: &cent,
+            lazy,
         }
         .subtree(&mut order, &mut scratch, 0, 0);
         // The per-triangle boxes are done with: free them before the triangles are copied.
@@ -419,6 +463,46 @@ impl Bvh {
             self.source = order.par_iter().map(|&i| source[i as usize]).collect();
         }
         self.nodes = nodes.par_iter().map(FNode::from_node).collect();
+        // Lazy ranges, numbered in node order.
+        for node in self.nodes.iter_mut().filter(|n| n.count & LAZY != 0) {
+            self.lazy.push(Lazy {
+                start: node.start,
+                count: node.count & !LAZY,
+                tree: std::sync::OnceLock::new(),
+            });
+            node.start = self.lazy.len() as u32 - 1;
+        }
+    }
+
+    /// The subtree of lazy range `i`, built on first use: what the whole build would have
+    /// built there (one thread, the same decisions on the same triangles in the same order).
+    fn sub(&self, i: u32) -> &Sub {
+        let l = &self.lazy[i as usize];
+        l.tree.get_or_init(|| {
+            let range = l.start as usize..(l.start + l.count) as usize;
+            let tris = &self.tris[range.clone()];
+            let bounds: Vec<(DVec3, DVec3)> = tris
+                .iter()
+                .map(|t| {
+                    let (b, c) = (t.v0 + t.e1, t.v0 + t.e2);
+                    (t.v0.min(b).min(c), t.v0.max(b).max(c))
+                })
+                .collect();
+            let cent: Vec<DVec3> = bounds.iter().map(|(l, h)| 0.5 * (*l + *h)).collect();
+            let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+            let mut scratch = vec![0u32; tris.len()];
+            let nodes = Builder {
+                bounds: &bounds,
+                cent: &cent,
+                lazy: false,
+            }
+            .serial(&mut order, &mut scratch, 0);
+            Sub {
+                nodes: nodes.iter().map(FNode::from_node).collect(),
+                tris: order.iter().map(|&k| tris[k as usize]).collect(),
+                ids: order.iter().map(|&k| l.start + k).collect(),
+            }
+        })
     }
 
     #[inline]
@@ -481,6 +565,24 @@ impl Bvh {
         d: DVec3,
         o32: Vec3A,
         inv: Vec3A,
+        tmax: f64,
+        any: bool,
+    ) -> Option<(f64, u32)> {
+        self.walk_in(&self.nodes, &self.tris, None, o, d, o32, inv, tmax, any)
+    }
+
+    /// Walk the tree `nodes` over `tris` from its root; `ids` maps a subtree's triangles to
+    /// [`Bvh::tris`] (`None`: the top tree, whose lazy ranges are walked as they are met).
+    #[allow(clippy::too_many_arguments)]
+    fn walk_in(
+        &self,
+        nodes: &[FNode],
+        tris: &[Tri],
+        ids: Option<&[u32]>,
+        o: DVec3,
+        d: DVec3,
+        o32: Vec3A,
+        inv: Vec3A,
         mut tmax: f64,
         any: bool,
     ) -> Option<(f64, u32)> {
@@ -496,12 +598,31 @@ impl Bvh {
         let mut sp = 0usize;
         let mut cur = 0u32;
         loop {
-            let n = &self.nodes[cur as usize];
-            if n.count > 0 {
+            let n = &nodes[cur as usize];
+            if n.count & LAZY != 0 {
+                let sub = self.sub(n.start);
+                if let Some(h) = self.walk_in(
+                    &sub.nodes,
+                    &sub.tris,
+                    Some(&sub.ids),
+                    o,
+                    d,
+                    o32,
+                    inv,
+                    tmax,
+                    any,
+                ) {
+                    tmax = h.0;
+                    best = Some(h);
+                    if any {
+                        return best;
+                    }
+                }
+            } else if n.count > 0 {
                 for k in n.start..n.start + n.count {
-                    if let Some(t) = Self::hit_tri(&self.tris[k as usize], o, d, tmax) {
+                    if let Some(t) = Self::hit_tri(&tris[k as usize], o, d, tmax) {
                         tmax = t;
-                        best = Some((t, k));
+                        best = Some((t, ids.map_or(k, |ids| ids[k as usize])));
                         if any {
                             return best;
                         }
@@ -510,8 +631,8 @@ impl Bvh {
             } else {
                 let (a, b) = (n.start, n.start + 1);
                 let tm = t32(tmax);
-                let ta = Self::slab(&self.nodes[a as usize], o32, inv, tm);
-                let tb = Self::slab(&self.nodes[b as usize], o32, inv, tm);
+                let ta = Self::slab(&nodes[a as usize], o32, inv, tm);
+                let tb = Self::slab(&nodes[b as usize], o32, inv, tm);
                 match (ta, tb) {
                     (Some(x), Some(y)) => {
                         let (near, far) = if x <= y { (a, b) } else { (b, a) };
@@ -540,7 +661,7 @@ impl Bvh {
                 }
                 sp -= 1;
                 let c = stack[sp];
-                if Self::slab(&self.nodes[c as usize], o32, inv, t32(tmax)).is_some() {
+                if Self::slab(&nodes[c as usize], o32, inv, t32(tmax)).is_some() {
                     cur = c;
                     break;
                 }
@@ -626,6 +747,8 @@ enum Decision {
 struct Builder<'a> {
     bounds: &'a [(DVec3, DVec3)],
     cent: &'a [DVec3],
+    /// Ranges within [`LAZY_LEAST`]..=[`LAZY_MAX`] become lazy nodes (their boxes only).
+    lazy: bool,
 }
 
 impl Builder<'_> {
@@ -638,6 +761,10 @@ impl Builder<'_> {
         base: usize,
         depth: u32,
     ) -> Vec<Node> {
+        if self.is_lazy(order.len()) {
+            let (lo, hi) = self.bounds_of(order);
+            return vec![lazy_node(lo, hi, base, order.len())];
+        }
         if order.len() < PARALLEL_MIN || depth >= PARALLEL_DEPTH {
             return self.serial(order, scratch, base);
         }
@@ -684,6 +811,11 @@ impl Builder<'_> {
         // Explicit stack: (node index, range start, range end) within `order`.
         let mut stack = vec![(0usize, 0usize, order.len())];
         while let Some((ni, s, e)) = stack.pop() {
+            if self.is_lazy(e - s) {
+                let (lo, hi) = self.bounds_of(&order[s..e]);
+                nodes[ni] = lazy_node(lo, hi, base + s, e - s);
+                continue;
+            }
             let (lo, hi, decision) = self.decide(&mut order[s..e], &mut scratch[s..e]);
             match decision {
                 Decision::Leaf => nodes[ni] = leaf(lo, hi, base + s, e - s),
@@ -703,6 +835,21 @@ impl Builder<'_> {
             }
         }
         nodes
+    }
+
+    fn is_lazy(&self, count: usize) -> bool {
+        self.lazy && (LAZY_LEAST + 1..=LAZY_MAX).contains(&count)
+    }
+
+    /// The box of `order`'s triangles (as [`Builder::decide`] computes it).
+    fn bounds_of(&self, order: &[u32]) -> (DVec3, DVec3) {
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        for &i in order {
+            let (l, h) = self.bounds[i as usize];
+            lo = lo.min(l);
+            hi = hi.max(h);
+        }
+        (lo, hi)
     }
 
     /// The bounds of `order`'s triangles and the binned SAH's decision; a split reorders
@@ -800,6 +947,16 @@ impl Builder<'_> {
         }
         order.copy_from_slice(scratch);
         (lo, hi, Decision::Split(mid))
+    }
+}
+
+/// A lazy node over the triangles `start..start + count` ([`LAZY`]).
+fn lazy_node(lo: DVec3, hi: DVec3, start: usize, count: usize) -> Node {
+    Node {
+        lo,
+        hi,
+        start: start as u32,
+        count: count as u32 | LAZY,
     }
 }
 
@@ -954,6 +1111,78 @@ mod tests {
         h
     }
 
+    impl Bvh {
+        /// The whole tree up front (no lazy ranges).
+        fn eager(meshes: Vec<(SurfaceId, TriMesh)>) -> Bvh {
+            Bvh::build_with(
+                meshes.into_iter().map(|(id, m)| (id, m, None)).collect(),
+                false,
+                false,
+            )
+        }
+    }
+
+    /// Lazy ranges ([`LAZY_MAX`]) give every hit the whole build gives: the same distance,
+    /// the same triangle (by its corners and surface) and the same occlusion, from any thread.
+    #[test]
+    fn lazy_subtrees_hit_what_the_whole_tree_hits() {
+        let eager = Bvh::eager(large());
+        let lazy = Bvh::from_meshes(large());
+        assert!(eager.lazy.is_empty());
+        assert!(lazy.lazy.len() > 10, "{} lazy ranges", lazy.lazy.len());
+        assert!(lazy.nodes.len() < eager.nodes.len() / 4);
+        let rays: Vec<Ray> = {
+            let mut rnd = uniform(4242);
+            (0..20_000)
+                .map(|i| {
+                    let o = DVec3::new(rnd() * 10.0 - 5.0, rnd() * 10.0 - 5.0, rnd() * 2.0 - 0.5);
+                    // Down, grazing and up: every kind of ray a render casts.
+                    let dz = [-1.0, -0.05, 0.3][i % 3];
+                    let d = DVec3::new(rnd() - 0.5, rnd() - 0.5, dz).normalize();
+                    Ray { origin: o, dir: d }
+                })
+                .collect()
+        };
+        let key = |b: &Bvh, h: Option<Hit>| {
+            h.map(|h| {
+                let t = &b.tris[h.triangle as usize];
+                (
+                    h.t.to_bits(),
+                    [t.v0, t.e1, t.e2].map(|v| v.to_array().map(f64::to_bits)),
+                    h.surface,
+                )
+            })
+        };
+        use rayon::prelude::*;
+        let hits: Vec<_> = rays
+            .par_iter()
+            .map(|r| key(&lazy, lazy.intersect(r, f64::INFINITY)))
+            .collect();
+        let mut seen = 0;
+        for (r, got) in rays.iter().zip(hits) {
+            let want = key(&eager, eager.intersect(r, f64::INFINITY));
+            seen += want.is_some() as usize;
+            assert_eq!(got, want, "{r:?}");
+            assert_eq!(
+                lazy.occluded_ray(r, 3.0),
+                eager.occluded_ray(r, 3.0),
+                "{r:?}"
+            );
+        }
+        assert!(seen > 5_000, "{seen} hits");
+        // Rays from above an 8 m patch reach most ranges; one ray reaches few.
+        let built = lazy.lazy.iter().filter(|l| l.tree.get().is_some()).count();
+        assert!(built > 0, "{built} of {} built", lazy.lazy.len());
+        let fresh = Bvh::from_meshes(large());
+        assert!(fresh.intersect(&rays[0], f64::INFINITY).is_some());
+        let one = fresh.lazy.iter().filter(|l| l.tree.get().is_some()).count();
+        assert!(
+            one <= 4,
+            "one ray built {one} of {} ranges",
+            fresh.lazy.len()
+        );
+    }
+
     /// A large mesh with every case of the builder: SAH splits, coincident centroids (a
     /// stack of copies of one triangle) and bins that cannot separate.
     fn large() -> Vec<(SurfaceId, TriMesh)> {
@@ -981,7 +1210,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| Bvh::from_meshes(large()))
+                .install(|| Bvh::eager(large()))
         };
         let (one, four) = (build(1), build(4));
         assert_eq!((one.nodes.len(), one.tris.len()), (424_923, 704_128));

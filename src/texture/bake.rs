@@ -347,6 +347,42 @@ pub fn wanted_texel(
 
 type CacheMap = HashMap<(u64, u64), Weak<Baked>>;
 static CACHE: Mutex<Option<CacheMap>> = Mutex::new(None);
+
+/// The plans of the most recent model ([`scene_plan`] of the whole model, by its content):
+/// every baked object of a scene needs the same plans, and planning tessellates every baked
+/// object, so a scene of several baked objects plans once, not once per object.
+type PlanCache = Option<(u64, Arc<Vec<Option<ObjectPlan>>>)>;
+static PLANS: Mutex<PlanCache> = Mutex::new(None);
+
+/// [`scene_plan`]'s entry for object `index`, planned once per content of what the plans
+/// depend on (the objects, the cameras and their poses, the water's index and the scene's
+/// folder; not the render settings, which a benchmark's or a lesson's renders vary).
+fn object_plan(model: &Model, index: usize) -> Result<Option<ObjectPlan>, String> {
+    let inputs = (
+        &model.source,
+        &model.objects,
+        &model.cameras,
+        &model.poses,
+        &model.water,
+    );
+    let json = serde_json::to_string(&inputs).map_err(|e| e.to_string())?;
+    let key = name_hash(&json);
+    let cached = PLANS
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .as_ref()
+        .filter(|(k, _)| *k == key)
+        .map(|(_, p)| p.clone());
+    let plans = match cached {
+        Some(p) => p,
+        None => {
+            let p = Arc::new(scene_plan(model)?);
+            *PLANS.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, p.clone()));
+            p
+        }
+    };
+    Ok(plans.get(index).cloned().flatten())
+}
 /// The most recent bakes, held strongly (oldest first) so that a process that compiles or
 /// renders the same scene again (a test binary, the Python module, a lesson's variants, a
 /// Mitsuba compile followed by a Cycles one) does not bake it again once the first user let
@@ -377,7 +413,7 @@ pub fn bake_object(model: &Model, index: usize) -> Result<Option<Arc<Baked>>, St
     if !o.material.is_baked() {
         return Ok(None);
     }
-    let Some(plan) = scene_plan(model)?.swap_remove(index) else {
+    let Some(plan) = object_plan(model, index)? else {
         return Ok(None);
     };
     let base = Path::new(&model.source).parent().unwrap_or(Path::new("."));
@@ -560,7 +596,7 @@ fn layout(
 /// What baking object `index` would give (texture size, texel, coarsening), without baking:
 /// for `poser explain`. `None` when the object is not baked.
 pub fn plan(model: &Model, index: usize) -> Result<Option<String>, String> {
-    let Some(p) = scene_plan(model)?.swap_remove(index) else {
+    let Some(p) = object_plan(model, index)? else {
         return Ok(None);
     };
     let mut s = format!(

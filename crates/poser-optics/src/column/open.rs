@@ -78,11 +78,7 @@ fn half_cosines() -> &'static [f32] {
             .into_par_iter()
             .flat_map_iter(|node| {
                 let n = grid_normal(node / SP, node % SP, ST, SP);
-                (0..HALVES).map(move |h| {
-                    let (i, p, q) = half_bounds(h);
-                    let (a, b) = (i as f64 * PI / NMU as f64, (i + 1) as f64 * PI / NMU as f64);
-                    half_bin(n, a, b, p, q) as f32
-                })
+                half_bins().iter().map(move |hb| hb.cosine(n) as f32)
             })
             .collect()
     })
@@ -101,48 +97,113 @@ fn look(a: f64, f: f64) -> DVec3 {
     DVec3::new(a.sin() * f.cos(), a.sin() * f.sin(), -a.cos())
 }
 
-/// `∫ max(0, n·ω) dω` over one half of a folded bin: polar `[a, b]` from the nadir, azimuth
-/// `[p, q]` in the sun's frame.
-fn half_bin(n: DVec3, a: f64, b: f64, p: f64, q: f64) -> f64 {
-    let (am, fm) = (0.5 * (a + b), 0.5 * (p + q));
-    let c = look(am, fm);
-    // The bin's angular radius about its centre: the farthest of its corners and edge
-    // midpoints, with a margin for the latitude arcs' bulge.
-    let r = [a, am, b]
-        .iter()
-        .flat_map(|&x| [p, fm, q].map(|y| look(x, y)))
-        .map(|v| c.dot(v).clamp(-1.0, 1.0).acos())
-        .fold(0.0, f64::max)
-        * 1.1
-        + 1e-9;
-    let h = n.dot(c).clamp(-1.0, 1.0).asin();
-    if h <= -r {
-        return 0.0;
-    }
-    if h >= r {
-        // Wholly above the horizon: n · ∫ω dω, in closed form.
+/// What `∫ max(0, n·ω) dω` over one half of a folded bin needs, whatever the normal `n`:
+/// computed once per half-bin (its angles' sines and cosines), so that a grid of normals
+/// costs dot products, not trigonometry.
+struct HalfBin {
+    /// The centre's direction and the angular radius about it.
+    c: DVec3,
+    r: f64,
+    /// `∫ω dω` over the half-bin (closed form).
+    v: DVec3,
+    /// The sub-cells' centre directions and their `d cos θ`, row by row ([`SUB`] × [`SUB`]).
+    cells: Vec<(DVec3, f64)>,
+    /// The azimuth's span.
+    qp: f64,
+}
+
+impl HalfBin {
+    /// Polar `[a, b]` from the nadir, azimuth `[p, q]` in the sun's frame.
+    fn new(a: f64, b: f64, p: f64, q: f64) -> HalfBin {
+        let (am, fm) = (0.5 * (a + b), 0.5 * (p + q));
+        let c = look(am, fm);
+        // The bin's angular radius about its centre: the farthest of its corners and edge
+        // midpoints, with a margin for the latitude arcs' bulge.
+        let r = [a, am, b]
+            .iter()
+            .flat_map(|&x| [p, fm, q].map(|y| look(x, y)))
+            .map(|v| c.dot(v).clamp(-1.0, 1.0).acos())
+            .fold(0.0, f64::max)
+            * 1.1
+            + 1e-9;
         let i2 = 0.5 * (b - a) - 0.25 * ((2.0 * b).sin() - (2.0 * a).sin());
         let v = DVec3::new(
             i2 * (q.sin() - p.sin()),
             i2 * (p.cos() - q.cos()),
             -0.5 * (b.sin().powi(2) - a.sin().powi(2)) * (q - p),
         );
-        return n.dot(v).max(0.0);
-    }
-    let mut s = 0.0;
-    for i in 0..SUB {
-        let (x0, x1) = (
-            a + (b - a) * i as f64 / SUB as f64,
-            a + (b - a) * (i + 1) as f64 / SUB as f64,
-        );
-        let dmu = x0.cos() - x1.cos();
-        for j in 0..SUB {
-            let f = p + (q - p) * (j as f64 + 0.5) / SUB as f64;
-            let w = look(0.5 * (x0 + x1), f);
-            s += n.dot(w).max(0.0) * dmu * (q - p) / SUB as f64;
+        let mut cells = Vec::with_capacity(SUB * SUB);
+        for i in 0..SUB {
+            let (x0, x1) = (
+                a + (b - a) * i as f64 / SUB as f64,
+                a + (b - a) * (i + 1) as f64 / SUB as f64,
+            );
+            let dmu = x0.cos() - x1.cos();
+            for j in 0..SUB {
+                let f = p + (q - p) * (j as f64 + 0.5) / SUB as f64;
+                cells.push((look(0.5 * (x0 + x1), f), dmu));
+            }
+        }
+        HalfBin {
+            c,
+            r,
+            v,
+            cells,
+            qp: q - p,
         }
     }
-    s
+
+    /// `∫ max(0, n·ω) dω` over the half-bin: closed form when it is wholly above the plane's
+    /// horizon, 0 wholly below, else summed over its sub-cells.
+    fn cosine(&self, n: DVec3) -> f64 {
+        let h = n.dot(self.c).clamp(-1.0, 1.0).asin();
+        if h <= -self.r {
+            return 0.0;
+        }
+        if h >= self.r {
+            return n.dot(self.v).max(0.0);
+        }
+        let mut s = 0.0;
+        for (w, dmu) in &self.cells {
+            s += n.dot(*w).max(0.0) * dmu * self.qp / SUB as f64;
+        }
+        s
+    }
+}
+
+/// Every half-bin's [`HalfBin`], index `h` as [`half_bounds`].
+fn half_bins() -> &'static [HalfBin] {
+    static CELL: OnceLock<Vec<HalfBin>> = OnceLock::new();
+    CELL.get_or_init(|| {
+        (0..HALVES)
+            .into_par_iter()
+            .map(|h| {
+                let (i, p, q) = half_bounds(h);
+                let (a, b) = (i as f64 * PI / NMU as f64, (i + 1) as f64 * PI / NMU as f64);
+                HalfBin::new(a, b, p, q)
+            })
+            .collect()
+    })
+}
+
+/// Every folded bin's two mirror halves, index `i · NPHI + j`: azimuth `[p, q]` and
+/// `[−q, −p]` with `p = jπ/NPHI` (computed as the folded table's bins are).
+fn folded_halves() -> &'static [[HalfBin; 2]] {
+    static CELL: OnceLock<Vec<[HalfBin; 2]>> = OnceLock::new();
+    CELL.get_or_init(|| {
+        (0..NMU * NPHI)
+            .into_par_iter()
+            .map(|bin| {
+                let (i, j) = (bin / NPHI, bin % NPHI);
+                let (a, b) = (i as f64 * PI / NMU as f64, (i + 1) as f64 * PI / NMU as f64);
+                let (p, q) = (
+                    j as f64 * PI / NPHI as f64,
+                    (j + 1) as f64 * PI / NPHI as f64,
+                );
+                [HalfBin::new(a, b, p, q), HalfBin::new(a, b, -q, -p)]
+            })
+            .collect()
+    })
 }
 
 /// `∫ max(0, n·ω) dω` over every folded bin of the table (both mirror halves), for every node:
@@ -154,15 +215,9 @@ fn bin_cosines() -> &'static [f32] {
             .into_par_iter()
             .flat_map_iter(|node| {
                 let n = grid_normal(node / NP, node % NP, NT, NP);
-                (0..NMU * NPHI).map(move |bin| {
-                    let (i, j) = (bin / NPHI, bin % NPHI);
-                    let (a, b) = (i as f64 * PI / NMU as f64, (i + 1) as f64 * PI / NMU as f64);
-                    let (p, q) = (
-                        j as f64 * PI / NPHI as f64,
-                        (j + 1) as f64 * PI / NPHI as f64,
-                    );
-                    (half_bin(n, a, b, p, q) + half_bin(n, a, b, -q, -p)) as f32
-                })
+                folded_halves()
+                    .iter()
+                    .map(move |[u, l]| (u.cosine(n) + l.cosine(n)) as f32)
             })
             .collect()
     })
