@@ -64,6 +64,14 @@ struct Tri {
     e2: DVec3,
 }
 
+impl Tri {
+    /// The triangle's box.
+    fn bounds(&self) -> (DVec3, DVec3) {
+        let (b, c) = (self.v0 + self.e1, self.v0 + self.e2);
+        (self.v0.min(b).min(c), self.v0.max(b).max(c))
+    }
+}
+
 #[derive(Debug, Clone, Copy)]
 struct Node {
     lo: DVec3,
@@ -431,14 +439,7 @@ impl Bvh {
             return;
         }
         let lazy = lazy && n > LAZY_ABOVE;
-        let bounds: Vec<(DVec3, DVec3)> = self
-            .tris
-            .par_iter()
-            .map(|t| {
-                let (b, c) = (t.v0 + t.e1, t.v0 + t.e2);
-                (t.v0.min(b).min(c), t.v0.max(b).max(c))
-            })
-            .collect();
+        let bounds: Vec<(DVec3, DVec3)> = self.tris.par_iter().map(Tri::bounds).collect();
         let cent: Vec<DVec3> = bounds.par_iter().map(|(l, h)| 0.5 * (*l + *h)).collect();
         let mut order: Vec<u32> = (0..n as u32).collect();
         let mut scratch = vec![0u32; n];
@@ -481,13 +482,7 @@ impl Bvh {
         l.tree.get_or_init(|| {
             let range = l.start as usize..(l.start + l.count) as usize;
             let tris = &self.tris[range.clone()];
-            let bounds: Vec<(DVec3, DVec3)> = tris
-                .iter()
-                .map(|t| {
-                    let (b, c) = (t.v0 + t.e1, t.v0 + t.e2);
-                    (t.v0.min(b).min(c), t.v0.max(b).max(c))
-                })
-                .collect();
+            let bounds: Vec<(DVec3, DVec3)> = tris.iter().map(Tri::bounds).collect();
             let cent: Vec<DVec3> = bounds.iter().map(|(l, h)| 0.5 * (*l + *h)).collect();
             let mut order: Vec<u32> = (0..tris.len() as u32).collect();
             let mut scratch = vec![0u32; tris.len()];

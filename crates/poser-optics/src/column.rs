@@ -217,6 +217,21 @@ impl Profile {
     pub fn e_d(&self, j: usize) -> f64 {
         self.e_d_direct[j] + self.e_d_diffuse[j]
     }
+
+    /// K_d at every plane from E_d at its neighbours (one-sided at the ends), planes `dz` apart.
+    fn fill_k_d(&mut self, dz: f64) {
+        self.k_d = (0..=NZ)
+            .map(|j| {
+                let (a, b) = (j.saturating_sub(1), (j + 1).min(NZ));
+                let (ea, eb) = (self.e_d(a), self.e_d(b));
+                if ea > 0.0 && eb > 0.0 && b > a {
+                    -(eb / ea).ln() / ((b - a) as f64 * dz)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+    }
 }
 
 /// The solved column.
@@ -547,16 +562,7 @@ fn walk(input: &ColumnInput, max_rounds: usize) -> Result<Column, ColumnError> {
         // identity (the crossing tally adds the noise of the beam's sampled arrivals).
         p.e_u[NZ] = input.bottom_albedo[c] * p.e_d(NZ);
         p.e_u_stderr[NZ] = input.bottom_albedo[c] * p.e_d_stderr[NZ];
-        for j in 0..=NZ {
-            let (a, b) = (j.saturating_sub(1), (j + 1).min(NZ));
-            let (ea, eb) = (p.e_d(a), p.e_d(b));
-            let k = if ea > 0.0 && eb > 0.0 && b > a {
-                -(eb / ea).ln() / ((b - a) as f64 * dz)
-            } else {
-                0.0
-            };
-            p.k_d.push(k);
-        }
+        p.fill_k_d(dz);
         seen_orders[c] = sum.seen_ord.iter().map(|v| v / nb).collect();
         profiles[c] = p;
     }

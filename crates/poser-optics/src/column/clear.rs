@@ -192,16 +192,7 @@ pub(super) fn solve(input: &ColumnInput, t0: std::time::Instant) -> Column {
         }
         // The Lambertian bottom reflects exactly A·E_d (as the walk's profiles say it).
         p.e_u[NZ] = input.bottom_albedo[c] * p.e_d(NZ);
-        for j in 0..=NZ {
-            let (a, b) = (j.saturating_sub(1), (j + 1).min(NZ));
-            let (ea, eb) = (p.e_d(a), p.e_d(b));
-            let k = if ea > 0.0 && eb > 0.0 && b > a {
-                -(eb / ea).ln() / ((b - a) as f64 * dz)
-            } else {
-                0.0
-            };
-            p.k_d.push(k);
-        }
+        p.fill_k_d(dz);
         // The table: the reflected light looking up (polar bins from NMU/2), each bin's mean
         // over its layer and its cosines (the walk's track-length estimate of the same).
         let mut t = vec![0.0f32; NZ * NMU * NPHI];
