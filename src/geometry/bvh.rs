@@ -563,7 +563,11 @@ impl Bvh {
         tmax: f64,
         any: bool,
     ) -> Option<(f64, u32)> {
-        self.walk_in(&self.nodes, &self.tris, None, o, d, o32, inv, tmax, any)
+        // One stack for the walk and the lazy subtrees' walks within it (each takes the part
+        // above its caller's entries), zeroed once per ray.
+        let mut stack = [0u32; 160];
+        let ray = (o, d, o32, inv);
+        self.walk_in(&self.nodes, &self.tris, None, ray, tmax, any, &mut stack)
     }
 
     /// Walk the tree `nodes` over `tris` from its root; `ids` maps a subtree's triangles to
@@ -574,13 +578,12 @@ impl Bvh {
         nodes: &[FNode],
         tris: &[Tri],
         ids: Option<&[u32]>,
-        o: DVec3,
-        d: DVec3,
-        o32: Vec3A,
-        inv: Vec3A,
+        ray: (DVec3, DVec3, Vec3A, Vec3A),
         mut tmax: f64,
         any: bool,
+        stack: &mut [u32],
     ) -> Option<(f64, u32)> {
+        let (o, d, o32, inv) = ray;
         let t32 = |t: f64| {
             if t.is_finite() {
                 (t * (1.0 + 1e-5)) as f32
@@ -589,24 +592,16 @@ impl Bvh {
             }
         };
         let mut best: Option<(f64, u32)> = None;
-        let mut stack = [0u32; 96];
         let mut sp = 0usize;
         let mut cur = 0u32;
         loop {
             let n = &nodes[cur as usize];
             if n.count & LAZY != 0 {
                 let sub = self.sub(n.start);
-                if let Some(h) = self.walk_in(
-                    &sub.nodes,
-                    &sub.tris,
-                    Some(&sub.ids),
-                    o,
-                    d,
-                    o32,
-                    inv,
-                    tmax,
-                    any,
-                ) {
+                let above = &mut stack[sp..];
+                if let Some(h) =
+                    self.walk_in(&sub.nodes, &sub.tris, Some(&sub.ids), ray, tmax, any, above)
+                {
                     tmax = h.0;
                     best = Some(h);
                     if any {
