@@ -51,7 +51,7 @@ pub fn json(model: &Model, input: &ColumnInput, col: &Column) -> serde_json::Val
         "sigma_a": input.sigma_a,
         "sigma_s": input.sigma_s,
         "photons": col.photons,
-        "method": if col.photons == 0 { "exact" } else { "walk" },
+        "method": if col.is_exact() { "exact" } else { "walk" },
         "solve_seconds": col.seconds,
         "truncated_share": col.truncated,
         "table": {
@@ -160,29 +160,34 @@ pub fn summary(col: &Column) -> Vec<String> {
             100.0 * share[1],
             100.0 * share[2]
         ),
-        if col.photons == 0 {
-            format!(
-                "  solved exactly in {:.2} s (the water does not scatter: quadrature, no \
-                 photons), {} layers × {} × {} directions",
-                col.seconds,
-                crate::optics::column::NZ,
-                crate::optics::column::NMU,
-                crate::optics::column::NPHI,
-            )
-        } else {
-            format!(
-                "  solved in {:.2} s: {} photons per channel, {} layers × {} × {} directions; \
-                 E_d at the seabed ± [{:.2}, {:.2}, {:.2}] % (1σ)",
-                col.seconds,
-                col.photons,
-                crate::optics::column::NZ,
-                crate::optics::column::NMU,
-                crate::optics::column::NPHI,
-                rel_err(col, 0),
-                rel_err(col, 1),
-                rel_err(col, 2)
-            )
-        },
+        format!(
+            "  {}, {} layers × {} × {} directions{}",
+            if col.is_exact() {
+                format!(
+                    "solved exactly in {:.2} s (the water does not scatter: quadrature, no \
+                     photons)",
+                    col.seconds
+                )
+            } else {
+                format!(
+                    "solved in {:.2} s: {} photons per channel",
+                    col.seconds, col.photons
+                )
+            },
+            crate::optics::column::NZ,
+            crate::optics::column::NMU,
+            crate::optics::column::NPHI,
+            if col.is_exact() {
+                String::new()
+            } else {
+                format!(
+                    "; E_d at the seabed ± [{:.2}, {:.2}, {:.2}] % (1σ)",
+                    rel_err(col, 0),
+                    rel_err(col, 1),
+                    rel_err(col, 2)
+                )
+            }
+        ),
     ]
 }
 

@@ -449,14 +449,14 @@ pub fn solve(input: &ColumnInput) -> Result<Column, ColumnError> {
 pub fn solve_rounds(input: &ColumnInput, max_rounds: usize) -> Result<Column, ColumnError> {
     input.check()?;
     if input.sigma_s.iter().all(|s| *s == 0.0) {
-        return Ok(clear::solve(input, std::time::Instant::now()));
+        return Ok(clear::solve(input));
     }
     walk(input, max_rounds)
 }
 
-/// The 1D Monte Carlo of the module's method, in at most `max_rounds` rounds.
+/// The 1D Monte Carlo of the module's method, in at most `max_rounds` rounds (on checked
+/// input).
 fn walk(input: &ColumnInput, max_rounds: usize) -> Result<Column, ColumnError> {
-    input.check()?;
     let max_rounds = max_rounds.clamp(1, MAX_ROUNDS);
     let t0 = std::time::Instant::now();
     let az = input
@@ -1111,6 +1111,12 @@ impl Column {
         } else {
             f64::INFINITY
         }
+    }
+
+    /// Whether the column was solved exactly (clear water, [`clear`]) rather than by the walk:
+    /// no photons, standard errors 0.
+    pub fn is_exact(&self) -> bool {
+        self.photons == 0
     }
 
     /// Depths of the profile planes, m.

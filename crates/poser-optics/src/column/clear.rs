@@ -22,8 +22,7 @@
 //! them.
 
 use super::{
-    Column, NMU, NPHI, NZ, ORDERS, Profile, SEEN_CONE, Top, build_cdf, mu_edge, open, scatter,
-    sky_seen,
+    Column, NMU, NPHI, NZ, ORDERS, Profile, SEEN_CONE, build_cdf, mu_edge, open, scatter, sky_seen,
 };
 use super::{ColumnInput, reflectance_from_below};
 use glam::DVec3;
@@ -63,12 +62,13 @@ fn integrate(f: &impl Fn(f64) -> f64, a: f64, b: f64, kink: Option<f64>, n: usiz
 
 /// One channel's closed forms (see the module table).
 struct Channel {
+    c: usize,
     sigma: f64,
     depth: f64,
-    /// The surface's reflectance from below at a cosine (0 under an open top).
-    reflect: Box<dyn Fn(f64) -> f64 + Sync>,
-    /// The sky's radiance seen looking up at a cosine.
-    sky: Box<dyn Fn(f64) -> f64 + Sync>,
+    /// The water's index under a reflecting surface (`None`: an open top).
+    n: Option<f64>,
+    /// The sky's radiance above the surface (all channels, as [`sky_seen`] takes it).
+    sky_l: DVec3,
     /// The critical cosine under a reflecting surface.
     kink: Option<f64>,
     /// The bottom's radiance (all orders) and its first order.
@@ -80,48 +80,40 @@ struct Channel {
 
 impl Channel {
     fn new(input: &ColumnInput, c: usize) -> Channel {
-        let sigma = input.sigma_a[c];
-        let depth = input.depth;
-        let sky_l = DVec3::from_array(input.ambient);
-        let window = input.top.window();
-        let (reflect, kink): (Box<dyn Fn(f64) -> f64 + Sync>, Option<f64>) = match input.top {
-            Top::Open => (Box::new(|_| 0.0), None),
-            Top::Fresnel(n) => {
-                let n = n[c];
-                let kink = (1.0 - 1.0 / (n * n)).max(0.0).sqrt();
-                (
-                    Box::new(move |mu| reflectance_from_below(n, mu)),
-                    Some(kink),
-                )
-            }
-        };
-        let sky: Box<dyn Fn(f64) -> f64 + Sync> =
-            Box::new(move |mu| sky_seen(sky_l, window, mu)[c]);
+        let n = input.top.window().map(|n| n[c]);
         let mut ch = Channel {
-            sigma,
-            depth,
-            reflect,
-            sky,
-            kink,
+            c,
+            sigma: input.sigma_a[c],
+            depth: input.depth,
+            n,
+            sky_l: DVec3::from_array(input.ambient),
+            kink: n.map(|n| (1.0 - 1.0 / (n * n)).max(0.0).sqrt()),
             l_b: 0.0,
             l_b1: 0.0,
             ratio: 0.0,
         };
-        let (e0, dir_h) = match input.sun {
-            Some(s) => {
-                let mu0 = -s.dirs[c].z;
-                (s.irradiance[c], mu0 * (-sigma * depth / mu0).exp())
-            }
-            None => (0.0, 0.0),
-        };
-        let e_dir_h = e0 * dir_h;
+        let (sigma, depth) = (ch.sigma, ch.depth);
+        let e_dir_h = input.sun.map_or(0.0, |s| {
+            let mu0 = -s.dirs[c].z;
+            s.irradiance[c] * mu0 * (-sigma * depth / mu0).exp()
+        });
         let e_sky_h = ch.sky_irradiance(depth);
-        let q = 2.0 * PI * ch.quad(&|mu| (ch.reflect)(mu) * (-2.0 * sigma * depth / mu).exp() * mu);
+        let q = 2.0 * PI * ch.quad(&|mu| ch.reflect(mu) * (-2.0 * sigma * depth / mu).exp() * mu);
         let a = input.bottom_albedo[c];
         ch.ratio = a * q / PI;
         ch.l_b1 = a * (e_dir_h + e_sky_h) / PI;
         ch.l_b = ch.l_b1 / (1.0 - ch.ratio);
         ch
+    }
+
+    /// The surface's reflectance from below at cosine `mu` (0 under an open top).
+    fn reflect(&self, mu: f64) -> f64 {
+        self.n.map_or(0.0, |n| reflectance_from_below(n, mu))
+    }
+
+    /// The sky's radiance seen looking up at cosine `mu`.
+    fn sky(&self, mu: f64) -> f64 {
+        sky_seen(self.sky_l, self.n.map(|n| [n; 3]), mu)[self.c]
     }
 
     /// `∫₀¹ f(μ) dμ`, split at the critical cosine. (`f` is evaluated at μ > 0 only where
@@ -132,12 +124,12 @@ impl Channel {
     }
 
     fn sky_irradiance(&self, z: f64) -> f64 {
-        2.0 * PI * self.quad(&|mu| (self.sky)(mu) * (-self.sigma * z / mu).exp() * mu)
+        2.0 * PI * self.quad(&|mu| self.sky(mu) * (-self.sigma * z / mu).exp() * mu)
     }
 
     /// The surface's return of the bottom's light at depth `z`, looking up at cosine `mu`.
     fn reflected(&self, z: f64, mu: f64) -> f64 {
-        self.l_b * (self.reflect)(mu) * (-self.sigma * (self.depth + z) / mu).exp()
+        self.l_b * self.reflect(mu) * (-self.sigma * (self.depth + z) / mu).exp()
     }
 
     /// The bottom's radiance seen looking down at cosine `mu` from depth `z`.
@@ -154,7 +146,8 @@ impl Channel {
 }
 
 /// The column of non-scattering water (`input.sigma_s` all 0), exact.
-pub(super) fn solve(input: &ColumnInput, t0: std::time::Instant) -> Column {
+pub(super) fn solve(input: &ColumnInput) -> Column {
+    let t0 = std::time::Instant::now();
     let az = input
         .sun
         .and_then(|s| DVec3::new(-s.dirs[1].x, -s.dirs[1].y, 0.0).try_normalize())
@@ -172,21 +165,21 @@ pub(super) fn solve(input: &ColumnInput, t0: std::time::Instant) -> Column {
         let mut p = Profile::default();
         for j in 0..=NZ {
             let z = j as f64 * dz;
-            let beam = e0 * (-ch.sigma * z / mu0).exp();
+            let beam = (-ch.sigma * z / mu0).exp();
             let sky = ch.sky_irradiance(z);
             let refl = 2.0 * PI * ch.quad(&|mu| ch.reflected(z, mu) * mu);
             let up = 2.0 * PI * ch.quad(&|mu| ch.bottom_seen(z, mu) * mu);
             let scalar = 2.0
                 * PI
                 * ch.quad(&|mu| {
-                    (ch.sky)(mu) * (-ch.sigma * z / mu).exp()
+                    ch.sky(mu) * (-ch.sigma * z / mu).exp()
                         + ch.reflected(z, mu)
                         + ch.bottom_seen(z, mu)
                 });
-            p.e_d_direct.push(e0 * mu0 * (-ch.sigma * z / mu0).exp());
+            p.e_d_direct.push(e0 * mu0 * beam);
             p.e_d_diffuse.push(sky + refl);
             p.e_u.push(up);
-            p.e_0.push(scalar + beam);
+            p.e_0.push(scalar + e0 * beam);
             p.e_d_stderr.push(0.0);
             p.e_u_stderr.push(0.0);
         }
@@ -203,7 +196,7 @@ pub(super) fn solve(input: &ColumnInput, t0: std::time::Instant) -> Column {
                     let (a, b) = (mu_edge(i).max(0.0), mu_edge(i + 1));
                     let f = |mu: f64| {
                         if mu > 0.0 {
-                            ch.l_b * (ch.reflect)(mu) * ch.layer_integral(ch.depth, 1.0, z0, z1, mu)
+                            ch.l_b * ch.reflect(mu) * ch.layer_integral(ch.depth, 1.0, z0, z1, mu)
                         } else {
                             0.0
                         }
